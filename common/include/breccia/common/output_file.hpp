@@ -1,0 +1,29 @@
+#pragma once
+// Outputs are written to "<name>.partial" and renamed when complete, so a reader never
+// sees a half-written file passed off as finished, and a failed run never clobbers the
+// previous good file of the same name.
+#include <filesystem>
+#include <string>
+
+namespace breccia {
+
+class OutputFile {
+public:
+  explicit OutputFile(std::filesystem::path final_path);
+  ~OutputFile();  // removes the partial file if commit() was not called
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+
+  const std::filesystem::path& temp_path() const { return temp_; }
+  const std::filesystem::path& final_path() const { return final_; }
+  void commit();  // atomic rename onto the final name
+
+private:
+  std::filesystem::path final_, temp_;
+  bool committed_ = false;
+};
+
+// Write a whole text file atomically.
+void write_text_file(const std::filesystem::path& path, const std::string& content);
+
+}  // namespace breccia

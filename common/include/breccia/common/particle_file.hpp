@@ -1,0 +1,57 @@
+#pragma once
+// particles.h5: the contract between geometry/ (writer) and solver/ and postproc/
+// (readers). Layout and units are documented in docs/formats.md; SI throughout.
+// Particle i is the centroid of source-mesh cell i (when the model came from a mesh).
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace breccia {
+
+struct ParticleSet {
+  std::string name;
+  std::vector<int64_t> indices;  // particle indices, sorted, unique
+};
+
+// Boundary facets of one named surface group (triangles in 3D, edges in 2D).
+struct SurfaceFacets {
+  std::string name;
+  std::vector<double> area_m2;     // F; in 2D: edge length times thickness
+  std::vector<double> normal;      // 3F, unit, outward from the body
+  std::vector<double> centroid_m;  // 3F
+  std::vector<int64_t> particle;   // F, the particle whose cell owns the facet
+  size_t size() const { return area_m2.size(); }
+};
+
+struct ParticleModel {
+  int dimension = 3;             // 2 or 3
+  double thickness_m = 1.0;      // 2D only: out-of-plane thickness; volume = area * thickness
+  std::vector<double> position_m;  // 3N (z = 0 in 2D)
+  std::vector<double> volume_m3;   // N
+  std::vector<double> spacing_m;   // N, local particle spacing (cube/square root of cell size)
+  std::vector<int32_t> material_id;  // N, index into material_names
+  std::vector<std::string> material_names;
+  std::vector<ParticleSet> sets;
+  std::vector<SurfaceFacets> surfaces;
+  // Source mesh (empty for lattices): nodes 3*Nn, cells nodes_per_cell*N, 0-based.
+  std::vector<double> mesh_nodes_m;
+  std::vector<int64_t> mesh_cells;
+  int nodes_per_cell = 0;  // 4 (tet), 3 (triangle), 0 (no mesh)
+  std::string source;      // what the model was made from (mesh path or "lattice ...")
+  std::string content_id;  // hash of positions and volumes; results files quote it
+
+  size_t size() const { return volume_m3.size(); }
+  const ParticleSet* find_set(const std::string& name) const;
+  const SurfaceFacets* find_surface(const std::string& name) const;
+};
+
+// Stable 64-bit hash of positions and volumes, as hex: the provenance key.
+std::string compute_content_id(const ParticleModel& model);
+
+// Write particles.h5 (atomically) and its ParaView sidecar particles.xdmf next to it.
+void write_particle_file(const std::string& path, ParticleModel model);
+
+// Read and validate; throws InputError naming the file and the dataset on any defect.
+ParticleModel read_particle_file(const std::string& path);
+
+}  // namespace breccia

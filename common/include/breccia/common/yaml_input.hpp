@@ -1,0 +1,65 @@
+#pragma once
+// One place that validates YAML input. A Section wraps a YAML map with its file name and
+// path ("loads[2].history"), rejects unknown keys naming the allowed ones, and converts
+// values with their units (units.hpp). Every error is an InputError naming file and field.
+#include <yaml-cpp/yaml.h>
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "breccia/common/units.hpp"
+
+namespace breccia {
+
+class Section {
+public:
+  Section(YAML::Node node, std::string file, std::string path);
+
+  // Load a YAML file; throws InputError for a missing file or a syntax error (with line).
+  static Section load_file(const std::string& file);
+
+  const std::string& file() const { return file_; }
+  const std::string& path() const { return path_; }
+  const YAML::Node& node() const { return node_; }
+  std::string field(const std::string& key) const;  // "path.key"
+
+  bool has(const std::string& key) const;
+  // Throws for any key not in `allowed`.
+  void allow_only(const std::vector<std::string>& allowed) const;
+
+  Section section(const std::string& key) const;                    // required map
+  std::optional<Section> optional_section(const std::string& key) const;
+  std::vector<Section> list(const std::string& key) const;          // list of maps (empty if absent)
+
+  double number(const std::string& key, Quantity q) const;          // required
+  double number(const std::string& key, Quantity q, double fallback) const;
+  std::optional<double> optional_number(const std::string& key, Quantity q) const;
+  double positive(const std::string& key, Quantity q) const;        // required, > 0
+  double positive(const std::string& key, Quantity q, double fallback) const;
+  long long integer(const std::string& key) const;
+  long long integer(const std::string& key, long long fallback) const;
+  bool boolean(const std::string& key, bool fallback) const;
+  std::string text(const std::string& key) const;
+  std::string text(const std::string& key, const std::string& fallback) const;
+  // A string that must be one of `choices`.
+  std::string choice(const std::string& key, const std::vector<std::string>& choices,
+                     const std::string& fallback) const;
+  std::string choice(const std::string& key, const std::vector<std::string>& choices) const;
+  std::vector<double> numbers(const std::string& key, Quantity q, size_t expected_size = 0) const;
+  std::array<double, 3> vec3(const std::string& key, Quantity q) const;  // 2 or 3 entries, z = 0
+  std::vector<std::string> texts(const std::string& key) const;
+
+private:
+  YAML::Node child(const std::string& key) const;
+  [[noreturn]] void fail(const std::string& key, const std::string& found,
+                         const std::string& expected) const;
+  double scalar_quantity(const YAML::Node& n, const std::string& fieldname, Quantity q) const;
+
+  YAML::Node node_;
+  std::string file_;
+  std::string path_;
+};
+
+}  // namespace breccia

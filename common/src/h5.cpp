@@ -1,0 +1,255 @@
+#include "breccia/common/h5.hpp"
+
+#include <stdexcept>
+
+#include "breccia/common/error.hpp"
+
+namespace breccia::h5 {
+namespace {
+
+// Silence HDF5's own stack printing: we turn failures into our own messages.
+struct QuietErrors {
+  QuietErrors() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
+};
+const QuietErrors quiet;
+
+struct Handle {
+  hid_t id;
+  herr_t (*close)(hid_t);
+  ~Handle() { if (id >= 0) close(id); }
+};
+
+template <class T> hid_t mem_type();
+template <> hid_t mem_type<double>() { return H5T_NATIVE_DOUBLE; }
+template <> hid_t mem_type<float>() { return H5T_NATIVE_FLOAT; }
+template <> hid_t mem_type<int64_t>() { return H5T_NATIVE_INT64; }
+template <> hid_t mem_type<int32_t>() { return H5T_NATIVE_INT32; }
+template <> hid_t mem_type<uint8_t>() { return H5T_NATIVE_UINT8; }
+
+std::string parent_of(const std::string& p) {
+  const auto pos = p.find_last_of('/');
+  if (pos == std::string::npos || pos == 0) return "/";
+  return p.substr(0, pos);
+}
+
+}  // namespace
+
+File::File(const std::string& path, Mode mode) : path_(path) {
+  switch (mode) {
+    case Mode::Read: id_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT); break;
+    case Mode::ReadWrite: id_ = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT); break;
+    case Mode::Create: id_ = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT); break;
+  }
+  if (id_ < 0) {
+    if (mode == Mode::Create) throw RunError("cannot create HDF5 file " + path);
+    throw InputError(path, "", "cannot be opened as an HDF5 file", "an HDF5 file written by Breccia");
+  }
+}
+
+File::~File() {
+  if (id_ >= 0) H5Fclose(id_);
+}
+
+void File::flush() const { H5Fflush(id_, H5F_SCOPE_GLOBAL); }
+
+bool File::exists(const std::string& object_path) const {
+  // H5Lexists must be checked level by level.
+  std::string prefix;
+  size_t start = 1;
+  while (start <= object_path.size()) {
+    const size_t next = object_path.find('/', start);
+    prefix = object_path.substr(0, next == std::string::npos ? object_path.size() : next);
+    if (H5Lexists(id_, prefix.c_str(), H5P_DEFAULT) <= 0) return false;
+    if (next == std::string::npos) break;
+    start = next + 1;
+  }
+  return true;
+}
+
+void File::create_group(const std::string& group_path) const {
+  if (group_path == "/" || exists(group_path)) return;
+  create_group(parent_of(group_path));
+  Handle g{H5Gcreate2(id_, group_path.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose};
+  if (g.id < 0) throw RunError(path_ + ": cannot create group " + group_path);
+}
+
+std::vector<std::string> File::children(const std::string& group_path) const {
+  std::vector<std::string> names;
+  if (!exists(group_path) && group_path != "/") return names;
+  Handle g{H5Gopen2(id_, group_path.c_str(), H5P_DEFAULT), H5Gclose};
+  if (g.id < 0) return names;
+  H5G_info_t info;
+  H5Gget_info(g.id, &info);
+  for (hsize_t i = 0; i < info.nlinks; ++i) {
+    const ssize_t len = H5Lget_name_by_idx(g.id, ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
+    std::string name(static_cast<size_t>(len), '\0');
+    H5Lget_name_by_idx(g.id, ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), len + 1, H5P_DEFAULT);
+    names.push_back(name);
+  }
+  return names;
+}
+
+template <class T>
+static void write_impl(const File& f, const std::string& path, const std::vector<T>& data,
+                       std::vector<hsize_t> dims) {
+  hsize_t total = 1;
+  for (auto d : dims) total *= d;
+  if (total != data.size())
+    throw std::logic_error("h5 write " + path + ": dims do not match data size");
+  f.create_group(parent_of(path));
+  if (f.exists(path)) H5Ldelete(f.id(), path.c_str(), H5P_DEFAULT);
+  Handle space{H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose};
+  Handle plist{H5Pcreate(H5P_DATASET_CREATE), H5Pclose};
+  // Chunk + deflate big arrays: particle files of 10^6+ particles shrink a lot.
+  if (total > 65536) {
+    std::vector<hsize_t> chunk = dims;
+    chunk[0] = std::min<hsize_t>(dims[0], 65536);
+    H5Pset_chunk(plist.id, static_cast<int>(chunk.size()), chunk.data());
+    H5Pset_deflate(plist.id, 1);
+  }
+  Handle ds{H5Dcreate2(f.id(), path.c_str(), mem_type<T>(), space.id, H5P_DEFAULT, plist.id, H5P_DEFAULT),
+            H5Dclose};
+  if (ds.id < 0) throw RunError(f.path() + ": cannot create dataset " + path);
+  if (total > 0 && H5Dwrite(ds.id, mem_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()) < 0)
+    throw RunError(f.path() + ": cannot write dataset " + path);
+}
+
+void File::write(const std::string& p, const std::vector<double>& d, std::vector<hsize_t> dims) const { write_impl(*this, p, d, dims); }
+void File::write(const std::string& p, const std::vector<float>& d, std::vector<hsize_t> dims) const { write_impl(*this, p, d, dims); }
+void File::write(const std::string& p, const std::vector<int64_t>& d, std::vector<hsize_t> dims) const { write_impl(*this, p, d, dims); }
+void File::write(const std::string& p, const std::vector<int32_t>& d, std::vector<hsize_t> dims) const { write_impl(*this, p, d, dims); }
+void File::write(const std::string& p, const std::vector<uint8_t>& d, std::vector<hsize_t> dims) const { write_impl(*this, p, d, dims); }
+
+void File::write_strings(const std::string& path, const std::vector<std::string>& values) const {
+  create_group(parent_of(path));
+  if (exists(path)) H5Ldelete(id_, path.c_str(), H5P_DEFAULT);
+  Handle type{H5Tcopy(H5T_C_S1), H5Tclose};
+  H5Tset_size(type.id, H5T_VARIABLE);
+  hsize_t n = values.size();
+  Handle space{H5Screate_simple(1, &n, nullptr), H5Sclose};
+  Handle ds{H5Dcreate2(id_, path.c_str(), type.id, space.id, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose};
+  std::vector<const char*> ptrs;
+  for (const auto& v : values) ptrs.push_back(v.c_str());
+  if (n > 0 && H5Dwrite(ds.id, type.id, H5S_ALL, H5S_ALL, H5P_DEFAULT, ptrs.data()) < 0)
+    throw RunError(path_ + ": cannot write " + path);
+}
+
+std::vector<hsize_t> File::dims(const std::string& path) const {
+  if (!exists(path)) throw InputError(path_, path, "dataset is missing", "a dataset " + path);
+  Handle ds{H5Dopen2(id_, path.c_str(), H5P_DEFAULT), H5Dclose};
+  Handle space{H5Dget_space(ds.id), H5Sclose};
+  const int rank = H5Sget_simple_extent_ndims(space.id);
+  std::vector<hsize_t> d(static_cast<size_t>(std::max(rank, 0)));
+  H5Sget_simple_extent_dims(space.id, d.data(), nullptr);
+  return d;
+}
+
+template <class T>
+static std::vector<T> read_impl(const File& f, const std::string& path) {
+  const auto d = f.dims(path);
+  hsize_t total = 1;
+  for (auto x : d) total *= x;
+  std::vector<T> out(total);
+  Handle ds{H5Dopen2(f.id(), path.c_str(), H5P_DEFAULT), H5Dclose};
+  if (total > 0 && H5Dread(ds.id, mem_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0)
+    throw InputError(f.path(), path, "cannot be read as a numeric dataset", "numeric data");
+  return out;
+}
+
+std::vector<double> File::read_doubles(const std::string& p) const { return read_impl<double>(*this, p); }
+std::vector<float> File::read_floats(const std::string& p) const { return read_impl<float>(*this, p); }
+std::vector<int64_t> File::read_int64(const std::string& p) const { return read_impl<int64_t>(*this, p); }
+std::vector<int32_t> File::read_int32(const std::string& p) const { return read_impl<int32_t>(*this, p); }
+std::vector<uint8_t> File::read_uint8(const std::string& p) const { return read_impl<uint8_t>(*this, p); }
+
+std::vector<std::string> File::read_strings(const std::string& path) const {
+  const auto d = dims(path);
+  const hsize_t n = d.empty() ? 0 : d[0];
+  Handle ds{H5Dopen2(id_, path.c_str(), H5P_DEFAULT), H5Dclose};
+  Handle type{H5Tcopy(H5T_C_S1), H5Tclose};
+  H5Tset_size(type.id, H5T_VARIABLE);
+  std::vector<char*> ptrs(n, nullptr);
+  if (n > 0 && H5Dread(ds.id, type.id, H5S_ALL, H5S_ALL, H5P_DEFAULT, ptrs.data()) < 0)
+    throw InputError(path_, path, "cannot be read as strings", "a string dataset");
+  std::vector<std::string> out;
+  for (auto* p : ptrs) out.emplace_back(p ? p : "");
+  if (n > 0) {
+    Handle space{H5Dget_space(ds.id), H5Sclose};
+    H5Dvlen_reclaim(type.id, space.id, H5P_DEFAULT, ptrs.data());
+  }
+  return out;
+}
+
+namespace {
+Handle open_object(hid_t file, const std::string& obj) {
+  return Handle{H5Oopen(file, obj.c_str(), H5P_DEFAULT), H5Oclose};
+}
+void replace_attr(hid_t obj, const std::string& name) {
+  if (H5Aexists(obj, name.c_str()) > 0) H5Adelete(obj, name.c_str());
+}
+}  // namespace
+
+void File::set_attr(const std::string& obj, const std::string& name, const std::string& value) const {
+  Handle o = open_object(id_, obj);
+  replace_attr(o.id, name);
+  Handle type{H5Tcopy(H5T_C_S1), H5Tclose};
+  H5Tset_size(type.id, std::max<size_t>(value.size(), 1));
+  Handle space{H5Screate(H5S_SCALAR), H5Sclose};
+  Handle a{H5Acreate2(o.id, name.c_str(), type.id, space.id, H5P_DEFAULT, H5P_DEFAULT), H5Aclose};
+  std::string padded = value.empty() ? std::string(1, '\0') : value;
+  H5Awrite(a.id, type.id, padded.data());
+}
+
+void File::set_attr(const std::string& obj, const std::string& name, double value) const {
+  Handle o = open_object(id_, obj);
+  replace_attr(o.id, name);
+  Handle space{H5Screate(H5S_SCALAR), H5Sclose};
+  Handle a{H5Acreate2(o.id, name.c_str(), H5T_NATIVE_DOUBLE, space.id, H5P_DEFAULT, H5P_DEFAULT), H5Aclose};
+  H5Awrite(a.id, H5T_NATIVE_DOUBLE, &value);
+}
+
+void File::set_attr(const std::string& obj, const std::string& name, long long value) const {
+  Handle o = open_object(id_, obj);
+  replace_attr(o.id, name);
+  Handle space{H5Screate(H5S_SCALAR), H5Sclose};
+  Handle a{H5Acreate2(o.id, name.c_str(), H5T_NATIVE_LLONG, space.id, H5P_DEFAULT, H5P_DEFAULT), H5Aclose};
+  H5Awrite(a.id, H5T_NATIVE_LLONG, &value);
+}
+
+bool File::has_attr(const std::string& obj, const std::string& name) const {
+  if (obj != "/" && !exists(obj)) return false;
+  Handle o = open_object(id_, obj);
+  return H5Aexists(o.id, name.c_str()) > 0;
+}
+
+std::string File::attr_string(const std::string& obj, const std::string& name) const {
+  if (!has_attr(obj, name)) throw InputError(path_, obj + "@" + name, "attribute is missing", "attribute " + name);
+  Handle o = open_object(id_, obj);
+  Handle a{H5Aopen(o.id, name.c_str(), H5P_DEFAULT), H5Aclose};
+  Handle type{H5Aget_type(a.id), H5Tclose};
+  const size_t size = H5Tget_size(type.id);
+  std::string out(size, '\0');
+  H5Aread(a.id, type.id, out.data());
+  while (!out.empty() && out.back() == '\0') out.pop_back();
+  return out;
+}
+
+double File::attr_double(const std::string& obj, const std::string& name) const {
+  if (!has_attr(obj, name)) throw InputError(path_, obj + "@" + name, "attribute is missing", "attribute " + name);
+  Handle o = open_object(id_, obj);
+  Handle a{H5Aopen(o.id, name.c_str(), H5P_DEFAULT), H5Aclose};
+  double v = 0;
+  H5Aread(a.id, H5T_NATIVE_DOUBLE, &v);
+  return v;
+}
+
+long long File::attr_int(const std::string& obj, const std::string& name) const {
+  if (!has_attr(obj, name)) throw InputError(path_, obj + "@" + name, "attribute is missing", "attribute " + name);
+  Handle o = open_object(id_, obj);
+  Handle a{H5Aopen(o.id, name.c_str(), H5P_DEFAULT), H5Aclose};
+  long long v = 0;
+  H5Aread(a.id, H5T_NATIVE_LLONG, &v);
+  return v;
+}
+
+}  // namespace breccia::h5

@@ -1,0 +1,39 @@
+#include "breccia/common/output_file.hpp"
+
+#include <fstream>
+#include <system_error>
+
+#include "breccia/common/error.hpp"
+
+namespace breccia {
+
+OutputFile::OutputFile(std::filesystem::path final_path)
+    : final_(std::move(final_path)), temp_(final_.string() + ".partial") {
+  if (final_.has_parent_path()) std::filesystem::create_directories(final_.parent_path());
+}
+
+OutputFile::~OutputFile() {
+  if (!committed_) {
+    std::error_code ec;
+    std::filesystem::remove(temp_, ec);
+  }
+}
+
+void OutputFile::commit() {
+  std::error_code ec;
+  std::filesystem::rename(temp_, final_, ec);
+  if (ec) throw RunError("cannot rename " + temp_.string() + " to " + final_.string() + ": " + ec.message());
+  committed_ = true;
+}
+
+void write_text_file(const std::filesystem::path& path, const std::string& content) {
+  OutputFile out(path);
+  {
+    std::ofstream f(out.temp_path());
+    f << content;
+    if (!f) throw RunError("cannot write " + out.temp_path().string());
+  }
+  out.commit();
+}
+
+}  // namespace breccia

@@ -1,0 +1,199 @@
+#include "breccia/common/particle_file.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <sstream>
+
+#include "breccia/common/error.hpp"
+#include "breccia/common/h5.hpp"
+#include "breccia/common/output_file.hpp"
+
+namespace breccia {
+
+const ParticleSet* ParticleModel::find_set(const std::string& name) const {
+  for (const auto& s : sets)
+    if (s.name == name) return &s;
+  return nullptr;
+}
+
+const SurfaceFacets* ParticleModel::find_surface(const std::string& name) const {
+  for (const auto& s : surfaces)
+    if (s.name == name) return &s;
+  return nullptr;
+}
+
+std::string compute_content_id(const ParticleModel& model) {
+  uint64_t h = 1469598103934665603ull;  // FNV-1a
+  auto mix = [&h](const void* data, size_t bytes) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < bytes; ++i) { h ^= p[i]; h *= 1099511628211ull; }
+  };
+  mix(model.position_m.data(), model.position_m.size() * sizeof(double));
+  mix(model.volume_m3.data(), model.volume_m3.size() * sizeof(double));
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+namespace {
+
+std::string xdmf_sidecar(const std::string& h5_name, const ParticleModel& m) {
+  const size_t n = m.size();
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+    << "  <Grid Name=\"particles\" GridType=\"Uniform\">\n"
+    << "   <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\" NodesPerElement=\"1\"/>\n"
+    << "   <Geometry GeometryType=\"XYZ\">\n"
+    << "    <DataItem Dimensions=\"" << n << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
+    << h5_name << ":/particles/position</DataItem>\n   </Geometry>\n";
+  auto attr = [&](const char* name, const char* path, const char* type, int prec) {
+    x << "   <Attribute Name=\"" << name << "\" AttributeType=\"Scalar\" Center=\"Node\">\n"
+      << "    <DataItem Dimensions=\"" << n << "\" NumberType=\"" << type << "\" Precision=\"" << prec
+      << "\" Format=\"HDF\">" << h5_name << ":" << path << "</DataItem>\n   </Attribute>\n";
+  };
+  attr("volume", "/particles/volume", "Float", 8);
+  attr("spacing", "/particles/spacing", "Float", 8);
+  attr("material_id", "/particles/material_id", "Int", 4);
+  x << "  </Grid>\n";
+  if (m.nodes_per_cell > 0) {
+    const char* topo = m.nodes_per_cell == 4 ? "Tetrahedron" : "Triangle";
+    x << "  <Grid Name=\"mesh\" GridType=\"Uniform\">\n"
+      << "   <Topology TopologyType=\"" << topo << "\" NumberOfElements=\"" << n << "\">\n"
+      << "    <DataItem Dimensions=\"" << n << " " << m.nodes_per_cell
+      << "\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":/mesh/cells</DataItem>\n"
+      << "   </Topology>\n   <Geometry GeometryType=\"XYZ\">\n"
+      << "    <DataItem Dimensions=\"" << m.mesh_nodes_m.size() / 3
+      << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name
+      << ":/mesh/nodes</DataItem>\n   </Geometry>\n"
+      << "   <Attribute Name=\"material_id\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
+      << "    <DataItem Dimensions=\"" << n << "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">"
+      << h5_name << ":/particles/material_id</DataItem>\n   </Attribute>\n  </Grid>\n";
+  }
+  x << " </Domain>\n</Xdmf>\n";
+  return x.str();
+}
+
+void validate(const ParticleModel& m, const std::string& file) {
+  const size_t n = m.size();
+  if (m.dimension != 2 && m.dimension != 3)
+    throw InputError(file, "/@dimension", "value " + std::to_string(m.dimension), "2 or 3");
+  if (n == 0) throw InputError(file, "/particles/volume", "no particles", "at least one particle");
+  if (m.position_m.size() != 3 * n)
+    throw InputError(file, "/particles/position", "size " + std::to_string(m.position_m.size()),
+                     "3 x " + std::to_string(n) + " (one row per particle)");
+  if (m.material_id.size() != n)
+    throw InputError(file, "/particles/material_id", "size " + std::to_string(m.material_id.size()),
+                     std::to_string(n));
+  if (m.spacing_m.size() != n)
+    throw InputError(file, "/particles/spacing", "size " + std::to_string(m.spacing_m.size()), std::to_string(n));
+  for (size_t i = 0; i < n; ++i) {
+    if (!(m.volume_m3[i] > 0.0) || !std::isfinite(m.volume_m3[i]))
+      throw InputError(file, "/particles/volume[" + std::to_string(i) + "]",
+                       "value " + std::to_string(m.volume_m3[i]), "a positive finite volume");
+    if (m.material_id[i] < 0 || static_cast<size_t>(m.material_id[i]) >= std::max<size_t>(m.material_names.size(), 1))
+      throw InputError(file, "/particles/material_id[" + std::to_string(i) + "]",
+                       "value " + std::to_string(m.material_id[i]), "an index into /materials/names");
+  }
+  for (const auto& s : m.sets)
+    for (auto idx : s.indices)
+      if (idx < 0 || static_cast<size_t>(idx) >= n)
+        throw InputError(file, "/sets/" + s.name, "index " + std::to_string(idx), "0 <= index < " + std::to_string(n));
+  for (const auto& s : m.surfaces) {
+    const size_t f = s.size();
+    if (s.normal.size() != 3 * f || s.centroid_m.size() != 3 * f || s.particle.size() != f)
+      throw InputError(file, "/surfaces/" + s.name, "inconsistent dataset sizes", "area F, normal F x 3, centroid F x 3, particle F");
+    for (auto p : s.particle)
+      if (p < 0 || static_cast<size_t>(p) >= n)
+        throw InputError(file, "/surfaces/" + s.name + "/particle", "index " + std::to_string(p), "a particle index");
+  }
+}
+
+}  // namespace
+
+void write_particle_file(const std::string& path, ParticleModel m) {
+  if (m.spacing_m.empty()) {
+    m.spacing_m.resize(m.size());
+    for (size_t i = 0; i < m.size(); ++i)
+      m.spacing_m[i] = m.dimension == 3 ? std::cbrt(m.volume_m3[i]) : std::sqrt(m.volume_m3[i] / m.thickness_m);
+  }
+  if (m.material_names.empty()) m.material_names.push_back("default");
+  validate(m, path);
+  m.content_id = compute_content_id(m);
+  const size_t n = m.size();
+  OutputFile out(path);
+  {
+    h5::File f(out.temp_path().string(), h5::File::Mode::Create);
+    f.set_attr("/", "format", std::string("breccia-particles"));
+    f.set_attr("/", "format_version", 1LL);
+    f.set_attr("/", "dimension", static_cast<long long>(m.dimension));
+    f.set_attr("/", "thickness_m", m.thickness_m);
+    f.set_attr("/", "units", std::string("SI (m, m3, kg, s)"));
+    f.set_attr("/", "source", m.source);
+    f.set_attr("/", "content_id", m.content_id);
+    f.write("/particles/position", m.position_m, {n, 3});
+    f.write("/particles/volume", m.volume_m3, {n});
+    f.write("/particles/spacing", m.spacing_m, {n});
+    f.write("/particles/material_id", m.material_id, {n});
+    f.write_strings("/materials/names", m.material_names);
+    f.create_group("/sets");
+    for (const auto& s : m.sets) f.write("/sets/" + s.name, s.indices, {s.indices.size()});
+    f.create_group("/surfaces");
+    for (const auto& s : m.surfaces) {
+      const std::string g = "/surfaces/" + s.name;
+      f.write(g + "/area", s.area_m2, {s.size()});
+      f.write(g + "/normal", s.normal, {s.size(), 3});
+      f.write(g + "/centroid", s.centroid_m, {s.size(), 3});
+      f.write(g + "/particle", s.particle, {s.size()});
+    }
+    if (m.nodes_per_cell > 0) {
+      f.write("/mesh/nodes", m.mesh_nodes_m, {m.mesh_nodes_m.size() / 3, 3});
+      f.write("/mesh/cells", m.mesh_cells, {n, static_cast<hsize_t>(m.nodes_per_cell)});
+      f.set_attr("/mesh", "nodes_per_cell", static_cast<long long>(m.nodes_per_cell));
+    }
+  }
+  out.commit();
+  const std::filesystem::path p(path);
+  std::filesystem::path xdmf = p;
+  xdmf.replace_extension(".xdmf");
+  write_text_file(xdmf, xdmf_sidecar(p.filename().string(), m));
+}
+
+ParticleModel read_particle_file(const std::string& path) {
+  if (!std::filesystem::exists(path))
+    throw InputError(path, "", "file does not exist", "a particles.h5 written by breccia-place");
+  h5::File f(path, h5::File::Mode::Read);
+  if (!f.has_attr("/", "format") || f.attr_string("/", "format") != "breccia-particles")
+    throw InputError(path, "/@format", "missing or not 'breccia-particles'", "a particles.h5 written by breccia-place");
+  ParticleModel m;
+  m.dimension = static_cast<int>(f.attr_int("/", "dimension"));
+  m.thickness_m = f.attr_double("/", "thickness_m");
+  m.source = f.attr_string("/", "source");
+  m.content_id = f.attr_string("/", "content_id");
+  m.position_m = f.read_doubles("/particles/position");
+  m.volume_m3 = f.read_doubles("/particles/volume");
+  m.spacing_m = f.read_doubles("/particles/spacing");
+  m.material_id = f.read_int32("/particles/material_id");
+  m.material_names = f.read_strings("/materials/names");
+  for (const auto& name : f.children("/sets")) m.sets.push_back({name, f.read_int64("/sets/" + name)});
+  for (const auto& name : f.children("/surfaces")) {
+    const std::string g = "/surfaces/" + name;
+    SurfaceFacets s;
+    s.name = name;
+    s.area_m2 = f.read_doubles(g + "/area");
+    s.normal = f.read_doubles(g + "/normal");
+    s.centroid_m = f.read_doubles(g + "/centroid");
+    s.particle = f.read_int64(g + "/particle");
+    m.surfaces.push_back(std::move(s));
+  }
+  if (f.exists("/mesh/cells")) {
+    m.nodes_per_cell = static_cast<int>(f.attr_int("/mesh", "nodes_per_cell"));
+    m.mesh_nodes_m = f.read_doubles("/mesh/nodes");
+    m.mesh_cells = f.read_int64("/mesh/cells");
+  }
+  validate(m, path);
+  return m;
+}
+
+}  // namespace breccia

@@ -1,0 +1,191 @@
+#include "breccia/common/yaml_input.hpp"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "breccia/common/error.hpp"
+
+namespace breccia {
+
+Section::Section(YAML::Node node, std::string file, std::string path)
+    : node_(std::move(node)), file_(std::move(file)), path_(std::move(path)) {
+  if (!node_.IsMap())
+    throw InputError(file_, path_.empty() ? "(top level)" : path_,
+                     "is not a mapping of keys to values", "a YAML map");
+}
+
+Section Section::load_file(const std::string& file) {
+  if (!std::filesystem::exists(file))
+    throw InputError(file, "", "file does not exist", "a readable YAML file");
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file);
+  } catch (const YAML::Exception& e) {
+    throw InputError(file, "line " + std::to_string(e.mark.line + 1),
+                     "YAML syntax error: " + e.msg, "valid YAML");
+  }
+  if (!root.IsMap()) throw InputError(file, "(top level)", "is not a YAML map", "a map of sections");
+  return Section(root, file, "");
+}
+
+std::string Section::field(const std::string& key) const {
+  return path_.empty() ? key : path_ + "." + key;
+}
+
+bool Section::has(const std::string& key) const { return node_[key].IsDefined() && !node_[key].IsNull(); }
+
+YAML::Node Section::child(const std::string& key) const { return node_[key]; }
+
+void Section::fail(const std::string& key, const std::string& found, const std::string& expected) const {
+  throw InputError(file_, field(key), found, expected);
+}
+
+void Section::allow_only(const std::vector<std::string>& allowed) const {
+  for (const auto& kv : node_) {
+    const std::string key = kv.first.as<std::string>();
+    if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
+    std::string list;
+    for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+    fail(key, "unknown key '" + key + "'", "one of: " + list);
+  }
+}
+
+Section Section::section(const std::string& key) const {
+  if (!has(key)) fail(key, "missing", "a section '" + key + "'");
+  if (!child(key).IsMap()) fail(key, "is not a map", "a map of keys to values");
+  return Section(child(key), file_, field(key));
+}
+
+std::optional<Section> Section::optional_section(const std::string& key) const {
+  if (!has(key)) return std::nullopt;
+  return section(key);
+}
+
+std::vector<Section> Section::list(const std::string& key) const {
+  std::vector<Section> out;
+  if (!has(key)) return out;
+  const YAML::Node n = child(key);
+  if (!n.IsSequence()) fail(key, "is not a list", "a YAML list of maps");
+  for (size_t i = 0; i < n.size(); ++i) {
+    const std::string p = field(key) + "[" + std::to_string(i) + "]";
+    if (!n[i].IsMap()) throw InputError(file_, p, "is not a map", "a map of keys to values");
+    out.emplace_back(n[i], file_, p);
+  }
+  return out;
+}
+
+double Section::scalar_quantity(const YAML::Node& n, const std::string& fieldname, Quantity q) const {
+  if (!n.IsScalar())
+    throw InputError(file_, fieldname, "is not a single value",
+                     std::string(quantity_name(q)) + " (a number, SI, or '<number> <unit>')");
+  return parse_quantity(n.Scalar(), q, file_, fieldname);
+}
+
+double Section::number(const std::string& key, Quantity q) const {
+  if (!has(key)) fail(key, "missing", std::string(quantity_name(q)) + " (SI or '<number> <unit>')");
+  return scalar_quantity(child(key), field(key), q);
+}
+
+double Section::number(const std::string& key, Quantity q, double fallback) const {
+  return has(key) ? number(key, q) : fallback;
+}
+
+std::optional<double> Section::optional_number(const std::string& key, Quantity q) const {
+  if (!has(key)) return std::nullopt;
+  return number(key, q);
+}
+
+double Section::positive(const std::string& key, Quantity q) const {
+  const double v = number(key, q);
+  if (!(v > 0.0)) fail(key, "value " + std::to_string(v) + " is not positive", "a value > 0");
+  return v;
+}
+
+double Section::positive(const std::string& key, Quantity q, double fallback) const {
+  return has(key) ? positive(key, q) : fallback;
+}
+
+long long Section::integer(const std::string& key) const {
+  if (!has(key)) fail(key, "missing", "an integer");
+  const YAML::Node n = child(key);
+  try {
+    if (!n.IsScalar()) throw YAML::Exception(YAML::Mark(), "");
+    return n.as<long long>();
+  } catch (const YAML::Exception&) {
+    fail(key, "'" + (n.IsScalar() ? n.Scalar() : std::string("non-scalar")) + "' is not an integer", "an integer");
+  }
+}
+
+long long Section::integer(const std::string& key, long long fallback) const {
+  return has(key) ? integer(key) : fallback;
+}
+
+bool Section::boolean(const std::string& key, bool fallback) const {
+  if (!has(key)) return fallback;
+  const YAML::Node n = child(key);
+  try {
+    if (!n.IsScalar()) throw YAML::Exception(YAML::Mark(), "");
+    return n.as<bool>();
+  } catch (const YAML::Exception&) {
+    fail(key, "'" + (n.IsScalar() ? n.Scalar() : std::string("non-scalar")) + "' is not a boolean", "true or false");
+  }
+}
+
+std::string Section::text(const std::string& key) const {
+  if (!has(key)) fail(key, "missing", "a text value");
+  const YAML::Node n = child(key);
+  if (!n.IsScalar()) fail(key, "is not a single text value", "a text value");
+  return n.Scalar();
+}
+
+std::string Section::text(const std::string& key, const std::string& fallback) const {
+  return has(key) ? text(key) : fallback;
+}
+
+std::string Section::choice(const std::string& key, const std::vector<std::string>& choices,
+                            const std::string& fallback) const {
+  if (!has(key)) return fallback;
+  return choice(key, choices);
+}
+
+std::string Section::choice(const std::string& key, const std::vector<std::string>& choices) const {
+  const std::string v = text(key);
+  if (std::find(choices.begin(), choices.end(), v) != choices.end()) return v;
+  std::string list;
+  for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c;
+  fail(key, "'" + v + "' is not a valid choice", "one of: " + list);
+}
+
+std::vector<double> Section::numbers(const std::string& key, Quantity q, size_t expected_size) const {
+  if (!has(key)) fail(key, "missing", "a list of " + std::string(quantity_name(q)) + " values");
+  const YAML::Node n = child(key);
+  if (!n.IsSequence()) fail(key, "is not a list", "a list like [1, 2, 3]");
+  if (expected_size && n.size() != expected_size)
+    fail(key, "has " + std::to_string(n.size()) + " entries", std::to_string(expected_size) + " entries");
+  std::vector<double> out;
+  for (size_t i = 0; i < n.size(); ++i)
+    out.push_back(scalar_quantity(n[i], field(key) + "[" + std::to_string(i) + "]", q));
+  return out;
+}
+
+std::array<double, 3> Section::vec3(const std::string& key, Quantity q) const {
+  auto v = numbers(key, q);
+  if (v.size() != 2 && v.size() != 3)
+    fail(key, "has " + std::to_string(v.size()) + " entries", "2 or 3 coordinates");
+  return {v[0], v[1], v.size() == 3 ? v[2] : 0.0};
+}
+
+std::vector<std::string> Section::texts(const std::string& key) const {
+  std::vector<std::string> out;
+  if (!has(key)) return out;
+  const YAML::Node n = child(key);
+  if (n.IsScalar()) return {n.Scalar()};
+  if (!n.IsSequence()) fail(key, "is not a list", "a list of names");
+  for (size_t i = 0; i < n.size(); ++i) {
+    if (!n[i].IsScalar()) fail(key, "entry " + std::to_string(i) + " is not a name", "a list of names");
+    out.push_back(n[i].Scalar());
+  }
+  return out;
+}
+
+}  // namespace breccia

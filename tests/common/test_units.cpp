@@ -1,0 +1,55 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "breccia/common/error.hpp"
+#include "breccia/common/units.hpp"
+#include "breccia/common/yaml_input.hpp"
+
+using namespace breccia;
+
+TEST(Units, PlainNumbersAreSIAndSuffixesConvert) {
+  EXPECT_DOUBLE_EQ(parse_quantity("2.5", Quantity::Pressure, "f", "x"), 2.5);
+  EXPECT_DOUBLE_EQ(parse_quantity("1 GPa", Quantity::Pressure, "f", "x"), 1e9);
+  EXPECT_DOUBLE_EQ(parse_quantity("140 us", Quantity::Time, "f", "x"), 140e-6);
+  EXPECT_DOUBLE_EQ(parse_quantity("2320 kg/m3", Quantity::Density, "f", "x"), 2320.0);
+  EXPECT_DOUBLE_EQ(parse_quantity("25 J/m2", Quantity::FractureEnergy, "f", "x"), 25.0);
+}
+
+TEST(Units, WrongKindOfUnitNamesFileFieldAndAcceptedUnits) {
+  try {
+    parse_quantity("5 mm", Quantity::Pressure, "case.yaml", "loads[0].peak_pressure");
+    FAIL() << "a length given for a pressure must be rejected";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("case.yaml"), std::string::npos);
+    EXPECT_NE(msg.find("loads[0].peak_pressure"), std::string::npos);
+    EXPECT_NE(msg.find("MPa"), std::string::npos);
+  }
+}
+
+TEST(YamlInput, UnknownKeyIsRejectedWithAllowedKeys) {
+  const std::string path = ::testing::TempDir() + "/bad_key.yaml";
+  std::ofstream(path) << "material:\n  densty: 2000\n";
+  const Section root = Section::load_file(path);
+  const Section mat = root.section("material");
+  try {
+    mat.allow_only({"density", "youngs_modulus"});
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("material.densty"), std::string::npos);
+    EXPECT_NE(msg.find("density"), std::string::npos);
+  }
+}
+
+TEST(YamlInput, SyntaxErrorNamesTheLine) {
+  const std::string path = ::testing::TempDir() + "/bad_syntax.yaml";
+  std::ofstream(path) << "a: 1\nb: [1, 2\n";
+  try {
+    Section::load_file(path);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("line"), std::string::npos);
+  }
+}

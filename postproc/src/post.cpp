@@ -1,0 +1,527 @@
+#include "breccia/postproc/post.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+
+#include "breccia/common/error.hpp"
+#include "breccia/common/output_file.hpp"
+#include "breccia/common/progress.hpp"
+#include "breccia/postproc/bond_graph.hpp"
+#include "breccia/postproc/fragments.hpp"
+#include "breccia/postproc/history.hpp"
+#include "breccia/postproc/meshes.hpp"
+#include "breccia/postproc/run_data.hpp"
+#include "breccia/postproc/size_distribution.hpp"
+#include "breccia/postproc/spectrum.hpp"
+#include "json_writer.hpp"
+
+namespace breccia::postproc {
+namespace fs = std::filesystem;
+
+#ifndef BRECCIA_POSTPROC_SCRIPTS_DIR
+#define BRECCIA_POSTPROC_SCRIPTS_DIR ""
+#endif
+
+fs::path default_scripts_dir() {
+  if (const char* env = std::getenv("BRECCIA_POSTPROC_SCRIPTS")) return env;
+  return BRECCIA_POSTPROC_SCRIPTS_DIR;
+}
+
+namespace {
+
+std::string fmt(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
+std::string step_suffix(const OutputInfo& o) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "_%06lld", o.step);
+  return buf;
+}
+
+std::string shell_quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) {
+    if (c == '\'') out += "'\\''";
+    else out += c;
+  }
+  return out + "'";
+}
+
+struct StepRecord {
+  OutputInfo info;
+  bool has_cracks = false, has_fragments = false;
+  CrackResult cracks;
+  int32_t fragment_count = 0;
+};
+
+class Runner {
+public:
+  explicit Runner(const PostOptions& o) : opt_(o) {}
+
+  PostSummary run() {
+    run_ = open_run(opt_.run_dir, opt_.particles_file);
+    if (run_.outputs.empty() && (opt_.cracks || opt_.fragments))
+      throw InputError(run_.results_path.string(), "/@output_count", "0 outputs", "at least one output group");
+    summary_.post_dir = opt_.run_dir / "post";
+    fs::create_directories(summary_.post_dir);
+    select_outputs();
+    const bool need_faces = opt_.cracks || opt_.energy;
+    if (!run_.outputs.empty() && (need_faces || opt_.fragments)) {
+      families_ = solver::build_families(run_.position_m, run_.horizon_m);
+      precracks_ = RemovedBonds(run_.precrack_bonds, run_.size());
+      if (need_faces) faces_ = candidate_faces(run_.particles, families_);
+    }
+    if (!run_.outputs.empty() && need_faces) crack_history();
+    for (size_t k = 0; k < analysed_.size(); ++k) {
+      if (analysed_.size() > 1 && opt_.progress)
+        std::fprintf(stderr, "[post] output %zu/%zu (step %lld)\n", k + 1, analysed_.size(), run_.outputs[analysed_[k]].step);
+      analyse_output(analysed_[k], k + 1 == analysed_.size());
+    }
+    if (opt_.all_steps) write_collections();
+    load_history();
+    if (opt_.energy && history_) energy();
+    if (opt_.probes && history_) probes();
+    write_json();
+    return summary_;
+  }
+
+private:
+  void select_outputs() {
+    if (run_.outputs.empty()) return;
+    if (opt_.all_steps) {
+      for (size_t k = 0; k < run_.outputs.size(); ++k) analysed_.push_back(k);
+    } else if (opt_.step) {
+      analysed_.push_back(run_.output_index_of_step(*opt_.step));
+    } else {
+      analysed_.push_back(run_.outputs.size() - 1);
+    }
+  }
+
+  fs::path out(const std::string& name) {
+    summary_.written.push_back(name);
+    return summary_.post_dir / name;
+  }
+
+  CrackInputs crack_inputs(const RemovedBonds& broken, std::span<const double> damage) const {
+    return CrackInputs{&broken, &precracks_, damage, run_.material_id, run_.fracture_energy_J_m2};
+  }
+
+  void crack_history() {
+    Progress progress("crack history", static_cast<long long>(run_.outputs.size()));
+    std::ostringstream csv;
+    csv << "output,step,time_s,crack_area_m2,fracture_area_m2,precrack_area_m2,crack_length_m,crack_count,"
+           "crack_faces,broken_bonds,G0_times_fracture_area_J,smoothed_crack_area_m2,smoothed_fracture_area_m2,"
+           "G0_times_smoothed_fracture_area_J\n";
+    for (size_t k = 0; k < run_.outputs.size(); ++k) {
+      const OutputFrame fr = read_output_cracks_only(run_, k);
+      const RemovedBonds broken(fr.broken_bonds, run_.size());
+      const CrackResult c = find_cracks(faces_, crack_inputs(broken, fr.damage), opt_.crack_criterion, opt_.damage_threshold);
+      csv << k << ',' << fr.info.step << ',' << fmt(fr.info.time_s) << ',' << fmt(c.area_m2) << ','
+          << fmt(c.fracture_area_m2) << ',' << fmt(c.precrack_area_m2) << ',' << fmt(c.length_m) << ','
+          << c.crack_count << ',' << c.face_count << ',' << fr.broken_bonds.size() / 2 << ',' << fmt(c.G0_area_J) << ','
+          << fmt(c.smoothed_area_m2) << ',' << fmt(c.smoothed_fracture_area_m2) << ',' << fmt(c.G0_smoothed_area_J) << '\n';
+      if (opt_.progress) progress.update(static_cast<long long>(k + 1));
+    }
+    write_text_file(out("crack_history.csv"), csv.str());
+  }
+
+  void analyse_output(size_t index, bool last) {
+    const OutputFrame fr = read_output(run_, index);
+    const std::string sfx = opt_.all_steps ? step_suffix(fr.info) : "";
+    const RemovedBonds broken(fr.broken_bonds, run_.size());
+    StepRecord rec;
+    rec.info = fr.info;
+    const bool has_mesh = run_.particles.nodes_per_cell > 0;
+    if (opt_.cracks || opt_.energy) {
+      rec.cracks = find_cracks(faces_, crack_inputs(broken, fr.damage), opt_.crack_criterion, opt_.damage_threshold);
+      rec.has_cracks = true;
+    }
+    if (opt_.cracks) {
+      write_vtp(out("cracks" + sfx + ".vtp"), crack_mesh(faces_, rec.cracks));
+      if (has_mesh) {
+        Mesh mesh = source_mesh(run_.particles);
+        mesh.point_data.push_back({"damage", 1, cell_to_node_average(run_.particles, fr.damage), false});
+        write_contour_vtp(out("damage_iso" + sfx + ".vtp"), mesh, "damage", opt_.damage_threshold);
+      } else if (last) {
+        notes_.push_back("damage_iso.vtp not written: lattice model without a source mesh");
+      }
+    }
+    if (opt_.fragments) {
+      int32_t count = 0;
+      const std::vector<int32_t> comp = intact_components(families_, broken, precracks_, &count);
+      FragmentInputs in{run_.dimension, run_.thickness_m, run_.position_m, fr.displacement_m,
+                        fr.velocity_m_s, run_.volume_m3, run_.density_kg_m3};
+      const FragmentResult frag = measure_fragments(in, comp, count, opt_.min_fragment_particles);
+      rec.has_fragments = true;
+      rec.fragment_count = static_cast<int32_t>(frag.fragments.size());
+      write_fragments_csv(out("fragments" + sfx + ".csv"), frag);
+      write_fragments_vtu(out("fragments" + sfx + ".vtu"), frag, fr);
+      Mesh deformed = deformed_mesh(run_.particles, fr.displacement_m, comp);
+      deformed.cell_data.push_back({"fragment_id", 1, std::vector<double>(frag.fragment_id.begin(), frag.fragment_id.end()), true});
+      deformed.cell_data.push_back({"damage", 1, fr.damage, false});
+      write_vtu(out("deformed" + sfx + ".vtu"), deformed);
+      if (last) {
+        fragments_ = frag;
+        distribution();
+      }
+    }
+    if (opt_.all_steps) {
+      if (opt_.cracks) pvd_["cracks"].emplace_back(fr.info.time_s, "cracks" + sfx + ".vtp");
+      if (opt_.cracks && has_mesh) pvd_["damage_iso"].emplace_back(fr.info.time_s, "damage_iso" + sfx + ".vtp");
+      if (opt_.fragments) {
+        pvd_["fragments"].emplace_back(fr.info.time_s, "fragments" + sfx + ".vtu");
+        pvd_["deformed"].emplace_back(fr.info.time_s, "deformed" + sfx + ".vtu");
+      }
+    }
+    records_.push_back(std::move(rec));
+  }
+
+  void write_collections() {
+    for (const auto& [name, entries] : pvd_) write_pvd(out(name + ".pvd"), entries);
+  }
+
+  void write_fragments_csv(const fs::path& path, const FragmentResult& fr) {
+    std::ostringstream csv;
+    csv << "fragment_id,particle_count,volume_m3,mass_kg,centroid_x_m,centroid_y_m,centroid_z_m,"
+           "reference_centroid_x_m,reference_centroid_y_m,reference_centroid_z_m,velocity_x_m_s,velocity_y_m_s,"
+           "velocity_z_m_s,equivalent_diameter_m,box_long_m,box_mid_m,box_short_m,sieve_size_m\n";
+    for (size_t k = 0; k < fr.fragments.size(); ++k) {
+      const Fragment& f = fr.fragments[k];
+      csv << k << ',' << f.particle_count << ',' << fmt(f.volume_m3) << ',' << fmt(f.mass_kg);
+      for (double v : f.centroid_m) csv << ',' << fmt(v);
+      for (double v : f.centroid_reference_m) csv << ',' << fmt(v);
+      for (double v : f.velocity_m_s) csv << ',' << fmt(v);
+      csv << ',' << fmt(f.equivalent_diameter_m);
+      for (double v : f.box_m) csv << ',' << fmt(v);
+      csv << ',' << fmt(f.sieve_size_m) << '\n';
+    }
+    write_text_file(path, csv.str());
+  }
+
+  void write_fragments_vtu(const fs::path& path, const FragmentResult& fr, const OutputFrame& frame) {
+    Mesh mesh = source_mesh(run_.particles);
+    std::vector<Field>& data = run_.particles.nodes_per_cell > 0 ? mesh.cell_data : mesh.point_data;
+    data.push_back({"fragment_id", 1, std::vector<double>(fr.fragment_id.begin(), fr.fragment_id.end()), true});
+    data.push_back({"component", 1, std::vector<double>(fr.component.begin(), fr.component.end()), true});
+    data.push_back({"damage", 1, frame.damage, false});
+    data.push_back({"displacement", 3, frame.displacement_m, false});
+    data.push_back({"velocity", 3, frame.velocity_m_s, false});
+    data.push_back({"material_id", 1, std::vector<double>(run_.material_id.begin(), run_.material_id.end()), true});
+    write_vtu(path, mesh);
+  }
+
+  void distribution() {
+    std::vector<double> size, mass;
+    for (const Fragment& f : fragments_.fragments) {
+      size.push_back(opt_.size_by_diameter ? f.equivalent_diameter_m : f.sieve_size_m);
+      mass.push_back(f.mass_kg);
+    }
+    dist_ = size_distribution(size, mass);
+    std::ostringstream csv;
+    csv << "size_m,passing,rosin_rammler,swebrec\n";
+    for (size_t k = 0; k < dist_.size_m.size(); ++k) {
+      const double x = dist_.size_m[k];
+      csv << fmt(x) << ',' << fmt(dist_.passing[k]) << ','
+          << (dist_.fitted ? fmt(dist_.rosin_rammler.passing(x)) : "") << ','
+          << (dist_.fitted ? fmt(dist_.swebrec.passing(x)) : "") << '\n';
+    }
+    write_text_file(out("size_distribution.csv"), csv.str());
+    if (!opt_.plots) return;
+    if (!dist_.fitted) {
+      notes_.push_back("fragment_sizes.png not drawn: fewer than 3 distinct fragment sizes");
+      return;
+    }
+    std::string args = "--data " + shell_quote((summary_.post_dir / "size_distribution.csv").string()) +
+                       " --rosin-rammler " + fmt(dist_.rosin_rammler.xc_m) + " " + fmt(dist_.rosin_rammler.n) +
+                       " --swebrec " + fmt(dist_.swebrec.xmax_m) + " " + fmt(dist_.swebrec.x50_m) + " " +
+                       fmt(dist_.swebrec.b) + " --size-label " +
+                       shell_quote(opt_.size_by_diameter ? "equivalent diameter" : "sieve size");
+    plot("plot_fragment_sizes.py", args, "fragment_sizes.png");
+  }
+
+  void plot(const std::string& script, const std::string& args, const std::string& png) {
+    const fs::path dir = opt_.scripts_dir.empty() ? default_scripts_dir() : opt_.scripts_dir;
+    const fs::path log = summary_.post_dir / "plots.log";
+    const std::string cmd = shell_quote(opt_.python) + " " + shell_quote((dir / script).string()) + " " + args +
+                            " --out " + shell_quote((summary_.post_dir / png).string()) + " >> " +
+                            shell_quote(log.string()) + " 2>&1";
+    const int rc = std::system(cmd.c_str());
+    if (rc == 0 && fs::exists(summary_.post_dir / png)) {
+      summary_.written.push_back(png);
+      return;
+    }
+    const std::string msg = png + ": " + script + " failed (exit " + std::to_string(rc) + "), see " + log.string();
+    summary_.plot_failures.push_back(msg);
+    std::fprintf(stderr, "warning: %s; the numerical results are unaffected\n", msg.c_str());
+  }
+
+  void load_history() {
+    const fs::path p = opt_.run_dir / "history.csv";
+    const bool wanted = opt_.energy || opt_.probes;
+    if (!wanted) return;
+    if (!fs::exists(p)) {
+      if (opt_.history_required)
+        throw InputError(p.string(), "", "file does not exist", "history.csv written by breccia-solve (needed for --energy/--spectrum)");
+      notes_.push_back("history.csv absent: no energy balance, probe histories or spectra");
+      return;
+    }
+    history_ = read_history(p);
+  }
+
+  void energy() {
+    const History& h = *history_;
+    for (const char* c : {"time_s", "kinetic_J", "strain_J", "external_work_J", "dissipated_J"}) h.column(c);
+    energy_done_ = true;
+    const auto& dissipated = h.column("dissipated_J");
+    size_t row = h.rows() ? h.rows() - 1 : 0;
+    const StepRecord* rec = records_.empty() ? nullptr : &records_.back();
+    if (rec && h.find("step")) {
+      const auto& steps = h.column("step");
+      for (size_t k = 0; k < h.rows(); ++k)
+        if (steps[k] <= static_cast<double>(rec->info.step)) row = k;
+    }
+    if (h.rows() == 0) return;
+    energy_row_ = row;
+    energy_dissipated_J_ = dissipated[row];
+    energy_G0_area_J_ = rec && rec->has_cracks ? rec->cracks.G0_smoothed_area_J : NAN;
+    energy_G0_face_area_J_ = rec && rec->has_cracks ? rec->cracks.G0_area_J : NAN;
+    const double w = h.column("external_work_J")[row];
+    const double stored = h.column("kinetic_J")[row] + h.column("strain_J")[row] + dissipated[row];
+    energy_imbalance_ = (w - stored) / std::max({std::abs(w), std::abs(stored), 1e-300});
+    if (opt_.plots)
+      plot("plot_energy.py", "--history " + shell_quote(h.path.string()), "energy.png");
+  }
+
+  // Uniform samples for the FFT; linear resampling when the history is not uniform.
+  std::vector<double> uniform(const std::vector<double>& t, const std::vector<double>& v, double& dt, bool& resampled) {
+    const size_t n = t.size();
+    dt = (t.back() - t.front()) / static_cast<double>(n - 1);
+    resampled = false;
+    for (size_t k = 0; k < n; ++k)
+      if (std::abs(t[k] - t.front() - k * dt) > 1e-6 * dt) resampled = true;
+    if (!resampled) return v;
+    std::vector<double> out(n);
+    size_t j = 0;
+    for (size_t k = 0; k < n; ++k) {
+      const double tk = t.front() + k * dt;
+      while (j + 2 < n && t[j + 1] < tk) ++j;
+      const double s = t[j + 1] > t[j] ? (tk - t[j]) / (t[j + 1] - t[j]) : 0.0;
+      out[k] = v[j] + std::clamp(s, 0.0, 1.0) * (v[j + 1] - v[j]);
+    }
+    return out;
+  }
+
+  void probes() {
+    const History& h = *history_;
+    const std::vector<std::string> names = h.probe_names();
+    std::vector<std::string> spectra = opt_.spectrum_probes;
+    for (const auto& s : spectra) {
+      if (std::find(names.begin(), names.end(), s) != names.end() || h.find("probe_" + s)) continue;
+      std::string have;
+      for (const auto& n : names) have += (have.empty() ? "" : ", ") + n;
+      throw InputError(h.path.string(), "--spectrum " + s, "no column probe_" + s + "_<component> or probe_" + s,
+                       "one of the probes in the header: " + (have.empty() ? std::string("(none)") : have));
+    }
+    if (spectra.empty() && opt_.spectrum_all) spectra = names;
+    const auto& t = h.column("time_s");
+    for (const auto& name : names) {
+      const auto cols = h.probe_columns(name);
+      std::ostringstream csv;
+      csv << "time_s";
+      for (const auto& c : cols) csv << ',' << c.substr(7 + name.size());
+      csv << '\n';
+      for (size_t r = 0; r < h.rows(); ++r) {
+        csv << fmt(t[r]);
+        for (const auto& c : cols) csv << ',' << fmt(h.column(c)[r]);
+        csv << '\n';
+      }
+      const std::string file = "probe_" + name + ".csv";
+      write_text_file(out(file), csv.str());
+      if (opt_.plots)
+        plot("plot_series.py", "--kind probe --data " + shell_quote((summary_.post_dir / file).string()) +
+                                   " --title " + shell_quote("probe " + name), "probe_" + name + ".png");
+    }
+    for (const auto& s : spectra) spectrum(s, t);
+  }
+
+  void spectrum(const std::string& probe, const std::vector<double>& t) {
+    const History& h = *history_;
+    std::vector<std::string> cols = h.probe_columns(probe);
+    if (cols.empty()) cols = {"probe_" + probe};
+    if (h.rows() < 4) {
+      notes_.push_back("spectrum of " + probe + " skipped: fewer than 4 samples");
+      return;
+    }
+    std::vector<std::pair<std::string, Spectrum>> comps;
+    bool resampled = false;
+    for (const auto& c : cols) {
+      double dt = 0;
+      bool rs = false;
+      const std::vector<double> v = uniform(t, h.column(c), dt, rs);
+      if (!(dt > 0))
+        throw InputError(h.path.string(), "time_s", "no increase over " + std::to_string(t.size()) + " rows",
+                         "increasing sample times for the spectrum of probe " + probe);
+      resampled = resampled || rs;
+      const std::string comp = c.size() > 7 + probe.size() ? c.substr(7 + probe.size()) : c;
+      comps.emplace_back(comp, amplitude_spectrum(v, dt, opt_.hann, opt_.frequency_Hz));
+    }
+    std::ostringstream csv;
+    csv << "frequency_Hz";
+    for (const auto& [c, s] : comps) csv << ",amplitude_" << c << ",normalised_" << c;
+    csv << '\n';
+    for (size_t k = 0; k < comps.front().second.frequency_Hz.size(); ++k) {
+      csv << fmt(comps.front().second.frequency_Hz[k]);
+      for (const auto& [c, s] : comps) csv << ',' << fmt(s.amplitude[k]) << ',' << fmt(s.normalised[k]);
+      csv << '\n';
+    }
+    const std::string file = "spectrum_" + probe + ".csv";
+    write_text_file(out(file), csv.str());
+    spectra_.push_back({probe, comps, resampled});
+    if (opt_.plots)
+      plot("plot_series.py", "--kind spectrum --data " + shell_quote((summary_.post_dir / file).string()) +
+                                 " --title " + shell_quote("probe " + probe + (opt_.hann ? ", Hann window" : "")),
+           "spectrum_" + probe + ".png");
+  }
+
+  void write_cracks_json(JsonWriter& j, const CrackResult& c) {
+    j.value("crack_area_m2", c.area_m2).value("fracture_area_m2", c.fracture_area_m2)
+        .value("precrack_area_m2", c.precrack_area_m2);
+    if (run_.dimension == 2) j.value("crack_length_m", c.length_m).value("fracture_length_m", c.fracture_length_m);
+    j.value("smoothed_crack_area_m2", c.smoothed_area_m2).value("smoothed_fracture_area_m2", c.smoothed_fracture_area_m2);
+    if (run_.dimension == 2) j.value("smoothed_crack_length_m", c.smoothed_length_m);
+    j.value("smoothing_radius_m", c.smoothing_radius_m);
+    j.value("crack_count", c.crack_count).value("crack_faces", c.face_count).value("G0_times_fracture_area_J", c.G0_area_J)
+        .value("G0_times_smoothed_fracture_area_J", c.G0_smoothed_area_J);
+  }
+
+  void write_json() {
+    JsonWriter j;
+    j.begin_object();
+    j.value("format", "breccia-post").value("format_version", 1);
+    j.value("results_file", run_.results_path.string()).value("particles_file", run_.particles_path.string());
+    j.value("model", run_.model).value("dimension", run_.dimension).value("particles", run_.size());
+    j.value("crack_criterion", opt_.crack_criterion == CrackCriterion::Bond ? "bond" : "damage");
+    j.value("damage_threshold", opt_.damage_threshold);
+    if (!records_.empty()) {
+      const StepRecord& r = records_.back();
+      j.value("step", r.info.step).value("time_s", r.info.time_s);
+      if (r.has_cracks) {
+        j.begin_object("cracks");
+        write_cracks_json(j, r.cracks);
+        j.end_object();
+      }
+    }
+    if (!fragments_.component.empty()) {
+      j.begin_object("fragments");
+      j.value("fragment_count", fragments_.fragments.size()).value("component_count", fragments_.component_count);
+      j.value("min_fragment_particles", opt_.min_fragment_particles);
+      j.value("filtered_out_count", fragments_.filtered_count).value("filtered_out_mass_kg", fragments_.filtered_mass_kg);
+      if (!fragments_.fragments.empty()) {
+        const Fragment& big = fragments_.fragments.front();
+        j.value("largest_mass_kg", big.mass_kg).value("largest_volume_m3", big.volume_m3);
+      }
+      j.end_object();
+      j.begin_object("size_distribution");
+      j.value("size_measure", opt_.size_by_diameter ? "equivalent_diameter" : "sieve_size");
+      j.value("fragment_count", dist_.fragment_count).value("x50_m", dist_.x50_m).value("x80_m", dist_.x80_m);
+      j.value("fitted", dist_.fitted);
+      if (dist_.fitted) {
+        const auto& rr = dist_.rosin_rammler;
+        const auto& sw = dist_.swebrec;
+        j.begin_object("rosin_rammler").value("xc_m", rr.xc_m).value("n", rr.n).value("x50_m", rr.x50_m)
+            .value("x80_m", rr.x80_m).value("r_squared", rr.r2).end_object();
+        j.begin_object("swebrec").value("xmax_m", sw.xmax_m).value("x50_m", sw.x50_m).value("b", sw.b)
+            .value("x80_m", sw.x80_m).value("r_squared", sw.r2).end_object();
+      }
+      j.end_object();
+    }
+    if (energy_done_) {
+      j.begin_object("energy");
+      j.value("history_row", energy_row_).value("dissipated_J", energy_dissipated_J_);
+      j.value("G0_times_crack_area_J", energy_G0_area_J_);
+      j.value("ratio", energy_G0_area_J_ > 0 ? energy_dissipated_J_ / energy_G0_area_J_ : NAN);
+      j.value("G0_times_face_area_J", energy_G0_face_area_J_);
+      j.value("ratio_face_area", energy_G0_face_area_J_ > 0 ? energy_dissipated_J_ / energy_G0_face_area_J_ : NAN);
+      j.value("relative_imbalance", energy_imbalance_);
+      j.end_object();
+    }
+    if (!spectra_.empty()) {
+      j.begin_array("spectra");
+      for (const auto& sp : spectra_) {
+        for (const auto& [comp, s] : sp.components) {
+          j.begin_object().value("probe", sp.probe).value("component", comp).value("window", opt_.hann ? "hann" : "rectangular");
+          j.value("resampled", sp.resampled).value("reference_frequency_Hz", s.reference_frequency_Hz);
+          j.value("reference_amplitude", s.reference_amplitude);
+          j.begin_array("harmonics");
+          for (const auto& hm : s.harmonics)
+            j.begin_object().value("order", hm.order).value("frequency_Hz", hm.frequency_Hz)
+                .value("amplitude", hm.amplitude).value("ratio", hm.ratio).end_object();
+          j.end_array().end_object();
+        }
+      }
+      j.end_array();
+    }
+    if (records_.size() > 1) {
+      j.begin_array("outputs");
+      for (const auto& r : records_) {
+        j.begin_object().value("step", r.info.step).value("time_s", r.info.time_s);
+        if (r.has_cracks) write_cracks_json(j, r.cracks);
+        if (r.has_fragments) j.value("fragment_count", r.fragment_count);
+        j.end_object();
+      }
+      j.end_array();
+    }
+    j.begin_array("files");
+    for (const auto& f : summary_.written) j.value("", f);
+    j.value("", "post.json");
+    j.end_array();
+    j.begin_array("plot_failures");
+    for (const auto& f : summary_.plot_failures) j.value("", f);
+    j.end_array();
+    j.begin_array("notes");
+    for (const auto& f : notes_) j.value("", f);
+    j.end_array();
+    j.end_object();
+    write_text_file(summary_.post_dir / "post.json", j.str());
+    summary_.written.push_back("post.json");
+  }
+
+  struct SpectrumRecord {
+    std::string probe;
+    std::vector<std::pair<std::string, Spectrum>> components;
+    bool resampled = false;
+  };
+
+  const PostOptions& opt_;
+  PostSummary summary_;
+  RunData run_;
+  std::vector<size_t> analysed_;
+  solver::Families families_;
+  RemovedBonds precracks_;
+  CandidateFaces faces_;
+  std::vector<StepRecord> records_;
+  FragmentResult fragments_;
+  SizeDistribution dist_;
+  std::optional<History> history_;
+  std::map<std::string, std::vector<std::pair<double, std::string>>> pvd_;
+  std::vector<std::string> notes_;
+  std::vector<SpectrumRecord> spectra_;
+  bool energy_done_ = false;
+  size_t energy_row_ = 0;
+  double energy_dissipated_J_ = NAN, energy_G0_area_J_ = NAN, energy_G0_face_area_J_ = NAN, energy_imbalance_ = NAN;
+};
+
+}  // namespace
+
+PostSummary run_post(const PostOptions& options) { return Runner(options).run(); }
+
+}  // namespace breccia::postproc

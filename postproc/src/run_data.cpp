@@ -1,0 +1,155 @@
+#include "breccia/postproc/run_data.hpp"
+
+#include <cstdio>
+
+#include "breccia/common/error.hpp"
+#include "breccia/common/h5.hpp"
+#include "breccia/postproc/bond_graph.hpp"
+
+namespace breccia::postproc {
+namespace fs = std::filesystem;
+namespace {
+
+std::string group_name(size_t k) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "/output/%06zu", k);
+  return buf;
+}
+
+void require(const h5::File& f, const std::string& obj, const std::string& expected) {
+  if (!f.exists(obj)) throw InputError(f.path(), obj, "missing", expected);
+}
+
+void require_attr(const h5::File& f, const std::string& obj, const std::string& name) {
+  if (!f.has_attr(obj, name))
+    throw InputError(f.path(), (obj == "/" ? "/" : obj + "/") + "@" + name, "missing attribute",
+                     "written by breccia-solve (format breccia-results 1)");
+}
+
+template <class T>
+std::vector<T> sized(std::vector<T> v, size_t expected, const std::string& file, const std::string& name,
+                     const std::string& shape) {
+  if (v.size() != expected)
+    throw InputError(file, name, "size " + std::to_string(v.size()), shape);
+  return v;
+}
+
+}  // namespace
+
+size_t RunData::output_index_of_step(long long step) const {
+  for (size_t k = 0; k < outputs.size(); ++k)
+    if (outputs[k].step == step) return k;
+  std::string have = outputs.empty() ? std::string("no outputs")
+                                     : std::to_string(outputs.size()) + " outputs, steps " +
+                                           std::to_string(outputs.front().step) + " .. " +
+                                           std::to_string(outputs.back().step);
+  throw InputError(results_path.string(), "--step", "no output at step " + std::to_string(step),
+                   "the step of one of the outputs (" + have + ")");
+}
+
+RunData open_run(const fs::path& run_dir, const std::string& particles_override) {
+  RunData run;
+  run.run_dir = run_dir;
+  run.results_path = run_dir / "results.h5";
+  const std::string rp = run.results_path.string();
+  if (!fs::is_directory(run_dir))
+    throw InputError(run_dir.string(), "", "not a directory", "a run directory written by breccia-solve");
+  if (!fs::exists(run.results_path))
+    throw InputError(rp, "", "file does not exist", "a run directory containing results.h5 written by breccia-solve");
+  h5::File f(rp, h5::File::Mode::Read);
+  require_attr(f, "/", "format");
+  if (f.attr_string("/", "format") != "breccia-results")
+    throw InputError(rp, "/@format", "'" + f.attr_string("/", "format") + "'", "'breccia-results'");
+  require_attr(f, "/", "format_version");
+  if (f.attr_int("/", "format_version") != 1)
+    throw InputError(rp, "/@format_version", std::to_string(f.attr_int("/", "format_version")), "1");
+  for (const char* a : {"particles_file", "particles_content_id", "dimension", "output_count"})
+    require_attr(f, "/", a);
+  run.dimension = static_cast<int>(f.attr_int("/", "dimension"));
+  if (run.dimension != 2 && run.dimension != 3)
+    throw InputError(rp, "/@dimension", std::to_string(run.dimension), "2 or 3");
+  run.thickness_m = f.has_attr("/", "thickness_m") ? f.attr_double("/", "thickness_m") : 1.0;
+  run.model = f.has_attr("/", "model") ? f.attr_string("/", "model") : "";
+
+  fs::path pf = particles_override.empty() ? fs::path(f.attr_string("/", "particles_file"))
+                                           : fs::path(particles_override);
+  if (particles_override.empty() && pf.is_relative()) pf = run_dir / pf;
+  run.particles_path = pf;
+  if (!fs::exists(pf))
+    throw InputError(rp, "/@particles_file", "particles file '" + pf.string() + "' does not exist",
+                     "the particles.h5 this run was computed from (or --particles FILE)");
+  run.particles = read_particle_file(pf.string());
+  const std::string quoted = f.attr_string("/", "particles_content_id");
+  if (quoted != run.particles.content_id)
+    throw InputError(rp, "/@particles_content_id",
+                     "'" + quoted + "' but " + pf.string() + " has content_id '" + run.particles.content_id + "'",
+                     "the particles file this run was computed from (same content_id)");
+
+  for (const char* d : {"/particles/position", "/particles/volume", "/particles/density", "/particles/horizon",
+                        "/particles/material_id"})
+    require(f, d, "written by breccia-solve");
+  const size_t n = f.dims("/particles/volume").at(0);
+  if (n != run.particles.size())
+    throw InputError(rp, "/particles/volume", std::to_string(n) + " particles",
+                     std::to_string(run.particles.size()) + " as in " + pf.string());
+  run.position_m = sized(f.read_doubles("/particles/position"), 3 * n, rp, "/particles/position", "N x 3");
+  run.volume_m3 = sized(f.read_doubles("/particles/volume"), n, rp, "/particles/volume", "N");
+  run.density_kg_m3 = sized(f.read_doubles("/particles/density"), n, rp, "/particles/density", "N");
+  run.horizon_m = sized(f.read_doubles("/particles/horizon"), n, rp, "/particles/horizon", "N");
+  run.material_id = sized(f.read_int32("/particles/material_id"), n, rp, "/particles/material_id", "N");
+  if (f.exists("/materials/names")) run.material_names = f.read_strings("/materials/names");
+  if (f.exists("/materials/fracture_energy")) run.fracture_energy_J_m2 = f.read_doubles("/materials/fracture_energy");
+  for (size_t i = 0; i < n; ++i)
+    if (run.material_id[i] < 0 ||
+        (!run.fracture_energy_J_m2.empty() && static_cast<size_t>(run.material_id[i]) >= run.fracture_energy_J_m2.size()))
+      throw InputError(rp, "/particles/material_id[" + std::to_string(i) + "]", std::to_string(run.material_id[i]),
+                       "an index into /materials/fracture_energy");
+  if (f.exists("/precrack_bonds")) {
+    run.precrack_bonds = f.read_int64("/precrack_bonds");
+    validate_pairs(run.precrack_bonds, n, rp, "/precrack_bonds");
+  }
+
+  const long long count = f.attr_int("/", "output_count");
+  for (long long k = 0; k < count; ++k) {
+    OutputInfo o;
+    o.group = group_name(static_cast<size_t>(k));
+    require(f, o.group, "output_count = " + std::to_string(count) + " consecutive output groups");
+    require_attr(f, o.group, "step");
+    require_attr(f, o.group, "time_s");
+    o.step = f.attr_int(o.group, "step");
+    o.time_s = f.attr_double(o.group, "time_s");
+    run.outputs.push_back(o);
+  }
+  return run;
+}
+
+namespace {
+
+OutputFrame read_frame(const RunData& run, size_t k, bool full) {
+  if (k >= run.outputs.size())
+    throw InputError(run.results_path.string(), "/output", "output index " + std::to_string(k),
+                     "< output_count = " + std::to_string(run.outputs.size()));
+  const std::string rp = run.results_path.string();
+  h5::File f(rp, h5::File::Mode::Read);
+  OutputFrame fr;
+  fr.info = run.outputs[k];
+  const std::string& g = fr.info.group;
+  const size_t n = run.size();
+  for (const char* d : {"/damage", "/broken_bonds"}) require(f, g + d, "written by breccia-solve");
+  fr.damage = sized(f.read_doubles(g + "/damage"), n, rp, g + "/damage", "N");
+  fr.broken_bonds = f.read_int64(g + "/broken_bonds");
+  validate_pairs(fr.broken_bonds, n, rp, g + "/broken_bonds");
+  if (full) {
+    for (const char* d : {"/displacement", "/velocity"}) require(f, g + d, "written by breccia-solve");
+    fr.displacement_m = sized(f.read_doubles(g + "/displacement"), 3 * n, rp, g + "/displacement", "N x 3");
+    fr.velocity_m_s = sized(f.read_doubles(g + "/velocity"), 3 * n, rp, g + "/velocity", "N x 3");
+  }
+  return fr;
+}
+
+}  // namespace
+
+OutputFrame read_output(const RunData& run, size_t k) { return read_frame(run, k, true); }
+OutputFrame read_output_cracks_only(const RunData& run, size_t k) { return read_frame(run, k, false); }
+
+}  // namespace breccia::postproc

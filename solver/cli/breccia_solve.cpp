@@ -1,0 +1,112 @@
+// breccia-solve: run a peridynamics (or MPS) case.
+//   breccia-solve CASE.yaml [-o DIR] [--threads N] [--restart FILE] [--steps N] [--backend cpu|cuda|auto] [--quiet]
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "breccia/common/error.hpp"
+#include "breccia/common/yaml_input.hpp"
+#include "breccia/solver/run.hpp"
+#ifdef BRECCIA_WITH_MPS
+#include "breccia/mps/run_case.hpp"
+#endif
+#ifdef BRECCIA_WITH_CUDA
+#include "breccia/solver/cuda_backend.hpp"
+#endif
+
+namespace {
+
+void usage() {
+  std::fprintf(stderr,
+               "usage: breccia-solve CASE.yaml [-o DIR] [--threads N] [--restart FILE] [--steps N]\n"
+               "                     [--backend cpu|cuda|auto] [--quiet]\n");
+}
+
+bool gpu_available() {
+#ifdef BRECCIA_WITH_CUDA
+  return breccia::solver::cuda_device_available();
+#else
+  return false;
+#endif
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace breccia;
+  std::string case_file;
+  solver::RunOptions opt;
+  std::string backend = "auto";
+  for (int k = 1; k < argc; ++k) {
+    const std::string a = argv[k];
+    auto value = [&](const char* name) -> std::string {
+      if (k + 1 >= argc) {
+        std::fprintf(stderr, "error: %s needs a value\n", name);
+        std::exit(kExitBadInput);
+      }
+      return argv[++k];
+    };
+    try {
+      if (a == "-o" || a == "--output") opt.out_dir = value("-o");
+      else if (a == "--threads") opt.threads = std::stoi(value("--threads"));
+      else if (a == "--restart") opt.restart_file = value("--restart");
+      else if (a == "--steps") opt.steps = std::stoll(value("--steps"));
+      else if (a == "--backend") backend = value("--backend");
+      else if (a == "--quiet") opt.progress = false;
+      else if (a == "-h" || a == "--help") { usage(); return 0; }
+      else if (!a.empty() && a[0] == '-') { std::fprintf(stderr, "error: unknown option %s\n", a.c_str()); usage(); return kExitBadInput; }
+      else case_file = a;
+    } catch (const std::exception&) {
+      std::fprintf(stderr, "error: option %s: '%s' is not a number\n", a.c_str(), argv[k]);
+      return kExitBadInput;
+    }
+  }
+  if (case_file.empty()) {
+    usage();
+    return kExitBadInput;
+  }
+  if (backend != "cpu" && backend != "cuda" && backend != "auto") {
+    std::fprintf(stderr, "error: --backend: '%s' (expected cpu, cuda or auto)\n", backend.c_str());
+    return kExitBadInput;
+  }
+  if (backend == "cuda" && !gpu_available()) {
+    std::fprintf(stderr, "error: --backend cuda: no CUDA device is available on this machine"
+#ifndef BRECCIA_WITH_CUDA
+                         " (this build has no CUDA backend)"
+#endif
+                         "; use --backend cpu or auto\n");
+    return kExitBadInput;
+  }
+  opt.backend = (backend == "cuda" || (backend == "auto" && gpu_available())) ? "cuda" : "cpu";
+  try {
+    // The model decides the solver: PD here, MPS in its own library.
+    const Section root = Section::load_file(case_file);
+    if (root.has("model") && root.section("model").text("type", "") == "mps") {
+#ifdef BRECCIA_WITH_MPS
+      return mps::run_case(case_file, opt.out_dir, opt.threads);
+#else
+      throw InputError(case_file, "model.type", "'mps' but this build has no MPS solver", "pmb or lps");
+#endif
+    }
+    const solver::CaseConfig config = solver::parse_case_file(case_file);
+    const solver::RunResult r = solver::run_case(config, opt);
+    if (r.status == "unstable" || r.status == "not_converged") {
+      std::fprintf(stderr, "error: %s\n", r.message.c_str());
+      return kExitRunFailed;
+    }
+    if (r.status == "interrupted") {
+      std::fprintf(stderr, "%s\n", r.message.c_str());
+      return 130;
+    }
+    if (opt.progress)
+      std::fprintf(stderr, "done: %lld steps in %.2f s, %.3g bond-updates/s; results in %s\n", r.steps, r.wall_s,
+                   r.bond_updates_per_s, opt.out_dir.c_str());
+    return 0;
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitBadInput;
+  } catch (const RunError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitRunFailed;
+  }
+}

@@ -1,0 +1,40 @@
+#pragma once
+// From engineering constants to peridynamic coefficients: micro-modulus, critical stretch,
+// LPS coefficients. The continuum calibration integrals are written with the influence
+// function's moments J_k = int_0^1 omega(q) q^k dq (docs/theory.md has the derivations).
+#include "breccia/solver/pd_physics.hpp"
+
+namespace breccia::solver {
+
+struct ElasticInput {
+  int dimension = 3;
+  Planar planar = Planar::None;
+  double youngs_modulus = 0.0;
+  double poisson_ratio = 0.25;
+  double thickness = 1.0;  // 2D only
+};
+
+double influence_moment(Influence kind, int k);  // J_k
+
+// Bulk modulus of the d-dimensional problem: K (3D), E/(2(1-nu)) plane stress,
+// E/(2(1+nu)(1-2nu)) = lambda + mu plane strain.
+double dimensional_bulk_modulus(const ElasticInput& in);
+double shear_modulus(const ElasticInput& in);
+// The Poisson ratio bond-based PD is tied to: 1/4 (3D, plane strain), 1/3 (plane stress).
+double pmb_poisson_ratio(int dimension, Planar planar);
+
+// Full (one-sided, textbook) PMB micro-modulus c0 such that the PD strain energy under
+// isotropic expansion equals the classical one: c0 = 2 d^2 K_d / int_H omega |xi| dV.
+double pmb_micromodulus(const ElasticInput& in, Influence kind, double horizon);
+// Critical stretch from G0: energy of all bonds crossing a unit plane = G0.
+double pmb_critical_stretch(const ElasticInput& in, Influence kind, double horizon, double fracture_energy);
+// LPS critical stretch: the deviatoric pair energy of the crossing bonds equals G0
+// (the dilatation term is not a pair energy; docs/theory.md states the approximation).
+double lps_critical_stretch(const ElasticInput& in, Influence kind, double horizon, double fracture_energy);
+LpsCoefficients lps_coefficients(const ElasticInput& in);
+
+// Classical strain energy density for a small strain tensor eps (3x3 row-major, plane
+// problems use the 2x2 block), used by tests and by the energy surface correction.
+double classical_energy_density(const ElasticInput& in, const double eps[9]);
+
+}  // namespace breccia::solver

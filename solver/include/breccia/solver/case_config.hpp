@@ -1,0 +1,134 @@
+#pragma once
+// The PD case file, parsed and validated in one place (docs/case-format.md). Everything
+// here is SI; names of sets and surfaces are checked against the particle model later,
+// in setup, where the model is known.
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "breccia/solver/pd_physics.hpp"
+
+namespace breccia::solver {
+
+using Vec3 = std::array<double, 3>;
+
+struct LatticeSpec {
+  int dimension = 3;
+  std::vector<double> box;  // x0 y0 [z0] x1 y1 [z1]
+  double spacing = 0.0;
+  double thickness = 1.0;
+};
+
+struct MaterialSpec {
+  std::string name;
+  double density = 0.0;
+  double youngs_modulus = 0.0;
+  double poisson_ratio = 0.25;
+  double fracture_energy = 0.0;  // 0: unbreakable
+  double weibull_modulus = 0.0;  // 0: no scatter
+  long long weibull_seed = 1;
+};
+
+// A time history multiplying a load: constant, ramp, double exponential (seed 001 eq. 12),
+// or a CSV table (time_s, value) interpolated linearly and held after its end.
+struct HistorySpec {
+  enum class Kind { Constant, Ramp, DoubleExponential, Table } kind = Kind::Constant;
+  double value = 1.0;        // Constant: value; Ramp: final value; DoubleExp: peak
+  double ramp_time = 0.0;    // Ramp
+  double rise_time = 0.0;    // DoubleExponential: t0
+  double ratio = 0.0;        // DoubleExponential: beta/alpha
+  std::vector<double> table_time, table_value;
+  double at(double t) const;
+};
+
+struct LoadSpec {
+  enum class Kind { Pressure, Traction, BodyForce } kind = Kind::Pressure;
+  std::string surface;  // Pressure, Traction
+  std::string set;      // BodyForce: empty = all
+  Vec3 vector{0, 0, 0}; // Traction [Pa] or body acceleration [m/s2]
+  HistorySpec history;  // Pressure: the pressure itself; others: a multiplier (default 1)
+};
+
+struct BoundarySpec {
+  enum class Kind { Fixed, Velocity, Displacement } kind = Kind::Fixed;
+  std::string set;
+  Vec3 value{0, 0, 0};
+  std::array<bool, 3> components{true, true, true};
+  double ramp_time = 0.0;  // linear ramp of the velocity/displacement to its value
+};
+
+struct InitialSpec {
+  enum class Kind { Velocity, RadialVelocity } kind = Kind::Velocity;
+  std::string set;  // empty = all particles
+  Vec3 value{0, 0, 0};
+  Vec3 center{0, 0, 0};
+  double strain_rate = 0.0;  // RadialVelocity: v = rate * (x - center) (in-plane in 2D)
+  bool cylindrical = false;  // RadialVelocity about the z axis through center
+};
+
+struct PrecrackSpec {
+  enum class Kind { Segment, Polygon, Surface } kind = Kind::Segment;
+  std::vector<Vec3> points;  // Segment: 2 points (2D); Polygon: >= 3 coplanar points (3D)
+  std::string surface;       // Surface: a named facet group of the particle file
+};
+
+struct IndenterSpec {
+  bool enabled = false;
+  double radius = 0.0;
+  Vec3 center{0, 0, 0};
+  Vec3 velocity{0, 0, 0};
+  double stiffness = 0.0;  // LAMMPS fix indent K [N/m^3 per unit volume]: F = -K (R - r)^2
+};
+
+struct ProbeSpec {
+  std::string name;
+  Vec3 position{0, 0, 0};
+  std::string field = "displacement";  // displacement | velocity
+};
+
+struct CaseConfig {
+  std::string file;      // the case file path
+  std::string directory; // its folder: relative paths resolve against it
+  std::string name;
+  // specimen
+  std::string particles_path;
+  std::optional<LatticeSpec> lattice;
+  // model
+  PdModel model = PdModel::PMB;
+  std::string model_name = "pmb";
+  Planar planar = Planar::None;
+  Influence influence = Influence::Constant;
+  double horizon_factor = 3.015;    // horizon = factor * local spacing
+  std::optional<double> horizon_m;  // or one fixed horizon
+  bool variable_horizon = false;    // per-particle horizon from local spacing
+  bool surface_correction = false;  // energy method (Le & Bobaru 2018)
+  bool fracture = true;
+  std::vector<std::string> no_fail_sets;
+  std::vector<MaterialSpec> materials;
+  std::vector<PrecrackSpec> precracks;
+  std::vector<LoadSpec> loads;
+  std::vector<BoundarySpec> boundaries;
+  std::vector<InitialSpec> initial;
+  IndenterSpec indenter;
+  // time
+  std::optional<double> end_time;
+  std::optional<long long> steps;
+  std::optional<double> dt;
+  double safety = 0.8;
+  bool check_stability = true;
+  bool quasi_static = false;  // adaptive dynamic relaxation
+  double adr_tolerance = 1e-8;
+  long long adr_max_steps = 100000;
+  // output
+  long long output_every = 100;
+  long long history_every = 10;
+  long long checkpoint_every = 0;  // 0: only at the end and on Ctrl-C
+  std::vector<std::string> fields{"displacement", "velocity", "damage"};
+  std::vector<ProbeSpec> probes;
+  bool write_results = true;
+};
+
+CaseConfig parse_case_file(const std::string& path);
+
+}  // namespace breccia::solver

@@ -1,0 +1,156 @@
+#pragma once
+// Per-particle kernels over raw views: the loop bodies both backends run. A backend only
+// decides how `for i in [0, n)` is launched (OpenMP here, CUDA in solver/cuda/).
+#include <cmath>
+#include <cstdint>
+
+#include "breccia/solver/pd_physics.hpp"
+
+namespace breccia::solver {
+
+// Everything a kernel reads or writes, as raw pointers (structure of arrays).
+struct PdView {
+  int64_t n = 0;
+  int model = 0;  // PdModel
+  bool fracture = true;
+  const double* x0 = nullptr;   // 3N reference positions
+  double* u = nullptr;          // 3N displacement
+  double* v = nullptr;          // 3N velocity
+  double* a = nullptr;          // 3N acceleration
+  double* force = nullptr;      // 3N internal force density [N/m3]
+  const double* body = nullptr; // 3N external force density [N/m3]
+  const double* volume = nullptr;
+  const double* density = nullptr;
+  const uint8_t* fixed_dof = nullptr;  // N, bit d set: component d is prescribed
+  // bonds, CSR over full families
+  const int64_t* offsets = nullptr;
+  const int32_t* neighbor = nullptr;
+  const double* xi_len = nullptr;
+  const double* k_own = nullptr;   // PMB: c_half*omega*beta*V_j; LPS: omega*beta (own horizon)
+  const double* k_dual = nullptr;  // same for the neighbour's horizon
+  const double* vol_own = nullptr; // beta*V_j in the own horizon (damage weights)
+  const float* s0_own = nullptr;   // critical stretch of each half-bond
+  const float* s0_dual = nullptr;
+  uint8_t* state = nullptr;        // kOwnIntact | kDualIntact
+  // LPS per particle
+  const LpsCoefficients* lps = nullptr;
+  const double* weighted_volume = nullptr;  // m_i
+  double* dilatation = nullptr;             // theta_i
+  // per-particle outputs
+  double* energy_density = nullptr;   // W_i [J/m3]
+  double* dissipated = nullptr;       // energy released by bonds broken this step, per particle [J]
+  double* damage = nullptr;
+  double* max_stretch = nullptr;      // optional
+};
+
+// LPS first pass: theta_i = d/m_i * sum_j omega beta |xi| e V_j over intact own bonds.
+BRECCIA_HD void lps_dilatation_kernel(const PdView& p, int64_t i) {
+  double sum = 0.0;
+  for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
+    if (!(p.state[k] & kOwnIntact)) continue;
+    const int64_t j = p.neighbor[k];
+    const BondGeometry g = bond_geometry(p.x0, p.u, i, j, p.xi_len[k]);
+    sum += p.k_own[k] * p.xi_len[k] * (g.length - p.xi_len[k]) * p.volume[j];
+  }
+  p.dilatation[i] = p.lps[i].dilatation_factor * sum / p.weighted_volume[i];
+}
+
+// Break the half-bonds of entry k whose stretch passed their critical value. Each entry is
+// written only by its owner i; (i,j) and (j,i) see the same stretch, so they agree.
+BRECCIA_HD uint8_t break_bonds(const PdView& p, int64_t k, double stretch) {
+  uint8_t st = p.state[k];
+  if ((st & kOwnIntact) && stretch > p.s0_own[k]) st &= static_cast<uint8_t>(~kOwnIntact);
+  if ((st & kDualIntact) && stretch > p.s0_dual[k]) st &= static_cast<uint8_t>(~kDualIntact);
+  return st;
+}
+
+// Internal force density, strain-energy density, damage and breaking for particle i.
+BRECCIA_HD void force_kernel(const PdView& p, int64_t i) {
+  double fx = 0.0, fy = 0.0, fz = 0.0, w = 0.0, released = 0.0, smax = 0.0;
+  double intact_vol = 0.0, total_vol = 0.0;
+  const bool lps = p.model == static_cast<int>(PdModel::LPS);
+  double m_i = 0.0, theta_i = 0.0, dev_sum = 0.0;
+  if (lps) {
+    m_i = p.weighted_volume[i];
+    theta_i = p.dilatation[i];
+  }
+  for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
+    total_vol += p.vol_own[k];
+    uint8_t st = p.state[k];
+    if (!st) continue;
+    const int64_t j = p.neighbor[k];
+    const double xi = p.xi_len[k];
+    const BondGeometry g = bond_geometry(p.x0, p.u, i, j, xi);
+    if (g.stretch > smax) smax = g.stretch;
+    if (p.fracture) {
+      const uint8_t after = break_bonds(p, k, g.stretch);
+      if (after != st) {
+        // Energy the broken halves held (PMB pair potential; LPS deviatoric pair part).
+        const uint8_t lost = static_cast<uint8_t>(st & ~after);
+        if (lps) {
+          const double e = g.length - xi;
+          const double dev_i = e - theta_i * xi / p.lps[i].dilatation_factor;
+          if (lost & kOwnIntact)
+            released += 0.5 * (p.lps[i].shear_term / m_i) * p.k_own[k] * dev_i * dev_i * p.volume[j] * p.volume[i];
+        } else {
+          released += p.volume[i] * pmb_energy_density(p.k_own[k], p.k_dual[k], lost, g.stretch, xi);
+        }
+        st = after;
+        p.state[k] = st;
+      }
+    }
+    if (st & kOwnIntact) intact_vol += p.vol_own[k];
+    if (!st) continue;
+    double scalar;  // force density along the deformed bond direction
+    if (lps) {
+      const double e = g.length - xi;
+      const int64_t jj = j;
+      double t = 0.0;
+      if (st & kOwnIntact) {
+        t += lps_force_state(p.lps[i], m_i, theta_i, p.k_own[k], xi, e);
+        const double dev = e - theta_i * xi / p.lps[i].dilatation_factor;
+        dev_sum += p.k_own[k] * dev * dev * p.volume[j];
+      }
+      if (st & kDualIntact)
+        t += lps_force_state(p.lps[jj], p.weighted_volume[jj], p.dilatation[jj], p.k_dual[k], xi, e);
+      scalar = t * p.volume[j];
+    } else {
+      scalar = pmb_force_scalar(p.k_own[k], p.k_dual[k], st, g.stretch);
+      w += pmb_energy_density(p.k_own[k], p.k_dual[k], st, g.stretch, xi);
+    }
+    const double inv_len = 1.0 / g.length;
+    fx += scalar * g.dx * inv_len;
+    fy += scalar * g.dy * inv_len;
+    fz += scalar * g.dz * inv_len;
+  }
+  if (lps) w = lps_bulk_energy(p.lps[i], theta_i) + 0.5 * (p.lps[i].shear_term / m_i) * dev_sum;
+  p.force[3 * i] = fx;
+  p.force[3 * i + 1] = fy;
+  p.force[3 * i + 2] = fz;
+  p.energy_density[i] = w;
+  p.dissipated[i] = released;
+  p.damage[i] = total_vol > 0.0 ? 1.0 - intact_vol / total_vol : 0.0;
+  if (p.max_stretch) p.max_stretch[i] = smax;
+}
+
+// a = (f_int + b) / rho, then the second half kick of velocity Verlet.
+BRECCIA_HD void acceleration_kernel(const PdView& p, int64_t i, double half_dt) {
+  const double inv_rho = 1.0 / p.density[i];
+  for (int d = 0; d < 3; ++d) {
+    const int64_t c = 3 * i + d;
+    p.a[c] = (p.force[c] + p.body[c]) * inv_rho;
+    if (!(p.fixed_dof[i] & (1u << d))) p.v[c] += half_dt * p.a[c];
+  }
+}
+
+// First half kick and drift for free components (prescribed ones are set by the caller).
+BRECCIA_HD void kick_drift_kernel(const PdView& p, int64_t i, double half_dt, double dt) {
+  for (int d = 0; d < 3; ++d) {
+    const int64_t c = 3 * i + d;
+    if (p.fixed_dof[i] & (1u << d)) continue;
+    p.v[c] += half_dt * p.a[c];
+    p.u[c] += dt * p.v[c];
+  }
+}
+
+}  // namespace breccia::solver

@@ -1,0 +1,142 @@
+#pragma once
+// Peridynamic physics written once, as plain functions on plain data, callable from the
+// OpenMP loops and from CUDA kernels (BRECCIA_HD). Derivations: docs/theory.md.
+#include <cmath>
+#include <cstdint>
+
+#include "breccia/solver/hd.hpp"
+
+namespace breccia::solver {
+
+enum class Influence : int { Constant = 0, Inverse = 1, Gaussian = 2 };
+enum class PdModel : int { PMB = 0, LPS = 1 };
+enum class Planar : int { None = 0, PlaneStress = 1, PlaneStrain = 2 };
+
+// Influence function in terms of q = |xi| / delta (dimensionless so that micro-moduli keep
+// their textbook units): constant 1; inverse delta/|xi| (= 1/q); Gaussian exp(-q^2) (seed 001, eq. 8).
+BRECCIA_HD double influence(Influence kind, double q) {
+  switch (kind) {
+    case Influence::Inverse: return 1.0 / q;
+    case Influence::Gaussian: return std::exp(-q * q);
+    default: return 1.0;
+  }
+}
+
+// Fraction of neighbour j's cell inside the horizon: a linear ramp over j's cell width,
+// which needs no lattice (tet-centroid particles have cells of any shape; docs/theory.md).
+BRECCIA_HD double partial_volume_fraction(double xi_len, double horizon, double half_cell_j) {
+  if (half_cell_j <= 0.0) return xi_len <= horizon ? 1.0 : 0.0;
+  const double f = (horizon + half_cell_j - xi_len) / (2.0 * half_cell_j);
+  return f < 0.0 ? 0.0 : (f > 1.0 ? 1.0 : f);
+}
+
+// The same fraction by quadrature: j's cell taken as an axis-aligned cube (square) of
+// j's own volume, sampled at n^d midpoints. Far more accurate than the ramp near the
+// horizon edge (it sees the cell's orientation to the bond), still lattice-free.
+inline double partial_volume_sampled(const double xi[3], double horizon, double half_cell_j, int dimension) {
+  const double reach = half_cell_j * (dimension == 3 ? 1.7320508075688772 : 1.4142135623730951);
+  const double len = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
+  if (len + reach <= horizon) return 1.0;
+  if (len - reach >= horizon) return 0.0;
+  constexpr int n = 6;
+  const double h = 2.0 * half_cell_j / n;
+  int inside = 0, total = 0;
+  const int nz = dimension == 3 ? n : 1;
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b)
+      for (int c = 0; c < nz; ++c) {
+        const double px = xi[0] - half_cell_j + (a + 0.5) * h;
+        const double py = xi[1] - half_cell_j + (b + 0.5) * h;
+        const double pz = dimension == 3 ? xi[2] - half_cell_j + (c + 0.5) * h : xi[2];
+        inside += (px * px + py * py + pz * pz <= horizon * horizon);
+        ++total;
+      }
+  return static_cast<double>(inside) / total;
+}
+
+// Bond stretch s = (|xi + eta| - |xi|) / |xi| and the deformed unit direction.
+struct BondGeometry {
+  double dx, dy, dz;   // deformed bond vector (j - i)
+  double length;       // |xi + eta|
+  double stretch;      // s
+};
+
+BRECCIA_HD BondGeometry bond_geometry(const double* x0, const double* u, int64_t i, int64_t j,
+                                      double xi_len) {
+  BondGeometry g;
+  g.dx = (x0[3 * j] + u[3 * j]) - (x0[3 * i] + u[3 * i]);
+  g.dy = (x0[3 * j + 1] + u[3 * j + 1]) - (x0[3 * i + 1] + u[3 * i + 1]);
+  g.dz = (x0[3 * j + 2] + u[3 * j + 2]) - (x0[3 * i + 2] + u[3 * i + 2]);
+  g.length = std::sqrt(g.dx * g.dx + g.dy * g.dy + g.dz * g.dz);
+  g.stretch = (g.length - xi_len) / xi_len;
+  return g;
+}
+
+// Half-bond state bits of one family entry (i -> j): the bond as seen from i's horizon
+// ("own", uses delta_i) and from j's horizon ("dual", uses delta_j). With one constant
+// horizon both halves are identical and break together (dual-horizon PD, Ren et al. 2017).
+inline constexpr uint8_t kOwnIntact = 1;
+inline constexpr uint8_t kDualIntact = 2;
+
+// PMB (eq. 3 of seed 001): force density on i from bond (i, j) is
+// (k_own [own intact] + k_dual [dual intact]) * s * e_ij, where k = c_half * omega * beta * V_j.
+// Returns the scalar multiplying the unit vector; also the bond's contribution to
+// i's strain-energy density: W_i += 1/4 * k * s^2 * |xi| (docs/theory.md, PMB energy).
+BRECCIA_HD double pmb_force_scalar(double k_own, double k_dual, uint8_t state, double stretch) {
+  const double k = ((state & kOwnIntact) ? k_own : 0.0) + ((state & kDualIntact) ? k_dual : 0.0);
+  return k * stretch;
+}
+
+BRECCIA_HD double pmb_energy_density(double k_own, double k_dual, uint8_t state, double stretch,
+                                     double xi_len) {
+  const double k = ((state & kOwnIntact) ? k_own : 0.0) + ((state & kDualIntact) ? k_dual : 0.0);
+  return 0.25 * k * stretch * stretch * xi_len;
+}
+
+// LPS (Silling et al. 2007; seed 001 eqs. 6-8 with the 3/m factor restored).
+// Per-particle coefficients: 3D dilatation_factor = 3, bulk term 3K, shear term 15 mu;
+// 2D (Le, Silling & Bobaru 2014): dilatation_factor = 2, bulk term 2 K2, shear term 8 mu.
+struct LpsCoefficients {
+  double dilatation_factor;  // d: theta = d/m * sum(w |xi| e V)
+  double bulk_term;          // 3K (3D) or 2K2 (2D)
+  double shear_term;         // 15 mu (3D) or 8 mu (2D)
+};
+
+// Scalar force state t<xi> of one bond seen from a particle with weighted volume m and
+// dilatation theta; w = omega * beta * V_neighbour is carried separately by the caller.
+BRECCIA_HD double lps_force_state(const LpsCoefficients& c, double m, double theta, double omega,
+                                  double xi_len, double extension) {
+  const double deviatoric_extension = extension - theta * xi_len / c.dilatation_factor;
+  return (c.bulk_term * theta / m) * omega * xi_len + (c.shear_term / m) * omega * deviatoric_extension;
+}
+
+// Strain energy density of an LPS particle: K_d theta^2 / 2 + (shear/(2m)) sum w e_d^2 V.
+// bulk_term / dilatation_factor = K (3D) or K2 (2D).
+BRECCIA_HD double lps_bulk_energy(const LpsCoefficients& c, double theta) {
+  return 0.5 * (c.bulk_term / c.dilatation_factor) * theta * theta;
+}
+
+// Velocity Verlet half kick + drift for one particle component.
+BRECCIA_HD void verlet_kick(double* v, const double* a, double half_dt, int64_t k) { v[k] += half_dt * a[k]; }
+
+// Borehole pressure (seed 001, eq. 12): P0 (e^-at - e^-bt) / (e^-a t0 - e^-b t0), with a and b
+// from the rise time t0 and the ratio r = b/a: t0 = ln(r) / (b - a).
+BRECCIA_HD double double_exponential_pressure(double peak, double rise_time, double ratio, double t) {
+  const double a = std::log(ratio) / ((ratio - 1.0) * rise_time);
+  const double b = ratio * a;
+  const double norm = std::exp(-a * rise_time) - std::exp(-b * rise_time);
+  return t < 0.0 ? 0.0 : peak * (std::exp(-a * t) - std::exp(-b * t)) / norm;
+}
+
+// Deterministic per-bond uniform random number in (0,1): the same for (i,j) and (j,i),
+// independent of thread count and particle order (hash of the particles' ids and the seed).
+BRECCIA_HD double bond_uniform(uint64_t id_a, uint64_t id_b, uint64_t seed) {
+  uint64_t lo = id_a < id_b ? id_a : id_b, hi = id_a < id_b ? id_b : id_a;
+  uint64_t z = seed ^ (lo * 0x9E3779B97F4A7C15ull) ^ (hi + 0x632BE59BD9B4E019ull + (lo << 6) + (lo >> 2));
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z = z ^ (z >> 31);
+  return (static_cast<double>(z >> 11) + 0.5) * (1.0 / 9007199254740992.0);
+}
+
+}  // namespace breccia::solver

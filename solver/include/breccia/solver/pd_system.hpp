@@ -1,0 +1,104 @@
+#pragma once
+// The state of one PD run, as structure-of-arrays owned by one object. Particles are held
+// in Morton order internally (locality); `original_index` maps back to particles.h5 order,
+// in which every output is written.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "breccia/common/particle_file.hpp"
+#include "breccia/solver/case_config.hpp"
+#include "breccia/solver/pd_kernels.hpp"
+
+namespace breccia::solver {
+
+struct PressureFacet {  // a boundary facet carrying pressure or traction
+  int32_t particle;     // internal index
+  double area;          // m2
+  double normal[3];     // outward unit normal
+};
+
+struct PdSystem {
+  CaseConfig config;
+  ParticleModel particles;  // as read (file order)
+  int dimension = 3;
+  double thickness = 1.0;
+  size_t n = 0;
+  std::vector<int32_t> original_index;  // internal -> file index
+  std::vector<int32_t> internal_index;  // file -> internal index
+
+  // per particle (internal order)
+  std::vector<double> x0, u, v, a, force, body;  // 3N
+  std::vector<double> volume, density, horizon, half_cell;
+  std::vector<int32_t> material;
+  std::vector<uint8_t> fixed_dof;
+  std::vector<double> energy_density, dissipated, damage, max_stretch, dilatation, weighted_volume;
+  std::vector<LpsCoefficients> lps;
+  std::vector<double> calibration_factor;  // PMB: classical / discrete energy (docs/theory.md)
+
+  // bonds (CSR over full families)
+  std::vector<int64_t> offsets;
+  std::vector<int32_t> neighbor;
+  std::vector<double> xi_len, k_own, k_dual, vol_own;
+  std::vector<float> s0_own, s0_dual;
+  std::vector<uint8_t> state;
+  std::vector<std::pair<int64_t, int64_t>> precrack_pairs;  // file indices, i < j
+
+  // loads and constraints
+  struct SurfaceLoad {
+    const LoadSpec* spec;
+    std::vector<PressureFacet> facets;
+  };
+  std::vector<SurfaceLoad> surface_loads;
+  struct BodyLoad {
+    const LoadSpec* spec;
+    std::vector<int32_t> particles;  // internal; empty = all
+  };
+  std::vector<BodyLoad> body_loads;
+  struct Constraint {
+    const BoundarySpec* spec;
+    std::vector<int32_t> particles;  // internal
+  };
+  std::vector<Constraint> constraints;
+
+  // time and energy bookkeeping
+  long long step = 0;
+  double time = 0.0;
+  double dt = 0.0;
+  double stable_dt = 0.0;         // 2 / omega_max from power iteration (sharp)
+  double silling_askari_dt = 0.0; // Silling & Askari 2005 bound (PMB), for reference
+  double external_work = 0.0;
+  double dissipated_energy = 0.0;
+  double indenter_position[3] = {0, 0, 0};
+
+  PdView view();
+  size_t bond_count() const { return neighbor.size(); }
+  double total_mass() const;
+};
+
+// Build everything from a case file: particles (file or lattice), families, coefficients,
+// pre-cracks, loads, constraints, initial conditions, stable step. Throws InputError.
+PdSystem setup_system(const CaseConfig& config);
+
+// One velocity-Verlet step of size sys.dt on the CPU (OpenMP).
+void cpu_step(PdSystem& sys);
+// Internal forces (and LPS dilatation) at the current displacement; fills energy/damage.
+void cpu_compute_forces(PdSystem& sys);
+// External force density at time t (pressure, traction, body force, indenter).
+void compute_external(PdSystem& sys, double t);
+// Impose prescribed displacement/velocity at time t on constrained components.
+void apply_constraints(PdSystem& sys, double t, double dt);
+
+struct Energies {
+  double kinetic = 0.0, strain = 0.0, max_damage = 0.0;
+  long long broken_half_bonds = 0;
+  bool finite = true;
+  int64_t bad_particle = -1;  // internal index of a non-finite particle
+};
+Energies measure(const PdSystem& sys);
+
+// Largest angular frequency of the linearised system by power iteration (uses the force
+// kernel on a tiny displacement, so it is exact for the discretisation at hand).
+double estimate_max_frequency(PdSystem& sys, int iterations = 60);
+
+}  // namespace breccia::solver

@@ -1,0 +1,41 @@
+#pragma once
+// Running a PD case: the time loop with outputs, progress, instability detection,
+// checkpoints and Ctrl-C, and adaptive dynamic relaxation for quasi-static problems.
+#include <optional>
+#include <string>
+
+#include "breccia/solver/pd_system.hpp"
+
+namespace breccia::solver {
+
+struct RunOptions {
+  std::string out_dir = "out";
+  int threads = 0;                      // 0: OpenMP default
+  std::string restart_file;             // continue from this checkpoint
+  std::optional<long long> steps;       // override the number of steps
+  bool progress = true;
+  std::string backend = "cpu";
+};
+
+struct RunResult {
+  std::string status;   // completed | unstable | interrupted | converged | not_converged
+  long long steps = 0;  // steps taken in this invocation
+  double wall_s = 0.0;
+  double bond_updates_per_s = 0.0;
+  Energies final_energies;
+  std::string message;
+};
+
+// Throws InputError for bad input; returns status "unstable" (and writes its message into
+// summary.json) when the run blows up, keeping the last good output.
+RunResult run_case(const CaseConfig& config, const RunOptions& options);
+RunResult run_system(PdSystem& sys, const RunOptions& options);
+
+// Adaptive dynamic relaxation (Kilic & Madenci 2010) to static equilibrium; returns the
+// number of iterations, or -1 if not converged within config.adr_max_steps.
+long long relax_to_equilibrium(PdSystem& sys, bool progress);
+
+// Checks a state for blow-up; empty string if healthy, else the message for the user.
+std::string instability_message(const PdSystem& sys, const Energies& e, double energy_scale);
+
+}  // namespace breccia::solver

@@ -1,0 +1,262 @@
+#include "breccia/mps/case_spec.hpp"
+
+#include <cmath>
+#include <filesystem>
+
+#include "breccia/common/error.hpp"
+#include "breccia/common/yaml_input.hpp"
+
+namespace breccia::mps {
+
+double MaterialSpec::p_wave_speed() const {
+  return std::sqrt((lame_lambda_pa + 2.0 * shear_modulus_pa) / density_kg_m3);
+}
+double MaterialSpec::s_wave_speed() const { return std::sqrt(shear_modulus_pa / density_kg_m3); }
+
+namespace {
+
+[[noreturn]] void fail(const Section& s, const std::string& key, const std::string& found,
+                       const std::string& expected) {
+  throw InputError(s.file(), s.field(key), found, expected);
+}
+
+LatticeSpec parse_lattice(const Section& s) {
+  s.allow_only({"dimension", "box", "spacing", "thickness", "periodic"});
+  LatticeSpec l;
+  l.dimension = static_cast<int>(s.integer("dimension", 2));
+  if (l.dimension != 2 && l.dimension != 3)
+    fail(s, "dimension", std::to_string(l.dimension), "2 or 3");
+  const auto box = s.numbers("box", Quantity::Length, l.dimension == 2 ? 4 : 6);
+  for (int a = 0; a < l.dimension; ++a) {
+    l.low_m[a] = box[a];
+    l.high_m[a] = box[a + l.dimension];
+    if (!(l.high_m[a] > l.low_m[a])) fail(s, "box", "upper corner not above lower corner", "[x0, y0, x1, y1] with x1 > x0, y1 > y0");
+  }
+  l.spacing_m = s.positive("spacing", Quantity::Length);
+  l.thickness_m = s.positive("thickness", Quantity::Length, l.dimension == 2 ? l.spacing_m : 1.0);
+  if (s.has("periodic")) {
+    const YAML::Node n = s.node()["periodic"];
+    if (!n.IsSequence() || n.size() != static_cast<size_t>(l.dimension))
+      fail(s, "periodic", "not a list of " + std::to_string(l.dimension) + " booleans", "e.g. [true, false]");
+    for (int a = 0; a < l.dimension; ++a) l.periodic[a] = n[a].as<bool>();
+  }
+  return l;
+}
+
+MaterialSpec parse_material(const Section& s) {
+  s.allow_only({"name", "density", "youngs_modulus", "poisson_ratio", "lambda", "mu", "C13", "C55"});
+  MaterialSpec m;
+  m.name = s.text("name", "material");
+  m.density_kg_m3 = s.positive("density", Quantity::Density);
+  const bool engineering = s.has("youngs_modulus") || s.has("poisson_ratio");
+  const bool lame = s.has("lambda") || s.has("mu");
+  const bool stiffness = s.has("C13") || s.has("C55");
+  if (engineering + lame + stiffness != 1)
+    fail(s, "", "elastic constants given " + std::to_string(engineering + lame + stiffness) + " ways",
+         "exactly one pair: youngs_modulus & poisson_ratio, lambda & mu, or C13 & C55");
+  if (engineering) {
+    const double e = s.positive("youngs_modulus", Quantity::Pressure);
+    const double nu = s.number("poisson_ratio", Quantity::Dimensionless);
+    if (!(nu > -1.0 && nu < 0.5)) fail(s, "poisson_ratio", std::to_string(nu), "-1 < nu < 0.5");
+    m.lame_lambda_pa = e * nu / ((1 + nu) * (1 - 2 * nu));  // plane strain in 2D
+    m.shear_modulus_pa = e / (2 * (1 + nu));
+  } else if (lame) {
+    m.lame_lambda_pa = s.number("lambda", Quantity::Pressure);
+    m.shear_modulus_pa = s.positive("mu", Quantity::Pressure);
+  } else {
+    m.lame_lambda_pa = s.number("C13", Quantity::Pressure);
+    m.shear_modulus_pa = s.positive("C55", Quantity::Pressure);
+  }
+  if (!(m.lame_lambda_pa + 2.0 * m.shear_modulus_pa > 0))
+    fail(s, lame ? "lambda" : "C13", "lambda + 2 mu is not positive", "a positive P-wave modulus");
+  return m;
+}
+
+CrackSpec parse_crack(const Section& s, size_t index) {
+  s.allow_only({"name", "segment", "static_friction", "kinetic_friction", "normal_stress", "stiffness_factor",
+                "shear_stiffness", "normal_stiffness", "mode", "restick"});
+  CrackSpec c;
+  c.name = s.text("name", "crack" + std::to_string(index));
+  if (!s.has("segment")) fail(s, "segment", "missing", "[[x0, y0], [x1, y1]]");
+  const YAML::Node seg = s.node()["segment"];
+  if (!seg.IsSequence() || seg.size() != 2) fail(s, "segment", "not a list of two points", "[[x0, y0], [x1, y1]]");
+  for (int p = 0; p < 2; ++p) {
+    YAML::Node wrapper;
+    wrapper["point"] = seg[p];
+    const auto v = Section(wrapper, s.file(), s.field("segment") + "[" + std::to_string(p) + "]").vec3("point", Quantity::Length);
+    (p == 0 ? c.start_m : c.end_m) = v;
+  }
+  const double len = std::hypot(c.end_m[0] - c.start_m[0], c.end_m[1] - c.start_m[1]);
+  if (!(len > 0)) fail(s, "segment", "has zero length", "two distinct end points");
+  c.static_friction = s.number("static_friction", Quantity::Dimensionless);
+  c.kinetic_friction = s.number("kinetic_friction", Quantity::Dimensionless, c.static_friction);
+  if (c.static_friction < 0) fail(s, "static_friction", std::to_string(c.static_friction), "a coefficient >= 0");
+  if (c.kinetic_friction < 0) fail(s, "kinetic_friction", std::to_string(c.kinetic_friction), "a coefficient >= 0");
+  if (c.kinetic_friction > c.static_friction)
+    fail(s, "kinetic_friction", "mu_k = " + std::to_string(c.kinetic_friction) + " > mu_s = " + std::to_string(c.static_friction),
+         "kinetic friction <= static friction");
+  c.normal_stress_pa = s.number("normal_stress", Quantity::Pressure, 0.0);
+  if (c.normal_stress_pa < 0) fail(s, "normal_stress", std::to_string(c.normal_stress_pa), "a compressive pre-stress >= 0 (Pa)");
+  c.stiffness_factor = s.positive("stiffness_factor", Quantity::Dimensionless, 1.0);
+  if (s.has("shear_stiffness")) c.shear_stiffness_n_m = s.positive("shear_stiffness", Quantity::FractureEnergy);
+  if (s.has("normal_stiffness")) c.normal_stiffness_n_m = s.positive("normal_stiffness", Quantity::FractureEnergy);
+  c.clapping = s.choice("mode", {"sliding", "clapping"}, "sliding") == "clapping";
+  c.restick_continuous = s.choice("restick", {"paper", "continuous"}, "paper") == "continuous";
+  return c;
+}
+
+BoundarySpec parse_boundary(const Section& s, size_t index, int dimension) {
+  s.allow_only({"name", "face", "box", "set", "components", "displacement"});
+  BoundarySpec b;
+  b.name = s.text("name", "boundary" + std::to_string(index));
+  const int ways = s.has("face") + s.has("box") + s.has("set");
+  if (ways != 1) fail(s, "", "particles selected " + std::to_string(ways) + " ways", "exactly one of face, box, set");
+  if (s.has("face")) b.face = s.choice("face", {"left", "right", "bottom", "top", "back", "front"});
+  if (s.has("set")) b.set = s.text("set");
+  if (s.has("box")) {
+    const auto v = s.numbers("box", Quantity::Length, dimension == 2 ? 4 : 6);
+    std::array<double, 6> box{0, 0, -1e300, 0, 0, 1e300};
+    for (int a = 0; a < dimension; ++a) {
+      box[a] = v[a];
+      box[3 + a] = v[a + dimension];
+    }
+    b.box_m = box;
+  }
+  const auto comps = s.texts("components");
+  if (comps.empty()) fail(s, "components", "missing", "a list of prescribed components, e.g. [x]");
+  for (const auto& c : comps) {
+    if (c == "x") b.components[0] = true;
+    else if (c == "y") b.components[1] = true;
+    else if (c == "z" && dimension == 3) b.components[2] = true;
+    else fail(s, "components", "'" + c + "'", dimension == 3 ? "x, y or z" : "x or y");
+  }
+  if (auto d = s.optional_section("displacement")) {
+    d->allow_only({"type", "amplitude", "period", "frequency", "cycles", "delay", "window"});
+    const std::string type = d->choice("type", {"sine_burst", "zero"}, "sine_burst");
+    if (type == "sine_burst") {
+      BurstHistory h;
+      h.amplitude_m = d->number("amplitude", Quantity::Length);
+      if (d->has("period") == d->has("frequency")) fail(*d, "period", "period and frequency both or neither given", "exactly one");
+      h.period_s = d->has("period") ? d->positive("period", Quantity::Time) : 1.0 / d->positive("frequency", Quantity::Frequency);
+      h.cycles = d->positive("cycles", Quantity::Dimensionless);
+      h.delay_s = d->number("delay", Quantity::Time, 0.0);
+      h.hann = d->choice("window", {"none", "hann"}, "none") == "hann";
+      b.burst = h;
+    }
+  }
+  return b;
+}
+
+InitialGaussian parse_initial(const Section& s) {
+  s.allow_only({"displacement"});
+  const Section d = s.section("displacement");
+  d.allow_only({"type", "center", "width", "amplitude"});
+  d.choice("type", {"gaussian"}, "gaussian");
+  InitialGaussian g;
+  g.center_m = d.vec3("center", Quantity::Length);
+  g.width_m = d.positive("width", Quantity::Length);
+  g.amplitude_m = d.vec3("amplitude", Quantity::Length);
+  return g;
+}
+
+ProbeSpec parse_probe(const Section& s, size_t index) {
+  s.allow_only({"name", "position", "field"});
+  ProbeSpec p;
+  p.name = s.text("name", "probe" + std::to_string(index));
+  p.position_m = s.vec3("position", Quantity::Length);
+  p.field = s.choice("field", {"displacement_x", "displacement_y", "displacement_z", "velocity_x", "velocity_y", "velocity_z"},
+                     "displacement_x");
+  return p;
+}
+
+bool inside_box(const LatticeSpec& l, const std::array<double, 3>& p) {
+  const double tol = 1e-9 * l.spacing_m;
+  for (int a = 0; a < l.dimension; ++a)
+    if (p[a] < l.low_m[a] - tol || p[a] > l.high_m[a] + tol) return false;
+  return true;
+}
+
+CaseSpec parse_root(const Section& root) {
+  CaseSpec c;
+  c.file = root.file();
+  root.allow_only({"specimen", "model", "materials", "cracks", "boundary", "initial", "time", "output"});
+
+  const Section spec = root.section("specimen");
+  spec.allow_only({"lattice", "particles"});
+  if (spec.has("lattice") == spec.has("particles"))
+    fail(spec, "lattice", "lattice and particles both or neither given", "exactly one of lattice, particles");
+  if (spec.has("lattice")) {
+    c.lattice = parse_lattice(spec.section("lattice"));
+  } else {
+    std::filesystem::path p = spec.text("particles");
+    if (p.is_relative() && !c.file.empty()) p = std::filesystem::path(c.file).parent_path() / p;
+    c.particle_file = p.string();
+  }
+  const int dimension = c.lattice ? c.lattice->dimension : 2;
+
+  const Section model = root.section("model");
+  model.allow_only({"type", "re_over_spacing", "equation", "integrator"});
+  model.choice("type", {"mps"});
+  c.re_over_spacing = model.positive("re_over_spacing", Quantity::Dimensionless, 2.1);
+  if (c.re_over_spacing < 1.01 || c.re_over_spacing > 5.0)
+    fail(model, "re_over_spacing", std::to_string(c.re_over_spacing), "1.01 <= re/spacing <= 5 (nearest neighbours inside re)");
+  c.equation = model.choice("equation", {"navier", "rotation_free"}, "navier") == "navier" ? Equation::Navier
+                                                                                        : Equation::RotationFree;
+  c.integrator = model.choice("integrator", {"symplectic_euler", "velocity_verlet"}, "symplectic_euler") ==
+                         "symplectic_euler"
+                     ? Integrator::SymplecticEuler
+                     : Integrator::VelocityVerlet;
+
+  const auto materials = root.list("materials");
+  if (materials.size() != 1)
+    throw InputError(root.file(), "materials", std::to_string(materials.size()) + " materials",
+                     "exactly one material (the MPS solver is single-material)");
+  c.material = parse_material(materials[0]);
+
+  const auto cracks = root.list("cracks");
+  for (size_t i = 0; i < cracks.size(); ++i) {
+    c.cracks.push_back(parse_crack(cracks[i], i));
+    if (dimension != 2) fail(cracks[i], "segment", "crack in a 3D model", "cracks in 2D models only");
+    if (c.lattice && (!inside_box(*c.lattice, c.cracks.back().start_m) || !inside_box(*c.lattice, c.cracks.back().end_m)))
+      fail(cracks[i], "segment", "end point outside the body", "a segment inside the lattice box");
+  }
+  const auto boundary = root.list("boundary");
+  for (size_t i = 0; i < boundary.size(); ++i) c.boundary.push_back(parse_boundary(boundary[i], i, dimension));
+  if (auto init = root.optional_section("initial")) c.initial = parse_initial(*init);
+
+  const Section time = root.section("time");
+  time.allow_only({"end", "dt", "safety"});
+  c.end_time_s = time.positive("end", Quantity::Time);
+  if (time.has("dt")) c.dt_s = time.positive("dt", Quantity::Time);
+  c.safety = time.positive("safety", Quantity::Dimensionless, 0.5);
+  if (c.safety > 1.0) fail(time, "safety", std::to_string(c.safety), "0 < safety <= 1");
+
+  if (auto out = root.optional_section("output")) {
+    out->allow_only({"every", "history_every", "energy", "progress", "probes"});
+    c.snapshot_every = out->integer("every", 0);
+    c.history_every = out->integer("history_every", 1);
+    if (c.snapshot_every < 0) fail(*out, "every", std::to_string(c.snapshot_every), "steps >= 0");
+    if (c.history_every < 1) fail(*out, "history_every", std::to_string(c.history_every), "steps >= 1");
+    c.energy = out->boolean("energy", false);
+    c.progress = out->boolean("progress", true);
+    const auto probes = out->list("probes");
+    for (size_t i = 0; i < probes.size(); ++i) c.probes.push_back(parse_probe(probes[i], i));
+  }
+  return c;
+}
+
+}  // namespace
+
+CaseSpec load_case(const std::string& case_file) { return parse_root(Section::load_file(case_file)); }
+
+CaseSpec parse_case_text(const std::string& yaml_text, const std::string& name) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw InputError(name, "line " + std::to_string(e.mark.line + 1), "YAML syntax error: " + e.msg, "valid YAML");
+  }
+  return parse_root(Section(root, name, ""));
+}
+
+}  // namespace breccia::mps

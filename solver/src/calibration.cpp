@@ -1,0 +1,107 @@
+#include "breccia/solver/calibration.hpp"
+
+#include <array>
+#include <cmath>
+#include <numbers>
+
+namespace breccia::solver {
+
+double gaussian_moment(int k);
+
+double influence_moment(Influence kind, int k) {
+  switch (kind) {
+    case Influence::Constant: return 1.0 / (k + 1);
+    case Influence::Inverse: return 1.0 / k;
+    case Influence::Gaussian: {
+      // Composite Simpson, 2000 intervals: exact to ~1e-14 for this smooth integrand.
+      // Cached: set-up asks for these once per bond.
+      static const auto table = [] {
+        std::array<double, 8> t{};
+        for (int kk = 0; kk < 8; ++kk) t[kk] = gaussian_moment(kk);
+        return t;
+      }();
+      if (k >= 0 && k < 8) return table[k];
+      return gaussian_moment(k);
+    }
+  }
+  return 0.0;
+}
+
+double gaussian_moment(int k) {
+  {
+      const int n = 2000;
+      double sum = 0.0;
+      for (int i = 0; i <= n; ++i) {
+        const double q = static_cast<double>(i) / n;
+        const double w = (i == 0 || i == n) ? 1.0 : (i % 2 ? 4.0 : 2.0);
+        sum += w * std::exp(-q * q) * std::pow(q, k);
+      }
+      return sum / (3.0 * n);
+  }
+}
+
+double dimensional_bulk_modulus(const ElasticInput& in) {
+  const double E = in.youngs_modulus, nu = in.poisson_ratio;
+  if (in.dimension == 3) return E / (3.0 * (1.0 - 2.0 * nu));
+  if (in.planar == Planar::PlaneStress) return E / (2.0 * (1.0 - nu));
+  return E / (2.0 * (1.0 + nu) * (1.0 - 2.0 * nu));
+}
+
+double shear_modulus(const ElasticInput& in) { return in.youngs_modulus / (2.0 * (1.0 + in.poisson_ratio)); }
+
+double pmb_poisson_ratio(int dimension, Planar planar) {
+  return (dimension == 2 && planar == Planar::PlaneStress) ? 1.0 / 3.0 : 0.25;
+}
+
+namespace {
+// int_H omega(|xi|/delta) |xi| dV: 3D 4 pi delta^4 J3; 2D (dV = t dA) 2 pi t delta^3 J2.
+double first_moment_integral(const ElasticInput& in, Influence kind, double delta) {
+  using std::numbers::pi;
+  if (in.dimension == 3) return 4.0 * pi * std::pow(delta, 4) * influence_moment(kind, 3);
+  return 2.0 * pi * in.thickness * std::pow(delta, 3) * influence_moment(kind, 2);
+}
+}  // namespace
+
+double pmb_micromodulus(const ElasticInput& in, Influence kind, double delta) {
+  const double d = in.dimension;
+  return 2.0 * d * d * dimensional_bulk_modulus(in) / first_moment_integral(in, kind, delta);
+}
+
+double pmb_critical_stretch(const ElasticInput& in, Influence kind, double delta, double G0) {
+  using std::numbers::pi;
+  const double c0 = pmb_micromodulus(in, kind, delta);
+  // 3D: G0 = pi/2 c0 s0^2 delta^5 J4;  2D: G0 = t c0 s0^2 delta^4 J3 (docs/theory.md).
+  if (in.dimension == 3) return std::sqrt(2.0 * G0 / (pi * c0 * std::pow(delta, 5) * influence_moment(kind, 4)));
+  return std::sqrt(G0 / (in.thickness * c0 * std::pow(delta, 4) * influence_moment(kind, 3)));
+}
+
+double lps_critical_stretch(const ElasticInput& in, Influence kind, double delta, double G0) {
+  using std::numbers::pi;
+  const double mu = shear_modulus(in);
+  // 3D: G0 = 15 mu delta J5 / (4 J4) s0^2;  2D: G0 = 8 mu delta J4 / (pi J3) s0^2.
+  if (in.dimension == 3)
+    return std::sqrt(G0 * 4.0 * influence_moment(kind, 4) / (15.0 * mu * delta * influence_moment(kind, 5)));
+  return std::sqrt(G0 * pi * influence_moment(kind, 3) / (8.0 * mu * delta * influence_moment(kind, 4)));
+}
+
+LpsCoefficients lps_coefficients(const ElasticInput& in) {
+  const double Kd = dimensional_bulk_modulus(in), mu = shear_modulus(in);
+  if (in.dimension == 3) return {3.0, 3.0 * Kd, 15.0 * mu};
+  return {2.0, 2.0 * Kd, 8.0 * mu};
+}
+
+double classical_energy_density(const ElasticInput& in, const double eps[9]) {
+  const double mu = shear_modulus(in);
+  const int d = in.dimension;
+  double tr = 0.0;
+  for (int a = 0; a < d; ++a) tr += eps[4 * a];
+  double dev2 = 0.0;  // eps_dev : eps_dev in d dimensions
+  for (int a = 0; a < d; ++a)
+    for (int b = 0; b < d; ++b) {
+      const double e = eps[3 * a + b] - (a == b ? tr / d : 0.0);
+      dev2 += e * e;
+    }
+  return 0.5 * dimensional_bulk_modulus(in) * tr * tr + mu * dev2;
+}
+
+}  // namespace breccia::solver

@@ -1,0 +1,297 @@
+#include "breccia/solver/case_config.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "breccia/common/error.hpp"
+#include "breccia/common/yaml_input.hpp"
+
+namespace breccia::solver {
+namespace {
+
+std::string resolve(const std::string& dir, const std::string& p) {
+  if (p.empty() || std::filesystem::path(p).is_absolute()) return p;
+  return (std::filesystem::path(dir) / p).lexically_normal().string();
+}
+
+HistorySpec parse_history(const Section& s, Quantity q, const std::string& dir) {
+  s.allow_only({"type", "value", "peak", "ramp_time", "rise_time", "ratio", "file"});
+  HistorySpec h;
+  const std::string type = s.choice("type", {"constant", "ramp", "double_exponential", "table"});
+  if (type == "constant") {
+    h.kind = HistorySpec::Kind::Constant;
+    h.value = s.number("value", q);
+  } else if (type == "ramp") {
+    h.kind = HistorySpec::Kind::Ramp;
+    h.value = s.number("value", q);
+    h.ramp_time = s.positive("ramp_time", Quantity::Time);
+  } else if (type == "double_exponential") {
+    h.kind = HistorySpec::Kind::DoubleExponential;
+    h.value = s.number("peak", q);
+    h.rise_time = s.positive("rise_time", Quantity::Time);
+    h.ratio = s.number("ratio", Quantity::Dimensionless);
+    if (!(h.ratio > 1.0))
+      throw InputError(s.file(), s.field("ratio"), "value " + std::to_string(h.ratio), "beta/alpha > 1");
+  } else {
+    h.kind = HistorySpec::Kind::Table;
+    const std::string csv = resolve(dir, s.text("file"));
+    std::ifstream in(csv);
+    if (!in) throw InputError(s.file(), s.field("file"), "cannot open '" + csv + "'", "a CSV file time_s,value");
+    std::string line;
+    int lineno = 0;
+    while (std::getline(in, line)) {
+      ++lineno;
+      if (line.empty() || line[0] == '#') continue;
+      std::replace(line.begin(), line.end(), ',', ' ');
+      std::istringstream ls(line);
+      double t, v;
+      if (!(ls >> t >> v)) {
+        if (lineno == 1) continue;  // header
+        throw InputError(csv, "line " + std::to_string(lineno), "'" + line + "'", "two numbers: time_s, value");
+      }
+      if (!h.table_time.empty() && t <= h.table_time.back())
+        throw InputError(csv, "line " + std::to_string(lineno), "time does not increase", "increasing times");
+      h.table_time.push_back(t);
+      h.table_value.push_back(v);
+    }
+    if (h.table_time.size() < 2) throw InputError(csv, "", "fewer than two rows", "a table of at least two rows");
+  }
+  return h;
+}
+
+std::array<bool, 3> parse_components(const Section& s) {
+  if (!s.has("components")) return {true, true, true};
+  std::array<bool, 3> c{false, false, false};
+  for (const auto& name : s.texts("components")) {
+    if (name == "x") c[0] = true;
+    else if (name == "y") c[1] = true;
+    else if (name == "z") c[2] = true;
+    else throw InputError(s.file(), s.field("components"), "'" + name + "'", "a list of x, y, z");
+  }
+  return c;
+}
+
+}  // namespace
+
+double HistorySpec::at(double t) const {
+  switch (kind) {
+    case Kind::Constant: return value;
+    case Kind::Ramp: return t >= ramp_time ? value : value * t / ramp_time;
+    case Kind::DoubleExponential: return double_exponential_pressure(value, rise_time, ratio, t);
+    case Kind::Table: {
+      if (t <= table_time.front()) return table_value.front();
+      if (t >= table_time.back()) return table_value.back();
+      const auto it = std::upper_bound(table_time.begin(), table_time.end(), t);
+      const size_t k = static_cast<size_t>(it - table_time.begin());
+      const double f = (t - table_time[k - 1]) / (table_time[k] - table_time[k - 1]);
+      return table_value[k - 1] + f * (table_value[k] - table_value[k - 1]);
+    }
+  }
+  return 0.0;
+}
+
+CaseConfig parse_case_file(const std::string& path) {
+  const Section root = Section::load_file(path);
+  root.allow_only({"name", "specimen", "model", "materials", "precracks", "loads", "boundary", "initial",
+                   "indenter", "time", "output", "description"});
+  CaseConfig c;
+  c.file = path;
+  c.directory = std::filesystem::path(path).parent_path().string();
+  c.name = root.text("name", std::filesystem::path(path).stem().string());
+
+  const Section spec = root.section("specimen");
+  spec.allow_only({"particles", "lattice", "mesh"});
+  if (spec.has("particles")) {
+    c.particles_path = resolve(c.directory, spec.text("particles"));
+  } else if (spec.has("lattice")) {
+    const Section l = spec.section("lattice");
+    l.allow_only({"dimension", "box", "spacing", "thickness"});
+    LatticeSpec lat;
+    lat.dimension = static_cast<int>(l.integer("dimension"));
+    if (lat.dimension != 2 && lat.dimension != 3)
+      throw InputError(path, l.field("dimension"), std::to_string(lat.dimension), "2 or 3");
+    lat.box = l.numbers("box", Quantity::Length, lat.dimension == 3 ? 6 : 4);
+    lat.spacing = l.positive("spacing", Quantity::Length);
+    lat.thickness = l.positive("thickness", Quantity::Length, lat.spacing);
+    c.lattice = lat;
+  } else {
+    throw InputError(path, "specimen", "neither 'particles' nor 'lattice' given",
+                     "specimen.particles: particles.h5 or specimen.lattice: {...}");
+  }
+
+  const Section model = root.section("model");
+  model.allow_only({"type", "planar", "influence", "horizon", "horizon_factor", "variable_horizon",
+                    "surface_correction", "fracture", "no_fail"});
+  c.model_name = model.choice("type", {"pmb", "lps", "mps"});
+  c.model = c.model_name == "lps" ? PdModel::LPS : PdModel::PMB;
+  const std::string planar = model.choice("planar", {"plane_stress", "plane_strain", "none"}, "none");
+  c.planar = planar == "plane_stress" ? Planar::PlaneStress : planar == "plane_strain" ? Planar::PlaneStrain : Planar::None;
+  const std::string infl = model.choice("influence", {"constant", "inverse", "gaussian"}, "constant");
+  c.influence = infl == "inverse" ? Influence::Inverse : infl == "gaussian" ? Influence::Gaussian : Influence::Constant;
+  if (model.has("horizon")) c.horizon_m = model.positive("horizon", Quantity::Length);
+  c.horizon_factor = model.positive("horizon_factor", Quantity::Dimensionless, 3.015);
+  c.variable_horizon = model.boolean("variable_horizon", false);
+  if (c.variable_horizon && c.horizon_m)
+    throw InputError(path, "model.horizon", "a fixed horizon together with variable_horizon: true",
+                     "either horizon (fixed) or variable_horizon with horizon_factor");
+  if (c.horizon_factor < 1.0)
+    throw InputError(path, "model.horizon_factor", "value " + std::to_string(c.horizon_factor),
+                     "a horizon of at least one particle spacing (typically 3.015)");
+  c.surface_correction = model.choice("surface_correction", {"none", "energy"}, "none") == "energy";
+  c.fracture = model.boolean("fracture", true);
+  c.no_fail_sets = model.texts("no_fail");
+
+  for (const Section& m : root.list("materials")) {
+    m.allow_only({"name", "density", "youngs_modulus", "poisson_ratio", "fracture_energy", "weibull"});
+    MaterialSpec ms;
+    ms.name = m.text("name", "default");
+    ms.density = m.positive("density", Quantity::Density);
+    ms.youngs_modulus = m.positive("youngs_modulus", Quantity::Pressure);
+    ms.poisson_ratio = m.number("poisson_ratio", Quantity::Dimensionless, 0.25);
+    if (!(ms.poisson_ratio > -1.0 && ms.poisson_ratio < 0.5))
+      throw InputError(path, m.field("poisson_ratio"), "value " + std::to_string(ms.poisson_ratio), "-1 < nu < 0.5");
+    ms.fracture_energy = m.number("fracture_energy", Quantity::FractureEnergy, 0.0);
+    if (ms.fracture_energy < 0)
+      throw InputError(path, m.field("fracture_energy"), "negative value", "G0 >= 0 (0: unbreakable)");
+    if (auto w = m.optional_section("weibull")) {
+      w->allow_only({"modulus", "seed"});
+      ms.weibull_modulus = w->positive("modulus", Quantity::Dimensionless);
+      ms.weibull_seed = w->integer("seed", 1);
+    }
+    c.materials.push_back(ms);
+  }
+  if (c.materials.empty())
+    throw InputError(path, "materials", "missing or empty", "a list with at least one material");
+
+  for (const Section& p : root.list("precracks")) {
+    p.allow_only({"type", "from", "to", "points", "surface"});
+    PrecrackSpec pc;
+    const std::string type = p.choice("type", {"segment", "polygon", "surface"});
+    if (type == "segment") {
+      pc.kind = PrecrackSpec::Kind::Segment;
+      pc.points = {p.vec3("from", Quantity::Length), p.vec3("to", Quantity::Length)};
+    } else if (type == "polygon") {
+      pc.kind = PrecrackSpec::Kind::Polygon;
+      const YAML::Node pts = p.node()["points"];
+      if (!pts.IsSequence() || pts.size() < 3)
+        throw InputError(path, p.field("points"), "missing or fewer than 3 points", "a list of >= 3 coplanar points");
+      for (size_t k = 0; k < pts.size(); ++k) {
+        YAML::Node wrap;
+        wrap["p"] = pts[k];
+        pc.points.push_back(Section(wrap, path, p.field("points") + "[" + std::to_string(k) + "]").vec3("p", Quantity::Length));
+      }
+    } else {
+      pc.kind = PrecrackSpec::Kind::Surface;
+      pc.surface = p.text("surface");
+    }
+    c.precracks.push_back(pc);
+  }
+
+  for (const Section& l : root.list("loads")) {
+    l.allow_only({"type", "surface", "set", "value", "history"});
+    LoadSpec ls;
+    const std::string type = l.choice("type", {"pressure", "traction", "body_force"});
+    if (type == "pressure") {
+      ls.kind = LoadSpec::Kind::Pressure;
+      ls.surface = l.text("surface");
+      ls.history = parse_history(l.section("history"), Quantity::Pressure, c.directory);
+    } else if (type == "traction") {
+      ls.kind = LoadSpec::Kind::Traction;
+      ls.surface = l.text("surface");
+      ls.vector = l.vec3("value", Quantity::Pressure);
+      if (l.has("history")) ls.history = parse_history(l.section("history"), Quantity::Dimensionless, c.directory);
+    } else {
+      ls.kind = LoadSpec::Kind::BodyForce;
+      ls.set = l.text("set", "");
+      ls.vector = l.vec3("value", Quantity::Acceleration);
+      if (l.has("history")) ls.history = parse_history(l.section("history"), Quantity::Dimensionless, c.directory);
+    }
+    c.loads.push_back(ls);
+  }
+
+  for (const Section& b : root.list("boundary")) {
+    b.allow_only({"type", "set", "value", "components", "ramp_time"});
+    BoundarySpec bs;
+    const std::string type = b.choice("type", {"fixed", "velocity", "displacement"});
+    bs.set = b.text("set");
+    bs.components = parse_components(b);
+    if (type == "fixed") {
+      bs.kind = BoundarySpec::Kind::Fixed;
+    } else if (type == "velocity") {
+      bs.kind = BoundarySpec::Kind::Velocity;
+      bs.value = b.vec3("value", Quantity::Velocity);
+    } else {
+      bs.kind = BoundarySpec::Kind::Displacement;
+      bs.value = b.vec3("value", Quantity::Length);
+    }
+    bs.ramp_time = b.number("ramp_time", Quantity::Time, 0.0);
+    c.boundaries.push_back(bs);
+  }
+
+  for (const Section& s : root.list("initial")) {
+    s.allow_only({"type", "set", "value", "center", "strain_rate", "cylindrical"});
+    InitialSpec is;
+    const std::string type = s.choice("type", {"velocity", "radial_velocity"});
+    is.set = s.text("set", "");
+    if (type == "velocity") {
+      is.kind = InitialSpec::Kind::Velocity;
+      is.value = s.vec3("value", Quantity::Velocity);
+    } else {
+      is.kind = InitialSpec::Kind::RadialVelocity;
+      is.center = s.vec3("center", Quantity::Length);
+      is.strain_rate = s.number("strain_rate", Quantity::StrainRate);
+      is.cylindrical = s.boolean("cylindrical", false);
+    }
+    c.initial.push_back(is);
+  }
+
+  if (auto ind = root.optional_section("indenter")) {
+    ind->allow_only({"radius", "center", "velocity", "stiffness"});
+    c.indenter.enabled = true;
+    c.indenter.radius = ind->positive("radius", Quantity::Length);
+    c.indenter.center = ind->vec3("center", Quantity::Length);
+    c.indenter.velocity = ind->vec3("velocity", Quantity::Velocity);
+    c.indenter.stiffness = ind->positive("stiffness", Quantity::Dimensionless);
+  }
+
+  const Section time = root.section("time");
+  time.allow_only({"end", "steps", "dt", "safety", "check_stability", "integrator", "adr_tolerance", "adr_max_steps"});
+  c.end_time = time.optional_number("end", Quantity::Time);
+  if (time.has("steps")) c.steps = time.integer("steps");
+  if (time.has("dt")) c.dt = time.positive("dt", Quantity::Time);
+  c.safety = time.positive("safety", Quantity::Dimensionless, 0.8);
+  c.check_stability = time.boolean("check_stability", true);
+  c.quasi_static = time.choice("integrator", {"verlet", "adr"}, "verlet") == "adr";
+  c.adr_tolerance = time.positive("adr_tolerance", Quantity::Dimensionless, 1e-8);
+  c.adr_max_steps = time.integer("adr_max_steps", 100000);
+  if (!c.end_time && !c.steps && !c.quasi_static)
+    throw InputError(path, "time", "neither 'end' nor 'steps' given", "time.end (e.g. 700 us) or time.steps");
+
+  if (auto out = root.optional_section("output")) {
+    out->allow_only({"every", "history_every", "checkpoint_every", "fields", "probes", "results"});
+    c.output_every = out->integer("every", 100);
+    c.history_every = out->integer("history_every", 10);
+    c.checkpoint_every = out->integer("checkpoint_every", 0);
+    c.write_results = out->boolean("results", true);
+    if (out->has("fields")) c.fields = out->texts("fields");
+    for (const auto& f : c.fields) {
+      static const std::vector<std::string> known{"displacement", "velocity", "damage", "stretch", "dilatation",
+                                                  "strain_energy_density"};
+      if (std::find(known.begin(), known.end(), f) == known.end())
+        throw InputError(path, "output.fields", "unknown field '" + f + "'",
+                         "displacement, velocity, damage, stretch, dilatation, strain_energy_density");
+    }
+    for (const Section& p : out->list("probes")) {
+      p.allow_only({"name", "position", "field"});
+      c.probes.push_back({p.text("name"), p.vec3("position", Quantity::Length),
+                          p.choice("field", {"displacement", "velocity"}, "displacement")});
+    }
+    if (c.output_every <= 0 || c.history_every <= 0)
+      throw InputError(path, "output.every", "a non-positive interval", "a positive number of steps");
+  }
+  return c;
+}
+
+}  // namespace breccia::solver

@@ -1,0 +1,308 @@
+#include "breccia/solver/outputs.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "breccia/common/error.hpp"
+#include "breccia/common/output_file.hpp"
+
+namespace breccia::solver {
+namespace {
+
+std::string group_name(int index) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "/output/%06d", index);
+  return buf;
+}
+
+// Internal-order 3N array -> file order.
+std::vector<double> to_file_order3(const PdSystem& s, const std::vector<double>& a) {
+  std::vector<double> out(3 * s.n);
+  for (size_t k = 0; k < s.n; ++k)
+    for (int d = 0; d < 3; ++d) out[3 * static_cast<size_t>(s.original_index[k]) + d] = a[3 * k + d];
+  return out;
+}
+
+std::vector<double> to_file_order(const PdSystem& s, const std::vector<double>& a) {
+  std::vector<double> out(s.n);
+  for (size_t k = 0; k < s.n; ++k) out[static_cast<size_t>(s.original_index[k])] = a[k];
+  return out;
+}
+
+bool is_precrack(const PdSystem& s, int64_t fi, int64_t fj) {
+  return std::binary_search(s.precrack_pairs.begin(), s.precrack_pairs.end(), std::make_pair(fi, fj));
+}
+
+}  // namespace
+
+std::vector<int64_t> broken_pairs(const PdSystem& s) {
+  std::vector<std::pair<int64_t, int64_t>> pairs;
+  for (size_t i = 0; i < s.n; ++i)
+    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
+      if (s.state[k] == (kOwnIntact | kDualIntact)) continue;
+      // A half that never existed (outside that horizon) is not a broken bond.
+      const int64_t fi = s.original_index[i], fj = s.original_index[s.neighbor[k]];
+      if (fi >= fj) continue;
+      const bool own_exists = s.vol_own[k] > 0;
+      const bool own_broken = own_exists && !(s.state[k] & kOwnIntact);
+      const bool dual_broken = s.k_dual[k] > 0 && !(s.state[k] & kDualIntact);
+      if (!(own_broken || dual_broken)) continue;
+      if (is_precrack(s, fi, fj)) continue;
+      pairs.emplace_back(fi, fj);
+    }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<int64_t> flat;
+  flat.reserve(2 * pairs.size());
+  for (auto& p : pairs) {
+    flat.push_back(p.first);
+    flat.push_back(p.second);
+  }
+  return flat;
+}
+
+ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool restart) : dir_(out_dir) {
+  std::filesystem::create_directories(out_dir);
+  const std::string path = out_dir + "/results.h5";
+  if (restart && std::filesystem::exists(path)) {
+    file_ = std::make_unique<h5::File>(path, h5::File::Mode::ReadWrite);
+    if (file_->attr_string("/", "particles_content_id") != s.particles.content_id)
+      throw InputError(path, "/@particles_content_id", "belongs to a different particle model",
+                       "the results of this case (or a fresh output directory)");
+    // Keep outputs up to the checkpoint; later ones are recomputed.
+    const int stored = static_cast<int>(file_->attr_int("/", "output_count"));
+    for (int k = 0; k < stored; ++k) {
+      const std::string g = group_name(k);
+      if (file_->attr_int(g, "step") > s.step) {
+        H5Ldelete(file_->id(), g.c_str(), H5P_DEFAULT);
+      } else {
+        count_ = k + 1;
+        times_.push_back(file_->attr_double(g, "time_s"));
+      }
+    }
+    file_->set_attr("/", "output_count", static_cast<long long>(count_));
+    file_->set_attr("/", "complete", 0LL);
+    return;
+  }
+  file_ = std::make_unique<h5::File>(path, h5::File::Mode::Create);
+  h5::File& f = *file_;
+  f.set_attr("/", "format", std::string("breccia-results"));
+  f.set_attr("/", "format_version", 1LL);
+  f.set_attr("/", "particles_file",
+             s.config.particles_path.empty() ? std::string("") : std::filesystem::absolute(s.config.particles_path).string());
+  f.set_attr("/", "particles_content_id", s.particles.content_id);
+  f.set_attr("/", "dimension", static_cast<long long>(s.dimension));
+  f.set_attr("/", "thickness_m", s.thickness);
+  f.set_attr("/", "model", s.config.model_name);
+  f.set_attr("/", "case_file", std::filesystem::absolute(s.config.file).string());
+  f.set_attr("/", "complete", 0LL);
+  const size_t n = s.n;
+  std::vector<double> density(n), horizon(n);
+  std::vector<int32_t> material(n);
+  for (size_t k = 0; k < n; ++k) {
+    const size_t fi = static_cast<size_t>(s.original_index[k]);
+    density[fi] = s.density[k];
+    horizon[fi] = s.horizon[k];
+    material[fi] = s.material[k];
+  }
+  f.write("/particles/position", s.particles.position_m, {n, 3});
+  f.write("/particles/volume", s.particles.volume_m3, {n});
+  f.write("/particles/density", density, {n});
+  f.write("/particles/horizon", horizon, {n});
+  f.write("/particles/material_id", material, {n});
+  std::vector<std::string> names;
+  std::vector<double> g0;
+  for (const auto& m : s.config.materials) {
+    names.push_back(m.name);
+    g0.push_back(m.fracture_energy);
+  }
+  f.write_strings("/materials/names", names);
+  f.write("/materials/fracture_energy", g0, {g0.size()});
+  std::vector<int64_t> pre;
+  for (auto& p : s.precrack_pairs) {
+    pre.push_back(p.first);
+    pre.push_back(p.second);
+  }
+  f.write("/precrack_bonds", pre, {pre.size() / 2, 2});
+  f.create_group("/output");
+  f.set_attr("/", "output_count", 0LL);
+  f.flush();
+}
+
+void ResultsWriter::write(const PdSystem& s) {
+  h5::File& f = *file_;
+  const std::string g = group_name(count_);
+  const size_t n = s.n;
+  const auto& fields = s.config.fields;
+  auto wants = [&](const char* name) { return std::find(fields.begin(), fields.end(), name) != fields.end(); };
+  f.write(g + "/displacement", to_file_order3(s, s.u), {n, 3});
+  f.write(g + "/velocity", to_file_order3(s, s.v), {n, 3});
+  f.write(g + "/damage", to_file_order(s, s.damage), {n});
+  if (wants("stretch")) f.write(g + "/stretch", to_file_order(s, s.max_stretch), {n});
+  if (wants("dilatation")) f.write(g + "/dilatation", to_file_order(s, s.dilatation), {n});
+  if (wants("strain_energy_density")) f.write(g + "/strain_energy_density", to_file_order(s, s.energy_density), {n});
+  const std::vector<int64_t> broken = broken_pairs(s);
+  f.write(g + "/broken_bonds", broken, {broken.size() / 2, 2});
+  f.set_attr(g, "step", static_cast<long long>(s.step));
+  f.set_attr(g, "time_s", s.time);
+  ++count_;
+  times_.push_back(s.time);
+  f.set_attr("/", "output_count", static_cast<long long>(count_));
+  f.flush();
+  write_xdmf(s);
+}
+
+void ResultsWriter::write_xdmf(const PdSystem& s) const {
+  std::ostringstream x;
+  const size_t n = s.n;
+  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+    << "  <Grid Name=\"results\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  auto item = [&](const std::string& path, const std::string& dims) {
+    return "<DataItem Dimensions=\"" + dims + "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">results.h5:" +
+           path + "</DataItem>";
+  };
+  for (int k = 0; k < count_; ++k) {
+    const std::string g = group_name(k);
+    x << "   <Grid Name=\"step" << k << "\" GridType=\"Uniform\">\n"
+      << "    <Time Value=\"" << times_[k] << "\"/>\n"
+      << "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\" NodesPerElement=\"1\"/>\n"
+      << "    <Geometry GeometryType=\"XYZ\">" << item("/particles/position", std::to_string(n) + " 3")
+      << "</Geometry>\n";
+    for (const char* v : {"displacement", "velocity"})
+      x << "    <Attribute Name=\"" << v << "\" AttributeType=\"Vector\" Center=\"Node\">"
+        << item(g + "/" + v, std::to_string(n) + " 3") << "</Attribute>\n";
+    for (const char* v : {"damage", "stretch", "dilatation", "strain_energy_density"}) {
+      if (std::string(v) != "damage" &&
+          std::find(s.config.fields.begin(), s.config.fields.end(), v) == s.config.fields.end())
+        continue;
+      x << "    <Attribute Name=\"" << v << "\" AttributeType=\"Scalar\" Center=\"Node\">"
+        << item(g + "/" + v, std::to_string(n)) << "</Attribute>\n";
+    }
+    x << "   </Grid>\n";
+  }
+  x << "  </Grid>\n </Domain>\n</Xdmf>\n";
+  write_text_file(dir_ + "/results.xdmf", x.str());
+}
+
+HistoryWriter::HistoryWriter(const PdSystem& s, const std::string& out_dir, bool append) {
+  std::filesystem::create_directories(out_dir);
+  const std::string path = out_dir + "/history.csv";
+  for (const auto& p : s.config.probes) {
+    int32_t best = 0;
+    double best_d2 = 1e300;
+    for (size_t i = 0; i < s.n; ++i) {
+      double d2 = 0;
+      for (int d = 0; d < 3; ++d) d2 += std::pow(s.x0[3 * i + d] - p.position[d], 2);
+      if (d2 < best_d2) {
+        best_d2 = d2;
+        best = static_cast<int32_t>(i);
+      }
+    }
+    probes_.emplace_back(best, p.field == "velocity" ? 1 : 0);
+  }
+  if (append && std::filesystem::exists(path)) {
+    // Drop rows after the checkpoint step so the history continues seamlessly.
+    std::ifstream in(path);
+    std::string line, kept;
+    bool header = true;
+    while (std::getline(in, line)) {
+      if (!header && std::stoll(line.substr(0, line.find(','))) > s.step) break;
+      kept += line + "\n";
+      header = false;
+    }
+    in.close();
+    write_text_file(path, kept);
+    file_ = std::fopen(path.c_str(), "a");
+  } else {
+    file_ = std::fopen(path.c_str(), "w");
+    if (!file_) throw RunError("cannot write " + path);
+    std::fprintf(file_, "step,time_s,kinetic_J,strain_J,external_work_J,dissipated_J,total_J,max_damage,broken_bonds");
+    const char* comp[2][3] = {{"ux", "uy", "uz"}, {"vx", "vy", "vz"}};
+    for (size_t p = 0; p < probes_.size(); ++p)
+      for (int d = 0; d < 3; ++d)
+        std::fprintf(file_, ",probe_%s_%s", s.config.probes[p].name.c_str(), comp[probes_[p].second][d]);
+    std::fprintf(file_, "\n");
+  }
+  if (!file_) throw RunError("cannot write " + path);
+}
+
+HistoryWriter::~HistoryWriter() {
+  if (file_) std::fclose(file_);
+}
+
+void HistoryWriter::write(const PdSystem& s, const Energies& e) {
+  // Broken bonds counted as pairs: each pair has two entries, each with up to two halves.
+  std::fprintf(file_, "%lld,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%.6f,%lld", s.step, s.time, e.kinetic, e.strain,
+               s.external_work, s.dissipated_energy, e.kinetic + e.strain + s.dissipated_energy - s.external_work,
+               e.max_damage, e.broken_half_bonds / 2);
+  for (const auto& [i, kind] : probes_) {
+    const std::vector<double>& src = kind ? s.v : s.u;
+    for (int d = 0; d < 3; ++d) std::fprintf(file_, ",%.9e", src[3 * static_cast<size_t>(i) + d]);
+  }
+  std::fprintf(file_, "\n");
+  std::fflush(file_);
+}
+
+void write_checkpoint(const PdSystem& s, const std::string& path) {
+  OutputFile out(path);
+  {
+    h5::File f(out.temp_path().string(), h5::File::Mode::Create);
+    f.set_attr("/", "format", std::string("breccia-checkpoint"));
+    f.set_attr("/", "particles_content_id", s.particles.content_id);
+    f.set_attr("/", "case_file", s.config.file);
+    f.set_attr("/", "step", static_cast<long long>(s.step));
+    f.set_attr("/", "time_s", s.time);
+    f.set_attr("/", "dt_s", s.dt);
+    f.set_attr("/", "external_work_J", s.external_work);
+    f.set_attr("/", "dissipated_J", s.dissipated_energy);
+    f.set_attr("/", "bond_count", static_cast<long long>(s.bond_count()));
+    const size_t n = s.n;
+    f.write("/u", s.u, {n, 3});
+    f.write("/v", s.v, {n, 3});
+    f.write("/a", s.a, {n, 3});
+    f.write("/force", s.force, {n, 3});
+    f.write("/body", s.body, {n, 3});
+    f.write("/bond_state", s.state, {s.state.size()});
+    std::vector<double> ind(s.indenter_position, s.indenter_position + 3);
+    f.write("/indenter_position", ind, {3});
+  }
+  out.commit();
+}
+
+void read_checkpoint(PdSystem& s, const std::string& path) {
+  if (!std::filesystem::exists(path)) throw InputError(path, "", "checkpoint file does not exist", "a checkpoint.h5");
+  h5::File f(path, h5::File::Mode::Read);
+  if (!f.has_attr("/", "format") || f.attr_string("/", "format") != "breccia-checkpoint")
+    throw InputError(path, "/@format", "not a Breccia checkpoint", "a checkpoint.h5 written by breccia-solve");
+  if (f.attr_string("/", "particles_content_id") != s.particles.content_id)
+    throw InputError(path, "/@particles_content_id", "was written for a different particle model",
+                     "a checkpoint of this case");
+  if (static_cast<size_t>(f.attr_int("/", "bond_count")) != s.bond_count())
+    throw InputError(path, "/@bond_count", "bond count differs from this case's families",
+                     "a checkpoint of the same case (horizon and model unchanged)");
+  s.step = f.attr_int("/", "step");
+  s.time = f.attr_double("/", "time_s");
+  s.dt = f.attr_double("/", "dt_s");
+  s.external_work = f.attr_double("/", "external_work_J");
+  s.dissipated_energy = f.attr_double("/", "dissipated_J");
+  s.u = f.read_doubles("/u");
+  s.v = f.read_doubles("/v");
+  s.a = f.read_doubles("/a");
+  s.force = f.read_doubles("/force");
+  s.body = f.read_doubles("/body");
+  s.state = f.read_uint8("/bond_state");
+  const auto ind = f.read_doubles("/indenter_position");
+  for (int d = 0; d < 3; ++d) s.indenter_position[d] = ind[d];
+  // Derived per-particle fields (damage, energy) at the restored state; no bond can break
+  // here because the stretches are those already checked at the checkpointed step.
+  const double dissipated = s.dissipated_energy;
+  const std::vector<double> force = s.force;
+  cpu_compute_forces(s);
+  s.dissipated_energy = dissipated;
+  s.force = force;
+}
+
+}  // namespace breccia::solver

@@ -1,0 +1,271 @@
+#include "breccia/solver/run.hpp"
+
+#include <omp.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "breccia/common/error.hpp"
+#include "breccia/common/output_file.hpp"
+#include "breccia/solver/outputs.hpp"
+
+namespace breccia::solver {
+namespace {
+
+std::atomic<bool> g_interrupted{false};
+void on_sigint(int) { g_interrupted = true; }
+
+std::string fmt(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.6g", v);
+  return b;
+}
+
+void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, double setup_s) {
+  std::ostringstream j;
+  const double bytes_per_particle =
+      (s.bond_count() * (sizeof(int32_t) + 4 * sizeof(double) + 2 * sizeof(float) + 1) +
+       s.n * (13 * sizeof(double) + 2 * sizeof(int32_t) + 1)) / std::max<double>(1.0, s.n);
+  j << "{\n"
+    << "  \"case\": \"" << s.config.name << "\",\n"
+    << "  \"status\": \"" << r.status << "\",\n"
+    << "  \"message\": \"" << r.message << "\",\n"
+    << "  \"model\": \"" << s.config.model_name << "\",\n"
+    << "  \"backend\": \"" << o.backend << "\",\n"
+    << "  \"threads\": " << omp_get_max_threads() << ",\n"
+    << "  \"dimension\": " << s.dimension << ",\n"
+    << "  \"particles\": " << s.n << ",\n"
+    << "  \"bonds\": " << s.bond_count() << ",\n"
+    << "  \"mean_family_size\": " << fmt(static_cast<double>(s.bond_count()) / std::max<size_t>(1, s.n)) << ",\n"
+    << "  \"bytes_per_particle\": " << fmt(bytes_per_particle) << ",\n"
+    << "  \"steps\": " << s.step << ",\n"
+    << "  \"steps_this_run\": " << r.steps << ",\n"
+    << "  \"time_s\": " << fmt(s.time) << ",\n"
+    << "  \"dt_s\": " << fmt(s.dt) << ",\n"
+    << "  \"stable_dt_s\": " << fmt(s.stable_dt) << ",\n"
+    << "  \"silling_askari_dt_s\": " << fmt(s.silling_askari_dt) << ",\n"
+    << "  \"setup_wall_s\": " << fmt(setup_s) << ",\n"
+    << "  \"wall_s\": " << fmt(r.wall_s) << ",\n"
+    << "  \"bond_updates_per_s\": " << fmt(r.bond_updates_per_s) << ",\n"
+    << "  \"bond_updates_note\": \"bond entries (each bond counted once from each end) x steps / wall time of the time loop\",\n"
+    << "  \"kinetic_J\": " << fmt(r.final_energies.kinetic) << ",\n"
+    << "  \"strain_J\": " << fmt(r.final_energies.strain) << ",\n"
+    << "  \"external_work_J\": " << fmt(s.external_work) << ",\n"
+    << "  \"dissipated_J\": " << fmt(s.dissipated_energy) << ",\n"
+    << "  \"max_damage\": " << fmt(r.final_energies.max_damage) << ",\n"
+    << "  \"broken_bonds\": " << r.final_energies.broken_half_bonds / 2 << "\n"
+    << "}\n";
+  write_text_file(o.out_dir + "/summary.json", j.str());
+}
+
+}  // namespace
+
+std::string instability_message(const PdSystem& s, const Energies& e, double energy_scale) {
+  const auto where = [&](int64_t i) {
+    std::ostringstream m;
+    m << "particle " << s.original_index[i] << " at (" << s.x0[3 * i] << ", " << s.x0[3 * i + 1] << ", "
+      << s.x0[3 * i + 2] << ")";
+    return m.str();
+  };
+  std::ostringstream m;
+  if (!e.finite) {
+    const int64_t i = e.bad_particle >= 0 ? e.bad_particle : 0;
+    m << "run became unstable at step " << s.step << " (t = " << s.time << " s): " << where(i)
+      << " has a non-finite displacement or velocity";
+  } else if (e.kinetic + e.strain > 10.0 * energy_scale && e.kinetic + e.strain > 1e-30) {
+    // Energy far above everything put in: an exponentially growing mode.
+    int64_t worst = 0;
+    double vmax = -1;
+    for (size_t i = 0; i < s.n; ++i) {
+      const double v2 = s.v[3 * i] * s.v[3 * i] + s.v[3 * i + 1] * s.v[3 * i + 1] + s.v[3 * i + 2] * s.v[3 * i + 2];
+      if (v2 > vmax) {
+        vmax = v2;
+        worst = static_cast<int64_t>(i);
+      }
+    }
+    m << "run became unstable at step " << s.step << " (t = " << s.time << " s): energy "
+      << e.kinetic + e.strain << " J grew beyond 10x the energy supplied (" << energy_scale << " J); fastest "
+      << where(worst);
+  } else {
+    return "";
+  }
+  m << ". Likely cause: time step too large (dt = " << s.dt << " s, stable step 2/omega_max = " << s.stable_dt
+    << " s)";
+  if (s.dt <= s.stable_dt) m << ", or a horizon too small for irregular particles (raise model.horizon_factor)";
+  m << ". The last good output is kept.";
+  return m.str();
+}
+
+long long relax_to_equilibrium(PdSystem& s, bool progress) {
+  // Fictitious density rho* = 1.2 rho omega_max^2 / 4 makes the unit step stable.
+  const size_t n3 = 3 * s.n;
+  const double omega2 = std::pow(2.0 / s.stable_dt, 2);
+  std::vector<double> lam(s.n), f_prev(n3, 0.0), v_half(n3, 0.0);
+  for (size_t i = 0; i < s.n; ++i) lam[i] = 1.2 * s.density[i] * omega2 / 4.0;
+  apply_constraints(s, 1e300, 0.0);  // prescribed values at their full size
+  for (auto& x : s.v) x = 0.0;
+  compute_external(s, 0.0);
+  double load_norm = 0.0;
+  for (size_t k = 0; k < n3; ++k) load_norm += s.body[k] * s.body[k] * s.volume[k / 3];
+  load_norm = std::sqrt(load_norm);
+  auto is_free = [&](size_t k) { return !(s.fixed_dof[k / 3] & (1u << (k % 3))); };
+  const auto start = std::chrono::steady_clock::now();
+  auto last = start;
+  for (long long it = 0; it < s.config.adr_max_steps; ++it) {
+    cpu_compute_forces(s);
+    double num = 0.0, den = 0.0, residual = 0.0;
+    for (size_t k = 0; k < n3; ++k) {
+      if (!is_free(k)) continue;
+      const double f = (s.force[k] + s.body[k]) / lam[k / 3];
+      residual += std::pow(s.force[k] + s.body[k], 2) * s.volume[k / 3];
+      if (it > 0 && v_half[k] != 0.0) {
+        const double kdiag = -(f - f_prev[k]) / v_half[k];
+        num += s.u[k] * kdiag * s.u[k];
+      }
+      den += s.u[k] * s.u[k];
+    }
+    residual = std::sqrt(residual);
+    const double ref = load_norm > 0 ? load_norm : 1.0;
+    if (it > 10 && residual <= s.config.adr_tolerance * ref) {
+      s.step = it;
+      return it;
+    }
+    double damping = (den > 0 && num > 0) ? 2.0 * std::sqrt(num / den) : 0.0;
+    damping = std::min(damping, 1.9);
+    for (size_t k = 0; k < n3; ++k) {
+      if (!is_free(k)) continue;
+      const double f = (s.force[k] + s.body[k]) / lam[k / 3];
+      v_half[k] = it == 0 ? 0.5 * f : ((2.0 - damping) * v_half[k] + 2.0 * f) / (2.0 + damping);
+      s.u[k] += v_half[k];
+      f_prev[k] = f;
+    }
+    if (progress) {
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - last).count() > 2.0) {
+        last = now;
+        std::fprintf(stderr, "[adr] iteration %lld  residual/load %.3e  (tolerance %.1e)\n", it, residual / ref,
+                     s.config.adr_tolerance);
+      }
+    }
+  }
+  return -1;
+}
+
+RunResult run_system(PdSystem& s, const RunOptions& o) {
+  RunResult r;
+  const bool restart = !o.restart_file.empty();
+  std::filesystem::create_directories(o.out_dir);
+  std::unique_ptr<ResultsWriter> results;
+  if (s.config.write_results) results = std::make_unique<ResultsWriter>(s, o.out_dir, restart);
+  HistoryWriter history(s, o.out_dir, restart);
+
+  if (s.config.quasi_static) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const long long iters = relax_to_equilibrium(s, o.progress);
+    r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r.steps = iters < 0 ? s.config.adr_max_steps : iters;
+    r.status = iters < 0 ? "not_converged" : "converged";
+    r.final_energies = measure(s);
+    if (iters < 0) r.message = "ADR did not reach the tolerance within time.adr_max_steps";
+    history.write(s, r.final_energies);
+    if (results) results->write(s);
+    return r;
+  }
+
+  long long total_steps = 0;
+  if (o.steps) total_steps = *o.steps + s.step;
+  else if (s.config.steps) total_steps = *s.config.steps;
+  else total_steps = static_cast<long long>(std::ceil(*s.config.end_time / s.dt - 1e-9));
+
+  Energies e = measure(s);
+  // Energy supplied so far: the scale against which blow-up is judged.
+  double supplied = e.kinetic + e.strain;
+  if (!restart) {
+    history.write(s, e);
+    if (results) results->write(s);
+  }
+  g_interrupted = false;
+  auto previous = std::signal(SIGINT, on_sigint);
+  const long long first_step = s.step;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto last_report = t0;
+  r.status = "completed";
+  while (s.step < total_steps) {
+    cpu_step(s);
+    const bool history_due = s.step % s.config.history_every == 0 || s.step == total_steps;
+    const bool output_due = s.step % s.config.output_every == 0 || s.step == total_steps;
+    if (history_due || output_due) {
+      e = measure(s);
+      supplied = std::max(supplied, std::fabs(s.external_work) + s.dissipated_energy);
+      supplied = std::max(supplied, 1e-300);
+      const std::string bad = instability_message(s, e, supplied);
+      if (!bad.empty()) {
+        r.status = "unstable";
+        r.message = bad;
+        break;
+      }
+      if (history_due) history.write(s, e);
+      if (output_due && results) results->write(s);
+    }
+    if (s.config.checkpoint_every > 0 && s.step % s.config.checkpoint_every == 0)
+      write_checkpoint(s, o.out_dir + "/checkpoint.h5");
+    if (g_interrupted) {
+      r.status = "interrupted";
+      r.message = "interrupted by the user at step " + std::to_string(s.step) + "; continue with --restart " +
+                  o.out_dir + "/checkpoint.h5";
+      e = measure(s);
+      history.write(s, e);
+      if (results) results->write(s);
+      write_checkpoint(s, o.out_dir + "/checkpoint.h5");
+      break;
+    }
+    if (o.progress) {
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - last_report).count() > 2.0) {
+        last_report = now;
+        const double el = std::chrono::duration<double>(now - t0).count();
+        const double rate = (s.step - first_step) / el;
+        std::fprintf(stderr, "step %lld/%lld  t = %.4e s  %.1f steps/s  ETA %.1f s  max damage %.3f\n", s.step,
+                     total_steps, s.time, rate, (total_steps - s.step) / std::max(rate, 1e-9), e.max_damage);
+      }
+    }
+  }
+  std::signal(SIGINT, previous);
+  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.steps = s.step - first_step;
+  r.bond_updates_per_s = r.wall_s > 0 ? static_cast<double>(s.bond_count()) * r.steps / r.wall_s : 0.0;
+  if (r.status == "completed") {
+    r.final_energies = measure(s);
+    write_checkpoint(s, o.out_dir + "/checkpoint.h5");
+  } else {
+    r.final_energies = e;
+  }
+  return r;
+}
+
+RunResult run_case(const CaseConfig& config, const RunOptions& o) {
+  if (o.threads > 0) omp_set_num_threads(o.threads);
+  const auto t0 = std::chrono::steady_clock::now();
+  PdSystem s = setup_system(config);
+  if (!o.restart_file.empty()) read_checkpoint(s, o.restart_file);
+  const double setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (o.progress) {
+    std::fprintf(stderr,
+                 "breccia-solve: %s, %s %dD, %zu particles, %zu bonds (%.1f per particle), horizon %.4g m\n"
+                 "  stable step 2/omega_max = %.4e s (Silling-Askari bound %.4e s), dt = %.4e s (safety %.2f)\n"
+                 "  set-up %.2f s\n",
+                 config.name.c_str(), config.model_name.c_str(), s.dimension, s.n, s.bond_count(),
+                 static_cast<double>(s.bond_count()) / std::max<size_t>(1, s.n), s.horizon.empty() ? 0.0 : s.horizon[0],
+                 s.stable_dt, s.silling_askari_dt, s.dt, config.safety, setup_s);
+  }
+  RunResult r = run_system(s, o);
+  write_summary(s, o, r, setup_s);
+  return r;
+}
+
+}  // namespace breccia::solver

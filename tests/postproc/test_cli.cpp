@@ -1,0 +1,219 @@
+// breccia-post end to end on synthetic run directories, and its answers to bad input.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+#include "breccia/common/error.hpp"
+#include "breccia/postproc/run_data.hpp"
+#include "synthetic_run.hpp"
+
+using namespace breccia;
+namespace bt = breccia::postproc::testing;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kH = 1e-3;
+constexpr double kG0 = 100.0;
+
+struct Result {
+  int code = -1;
+  std::string output;
+};
+
+Result run_post(const std::string& args, const std::string& env = "") {
+  const std::string cmd = env + " '" + std::string(BRECCIA_POST_EXE) + "' " + args + " 2>&1";
+  Result r;
+  FILE* p = popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf{};
+  while (fgets(buf.data(), buf.size(), p)) r.output += buf.data();
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The number after the first "key": at or after `from`.
+double json_number(const std::string& json, const std::string& key, const std::string& from = "") {
+  size_t start = from.empty() ? 0 : json.find(from);
+  const size_t at = json.find("\"" + key + "\": ", start == std::string::npos ? 0 : start);
+  if (at == std::string::npos) return NAN;
+  return std::strtod(json.c_str() + at + key.size() + 4, nullptr);
+}
+
+// Cubes of 2, 3 and 4 mm, 3 mm apart; the 4 mm cube cut on z = 1 mm (16 mm^2).
+bt::SyntheticRun cracked_cubes(const fs::path& dir) {
+  bt::SyntheticRun run;
+  run.dir = dir;
+  fs::remove_all(dir);
+  run.model = bt::merge({bt::structured_mesh(3, {2, 2, 2}, kH), bt::structured_mesh(3, {3, 3, 3}, kH, {5 * kH, 0, 0}),
+                         bt::structured_mesh(3, {4, 4, 4}, kH, {11 * kH, 0, 0})});
+  run.horizon_m = 1.6 * kH;
+  run.fracture_energy_J_m2 = {kG0};
+  const auto cut = bt::bonds_where(run.model, run.horizon_m, [](const double* a, const double* b) {
+    return a[0] > 10 * kH && (a[2] - kH) * (b[2] - kH) < 0;
+  });
+  run.outputs.push_back({0, 0.0, {}, {}, {}, {}});
+  bt::SyntheticOutput last{100, 1e-5, {}, {}, {}, cut};
+  last.damage.assign(run.model.size(), 0.0);
+  run.outputs.push_back(last);
+  return run;
+}
+
+void write_history(const fs::path& dir, double dissipated_J) {
+  // 512 samples, dt = 10 ns; probe A: 2 MHz on bin 10... (f0 = 10 / (512 dt)) plus 10 % third harmonic.
+  const size_t n = 512;
+  const double dt = 1e-8, f0 = 10.0 / (n * dt);
+  std::ostringstream s;
+  s << "step,time_s,kinetic_J,strain_J,external_work_J,dissipated_J,total_J,max_damage,broken_bonds,probe_A_ux,probe_A_uy\n";
+  for (size_t k = 0; k < n; ++k) {
+    const double t = k * dt, frac = static_cast<double>(k) / (n - 1);
+    const double d = dissipated_J * frac, kin = 0.3 * frac, strain = 0.1 * frac;
+    const double ux = 1e-8 * (std::sin(2 * std::numbers::pi * f0 * t) + 0.1 * std::sin(2 * std::numbers::pi * 3 * f0 * t));
+    s << k * 100 / (n - 1) << ',' << t << ',' << kin << ',' << strain << ',' << kin + strain + d << ',' << d << ','
+      << kin + strain + d << ",0,0," << ux << ',' << 0.5 * ux << '\n';
+  }
+  std::ofstream(dir / "history.csv") << s.str();
+}
+
+}  // namespace
+
+TEST(BrecciaPostCli, FullRunWritesEveryOutputWithTheKnownAnswers) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_full";
+  const auto run = cracked_cubes(dir);
+  bt::write_run(run);
+  write_history(dir, kG0 * 16e-6);
+  const Result r = run_post("'" + dir.string() + "' --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* f : {"cracks.vtp", "damage_iso.vtp", "crack_history.csv", "fragments.csv", "fragments.vtu",
+                        "deformed.vtu", "size_distribution.csv", "post.json", "probe_A.csv", "spectrum_A.csv",
+                        "fragment_sizes.png", "energy.png", "probe_A.png", "spectrum_A.png"})
+    EXPECT_TRUE(fs::exists(dir / "post" / f)) << f << "\n" << r.output;
+  const std::string json = read(dir / "post" / "post.json");
+  EXPECT_EQ(json_number(json, "fragment_count", "\"fragments\""), 4);
+  EXPECT_NEAR(json_number(json, "crack_area_m2"), 16e-6, 1e-15);
+  EXPECT_EQ(json_number(json, "crack_count"), 1);
+  // History dissipated energy was written as G0 x 16 mm^2: the check reads 1.
+  EXPECT_NEAR(json_number(json, "ratio", "\"energy\""), 1.0, 1e-6);
+  EXPECT_NEAR(json_number(json, "ratio", "\"order\": 3"), 0.1, 0.001);  // on-bin tones: 1 %
+  // Crack area history: nothing at output 0, 16 mm^2 at output 1.
+  const std::string hist = read(dir / "post" / "crack_history.csv");
+  EXPECT_NE(hist.find("\n0,0,0,0,"), std::string::npos) << hist;
+  EXPECT_NE(hist.find("\n1,100,1e-05,1.6e-05,"), std::string::npos) << hist;
+}
+
+TEST(BrecciaPostCli, AllStepsWritesOneFileSetPerOutputAndCollections) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_all";
+  bt::write_run(cracked_cubes(dir));
+  const Result r = run_post("'" + dir.string() + "' --all --cracks --fragments --no-plots --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* f : {"cracks_000000.vtp", "cracks_000100.vtp", "fragments_000100.vtu", "deformed_000000.vtu",
+                        "cracks.pvd", "fragments.pvd"})
+    EXPECT_TRUE(fs::exists(dir / "post" / f)) << f;
+  EXPECT_FALSE(fs::exists(dir / "post" / "energy.png"));  // not selected
+}
+
+TEST(BrecciaPostCli, FailingChartScriptIsReportedAndResultsAreKept) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_noscript";
+  bt::write_run(cracked_cubes(dir));
+  const Result r = run_post("'" + dir.string() + "' --fragments --quiet", "BRECCIA_POSTPROC_SCRIPTS=/nonexistent");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("chart not drawn"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "post" / "fragments.csv"));
+  EXPECT_NE(read(dir / "post" / "post.json").find("fragment_sizes.png: plot_fragment_sizes.py failed"), std::string::npos);
+}
+
+TEST(BrecciaPostCli, TwoDimensionalLatticeRunReportsCrackLengthAndTwoFragments) {
+  // 10 x 6 square lattice, thickness 5 mm, cut between rows 2 and 3: a 10 mm crack.
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_lattice2d";
+  fs::remove_all(dir);
+  bt::SyntheticRun run;
+  run.dir = dir;
+  run.model = bt::lattice(2, {10, 6, 1}, kH, 5e-3);
+  run.horizon_m = 3.015 * kH;
+  const auto cut = bt::bonds_where(run.model, run.horizon_m, [](const double* a, const double* b) {
+    return (a[1] - 3 * kH) * (b[1] - 3 * kH) < 0;
+  });
+  run.outputs.push_back({10, 1e-6, {}, {}, {}, cut});
+  bt::write_run(run);
+  const Result r = run_post("'" + dir.string() + "' --no-plots --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const std::string json = read(dir / "post" / "post.json");
+  EXPECT_NEAR(json_number(json, "crack_length_m"), 10 * kH, 1e-15);
+  EXPECT_NEAR(json_number(json, "crack_area_m2"), 10 * kH * 5e-3, 1e-18);
+  EXPECT_EQ(json_number(json, "fragment_count", "\"fragments\""), 2);
+  EXPECT_TRUE(fs::exists(dir / "post" / "deformed.vtu"));
+  EXPECT_FALSE(fs::exists(dir / "post" / "damage_iso.vtp"));  // no mesh to contour on
+  EXPECT_NE(json.find("damage_iso.vtp not written: lattice model"), std::string::npos);
+}
+
+TEST(BrecciaPostCli, MissingResultsFileIsBadInputNamingTheFile) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_empty";
+  fs::create_directories(dir);
+  const Result r = run_post("'" + dir.string() + "'");
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.output.find("error: " + (dir / "results.h5").string() + ": file does not exist"), std::string::npos) << r.output;
+}
+
+TEST(BrecciaPostCli, UnknownStepIsBadInputListingTheAvailableSteps) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_step";
+  bt::write_run(cracked_cubes(dir));
+  const Result r = run_post("'" + dir.string() + "' --step 50 --no-plots");
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.output.find("no output at step 50"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("2 outputs, steps 0 .. 100"), std::string::npos) << r.output;
+}
+
+TEST(BrecciaPostCli, ProvenanceMismatchIsBadInputNamingBothFiles) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_provenance";
+  auto run = cracked_cubes(dir);
+  run.content_id_override = "0123456789abcdef";
+  bt::write_run(run);
+  const Result r = run_post("'" + dir.string() + "' --no-plots");
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.output.find((dir / "results.h5").string() + ": /@particles_content_id: '0123456789abcdef'"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find((dir / "particles.h5").string()), std::string::npos) << r.output;
+  // The library says the same through InputError, naming the field.
+  try {
+    postproc::open_run(dir);
+    FAIL() << "open_run accepted a mismatched particles file";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "/@particles_content_id");
+  }
+}
+
+TEST(BrecciaPostCli, UnknownProbeIsBadInputListingTheProbes) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_probe";
+  bt::write_run(cracked_cubes(dir));
+  write_history(dir, 0.0);
+  const Result r = run_post("'" + dir.string() + "' --spectrum B --no-plots");
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.output.find("one of the probes in the header: A"), std::string::npos) << r.output;
+}
+
+TEST(BrecciaPostCli, EnergyWithoutHistoryIsBadInput) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_nohistory";
+  bt::write_run(cracked_cubes(dir));
+  const Result r = run_post("'" + dir.string() + "' --energy --no-plots");
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.output.find("history.csv: file does not exist"), std::string::npos) << r.output;
+}
+
+TEST(BrecciaPostCli, UnknownOptionIsBadInput) {
+  const Result r = run_post("somewhere --frobnicate");
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.output.find("--frobnicate: unknown option"), std::string::npos) << r.output;
+}

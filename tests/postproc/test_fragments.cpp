@@ -1,0 +1,158 @@
+// Fragments over the intact bond graph, their measures and the split deformed mesh.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "breccia/postproc/bond_graph.hpp"
+#include "breccia/postproc/fragments.hpp"
+#include "breccia/postproc/meshes.hpp"
+#include "synthetic_run.hpp"
+
+using namespace breccia;
+using namespace breccia::postproc;
+namespace bt = breccia::postproc::testing;
+
+namespace {
+
+constexpr double kH = 1e-3;
+constexpr double kDensity = 2500.0;
+
+FragmentResult fragments_of(const ParticleModel& m, double horizon, const std::vector<int64_t>& broken,
+                            int64_t min_particles = 1, const std::vector<double>& displacement = {}) {
+  const auto fam = solver::build_families(m.position_m, std::vector<double>(m.size(), horizon));
+  int32_t count = 0;
+  const auto comp = intact_components(fam, RemovedBonds(broken, m.size()), RemovedBonds({}, m.size()), &count);
+  const std::vector<double> density(m.size(), kDensity);
+  FragmentInputs in{m.dimension, m.thickness_m, m.position_m, displacement, {}, m.volume_m3, density};
+  return measure_fragments(in, comp, count, min_particles);
+}
+
+}  // namespace
+
+TEST(Fragments, PlanarCutSplitsBlockIntoTwoHalvesOfExactVolume) {
+  // 4 x 4 x 4 mm block cut on z = 1 mm: fragments of 4 x 4 x 3 and 4 x 4 x 1 mm^3.
+  const auto m = bt::structured_mesh(3, {4, 4, 4}, kH);
+  const double horizon = 1.6 * kH;
+  const auto cut = bt::bonds_where(m, horizon, [](const double* a, const double* b) {
+    return (a[2] - kH) * (b[2] - kH) < 0;
+  });
+  const FragmentResult r = fragments_of(m, horizon, cut);
+  ASSERT_EQ(r.fragments.size(), 2u);
+  // Volumes are sums of h^3/6: equal to the boxes up to rounding.
+  EXPECT_NEAR(r.fragments[0].volume_m3, 48e-9, 1e-20);
+  EXPECT_NEAR(r.fragments[1].volume_m3, 16e-9, 1e-20);
+  EXPECT_NEAR(r.fragments[0].mass_kg, 48e-9 * kDensity, 1e-16);
+  EXPECT_NEAR(r.fragments[0].centroid_reference_m[2], 2.5 * kH, 1e-12);  // uniform density: box centre
+  EXPECT_NEAR(r.fragments[1].centroid_reference_m[2], 0.5 * kH, 1e-12);
+  // The slab's box is 4 x 4 x 1 mm; particle centres span (edge - h/2), plus the mean
+  // spacing (h / 6^(1/3) = 0.55 h): each edge within 0.1 h of the true one.
+  EXPECT_NEAR(r.fragments[1].box_m[0], 4 * kH, 0.1 * kH);
+  EXPECT_NEAR(r.fragments[1].box_m[2], 1 * kH, 0.1 * kH);
+  EXPECT_NEAR(r.fragments[1].sieve_size_m, 4 * kH, 0.1 * kH);
+}
+
+TEST(Fragments, SeparatedCubesGiveOneFragmentEachWithExactVolume) {
+  // Cubes of 1, 2, 3 and 4 cells, 3 h apart (beyond the horizon): no bond between them.
+  std::vector<ParticleModel> parts;
+  double x0 = 0;
+  for (int n = 1; n <= 4; ++n) {
+    parts.push_back(bt::structured_mesh(3, {n, n, n}, kH, {x0, 0, 0}));
+    x0 += (n + 3) * kH;
+  }
+  const auto m = bt::merge(parts);
+  const FragmentResult r = fragments_of(m, 1.6 * kH, {});
+  ASSERT_EQ(r.fragments.size(), 4u);
+  for (int k = 0; k < 4; ++k) {
+    const int n = 4 - k;  // sorted by decreasing mass
+    const double volume = std::pow(n * kH, 3);
+    EXPECT_NEAR(r.fragments[k].volume_m3, volume, 1e-12 * volume);
+    EXPECT_EQ(r.fragments[k].particle_count, 6 * n * n * n);
+    EXPECT_NEAR(r.fragments[k].equivalent_diameter_m, std::cbrt(6 * volume / std::numbers::pi), 1e-12);
+    // Cube: the coordinate box wins over the (arbitrary) principal axes; see the slab test
+    // for why 0.1 h.
+    EXPECT_NEAR(r.fragments[k].sieve_size_m, n * kH, 0.1 * kH);
+  }
+}
+
+TEST(Fragments, MinimumSizeFilterDropsSmallFragmentsAndCountsTheirMass) {
+  std::vector<ParticleModel> parts{bt::structured_mesh(3, {1, 1, 1}, kH), bt::structured_mesh(3, {3, 3, 3}, kH, {5 * kH, 0, 0})};
+  const auto m = bt::merge(parts);
+  const FragmentResult r = fragments_of(m, 1.6 * kH, {}, 7);  // the 1-cell cube has 6 particles
+  ASSERT_EQ(r.fragments.size(), 1u);
+  EXPECT_EQ(r.filtered_count, 1);
+  EXPECT_NEAR(r.filtered_mass_kg, 1e-9 * kDensity, 1e-18);
+  EXPECT_EQ(r.fragment_id[0], -1);
+  EXPECT_EQ(r.fragment_id[m.size() - 1], 0);
+}
+
+TEST(Fragments, InclinedRodPrincipalBoxFindsTheSieveSizeOfTheCrossSection) {
+  // A 20 x 3 x 2 lattice rod rotated by 30 degrees about z: the coordinate box is wide, the
+  // principal box is 20 x 3 x 2 spacings, so the sieve size is 3 spacings (exact for a
+  // lattice: centre spread (n-1) s plus one spacing).
+  auto m = bt::lattice(3, {20, 3, 2}, kH);
+  const double c = std::cos(std::numbers::pi / 6), s = std::sin(std::numbers::pi / 6);
+  for (size_t i = 0; i < m.size(); ++i) {
+    const double x = m.position_m[3 * i], y = m.position_m[3 * i + 1];
+    m.position_m[3 * i] = c * x - s * y;
+    m.position_m[3 * i + 1] = s * x + c * y;
+  }
+  const FragmentResult r = fragments_of(m, 1.6 * kH, {});
+  ASSERT_EQ(r.fragments.size(), 1u);
+  EXPECT_NEAR(r.fragments[0].box_m[0], 20 * kH, 1e-9);
+  EXPECT_NEAR(r.fragments[0].sieve_size_m, 3 * kH, 1e-9);
+  EXPECT_NEAR(r.fragments[0].box_m[2], 2 * kH, 1e-9);
+}
+
+TEST(DeformedMesh, AffineDisplacementIsReproducedAtEveryNode) {
+  // Least squares with an affine basis is exact for affine fields, interior or boundary.
+  const auto m = bt::structured_mesh(3, {3, 3, 3}, kH);
+  auto u_of = [](const double* x) {
+    return std::array<double, 3>{0.01 * x[0] + 0.002 * x[1] + 1e-5, -0.02 * x[1], 0.005 * x[2] + 0.003 * x[0]};
+  };
+  std::vector<double> u;
+  for (size_t i = 0; i < m.size(); ++i) {
+    const auto v = u_of(&m.position_m[3 * i]);
+    u.insert(u.end(), v.begin(), v.end());
+  }
+  const std::vector<int32_t> one(m.size(), 0);
+  const Mesh d = deformed_mesh(m, u, one);
+  ASSERT_EQ(d.points_m.size(), m.mesh_nodes_m.size());  // one piece: no node duplicated
+  for (size_t v = 0; v < d.points_m.size() / 3; ++v) {
+    const auto uv = u_of(&m.mesh_nodes_m[3 * v]);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(d.points_m[3 * v + k], m.mesh_nodes_m[3 * v + k] + uv[k], 1e-15);
+  }
+}
+
+TEST(DeformedMesh, AffineDisplacementIsReproducedOnTriangleMeshes) {
+  const auto m = bt::structured_mesh(2, {4, 3, 0}, kH);
+  auto u_of = [](const double* x) { return std::array<double, 3>{0.01 * x[0] - 0.004 * x[1] + 2e-6, 0.02 * x[1], 0.0}; };
+  std::vector<double> u;
+  for (size_t i = 0; i < m.size(); ++i) {
+    const auto v = u_of(&m.position_m[3 * i]);
+    u.insert(u.end(), v.begin(), v.end());
+  }
+  const Mesh d = deformed_mesh(m, u, std::vector<int32_t>(m.size(), 0));
+  ASSERT_EQ(d.points_m.size(), m.mesh_nodes_m.size());
+  for (size_t v = 0; v < d.points_m.size() / 3; ++v) {
+    const auto uv = u_of(&m.mesh_nodes_m[3 * v]);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(d.points_m[3 * v + k], m.mesh_nodes_m[3 * v + k] + uv[k], 1e-15);
+  }
+}
+
+TEST(DeformedMesh, NodesOnTheCrackAreDuplicatedPerFragmentAndMoveWithIt) {
+  const auto m = bt::structured_mesh(3, {4, 4, 4}, kH);
+  std::vector<int32_t> comp(m.size());
+  std::vector<double> u(3 * m.size(), 0.0);
+  for (size_t i = 0; i < m.size(); ++i) {
+    comp[i] = m.position_m[3 * i + 2] > 2 * kH ? 1 : 0;
+    u[3 * i + 2] = comp[i] ? 1e-4 : 0.0;  // upper half lifted rigidly by 0.1 mm
+  }
+  const Mesh d = deformed_mesh(m, u, comp);
+  EXPECT_EQ(d.points_m.size() / 3, m.mesh_nodes_m.size() / 3 + 25);  // the 5 x 5 nodes on z = 2 mm
+  for (size_t c = 0; c < m.size(); ++c)
+    for (int k = 0; k < 4; ++k) {
+      const int64_t p = d.cells[4 * c + k], v = m.mesh_cells[4 * c + k];
+      EXPECT_NEAR(d.points_m[3 * p + 2] - m.mesh_nodes_m[3 * v + 2], comp[c] ? 1e-4 : 0.0, 1e-15);
+    }
+}

@@ -1,0 +1,48 @@
+#pragma once
+// Small helpers for solver tests: write a case file, build a system from it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <string>
+
+#include "breccia/solver/case_config.hpp"
+#include "breccia/solver/pd_system.hpp"
+
+namespace breccia::solver::testing {
+
+inline std::string write_case(const std::string& name, const std::string& yaml) {
+  const std::string path = ::testing::TempDir() + "/" + name + ".yaml";
+  std::ofstream(path) << yaml;
+  return path;
+}
+
+inline PdSystem system_from_yaml(const std::string& name, const std::string& yaml) {
+  return setup_system(parse_case_file(write_case(name, yaml)));
+}
+
+// Internal index of the particle nearest to a point.
+inline int64_t nearest(const PdSystem& s, double x, double y, double z) {
+  int64_t best = 0;
+  double bd = 1e300;
+  for (size_t i = 0; i < s.n; ++i) {
+    const double d = std::pow(s.x0[3 * i] - x, 2) + std::pow(s.x0[3 * i + 1] - y, 2) + std::pow(s.x0[3 * i + 2] - z, 2);
+    if (d < bd) {
+      bd = d;
+      best = static_cast<int64_t>(i);
+    }
+  }
+  return best;
+}
+
+// Impose u = eps . x on every particle (eps row-major 3x3).
+inline void impose_affine(PdSystem& s, const double eps[9]) {
+  for (size_t i = 0; i < s.n; ++i)
+    for (int a = 0; a < 3; ++a) {
+      double v = 0;
+      for (int b = 0; b < 3; ++b) v += eps[3 * a + b] * s.x0[3 * i + b];
+      s.u[3 * i + a] = v;
+    }
+}
+
+}  // namespace breccia::solver::testing

@@ -1,0 +1,85 @@
+// breccia-solve turns bad input into one clear message and exit code 2.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+namespace {
+
+struct Outcome {
+  int exit_code;
+  std::string output;
+};
+
+Outcome run_solver(const std::string& case_yaml, const std::string& name) {
+  const std::string dir = ::testing::TempDir() + "/cli_" + name;
+  std::string mk = "mkdir -p " + dir;
+  if (std::system(mk.c_str()) != 0) return {-1, ""};
+  const std::string file = dir + "/case.yaml";
+  std::ofstream(file) << case_yaml;
+  const std::string cmd = std::string(BRECCIA_SOLVE_EXE) + " " + file + " -o " + dir + "/out --quiet 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 512> buf{};
+  while (fgets(buf.data(), buf.size(), p)) out += buf.data();
+  const int status = pclose(p);
+  return {WEXITSTATUS(status), out};
+}
+
+const std::string kBase =
+    "specimen: {lattice: {dimension: 2, box: [0, 0, 0.01, 0.01], spacing: 1 mm, thickness: 1 mm}}\n"
+    "model: {type: pmb, planar: plane_strain}\n";
+const std::string kMaterial = "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25}]\n";
+const std::string kTime = "time: {steps: 5}\n";
+
+void expect_bad_input(const Outcome& o, const std::vector<std::string>& fragments) {
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  for (const auto& f : fragments) EXPECT_NE(o.output.find(f), std::string::npos) << "missing '" << f << "' in: " << o.output;
+}
+
+}  // namespace
+
+TEST(SolverCli, UnknownSetIsNamedWithTheAvailableOnes) {
+  expect_bad_input(run_solver(kBase + kMaterial + kTime + "boundary: [{type: fixed, set: bottom}]\n", "unknown_set"),
+                   {"case.yaml", "boundary[0].set", "bottom", "xmin"});
+}
+
+TEST(SolverCli, NegativeModulusIsRejected) {
+  expect_bad_input(
+      run_solver(kBase + "materials: [{name: m, density: 2000, youngs_modulus: -1 GPa, poisson_ratio: 0.25}]\n" + kTime,
+                 "negative_modulus"),
+      {"materials[0].youngs_modulus", "positive"});
+}
+
+TEST(SolverCli, TimeStepAboveStableIsRejected) {
+  expect_bad_input(run_solver(kBase + kMaterial + "time: {steps: 5, dt: 1 ms}\n", "big_dt"), {"time.dt", "stable"});
+}
+
+TEST(SolverCli, HorizonSmallerThanSpacingIsRejected) {
+  expect_bad_input(run_solver("specimen: {lattice: {dimension: 2, box: [0, 0, 0.01, 0.01], spacing: 1 mm, thickness: 1 mm}}\n"
+                              "model: {type: pmb, planar: plane_strain, horizon: 0.5 mm}\n" + kMaterial + kTime,
+                              "small_horizon"),
+                   {"model.horizon", "spacing"});
+}
+
+TEST(SolverCli, UnknownKeyAndWrongUnitAreRejected) {
+  expect_bad_input(run_solver(kBase + kMaterial + kTime + "outptu: {every: 1}\n", "unknown_key"), {"outptu", "output"});
+  expect_bad_input(
+      run_solver(kBase + "materials: [{name: m, density: 2000, youngs_modulus: 10 mm, poisson_ratio: 0.25}]\n" + kTime,
+                 "wrong_unit"),
+      {"youngs_modulus", "GPa"});
+}
+
+TEST(SolverCli, MissingParticleFileIsNamed) {
+  expect_bad_input(run_solver("specimen: {particles: nowhere.h5}\nmodel: {type: lps}\n" + kMaterial + kTime, "missing_file"),
+                   {"nowhere.h5", "does not exist"});
+}
+
+TEST(SolverCli, PmbWithAnotherPoissonRatioPointsToLps) {
+  expect_bad_input(
+      run_solver(kBase + "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.3}]\n" + kTime,
+                 "pmb_nu"),
+      {"poisson_ratio", "lps"});
+}

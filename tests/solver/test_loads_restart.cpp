@@ -1,0 +1,104 @@
+// Loads act through surface facets; restart is bit-identical.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "breccia/solver/outputs.hpp"
+#include "breccia/solver/run.hpp"
+#include "helpers.hpp"
+
+using namespace breccia::solver;
+using namespace breccia::solver::testing;
+
+namespace {
+const char* kBoxWithPressure = R"(
+specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.01, 0.008, 0.006], spacing: 1 mm}}
+model: {type: lps, horizon_factor: 3.015}
+materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.3}]
+loads:
+  - {type: pressure, surface: xmin, history: {type: constant, value: 2 MPa}}
+  - {type: pressure, surface: xmax, history: {type: constant, value: 2 MPa}}
+  - {type: pressure, surface: ymin, history: {type: constant, value: 2 MPa}}
+  - {type: pressure, surface: ymax, history: {type: constant, value: 2 MPa}}
+  - {type: pressure, surface: zmin, history: {type: constant, value: 2 MPa}}
+  - {type: pressure, surface: zmax, history: {type: constant, value: 2 MPa}}
+time: {steps: 1}
+)";
+
+void total_force(const PdSystem& s, double f[3]) {
+  f[0] = f[1] = f[2] = 0;
+  for (size_t i = 0; i < s.n; ++i)
+    for (int d = 0; d < 3; ++d) f[d] += s.volume[i] * s.body[3 * i + d];
+}
+}  // namespace
+
+TEST(Loads, PressureOnAClosedSurfaceHasZeroResultant) {
+  PdSystem s = system_from_yaml("closed_pressure", kBoxWithPressure);
+  compute_external(s, 0.0);
+  double f[3];
+  total_force(s, f);
+  // Round-off relative to the force on one face (2 MPa x 80 mm2 = 160 N).
+  for (int d = 0; d < 3; ++d) EXPECT_NEAR(f[d], 0.0, 1e-12 * 160.0);
+}
+
+TEST(Loads, PressureOnAFlatFaceGivesPressureTimesArea) {
+  std::string yaml = kBoxWithPressure;
+  PdSystem s = system_from_yaml("face_pressure", yaml);
+  s.surface_loads.resize(2);  // keep xmin and xmax only
+  s.surface_loads.erase(s.surface_loads.begin());  // xmax alone
+  compute_external(s, 0.0);
+  double f[3];
+  total_force(s, f);
+  const double area = 0.008 * 0.006;
+  EXPECT_NEAR(f[0], -2e6 * area, 1e-12 * 2e6 * area);  // pushes inward, against +x
+  EXPECT_NEAR(f[1], 0.0, 1e-9);
+}
+
+TEST(Loads, DoubleExponentialPressurePeaksAtTheRiseTime) {
+  // Seed 001 eq. 12 with the granite values: P0 150 MPa, t0 5 us, beta/alpha 5.
+  HistorySpec h;
+  h.kind = HistorySpec::Kind::DoubleExponential;
+  h.value = 150e6;
+  h.rise_time = 5e-6;
+  h.ratio = 5.0;
+  EXPECT_NEAR(h.at(5e-6), 150e6, 1e-6);
+  EXPECT_LT(h.at(4.9e-6), 150e6);
+  EXPECT_LT(h.at(5.1e-6), 150e6);
+  // benchmarks.md section 4: P falls to 50 % at 16.3 us (derived there).
+  EXPECT_NEAR(h.at(16.3e-6) / 150e6, 0.5, 0.01);
+}
+
+TEST(Restart, HalfRunsWithACheckpointEqualOneStraightRunBitForBit) {
+  const char* yaml = R"(
+specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.01], spacing: 0.5 mm, thickness: 1 mm}}
+model: {type: pmb, planar: plane_stress, horizon_factor: 3.015}
+materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.3333333333333333, fracture_energy: 3.8, weibull: {modulus: 5, seed: 3}}]
+precracks: [{type: segment, from: [0, 0.005], to: [0.01, 0.005]}]
+loads: [{type: traction, surface: ymax, value: [0, 20 MPa, 0]}, {type: traction, surface: ymin, value: [0, -20 MPa, 0]}]
+time: {steps: 400}
+output: {every: 100, history_every: 20}
+)";
+  const std::string case_file = write_case("restart", yaml);
+  const CaseConfig config = parse_case_file(case_file);
+  RunOptions o;
+  o.progress = false;
+  PdSystem straight = setup_system(config);
+  o.out_dir = ::testing::TempDir() + "/restart_straight";
+  run_system(straight, o);
+  ASSERT_GT(measure(straight).broken_half_bonds, 0) << "the case should break bonds";
+
+  PdSystem first = setup_system(config);
+  o.out_dir = ::testing::TempDir() + "/restart_split";
+  o.steps = 200;
+  run_system(first, o);
+  PdSystem second = setup_system(config);
+  read_checkpoint(second, o.out_dir + "/checkpoint.h5");
+  o.restart_file = o.out_dir + "/checkpoint.h5";
+  o.steps = 200;
+  run_system(second, o);
+  ASSERT_EQ(second.step, straight.step);
+  EXPECT_EQ(0, std::memcmp(second.u.data(), straight.u.data(), straight.u.size() * sizeof(double)));
+  EXPECT_EQ(0, std::memcmp(second.v.data(), straight.v.data(), straight.v.size() * sizeof(double)));
+  EXPECT_EQ(second.state, straight.state);
+  EXPECT_EQ(second.dissipated_energy, straight.dissipated_energy);
+}

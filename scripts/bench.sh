@@ -1,0 +1,97 @@
+#!/usr/bin/env bash
+# Throughput benchmark: bond-updates per second for PMB and LPS on a cubic lattice with
+# m = 3 (41^3 particles, delta = 3.015 dx), Breccia next to LAMMPS PERI in the same run.
+# bond-updates = particles x mean family size x steps (each bond counted once from each
+# end) / wall time of the time loop. Usage: scripts/bench.sh BUILD_DIR [N=41] [STEPS=100]
+set -euo pipefail
+BUILD=${1:-build}; N=${2:-41}; STEPS=${3:-100}
+BIN="$(cd "$BUILD" && pwd)/bin"
+OUT="${OUT:-$(pwd)/runs/bench}"
+mkdir -p "$OUT"
+DX=0.0005
+L=$(awk -v n="$N" -v dx="$DX" 'BEGIN{printf "%.6g", n*dx}')
+THREADS_LIST=${THREADS_LIST:-"1 $(nproc)"}
+if ! command -v lmp >/dev/null 2>&1; then
+  echo "bench: installing LAMMPS (Debian package lammps) for the side-by-side comparison"
+  SUDO=""; [ "$(id -u)" != 0 ] && SUDO=sudo
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends lammps >/dev/null
+fi
+results="$OUT/bench.csv"
+echo "code,model,threads,particles,bonds_per_particle,steps,loop_s,bond_updates_per_s,per_core" > "$results"
+
+for model in pmb lps; do
+  cat > "$OUT/$model.yaml" <<YAML
+name: bench-$model
+specimen: {lattice: {dimension: 3, box: [0, 0, 0, $L, $L, $L], spacing: $DX}}
+model: {type: $model, horizon_factor: 3.015}
+materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, fracture_energy: 1e6}]
+initial: [{type: radial_velocity, center: [0, 0, 0], strain_rate: 10}]
+time: {steps: $STEPS}
+output: {every: 1000000, history_every: 1000000, results: false}
+YAML
+  for t in $THREADS_LIST; do
+    OMP_NUM_THREADS=$t "$BIN/breccia-solve" "$OUT/$model.yaml" -o "$OUT/breccia-$model-$t" --threads "$t" --quiet
+    $PYTHON - "$OUT/breccia-$model-$t/summary.json" "$model" "$t" >> "$results" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1])); t = int(sys.argv[3])
+print(f"breccia,{sys.argv[2]},{t},{s['particles']},{s['mean_family_size']:.1f},{s['steps_this_run']},{s['wall_s']:.3f},{s['bond_updates_per_s']:.4g},{s['bond_updates_per_s']/t:.4g}")
+PY
+  done
+done
+
+# LAMMPS PERI on the same lattice (E 22.35 GPa, nu 1/4: K = 14.9 GPa, G = 8.94 GPa).
+# LAMMPS families: lattice points within delta (FixPeriNeigh), counted here exactly.
+BONDS=$($PYTHON - "$N" <<'PY'
+import numpy as np, sys
+n = int(sys.argv[1]); r = 3.015
+off = np.array([(a, b, c) for a in range(-4, 5) for b in range(-4, 5) for c in range(-4, 5)
+                if 0 < a*a + b*b + c*c <= r*r])
+idx = np.arange(n)
+total = 0
+for a, b, c in off:  # pairs along each offset inside the n^3 block
+    total += max(0, n - abs(a)) * max(0, n - abs(b)) * max(0, n - abs(c))
+print(f"{total / n**3:.1f}")
+PY
+)
+for model in pmb lps; do
+  if [ "$model" = pmb ]; then
+    coeff="pair_style peri/pmb
+pair_coeff * * $(awk -v K=14.9e9 -v d=$(awk -v dx=$DX 'BEGIN{print 3.015*dx}') 'BEGIN{printf "%.6e", 18*K/(3.14159265358979*d^4)}') $(awk -v dx=$DX 'BEGIN{print 3.015*dx}') 0.01 0.0"
+  else
+    coeff="pair_style peri/lps
+pair_coeff * * 14.9e9 8.94e9 $(awk -v dx=$DX 'BEGIN{print 3.015*dx}') 0.01 0.0"
+  fi
+  cat > "$OUT/lammps-$model.in" <<LMP
+units si
+boundary s s s
+atom_style peri
+atom_modify map array
+lattice sc $DX
+region box block 0 $((N-1)) 0 $((N-1)) 0 $((N-1))
+create_box 1 box
+create_atoms 1 region box
+$coeff
+set group all density 2200
+set group all volume $(awk -v dx=$DX 'BEGIN{printf "%.6e", dx^3}')
+velocity all create 1e-3 4928459 dist gaussian
+neighbor $(awk -v dx=$DX 'BEGIN{print 0.1*dx}') bin
+timestep 1.0e-8
+fix 1 all nve
+run 0
+run $STEPS
+LMP
+  for t in $THREADS_LIST; do
+    if ( cd "$OUT" && mpirun --allow-run-as-root --oversubscribe -np "$t" lmp -in "lammps-$model.in" -log "lammps-$model-$t.log" -screen none ) >/dev/null 2>&1; then
+      loop=$(grep "^Loop time" "$OUT/lammps-$model-$t.log" | tail -1 | awk '{print $4}')
+      atoms=$((N*N*N))
+      rate=$(awk -v a=$atoms -v b=$BONDS -v s=$STEPS -v l=$loop 'BEGIN{printf "%.4g", a*b*s/l}')
+      per=$(awk -v r=$rate -v t=$t 'BEGIN{printf "%.4g", r/t}')
+      echo "lammps,$model,$t,$atoms,$BONDS,$STEPS,$loop,$rate,$per" >> "$results"
+    else
+      echo "lammps,$model,$t,,,,failed (see $OUT/lammps-$model-$t.log),," >> "$results"
+    fi
+  done
+done
+echo
+column -s, -t < "$results"
+echo "(table: $results)"

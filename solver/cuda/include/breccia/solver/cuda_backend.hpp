@@ -1,0 +1,60 @@
+#pragma once
+// The CUDA backend: the kernels of pd_kernels.hpp launched one GPU thread per particle over
+// device copies of a PdSystem's arrays (docs/cuda.md). The physics is not repeated here;
+// only where the loop runs and where the data lives differ from the OpenMP backend.
+//
+// This header is plain C++ (no CUDA types), so host-only code such as breccia-solve's CLI
+// can include it and link breccia_solver_cuda without being compiled by nvcc.
+#include <memory>
+#include <string>
+
+#include "breccia/solver/pd_system.hpp"
+#include "breccia/solver/run.hpp"
+
+namespace breccia::solver {
+
+// True when a CUDA driver and at least one device are present. Never throws: a machine
+// without a GPU or without the driver library simply answers false.
+bool cuda_device_available();
+
+// Name and memory of device 0, for logs ("NVIDIA H100 80GB HBM3, 79.1 GiB"); empty if none.
+std::string cuda_device_description();
+
+// A PdSystem's arrays on the device. The host PdSystem stays the owner of the case (config,
+// loads, constraints, metadata); this object owns the device copies of every array a step
+// reads or writes. Residency contract:
+//   - construction uploads everything from `sys` (so it also continues a restart);
+//   - step() advances the device state and the host's step/time counters only;
+//   - external_work and dissipated_energy accumulate on the device and are copied into
+//     the host mirror by measure() and download();
+//   - download() copies all per-particle and per-bond state back for outputs/checkpoints.
+// Throws RunError naming the kernel or copy if CUDA reports an error.
+class CudaSystem {
+public:
+  explicit CudaSystem(const PdSystem& sys);
+  ~CudaSystem();
+  CudaSystem(const CudaSystem&) = delete;
+  CudaSystem& operator=(const CudaSystem&) = delete;
+
+  // One velocity-Verlet step of size sys.dt: the same phases, in the same order, as cpu_step.
+  void step(PdSystem& host_mirror_meta);
+  // Energies reduced on the device (no per-particle download); also refreshes the host
+  // mirror's external_work and dissipated_energy.
+  Energies measure(PdSystem& host_mirror_meta);
+  // Copy u, v, a, force, body, per-particle fields, bond states and the energy
+  // accumulators into `sys` (outputs, checkpoints, comparisons).
+  void download(PdSystem& sys);
+  // Copy only u and v (history probes need nothing more).
+  void download_kinematics(PdSystem& sys);
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// run_system's time loop on the device: same outputs (results.h5, history.csv, checkpoint),
+// same instability check and Ctrl-C handling; arrays are downloaded only when an output,
+// a probe row or a checkpoint needs them. Quasi-static cases (ADR) run on the host.
+RunResult run_system_cuda(PdSystem& sys, const RunOptions& options);
+
+}  // namespace breccia::solver

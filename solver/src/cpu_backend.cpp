@@ -9,6 +9,11 @@
 namespace breccia::solver {
 
 void cpu_compute_forces(PdSystem& sys) {
+  // Current positions once per force pass: the bond loop then gathers one array.
+  if (sys.x.size() != sys.x0.size()) sys.x.resize(sys.x0.size());
+  const int64_t n3 = static_cast<int64_t>(sys.x0.size());
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < n3; ++k) sys.x[k] = sys.x0[k] + sys.u[k];
   const PdView p = sys.view();
   if (sys.config.model == PdModel::LPS) for_each_particle(p.n, [&](int64_t i) { lps_dilatation_kernel(p, i); });
   for_each_particle(p.n, [&](int64_t i) { force_kernel(p, i); });

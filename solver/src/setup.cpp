@@ -181,7 +181,7 @@ PdView PdSystem::view() {
   p.n = static_cast<int64_t>(n);
   p.model = static_cast<int>(config.model);
   p.fracture = config.fracture;
-  p.x0 = x0.data(); p.u = u.data(); p.v = v.data(); p.a = a.data();
+  p.x0 = x0.data(); p.x = x.size() == x0.size() ? x.data() : nullptr; p.u = u.data(); p.v = v.data(); p.a = a.data();
   p.force = force.data(); p.body = body.data();
   p.volume = volume.data(); p.density = density.data(); p.fixed_dof = fixed_dof.data();
   p.offsets = offsets.data(); p.neighbor = neighbor.data(); p.xi_len = xi_len.data();
@@ -189,8 +189,11 @@ PdView PdSystem::view() {
   p.s0_own = s0_own.data(); p.s0_dual = s0_dual.data(); p.state = state.data();
   p.lps = lps.empty() ? nullptr : lps.data();
   p.weighted_volume = weighted_volume.data(); p.dilatation = dilatation.data();
+  p.lps_a = lps_a.size() == n ? lps_a.data() : nullptr; p.lps_b = lps_b.size() == n ? lps_b.data() : nullptr;
   p.energy_density = energy_density.data(); p.dissipated = dissipated.data();
   p.damage = damage.data(); p.max_stretch = max_stretch.data();
+  p.diagnostics = diagnostics;
+  p.symmetric_halves = symmetric_halves;
   return p;
 }
 
@@ -619,6 +622,19 @@ PdSystem setup_system(const CaseConfig& config) {
       }
   }
   for (int d = 0; d < 3; ++d) s.indenter_position[d] = c.indenter.center[d];
+
+  // One constant horizon makes both halves of every entry identical: the fast kernel.
+  {
+    bool same = true;
+    for (size_t k = 0; k < s.state.size() && same; ++k)
+      same = s.k_own[k] == s.k_dual[k] && s.s0_own[k] == s.s0_dual[k] &&
+             (s.state[k] == 0 || s.state[k] == (kOwnIntact | kDualIntact));
+    s.symmetric_halves = same;
+    if (lps && same) {
+      s.lps_a.assign(n, 0.0);
+      s.lps_b.assign(n, 0.0);
+    }
+  }
 
   // Stable time step: sharp estimate by power iteration; Silling & Askari (2005) for reference.
   if (!lps) {

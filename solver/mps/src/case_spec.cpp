@@ -38,7 +38,13 @@ LatticeSpec parse_lattice(const Section& s) {
     const YAML::Node n = s.node()["periodic"];
     if (!n.IsSequence() || n.size() != static_cast<size_t>(l.dimension))
       fail(s, "periodic", "not a list of " + std::to_string(l.dimension) + " booleans", "e.g. [true, false]");
-    for (int a = 0; a < l.dimension; ++a) l.periodic[a] = n[a].as<bool>();
+    for (int a = 0; a < l.dimension; ++a) {
+      try {
+        l.periodic[a] = n[a].as<bool>();
+      } catch (const YAML::Exception&) {
+        fail(s, "periodic", "entry " + std::to_string(a) + " is not a boolean", "true or false");
+      }
+    }
   }
   return l;
 }

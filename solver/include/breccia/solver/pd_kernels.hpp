@@ -13,7 +13,13 @@ struct PdView {
   int64_t n = 0;
   int model = 0;  // PdModel
   bool fracture = true;
+  // Damage, energy density and max stretch are only needed on output/history steps.
+  bool diagnostics = true;
+  // One constant horizon: both halves of every entry are equal (k_own == k_dual,
+  // s0_own == s0_dual, both bits set together), so the kernel reads one of each.
+  bool symmetric_halves = false;
   const double* x0 = nullptr;   // 3N reference positions
+  const double* x = nullptr;    // 3N current positions x0 + u (optional: fast PMB path)
   double* u = nullptr;          // 3N displacement
   double* v = nullptr;          // 3N velocity
   double* a = nullptr;          // 3N acceleration
@@ -36,6 +42,10 @@ struct PdView {
   const LpsCoefficients* lps = nullptr;
   const double* weighted_volume = nullptr;  // m_i
   double* dilatation = nullptr;             // theta_i
+  // Optional per-particle LPS factors for the fast path: t_i = omega (A_i |xi| + B_i e),
+  // A_i = theta_i (c_b - c_s/d) / m_i, B_i = c_s / m_i (filled by the dilatation pass).
+  double* lps_a = nullptr;
+  double* lps_b = nullptr;
   // per-particle outputs
   double* energy_density = nullptr;   // W_i [J/m3]
   double* dissipated = nullptr;       // energy released by bonds broken this step, per particle [J]
@@ -49,10 +59,70 @@ BRECCIA_HD void lps_dilatation_kernel(const PdView& p, int64_t i) {
   for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
     if (!(p.state[k] & kOwnIntact)) continue;
     const int64_t j = p.neighbor[k];
-    const BondGeometry g = bond_geometry(p.x0, p.u, i, j, p.xi_len[k]);
-    sum += p.k_own[k] * p.xi_len[k] * (g.length - p.xi_len[k]) * p.volume[j];
+    double length;
+    if (p.x) {
+      const double dx = p.x[3 * j] - p.x[3 * i], dy = p.x[3 * j + 1] - p.x[3 * i + 1], dz = p.x[3 * j + 2] - p.x[3 * i + 2];
+      length = std::sqrt(dx * dx + dy * dy + dz * dz);
+    } else {
+      length = bond_geometry(p.x0, p.u, i, j, p.xi_len[k]).length;
+    }
+    sum += p.k_own[k] * p.xi_len[k] * (length - p.xi_len[k]) * p.volume[j];
   }
-  p.dilatation[i] = p.lps[i].dilatation_factor * sum / p.weighted_volume[i];
+  const double theta = p.lps[i].dilatation_factor * sum / p.weighted_volume[i];
+  p.dilatation[i] = theta;
+  if (p.lps_a) {
+    const LpsCoefficients& c = p.lps[i];
+    p.lps_a[i] = theta * (c.bulk_term - c.shear_term / c.dilatation_factor) / p.weighted_volume[i];
+    p.lps_b[i] = c.shear_term / p.weighted_volume[i];
+  }
+}
+
+// LPS with one constant horizon: the pair's force state is omega ((A_i + A_j)|xi| +
+// (B_i + B_j) e), the same algebra as lps_force_state summed over both ends.
+BRECCIA_HD void lps_symmetric_force_kernel(const PdView& p, int64_t i) {
+  const double* x = p.x;
+  const double xi0 = x[3 * i], yi0 = x[3 * i + 1], zi0 = x[3 * i + 2];
+  const double a_i = p.lps_a[i], b_i = p.lps_b[i];
+  const double theta_i = p.dilatation[i], d = p.lps[i].dilatation_factor;
+  double fx = 0.0, fy = 0.0, fz = 0.0, released = 0.0, dev_sum = 0.0, smax = 0.0;
+  double intact_vol = 0.0, total_vol = 0.0;
+  const int64_t end = p.offsets[i + 1];
+  for (int64_t k = p.offsets[i]; k < end; ++k) {
+    if (p.diagnostics) total_vol += p.vol_own[k];
+    if (!p.state[k]) continue;
+    const int64_t j = p.neighbor[k];
+    const double dx = x[3 * j] - xi0, dy = x[3 * j + 1] - yi0, dz = x[3 * j + 2] - zi0;
+    const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const double xi = p.xi_len[k];
+    const double e = len - xi;
+    const double omega = p.k_own[k];
+    if (p.fracture && e > p.s0_own[k] * xi) {
+      const double dev = e - theta_i * xi / d;
+      released += 0.5 * b_i * omega * dev * dev * p.volume[j] * p.volume[i];
+      p.state[k] = 0;
+      continue;
+    }
+    const double t = omega * ((a_i + p.lps_a[j]) * xi + (b_i + p.lps_b[j]) * e);
+    const double f = t * p.volume[j] / len;
+    fx += f * dx;
+    fy += f * dy;
+    fz += f * dz;
+    if (p.diagnostics) {
+      const double dev = e - theta_i * xi / d;
+      dev_sum += omega * dev * dev * p.volume[j];
+      intact_vol += p.vol_own[k];
+      if (e / xi > smax) smax = e / xi;
+    }
+  }
+  p.force[3 * i] = fx;
+  p.force[3 * i + 1] = fy;
+  p.force[3 * i + 2] = fz;
+  p.dissipated[i] = released;
+  if (p.diagnostics) {
+    p.energy_density[i] = lps_bulk_energy(p.lps[i], theta_i) + 0.5 * b_i * dev_sum;
+    p.damage[i] = total_vol > 0.0 ? 1.0 - intact_vol / total_vol : 0.0;
+    if (p.max_stretch) p.max_stretch[i] = smax;
+  }
 }
 
 // Break the half-bonds of entry k whose stretch passed their critical value. Each entry is
@@ -64,8 +134,64 @@ BRECCIA_HD uint8_t break_bonds(const PdView& p, int64_t k, double stretch) {
   return st;
 }
 
+// PMB with one constant horizon, the common production case: reads one modulus and one
+// critical stretch per entry and skips the diagnostics between output steps.
+BRECCIA_HD void pmb_symmetric_force_kernel(const PdView& p, int64_t i) {
+  // Current positions: from the x array when the backend keeps one (one gather per bond
+  // instead of two), else x0 + u.
+  const bool have_x = p.x != nullptr;
+  auto pos = [&](int64_t a, int d) { return have_x ? p.x[3 * a + d] : p.x0[3 * a + d] + p.u[3 * a + d]; };
+  const double xi0 = pos(i, 0), yi0 = pos(i, 1), zi0 = pos(i, 2);
+  double fx = 0.0, fy = 0.0, fz = 0.0, w = 0.0, released = 0.0, smax = 0.0;
+  double intact_vol = 0.0, total_vol = 0.0;
+  const int64_t end = p.offsets[i + 1];
+  for (int64_t k = p.offsets[i]; k < end; ++k) {
+    if (p.diagnostics) total_vol += p.vol_own[k];
+    if (!p.state[k]) continue;
+    const int64_t j = p.neighbor[k];
+    const double dx = pos(j, 0) - xi0;
+    const double dy = pos(j, 1) - yi0;
+    const double dz = pos(j, 2) - zi0;
+    const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const double xi = p.xi_len[k];
+    const double stretch = (len - xi) / xi;
+    const double k2 = 2.0 * p.k_own[k];  // own + dual halves
+    if (p.fracture && stretch > p.s0_own[k]) {
+      released += p.volume[i] * 0.25 * k2 * stretch * stretch * xi;
+      p.state[k] = 0;
+      continue;
+    }
+    const double f = k2 * stretch / len;
+    fx += f * dx;
+    fy += f * dy;
+    fz += f * dz;
+    if (p.diagnostics) {
+      w += 0.25 * k2 * stretch * stretch * xi;
+      intact_vol += p.vol_own[k];
+      if (stretch > smax) smax = stretch;
+    }
+  }
+  p.force[3 * i] = fx;
+  p.force[3 * i + 1] = fy;
+  p.force[3 * i + 2] = fz;
+  p.dissipated[i] = released;
+  if (p.diagnostics) {
+    p.energy_density[i] = w;
+    p.damage[i] = total_vol > 0.0 ? 1.0 - intact_vol / total_vol : 0.0;
+    if (p.max_stretch) p.max_stretch[i] = smax;
+  }
+}
+
 // Internal force density, strain-energy density, damage and breaking for particle i.
 BRECCIA_HD void force_kernel(const PdView& p, int64_t i) {
+  if (p.symmetric_halves && p.model == static_cast<int>(PdModel::PMB)) {
+    pmb_symmetric_force_kernel(p, i);
+    return;
+  }
+  if (p.symmetric_halves && p.lps_a && p.x) {
+    lps_symmetric_force_kernel(p, i);
+    return;
+  }
   double fx = 0.0, fy = 0.0, fz = 0.0, w = 0.0, released = 0.0, smax = 0.0;
   double intact_vol = 0.0, total_vol = 0.0;
   const bool lps = p.model == static_cast<int>(PdModel::LPS);

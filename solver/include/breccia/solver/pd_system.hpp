@@ -29,10 +29,12 @@ struct PdSystem {
 
   // per particle (internal order)
   std::vector<double> x0, u, v, a, force, body;  // 3N
+  std::vector<double> x;                         // 3N current positions x0 + u (kept by cpu_step)
   std::vector<double> volume, density, horizon, half_cell;
   std::vector<int32_t> material;
   std::vector<uint8_t> fixed_dof;
   std::vector<double> energy_density, dissipated, damage, max_stretch, dilatation, weighted_volume;
+  std::vector<double> lps_a, lps_b;  // fast LPS path factors (pd_kernels.hpp)
   std::vector<LpsCoefficients> lps;
   std::vector<double> calibration_factor;  // PMB: classical / discrete energy (docs/theory.md)
 
@@ -70,6 +72,8 @@ struct PdSystem {
   double external_work = 0.0;
   double dissipated_energy = 0.0;
   double indenter_position[3] = {0, 0, 0};
+  bool symmetric_halves = false;  // one constant horizon (set-up decides)
+  bool diagnostics = true;        // compute damage/energy in the next force pass
 
   PdView view();
   size_t bond_count() const { return neighbor.size(); }

@@ -21,6 +21,7 @@ struct RunResult {
   std::string status;   // completed | unstable | interrupted | converged | not_converged
   long long steps = 0;  // steps taken in this invocation
   double wall_s = 0.0;
+  double cpu_s = 0.0;  // process CPU time of the loop (all threads): robust on a shared machine
   double bond_updates_per_s = 0.0;
   Energies final_energies;
   std::string message;

@@ -37,7 +37,10 @@ public:
   CudaSystem& operator=(const CudaSystem&) = delete;
 
   // One velocity-Verlet step of size sys.dt: the same phases, in the same order, as cpu_step.
+  // Honours sys.diagnostics (damage/energy density skipped between output steps).
   void step(PdSystem& host_mirror_meta);
+  // cpu_compute_forces at the current displacement (e.g. diagnostics for an unplanned output).
+  void compute_forces(PdSystem& host_mirror_meta);
   // Energies reduced on the device (no per-particle download); also refreshes the host
   // mirror's external_work and dissipated_energy.
   Energies measure(PdSystem& host_mirror_meta);

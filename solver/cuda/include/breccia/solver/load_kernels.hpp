@@ -1,0 +1,56 @@
+#pragma once
+// Loads and constraints of one particle per call, written once for both backends. The
+// expressions are those of cpu_backend.cpp (compute_external, apply_constraints), operand
+// for operand, so the two backends round identically. Intended home: next to pd_kernels.hpp
+// in solver/include/, with cpu_backend.cpp calling them too (docs/cuda.md, "Open items").
+#include <cmath>
+#include <cstdint>
+
+#include "breccia/solver/hd.hpp"
+
+namespace breccia::solver {
+
+// Force of one loaded facet [N]. Pressure pushes against the outward normal; a traction is a
+// force per area. `history` is the load's time history at this step (the pressure itself for
+// a pressure load, a multiplier of `traction` otherwise).
+BRECCIA_HD void facet_force(bool pressure, double history, double area, const double normal[3],
+                            const double traction[3], double force[3]) {
+  for (int d = 0; d < 3; ++d) force[d] = pressure ? -history * area * normal[d] : history * traction[d] * area;
+}
+
+// Rigid sphere centred at c (LAMMPS fix indent): force density K (R - r)^2 pushing out of the
+// sphere, added to body[3i .. 3i+2].
+BRECCIA_HD void add_indenter_force(const double* x0, const double* u, int64_t i, const double c[3], double radius,
+                                   double stiffness, double* body) {
+  double r[3], len2 = 0;
+  for (int d = 0; d < 3; ++d) {
+    r[d] = x0[3 * i + d] + u[3 * i + d] - c[d];
+    len2 += r[d] * r[d];
+  }
+  const double len = std::sqrt(len2);
+  if (len >= radius || len <= 0) return;
+  const double mag = stiffness * (radius - len) * (radius - len);
+  for (int d = 0; d < 3; ++d) body[3 * i + d] += mag * r[d] / len;
+}
+
+// One prescribed component at this step. kind: 0 fixed, 1 velocity, 2 displacement
+// (BoundarySpec::Kind). `velocity` and `target` are the ramped values, evaluated once per
+// step on the host.
+BRECCIA_HD void constrain_component(int kind, double velocity, double target, double dt, double& u, double& v) {
+  switch (kind) {
+    case 0:
+      u = 0.0;
+      v = 0.0;
+      break;
+    case 1:
+      v = velocity;
+      u += dt * v;
+      break;
+    case 2:
+      v = dt > 0 ? (target - u) / dt : 0.0;
+      u = target;
+      break;
+  }
+}
+
+}  // namespace breccia::solver

@@ -1,0 +1,633 @@
+// The CUDA backend: one thread per particle runs the kernel bodies of pd_kernels.hpp (and of
+// load_kernels.hpp for loads and constraints) on device copies of a PdSystem's arrays
+// (docs/cuda.md). No physics is written here, only launches, data movement and reductions.
+// With FMA contraction off (CMakeLists.txt) each particle's arithmetic rounds as on the CPU.
+#include <cuda_runtime.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "breccia/common/error.hpp"
+#include "breccia/solver/cuda_backend.hpp"
+#include "breccia/solver/load_kernels.hpp"
+#include "breccia/solver/pd_kernels.hpp"
+
+namespace breccia::solver {
+namespace {
+
+constexpr int kBlock = 256;
+constexpr int kMaxReduceBlocks = 1024;  // partial sums per reduction: fixed, so results are reproducible
+constexpr int kMaxSurfaceLoads = 64;    // load histories travel as one kernel parameter
+
+void check(cudaError_t status, const std::string& what) {
+  if (status != cudaSuccess)
+    throw RunError("CUDA backend: " + what + " failed: " + cudaGetErrorName(status) + " (" +
+                   cudaGetErrorString(status) + ")");
+}
+
+int64_t blocks_for(int64_t n) { return (n + kBlock - 1) / kBlock; }
+
+// Every launch is followed by this: the error state is checked with the kernel's name.
+void check_launch(const char* kernel, bool synchronize) {
+  check(cudaGetLastError(), std::string("launch of ") + kernel);
+  if (synchronize) check(cudaDeviceSynchronize(), std::string("kernel ") + kernel);
+}
+
+// ---------------------------------------------------------------------------------------
+// Device memory
+
+template <class T>
+class DeviceArray {
+public:
+  DeviceArray() = default;
+  DeviceArray(const DeviceArray&) = delete;
+  DeviceArray& operator=(const DeviceArray&) = delete;
+  DeviceArray(DeviceArray&& other) noexcept : ptr_(other.ptr_), count_(other.count_) {
+    other.ptr_ = nullptr;
+    other.count_ = 0;
+  }
+  ~DeviceArray() {
+    if (ptr_) cudaFree(ptr_);
+  }
+  void allocate(size_t count, const char* name) {
+    count_ = count;
+    if (count == 0) return;
+    check(cudaMalloc(&ptr_, count * sizeof(T)), std::string("cudaMalloc of ") + name);
+  }
+  void upload(const std::vector<T>& host, const char* name) {
+    allocate(host.size(), name);
+    if (count_ == 0) return;
+    check(cudaMemcpy(ptr_, host.data(), count_ * sizeof(T), cudaMemcpyHostToDevice),
+          std::string("upload of ") + name);
+  }
+  void download(std::vector<T>& host, const char* name) const {
+    if (count_ == 0) return;
+    host.resize(count_);
+    check(cudaMemcpy(host.data(), ptr_, count_ * sizeof(T), cudaMemcpyDeviceToHost),
+          std::string("download of ") + name);
+  }
+  T* get() const { return ptr_; }  // nullptr when empty, as PdView expects for absent arrays
+  size_t size() const { return count_; }
+
+private:
+  T* ptr_ = nullptr;
+  size_t count_ = 0;
+};
+
+// ---------------------------------------------------------------------------------------
+// Kernels: each is a launcher around BRECCIA_HD bodies; the only arithmetic of their own is
+// the work-of-loads bookkeeping of cpu_step.
+
+__device__ int64_t thread_index() { return static_cast<int64_t>(blockIdx.x) * blockDim.x + threadIdx.x; }
+
+__global__ void kick_drift_cuda(PdView p, double half_dt, double dt) {
+  const int64_t i = thread_index();
+  if (i < p.n) kick_drift_kernel(p, i, half_dt, dt);
+}
+
+// Current positions once per force pass, as cpu_compute_forces keeps them.
+__global__ void current_positions_cuda(int64_t n3, const double* x0, const double* u, double* x) {
+  const int64_t k = thread_index();
+  if (k < n3) x[k] = x0[k] + u[k];
+}
+
+__global__ void lps_dilatation_cuda(PdView p) {
+  const int64_t i = thread_index();
+  if (i < p.n) lps_dilatation_kernel(p, i);
+}
+
+__global__ void force_cuda(PdView p) {
+  const int64_t i = thread_index();
+  if (i < p.n) force_kernel(p, i);
+}
+
+__global__ void acceleration_cuda(PdView p, double half_dt) {
+  const int64_t i = thread_index();
+  if (i < p.n) acceleration_kernel(p, i, half_dt);
+}
+
+// Force times displacement before the step, for the trapezoidal work of loads and reactions.
+__global__ void work_before_cuda(PdView p, double* u_before, double* f_before) {
+  const int64_t k = thread_index();
+  if (k >= 3 * p.n) return;
+  const int64_t i = k / 3;
+  const bool constrained = p.fixed_dof[i] & (1u << (k % 3));
+  f_before[k] = p.volume[i] * (constrained ? -p.force[k] : p.body[k]);
+  u_before[k] = p.u[k];
+}
+
+// Prescribed components of one constraint at this step; the ramps are evaluated on the host.
+struct ConstraintStep {
+  int kind;            // BoundarySpec::Kind
+  unsigned components; // bit d: component d prescribed
+  double velocity[3];  // Velocity: v at this step
+  double target[3];    // Displacement: u at this step
+  double dt;
+};
+
+__global__ void constraint_cuda(int64_t count, const int32_t* particles, ConstraintStep c, double* u, double* v) {
+  const int64_t q = thread_index();
+  if (q >= count) return;
+  const int64_t i = particles[q];
+  for (int d = 0; d < 3; ++d)
+    if (c.components & (1u << d)) constrain_component(c.kind, c.velocity[d], c.target[d], c.dt, u[3 * i + d], v[3 * i + d]);
+}
+
+struct LoadHistories {
+  double value[kMaxSurfaceLoads];  // history of each surface load at this step
+};
+
+// Facets grouped by particle (CSR), kept in the CPU's (load, facet) order within a particle,
+// so each particle's body force is summed in the same order as compute_external.
+struct FacetView {
+  int64_t particle_count;
+  const int32_t* particle;
+  const int64_t* offsets;
+  const int32_t* load;
+  const double* area;
+  const double* normal;          // 3 per facet
+  const uint8_t* load_is_pressure;
+  const double* load_vector;     // 3 per load
+};
+
+__global__ void surface_load_cuda(FacetView f, LoadHistories h, const double* volume, double* body) {
+  const int64_t q = thread_index();
+  if (q >= f.particle_count) return;
+  const int64_t i = f.particle[q];
+  for (int64_t e = f.offsets[q]; e < f.offsets[q + 1]; ++e) {
+    const int l = f.load[e];
+    double force[3];
+    facet_force(f.load_is_pressure[l], h.value[l], f.area[e], &f.normal[3 * e], &f.load_vector[3 * l], force);
+    for (int d = 0; d < 3; ++d) body[3 * i + d] += force[d] / volume[i];
+  }
+}
+
+// particles == nullptr: every particle.
+__global__ void body_load_cuda(int64_t count, const int32_t* particles, double history, double gx, double gy,
+                               double gz, const double* density, double* body) {
+  const int64_t q = thread_index();
+  if (q >= count) return;
+  const int64_t i = particles ? particles[q] : q;
+  const double g[3] = {gx, gy, gz};
+  for (int d = 0; d < 3; ++d) body[3 * i + d] += density[i] * history * g[d];
+}
+
+__global__ void indenter_cuda(PdView p, double cx, double cy, double cz, double radius, double stiffness,
+                              double* body) {
+  const int64_t i = thread_index();
+  if (i >= p.n) return;
+  const double c[3] = {cx, cy, cz};
+  add_indenter_force(p.x0, p.u, i, c, radius, stiffness, body);
+}
+
+// ---------------------------------------------------------------------------------------
+// Reductions: grid-stride partial sums into at most kMaxReduceBlocks values, then one block
+// folds them. The grid is fixed, so a run's sums are reproducible from run to run.
+
+template <class Load>
+__global__ void reduce_partial_cuda(int64_t n, Load load, typename Load::Value* partial) {
+  using Value = typename Load::Value;
+  __shared__ Value shared[kBlock];
+  Value acc = Load::identity();
+  for (int64_t k = thread_index(); k < n; k += static_cast<int64_t>(gridDim.x) * blockDim.x)
+    acc = Load::combine(acc, load(k));
+  shared[threadIdx.x] = acc;
+  __syncthreads();
+  for (int half = kBlock / 2; half > 0; half /= 2) {
+    if (threadIdx.x < half) shared[threadIdx.x] = Load::combine(shared[threadIdx.x], shared[threadIdx.x + half]);
+    __syncthreads();
+  }
+  if (threadIdx.x == 0) partial[blockIdx.x] = shared[0];
+}
+
+template <class Load, class Finish>
+__global__ void reduce_final_cuda(int count, const typename Load::Value* partial, Finish finish) {
+  using Value = typename Load::Value;
+  __shared__ Value shared[kBlock];
+  Value acc = Load::identity();
+  for (int k = threadIdx.x; k < count; k += blockDim.x) acc = Load::combine(acc, partial[k]);
+  shared[threadIdx.x] = acc;
+  __syncthreads();
+  for (int half = kBlock / 2; half > 0; half /= 2) {
+    if (threadIdx.x < half) shared[threadIdx.x] = Load::combine(shared[threadIdx.x], shared[threadIdx.x + half]);
+    __syncthreads();
+  }
+  if (threadIdx.x == 0) finish(shared[0]);
+}
+
+// Plain aggregates (no member initialisers): they live in __shared__ arrays.
+struct StepSums {
+  double released;  // energy of the bonds broken this step [J]
+  double work;      // work of external forces and reactions over the step [J]
+};
+
+struct MeasureSums {
+  double kinetic, strain, max_damage;
+  long long broken_half_bonds;
+  long long bad_particle;  // largest index with a non-finite u or v; -1 if none
+};
+
+// Scalars that live on the device across steps (the host mirror is refreshed on demand).
+struct DeviceScalars {
+  double external_work;
+  double dissipated_energy;
+  MeasureSums measured;
+};
+
+struct StepLoad {
+  using Value = StepSums;
+  PdView p;
+  const double* u_before;
+  const double* f_before;
+  __device__ static Value identity() { return {0.0, 0.0}; }
+  __device__ static Value combine(Value a, Value b) { return {a.released + b.released, a.work + b.work}; }
+  // k runs over 3N components; the first N also carry the particles' released energy.
+  __device__ Value operator()(int64_t k) const {
+    const int64_t i = k / 3;
+    const bool constrained = p.fixed_dof[i] & (1u << (k % 3));
+    const double f_after = p.volume[i] * (constrained ? -p.force[k] : p.body[k]);
+    return {k < p.n ? p.dissipated[k] : 0.0, 0.5 * (f_before[k] + f_after) * (p.u[k] - u_before[k])};
+  }
+};
+
+// Released energy alone, for a force pass outside a step.
+struct ReleasedLoad {
+  using Value = StepSums;
+  const double* dissipated;
+  __device__ static Value identity() { return {0.0, 0.0}; }
+  __device__ static Value combine(Value a, Value b) { return {a.released + b.released, a.work + b.work}; }
+  __device__ Value operator()(int64_t i) const { return {dissipated[i], 0.0}; }
+};
+
+struct StepFinish {
+  DeviceScalars* scalars;
+  __device__ void operator()(StepSums s) const {
+    scalars->dissipated_energy += s.released;
+    scalars->external_work += s.work;
+  }
+};
+
+struct MeasureLoad {
+  using Value = MeasureSums;
+  PdView p;
+  __device__ static Value identity() { return {0.0, 0.0, 0.0, 0, -1}; }
+  __device__ static Value combine(Value a, Value b) {
+    return {a.kinetic + b.kinetic, a.strain + b.strain, a.max_damage > b.max_damage ? a.max_damage : b.max_damage,
+            a.broken_half_bonds + b.broken_half_bonds, a.bad_particle > b.bad_particle ? a.bad_particle : b.bad_particle};
+  }
+  __device__ Value operator()(int64_t i) const {
+    double v2 = 0.0;
+    bool finite = true;
+    for (int d = 0; d < 3; ++d) {
+      v2 += p.v[3 * i + d] * p.v[3 * i + d];
+      finite = finite && isfinite(p.u[3 * i + d]) && isfinite(p.v[3 * i + d]);
+    }
+    long long broken = 0;
+    for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) broken += (p.state[k] != (kOwnIntact | kDualIntact));
+    return {0.5 * p.density[i] * p.volume[i] * v2, p.volume[i] * p.energy_density[i], p.damage[i], broken,
+            finite ? -1 : static_cast<long long>(i)};
+  }
+};
+
+struct MeasureFinish {
+  DeviceScalars* scalars;
+  __device__ void operator()(MeasureSums s) const { scalars->measured = s; }
+};
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+
+bool cuda_device_available() {
+  int count = 0;
+  const cudaError_t status = cudaGetDeviceCount(&count);
+  if (status != cudaSuccess) {
+    cudaGetLastError();  // no driver / no device: clear the error, answer no
+    return false;
+  }
+  return count > 0;
+}
+
+std::string cuda_device_description() {
+  if (!cuda_device_available()) return "";
+  cudaDeviceProp prop{};
+  if (cudaGetDeviceProperties(&prop, 0) != cudaSuccess) return "";
+  char text[512];
+  std::snprintf(text, sizeof text, "%s, %.1f GiB, compute capability %d.%d", prop.name,
+                prop.totalGlobalMem / 1073741824.0, prop.major, prop.minor);
+  return text;
+}
+
+struct CudaSystem::Impl {
+  // per particle
+  DeviceArray<double> x0, x, u, v, a, force, body, volume, density;
+  DeviceArray<uint8_t> fixed_dof;
+  DeviceArray<double> energy_density, dissipated, damage, max_stretch, dilatation, weighted_volume, lps_a, lps_b;
+  DeviceArray<LpsCoefficients> lps;
+  // bonds
+  DeviceArray<int64_t> offsets;
+  DeviceArray<int32_t> neighbor;
+  DeviceArray<double> xi_len, k_own, k_dual, vol_own;
+  DeviceArray<float> s0_own, s0_dual;
+  DeviceArray<uint8_t> state;
+  // step scratch
+  DeviceArray<double> u_before, f_before;
+  // loads and constraints (index lists uploaded once)
+  DeviceArray<int32_t> facet_particle, facet_load;
+  DeviceArray<int64_t> facet_offsets;
+  DeviceArray<double> facet_area, facet_normal, load_vector;
+  DeviceArray<uint8_t> load_is_pressure;
+  std::vector<DeviceArray<int32_t>> body_load_particles;   // one per sys.body_loads entry
+  std::vector<DeviceArray<int32_t>> constraint_particles;  // one per sys.constraints entry
+  // reductions
+  DeviceArray<StepSums> step_partial;
+  DeviceArray<MeasureSums> measure_partial;
+  DeviceArray<DeviceScalars> scalars;
+
+  PdView view;
+  FacetView facets{};
+  bool sync_after_launch = false;  // BRECCIA_CUDA_SYNC=1: attribute asynchronous faults to their kernel
+
+  void after_launch(const char* kernel) const { check_launch(kernel, sync_after_launch); }
+  void compute_forces(const PdSystem& sys);
+};
+
+CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
+  if (!cuda_device_available())
+    throw RunError("CUDA backend: no CUDA device is available (no GPU, or no NVIDIA driver); use --backend cpu");
+  check(cudaSetDevice(0), "cudaSetDevice(0)");
+  Impl& m = *impl_;
+  const char* sync = std::getenv("BRECCIA_CUDA_SYNC");
+  m.sync_after_launch = sync && std::string(sync) == "1";
+
+  m.x0.upload(s.x0, "x0");
+  m.x.allocate(s.x0.size(), "x");  // filled before every force pass
+  m.u.upload(s.u, "u");
+  m.v.upload(s.v, "v");
+  m.a.upload(s.a, "a");
+  m.force.upload(s.force, "force");
+  m.body.upload(s.body, "body");
+  m.volume.upload(s.volume, "volume");
+  m.density.upload(s.density, "density");
+  m.fixed_dof.upload(s.fixed_dof, "fixed_dof");
+  m.energy_density.upload(s.energy_density, "energy_density");
+  m.dissipated.upload(s.dissipated, "dissipated");
+  m.damage.upload(s.damage, "damage");
+  m.max_stretch.upload(s.max_stretch, "max_stretch");
+  m.dilatation.upload(s.dilatation, "dilatation");
+  m.weighted_volume.upload(s.weighted_volume, "weighted_volume");
+  // The fast LPS path's per-particle factors exist only where set-up allocated them.
+  if (s.lps_a.size() == s.n && s.lps_b.size() == s.n) {
+    m.lps_a.upload(s.lps_a, "lps_a");
+    m.lps_b.upload(s.lps_b, "lps_b");
+  }
+  m.lps.upload(s.lps, "lps");
+  m.offsets.upload(s.offsets, "offsets");
+  m.neighbor.upload(s.neighbor, "neighbor");
+  m.xi_len.upload(s.xi_len, "xi_len");
+  m.k_own.upload(s.k_own, "k_own");
+  m.k_dual.upload(s.k_dual, "k_dual");
+  m.vol_own.upload(s.vol_own, "vol_own");
+  m.s0_own.upload(s.s0_own, "s0_own");
+  m.s0_dual.upload(s.s0_dual, "s0_dual");
+  m.state.upload(s.state, "state");
+  m.u_before.allocate(3 * s.n, "u_before");
+  m.f_before.allocate(3 * s.n, "f_before");
+
+  // Every field set here by name; one added to PdView later stays nullptr (its optional
+  // feature off) until it is added here, rather than pointing at host memory.
+  PdView& p = m.view;
+  p.n = static_cast<int64_t>(s.n);
+  p.model = static_cast<int>(s.config.model);
+  p.fracture = s.config.fracture;
+  p.diagnostics = s.diagnostics;
+  p.symmetric_halves = s.symmetric_halves;
+  p.x0 = m.x0.get(); p.x = m.x.get(); p.u = m.u.get(); p.v = m.v.get(); p.a = m.a.get();
+  p.force = m.force.get(); p.body = m.body.get();
+  p.volume = m.volume.get(); p.density = m.density.get(); p.fixed_dof = m.fixed_dof.get();
+  p.offsets = m.offsets.get(); p.neighbor = m.neighbor.get(); p.xi_len = m.xi_len.get();
+  p.k_own = m.k_own.get(); p.k_dual = m.k_dual.get(); p.vol_own = m.vol_own.get();
+  p.s0_own = m.s0_own.get(); p.s0_dual = m.s0_dual.get(); p.state = m.state.get();
+  p.lps = m.lps.get();
+  p.weighted_volume = m.weighted_volume.get(); p.dilatation = m.dilatation.get();
+  p.lps_a = m.lps_a.get(); p.lps_b = m.lps_b.get();
+  p.energy_density = m.energy_density.get(); p.dissipated = m.dissipated.get();
+  p.damage = m.damage.get(); p.max_stretch = m.max_stretch.get();
+
+  // Surface-load facets regrouped by particle; a stable sort keeps compute_external's order.
+  if (s.surface_loads.size() > static_cast<size_t>(kMaxSurfaceLoads))
+    throw RunError("CUDA backend: " + std::to_string(s.surface_loads.size()) + " pressure/traction loads, at most " +
+                   std::to_string(kMaxSurfaceLoads) + " supported; use --backend cpu");
+  struct Entry {
+    int32_t particle, load;
+    const PressureFacet* facet;
+  };
+  std::vector<Entry> entries;
+  std::vector<uint8_t> is_pressure;
+  std::vector<double> vectors;
+  for (size_t l = 0; l < s.surface_loads.size(); ++l) {
+    const auto& sl = s.surface_loads[l];
+    is_pressure.push_back(sl.spec->kind == LoadSpec::Kind::Pressure);
+    vectors.insert(vectors.end(), sl.spec->vector.begin(), sl.spec->vector.end());
+    for (const auto& f : sl.facets) entries.push_back({f.particle, static_cast<int32_t>(l), &f});
+  }
+  std::stable_sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) { return x.particle < y.particle; });
+  std::vector<int32_t> particle, load;
+  std::vector<int64_t> offsets{0};
+  std::vector<double> area, normal;
+  for (size_t e = 0; e < entries.size(); ++e) {
+    if (e == 0 || entries[e].particle != entries[e - 1].particle) {
+      if (e > 0) offsets.push_back(static_cast<int64_t>(e));
+      particle.push_back(entries[e].particle);
+    }
+    load.push_back(entries[e].load);
+    area.push_back(entries[e].facet->area);
+    normal.insert(normal.end(), entries[e].facet->normal, entries[e].facet->normal + 3);
+  }
+  if (!entries.empty()) offsets.push_back(static_cast<int64_t>(entries.size()));
+  m.facet_particle.upload(particle, "facet particles");
+  m.facet_offsets.upload(offsets, "facet offsets");
+  m.facet_load.upload(load, "facet loads");
+  m.facet_area.upload(area, "facet areas");
+  m.facet_normal.upload(normal, "facet normals");
+  m.load_is_pressure.upload(is_pressure, "load kinds");
+  m.load_vector.upload(vectors, "load vectors");
+  m.facets = {static_cast<int64_t>(particle.size()), m.facet_particle.get(), m.facet_offsets.get(), m.facet_load.get(),
+              m.facet_area.get(), m.facet_normal.get(), m.load_is_pressure.get(), m.load_vector.get()};
+
+  m.body_load_particles = std::vector<DeviceArray<int32_t>>(s.body_loads.size());
+  for (size_t b = 0; b < s.body_loads.size(); ++b) m.body_load_particles[b].upload(s.body_loads[b].particles, "body-load set");
+  m.constraint_particles = std::vector<DeviceArray<int32_t>>(s.constraints.size());
+  for (size_t c = 0; c < s.constraints.size(); ++c) m.constraint_particles[c].upload(s.constraints[c].particles, "boundary set");
+
+  m.step_partial.allocate(kMaxReduceBlocks, "step partial sums");
+  m.measure_partial.allocate(kMaxReduceBlocks, "measure partial sums");
+  const std::vector<DeviceScalars> scalars{{s.external_work, s.dissipated_energy, {0.0, 0.0, 0.0, 0, -1}}};
+  m.scalars.upload(scalars, "energy accumulators");
+}
+
+CudaSystem::~CudaSystem() = default;
+
+namespace {
+
+template <class Load, class Finish>
+void reduce(int64_t n, const Load& load, typename Load::Value* partial, Finish finish, const char* name,
+            bool synchronize) {
+  const int grid = static_cast<int>(std::clamp<int64_t>(blocks_for(n), 1, kMaxReduceBlocks));
+  reduce_partial_cuda<Load><<<grid, kBlock>>>(n, load, partial);
+  check_launch(name, synchronize);
+  reduce_final_cuda<Load, Finish><<<1, kBlock>>>(grid, partial, finish);
+  check_launch(name, synchronize);
+}
+
+}  // namespace
+
+// cpu_compute_forces on the device, less the sum of the released energy (the caller adds it).
+void CudaSystem::Impl::compute_forces(const PdSystem& sys) {
+  PdView& p = view;
+  p.diagnostics = sys.diagnostics;  // the run loop turns diagnostics off between output steps
+  p.symmetric_halves = sys.symmetric_halves;
+  const int64_t grid = blocks_for(p.n);
+  current_positions_cuda<<<blocks_for(3 * p.n), kBlock>>>(3 * p.n, p.x0, p.u, x.get());
+  after_launch("current_positions");
+  if (p.model == static_cast<int>(PdModel::LPS)) {
+    lps_dilatation_cuda<<<grid, kBlock>>>(p);
+    after_launch("lps_dilatation_kernel");
+  }
+  force_cuda<<<grid, kBlock>>>(p);
+  after_launch("force_kernel");
+}
+
+void CudaSystem::compute_forces(PdSystem& sys) {
+  Impl& m = *impl_;
+  if (m.view.n == 0) return;
+  m.compute_forces(sys);
+  reduce(m.view.n, ReleasedLoad{m.view.dissipated}, m.step_partial.get(), StepFinish{m.scalars.get()},
+         "released energy reduction", m.sync_after_launch);
+}
+
+void CudaSystem::step(PdSystem& sys) {
+  Impl& m = *impl_;
+  const PdView& p = m.view;
+  const double dt = sys.dt, half = 0.5 * dt;
+  const int64_t n = p.n;
+  if (n == 0) {  // nothing to launch (a grid of zero blocks is a launch error)
+    sys.time += dt;
+    ++sys.step;
+    return;
+  }
+  const int64_t grid = blocks_for(n), grid3 = blocks_for(3 * n);
+
+  work_before_cuda<<<grid3, kBlock>>>(p, m.u_before.get(), m.f_before.get());
+  m.after_launch("work_before");
+  kick_drift_cuda<<<grid, kBlock>>>(p, half, dt);
+  m.after_launch("kick_drift_kernel");
+  sys.time += dt;
+  const double t = sys.time;
+
+  // Constraints (apply_constraints): one launch per boundary, in the case's order.
+  for (size_t c = 0; c < sys.constraints.size(); ++c) {
+    const BoundarySpec& b = *sys.constraints[c].spec;
+    ConstraintStep cs{static_cast<int>(b.kind), 0u, {0, 0, 0}, {0, 0, 0}, dt};
+    for (int d = 0; d < 3; ++d) {
+      if (b.components[d]) cs.components |= 1u << d;
+      if (b.kind == BoundarySpec::Kind::Velocity) {
+        const double ramp = b.ramp_time > 0 ? std::min(1.0, (t - 0.5 * dt) / b.ramp_time) : 1.0;
+        cs.velocity[d] = b.value[d] * std::max(0.0, ramp);
+      } else if (b.kind == BoundarySpec::Kind::Displacement) {
+        const double ramp = b.ramp_time > 0 ? std::min(1.0, t / b.ramp_time) : 1.0;
+        cs.target[d] = b.value[d] * ramp;
+      }
+    }
+    const auto& set = m.constraint_particles[c];
+    if (set.size() == 0) continue;
+    constraint_cuda<<<blocks_for(set.size()), kBlock>>>(set.size(), set.get(), cs, m.u.get(), m.v.get());
+    m.after_launch("constraint");
+  }
+
+  // External force density (compute_external).
+  check(cudaMemsetAsync(m.body.get(), 0, 3 * n * sizeof(double)), "clearing body forces");
+  if (m.facets.particle_count > 0) {
+    LoadHistories h{};
+    for (size_t l = 0; l < sys.surface_loads.size(); ++l) h.value[l] = sys.surface_loads[l].spec->history.at(t);
+    surface_load_cuda<<<blocks_for(m.facets.particle_count), kBlock>>>(m.facets, h, p.volume, m.body.get());
+    m.after_launch("surface_load");
+  }
+  for (size_t b = 0; b < sys.body_loads.size(); ++b) {
+    const auto& bl = sys.body_loads[b];
+    const double h = bl.spec->history.at(t);
+    const auto& set = m.body_load_particles[b];
+    const int64_t count = bl.particles.empty() ? n : static_cast<int64_t>(set.size());
+    body_load_cuda<<<blocks_for(count), kBlock>>>(count, set.get(), h, bl.spec->vector[0], bl.spec->vector[1],
+                                                  bl.spec->vector[2], p.density, m.body.get());
+    m.after_launch("body_load");
+  }
+  const IndenterSpec& ind = sys.config.indenter;
+  if (ind.enabled) {
+    double c[3];
+    for (int d = 0; d < 3; ++d) c[d] = ind.center[d] + ind.velocity[d] * t;
+    for (int d = 0; d < 3; ++d) sys.indenter_position[d] = c[d];
+    indenter_cuda<<<grid, kBlock>>>(p, c[0], c[1], c[2], ind.radius, ind.stiffness, m.body.get());
+    m.after_launch("indenter");
+  }
+
+  m.compute_forces(sys);
+  acceleration_cuda<<<grid, kBlock>>>(p, half);
+  m.after_launch("acceleration_kernel");
+  reduce(3 * n, StepLoad{p, m.u_before.get(), m.f_before.get()}, m.step_partial.get(), StepFinish{m.scalars.get()},
+         "step energy reduction", m.sync_after_launch);
+  ++sys.step;
+}
+
+Energies CudaSystem::measure(PdSystem& sys) {
+  Impl& m = *impl_;
+  Energies e;
+  if (m.view.n > 0)
+    reduce(m.view.n, MeasureLoad{m.view}, m.measure_partial.get(), MeasureFinish{m.scalars.get()},
+           "measure reduction", m.sync_after_launch);
+  std::vector<DeviceScalars> host;
+  m.scalars.download(host, "energy sums");  // synchronises with the default stream
+  const DeviceScalars& s = host[0];
+  sys.external_work = s.external_work;
+  sys.dissipated_energy = s.dissipated_energy;
+  if (m.view.n == 0) return e;
+  e.kinetic = s.measured.kinetic;
+  e.strain = s.measured.strain;
+  e.max_damage = s.measured.max_damage;
+  e.broken_half_bonds = s.measured.broken_half_bonds;
+  e.bad_particle = s.measured.bad_particle;
+  e.finite = e.bad_particle < 0 && std::isfinite(e.kinetic) && std::isfinite(e.strain);
+  return e;
+}
+
+void CudaSystem::download_kinematics(PdSystem& sys) {
+  impl_->u.download(sys.u, "u");
+  impl_->v.download(sys.v, "v");
+}
+
+void CudaSystem::download(PdSystem& sys) {
+  Impl& m = *impl_;
+  download_kinematics(sys);
+  m.x.download(sys.x, "x");
+  m.a.download(sys.a, "a");
+  m.force.download(sys.force, "force");
+  m.body.download(sys.body, "body");
+  m.energy_density.download(sys.energy_density, "energy_density");
+  m.dissipated.download(sys.dissipated, "dissipated");
+  m.damage.download(sys.damage, "damage");
+  m.max_stretch.download(sys.max_stretch, "max_stretch");
+  m.dilatation.download(sys.dilatation, "dilatation");
+  m.state.download(sys.state, "state");
+  std::vector<DeviceScalars> host;
+  m.scalars.download(host, "energy sums");
+  sys.external_work = host[0].external_work;
+  sys.dissipated_energy = host[0].dissipated_energy;
+}
+
+}  // namespace breccia::solver

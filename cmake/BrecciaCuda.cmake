@@ -8,13 +8,17 @@ if(BRECCIA_CUDA STREQUAL "ON" OR BRECCIA_CUDA STREQUAL "AUTO")
   include(CheckLanguage)
   check_language(CUDA)
   if(CMAKE_CUDA_COMPILER)
+    if(NOT DEFINED CMAKE_CUDA_ARCHITECTURES)
+      # Hopper (H100/H200) is the target device; one architecture keeps the build short.
+      # Set before enable_language, which would otherwise pick nvcc's default.
+      set(CMAKE_CUDA_ARCHITECTURES 90)
+    endif()
+    # CMake 3.25 knows nvcc's dialects only up to C++17; tell it the C++20 flag.
+    set(CMAKE_CUDA20_STANDARD_COMPILE_OPTION "-std=c++20")
+    set(CMAKE_CUDA20_EXTENSION_COMPILE_OPTION "-std=c++20")
     enable_language(CUDA)
     set(CMAKE_CUDA_STANDARD 20)
     set(CMAKE_CUDA_STANDARD_REQUIRED ON)
-    if(NOT DEFINED CMAKE_CUDA_ARCHITECTURES OR CMAKE_CUDA_ARCHITECTURES STREQUAL "52")
-      # Hopper (H100/H200) is the target device; keep the build to one architecture for speed.
-      set(CMAKE_CUDA_ARCHITECTURES 90)
-    endif()
     find_package(CUDAToolkit REQUIRED)
     set(BRECCIA_HAVE_CUDA ON)
   elseif(BRECCIA_CUDA STREQUAL "ON")

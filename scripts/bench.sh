@@ -17,7 +17,7 @@ if ! command -v lmp >/dev/null 2>&1; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends lammps >/dev/null
 fi
 results="$OUT/bench.csv"
-echo "code,model,threads,particles,bonds_per_particle,steps,loop_s,bond_updates_per_s,per_core" > "$results"
+echo "code,model,threads,particles,bonds_per_particle,steps,loop_wall_s,bond_updates_per_s,per_core_wall,loop_cpu_s,per_cpu_second" > "$results"
 
 for model in pmb lps; do
   cat > "$OUT/$model.yaml" <<YAML
@@ -34,7 +34,7 @@ YAML
     $PYTHON - "$OUT/breccia-$model-$t/summary.json" "$model" "$t" >> "$results" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1])); t = int(sys.argv[3])
-print(f"breccia,{sys.argv[2]},{t},{s['particles']},{s['mean_family_size']:.1f},{s['steps_this_run']},{s['wall_s']:.3f},{s['bond_updates_per_s']:.4g},{s['bond_updates_per_s']/t:.4g}")
+print(f"breccia,{sys.argv[2]},{t},{s['particles']},{s['mean_family_size']:.1f},{s['steps_this_run']},{s['wall_s']:.3f},{s['bond_updates_per_s']:.4g},{s['bond_updates_per_s']/t:.4g},{s['loop_cpu_s']:.3f},{s['bond_updates_per_cpu_s']:.4g}")
 PY
   done
 done
@@ -86,7 +86,11 @@ LMP
       atoms=$((N*N*N))
       rate=$(awk -v a=$atoms -v b=$BONDS -v s=$STEPS -v l=$loop 'BEGIN{printf "%.4g", a*b*s/l}')
       per=$(awk -v r=$rate -v t=$t 'BEGIN{printf "%.4g", r/t}')
-      echo "lammps,$model,$t,$atoms,$BONDS,$STEPS,$loop,$rate,$per" >> "$results"
+      # LAMMPS reports the CPU share of the loop: "NN% CPU use with P MPI tasks".
+      pct=$(grep "CPU use with" "$OUT/lammps-$model-$t.log" | tail -1 | awk '{print $1}' | tr -d '%')
+      cpu=$(awk -v l=$loop -v p=$pct -v t=$t 'BEGIN{printf "%.4g", l*p/100*t}')
+      percpu=$(awk -v a=$atoms -v b=$BONDS -v s=$STEPS -v c=$cpu 'BEGIN{printf "%.4g", a*b*s/c}')
+      echo "lammps,$model,$t,$atoms,$BONDS,$STEPS,$loop,$rate,$per,$cpu,$percpu" >> "$results"
     else
       echo "lammps,$model,$t,,,,failed (see $OUT/lammps-$model-$t.log),," >> "$results"
     fi

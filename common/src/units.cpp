@@ -17,7 +17,7 @@ using UnitTable = std::vector<std::pair<std::string, double>>;
 const UnitTable& table(Quantity q) {
   static const std::map<Quantity, UnitTable> tables = {
       {Quantity::Dimensionless, {{"", 1.0}, {"%", 0.01}}},
-      {Quantity::Length, {{"m", 1.0}, {"cm", 1e-2}, {"mm", 1e-3}, {"um", 1e-6}, {"km", 1e3}}},
+      {Quantity::Length, {{"m", 1.0}, {"cm", 1e-2}, {"mm", 1e-3}, {"um", 1e-6}, {"nm", 1e-9}, {"km", 1e3}}},
       {Quantity::Area, {{"m2", 1.0}, {"cm2", 1e-4}, {"mm2", 1e-6}}},
       {Quantity::Volume, {{"m3", 1.0}, {"cm3", 1e-6}, {"mm3", 1e-9}, {"l", 1e-3}}},
       {Quantity::Time, {{"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"ns", 1e-9}}},

@@ -78,6 +78,9 @@ int main(int argc, char** argv) {
     return kExitBadInput;
   }
   opt.backend = (backend == "cuda" || (backend == "auto" && gpu_available())) ? "cuda" : "cpu";
+#ifdef BRECCIA_WITH_CUDA
+  if (opt.backend == "cuda") opt.run_loop = solver::run_system_cuda;
+#endif
   try {
     // The model decides the solver: PD here, MPS in its own library.
     const Section root = Section::load_file(case_file);

@@ -4,6 +4,7 @@
 #include <random>
 
 #include "breccia/solver/forall.hpp"
+#include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_system.hpp"
 
 namespace breccia::solver {
@@ -30,9 +31,7 @@ void compute_external(PdSystem& sys, double t) {
     const double h = ls.history.at(t);
     for (const auto& f : sl.facets) {
       double force[3];
-      for (int d = 0; d < 3; ++d)
-        // Pressure pushes against the outward normal; a traction is a force per area.
-        force[d] = ls.kind == LoadSpec::Kind::Pressure ? -h * f.area * f.normal[d] : h * ls.vector[d] * f.area;
+      facet_force(ls.kind == LoadSpec::Kind::Pressure, h, f.area, f.normal, ls.vector.data(), force);
       for (int d = 0; d < 3; ++d) sys.body[3 * f.particle + d] += force[d] / sys.volume[f.particle];
     }
   }
@@ -48,51 +47,29 @@ void compute_external(PdSystem& sys, double t) {
   }
   const IndenterSpec& ind = sys.config.indenter;
   if (ind.enabled) {
-    // Rigid sphere (LAMMPS fix indent): F = K (R - r)^2 pushing out of the sphere, per unit volume.
     double c[3];
     for (int d = 0; d < 3; ++d) c[d] = ind.center[d] + ind.velocity[d] * t;
     for (int d = 0; d < 3; ++d) sys.indenter_position[d] = c[d];
+    const double* x0 = sys.x0.data();
+    const double* u = sys.u.data();
+    double* body = sys.body.data();
 #pragma omp parallel for
-    for (int64_t i = 0; i < static_cast<int64_t>(sys.n); ++i) {
-      double r[3], len2 = 0;
-      for (int d = 0; d < 3; ++d) {
-        r[d] = sys.x0[3 * i + d] + sys.u[3 * i + d] - c[d];
-        len2 += r[d] * r[d];
-      }
-      const double len = std::sqrt(len2);
-      if (len >= ind.radius || len <= 0) continue;
-      const double mag = ind.stiffness * (ind.radius - len) * (ind.radius - len);
-      for (int d = 0; d < 3; ++d) sys.body[3 * i + d] += mag * r[d] / len;
-    }
+    for (int64_t i = 0; i < static_cast<int64_t>(sys.n); ++i)
+      add_indenter_force(x0, u, i, c, ind.radius, ind.stiffness, body);
   }
 }
 
 void apply_constraints(PdSystem& sys, double t, double dt) {
   for (const auto& con : sys.constraints) {
     const BoundarySpec& b = *con.spec;
+    double velocity[3], target[3];
+    prescribed_values(b, t, dt, velocity, target);
+    const int kind = static_cast<int>(b.kind);
     for (auto i : con.particles)
       for (int d = 0; d < 3; ++d) {
         if (!b.components[d]) continue;
         const int64_t k = 3 * static_cast<int64_t>(i) + d;
-        switch (b.kind) {
-          case BoundarySpec::Kind::Fixed:
-            sys.u[k] = 0.0;
-            sys.v[k] = 0.0;
-            break;
-          case BoundarySpec::Kind::Velocity: {
-            const double ramp = b.ramp_time > 0 ? std::min(1.0, (t - 0.5 * dt) / b.ramp_time) : 1.0;
-            sys.v[k] = b.value[d] * std::max(0.0, ramp);
-            sys.u[k] += dt * sys.v[k];
-            break;
-          }
-          case BoundarySpec::Kind::Displacement: {
-            const double ramp = b.ramp_time > 0 ? std::min(1.0, t / b.ramp_time) : 1.0;
-            const double target = b.value[d] * ramp;
-            sys.v[k] = dt > 0 ? (target - sys.u[k]) / dt : 0.0;
-            sys.u[k] = target;
-            break;
-          }
-        }
+        constrain_component(kind, velocity[d], target[d], dt, sys.u[k], sys.v[k]);
       }
   }
 }

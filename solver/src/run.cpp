@@ -273,7 +273,7 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
                  static_cast<double>(s.bond_count()) / std::max<size_t>(1, s.n), s.horizon.empty() ? 0.0 : s.horizon[0],
                  s.stable_dt, s.silling_askari_dt, s.dt, config.safety, setup_s);
   }
-  RunResult r = run_system(s, o);
+  RunResult r = o.run_loop ? o.run_loop(s, o) : run_system(s, o);
   write_summary(s, o, r, setup_s);
   return r;
 }

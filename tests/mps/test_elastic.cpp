@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/simulation.hpp"
@@ -72,12 +73,14 @@ TEST(MpsElasticWaves, NavierPWaveTravelsAtTheLongitudinalSpeed) {
   // 1 MHz: lambda_P = 6 mm = 24 spacings. 2%: the lattice's dispersion at 24 points per
   // wavelength (measured ~0.5% slow) plus the cross-correlation's sub-sample resolution.
   const double c = measured_speed(strip_case("navier", "y", 1e6, 20e-6), "displacement_y");
+  std::printf("P wave: measured %.1f m/s, c_L %.1f m/s (%+.2f%%)\n", c, kCL, 100 * (c / kCL - 1));
   EXPECT_NEAR(c / kCL, 1.0, 0.02) << "measured " << c << " m/s, c_L " << kCL;
 }
 
 TEST(MpsElasticWaves, NavierSWaveTravelsAtTheShearSpeed) {
   // 0.5 MHz: lambda_T = 6.4 mm = 26 spacings; same 2% budget as the P wave.
   const double c = measured_speed(strip_case("navier", "x", 0.5e6, 35e-6), "displacement_x");
+  std::printf("S wave: measured %.1f m/s, c_T %.1f m/s (%+.2f%%)\n", c, kCT, 100 * (c / kCT - 1));
   EXPECT_NEAR(c / kCT, 1.0, 0.02) << "measured " << c << " m/s, c_T " << kCT;
 }
 
@@ -85,6 +88,7 @@ TEST(MpsElasticWaves, RotationFreeFormOfThePaperMakesShearWavesSqrt2TooFast) {
   // Eq. (6) has 2 C55 lap u where the Navier equation has C55 lap u + (lambda + mu) grad div u;
   // for a shear wave div u = 0, so c = sqrt(2 C55 / rho) = sqrt(2) c_T (physics.md sec. 2).
   const double c = measured_speed(strip_case("rotation_free", "x", 0.5e6, 30e-6), "displacement_x");
+  std::printf("rotation-free S wave: measured %.1f m/s = %.3f c_T (sqrt 2 = 1.414)\n", c, c / kCT);
   EXPECT_NEAR(c / (std::sqrt(2.0) * kCT), 1.0, 0.03) << "measured " << c << " m/s";
   EXPECT_GT(c / kCT, 1.3);  // clearly not the physical shear speed
   // ...while its P wave is right: C13 + 2 C55 = lambda + 2 mu.

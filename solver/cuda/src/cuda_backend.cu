@@ -535,16 +535,9 @@ void CudaSystem::step(PdSystem& sys) {
   for (size_t c = 0; c < sys.constraints.size(); ++c) {
     const BoundarySpec& b = *sys.constraints[c].spec;
     ConstraintStep cs{static_cast<int>(b.kind), 0u, {0, 0, 0}, {0, 0, 0}, dt};
-    for (int d = 0; d < 3; ++d) {
+    for (int d = 0; d < 3; ++d)
       if (b.components[d]) cs.components |= 1u << d;
-      if (b.kind == BoundarySpec::Kind::Velocity) {
-        const double ramp = b.ramp_time > 0 ? std::min(1.0, (t - 0.5 * dt) / b.ramp_time) : 1.0;
-        cs.velocity[d] = b.value[d] * std::max(0.0, ramp);
-      } else if (b.kind == BoundarySpec::Kind::Displacement) {
-        const double ramp = b.ramp_time > 0 ? std::min(1.0, t / b.ramp_time) : 1.0;
-        cs.target[d] = b.value[d] * ramp;
-      }
-    }
+    prescribed_values(b, t, dt, cs.velocity, cs.target);
     const auto& set = m.constraint_particles[c];
     if (set.size() == 0) continue;
     constraint_cuda<<<blocks_for(set.size()), kBlock>>>(set.size(), set.get(), cs, m.u.get(), m.v.get());

@@ -95,7 +95,18 @@ int run_case(const std::string& case_file, const std::string& out_dir, int threa
     f.set_attr("/", "model", std::string("mps"));
     f.set_attr("/", "dimension", static_cast<long long>(sim.dimension()));
     f.set_attr("/", "case_file", case_file);
+    // The layout of docs/formats.md (results.h5) where it applies to MPS.
+    f.set_attr("/", "format_version", 1LL);
+    f.set_attr("/", "thickness_m", sim.thickness_m());
+    f.set_attr("/", "particles_file",
+               spec.particle_file.empty() ? std::string() : std::filesystem::absolute(spec.particle_file).string());
+    f.set_attr("/", "particles_content_id", sim.particles_content_id());
+    f.set_attr("/", "complete", 0LL);
     f.write("/particles/position", sim.position_m(), {sim.size(), 3});
+    f.write("/particles/volume", sim.volume_m3(), {sim.size()});
+    f.write("/particles/density", std::vector<double>(sim.size(), m.density_kg_m3), {sim.size()});
+    f.write("/particles/material_id", std::vector<int32_t>(sim.size(), 0), {sim.size()});
+    f.write_strings("/materials/names", {m.name});
     write_snapshot(f, sim);
     record();
     Progress progress("mps", total_steps, spec.progress ? 5.0 : 1e300);
@@ -111,6 +122,8 @@ int run_case(const std::string& case_file, const std::string& out_dir, int threa
       progress.update(s, "t=" + fmt(sim.time_s()) + " s");
     }
     write_snapshot(f, sim);
+    f.set_attr("/", "output_count", static_cast<long long>(f.children("/output").size()));
+    f.set_attr("/", "complete", 1LL);
     if (spec.progress) progress.finish("t=" + fmt(sim.time_s()) + " s");
   }
   results.commit();

@@ -99,6 +99,7 @@ void Simulation::build_particles() {
   thickness_m_ = model.thickness_m;
   position_m_ = model.position_m;
   volume_m3_ = model.volume_m3;
+  content_id_ = model.content_id;
   std::vector<double> sp = model.spacing_m;
   std::nth_element(sp.begin(), sp.begin() + sp.size() / 2, sp.end());
   spacing_m_ = sp[sp.size() / 2];

@@ -135,37 +135,36 @@ BRECCIA_HD uint8_t break_bonds(const PdView& p, int64_t k, double stretch) {
 }
 
 // PMB with one constant horizon, the common production case: reads one modulus and one
-// critical stretch per entry and skips the diagnostics between output steps.
-BRECCIA_HD void pmb_symmetric_force_kernel(const PdView& p, int64_t i) {
-  // Current positions: from the x array when the backend keeps one (one gather per bond
-  // instead of two), else x0 + u.
-  const bool have_x = p.x != nullptr;
-  auto pos = [&](int64_t a, int d) { return have_x ? p.x[3 * a + d] : p.x0[3 * a + d] + p.u[3 * a + d]; };
-  const double xi0 = pos(i, 0), yi0 = pos(i, 1), zi0 = pos(i, 2);
+// critical stretch per entry; the diagnostics (energy, damage) are compiled out of the
+// loop between output steps.
+template <bool kDiagnostics>
+BRECCIA_HD void pmb_symmetric_force_loop(const PdView& p, int64_t i) {
+  const double* x = p.x;
+  const double xi0 = x[3 * i], yi0 = x[3 * i + 1], zi0 = x[3 * i + 2];
   double fx = 0.0, fy = 0.0, fz = 0.0, w = 0.0, released = 0.0, smax = 0.0;
   double intact_vol = 0.0, total_vol = 0.0;
   const int64_t end = p.offsets[i + 1];
   for (int64_t k = p.offsets[i]; k < end; ++k) {
-    if (p.diagnostics) total_vol += p.vol_own[k];
+    if (kDiagnostics) total_vol += p.vol_own[k];
     if (!p.state[k]) continue;
     const int64_t j = p.neighbor[k];
-    const double dx = pos(j, 0) - xi0;
-    const double dy = pos(j, 1) - yi0;
-    const double dz = pos(j, 2) - zi0;
+    const double dx = x[3 * j] - xi0, dy = x[3 * j + 1] - yi0, dz = x[3 * j + 2] - zi0;
     const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
     const double xi = p.xi_len[k];
-    const double stretch = (len - xi) / xi;
+    const double extension = len - xi;
     const double k2 = 2.0 * p.k_own[k];  // own + dual halves
-    if (p.fracture && stretch > p.s0_own[k]) {
+    if (p.fracture && extension > p.s0_own[k] * xi) {
+      const double stretch = extension / xi;
       released += p.volume[i] * 0.25 * k2 * stretch * stretch * xi;
       p.state[k] = 0;
       continue;
     }
-    const double f = k2 * stretch / len;
+    const double f = k2 * extension / (xi * len);  // c s / |xi + eta|
     fx += f * dx;
     fy += f * dy;
     fz += f * dz;
-    if (p.diagnostics) {
+    if (kDiagnostics) {
+      const double stretch = extension / xi;
       w += 0.25 * k2 * stretch * stretch * xi;
       intact_vol += p.vol_own[k];
       if (stretch > smax) smax = stretch;
@@ -175,16 +174,21 @@ BRECCIA_HD void pmb_symmetric_force_kernel(const PdView& p, int64_t i) {
   p.force[3 * i + 1] = fy;
   p.force[3 * i + 2] = fz;
   p.dissipated[i] = released;
-  if (p.diagnostics) {
+  if (kDiagnostics) {
     p.energy_density[i] = w;
     p.damage[i] = total_vol > 0.0 ? 1.0 - intact_vol / total_vol : 0.0;
     if (p.max_stretch) p.max_stretch[i] = smax;
   }
 }
 
+BRECCIA_HD void pmb_symmetric_force_kernel(const PdView& p, int64_t i) {
+  if (p.diagnostics) pmb_symmetric_force_loop<true>(p, i);
+  else pmb_symmetric_force_loop<false>(p, i);
+}
+
 // Internal force density, strain-energy density, damage and breaking for particle i.
 BRECCIA_HD void force_kernel(const PdView& p, int64_t i) {
-  if (p.symmetric_halves && p.model == static_cast<int>(PdModel::PMB)) {
+  if (p.symmetric_halves && p.x && p.model == static_cast<int>(PdModel::PMB)) {
     pmb_symmetric_force_kernel(p, i);
     return;
   }

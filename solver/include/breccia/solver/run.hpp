@@ -1,12 +1,16 @@
 #pragma once
 // Running a PD case: the time loop with outputs, progress, instability detection,
 // checkpoints and Ctrl-C, and adaptive dynamic relaxation for quasi-static problems.
+#include <functional>
 #include <optional>
 #include <string>
 
 #include "breccia/solver/pd_system.hpp"
 
 namespace breccia::solver {
+
+struct RunResult;
+struct PdSystem;
 
 struct RunOptions {
   std::string out_dir = "out";
@@ -15,6 +19,8 @@ struct RunOptions {
   std::optional<long long> steps;       // override the number of steps
   bool progress = true;
   std::string backend = "cpu";
+  // The time loop to use (the CUDA backend supplies its own); empty: the CPU loop.
+  std::function<RunResult(PdSystem&, const RunOptions&)> run_loop;
 };
 
 struct RunResult {

@@ -41,6 +41,9 @@ public:
   const CaseSpec& spec() const { return spec_; }
 
   const std::vector<double>& position_m() const { return position_m_; }  // 3N reference
+  const std::vector<double>& volume_m3() const { return volume_m3_; }
+  double thickness_m() const { return thickness_m_; }
+  const std::string& particles_content_id() const { return content_id_; }  // "" for a lattice
   const std::vector<double>& displacement(int axis) const { return u_[axis]; }
   const std::vector<double>& velocity(int axis) const { return v_[axis]; }
   std::vector<double>& displacement(int axis) { return u_[axis]; }
@@ -71,6 +74,7 @@ private:
   double spacing_m_ = 0.0, thickness_m_ = 1.0;
   Periodicity periodic_;
   std::vector<double> position_m_, volume_m3_;
+  std::string content_id_;
   std::vector<std::string> set_names_;
   std::vector<std::vector<int64_t>> set_members_;
   BondList bonds_;

@@ -1,11 +1,11 @@
 #pragma once
-// Loads and constraints of one particle per call, written once for both backends. The
-// expressions are those of cpu_backend.cpp (compute_external, apply_constraints), operand
-// for operand, so the two backends round identically. Intended home: next to pd_kernels.hpp
-// in solver/include/, with cpu_backend.cpp calling them too (docs/cuda.md, "Open items").
+// Loads and constraints of one particle per call, written once for both backends
+// (cpu_backend.cpp and solver/cuda/ call the same functions, so they round identically).
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
+#include "breccia/solver/case_config.hpp"
 #include "breccia/solver/hd.hpp"
 
 namespace breccia::solver {
@@ -50,6 +50,21 @@ BRECCIA_HD void constrain_component(int kind, double velocity, double target, do
       v = dt > 0 ? (target - u) / dt : 0.0;
       u = target;
       break;
+  }
+}
+
+// The ramped values of one boundary at time t of a step of size dt (host side, once per
+// step): the velocity a Velocity boundary imposes, the displacement a Displacement one does.
+inline void prescribed_values(const BoundarySpec& b, double t, double dt, double velocity[3], double target[3]) {
+  for (int d = 0; d < 3; ++d) {
+    velocity[d] = target[d] = 0.0;
+    if (b.kind == BoundarySpec::Kind::Velocity) {
+      const double ramp = b.ramp_time > 0 ? std::min(1.0, (t - 0.5 * dt) / b.ramp_time) : 1.0;
+      velocity[d] = b.value[d] * std::max(0.0, ramp);
+    } else if (b.kind == BoundarySpec::Kind::Displacement) {
+      const double ramp = b.ramp_time > 0 ? std::min(1.0, t / b.ramp_time) : 1.0;
+      target[d] = b.value[d] * ramp;
+    }
   }
 }
 

@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Dynamic crack branching in soda-lime glass (Bobaru & Zhang 2015; benchmarks.md section 1a).
+#   VARIANT=quick|demo: dx = 1/3 mm (m = 3), sigma = 2 MPa, G0 = 3.8 J/m2 (~40 s on 2 cores)
+#   VARIANT=full      : dx = 0.25 mm (m = 4), sigma/G0 = 2 MPa/3.8, 4 MPa/3.8, 12 MPa/135 J/m2
+#                       (Bobaru & Zhang 2015 and Ha & Bobaru 2010 set-ups; 1-2 min each)
+#   VARIANT=test      : dx = 0.5 mm (m = 2), 2 MPa, 28 us (the CTest regression run)
+# Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
+set -euo pipefail
+: "${BRECCIA_BIN:?path to the Breccia executables}" "${OUT:?output directory}"
+VARIANT=${VARIANT:-quick}
+PYTHON=${PYTHON:-/usr/bin/python3}
+THREADS=${THREADS:-$(nproc)}
+HERE="$(cd "$(dirname "$0")" && pwd)"
+case "$VARIANT" in
+  quick|demo) DX=0.000333333333333333333; DECK=case-quick.yaml; LOADS=${LOADS:-"2:3.8"} ;;
+  full)       DX=0.00025;                 DECK=case-full.yaml;  LOADS=${LOADS:-"2:3.8 4:3.8 12:135"} ;;
+  test)       DX=0.0005;                  DECK=case-quick.yaml; LOADS="2:3.8"; END="28 us" ;;
+  *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full|test)" >&2; exit 2 ;;
+esac
+mkdir -p "$OUT"
+# Specimen: 100 x 40 mm plate, 1 mm thick; no-fail strips within delta = 1 mm of the loaded edges.
+"$BRECCIA_BIN/breccia-place" --lattice square --box 0,0,0.1,0.04 --spacing "$DX" --thickness 1mm \
+  -o "$OUT/particles.h5" > "$OUT/place.log"
+"$PYTHON" "$HERE/add_sets.py" "$OUT/particles.h5" no_fail_bottom:0,0,0.1,0.001 no_fail_top:0,0.039,0.1,0.04
+RUNS=()
+for load in $LOADS; do  # sigma_MPa:G0_J_per_m2
+  s=${load%%:*}; g0=${load##*:}
+  name="sigma${s}MPa_G${g0}"
+  mkdir -p "$OUT/$name"
+  sed -e "s/STRESS/$s/g" -e "s/fracture_energy: G0 /fracture_energy: $g0 /" -e "s#particles: particles.h5#particles: ../particles.h5#" \
+      -e "s/no_fail: \[no_fail\]/no_fail: [no_fail_bottom, no_fail_top]/" -e "s/end: 43 us/end: ${END:-43 us}/" \
+      "$HERE/$DECK" > "$OUT/$name/case.yaml"
+  echo "== $name"
+  "$BRECCIA_BIN/breccia-solve" "$OUT/$name/case.yaml" -o "$OUT/$name" --threads "$THREADS" --quiet
+  "$BRECCIA_BIN/breccia-post" "$OUT/$name" --cracks --fragments --energy --quiet > "$OUT/$name/post.log"
+  RUNS+=("$name")
+done
+"$PYTHON" "$HERE/report.py" "$OUT" "${RUNS[@]}"
+echo "report: $OUT/report.json; pictures: $OUT/*.png"

@@ -1,0 +1,126 @@
+"""Crushed zone and radial cracks of the granite-blast run.
+
+    report.py OUT RUN [RUN ...]
+
+Damaged particle: damage > 0.35. Crushed zone: rings of width dx around the hole, counted
+outwards from the hole wall while at least half of a ring's particles are damaged; its
+radius is the outer edge of the last such ring. Radial cracks at radius r: particles in the
+ring r +- dx sorted by angle; a crack is a run of damaged particles, runs separated by an
+angular gap larger than 2 dx / r. Writes OUT/report.json, OUT/damage_<RUN>.png, OUT/cracks_vs_radius.png.
+"""
+import json
+import math
+import os
+import re
+import sys
+
+import h5py
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+DAMAGE_THRESHOLD = 0.35
+HOLE_RADIUS, OUTER_RADIUS = 0.0012875, 0.036
+SNAPSHOT_TIMES_US = (11.25, 18.75)  # the seed's two described instants
+COUNT_RADII_MM = (3, 5, 7.5, 10, 15, 20, 25, 30)
+
+
+def crushed_radius(r, damaged, dx):
+    edge = HOLE_RADIUS
+    k = 0
+    while True:
+        ring = (r >= HOLE_RADIUS + k * dx) & (r < HOLE_RADIUS + (k + 1) * dx)
+        if ring.sum() == 0 or damaged[ring].mean() < 0.5:
+            return edge
+        edge = HOLE_RADIUS + (k + 1) * dx
+        k += 1
+
+
+def cracks_at(r, theta, damaged, radius, dx):
+    ring = np.abs(r - radius) <= dx
+    if ring.sum() == 0:
+        return 0
+    order = np.argsort(theta[ring])
+    th, dm = theta[ring][order], damaged[ring][order]
+    if dm.all():
+        return -1  # fully damaged ring: inside the crushed zone
+    if not dm.any():
+        return 0
+    th_d = th[dm]
+    gaps = np.diff(np.concatenate([th_d, [th_d[0] + 2 * math.pi]]))
+    # An undamaged particle between two damaged ones separates two cracks only when the
+    # angular gap exceeds 2 dx / r (one lattice cell at this radius is dx / r).
+    return int(np.sum(gaps > 2 * dx / radius))
+
+
+def analyse(out, name):
+    run = os.path.join(out, name)
+    with h5py.File(os.path.join(run, "results.h5"), "r") as f:
+        x = f["particles/position"][:, :2]
+        keys = sorted(f["output"].keys())
+        times = np.array([f["output"][k].attrs["time_s"] for k in keys])
+        damage = np.array([f["output"][k]["damage"][:] for k in keys])
+    with open(os.path.join(run, "summary.json")) as fh:
+        summary = json.load(fh)
+    g0 = float(re.search(r"fracture_energy:\s*([0-9.eE+-]+)", open(os.path.join(run, "case.yaml")).read()).group(1))
+    dx = float(np.min(np.diff(np.unique(np.round(x[:, 0], 9)))))
+    r = np.hypot(x[:, 0], x[:, 1])
+    theta = np.arctan2(x[:, 1], x[:, 0])
+    res = {"run": name, "mean_fracture_energy_J_m2": g0, "particles": summary["particles"], "dx_m": dx,
+           "steps": summary["steps"], "dt_s": summary["dt_s"],
+           "wall_s": round(summary["wall_s"] + summary["setup_wall_s"], 1), "snapshots": []}
+    for k in range(len(times)):
+        dmg = damage[k] > DAMAGE_THRESHOLD
+        snap = {"time_s": float(times[k]), "crushed_radius_m": crushed_radius(r, dmg, dx),
+                "max_damaged_radius_m": float(r[dmg].max()) if dmg.any() else 0.0,
+                "cracks_at_radius_mm": {str(q): cracks_at(r, theta, dmg, q * 1e-3, dx) for q in COUNT_RADII_MM},
+                "outer_rim_damaged_fraction": float(dmg[r > OUTER_RADIUS - 3 * dx].mean())}
+        res["snapshots"].append(snap)
+    res["final"] = res["snapshots"][-1]
+    res["crushed_radius_over_hole_radius"] = res["final"]["crushed_radius_m"] / HOLE_RADIUS
+    return res, (x, times, damage, dx)
+
+
+def main(argv):
+    out, names = argv[1], argv[2:]
+    report = {"case": "granite-blast", "damage_threshold": DAMAGE_THRESHOLD, "hole_radius_m": HOLE_RADIUS,
+              "outer_radius_m": OUTER_RADIUS, "runs": []}
+    fig_c, ax_c = plt.subplots(figsize=(6, 4))
+    for name in names:
+        res, (x, times, damage, dx) = analyse(out, name)
+        report["runs"].append(res)
+        picks = [int(np.argmin(np.abs(times * 1e6 - t))) for t in SNAPSHOT_TIMES_US] + [len(times) - 1]
+        fig, axs = plt.subplots(1, 3, figsize=(14, 4.9))
+        size = (72.0 * dx * 1e3 / 18.0) ** 2 * 9
+        for ax, k in zip(axs, picks):
+            ax.scatter(x[:, 0] * 1e3, x[:, 1] * 1e3, c=damage[k], s=size, marker="s", cmap="jet", vmin=0, vmax=1,
+                       linewidths=0)
+            ax.set_aspect("equal")
+            ax.set_title(f"t = {times[k] * 1e6:.1f} us", fontsize=10)
+            ax.set_xlabel("x (mm)")
+        axs[0].set_ylabel("y (mm)")
+        fig.suptitle(f"granite-blast {name} (mean G0 {res['mean_fracture_energy_J_m2']:g} J/m2, dx = {dx * 1e3:g} mm): "
+                     "damage", fontsize=10)
+        fig.tight_layout()
+        fig.savefig(os.path.join(out, f"damage_{name}.png"), dpi=110)
+        plt.close(fig)
+        c = res["final"]["cracks_at_radius_mm"]
+        ax_c.plot(COUNT_RADII_MM, [max(v, 0) for v in c.values()], "o-", label=f"{name}, t = {times[-1] * 1e6:.0f} us")
+        f = res["final"]
+        print(f"{name}: particles {res['particles']}, wall {res['wall_s']} s, crushed radius "
+              f"{f['crushed_radius_m'] * 1e3:.2f} mm ({res['crushed_radius_over_hole_radius']:.1f} x hole), "
+              f"cracks at radius {f['cracks_at_radius_mm']}, max damaged radius {f['max_damaged_radius_m'] * 1e3:.1f} mm")
+    ax_c.set_xlabel("radius (mm)")
+    ax_c.set_ylabel("radial cracks crossing the circle")
+    ax_c.grid(alpha=0.3)
+    ax_c.legend(fontsize=8)
+    fig_c.tight_layout()
+    fig_c.savefig(os.path.join(out, "cracks_vs_radius.png"), dpi=120)
+    with open(os.path.join(out, "report.json"), "w") as fh:
+        json.dump(report, fh, indent=1)
+
+
+if __name__ == "__main__":
+    main(sys.argv)

@@ -9,6 +9,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/output_file.hpp"
+#include "breccia/common/particle_file.hpp"
 
 namespace breccia::solver {
 namespace {
@@ -91,8 +92,14 @@ ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool
   h5::File& f = *file_;
   f.set_attr("/", "format", std::string("breccia-results"));
   f.set_attr("/", "format_version", 1LL);
-  f.set_attr("/", "particles_file",
-             s.config.particles_path.empty() ? std::string("") : std::filesystem::absolute(s.config.particles_path).string());
+  // A lattice built from the case file has no particles.h5 yet: write one beside the
+  // results so that post-processing and provenance work the same for every run.
+  std::string particles_file = s.config.particles_path;
+  if (particles_file.empty()) {
+    particles_file = out_dir + "/particles.h5";
+    write_particle_file(particles_file, s.particles);
+  }
+  f.set_attr("/", "particles_file", std::filesystem::absolute(particles_file).string());
   f.set_attr("/", "particles_content_id", s.particles.content_id);
   f.set_attr("/", "dimension", static_cast<long long>(s.dimension));
   f.set_attr("/", "thickness_m", s.thickness);

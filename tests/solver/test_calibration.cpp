@@ -100,7 +100,15 @@ INSTANTIATE_TEST_SUITE_P(
                       EnergyCase{"lps", 2, "plane_stress", 0.2, 3.015},
                       EnergyCase{"lps", 2, "plane_stress", 0.33, 4.015},
                       EnergyCase{"lps", 2, "plane_strain", 0.2, 3.015},
-                      EnergyCase{"lps", 2, "plane_strain", 0.33, 4.015}));
+                      EnergyCase{"lps", 2, "plane_strain", 0.33, 4.015}),
+    // Stable, readable names (the default prints the struct's bytes, pointers included,
+    // which differ between CTest's discovery and the run).
+    [](const ::testing::TestParamInfo<EnergyCase>& info) {
+      const EnergyCase& c = info.param;
+      return std::string(c.model) + "_" + std::to_string(c.dimension) + "D_" + c.planar + "_nu" +
+             std::to_string(static_cast<int>(std::lround(c.nu * 100))) + "_m" +
+             std::to_string(static_cast<int>(std::lround(c.m * 1000)));
+    });
 
 TEST(Calibration, TextbookMicroModuliAndCriticalStretchAreRecovered) {
   // Silling & Askari 2005; Ha & Bobaru 2010 (constant influence function): exact formulas.

@@ -97,7 +97,7 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdView& p, int64_t i) {
     const double e = len - xi;
     const double omega = p.k_own[k];
     if (p.fracture && e > p.s0_own[k] * xi) {
-      const double dev = e - theta_i * xi / d;
+      const double dev = p.s0_own[k] * xi - theta_i * xi / d;  // at the critical extension
       released += 0.5 * b_i * omega * dev * dev * p.volume[j] * p.volume[i];
       p.state[k] = 0;
       continue;
@@ -154,8 +154,10 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdView& p, int64_t i) {
     const double extension = len - xi;
     const double k2 = 2.0 * p.k_own[k];  // own + dual halves
     if (p.fracture && extension > p.s0_own[k] * xi) {
-      const double stretch = extension / xi;
-      released += p.volume[i] * 0.25 * k2 * stretch * stretch * xi;
+      // Dissipated: what the bond holds at its critical stretch. It broke somewhere inside
+      // this step, so its force never worked against the stretch beyond s0.
+      const double s0 = p.s0_own[k];
+      released += p.volume[i] * 0.25 * k2 * s0 * s0 * xi;
       p.state[k] = 0;
       continue;
     }
@@ -216,14 +218,18 @@ BRECCIA_HD void force_kernel(const PdView& p, int64_t i) {
       const uint8_t after = break_bonds(p, k, g.stretch);
       if (after != st) {
         // Energy the broken halves held (PMB pair potential; LPS deviatoric pair part).
+        // What the broken halves hold at their critical stretch (see the symmetric kernel).
         const uint8_t lost = static_cast<uint8_t>(st & ~after);
         if (lps) {
-          const double e = g.length - xi;
+          const double e = p.s0_own[k] * xi;
           const double dev_i = e - theta_i * xi / p.lps[i].dilatation_factor;
           if (lost & kOwnIntact)
             released += 0.5 * (p.lps[i].shear_term / m_i) * p.k_own[k] * dev_i * dev_i * p.volume[j] * p.volume[i];
         } else {
-          released += p.volume[i] * pmb_energy_density(p.k_own[k], p.k_dual[k], lost, g.stretch, xi);
+          if (lost & kOwnIntact)
+            released += p.volume[i] * pmb_energy_density(p.k_own[k], 0.0, kOwnIntact, p.s0_own[k], xi);
+          if (lost & kDualIntact)
+            released += p.volume[i] * pmb_energy_density(0.0, p.k_dual[k], kDualIntact, p.s0_dual[k], xi);
         }
         st = after;
         p.state[k] = st;

@@ -21,7 +21,7 @@ mkdir -p "$OUT"
 # Specimen: 100 x 40 mm plate, 1 mm thick; no-fail strips within delta = 1 mm of the loaded edges.
 "$BRECCIA_BIN/breccia-place" --lattice square --box 0,0,0.1,0.04 --spacing "$DX" --thickness 1mm \
   -o "$OUT/particles.h5" > "$OUT/place.log"
-"$PYTHON" "$HERE/add_sets.py" "$OUT/particles.h5" no_fail_bottom:0,0,0.1,0.001 no_fail_top:0,0.039,0.1,0.04
+"$PYTHON" "$HERE/../../scripts/add_sets.py" "$OUT/particles.h5" no_fail_bottom:0,0,0.1,0.001 no_fail_top:0,0.039,0.1,0.04
 RUNS=()
 for load in $LOADS; do  # sigma_MPa:G0_J_per_m2
   s=${load%%:*}; g0=${load##*:}

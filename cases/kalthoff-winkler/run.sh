@@ -20,7 +20,7 @@ mkdir -p "$OUT/run"
 "$BRECCIA_BIN/breccia-place" --lattice square --box 0,0,0.1,0.2 --spacing "$DX" --thickness 9mm \
   -o "$OUT/particles.h5" > "$OUT/place.log"
 # Impact set: the first three particle layers (x < 3 dx) between the notches.
-"$PYTHON" "$HERE/add_sets.py" "$OUT/particles.h5" "impact:0,0.075,$("$PYTHON" -c "print(3*$DX)"),0.125"
+"$PYTHON" "$HERE/../../scripts/add_sets.py" "$OUT/particles.h5" "impact:0,0.075,$("$PYTHON" -c "print(3*$DX)"),0.125"
 sed -e "s#particles: particles.h5#particles: ../particles.h5#" -e "s/end: 80 us/end: ${END:-80 us}/" \
   "$HERE/$DECK" > "$OUT/run/case.yaml"
 "$BRECCIA_BIN/breccia-solve" "$OUT/run/case.yaml" -o "$OUT/run" --threads "$THREADS" --quiet

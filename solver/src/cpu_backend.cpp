@@ -30,6 +30,7 @@ void compute_external(PdSystem& sys, double t) {
     const LoadSpec& ls = *sl.spec;
     const double h = ls.history.at(t);
     for (const auto& f : sl.facets) {
+      if (!particle_attached(sys.offsets.data(), sys.state.data(), f.particle)) continue;
       double force[3];
       facet_force(ls.kind == LoadSpec::Kind::Pressure, h, f.area, f.normal, ls.vector.data(), force);
       for (int d = 0; d < 3; ++d) sys.body[3 * f.particle + d] += force[d] / sys.volume[f.particle];
@@ -109,6 +110,7 @@ Energies measure(const PdSystem& sys) {
   long long broken = 0;
   int64_t bad = -1;
   const int64_t n = static_cast<int64_t>(sys.n);
+  const PdView p = const_cast<PdSystem&>(sys).view();
 #pragma omp parallel for reduction(+ : ke, se, broken) reduction(max : dmax, bad)
   for (int64_t i = 0; i < n; ++i) {
     double v2 = 0.0;
@@ -121,7 +123,7 @@ Energies measure(const PdSystem& sys) {
     ke += 0.5 * sys.density[i] * sys.volume[i] * v2;
     se += sys.volume[i] * sys.energy_density[i];
     dmax = std::max(dmax, sys.damage[i]);
-    for (int64_t k = sys.offsets[i]; k < sys.offsets[i + 1]; ++k) broken += (sys.state[k] != (kOwnIntact | kDualIntact));
+    for (int64_t k = sys.offsets[i]; k < sys.offsets[i + 1]; ++k) broken += entry_broken(p, k);
   }
   e.kinetic = ke;
   e.strain = se;

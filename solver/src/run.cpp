@@ -68,6 +68,13 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
 
 }  // namespace
 
+void print_progress(long long step, long long total_steps, double time_s, long long steps_done, double elapsed_s,
+                    double max_damage) {
+  const double rate = steps_done / std::max(elapsed_s, 1e-9);
+  std::fprintf(stderr, "step %lld/%lld  t = %.4e s  %.1f steps/s  ETA %.1f s  max damage %.3f\n", step, total_steps,
+               time_s, rate, (total_steps - step) / std::max(rate, 1e-9), max_damage);
+}
+
 std::string instability_message(const PdSystem& s, const Energies& e, double energy_scale) {
   const auto where = [&](int64_t i) {
     std::ostringstream m;
@@ -237,10 +244,8 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
       const auto now = std::chrono::steady_clock::now();
       if (std::chrono::duration<double>(now - last_report).count() > 2.0) {
         last_report = now;
-        const double el = std::chrono::duration<double>(now - t0).count();
-        const double rate = (s.step - first_step) / el;
-        std::fprintf(stderr, "step %lld/%lld  t = %.4e s  %.1f steps/s  ETA %.1f s  max damage %.3f\n", s.step,
-                     total_steps, s.time, rate, (total_steps - s.step) / std::max(rate, 1e-9), e.max_damage);
+        print_progress(s.step, total_steps, s.time, s.step - first_step,
+                       std::chrono::duration<double>(now - t0).count(), e.max_damage);
       }
     }
   }

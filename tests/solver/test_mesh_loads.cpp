@@ -2,11 +2,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <numbers>
 
 #include "breccia/common/particle_file.hpp"
+#include "breccia/solver/calibration.hpp"
 #include "helpers.hpp"
 
 using namespace breccia;
@@ -46,4 +49,67 @@ TEST(Loads, PressureInABlindHoleOfAMeshPushesOnlyOnTheHoleBottom) {
   EXPECT_LE(ratio, 1.0);
   // The wall's sideways resultant cancels: round-off against the wall's total |force|.
   EXPECT_LT(std::hypot(f[0], f[1]), 1e-9 * wall);
+}
+
+namespace {
+
+// Particles at the centroids of a uniform gmsh tet mesh of a 100 mm cube (~10,000 tets).
+std::string tet_cube_particles() {
+  static const std::string path = [] {
+    const std::string dir = ::testing::TempDir() + "/tet_cube";
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir + "/box.yaml") << "dimension: 3\nbody: {shape: box, name: solid, origin: [0, 0, 0], "
+                                        "size: [100 mm, 100 mm, 100 mm]}\nmesh: {size: 8 mm}\n";
+    const std::string cmd = std::string(BRECCIA_MESH_EXE) + " " + dir + "/box.yaml -o " + dir +
+                            "/box.msh --quiet > /dev/null 2>&1 && " + BRECCIA_PLACE_EXE + " " + dir + "/box.msh -o " +
+                            dir + "/particles.h5 > /dev/null 2>&1";
+    if (std::system(cmd.c_str()) != 0) return std::string();
+    return dir + "/particles.h5";
+  }();
+  return path;
+}
+
+// Volume-weighted mean relative error of the strain-energy density over particles more
+// than two horizons from every face of the cube.
+double interior_energy_error(const char* model, double nu, const double eps[9]) {
+  const std::string file = tet_cube_particles();
+  EXPECT_FALSE(file.empty()) << "could not mesh the test cube";
+  PdSystem s = system_from_yaml(std::string("tet_energy_") + model,
+      "specimen: {particles: " + file + "}\nmodel: {type: " + model + ", horizon_factor: 3.015}\n"
+      "materials: [{name: solid, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: " + std::to_string(nu) + "}]\n"
+      "time: {steps: 1}\n");
+  impose_affine(s, eps);
+  cpu_compute_forces(s);
+  ElasticInput in{3, Planar::None, 10e9, nu, 1.0};
+  const double w_classical = classical_energy_density(in, eps);
+  const double margin = 2.0 * s.horizon[0];
+  double sum = 0, vol = 0;
+  for (size_t i = 0; i < s.n; ++i) {
+    bool interior = true;
+    for (int d = 0; d < 3; ++d) interior = interior && s.x0[3 * i + d] > margin && s.x0[3 * i + d] < 0.1 - margin;
+    if (!interior) continue;
+    sum += s.volume[i] * s.energy_density[i];
+    vol += s.volume[i];
+  }
+  EXPECT_GT(vol, 0.0);
+  return (sum / vol - w_classical) / w_classical;
+}
+
+}  // namespace
+
+// 3% on tet-centroid particles (issue 3, test 1, the looser case): an irregular family is
+// not isotropic particle by particle; averaged over the interior its fourth-order moment
+// deviates by up to a few percent from isotropy at m = 3 (measured here: PMB -0.9%,
+// LPS +0.2% for uniaxial strain, shear and expansion), while the
+// calibration makes isotropic expansion exact on average by construction.
+TEST(StrainEnergy, TetCentroidParticlesFromAGmshMeshMatchClassicalEnergyOnAverage) {
+  const double uniaxial[9] = {1e-4, 0, 0, 0, 0, 0, 0, 0, 0};
+  const double shear[9] = {0, 1e-4, 0, 1e-4, 0, 0, 0, 0, 0};
+  const double expansion[9] = {1e-4, 0, 0, 0, 1e-4, 0, 0, 0, 1e-4};
+  for (const double* eps : {uniaxial, shear, expansion}) {
+    const double pmb = interior_energy_error("pmb", 0.25, eps), lps = interior_energy_error("lps", 0.3, eps);
+    std::printf("tet-centroid interior energy error: PMB %+.4f  LPS %+.4f\n", pmb, lps);
+    EXPECT_NEAR(pmb, 0.0, 0.03);
+    EXPECT_NEAR(lps, 0.0, 0.03);
+  }
 }

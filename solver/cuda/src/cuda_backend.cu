@@ -156,10 +156,12 @@ struct FacetView {
   const double* load_vector;     // 3 per load
 };
 
-__global__ void surface_load_cuda(FacetView f, LoadHistories h, const double* volume, double* body) {
+__global__ void surface_load_cuda(FacetView f, LoadHistories h, const double* volume, const int64_t* bond_offsets,
+                                  const uint8_t* bond_state, double* body) {
   const int64_t q = thread_index();
   if (q >= f.particle_count) return;
   const int64_t i = f.particle[q];
+  if (!particle_attached(bond_offsets, bond_state, i)) return;
   for (int64_t e = f.offsets[q]; e < f.offsets[q + 1]; ++e) {
     const int l = f.load[e];
     double force[3];
@@ -289,7 +291,7 @@ struct MeasureLoad {
       finite = finite && isfinite(p.u[3 * i + d]) && isfinite(p.v[3 * i + d]);
     }
     long long broken = 0;
-    for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) broken += (p.state[k] != (kOwnIntact | kDualIntact));
+    for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) broken += entry_broken(p, k);
     return {0.5 * p.density[i] * p.volume[i] * v2, p.volume[i] * p.energy_density[i], p.damage[i], broken,
             finite ? -1 : static_cast<long long>(i)};
   }
@@ -549,7 +551,8 @@ void CudaSystem::step(PdSystem& sys) {
   if (m.facets.particle_count > 0) {
     LoadHistories h{};
     for (size_t l = 0; l < sys.surface_loads.size(); ++l) h.value[l] = sys.surface_loads[l].spec->history.at(t);
-    surface_load_cuda<<<blocks_for(m.facets.particle_count), kBlock>>>(m.facets, h, p.volume, m.body.get());
+    surface_load_cuda<<<blocks_for(m.facets.particle_count), kBlock>>>(m.facets, h, p.volume, p.offsets, p.state,
+                                                                         m.body.get());
     m.after_launch("surface_load");
   }
   for (size_t b = 0; b < sys.body_loads.size(); ++b) {

@@ -96,10 +96,8 @@ RunResult run_system_cuda(PdSystem& s, const RunOptions& o) {
       const auto now = std::chrono::steady_clock::now();
       if (std::chrono::duration<double>(now - last_report).count() > 2.0) {
         last_report = now;
-        const double elapsed = std::chrono::duration<double>(now - t0).count();
-        const double rate = (s.step - first_step) / elapsed;
-        std::fprintf(stderr, "step %lld/%lld  t = %.4e s  %.1f steps/s  ETA %.1f s  max damage %.3f\n", s.step,
-                     total_steps, s.time, rate, (total_steps - s.step) / std::max(rate, 1e-9), e.max_damage);
+        print_progress(s.step, total_steps, s.time, s.step - first_step,
+                       std::chrono::duration<double>(now - t0).count(), e.max_damage);
       }
     }
   }

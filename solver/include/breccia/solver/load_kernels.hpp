@@ -18,6 +18,15 @@ BRECCIA_HD void facet_force(bool pressure, double history, double area, const do
   for (int d = 0; d < 3; ++d) force[d] = pressure ? -history * area * normal[d] : history * traction[d] * area;
 }
 
+// A surface load acts on a particle only while it is attached to the body (one intact
+// bond at least): crushed debris leaves the loaded surface, and a constant blast pressure
+// on a free particle would accelerate it without bound.
+BRECCIA_HD bool particle_attached(const int64_t* offsets, const uint8_t* state, int64_t i) {
+  for (int64_t k = offsets[i]; k < offsets[i + 1]; ++k)
+    if (state[k]) return true;
+  return false;
+}
+
 // Rigid sphere centred at c (LAMMPS fix indent): force density K (R - r)^2 pushing out of the
 // sphere, added to body[3i .. 3i+2].
 BRECCIA_HD void add_indenter_force(const double* x0, const double* u, int64_t i, const double c[3], double radius,

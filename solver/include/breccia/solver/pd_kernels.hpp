@@ -125,6 +125,15 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdView& p, int64_t i) {
   }
 }
 
+// Has entry k lost a half-bond that existed? (With variable horizons a half may never
+// have existed: j outside i's horizon, or i outside j's.)
+BRECCIA_HD bool entry_broken(const PdView& p, int64_t k) {
+  const uint8_t st = p.state[k];
+  const bool own_lost = p.vol_own[k] > 0.0 && !(st & kOwnIntact);
+  const bool dual_lost = p.k_dual[k] > 0.0 && !(st & kDualIntact);
+  return own_lost || dual_lost;
+}
+
 // Break the half-bonds of entry k whose stretch passed their critical value. Each entry is
 // written only by its owner i; (i,j) and (j,i) see the same stretch, so they agree.
 BRECCIA_HD uint8_t break_bonds(const PdView& p, int64_t k, double stretch) {

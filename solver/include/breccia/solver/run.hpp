@@ -42,6 +42,10 @@ RunResult run_system(PdSystem& sys, const RunOptions& options);
 // number of iterations, or -1 if not converged within config.adr_max_steps.
 long long relax_to_equilibrium(PdSystem& sys, bool progress);
 
+// One progress line on stderr: step, simulated time, rate, ETA, max damage.
+void print_progress(long long step, long long total_steps, double time_s, long long steps_done, double elapsed_s,
+                    double max_damage);
+
 // Checks a state for blow-up; empty string if healthy, else the message for the user.
 std::string instability_message(const PdSystem& sys, const Energies& e, double energy_scale);
 

@@ -78,10 +78,12 @@ TEST_P(StrainEnergyOnLattice, InteriorEnergyDensityMatchesClassicalElasticity) {
   const EnergyCase c = GetParam();
   for (const double* eps : {kUniaxial, kShear, kMixed}) {
     const double err = energy_error(c, eps);
-    // 2D at m = 3 gets 3%: the square lattice's fourth neighbour moment is anisotropic at
-    // that horizon (measured: uniaxial -2.6%, shear +1.6% for PMB; -2.3%/+1.5% for LPS),
-    // which no scalar calibration removes; m = 4 and every 3D case meet 1%.
-    const double tolerance = (c.dimension == 2 && c.m < 3.5) ? 0.03 : kLatticeEnergyTolerance;
+    // LPS in 2D at m = 3 gets 3%: the square lattice's fourth neighbour moment is
+    // anisotropic at that horizon (measured: uniaxial -2.3%, shear +1.5%), which no scalar
+    // calibration removes. PMB removes it by a cos(4 theta) reweighting of each family
+    // (docs/theory.md); LPS does not yet. Every other case meets 1%.
+    const double tolerance = (c.dimension == 2 && c.m < 3.5 && std::string(c.model) == "lps") ? 0.03
+                                                                                              : kLatticeEnergyTolerance;
     EXPECT_LT(std::fabs(err), tolerance)
         << c.model << " " << c.dimension << "D " << c.planar << " nu=" << c.nu << " m=" << c.m
         << " relative error " << err;

@@ -2,6 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <csignal>
+#include <filesystem>
+#include <iterator>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -82,4 +87,32 @@ TEST(SolverCli, PmbWithAnotherPoissonRatioPointsToLps) {
       run_solver(kBase + "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.3}]\n" + kTime,
                  "pmb_nu"),
       {"poisson_ratio", "lps"});
+}
+
+TEST(SolverCli, CtrlCWritesACheckpointAndExitsWith130) {
+  const std::string dir = ::testing::TempDir() + "/cli_sigint";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/case.yaml")
+      << "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.02, 0.02, 0.02], spacing: 1 mm}}\n"
+         "model: {type: lps}\n" + kMaterial + "time: {steps: 100000000}\n";
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const std::string out = dir + "/out";
+    execl(BRECCIA_SOLVE_EXE, BRECCIA_SOLVE_EXE, (dir + "/case.yaml").c_str(), "-o", out.c_str(), "--quiet",
+          static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Wait until the time loop runs (history.csv has its first row), then interrupt.
+  for (int k = 0; k < 600 && !std::filesystem::exists(dir + "/out/history.csv"); ++k) usleep(100000);
+  usleep(500000);
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_TRUE(std::filesystem::exists(dir + "/out/checkpoint.h5"));
+  std::ifstream summary(dir + "/out/summary.json");
+  const std::string text((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"status\": \"interrupted\""), std::string::npos) << text;
 }

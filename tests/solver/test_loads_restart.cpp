@@ -102,3 +102,23 @@ output: {every: 100, history_every: 20}
   EXPECT_EQ(second.state, straight.state);
   EXPECT_EQ(second.dissipated_energy, straight.dissipated_energy);
 }
+
+TEST(Loads, RigidIndenterPushesOverlappingParticlesWithLammpsIndentForce) {
+  // LAMMPS fix indent: F(r) = -K (r - R)^2 for r < R, along the radius, here per unit volume.
+  PdSystem s = system_from_yaml("indenter", R"(
+specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.004, 0.004], spacing: 1 mm}}
+model: {type: pmb, horizon_factor: 3.015}
+materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25}]
+indenter: {radius: 1 mm, center: [0.0015, 0.0015, 0.0048], velocity: [0, 0, -10], stiffness: 1e15}
+time: {steps: 1}
+)");
+  const double t = 1e-5;  // the sphere has moved 0.1 mm down: centre z = 4.7 mm
+  compute_external(s, t);
+  const int64_t top = nearest(s, 0.0015, 0.0015, 0.0035);  // 1.2 mm below the centre: outside
+  EXPECT_EQ(s.body[3 * top + 2], 0.0);
+  s.u[3 * top + 2] = 0.0003;  // now 0.9 mm below the centre: 0.1 mm inside the sphere
+  compute_external(s, t);
+  const double expected = -1e15 * 0.0001 * 0.0001;  // pushed down, out of the sphere
+  EXPECT_NEAR(s.body[3 * top + 2], expected, 1e-9 * std::fabs(expected));
+  EXPECT_NEAR(s.body[3 * top], 0.0, 1e-9 * std::fabs(expected));
+}

@@ -169,6 +169,9 @@ long long relax_to_equilibrium(PdSystem& s, bool progress) {
 RunResult run_system(PdSystem& s, const RunOptions& o) {
   RunResult r;
   const bool restart = !o.restart_file.empty();
+  // Ctrl-C from here on ends the run cleanly (checkpoint, outputs, exit 130).
+  g_interrupted = false;
+  auto previous = std::signal(SIGINT, on_sigint);
   std::filesystem::create_directories(o.out_dir);
   std::unique_ptr<ResultsWriter> results;
   if (s.config.write_results) results = std::make_unique<ResultsWriter>(s, o.out_dir, restart);
@@ -184,6 +187,7 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
     if (iters < 0) r.message = "ADR did not reach the tolerance within time.adr_max_steps";
     history.write(s, r.final_energies);
     if (results) results->write(s);
+    std::signal(SIGINT, previous);
     return r;
   }
 
@@ -199,8 +203,6 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
     history.write(s, e);
     if (results) results->write(s);
   }
-  g_interrupted = false;
-  auto previous = std::signal(SIGINT, on_sigint);
   const long long first_step = s.step;
   const std::clock_t cpu0 = std::clock();
   const auto t0 = std::chrono::steady_clock::now();

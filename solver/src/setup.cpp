@@ -406,6 +406,9 @@ PdSystem setup_system(const CaseConfig& config) {
         sc += mu * c4;
         ss += mu * s4;
       }
+      // Families of fewer than 20 bonds (m < 2.5) are too coarse to reweight: the
+      // correction would be large and would change how cracks run.
+      if (s.offsets[i + 1] - s.offsets[i] < 20) continue;
       const double det = scc * sss - scs * scs;
       if (std::fabs(det) <= 1e-12 * (scc * sss + 1e-300)) continue;
       ca[i] = std::clamp((-sc * sss + ss * scs) / det, -0.5, 0.5);

@@ -91,6 +91,7 @@ TEST(SolverCli, PmbWithAnotherPoissonRatioPointsToLps) {
 
 TEST(SolverCli, CtrlCWritesACheckpointAndExitsWith130) {
   const std::string dir = ::testing::TempDir() + "/cli_sigint";
+  std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   std::ofstream(dir + "/case.yaml")
       << "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.02, 0.02, 0.02], spacing: 1 mm}}\n"

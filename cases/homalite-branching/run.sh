@@ -10,7 +10,7 @@ VARIANT=${VARIANT:-quick}
 PYTHON=${PYTHON:-/usr/bin/python3}
 THREADS=${THREADS:-$(nproc)}
 HERE="$(cd "$(dirname "$0")" && pwd)"
-END=${END:-"200 us"}
+END=${END:-"400 us"}
 case "$VARIANT" in
   full)       DX=0.001; EVERY=12 ;;
   quick|demo) DX=0.002; EVERY=6 ;;

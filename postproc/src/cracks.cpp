@@ -154,21 +154,28 @@ namespace {
 
 // Local crack plane per crack face from the principal axes of the crack-face centroids
 // within a radius (3D: normal = least-variance axis; 2D: normal = in-plane perpendicular of
-// the largest-variance axis), then area x |n_face . n_plane|.
-void smooth_areas(const CandidateFaces& faces, const CrackInputs& in, CrackResult& r) {
+// the largest-variance axis), then area x |n_face . n_plane|. Only faces with weight[f] > 0
+// take part (as faces and as neighbours); each counts weight[f] x its projected area.
+struct Smoothed {
+  double area_m2 = 0.0, fracture_area_m2 = 0.0, G0_fracture_area_J = 0.0, length_m = 0.0, radius_m = 0.0;
+};
+
+Smoothed smooth_areas(const CandidateFaces& faces, const CrackInputs& in, const CrackResult& r,
+                      const std::vector<double>& weight) {
+  Smoothed out;
   const int vpf = faces.vertices_per_face;
   const bool planar = faces.dimension == 2;
   std::vector<size_t> crack;
   double size_sum = 0;
   for (size_t f = 0; f < faces.size(); ++f)
-    if (r.state[f] != kIntact) {
+    if (weight[f] > 0) {
       crack.push_back(f);
       size_sum += planar ? faces.length_m[f] : std::sqrt(faces.area_m2[f]);
     }
-  if (crack.empty()) return;
+  if (crack.empty()) return out;
   // A few face sizes: wide enough to average the staircase, narrow against curvature.
   const double radius = 4.0 * size_sum / crack.size();
-  r.smoothing_radius_m = radius;
+  out.radius_m = radius;
   const size_t nc = crack.size();
   std::vector<Eigen::Vector3d> centroid(nc), normal(nc);
   for (size_t k = 0; k < nc; ++k) {
@@ -215,7 +222,7 @@ void smooth_areas(const CandidateFaces& faces, const CrackInputs& in, CrackResul
           if (it == grid.end()) continue;
           for (int32_t q : it->second) {
             if ((centroid[q] - centroid[k]).squaredNorm() > radius * radius) continue;
-            const double w = faces.area_m2[crack[q]];
+            const double w = weight[crack[q]] * faces.area_m2[crack[q]];
             mean += w * centroid[q];
             second += w * centroid[q] * centroid[q].transpose();
             wsum += w;
@@ -235,18 +242,19 @@ void smooth_areas(const CandidateFaces& faces, const CrackInputs& in, CrackResul
     const Eigen::Vector3d ev = es.eigenvalues();
     const bool defined = plane_normal.norm() > 0.5 && (planar ? ev[2] > 0 : ev[1] > 4.0 * std::max(ev[0], 0.0));
     const size_t f = crack[k];
-    const double factor = defined ? std::abs(normal[k].dot(plane_normal.normalized())) : 1.0;
-    r.smoothed_area_m2 += factor * faces.area_m2[f];
+    const double factor = weight[f] * (defined ? std::abs(normal[k].dot(plane_normal.normalized())) : 1.0);
+    out.area_m2 += factor * faces.area_m2[f];
     if (r.state[f] == kFractured) {
-      r.smoothed_fracture_area_m2 += factor * faces.area_m2[f];
+      out.fracture_area_m2 += factor * faces.area_m2[f];
       auto g0 = [&](int32_t p) {
         return in.fracture_energy_J_m2.empty() || in.material_id.empty() ? 0.0 : in.fracture_energy_J_m2[in.material_id[p]];
       };
-      r.G0_smoothed_area_J += factor * faces.area_m2[f] * 0.5 * (g0(faces.particle_a[f]) + g0(faces.particle_b[f]));
+      out.G0_fracture_area_J += factor * faces.area_m2[f] * 0.5 * (g0(faces.particle_a[f]) + g0(faces.particle_b[f]));
     }
   }
-  if (planar && faces.size() && faces.area_m2[crack[0]] > 0)
-    r.smoothed_length_m = r.smoothed_area_m2 * faces.length_m[crack[0]] / faces.area_m2[crack[0]];
+  if (planar && faces.area_m2[crack[0]] > 0)
+    out.length_m = out.area_m2 * faces.length_m[crack[0]] / faces.area_m2[crack[0]];
+  return out;
 }
 
 }  // namespace
@@ -282,7 +290,36 @@ CrackResult find_cracks(const CandidateFaces& faces, const CrackInputs& in, Crac
       r.G0_area_J += faces.area_m2[f] * 0.5 * (g0(a) + g0(b));
     }
   }
-  smooth_areas(faces, in, r);
+  std::vector<double> weight(nf, 0.0);
+  for (size_t f = 0; f < nf; ++f) weight[f] = r.state[f] != kIntact ? 1.0 : 0.0;
+  const Smoothed all = smooth_areas(faces, in, r, weight);
+  r.smoothed_area_m2 = all.area_m2;
+  r.smoothed_fracture_area_m2 = all.fracture_area_m2;
+  r.G0_smoothed_area_J = all.G0_fracture_area_J;
+  r.smoothed_length_m = all.length_m;
+  r.smoothing_radius_m = all.radius_m;
+  if (!in.fragment_of.empty()) {
+    r.has_separating = true;
+    std::vector<int64_t> fragment_size;
+    for (int32_t label : in.fragment_of) {
+      if (static_cast<size_t>(label) >= fragment_size.size()) fragment_size.resize(static_cast<size_t>(label) + 1, 0);
+      ++fragment_size[static_cast<size_t>(label)];
+    }
+    for (size_t f = 0; f < nf; ++f) {
+      const int32_t la = in.fragment_of[faces.particle_a[f]], lb = in.fragment_of[faces.particle_b[f]];
+      weight[f] = 0.0;
+      if (r.state[f] != kFractured || la == lb) continue;
+      // A debris chip lying in the crack has crack faces on both sides, but the crack runs
+      // once through where it sits: its faces count half.
+      const bool debris = std::min(fragment_size[la], fragment_size[lb]) < in.debris_particles;
+      weight[f] = debris ? 0.5 : 1.0;
+      ++r.separating_face_count;
+      r.separating_fracture_area_m2 += weight[f] * faces.area_m2[f];
+    }
+    const Smoothed sep = smooth_areas(faces, in, r, weight);
+    r.smoothed_separating_fracture_area_m2 = sep.fracture_area_m2;
+    r.G0_smoothed_separating_area_J = sep.G0_fracture_area_J;
+  }
   // Cracks: crack faces connected through shared vertices (edge or node).
   const int vpf = faces.vertices_per_face;
   UnionFind uf(nf);

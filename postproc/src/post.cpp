@@ -112,7 +112,7 @@ private:
   }
 
   CrackInputs crack_inputs(const RemovedBonds& broken, std::span<const double> damage) const {
-    return CrackInputs{&broken, &precracks_, damage, run_.material_id, run_.fracture_energy_J_m2};
+    return CrackInputs{&broken, &precracks_, damage, run_.material_id, run_.fracture_energy_J_m2, {}, 0};
   }
 
   void crack_history() {
@@ -141,8 +141,16 @@ private:
     StepRecord rec;
     rec.info = fr.info;
     const bool has_mesh = run_.particles.nodes_per_cell > 0;
+    int32_t count = 0;
+    std::vector<int32_t> comp;  // fragments: components of the intact bond graph
+    if (opt_.cracks || opt_.energy || opt_.fragments) comp = intact_components(families_, broken, precracks_, &count);
     if (opt_.cracks || opt_.energy) {
-      rec.cracks = find_cracks(faces_, crack_inputs(broken, fr.damage), opt_.crack_criterion, opt_.damage_threshold);
+      CrackInputs in = crack_inputs(broken, fr.damage);
+      in.fragment_of = comp;  // through-crack (separating) measures
+      // Debris: pieces smaller than one horizon family, too small to have a bulk of their own.
+      in.debris_particles = families_.offsets.empty() || run_.size() == 0
+                                ? 0 : 1 + families_.offsets.back() / static_cast<int64_t>(run_.size());
+      rec.cracks = find_cracks(faces_, in, opt_.crack_criterion, opt_.damage_threshold);
       rec.has_cracks = true;
     }
     if (opt_.cracks) {
@@ -156,8 +164,6 @@ private:
       }
     }
     if (opt_.fragments) {
-      int32_t count = 0;
-      const std::vector<int32_t> comp = intact_components(families_, broken, precracks_, &count);
       FragmentInputs in{run_.dimension, run_.thickness_m, run_.position_m, fr.displacement_m,
                         fr.velocity_m_s, run_.volume_m3, run_.density_kg_m3};
       const FragmentResult frag = measure_fragments(in, comp, count, opt_.min_fragment_particles);
@@ -294,6 +300,7 @@ private:
     energy_dissipated_J_ = dissipated[row];
     energy_G0_area_J_ = rec && rec->has_cracks ? rec->cracks.G0_smoothed_area_J : NAN;
     energy_G0_face_area_J_ = rec && rec->has_cracks ? rec->cracks.G0_area_J : NAN;
+    energy_G0_separating_area_J_ = rec && rec->has_cracks && rec->cracks.has_separating ? rec->cracks.G0_smoothed_separating_area_J : NAN;
     const double w = h.column("external_work_J")[row];
     const double stored = h.column("kinetic_J")[row] + h.column("strain_J")[row] + dissipated[row];
     energy_imbalance_ = (w - stored) / std::max({std::abs(w), std::abs(stored), 1e-300});
@@ -401,6 +408,10 @@ private:
     j.value("smoothing_radius_m", c.smoothing_radius_m);
     j.value("crack_count", c.crack_count).value("crack_faces", c.face_count).value("G0_times_fracture_area_J", c.G0_area_J)
         .value("G0_times_smoothed_fracture_area_J", c.G0_smoothed_area_J);
+    if (c.has_separating)
+      j.value("separating_faces", c.separating_face_count).value("separating_fracture_area_m2", c.separating_fracture_area_m2)
+          .value("smoothed_separating_fracture_area_m2", c.smoothed_separating_fracture_area_m2)
+          .value("G0_times_smoothed_separating_area_J", c.G0_smoothed_separating_area_J);
   }
 
   void write_json() {
@@ -451,6 +462,8 @@ private:
       j.value("ratio", energy_G0_area_J_ > 0 ? energy_dissipated_J_ / energy_G0_area_J_ : NAN);
       j.value("G0_times_face_area_J", energy_G0_face_area_J_);
       j.value("ratio_face_area", energy_G0_face_area_J_ > 0 ? energy_dissipated_J_ / energy_G0_face_area_J_ : NAN);
+      j.value("G0_times_separating_area_J", energy_G0_separating_area_J_);
+      j.value("ratio_separating", energy_G0_separating_area_J_ > 0 ? energy_dissipated_J_ / energy_G0_separating_area_J_ : NAN);
       j.value("relative_imbalance", energy_imbalance_);
       j.end_object();
     }
@@ -517,7 +530,7 @@ private:
   std::vector<SpectrumRecord> spectra_;
   bool energy_done_ = false;
   size_t energy_row_ = 0;
-  double energy_dissipated_J_ = NAN, energy_G0_area_J_ = NAN, energy_G0_face_area_J_ = NAN, energy_imbalance_ = NAN;
+  double energy_dissipated_J_ = NAN, energy_G0_area_J_ = NAN, energy_G0_face_area_J_ = NAN, energy_G0_separating_area_J_ = NAN, energy_imbalance_ = NAN;
 };
 
 }  // namespace

@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
   }
   opt.backend = (backend == "cuda" || (backend == "auto" && gpu_available())) ? "cuda" : "cpu";
 #ifdef BRECCIA_WITH_CUDA
-  if (opt.backend == "cuda") opt.run_loop = solver::run_system_cuda;
+  if (opt.backend == "cuda") opt.backend_loop = solver::cuda_time_loop;
 #endif
   try {
     // The model decides the solver: PD here, MPS in its own library.

@@ -166,41 +166,32 @@ long long relax_to_equilibrium(PdSystem& s, bool progress) {
   return -1;
 }
 
-RunResult run_system(PdSystem& s, const RunOptions& o) {
+namespace {
+
+class CpuBackend final : public StepBackend {
+public:
+  void step(PdSystem& s) override { cpu_step(s); }
+  Energies measure(PdSystem& s) override { return solver::measure(s); }
+  void compute_forces(PdSystem& s) override { cpu_compute_forces(s); }
+};
+
+long long total_steps_of(const PdSystem& s, const RunOptions& o) {
+  if (o.steps) return *o.steps + s.step;
+  if (s.config.steps) return *s.config.steps;
+  return static_cast<long long>(std::ceil(*s.config.end_time / s.dt - 1e-9));
+}
+
+}  // namespace
+
+RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, ResultsWriter* results,
+                        HistoryWriter& history) {
   RunResult r;
   const bool restart = !o.restart_file.empty();
-  // Ctrl-C from here on ends the run cleanly (checkpoint, outputs, exit 130).
-  g_interrupted = false;
-  auto previous = std::signal(SIGINT, on_sigint);
-  std::filesystem::create_directories(o.out_dir);
-  std::unique_ptr<ResultsWriter> results;
-  if (s.config.write_results) results = std::make_unique<ResultsWriter>(s, o.out_dir, restart);
-  HistoryWriter history(s, o.out_dir, restart);
-
-  if (s.config.quasi_static) {
-    const auto t0 = std::chrono::steady_clock::now();
-    const long long iters = relax_to_equilibrium(s, o.progress);
-    r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    r.steps = iters < 0 ? s.config.adr_max_steps : iters;
-    r.status = iters < 0 ? "not_converged" : "converged";
-    r.final_energies = measure(s);
-    if (iters < 0) r.message = "ADR did not reach the tolerance within time.adr_max_steps";
-    history.write(s, r.final_energies);
-    if (results) results->write(s);
-    std::signal(SIGINT, previous);
-    return r;
-  }
-
-  long long total_steps = 0;
-  if (o.steps) total_steps = *o.steps + s.step;
-  else if (s.config.steps) total_steps = *s.config.steps;
-  else total_steps = static_cast<long long>(std::ceil(*s.config.end_time / s.dt - 1e-9));
-
-  Energies e = measure(s);
-  // Energy supplied so far: the scale against which blow-up is judged.
-  double supplied = e.kinetic + e.strain;
+  const long long total_steps = total_steps_of(s, o);
+  Energies e = backend.measure(s);
+  double supplied = e.kinetic + e.strain;  // the scale against which blow-up is judged
   if (!restart) {
-    history.write(s, e);
+    history.write(s, e);  // host and backend agree before the first step
     if (results) results->write(s);
   }
   const long long first_step = s.step;
@@ -209,34 +200,40 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
   auto last_report = t0;
   r.status = "completed";
   while (s.step < total_steps) {
+    // Damage and energy density only where something will read them.
     const long long next = s.step + 1;
     s.diagnostics = next % s.config.history_every == 0 || next % s.config.output_every == 0 ||
                     next == total_steps || (s.config.checkpoint_every > 0 && next % s.config.checkpoint_every == 0);
-    cpu_step(s);
+    backend.step(s);
     s.diagnostics = true;
     const bool history_due = s.step % s.config.history_every == 0 || s.step == total_steps;
     const bool output_due = s.step % s.config.output_every == 0 || s.step == total_steps;
     if (history_due || output_due) {
-      e = measure(s);
+      e = backend.measure(s);
       supplied = std::max(supplied, std::fabs(s.external_work) + s.dissipated_energy);
       supplied = std::max(supplied, 1e-300);
-      const std::string bad = instability_message(s, e, supplied);
-      if (!bad.empty()) {
+      if (!instability_message(s, e, supplied).empty()) {
+        backend.download(s);  // the message names the fastest particle: it needs velocities
         r.status = "unstable";
-        r.message = bad;
+        r.message = instability_message(s, e, supplied);
         break;
       }
+      if (output_due) backend.download(s);
+      else if (!s.config.probes.empty()) backend.download_kinematics(s);
       if (history_due) history.write(s, e);
       if (output_due && results) results->write(s);
     }
-    if (s.config.checkpoint_every > 0 && s.step % s.config.checkpoint_every == 0)
+    if (s.config.checkpoint_every > 0 && s.step % s.config.checkpoint_every == 0) {
+      backend.download(s);
       write_checkpoint(s, o.out_dir + "/checkpoint.h5");
+    }
     if (g_interrupted) {
       r.status = "interrupted";
       r.message = "interrupted by the user at step " + std::to_string(s.step) + "; continue with --restart " +
                   o.out_dir + "/checkpoint.h5";
-      cpu_compute_forces(s);  // diagnostics at this step (no bond can break again here)
-      e = measure(s);
+      backend.compute_forces(s);  // diagnostics at this step (no bond can break again here)
+      e = backend.measure(s);
+      backend.download(s);
       history.write(s, e);
       if (results) results->write(s);
       write_checkpoint(s, o.out_dir + "/checkpoint.h5");
@@ -251,17 +248,48 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
       }
     }
   }
-  std::signal(SIGINT, previous);
+  // The last step always measures, which synchronises a device: the clock sees its work.
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   r.steps = s.step - first_step;
   r.cpu_s = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
   r.bond_updates_per_s = r.wall_s > 0 ? static_cast<double>(s.bond_count()) * r.steps / r.wall_s : 0.0;
   if (r.status == "completed") {
-    r.final_energies = measure(s);
+    r.final_energies = backend.measure(s);
+    backend.download(s);
     write_checkpoint(s, o.out_dir + "/checkpoint.h5");
   } else {
     r.final_energies = e;
   }
+  return r;
+}
+
+RunResult run_system(PdSystem& s, const RunOptions& o) {
+  const bool restart = !o.restart_file.empty();
+  // Ctrl-C from here on ends the run cleanly (checkpoint, outputs, exit 130).
+  g_interrupted = false;
+  auto previous = std::signal(SIGINT, on_sigint);
+  std::filesystem::create_directories(o.out_dir);
+  std::unique_ptr<ResultsWriter> results;
+  if (s.config.write_results) results = std::make_unique<ResultsWriter>(s, o.out_dir, restart);
+  HistoryWriter history(s, o.out_dir, restart);
+  RunResult r;
+  if (s.config.quasi_static) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const long long iters = relax_to_equilibrium(s, o.progress);
+    r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r.steps = iters < 0 ? s.config.adr_max_steps : iters;
+    r.status = iters < 0 ? "not_converged" : "converged";
+    r.final_energies = measure(s);
+    if (iters < 0) r.message = "ADR did not reach the tolerance within time.adr_max_steps";
+    history.write(s, r.final_energies);
+    if (results) results->write(s);
+  } else if (o.backend_loop) {
+    r = o.backend_loop(s, o, results.get(), history);
+  } else {
+    CpuBackend cpu;
+    r = run_time_loop(s, o, cpu, results.get(), history);
+  }
+  std::signal(SIGINT, previous);
   return r;
 }
 
@@ -280,7 +308,7 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
                  static_cast<double>(s.bond_count()) / std::max<size_t>(1, s.n), s.horizon.empty() ? 0.0 : s.horizon[0],
                  s.stable_dt, s.silling_askari_dt, s.dt, config.safety, setup_s);
   }
-  RunResult r = o.run_loop ? o.run_loop(s, o) : run_system(s, o);
+  RunResult r = run_system(s, o);
   write_summary(s, o, r, setup_s);
   return r;
 }

@@ -23,7 +23,7 @@ struct Cracked {
   RemovedBonds broken, precracks;
   std::vector<double> fracture_energy{100.0};
   CrackResult find(CrackCriterion criterion = CrackCriterion::Bond, std::span<const double> damage = {}) const {
-    return find_cracks(faces, CrackInputs{&broken, &precracks, damage, model.material_id, fracture_energy}, criterion, 0.5);
+    return find_cracks(faces, CrackInputs{&broken, &precracks, damage, model.material_id, fracture_energy, {}, 0}, criterion, 0.5);
   }
 };
 
@@ -166,4 +166,31 @@ TEST(CrackSurface, DamageIsosurfaceLiesAroundTheDamagedLayer) {
   std::filesystem::create_directories(path.parent_path());
   EXPECT_GT(write_contour_vtp(path, mesh, "damage", 0.5), 0u);
   EXPECT_TRUE(std::filesystem::exists(path));
+}
+
+TEST(CrackSurface, SeparatingAreaCountsOnlyFacesBetweenFragments) {
+  // 2D lattice 10 x 6 cells, h = 1 mm, thickness 1 mm. A through-crack on x = 5 mm (6 faces,
+  // 6 mm^2) splits it in two; one more broken nearest-neighbour bond inside the left piece
+  // adds a crack face but separates nothing, so it is in the fracture area and not in the
+  // separating area.
+  const auto m = bt::lattice(2, {10, 6, 1}, kH, kH);
+  const double horizon = 1.5 * kH;  // nearest and diagonal neighbours
+  auto cut = bt::bonds_where(m, horizon, [](const double* a, const double* b) { return crosses(a, b, 0, 5 * kH); });
+  const Cracked whole = make(m, horizon, cut);
+  // Stray bond: particles at (1.5, 2.5) mm and (2.5, 2.5) mm (index = i + 10 j).
+  cut.insert(cut.end(), {int64_t{1 + 10 * 2}, int64_t{2 + 10 * 2}});
+  const Cracked c = make(m, horizon, cut);
+  int32_t count = 0;
+  const auto comp = intact_components(c.families, c.broken, c.precracks, &count);
+  ASSERT_EQ(count, 2);
+  CrackInputs in{&c.broken, &c.precracks, {}, c.model.material_id, c.fracture_energy, {}, 0};
+  in.fragment_of = comp;
+  const CrackResult r = find_cracks(c.faces, in, CrackCriterion::Bond, 0.5);
+  EXPECT_NEAR(r.fracture_area_m2, 7e-6, 1e-18);  // 6 through-crack faces + the stray one
+  ASSERT_TRUE(r.has_separating);
+  EXPECT_EQ(r.separating_face_count, 6u);
+  EXPECT_NEAR(r.separating_fracture_area_m2, 6e-6, 1e-18);
+  EXPECT_NEAR(r.smoothed_separating_fracture_area_m2, 6e-6, 1e-15);  // straight crack: factor 1
+  EXPECT_NEAR(r.G0_smoothed_separating_area_J, 100.0 * 6e-6, 1e-12);
+  EXPECT_FALSE(whole.find().has_separating);  // no fragment labels given: not computed
 }

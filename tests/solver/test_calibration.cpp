@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <ostream>
 #include <numbers>
 
 #include "breccia/solver/calibration.hpp"
@@ -20,6 +21,11 @@ struct EnergyCase {
   double nu;
   double m;            // horizon / spacing
 };
+
+// Printed in CTest's test names: must not show the struct's bytes (pointers differ per run).
+void PrintTo(const EnergyCase& c, std::ostream* os) {
+  *os << c.model << " " << c.dimension << "D " << c.planar << " nu " << c.nu << " m " << c.m;
+}
 
 std::string energy_case_yaml(const EnergyCase& c, bool surface_correction) {
   // Box large enough that the centre particle's family lies 2 horizons from any surface.

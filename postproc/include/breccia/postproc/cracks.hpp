@@ -54,6 +54,17 @@ struct CrackResult {
   double G0_area_J = 0.0;  // sum over fracture faces of area x mean G0 of the two materials
   double G0_smoothed_area_J = 0.0;
   size_t face_count = 0;
+  // Through-cracks: fracture faces whose two particles lie in different fragments (components
+  // of the intact bond graph). Broken bonds scattered inside a piece add crack faces but
+  // separate nothing; these measures leave them out. Faces next to a debris fragment (fewer
+  // particles than CrackInputs::debris_particles) count half: a chip sitting in the crack has
+  // faces on both of its sides, but the crack runs through it once. Set when
+  // CrackInputs::fragment_of is given.
+  bool has_separating = false;
+  size_t separating_face_count = 0;
+  double separating_fracture_area_m2 = 0.0;
+  double smoothed_separating_fracture_area_m2 = 0.0;  // smoothed among separating faces only
+  double G0_smoothed_separating_area_J = 0.0;
 };
 
 struct CrackInputs {
@@ -62,6 +73,8 @@ struct CrackInputs {
   std::span<const double> damage;               // N (Damage criterion)
   std::span<const int32_t> material_id;         // N (for G0)
   std::span<const double> fracture_energy_J_m2; // per material
+  std::span<const int32_t> fragment_of;         // N fragment (component) labels; empty: no separating measures
+  int64_t debris_particles = 0;                  // fragments with fewer particles are debris (faces count half)
 };
 
 CrackResult find_cracks(const CandidateFaces& faces, const CrackInputs& in, CrackCriterion criterion,

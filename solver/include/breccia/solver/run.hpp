@@ -11,6 +11,8 @@ namespace breccia::solver {
 
 struct RunResult;
 struct PdSystem;
+class ResultsWriter;
+class HistoryWriter;
 
 struct RunOptions {
   std::string out_dir = "out";
@@ -19,8 +21,9 @@ struct RunOptions {
   std::optional<long long> steps;       // override the number of steps
   bool progress = true;
   std::string backend = "cpu";
-  // The time loop to use (the CUDA backend supplies its own); empty: the CPU loop.
-  std::function<RunResult(PdSystem&, const RunOptions&)> run_loop;
+  // A backend's dynamic loop (the CUDA backend sets it; it runs run_time_loop with its own
+  // StepBackend); empty: the CPU backend.
+  std::function<RunResult(PdSystem&, const RunOptions&, ResultsWriter*, HistoryWriter&)> backend_loop;
 };
 
 struct RunResult {
@@ -32,6 +35,23 @@ struct RunResult {
   Energies final_energies;
   std::string message;
 };
+
+// What the time loop needs from a backend. The CPU backend works on the PdSystem in place;
+// the CUDA backend keeps the state on the device and copies it back only when a file needs it.
+class StepBackend {
+public:
+  virtual ~StepBackend() = default;
+  virtual void step(PdSystem& s) = 0;            // one velocity-Verlet step
+  virtual Energies measure(PdSystem& s) = 0;     // energies and checks at the current step
+  virtual void compute_forces(PdSystem& s) = 0;  // refresh forces and diagnostics in place
+  virtual void download(PdSystem&) {}            // whole state to the host (outputs, checkpoint)
+  virtual void download_kinematics(PdSystem&) {} // u and v only (probes)
+};
+
+// The dynamic time loop shared by every backend: outputs, history, checkpoints, progress,
+// instability detection and Ctrl-C. Writers must exist (run_system creates them).
+RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, ResultsWriter* results,
+                        HistoryWriter& history);
 
 // Throws InputError for bad input; returns status "unstable" (and writes its message into
 // summary.json) when the run blows up, keeping the last good output.

@@ -59,5 +59,7 @@ private:
 // same instability check and Ctrl-C handling; arrays are downloaded only when an output,
 // a probe row or a checkpoint needs them. Quasi-static cases (ADR) run on the host.
 RunResult run_system_cuda(PdSystem& sys, const RunOptions& options);
+// The dynamic loop on the GPU, for RunOptions::backend_loop (run_system calls it).
+RunResult cuda_time_loop(PdSystem& sys, const RunOptions& options, ResultsWriter* results, HistoryWriter& history);
 
 }  // namespace breccia::solver

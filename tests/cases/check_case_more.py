@@ -1,0 +1,45 @@
+"""Checks of the homalite-branching and inclusion-plate cases, on check_case.py's runner.
+
+    check_case_more.py CASE --source ROOT --bin BIN_DIR --work DIR [--python PY]
+
+Adds two entries to check_case.CHECKS and runs check_case.main (same chain, same exit codes).
+"""
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import check_case  # noqa: E402
+from check_case import check  # noqa: E402
+
+
+def homalite_branching(rep):
+    run = rep["runs"][0]
+    c_r = rep["rayleigh_speed_m_s"]
+    # The step load's wave reaches the crack line at ~49 us (benchmarks.md 1b); the coarse
+    # lattice (dx 4 mm, delta 16 mm) starts the crack at ~113 us, the 1 mm lattice at 88 us.
+    t0 = (run["initiation_time_s"] or float("nan")) * 1e6
+    check(49.0 <= t0 <= 150.0, f"crack starts after the wave reaches the notch line: {t0:.0f} us in [49, 150] us")
+    # A running crack: >= 40 mm by 400 us (test lattice 188 mm; full branches 100 mm from the notch tip).
+    length = run["final_crack_length_m"] * 1e3
+    check(length >= 40.0, f"crack length {length:.0f} mm >= 40 mm at 400 us")
+    # Mode-I cracks stay below c_R; PD branching runs reach 0.5-0.65 c_R (full variant 0.63).
+    v = run["max_tip_speed_m_s"]
+    check(0.25 * c_r <= v <= 0.8 * c_r, f"max tip speed {v:.0f} m/s in [0.25, 0.8] c_R")
+
+
+def inclusion_plate(rep):
+    run = rep["runs"][0]
+    # 2 m/s (seed): branching cracks, i.e. at least two separate bands on one vertical line.
+    check(run["max_bands_on_a_vertical_line"] >= 2,
+          f"2 m/s: {run['max_bands_on_a_vertical_line']} bands on a vertical line (>= 2: branching)")
+    # Stiffer, stronger inclusions deflect the cracks: the share of damaged particles inside
+    # inclusions stays well below their area fraction (0.2); a path blind to them would give ~0.2.
+    share, area = run["crack_share_in_inclusions"], run["inclusion_area_fraction"]
+    check(share <= 0.5 * area, f"crack share in inclusions {share:.3f} <= half the area fraction {area:.3f}")
+    check(run["crack_reach_x_m"] >= 2.9e-3, f"a crack crosses the plate (reach {run['crack_reach_x_m'] * 1e3:.2f} mm)")
+
+
+check_case.CHECKS.update({"homalite-branching": homalite_branching, "inclusion-plate": inclusion_plate})
+
+if __name__ == "__main__":
+    sys.exit(check_case.main())

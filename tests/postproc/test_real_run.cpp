@@ -1,0 +1,107 @@
+// breccia-post on a real breccia-solve fracture run: a 2D glass strip (8 x 4 mm, lattice
+// spacing 0.2 mm, 1 mm thick) with a 2 mm ligament between two edge pre-cracks, pulled
+// apart at 0.1 m/s until it separates into two halves.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string quoted(const fs::path& p) {
+  std::string q = "'";
+  q += p.string();
+  q += "'";
+  return q;
+}
+
+int run(const std::string& cmd) {
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The number after the first "key": at or after `from`.
+double json_number(const std::string& json, const std::string& key, const std::string& from = "") {
+  const size_t start = from.empty() ? 0 : json.find(from);
+  const size_t at = json.find("\"" + key + "\": ", start == std::string::npos ? 0 : start);
+  if (at == std::string::npos) return NAN;
+  return std::strtod(json.c_str() + at + key.size() + 4, nullptr);
+}
+
+constexpr double kLigament_m = 2e-3, kThickness_m = 1e-3, kG0 = 3.8;
+
+// Runs the solver and breccia-post once for all tests of this file.
+const std::string& ligament_post_json() {
+  static const std::string json = [] {
+    const fs::path dir = fs::temp_directory_path() / ("breccia_post_real_run_" + std::to_string(getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::ofstream(dir / "case.yaml") << R"(name: ligament
+specimen: {lattice: {dimension: 2, box: [0, 0, 0.008, 0.004], spacing: 0.2 mm, thickness: 1 mm}}
+model: {type: pmb, planar: plane_stress, horizon_factor: 3.015, no_fail: [xmin, xmax]}
+materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.3333333333333333, fracture_energy: 3.8}]
+precracks:
+  - {type: segment, from: [0.004, 0], to: [0.004, 0.001]}
+  - {type: segment, from: [0.004, 0.003], to: [0.004, 0.004]}
+boundary:
+  - {type: velocity, set: xmax, value: [0.1, 0, 0], components: [x], ramp_time: 20 us}
+  - {type: velocity, set: xmin, value: [-0.1, 0, 0], components: [x], ramp_time: 20 us}
+time: {end: 80 us}
+output: {every: 100000, history_every: 50}
+)";
+    const std::string solve = quoted(BRECCIA_SOLVE_EXE) + " " + quoted(dir / "case.yaml") + " -o " + quoted(dir / "run") +
+                              " > " + quoted(dir / "solve.log") + " 2>&1";
+    if (run(solve) != 0) return std::string();
+    const std::string post =
+        quoted(BRECCIA_POST_EXE) + " " + quoted(dir / "run") + " --no-plots --quiet > " + quoted(dir / "post.log") + " 2>&1";
+    if (run(post) != 0) return std::string();
+    std::string out = read(dir / "run" / "post" / "post.json");
+    fs::remove_all(dir);
+    return out;
+  }();
+  return json;
+}
+
+}  // namespace
+
+TEST(RealFractureRun, SeparatingCrackAreaIsTheLigamentWhileBrokenBondFacesOvercountIt) {
+  const std::string& json = ligament_post_json();
+  ASSERT_FALSE(json.empty()) << "breccia-solve or breccia-post failed";
+  // Two halves (plus single-particle debris chips torn out of the crack band).
+  ASSERT_GE(json_number(json, "fragment_count", "\"fragments\""), 2);
+  const double ligament_area = kLigament_m * kThickness_m;
+  // Broken bonds spread over a band a few spacings wide around the crack: every lattice
+  // face with a broken bond counts, about 3.7x the ligament here (the lead's 3x on a finer
+  // lattice). The check is only that the over-count exists, which is what the separating
+  // criterion removes.
+  EXPECT_GT(json_number(json, "fracture_area_m2", "\"cracks\""), 2.0 * ligament_area);
+  // Faces between different fragments, smoothed: the through-crack. Tolerance: the crack is
+  // rough on scales longer than the smoothing radius (4 faces) and debris chips sit in it;
+  // measured 1.04-1.13x the ligament on four runs (this case, the 10 x 6 mm case of
+  // issue 5 at 0.1 mm spacing, and a 6 x 3 mm strip at 0.03 m/s), hence [1, 1.15].
+  const double separating = json_number(json, "smoothed_separating_fracture_area_m2", "\"cracks\"");
+  EXPECT_GE(separating, ligament_area);
+  EXPECT_LE(separating, 1.15 * ligament_area);
+  // The separating energy ratio is reported; its value (about 1.19) is discussed in
+  // docs/postproc.md and deliberately not asserted against 1 within 10 %.
+  const double g0_separating = json_number(json, "G0_times_separating_area_J", "\"energy\"");
+  EXPECT_NEAR(g0_separating, kG0 * separating, 1e-6 * kG0 * separating);  // one material: G0 x area, to the 10 digits printed
+  EXPECT_TRUE(std::isfinite(json_number(json, "ratio_separating", "\"energy\"")));
+}

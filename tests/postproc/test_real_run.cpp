@@ -94,11 +94,13 @@ TEST(RealFractureRun, SeparatingCrackAreaIsTheLigamentWhileBrokenBondFacesOverco
   EXPECT_GT(json_number(json, "fracture_area_m2", "\"cracks\""), 2.0 * ligament_area);
   // Faces between different fragments, smoothed: the through-crack. Tolerance: the crack is
   // rough on scales longer than the smoothing radius (4 faces) and debris chips sit in it;
-  // measured 1.04-1.13x the ligament on four runs (this case, the 10 x 6 mm case of
-  // issue 5 at 0.1 mm spacing, and a 6 x 3 mm strip at 0.03 m/s), hence [1, 1.15].
+  // measured 1.04-1.15x the ligament on four runs (this case at 80 and 100 us: 1.08, 1.15;
+  // the 10 x 6 mm case of issue 5 at 0.1 mm spacing: 1.04; a 6 x 3 mm strip at 0.03 m/s:
+  // 1.13), hence [1, 1.2]. Counting every broken-bond face gives 3.7x; counting debris-chip
+  // faces in full (both sides of each chip) gives 1.36x.
   const double separating = json_number(json, "smoothed_separating_fracture_area_m2", "\"cracks\"");
   EXPECT_GE(separating, ligament_area);
-  EXPECT_LE(separating, 1.15 * ligament_area);
+  EXPECT_LE(separating, 1.2 * ligament_area);
   // The separating energy ratio is reported; its value (about 1.19) is discussed in
   // docs/postproc.md and deliberately not asserted against 1 within 10 %.
   const double g0_separating = json_number(json, "G0_times_separating_area_J", "\"energy\"");

@@ -2,6 +2,7 @@
 // spacing 0.2 mm, 1 mm thick) with a 2 mm ligament between two edge pre-cracks, pulled
 // apart at 0.1 m/s until it separates into two halves.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <array>
 #include <cmath>
@@ -11,8 +12,6 @@
 #include <fstream>
 #include <sstream>
 #include <string>
-
-#include <unistd.h>
 
 namespace fs = std::filesystem;
 
@@ -66,11 +65,11 @@ boundary:
 time: {end: 80 us}
 output: {every: 100000, history_every: 50}
 )";
-    const std::string solve = quoted(BRECCIA_SOLVE_EXE) + " " + quoted(dir / "case.yaml") + " -o " + quoted(dir / "run") +
-                              " > " + quoted(dir / "solve.log") + " 2>&1";
+    const std::string solve = quoted(BRECCIA_SOLVE_EXE) + " " + quoted(dir / "case.yaml") + " -o " +
+                              quoted(dir / "run") + " > " + quoted(dir / "solve.log") + " 2>&1";
     if (run(solve) != 0) return std::string();
-    const std::string post =
-        quoted(BRECCIA_POST_EXE) + " " + quoted(dir / "run") + " --no-plots --quiet > " + quoted(dir / "post.log") + " 2>&1";
+    const std::string post = quoted(BRECCIA_POST_EXE) + " " + quoted(dir / "run") + " --no-plots --quiet > " +
+                             quoted(dir / "post.log") + " 2>&1";
     if (run(post) != 0) return std::string();
     std::string out = read(dir / "run" / "post" / "post.json");
     fs::remove_all(dir);
@@ -104,6 +103,7 @@ TEST(RealFractureRun, SeparatingCrackAreaIsTheLigamentWhileBrokenBondFacesOverco
   // The separating energy ratio is reported; its value (about 1.19) is discussed in
   // docs/postproc.md and deliberately not asserted against 1 within 10 %.
   const double g0_separating = json_number(json, "G0_times_separating_area_J", "\"energy\"");
-  EXPECT_NEAR(g0_separating, kG0 * separating, 1e-6 * kG0 * separating);  // one material: G0 x area, to the 10 digits printed
+  EXPECT_NEAR(g0_separating, kG0 * separating,
+              1e-6 * kG0 * separating);  // one material: G0 x area, to the 10 digits printed
   EXPECT_TRUE(std::isfinite(json_number(json, "ratio_separating", "\"energy\"")));
 }

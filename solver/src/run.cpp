@@ -302,11 +302,13 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
   if (o.progress) {
     std::fprintf(stderr,
                  "breccia-solve: %s, %s %dD, %zu particles, %zu bonds (%.1f per particle), horizon %.4g m\n"
-                 "  stable step 2/omega_max = %.4e s (Silling-Askari bound %.4e s), dt = %.4e s (safety %.2f)\n"
+                 "  stable step 2/omega_max = %.4e s (Silling-Askari bound %s), dt = %.4e s (safety %.2f)\n"
                  "  set-up %.2f s\n",
                  config.name.c_str(), config.model_name.c_str(), s.dimension, s.n, s.bond_count(),
                  static_cast<double>(s.bond_count()) / std::max<size_t>(1, s.n), s.horizon.empty() ? 0.0 : s.horizon[0],
-                 s.stable_dt, s.silling_askari_dt, s.dt, config.safety, setup_s);
+                 s.stable_dt,
+                 s.silling_askari_dt > 0 ? (fmt(s.silling_askari_dt) + " s").c_str() : "n/a for LPS", s.dt,
+                 config.safety, setup_s);
   }
   RunResult r = run_system(s, o);
   write_summary(s, o, r, setup_s);

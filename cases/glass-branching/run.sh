@@ -6,11 +6,8 @@
 #   VARIANT=test      : dx = 0.5 mm (m = 2), 2 MPa, 28 us (the CTest regression run)
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
-: "${BRECCIA_BIN:?path to the Breccia executables}" "${OUT:?output directory}"
-VARIANT=${VARIANT:-quick}
-PYTHON=${PYTHON:-/usr/bin/python3}
-THREADS=${THREADS:-$(nproc)}
 HERE="$(cd "$(dirname "$0")" && pwd)"
+source "$HERE/../../scripts/case_env.sh"
 case "$VARIANT" in
   quick|demo) DX=0.000333333333333333333; DECK=case-quick.yaml; LOADS=${LOADS:-"2:3.8"} ;;
   full)       DX=0.00025;                 DECK=case-full.yaml;  LOADS=${LOADS:-"2:3.8 4:3.8 12:135"} ;;

@@ -5,11 +5,8 @@
 #   VARIANT=test      : dx = 0.1 mm, rates 1e3 and 1e4 /s (the CTest regression run)
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
-: "${BRECCIA_BIN:?path to the Breccia executables}" "${OUT:?output directory}"
-VARIANT=${VARIANT:-quick}
-PYTHON=${PYTHON:-/usr/bin/python3}
-THREADS=${THREADS:-$(nproc)}
 HERE="$(cd "$(dirname "$0")" && pwd)"
+source "$HERE/../../scripts/case_env.sh"
 case "$VARIANT" in
   quick|demo) DX=0.0001;  RATES=${RATES:-"5e2 1e3 2e3 5e3 1e4"} ;;
   full)       DX=0.00005; RATES=${RATES:-"5e2 1e3 2e3 5e3 1e4 2e4"} ;;

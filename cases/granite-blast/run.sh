@@ -5,11 +5,8 @@
 #   VARIANT=test      : dx = 0.5 mm, 25 us (the CTest regression run)
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
-: "${BRECCIA_BIN:?path to the Breccia executables}" "${OUT:?output directory}"
-VARIANT=${VARIANT:-quick}
-PYTHON=${PYTHON:-/usr/bin/python3}
-THREADS=${THREADS:-$(nproc)}
 HERE="$(cd "$(dirname "$0")" && pwd)"
+source "$HERE/../../scripts/case_env.sh"
 case "$VARIANT" in
   quick|demo) DX=0.0005;  EVERY=25 ;;   # outputs ~2.4 us apart
   full)       DX=0.00025; EVERY=50 ;;

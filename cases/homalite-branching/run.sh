@@ -5,11 +5,8 @@
 #   VARIANT=test : dx = 4 mm, 101 x 53 particles (the CTest regression run, < 30 s)
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
-: "${BRECCIA_BIN:?path to the Breccia executables}" "${OUT:?output directory}"
-VARIANT=${VARIANT:-quick}
-PYTHON=${PYTHON:-/usr/bin/python3}
-THREADS=${THREADS:-$(nproc)}
 HERE="$(cd "$(dirname "$0")" && pwd)"
+source "$HERE/../../scripts/case_env.sh"
 END=${END:-"400 us"}
 case "$VARIANT" in
   full)       DX=0.001; EVERY=12 ;;

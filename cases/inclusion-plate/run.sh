@@ -8,11 +8,8 @@
 # replaced by 0.1 m/s ramped over 2 us, to 16 us (quick only; README: what it stands for).
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
-: "${BRECCIA_BIN:?path to the Breccia executables}" "${OUT:?output directory}"
-VARIANT=${VARIANT:-quick}
-PYTHON=${PYTHON:-/usr/bin/python3}
-THREADS=${THREADS:-$(nproc)}
 HERE="$(cd "$(dirname "$0")" && pwd)"
+source "$HERE/../../scripts/case_env.sh"
 case "$VARIANT" in
   full)       DX=15e-6; EVERY=40; RATES=${RATES:-"2:0.1us:1.5us"} ;;
   quick|demo) DX=30e-6; EVERY=20; RATES=${RATES:-"2:0.1us:1.5us 0.1:2us:16us"} ;;

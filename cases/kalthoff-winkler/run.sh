@@ -5,11 +5,8 @@
 #   VARIANT=test      : dx = 1.25 mm, 60 us (12,800 particles; the CTest regression run)
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
-: "${BRECCIA_BIN:?path to the Breccia executables}" "${OUT:?output directory}"
-VARIANT=${VARIANT:-quick}
-PYTHON=${PYTHON:-/usr/bin/python3}
-THREADS=${THREADS:-$(nproc)}
 HERE="$(cd "$(dirname "$0")" && pwd)"
+source "$HERE/../../scripts/case_env.sh"
 case "$VARIANT" in
   quick|demo) DX=0.001;  DECK=case-quick.yaml ;;
   full)       DX=0.0005; DECK=case-full.yaml ;;

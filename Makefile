@@ -41,3 +41,13 @@ bench: build
 
 clean:
 	rm -rf $(BUILD)
+
+# make atlas [QUICK=1]: speed-accuracy sweeps and the measured stability map of the PD solver
+# -> docs/atlas/atlas.csv, docs/atlas/stability.csv, docs/atlas/*.png, docs/atlas.md.
+# QUICK=1: ~6 min on 2 quiet cores (measured in pieces), ~15 min on the shared machine; full: not yet run.
+.PHONY: atlas
+atlas: build
+	$(BUILD)/bin/breccia-atlas $(if $(QUICK),--quick) --threads $(JOBS) --work runs/atlas \
+	  --csv docs/atlas/atlas.csv --stability-csv docs/atlas/stability.csv
+	$(PYTHON) scripts/atlas_charts.py --csv docs/atlas/atlas.csv --stability docs/atlas/stability.csv \
+	  --out docs --command "make atlas$(if $(QUICK), QUICK=1)"

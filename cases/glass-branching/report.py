@@ -61,12 +61,12 @@ def load_run(run_dir):
     return x, times, damage, summary
 
 
-def tip_history(x, times, damage):
-    initially = damage[0] > DAMAGE_THRESHOLD
+def tip_history(x, times, damage, threshold=DAMAGE_THRESHOLD):
+    initially = damage[0] > threshold
     dist = np.linalg.norm(x - NOTCH_TIP, axis=1)
     length, tip_x = [], []
     for d in damage:
-        new = (d > DAMAGE_THRESHOLD) & ~initially
+        new = (d > threshold) & ~initially
         if new.any():
             k = np.argmax(np.where(new, dist, -1.0))
             length.append(dist[k])
@@ -99,8 +99,8 @@ def bands_per_column(x, damaged, dx):
     return dict(sorted(columns.items()))
 
 
-def branching(x, final_damage, initially, dx):
-    damaged = (final_damage > DAMAGE_THRESHOLD) & ~initially
+def branching(x, final_damage, initially, dx, threshold=DAMAGE_THRESHOLD):
+    damaged = (final_damage > threshold) & ~initially
     cols = bands_per_column(x, damaged, dx)
     xs = np.array(list(cols.keys()))
     counts = np.array([len(v) for v in cols.values()])

@@ -4,15 +4,25 @@
 #   VARIANT=full      : dx = 0.25 mm (m = 4), sigma/G0 = 2 MPa/3.8, 4 MPa/3.8, 12 MPa/135 J/m2
 #                       (Bobaru & Zhang 2015 and Ha & Bobaru 2010 set-ups; 1-2 min each)
 #   VARIANT=test      : dx = 0.5 mm (m = 2), 2 MPa, 28 us (the CTest regression run)
+# The 3D slab, 100 x 40 x 2 mm (CabanaPD's 3D deck; 3D PMB, nu = 1/4), 2 MPa, G0 = 3.8 J/m2:
+#   VARIANT=3d        : dx = 0.25 mm (m = 4), 400 x 160 x 8 = 512,000 particles (CabanaPD's grid)
+#   VARIANT=3d-quick  : dx = 1/3 mm (m = 3), 300 x 120 x 6 = 216,000 particles (a few minutes)
+#   VARIANT=3d-test   : dx = 0.5 mm (m = 2), 200 x 80 x 4 = 64,000 particles, 28 us (CTest)
+#   DIM=3d maps quick|demo|full|test to 3d-quick|3d-quick|3d|3d-test, so that
+#   `make case-glass-branching DIM=3d [QUICK=1]` and cases/glass-branching/3d/run.sh reach them.
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 source "$HERE/../../scripts/case_env.sh"
+if [ "${DIM:-2d}" = 3d ]; then
+  case "$VARIANT" in quick|demo) VARIANT=3d-quick ;; full) VARIANT=3d ;; test) VARIANT=3d-test ;; esac
+fi
 case "$VARIANT" in
+  3d|3d-quick|3d-test) export VARIANT PYTHON THREADS; exec bash "$HERE/run_3d.sh" ;;
   quick|demo) DX=0.000333333333333333333; DECK=case-quick.yaml; LOADS=${LOADS:-"2:3.8"} ;;
   full)       DX=0.00025;                 DECK=case-full.yaml;  LOADS=${LOADS:-"2:3.8 4:3.8 12:135"} ;;
   test)       DX=0.0005;                  DECK=case-quick.yaml; LOADS="2:3.8"; END="28 us" ;;
-  *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full|test)" >&2; exit 2 ;;
+  *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full|test|3d|3d-quick|3d-test)" >&2; exit 2 ;;
 esac
 mkdir -p "$OUT"
 # Specimen: 100 x 40 mm plate, 1 mm thick; no-fail strips within delta = 1 mm of the loaded edges.

@@ -1,8 +1,8 @@
-"""Checks of the homalite-branching and inclusion-plate cases, on check_case.py's runner.
+"""Checks of the homalite-branching, inclusion-plate and 3D glass-slab cases, on check_case.py's runner.
 
     check_case_more.py CASE --source ROOT --bin BIN_DIR --work DIR [--python PY]
 
-Adds two entries to check_case.CHECKS and runs check_case.main (same chain, same exit codes).
+Adds entries to check_case.CHECKS and runs check_case.main (same chain, same exit codes).
 """
 import os
 import sys
@@ -39,7 +39,35 @@ def inclusion_plate(rep):
     check(run["crack_reach_x_m"] >= 2.9e-3, f"a crack crosses the plate (reach {run['crack_reach_x_m'] * 1e3:.2f} mm)")
 
 
-check_case.CHECKS.update({"homalite-branching": homalite_branching, "inclusion-plate": inclusion_plate})
+def glass_branching_3d(rep):
+    run = rep["runs"][0]
+    br = run["branching"]
+    c_r = rep["rayleigh_speed_m_s"]  # 3D, nu = 1/4: 3,159 m/s
+    check(br.get("branched", False), "3D slab: the crack branches within 28 us at 2 MPa (Bobaru & Zhang 2015: one branching)")
+    # One symmetric pair on the mid-plane, as in the published 2D and 3D results at 2 MPa.
+    check(br["max_bands_on_a_vertical_line"] == 2,
+          f"3D slab: one branch pair (bands on a vertical line = {br['max_bands_on_a_vertical_line']}, expected 2)")
+    # Same band and reason as the 2D check: the fork position moves by ~+-10 mm between
+    # runs that differ by < 1 % in sigma/sqrt(G0) (cases/glass-branching/README.md); the 3D
+    # m = 2, 3, 4 lattices fork at 68.6-68.8 mm, the 2D ones at 64-66 mm.
+    fork = br.get("fork_x_m", float("nan")) * 1e3
+    check(55.0 <= fork <= 90.0, f"3D slab: mid-plane fork x = {fork:.1f} mm in [55, 90] mm")
+    # A running crack below the branching speed: 0.25-0.6 c_R as in the 2D check (soda-lime
+    # branches at ~0.5 c_R, Bowden et al. 1967 [R]).
+    v = run.get("mean_speed_before_branching_m_s", float("nan"))
+    check(0.25 * c_r <= v <= 0.6 * c_r, f"3D slab: mean tip speed before branching {v:.0f} m/s in [0.25, 0.6] c_R = "
+          f"[{0.25 * c_r:.0f}, {0.6 * c_r:.0f}] m/s")
+    # Through the thickness: the 2 mm slab is two horizons thick and loaded uniformly over
+    # it, so the crack forks at nearly the same x on both faces as on the mid-plane; a
+    # curved front may let the faces lead or lag by about a slab thickness. 3 mm = 1.5 slab
+    # thicknesses, above the ~1 mm scatter of the fork measure itself.
+    for face, res in run["faces"].items():
+        f_x = res["branching"].get("fork_x_m", float("nan")) * 1e3
+        check(abs(f_x - fork) <= 3.0, f"3D slab: {face} fork x = {f_x:.1f} mm within 3 mm of the mid-plane's")
+
+
+check_case.CHECKS.update({"homalite-branching": homalite_branching, "inclusion-plate": inclusion_plate,
+                          "glass-branching/3d": glass_branching_3d})
 
 if __name__ == "__main__":
     sys.exit(check_case.main())

@@ -3,16 +3,31 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <string>
+
+#include <unistd.h>
 
 #include "breccia/solver/case_config.hpp"
 #include "breccia/solver/pd_system.hpp"
 
 namespace breccia::solver::testing {
 
+// A scratch folder of this test process. CTest runs every test case as its own process, in
+// parallel (-j), and the cases of one parametrized suite write files of the same name:
+// sharing ::testing::TempDir() made them overwrite each other's inputs.
+inline const std::string& process_temp_dir() {
+  static const std::string dir = [] {
+    const std::string d = ::testing::TempDir() + "/breccia_test_" + std::to_string(::getpid());
+    std::filesystem::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+
 inline std::string write_case(const std::string& name, const std::string& yaml) {
-  const std::string path = ::testing::TempDir() + "/" + name + ".yaml";
+  const std::string path = process_temp_dir() + "/" + name + ".yaml";
   std::ofstream(path) << yaml;
   return path;
 }

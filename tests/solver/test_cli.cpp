@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include "helpers.hpp"
 
 namespace {
 
@@ -19,7 +20,7 @@ struct Outcome {
 };
 
 Outcome run_solver(const std::string& case_yaml, const std::string& name) {
-  const std::string dir = ::testing::TempDir() + "/cli_" + name;
+  const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_" + name;
   std::string mk = "mkdir -p " + dir;
   if (std::system(mk.c_str()) != 0) return {-1, ""};
   const std::string file = dir + "/case.yaml";
@@ -90,7 +91,7 @@ TEST(SolverCli, PmbWithAnotherPoissonRatioPointsToLps) {
 }
 
 TEST(SolverCli, CtrlCWritesACheckpointAndExitsWith130) {
-  const std::string dir = ::testing::TempDir() + "/cli_sigint";
+  const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_sigint";
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   std::ofstream(dir + "/case.yaml")

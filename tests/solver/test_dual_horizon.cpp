@@ -31,7 +31,7 @@ std::string graded_strip(const std::string& name, double L, double W, double h) 
     for (double y = h; y < W; y += 2 * h) add(x, y, 2 * h);
   m.material_names = {"rock"};
   m.source = "graded strip (test)";
-  const std::string path = ::testing::TempDir() + "/" + name + ".h5";
+  const std::string path = breccia::solver::testing::process_temp_dir() + "/" + name + ".h5";
   write_particle_file(path, m);
   return path;
 }

@@ -138,7 +138,7 @@ TEST(Energy, RunAtOnePointTwoTimesTheStableStepIsStoppedAsUnstable) {
   PdSystem s = system_from_yaml("unstable", yaml);
   smooth_velocity(s);
   RunOptions o;
-  o.out_dir = ::testing::TempDir() + "/unstable_run";
+  o.out_dir = breccia::solver::testing::process_temp_dir() + "/unstable_run";
   o.progress = false;
   const RunResult r = run_system(s, o);
   EXPECT_EQ(r.status, "unstable");

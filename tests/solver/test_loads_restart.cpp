@@ -83,12 +83,12 @@ output: {every: 100, history_every: 20}
   RunOptions o;
   o.progress = false;
   PdSystem straight = setup_system(config);
-  o.out_dir = ::testing::TempDir() + "/restart_straight";
+  o.out_dir = breccia::solver::testing::process_temp_dir() + "/restart_straight";
   run_system(straight, o);
   ASSERT_GT(measure(straight).broken_half_bonds, 0) << "the case should break bonds";
 
   PdSystem first = setup_system(config);
-  o.out_dir = ::testing::TempDir() + "/restart_split";
+  o.out_dir = breccia::solver::testing::process_temp_dir() + "/restart_split";
   o.steps = 200;
   run_system(first, o);
   PdSystem second = setup_system(config);

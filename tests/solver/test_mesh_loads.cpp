@@ -19,7 +19,7 @@ using namespace breccia::solver::testing;
 TEST(Loads, PressureInABlindHoleOfAMeshPushesOnlyOnTheHoleBottom) {
   // The hole wall is closed around the axis, so its pressure resultant vanishes; what is
   // left is P times the (faceted) bottom disc, pointing down into the block.
-  const std::string dir = ::testing::TempDir() + "/mesh_loads";
+  const std::string dir = breccia::solver::testing::process_temp_dir() + "/mesh_loads";
   std::filesystem::create_directories(dir);
   const std::string spec = std::string(BRECCIA_SOURCE_DIR) + "/cases/concrete-blast/specimen-quick.yaml";
   const std::string cmd = std::string(BRECCIA_MESH_EXE) + " " + spec + " -o " + dir + "/s.msh --quiet > /dev/null 2>&1 && " +
@@ -56,7 +56,7 @@ namespace {
 // Particles at the centroids of a uniform gmsh tet mesh of a 100 mm cube (~10,000 tets).
 std::string tet_cube_particles() {
   static const std::string path = [] {
-    const std::string dir = ::testing::TempDir() + "/tet_cube";
+    const std::string dir = breccia::solver::testing::process_temp_dir() + "/tet_cube";
     std::filesystem::create_directories(dir);
     std::ofstream(dir + "/box.yaml") << "dimension: 3\nbody: {shape: box, name: solid, origin: [0, 0, 0], "
                                         "size: [100 mm, 100 mm, 100 mm]}\nmesh: {size: 8 mm}\n";
@@ -112,4 +112,29 @@ TEST(StrainEnergy, TetCentroidParticlesFromAGmshMeshMatchClassicalEnergyOnAverag
     EXPECT_NEAR(pmb, 0.0, 0.03);
     EXPECT_NEAR(lps, 0.0, 0.03);
   }
+}
+
+TEST(Precracks, ANamedMeshSurfaceCutsExactlyTheBondsItsPolygonCuts) {
+  // A 40 mm cube with a 20 x 20 mm crack embedded at mid-height (gmsh fragment: the mesh
+  // conforms to it). The named surface's facets are recovered exactly from their owner
+  // tets, so it must remove the same bonds as the analytic square polygon; the former
+  // disc-per-facet rule both leaked (gaps at facet corners) and over-cut (disc edges).
+  const std::string dir = breccia::solver::testing::process_temp_dir() + "/named_crack";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/spec.yaml") << "dimension: 3\n"
+      "body: {shape: box, name: block, origin: [0, 0, 0], size: [40 mm, 40 mm, 40 mm]}\n"
+      "notches:\n  - {name: notch, type: crack, corner: [10 mm, 10 mm, 20 mm], edge_a: [20 mm, 0, 0], edge_b: [0, 20 mm, 0]}\n"
+      "mesh: {size: 4 mm}\n";
+  const std::string cmd = std::string(BRECCIA_MESH_EXE) + " " + dir + "/spec.yaml -o " + dir + "/s.msh --quiet > /dev/null 2>&1 && " +
+                          BRECCIA_PLACE_EXE + " " + dir + "/s.msh -o " + dir + "/particles.h5 > /dev/null 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string head = "specimen: {particles: " + dir + "/particles.h5}\nmodel: {type: pmb, horizon_factor: 3.015}\n"
+      "materials: [{name: block, density: 2000, youngs_modulus: 30 GPa, poisson_ratio: 0.25}]\ntime: {steps: 1}\n";
+  PdSystem by_surface = system_from_yaml("named_crack_surface", head + "precracks: [{type: surface, surface: notch}]\n");
+  PdSystem by_polygon = system_from_yaml("named_crack_polygon", head +
+      "precracks: [{type: polygon, points: [[0.01, 0.01, 0.02], [0.03, 0.01, 0.02], [0.03, 0.03, 0.02], [0.01, 0.03, 0.02]]}]\n");
+  ASSERT_GT(by_polygon.precrack_pairs.size(), 100u);
+  // Exact: both are exact geometry and no particle lies on the plane (centroids of tets
+  // on either side of a conforming surface).
+  EXPECT_EQ(by_surface.precrack_pairs, by_polygon.precrack_pairs);
 }

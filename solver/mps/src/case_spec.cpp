@@ -1,6 +1,7 @@
 #include "breccia/mps/case_spec.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 
 #include "breccia/common/error.hpp"
@@ -18,6 +19,12 @@ namespace {
 [[noreturn]] void fail(const Section& s, const std::string& key, const std::string& found,
                        const std::string& expected) {
   throw InputError(s.file(), s.field(key), found, expected);
+}
+
+std::string pascal_text(double v) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%g Pa", v);
+  return buf;
 }
 
 LatticeSpec parse_lattice(const Section& s) {
@@ -50,7 +57,7 @@ LatticeSpec parse_lattice(const Section& s) {
 }
 
 MaterialSpec parse_material(const Section& s) {
-  s.allow_only({"name", "density", "youngs_modulus", "poisson_ratio", "lambda", "mu", "C13", "C55"});
+  s.allow_only({"name", "density", "youngs_modulus", "poisson_ratio", "lambda", "mu", "C13", "C55", "plasticity"});
   MaterialSpec m;
   m.name = s.text("name", "material");
   m.density_kg_m3 = s.positive("density", Quantity::Density);
@@ -75,6 +82,19 @@ MaterialSpec parse_material(const Section& s) {
   }
   if (!(m.lame_lambda_pa + 2.0 * m.shear_modulus_pa > 0))
     fail(s, lame ? "lambda" : "C13", "lambda + 2 mu is not positive", "a positive P-wave modulus");
+  if (auto p = s.optional_section("plasticity")) {
+    p->allow_only({"yield_stress", "hardening_modulus"});
+    PlasticitySpec ps;
+    if (!p->has("yield_stress")) fail(*p, "yield_stress", "missing", "the initial yield stress (> 0), e.g. 240 MPa");
+    ps.yield_stress_pa = p->number("yield_stress", Quantity::Pressure);
+    if (!(ps.yield_stress_pa > 0))
+      fail(*p, "yield_stress", pascal_text(ps.yield_stress_pa), "a yield stress > 0");
+    ps.hardening_modulus_pa = p->number("hardening_modulus", Quantity::Pressure, 0.0);
+    if (!(ps.hardening_modulus_pa >= 0))
+      fail(*p, "hardening_modulus", pascal_text(ps.hardening_modulus_pa),
+           "a hardening modulus >= 0 (0: perfectly plastic)");
+    m.plasticity = ps;
+  }
   return m;
 }
 
@@ -153,9 +173,7 @@ BoundarySpec parse_boundary(const Section& s, size_t index, int dimension) {
   return b;
 }
 
-InitialGaussian parse_initial(const Section& s) {
-  s.allow_only({"displacement"});
-  const Section d = s.section("displacement");
+InitialGaussian parse_initial_displacement(const Section& d) {
   d.allow_only({"type", "center", "width", "amplitude"});
   d.choice("type", {"gaussian"}, "gaussian");
   InitialGaussian g;
@@ -185,7 +203,7 @@ bool inside_box(const LatticeSpec& l, const std::array<double, 3>& p) {
 CaseSpec parse_root(const Section& root) {
   CaseSpec c;
   c.file = root.file();
-  root.allow_only({"specimen", "model", "materials", "cracks", "boundary", "initial", "time", "output"});
+  root.allow_only({"specimen", "model", "materials", "cracks", "boundary", "initial", "contact", "time", "output"});
 
   const Section spec = root.section("specimen");
   spec.allow_only({"lattice", "particles"});
@@ -201,8 +219,23 @@ CaseSpec parse_root(const Section& root) {
   const int dimension = c.lattice ? c.lattice->dimension : 2;
 
   const Section model = root.section("model");
-  model.allow_only({"type", "re_over_spacing", "equation", "integrator"});
+  model.allow_only({"type", "re_over_spacing", "equation", "integrator", "formulation", "hourglass", "pressure_force",
+                    "damping", "gravity"});
   model.choice("type", {"mps"});
+  c.formulation = model.choice("formulation", {"displacement", "stress"}, "displacement") == "stress"
+                      ? Formulation::Stress
+                      : Formulation::Displacement;
+  const bool stress = c.formulation == Formulation::Stress;
+  for (const char* key : {"hourglass", "pressure_force", "damping", "gravity"})
+    if (!stress && model.has(key)) fail(model, key, "given for the displacement formulation", "formulation: stress");
+  if (stress && model.has("equation"))
+    fail(model, "equation", "given for the stress formulation", "no equation key (it selects the displacement operator)");
+  c.hourglass = model.number("hourglass", Quantity::Dimensionless, 0.1);
+  if (!(c.hourglass >= 0 && c.hourglass <= 10)) fail(model, "hourglass", std::to_string(c.hourglass), "0 <= hourglass <= 10");
+  c.repulsive_pressure = model.choice("pressure_force", {"conservative", "repulsive"}, "conservative") == "repulsive";
+  c.damping_per_s = model.number("damping", Quantity::Frequency, 0.0);
+  if (!(c.damping_per_s >= 0)) fail(model, "damping", std::to_string(c.damping_per_s), "a damping rate >= 0 (1/s)");
+  if (model.has("gravity")) c.gravity_m_s2 = model.vec3("gravity", Quantity::Acceleration);
   c.re_over_spacing = model.positive("re_over_spacing", Quantity::Dimensionless, 2.1);
   if (c.re_over_spacing < 1.01 || c.re_over_spacing > 5.0)
     fail(model, "re_over_spacing", std::to_string(c.re_over_spacing), "1.01 <= re/spacing <= 5 (nearest neighbours inside re)");
@@ -212,15 +245,21 @@ CaseSpec parse_root(const Section& root) {
                          "symplectic_euler"
                      ? Integrator::SymplecticEuler
                      : Integrator::VelocityVerlet;
+  if (stress && c.integrator != Integrator::SymplecticEuler)
+    fail(model, "integrator", "velocity_verlet with the stress formulation", "symplectic_euler (the paper's scheme)");
 
   const auto materials = root.list("materials");
   if (materials.size() != 1)
     throw InputError(root.file(), "materials", std::to_string(materials.size()) + " materials",
                      "exactly one material (the MPS solver is single-material)");
   c.material = parse_material(materials[0]);
+  if (c.material.plasticity && !stress)
+    fail(materials[0], "plasticity", "given for the displacement formulation (it has no stress state)",
+         "model.formulation: stress");
 
   const auto cracks = root.list("cracks");
   for (size_t i = 0; i < cracks.size(); ++i) {
+    if (stress) fail(cracks[i], "segment", "a frictional crack in the stress formulation", "cracks with formulation: displacement");
     c.cracks.push_back(parse_crack(cracks[i], i));
     if (dimension != 2) fail(cracks[i], "segment", "crack in a 3D model", "cracks in 2D models only");
     if (c.lattice && (!inside_box(*c.lattice, c.cracks.back().start_m) || !inside_box(*c.lattice, c.cracks.back().end_m)))
@@ -228,13 +267,29 @@ CaseSpec parse_root(const Section& root) {
   }
   const auto boundary = root.list("boundary");
   for (size_t i = 0; i < boundary.size(); ++i) c.boundary.push_back(parse_boundary(boundary[i], i, dimension));
-  if (auto init = root.optional_section("initial")) c.initial = parse_initial(*init);
+  if (auto init = root.optional_section("initial")) {
+    init->allow_only({"displacement", "velocity"});
+    if (init->has("displacement")) c.initial = parse_initial_displacement(init->section("displacement"));
+    if (init->has("velocity")) c.initial_velocity_m_s = init->vec3("velocity", Quantity::Velocity);
+  }
+  if (auto contact = root.optional_section("contact")) {
+    contact->allow_only({"floor"});
+    if (!stress) fail(*contact, "floor", "contact in the displacement formulation", "formulation: stress");
+    const Section f = contact->section("floor");
+    f.allow_only({"point", "normal", "stiffness_factor"});
+    FloorSpec fs;
+    fs.point_m = f.vec3("point", Quantity::Length);
+    fs.normal = f.has("normal") ? f.vec3("normal", Quantity::Dimensionless) : std::array<double, 3>{0.0, 1.0, 0.0};
+    if (!(std::hypot(fs.normal[0], fs.normal[1], fs.normal[2]) > 0)) fail(f, "normal", "a zero vector", "a nonzero normal");
+    fs.stiffness_factor = f.positive("stiffness_factor", Quantity::Dimensionless, 1.0);
+    c.floor = fs;
+  }
 
   const Section time = root.section("time");
   time.allow_only({"end", "dt", "safety"});
   c.end_time_s = time.positive("end", Quantity::Time);
   if (time.has("dt")) c.dt_s = time.positive("dt", Quantity::Time);
-  c.safety = time.positive("safety", Quantity::Dimensionless, 0.5);
+  c.safety = time.positive("safety", Quantity::Dimensionless, stress ? 0.3 : 0.5);
   if (c.safety > 1.0) fail(time, "safety", std::to_string(c.safety), "0 < safety <= 1");
 
   if (auto out = root.optional_section("output")) {

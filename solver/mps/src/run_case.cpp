@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <type_traits>
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/h5.hpp"
@@ -15,6 +16,7 @@
 #include "breccia/common/progress.hpp"
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/simulation.hpp"
+#include "breccia/mps/solid_case.hpp"
 
 namespace breccia::mps {
 namespace {
@@ -25,7 +27,8 @@ std::string fmt(double v) {
   return buf;
 }
 
-void write_snapshot(const h5::File& f, const Simulation& sim) {
+template <class Model>
+void write_snapshot(const h5::File& f, const Model& sim) {
   char name[32];
   std::snprintf(name, sizeof name, "/output/%06lld", sim.steps());
   const std::string group = name;
@@ -41,6 +44,118 @@ void write_snapshot(const h5::File& f, const Simulation& sim) {
     }
   f.write(group + "/displacement", u, {n, 3});
   f.write(group + "/velocity", v, {n, 3});
+  if constexpr (std::is_same_v<Model, Solid>) {
+    std::vector<double> stress(6 * n);
+    for (size_t i = 0; i < n; ++i) {
+      const SymTensor& t = sim.stress_pa()[i];
+      const double c[6] = {t.xx, t.yy, t.zz, t.xy, t.yz, t.zx};
+      for (int k = 0; k < 6; ++k) stress[6 * i + k] = c[k];
+    }
+    f.write(group + "/stress", stress, {n, 6});
+    f.write(group + "/eq_plastic_strain", sim.eq_plastic_strain(), {n});
+  }
+}
+
+template <class Model>
+void write_header(const h5::File& f, const Model& sim, const CaseSpec& spec, const std::string& case_file,
+                  const std::string& content_id, double thickness_m) {
+  const MaterialSpec& m = spec.material;
+  f.set_attr("/", "format", std::string("breccia-results"));
+  f.set_attr("/", "model", std::string("mps"));
+  f.set_attr("/", "dimension", static_cast<long long>(sim.dimension()));
+  f.set_attr("/", "case_file", case_file);
+  // The layout of docs/formats.md (results.h5) where it applies to MPS.
+  f.set_attr("/", "format_version", 1LL);
+  f.set_attr("/", "thickness_m", thickness_m);
+  f.set_attr("/", "particles_file",
+             spec.particle_file.empty() ? std::string() : std::filesystem::absolute(spec.particle_file).string());
+  f.set_attr("/", "particles_content_id", content_id);
+  f.set_attr("/", "complete", 0LL);
+  f.write("/particles/position", sim.position_m(), {sim.size(), 3});
+  f.write("/particles/volume", sim.volume_m3(), {sim.size()});
+  f.write("/particles/density", std::vector<double>(sim.size(), m.density_kg_m3), {sim.size()});
+  f.write("/particles/material_id", std::vector<int32_t>(sim.size(), 0), {sim.size()});
+  f.write_strings("/materials/names", {m.name});
+}
+
+// The stress formulation (solid.hpp): same files, with stress and plastic strain in the
+// snapshots and the energy terms of the stress solid in history.csv.
+int run_solid(const CaseSpec& spec, const std::string& case_file, const std::string& out_dir) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  std::string content_id;
+  Solid sim = make_solid(spec, &content_id);
+  const long long total_steps = static_cast<long long>(std::ceil(spec.end_time_s / sim.dt_s() - 1e-9));
+  std::fprintf(stderr,
+               "mps (stress): %zu particles, %zu bonds, %dD; spacing %.4g m, re %.3g spacing; c_L %.1f m/s; dt %.4g s "
+               "(safety %.2f x spacing / c_L); %lld steps; plasticity %s; pressure force %s; hourglass %.3g\n",
+               sim.size(), sim.bonds().size(), sim.dimension(), sim.spacing_m(), spec.re_over_spacing,
+               sim.p_wave_speed(), sim.dt_s(), spec.safety, total_steps, sim.law().plastic ? "von Mises" : "none",
+               spec.repulsive_pressure ? "repulsive" : "conservative", spec.hourglass);
+  std::vector<int> probe_particle;
+  for (const auto& p : spec.probes) probe_particle.push_back(sim.nearest_particle(p.position_m));
+  const std::filesystem::path dir(out_dir);
+  OutputFile results(dir / "results.h5");
+  std::ostringstream history;
+  history << "time_s";
+  for (const auto& p : spec.probes) history << "," << p.name << "_" << p.field;
+  if (sim.law().plastic) history << ",plastic_fraction";
+  if (spec.energy) history << ",kinetic_energy_J,stress_work_J,hourglass_energy_J,contact_energy_J,gravity_energy_J";
+  history << "\n";
+  auto record = [&]() {
+    history << fmt(sim.time_s());
+    for (size_t k = 0; k < probe_particle.size(); ++k) history << "," << fmt(sim.sample(probe_particle[k], spec.probes[k].field));
+    if (sim.law().plastic) history << "," << fmt(sim.plastic_fraction());
+    if (spec.energy)
+      history << "," << fmt(sim.kinetic_energy_j()) << "," << fmt(sim.stress_work_j()) << ","
+              << fmt(sim.hourglass_energy_j()) << "," << fmt(sim.floor_energy_j()) << "," << fmt(sim.gravity_energy_j());
+    history << "\n";
+  };
+  const auto loop_start = std::chrono::steady_clock::now();
+  {
+    h5::File f(results.temp_path().string(), h5::File::Mode::Create);
+    write_header(f, sim, spec, case_file, content_id, sim.thickness_m());
+    write_snapshot(f, sim);
+    record();
+    Progress progress("mps", total_steps, spec.progress ? 5.0 : 1e300);
+    for (long long s = 1; s <= total_steps; ++s) {
+      sim.step();
+      if (s % spec.history_every == 0) record();
+      if (spec.snapshot_every > 0 && s % spec.snapshot_every == 0 && s != total_steps) write_snapshot(f, sim);
+      if ((s % 100 == 0 || s == total_steps) && !std::isfinite(sim.kinetic_energy_j()))
+        throw RunError("mps: velocities became non-finite at step " + std::to_string(s) +
+                       " (time step above the stability limit? lower time.safety)");
+      progress.update(s, "t=" + fmt(sim.time_s()) + " s");
+    }
+    write_snapshot(f, sim);
+    f.set_attr("/", "output_count", static_cast<long long>(f.children("/output").size()));
+    f.set_attr("/", "complete", 1LL);
+    if (spec.progress) progress.finish("t=" + fmt(sim.time_s()) + " s");
+  }
+  results.commit();
+  const double loop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  write_text_file(dir / "history.csv", history.str());
+  double max_plastic = 0.0;
+  for (double e : sim.eq_plastic_strain()) max_plastic = std::max(max_plastic, e);
+  std::ostringstream js;
+  js << "{\n  \"model\": \"mps\",\n  \"formulation\": \"stress\",\n  \"case_file\": \"" << case_file << "\",\n"
+     << "  \"dimension\": " << sim.dimension() << ",\n  \"particles\": " << sim.size() << ",\n"
+     << "  \"bonds\": " << sim.bonds().size() << ",\n  \"spacing_m\": " << fmt(sim.spacing_m()) << ",\n"
+     << "  \"re_over_spacing\": " << fmt(spec.re_over_spacing) << ",\n"
+     << "  \"pressure_force\": \"" << (spec.repulsive_pressure ? "repulsive" : "conservative") << "\",\n"
+     << "  \"hourglass\": " << fmt(spec.hourglass) << ",\n  \"plastic\": " << (sim.law().plastic ? "true" : "false") << ",\n"
+     << "  \"steps\": " << sim.steps() << ",\n  \"dt_s\": " << fmt(sim.dt_s()) << ",\n"
+     << "  \"end_time_s\": " << fmt(sim.time_s()) << ",\n  \"p_wave_speed_m_s\": " << fmt(sim.p_wave_speed()) << ",\n"
+     << "  \"kinetic_energy_j\": " << fmt(sim.kinetic_energy_j()) << ",\n  \"stress_work_j\": " << fmt(sim.stress_work_j()) << ",\n"
+     << "  \"max_eq_plastic_strain\": " << fmt(max_plastic) << ",\n  \"plastic_fraction\": " << fmt(sim.plastic_fraction()) << ",\n"
+     << "  \"threads\": " << omp_get_max_threads() << ",\n  \"wall_time_s\": " << fmt(wall_s) << ",\n"
+     << "  \"step_loop_s\": " << fmt(loop_s) << ",\n"
+     << "  \"particle_steps_per_s\": " << fmt(loop_s > 0 ? sim.size() * static_cast<double>(sim.steps()) / loop_s : 0.0)
+     << "\n}\n";
+  write_text_file(dir / "summary.json", js.str());
+  std::fprintf(stderr, "mps: %lld steps in %.2f s (%.3g particle-steps/s); outputs in %s\n", sim.steps(), wall_s,
+               loop_s > 0 ? sim.size() * static_cast<double>(sim.steps()) / loop_s : 0.0, out_dir.c_str());
+  return 0;
 }
 
 }  // namespace
@@ -49,6 +164,7 @@ int run_case(const std::string& case_file, const std::string& out_dir, int threa
   const CaseSpec spec = load_case(case_file);
   if (threads > 0) omp_set_num_threads(threads);
   std::filesystem::create_directories(out_dir);
+  if (spec.formulation == Formulation::Stress) return run_solid(spec, case_file, out_dir);
   const auto wall_start = std::chrono::steady_clock::now();
 
   Simulation sim(spec);
@@ -91,22 +207,7 @@ int run_case(const std::string& case_file, const std::string& out_dir, int threa
   const auto loop_start = std::chrono::steady_clock::now();
   {
     h5::File f(results.temp_path().string(), h5::File::Mode::Create);
-    f.set_attr("/", "format", std::string("breccia-results"));
-    f.set_attr("/", "model", std::string("mps"));
-    f.set_attr("/", "dimension", static_cast<long long>(sim.dimension()));
-    f.set_attr("/", "case_file", case_file);
-    // The layout of docs/formats.md (results.h5) where it applies to MPS.
-    f.set_attr("/", "format_version", 1LL);
-    f.set_attr("/", "thickness_m", sim.thickness_m());
-    f.set_attr("/", "particles_file",
-               spec.particle_file.empty() ? std::string() : std::filesystem::absolute(spec.particle_file).string());
-    f.set_attr("/", "particles_content_id", sim.particles_content_id());
-    f.set_attr("/", "complete", 0LL);
-    f.write("/particles/position", sim.position_m(), {sim.size(), 3});
-    f.write("/particles/volume", sim.volume_m3(), {sim.size()});
-    f.write("/particles/density", std::vector<double>(sim.size(), m.density_kg_m3), {sim.size()});
-    f.write("/particles/material_id", std::vector<int32_t>(sim.size(), 0), {sim.size()});
-    f.write_strings("/materials/names", {m.name});
+    write_header(f, sim, spec, case_file, sim.particles_content_id(), sim.thickness_m());
     write_snapshot(f, sim);
     record();
     Progress progress("mps", total_steps, spec.progress ? 5.0 : 1e300);

@@ -14,24 +14,6 @@ namespace breccia::mps {
 // barriers (worse on a loaded machine) cost more than they save.
 constexpr long long kParallelMin = 8192;
 
-double burst_displacement(const BurstHistory& h, double t) {
-  const double tau = t - h.delay_s, length = h.cycles * h.period_s;
-  if (tau < 0.0 || tau > length) return 0.0;
-  const double carrier = h.amplitude_m * std::sin(2.0 * std::numbers::pi * tau / h.period_s);
-  if (!h.hann) return carrier;
-  return carrier * 0.5 * (1.0 - std::cos(2.0 * std::numbers::pi * tau / length));
-}
-
-double burst_velocity(const BurstHistory& h, double t) {
-  const double tau = t - h.delay_s, length = h.cycles * h.period_s;
-  if (tau < 0.0 || tau > length) return 0.0;
-  const double w = 2.0 * std::numbers::pi / h.period_s, wl = 2.0 * std::numbers::pi / length;
-  const double s = std::sin(w * tau), ds = w * std::cos(w * tau);
-  if (!h.hann) return h.amplitude_m * ds;
-  const double env = 0.5 * (1.0 - std::cos(wl * tau)), denv = 0.5 * wl * std::sin(wl * tau);
-  return h.amplitude_m * (ds * env + s * denv);
-}
-
 Simulation::Simulation(const CaseSpec& spec) : spec_(spec) {
   build_particles();
   bonds_ = build_bonds(dimension_, position_m_, spec_.re_over_spacing * spacing_m_, periodic_);
@@ -67,46 +49,16 @@ Simulation::Simulation(const CaseSpec& spec) : spec_(spec) {
 }
 
 void Simulation::build_particles() {
-  if (spec_.lattice) {
-    const LatticeSpec& l = *spec_.lattice;
-    dimension_ = l.dimension;
-    spacing_m_ = l.spacing_m;
-    thickness_m_ = l.thickness_m;
-    std::array<long long, 3> count{1, 1, 1};
-    for (int a = 0; a < dimension_; ++a) {
-      count[a] = std::llround((l.high_m[a] - l.low_m[a]) / l.spacing_m);
-      if (count[a] < 1) throw InputError(spec_.file, "specimen.lattice.spacing", "larger than the box", "spacing < box size");
-      if (l.periodic[a]) periodic_.period_m[a] = count[a] * l.spacing_m;
-    }
-    const double volume = dimension_ == 2 ? l.spacing_m * l.spacing_m * l.thickness_m : std::pow(l.spacing_m, 3);
-    const double re = spec_.re_over_spacing * spacing_m_;
-    for (int a = 0; a < 3; ++a)
-      if (periodic_.period_m[a] > 0 && periodic_.period_m[a] < 2.0 * re)
-        throw InputError(spec_.file, "specimen.lattice.periodic", "periodic box shorter than 2 re",
-                         "a periodic length of at least " + std::to_string(2.0 * re) + " m");
-    for (long long k = 0; k < count[2]; ++k)
-      for (long long j = 0; j < count[1]; ++j)
-        for (long long i = 0; i < count[0]; ++i) {
-          position_m_.push_back(l.low_m[0] + (i + 0.5) * l.spacing_m);
-          position_m_.push_back(l.low_m[1] + (j + 0.5) * l.spacing_m);
-          position_m_.push_back(dimension_ == 3 ? l.low_m[2] + (k + 0.5) * l.spacing_m : 0.0);
-          volume_m3_.push_back(volume);
-        }
-    return;
-  }
-  const ParticleModel model = read_particle_file(spec_.particle_file);
-  dimension_ = model.dimension;
-  thickness_m_ = model.thickness_m;
-  position_m_ = model.position_m;
-  volume_m3_ = model.volume_m3;
-  content_id_ = model.content_id;
-  std::vector<double> sp = model.spacing_m;
-  std::nth_element(sp.begin(), sp.begin() + sp.size() / 2, sp.end());
-  spacing_m_ = sp[sp.size() / 2];
-  for (const auto& s : model.sets) {
-    set_names_.push_back(s.name);
-    set_members_.push_back(s.indices);
-  }
+  ParticleCloud cloud = build_particle_cloud(spec_);
+  dimension_ = cloud.dimension;
+  spacing_m_ = cloud.spacing_m;
+  thickness_m_ = cloud.thickness_m;
+  periodic_ = cloud.periodic;
+  position_m_ = std::move(cloud.position_m);
+  volume_m3_ = std::move(cloud.volume_m3);
+  content_id_ = std::move(cloud.content_id);
+  set_names_ = std::move(cloud.set_names);
+  set_members_ = std::move(cloud.set_members);
   if (dimension_ != 2 && !spec_.cracks.empty())
     throw InputError(spec_.file, "cracks", "cracks in a 3D particle model", "cracks in 2D models only");
 }
@@ -117,49 +69,13 @@ void Simulation::build_cracks() {
 }
 
 void Simulation::build_boundary() {
-  const size_t n = size();
-  std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-  for (size_t i = 0; i < n; ++i)
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], position_m_[3 * i + a]);
-      hi[a] = std::max(hi[a], position_m_[3 * i + a]);
-    }
-  for (size_t b = 0; b < spec_.boundary.size(); ++b) {
-    const BoundarySpec& bs = spec_.boundary[b];
-    PrescribedSet set;
-    set.components = bs.components;
-    set.burst = bs.burst;
-    if (!bs.set.empty()) {
-      const auto it = std::find(set_names_.begin(), set_names_.end(), bs.set);
-      if (it == set_names_.end())
-        throw InputError(spec_.file, "boundary[" + std::to_string(b) + "].set", "unknown set '" + bs.set + "'",
-                         "a particle set of the particle file");
-      for (auto i : set_members_[it - set_names_.begin()]) set.particles.push_back(static_cast<int>(i));
-    } else {
-      for (size_t i = 0; i < n; ++i) {
-        const double* p = &position_m_[3 * i];
-        bool in = false;
-        if (bs.box_m) {
-          const auto& bx = *bs.box_m;
-          in = true;
-          for (int a = 0; a < dimension_; ++a) in = in && p[a] >= bx[a] && p[a] <= bx[3 + a];
-        } else {
-          const double tol = 0.5 * spacing_m_;
-          if (bs.face == "left") in = p[0] < lo[0] + tol;
-          if (bs.face == "right") in = p[0] > hi[0] - tol;
-          if (bs.face == "bottom") in = p[1] < lo[1] + tol;
-          if (bs.face == "top") in = p[1] > hi[1] - tol;
-          if (bs.face == "back") in = dimension_ == 3 && p[2] < lo[2] + tol;
-          if (bs.face == "front") in = dimension_ == 3 && p[2] > hi[2] - tol;
-        }
-        if (in) set.particles.push_back(static_cast<int>(i));
-      }
-    }
-    if (set.particles.empty())
-      throw InputError(spec_.file, "boundary[" + std::to_string(b) + "]", "selects no particles",
-                       "a face, box or set containing particles");
-    prescribed_.push_back(std::move(set));
-  }
+  ParticleCloud cloud;
+  cloud.dimension = dimension_;
+  cloud.spacing_m = spacing_m_;
+  cloud.position_m = position_m_;
+  cloud.set_names = set_names_;
+  cloud.set_members = set_members_;
+  prescribed_ = select_boundary(spec_, cloud);
 }
 
 void Simulation::apply_prescribed(double t) {

@@ -2,7 +2,9 @@
 // Peridynamic families: for each particle i, every j != i whose reference distance is
 // within reach(i, j) = max(horizon_i, horizon_j) + max(pad_i, pad_j). Full lists (each
 // pair appears from both ends) so a particle sums its own force without atomics.
-// Built with a uniform cell list: O(N) for bounded density contrast.
+// Built with a uniform cell list sized to the smallest reach (each particle scans the
+// cells its own reach covers; the family is the union of both directions): O(N) for
+// bounded density contrast.
 #include <cstdint>
 #include <span>
 #include <vector>

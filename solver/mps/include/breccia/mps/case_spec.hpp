@@ -10,6 +10,23 @@ namespace breccia::mps {
 
 enum class Equation { Navier, RotationFree };
 enum class Integrator { SymplecticEuler, VelocityVerlet };
+// displacement: the linear Navier operators of simulation.hpp (small displacements, no
+// stress state). stress: the stress-based solid of solid.hpp (stress per particle,
+// co-rotated, optional von Mises plasticity, contact with a rigid floor).
+enum class Formulation { Displacement, Stress };
+
+// von Mises with linear isotropic hardening: sigma_y = yield_stress + hardening_modulus eps_p.
+struct PlasticitySpec {
+  double yield_stress_pa = 0.0;       // > 0
+  double hardening_modulus_pa = 0.0;  // >= 0 (0: perfectly plastic)
+};
+
+// Rigid frictionless floor (solid.hpp, RigidFloor): the allowed side is (x - point).normal >= 0.
+struct FloorSpec {
+  std::array<double, 3> point_m{0.0, 0.0, 0.0};
+  std::array<double, 3> normal{0.0, 1.0, 0.0};
+  double stiffness_factor = 1.0;
+};
 
 struct LatticeSpec {
   int dimension = 2;
@@ -24,6 +41,7 @@ struct MaterialSpec {
   double density_kg_m3 = 0.0;
   double lame_lambda_pa = 0.0;  // = C13 for isotropic media
   double shear_modulus_pa = 0.0;  // mu = C55
+  std::optional<PlasticitySpec> plasticity;  // stress formulation only
   double p_wave_speed() const;  // sqrt((lambda + 2 mu) / rho)
   double s_wave_speed() const;  // sqrt(mu / rho)
 };
@@ -79,14 +97,22 @@ struct CaseSpec {
   double re_over_spacing = 2.1;
   Equation equation = Equation::Navier;
   Integrator integrator = Integrator::SymplecticEuler;
+  Formulation formulation = Formulation::Displacement;
+  // stress formulation (docs/mps.md, "Stress-based solid")
+  double hourglass = 0.1;          // hourglass stiffness / shear modulus
+  bool repulsive_pressure = false; // pressure_force: repulsive (Inagaki) | conservative
+  double damping_per_s = 0.0;      // mass-proportional damping (quasi-static runs)
+  std::array<double, 3> gravity_m_s2{0.0, 0.0, 0.0};
+  std::optional<FloorSpec> floor;
   MaterialSpec material;
   std::vector<CrackSpec> cracks;
   std::vector<BoundarySpec> boundary;
   std::optional<InitialGaussian> initial;
+  std::array<double, 3> initial_velocity_m_s{0.0, 0.0, 0.0};  // uniform, every particle
   // time
   double end_time_s = 0.0;
   std::optional<double> dt_s;
-  double safety = 0.5;  // dt = safety * spacing / c_L
+  double safety = 0.5;  // dt = safety * spacing / c_L (default 0.5; 0.3 for the stress formulation)
   // output
   long long snapshot_every = 0;  // 0: first and last state only
   long long history_every = 1;

@@ -9,17 +9,9 @@
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/crack.hpp"
 #include "breccia/mps/neighbours.hpp"
+#include "breccia/mps/particles.hpp"
 
 namespace breccia::mps {
-
-struct PrescribedSet {
-  std::vector<int> particles;
-  std::array<bool, 3> components{};
-  std::optional<BurstHistory> burst;
-};
-
-double burst_displacement(const BurstHistory& h, double t);
-double burst_velocity(const BurstHistory& h, double t);
 
 class Simulation {
 public:

@@ -1,0 +1,96 @@
+#pragma once
+// breccia-atlas: sweeps of the PD solver over problems with known answers (speed against
+// accuracy) and the measured stability map. docs/atlas.md explains every measure; the CSV
+// columns are a contract read by breccia-plan (docs/atlas/atlas.csv).
+#include <chrono>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "breccia/solver/pd_system.hpp"
+
+namespace breccia::atlas {
+
+// One point of a sweep: what the solver was asked to do.
+struct Settings {
+  std::string model = "pmb";         // pmb | lps
+  std::string kind = "lattice";      // lattice | tet (tet-centroid; triangle-centroid in 2D)
+  double m = 3.0;                    // nominal horizon / spacing
+  double spacing_m = 1e-3;           // target particle spacing
+};
+
+// One row of docs/atlas/atlas.csv (header: kAtlasHeader).
+struct AtlasRow {
+  std::string problem, model;
+  int dimension = 3;
+  std::string particles_kind;
+  double m = 0.0, spacing_m = 0.0;
+  int threads = 1;
+  size_t particles = 0, bonds = 0;
+  long long steps = 0;
+  double wall_s = 0.0, error = 0.0;
+  std::string error_measure;
+};
+
+inline constexpr const char* kAtlasHeader =
+    "problem,model,dimension,particles_kind,m,spacing_m,precision,backend,threads,particles,bonds,steps,wall_s,error,"
+    "error_measure";
+
+// Appends rows to a CSV, rewriting the whole file atomically after each row, so an
+// interrupted sweep leaves every finished row and never a half-written line.
+class CsvTable {
+public:
+  CsvTable(std::string path, std::string header, bool keep_existing);
+  void add(const std::string& line);
+
+private:
+  std::string path_, content_;
+};
+
+std::string csv_line(const AtlasRow& r);
+
+// Where particle files come from: the lattice is built by the solver itself; tet-centroid
+// particles come from breccia-mesh + breccia-place, cached under work_dir.
+struct SpecimenMaker {
+  std::string work_dir;
+  std::string mesh_exe, place_exe;
+  bool verbose = true;
+  // A box [lo, hi] (2D: z ignored) as the `specimen:` YAML block for the given settings.
+  std::string specimen_yaml(const Settings& s, int dimension, const double lo[3], const double hi[3],
+                            double thickness_m = 1e-3);
+  // Path of tet (triangle) centroid particles of the box with the given target spacing.
+  std::string tet_particles(int dimension, const double lo[3], const double hi[3], double spacing_m,
+                            double thickness_m);
+};
+
+// Builds a system from YAML text (written to work_dir/<name>.yaml).
+solver::PdSystem system_from_yaml(const std::string& work_dir, const std::string& name, const std::string& yaml);
+
+// Horizon factor handed to the solver for a nominal m: the lattice tests' 3.015 rule, so
+// a lattice point at exactly m spacings is inside.
+inline double horizon_factor(double m) { return m + 0.015; }
+
+using RowSink = std::function<void(const AtlasRow&)>;
+
+struct SweepPlan {
+  bool quick = false;
+  std::vector<std::string> problems, models, kinds;
+  std::vector<double> m_values{2, 3, 4, 5};
+  int threads = 1;
+};
+
+void wave_speed_bar(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& sink);
+void static_calibration(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& sink);  // strain + fracture energy
+void quasi_static_bar(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& sink);
+void kalthoff_winkler(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& sink);
+
+// Stability map: docs/atlas/stability.csv, one row per run.
+inline constexpr const char* kStabilityHeader =
+    "study,model,dimension,particles_kind,m,dt_factor,particles,bonds,min_family,steps,status,detected_by,"
+    "energy_ratio,energy_scatter,message";
+void stability_map(const SweepPlan& plan, SpecimenMaker& maker, CsvTable& table);
+
+// Elapsed seconds since a steady-clock start.
+double seconds_since(const std::chrono::steady_clock::time_point& t0);
+
+}  // namespace breccia::atlas

@@ -1,0 +1,46 @@
+#pragma once
+// The particles of an MPS case (a lattice from the case file, or particles.h5) and the
+// prescribed-displacement sets selected on them. Shared by the displacement solver
+// (simulation.hpp) and the stress-based solid (solid.hpp).
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "breccia/mps/case_spec.hpp"
+#include "breccia/mps/neighbours.hpp"
+
+namespace breccia::mps {
+
+struct ParticleCloud {
+  int dimension = 2;
+  double spacing_m = 0.0;
+  double thickness_m = 1.0;  // 2D out-of-plane thickness
+  Periodicity periodic;
+  std::vector<double> position_m;  // 3N, reference configuration
+  std::vector<double> volume_m3;
+  std::string content_id;          // "" for a lattice
+  std::vector<std::string> set_names;
+  std::vector<std::vector<int64_t>> set_members;
+};
+
+// Lattice (x fastest, then y, then z) or particle file; throws InputError for a spacing
+// larger than the box or a periodic length below 2 re.
+ParticleCloud build_particle_cloud(const CaseSpec& spec);
+
+// Particles whose displacement components follow a history (or stay zero).
+struct PrescribedSet {
+  std::vector<int> particles;
+  std::array<bool, 3> components{};
+  std::optional<BurstHistory> burst;
+};
+
+// One set per boundary entry of the case; throws InputError for an unknown set name or an
+// entry that selects no particle.
+std::vector<PrescribedSet> select_boundary(const CaseSpec& spec, const ParticleCloud& cloud);
+
+double burst_displacement(const BurstHistory& h, double t);
+double burst_velocity(const BurstHistory& h, double t);
+
+}  // namespace breccia::mps

@@ -1,0 +1,135 @@
+#pragma once
+// Stress-based MPS solid (Inagaki 2009 thesis; physics.md section 3): total Lagrangian
+// bonds, a stress state per particle updated incrementally (Hooke, co-rotated with the
+// Hughes-Winget/Jaumann rotation, optional von Mises plasticity with linear hardening),
+// internal force as the MPS divergence of the stress, symplectic Euler. 2D plane strain
+// or 3D. The kernels are in solid_kernels.hpp; this class owns the data and the loops.
+//
+// step() reads like the algorithm:
+//   1. H_i = grad u at the particle (corrected MPS gradient)
+//   2. stress update: rotate, Hooke increment, radial return
+//   3. force = MPS divergence of stress (+ hourglass control, external and contact forces)
+//   4. v += dt a, u += dt v (symplectic Euler), prescribed displacements
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "breccia/mps/neighbours.hpp"
+#include "breccia/mps/particles.hpp"
+#include "breccia/mps/solid_kernels.hpp"
+
+namespace breccia::mps {
+
+enum class PressureForce { Conservative, Repulsive };
+
+struct SolidOptions {
+  int dimension = 2;
+  double spacing_m = 0.0;
+  double thickness_m = 1.0;        // 2D out-of-plane thickness (volumes already include it)
+  double re_over_spacing = 2.1;
+  double hourglass = 0.1;          // alpha: hourglass stiffness relative to the shear modulus
+  double damping_per_s = 0.0;      // mass-proportional damping a -= damping v (quasi-static runs)
+  PressureForce pressure = PressureForce::Conservative;
+  double safety = 0.3;             // dt = safety * spacing / c_L
+  std::optional<double> dt_s;      // used as given when set
+  std::array<double, 3> gravity_m_s2{0.0, 0.0, 0.0};
+};
+
+// A rigid, frictionless half-space {x : (x - point) . normal >= 0} is the allowed side.
+// A particle that penetrates by depth g feels the penalty force k g normal, with
+// k = stiffness_factor * (lambda + 2 mu) * A / spacing (A: particle face area), i.e. the
+// floor is as stiff as one layer of the material times the factor. The force is
+// conservative (energy 1/2 k g^2), so a frictionless bounce conserves energy up to the
+// time-integration error.
+struct RigidFloor {
+  std::array<double, 3> point_m{0.0, 0.0, 0.0};
+  std::array<double, 3> normal{0.0, 1.0, 0.0};
+  double stiffness_factor = 1.0;
+};
+
+class Solid {
+public:
+  // position_m: 3N reference positions; volume_m3: N (2D: area x thickness).
+  Solid(std::vector<double> position_m, std::vector<double> volume_m3, double density_kg_m3, const SolidLaw& law,
+        const SolidOptions& options);
+
+  void add_prescribed(PrescribedSet set);
+  void set_floor(const RigidFloor& floor);
+  // Constant external force per particle (N), e.g. a pressure load; may be changed between steps.
+  std::vector<double>& external_force(int axis) { return external_force_n_[axis]; }
+
+  void step();
+
+  // Internal force (N, 3N array) that a uniform stress state would produce in the reference
+  // configuration. It vanishes on particles whose stencil is full and equals the discrete
+  // surface traction of that stress elsewhere, so minus it, restricted to the particles
+  // near one surface, is the load consistent with the operators for a uniform pressure or
+  // traction on that surface (a plain point force on the outer particle layer is not: the
+  // second layer's stencil is truncated too and would be left unbalanced).
+  std::vector<double> internal_force_of_uniform_stress(const SymTensor& stress) const;
+
+  double time_s() const { return time_s_; }
+  long long steps() const { return steps_; }
+  double dt_s() const { return dt_s_; }
+  double cfl_dt_s() const { return cfl_dt_s_; }
+  double spacing_m() const { return options_.spacing_m; }
+  double thickness_m() const { return options_.thickness_m; }
+  int dimension() const { return options_.dimension; }
+  size_t size() const { return volume_m3_.size(); }
+  const BondList& bonds() const { return bonds_; }
+  const Normalisation& normalisation() const { return norm_; }
+  const SolidOptions& options() const { return options_; }
+  const SolidLaw& law() const { return law_; }
+  double density_kg_m3() const { return density_kg_m3_; }
+  double p_wave_speed() const;
+
+  const std::vector<double>& position_m() const { return position_m_; }
+  const std::vector<double>& volume_m3() const { return volume_m3_; }
+  const std::vector<double>& displacement(int axis) const { return u_[axis]; }
+  const std::vector<double>& velocity(int axis) const { return v_[axis]; }
+  std::vector<double>& displacement(int axis) { return u_[axis]; }
+  std::vector<double>& velocity(int axis) { return v_[axis]; }
+  const std::vector<SymTensor>& stress_pa() const { return stress_; }
+  const std::vector<double>& eq_plastic_strain() const { return eq_plastic_strain_; }
+  // Current displacement gradient H = F - I per particle (up to date after a step).
+  const std::vector<Mat3>& displacement_gradient() const { return gradient_; }
+
+  double kinetic_energy_j() const;
+  // Stress work accumulated since the start (elastic energy + plastic dissipation).
+  double stress_work_j() const;
+  double hourglass_energy_j() const;
+  double floor_energy_j() const;
+  double gravity_energy_j() const;  // - m g . u, zero at the start
+  double plastic_fraction() const;  // share of particles with eq. plastic strain > 0
+
+  int nearest_particle(const std::array<double, 3>& p) const;
+  double sample(int particle, const std::string& field) const;
+
+private:
+  void compute_acceleration();
+  void apply_prescribed(double t);
+  double floor_penetration_m(long long i, double normal_out[3]) const;
+  double floor_stiffness_n_m(long long i) const;
+  double hourglass_stiffness() const;
+
+  std::vector<double> position_m_, volume_m3_;
+  double density_kg_m3_ = 0.0;
+  SolidLaw law_;
+  SolidOptions options_;
+  std::optional<RigidFloor> floor_;
+  BondList bonds_;
+  Normalisation norm_;
+  std::vector<Mat3> moment_inverse_, gradient_, f_inverse_;  // L^-1, H = F - I, F^-1
+  std::vector<ForceMatrices> matrices_;
+  std::vector<SymTensor> stress_;
+  std::vector<char> full_stencil_;  // number density >= 0.97 n0 (not a surface particle)
+  std::vector<double> eq_plastic_strain_, stress_work_j_m3_, pressure_pa_, pressure_floor_pa_;
+  std::array<std::vector<double>, 3> u_, v_, a_, external_force_n_;
+  std::vector<PrescribedSet> prescribed_;
+  double mean_volume_m3_ = 0.0;
+  double dt_s_ = 0.0, cfl_dt_s_ = 0.0, time_s_ = 0.0;
+  long long steps_ = 0;
+};
+
+}  // namespace breccia::mps

@@ -1,0 +1,295 @@
+#pragma once
+// Per-particle and per-bond bodies of the stress-based MPS solid (solid.hpp), written once
+// as BRECCIA_HD inline functions over raw arrays and small plain structs, so the OpenMP
+// loops in solid.cpp and a CUDA launcher call the same code.
+//
+// Notation (total Lagrangian, reference bonds r_k = X_j - X_i, c_k = w_k / |r_k|^2, V the
+// particle volumes):
+//   L_i   = sum_k V_j c_k r_k (x) r_k                     (moment matrix of the stencil)
+//   H_i   = [sum_k V_j c_k (u_j - u_i) (x) r_k] L_i^-1     (displacement gradient, F = I + H)
+// On a regular lattice (equal volumes, full stencil) L_i = V (n0/d) I and H_i is exactly
+// the MPS gradient (d/n0) sum_k (u_j - u_i) (x) r_k w_k/|r_k|^2 (Koshizuka & Oka 1996).
+// L_i^-1 keeps it exact for linear fields at surfaces, where the MPS form is not, and the
+// volume weights keep a uniform stress free of interior forces where particle volumes vary
+// (with unweighted sums a graded arrangement, e.g. particles on circles, feels a spurious
+// force of order p grad V / V).
+#include <cmath>
+
+#include "breccia/mps/kernels.hpp"
+#include "breccia/mps/plasticity.hpp"
+
+namespace breccia::mps {
+
+// Row-major 3x3 matrix.
+struct Mat3 {
+  double a[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  BRECCIA_HD double& operator()(int r, int c) { return a[3 * r + c]; }
+  BRECCIA_HD double operator()(int r, int c) const { return a[3 * r + c]; }
+};
+
+BRECCIA_HD inline Mat3 identity3() {
+  Mat3 m;
+  m.a[0] = m.a[4] = m.a[8] = 1.0;
+  return m;
+}
+
+BRECCIA_HD inline Mat3 mul(const Mat3& x, const Mat3& y) {
+  Mat3 m;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m(r, c) = x(r, 0) * y(0, c) + x(r, 1) * y(1, c) + x(r, 2) * y(2, c);
+  return m;
+}
+
+BRECCIA_HD inline double det(const Mat3& m) {
+  return m(0, 0) * (m(1, 1) * m(2, 2) - m(1, 2) * m(2, 1)) - m(0, 1) * (m(1, 0) * m(2, 2) - m(1, 2) * m(2, 0)) +
+         m(0, 2) * (m(1, 0) * m(2, 1) - m(1, 1) * m(2, 0));
+}
+
+// Inverse by cofactors; the caller guarantees det != 0.
+BRECCIA_HD inline Mat3 inverse(const Mat3& m) {
+  const double inv_det = 1.0 / det(m);
+  Mat3 r;
+  r(0, 0) = (m(1, 1) * m(2, 2) - m(1, 2) * m(2, 1)) * inv_det;
+  r(0, 1) = (m(0, 2) * m(2, 1) - m(0, 1) * m(2, 2)) * inv_det;
+  r(0, 2) = (m(0, 1) * m(1, 2) - m(0, 2) * m(1, 1)) * inv_det;
+  r(1, 0) = (m(1, 2) * m(2, 0) - m(1, 0) * m(2, 2)) * inv_det;
+  r(1, 1) = (m(0, 0) * m(2, 2) - m(0, 2) * m(2, 0)) * inv_det;
+  r(1, 2) = (m(0, 2) * m(1, 0) - m(0, 0) * m(1, 2)) * inv_det;
+  r(2, 0) = (m(1, 0) * m(2, 1) - m(1, 1) * m(2, 0)) * inv_det;
+  r(2, 1) = (m(0, 1) * m(2, 0) - m(0, 0) * m(2, 1)) * inv_det;
+  r(2, 2) = (m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0)) * inv_det;
+  return r;
+}
+
+BRECCIA_HD inline Mat3 transpose(const Mat3& m) {
+  Mat3 t;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) t(r, c) = m(c, r);
+  return t;
+}
+
+BRECCIA_HD inline Mat3 to_matrix(const SymTensor& s) {
+  Mat3 m;
+  m(0, 0) = s.xx;
+  m(1, 1) = s.yy;
+  m(2, 2) = s.zz;
+  m(0, 1) = m(1, 0) = s.xy;
+  m(1, 2) = m(2, 1) = s.yz;
+  m(0, 2) = m(2, 0) = s.zx;
+  return m;
+}
+
+BRECCIA_HD inline SymTensor symmetric_part(const Mat3& m) {
+  return {m(0, 0), m(1, 1), m(2, 2), 0.5 * (m(0, 1) + m(1, 0)), 0.5 * (m(1, 2) + m(2, 1)), 0.5 * (m(0, 2) + m(2, 0))};
+}
+
+BRECCIA_HD inline double contract(const SymTensor& s, const SymTensor& e) {
+  return s.xx * e.xx + s.yy * e.yy + s.zz * e.zz + 2.0 * (s.xy * e.xy + s.yz * e.yz + s.zx * e.zx);
+}
+
+// L_i^-1 for particle i. In 2D the z row and column stay zero (no z bonds). A stencil too
+// one-sided to invert (fewer than d independent bond directions) falls back to the plain
+// MPS scale d/(n0 V_i).
+BRECCIA_HD inline Mat3 inverse_moment_matrix_at(long long i, BondsView b, const double* volume_m3, int dimension,
+                                                double mps_scale) {
+  Mat3 moment;
+  mps_scale /= volume_m3[i];
+  for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
+    const double r[3] = {b.rx[k], b.ry[k], b.rz[k]};
+    const double c = volume_m3[b.neighbour[k]] * b.weight[k] / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    for (int p = 0; p < 3; ++p)
+      for (int q = 0; q < 3; ++q) moment(p, q) += c * r[p] * r[q];
+  }
+  if (dimension == 2) moment(2, 2) = 1.0;
+  // Relative to the full-stencil value (n0/d)^d: below 1e-3 the inverse amplifies noise.
+  const double full = 1.0 / mps_scale;
+  const double det_full = dimension == 2 ? full * full : full * full * full;
+  Mat3 inv;
+  if (std::fabs(det(moment)) < 1e-3 * det_full) {
+    inv = identity3();
+    for (double& v : inv.a) v *= mps_scale;
+  } else {
+    inv = inverse(moment);
+  }
+  if (dimension == 2) inv(2, 2) = 0.0;
+  return inv;
+}
+
+// H_i = [sum_k V_j c_k (u_j - u_i) (x) r_k] L_i^-1 (see the header comment).
+BRECCIA_HD inline Mat3 displacement_gradient_at(long long i, BondsView b, VectorField u, const double* volume_m3,
+                                                const Mat3& moment_inverse) {
+  Mat3 sum;
+  for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
+    const long long j = b.neighbour[k];
+    const double r[3] = {b.rx[k], b.ry[k], b.rz[k]};
+    const double c = volume_m3[j] * b.weight[k] / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    const double du[3] = {u.x[j] - u.x[i], u.y[j] - u.y[i], u.z[j] - u.z[i]};
+    for (int p = 0; p < 3; ++p)
+      for (int q = 0; q < 3; ++q) sum(p, q) += c * du[p] * r[q];
+  }
+  return mul(sum, moment_inverse);
+}
+
+// Material law of the solid: isotropic Hooke increments plus optional J2 plasticity.
+struct SolidLaw {
+  double lame_lambda_pa = 0.0;
+  double shear_modulus_pa = 0.0;
+  bool plastic = false;
+  VonMisesHardening hardening;
+};
+
+// One particle's stress update over a step, from the displacement gradients at the start
+// (h_old, with f_old_inverse = (I + h_old)^-1) and the end (h_new) of the step. The
+// incremental deformation gradient dF = F_new F_old^-1 = I + (H_new - H_old) F_old^-1
+// splits into the strain increment sym(dF - I) and the spin increment W = skew(dF - I).
+// The stress is first rotated with the Hughes-Winget operator Q = (I - W/2)^-1 (I + W/2)
+// (an exactly orthogonal, second-order integration of the Jaumann rate: a rigid rotation
+// only rotates the stress), then receives the Hooke increment (elastic trial) and, if
+// plastic, the radial return (deviatoric_scale: q_returned / q_trial, 1 when elastic).
+// Returns the stress work density of the step, (sigma_old + sigma_new)/2 : d eps (J/m^3),
+// for the energy balance.
+BRECCIA_HD inline double update_stress(const SolidLaw& law, const Mat3& h_old, const Mat3& f_old_inverse,
+                                       const Mat3& h_new, int dimension, SymTensor& stress, double& eq_plastic_strain,
+                                       double* deviatoric_scale = nullptr) {
+  Mat3 dh;
+  for (int k = 0; k < 9; ++k) dh.a[k] = h_new.a[k] - h_old.a[k];
+  const Mat3 g = mul(dh, f_old_inverse);
+  const SymTensor strain_increment = symmetric_part(g);
+  Mat3 half_spin;  // W/2
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) half_spin(r, c) = 0.25 * (g(r, c) - g(c, r));
+  Mat3 minus = identity3(), plus = identity3();
+  for (int k = 0; k < 9; ++k) {
+    minus.a[k] -= half_spin.a[k];
+    plus.a[k] += half_spin.a[k];
+  }
+  const Mat3 q = mul(inverse(minus), plus);
+  SymTensor rotated = symmetric_part(mul(mul(q, to_matrix(stress)), transpose(q)));
+  if (dimension == 2) rotated.yz = rotated.zx = 0.0;  // plane strain: no out-of-plane shear
+  SymTensor next = rotated;
+  add_hooke_increment(next, strain_increment, law.lame_lambda_pa, law.shear_modulus_pa);
+  double scale = 1.0;
+  if (law.plastic) {
+    const double q_trial = von_mises_stress(next);
+    if (radial_return(law.hardening, next, eq_plastic_strain) > 0.0) scale = von_mises_stress(next) / q_trial;
+  }
+  if (deviatoric_scale) *deviatoric_scale = scale;
+  SymTensor mid;
+  mid.xx = 0.5 * (rotated.xx + next.xx);
+  mid.yy = 0.5 * (rotated.yy + next.yy);
+  mid.zz = 0.5 * (rotated.zz + next.zz);
+  mid.xy = 0.5 * (rotated.xy + next.xy);
+  mid.yz = 0.5 * (rotated.yz + next.yz);
+  mid.zx = 0.5 * (rotated.zx + next.zx);
+  stress = next;
+  return contract(mid, strain_increment);
+}
+
+// Per-particle force matrices. With the Cauchy stress sigma, F = I + H, J = det F, the first
+// Piola-Kirchhoff stress P = J sigma F^-T and K_hg the hourglass stiffness (below):
+//   combined  C_i = P_i L_i^-1 - K_hg H_i
+//   pressure  G_i = J_i F_i^-T L_i^-1   (the part of P L^-1 that multiplies -p)
+// The bond force then needs only these two matrices per end (solid_force_at).
+struct ForceMatrices {
+  Mat3 combined, pressure;
+  double hourglass_stiffness = 0.0;  // K_hg of this particle (Pa/m^3)
+};
+
+BRECCIA_HD inline ForceMatrices force_matrices(const SymTensor& stress, const Mat3& h, const Mat3& f_inverse,
+                                               const Mat3& moment_inverse, double hourglass_stiffness) {
+  Mat3 f = h;
+  f(0, 0) += 1.0;
+  f(1, 1) += 1.0;
+  f(2, 2) += 1.0;
+  const double j = det(f);
+  const Mat3 g = mul(transpose(f_inverse), moment_inverse);
+  const Mat3 piola = mul(to_matrix(stress), g);
+  ForceMatrices out;
+  out.hourglass_stiffness = hourglass_stiffness;
+  for (int k = 0; k < 9; ++k) {
+    out.combined.a[k] = j * piola.a[k] - hourglass_stiffness * h.a[k];
+    out.pressure.a[k] = j * g.a[k];
+  }
+  return out;
+}
+
+// Internal force on particle i: minus the derivative of W = sum_i V_i psi(F_i) + E_hg with
+// respect to u_i (the MPS divergence of stress in its energy-conjugate, symmetric form):
+//   f_i = sum_k c_k V_i V_j [ (P_i L_i^-1 + P_j L_j^-1) r_k + hourglass_k ].
+// On a regular lattice L^-1 = (d/(n0 V)) I and the stress part is
+// V (d/n0) sum_k (sigma_i + sigma_j) r_k w_k/r_k^2, the adjoint MPS gradient of the stress
+// (as in kernels.hpp). Each bond term is antisymmetric in i, j: momentum is conserved.
+//
+// Repulsive pressure (pressure_floor_pa != nullptr; Inagaki's stabilisation): as in the
+// MPS pressure gradient of fluids, (d/n0) sum_j (p_j - p^_i) r w/r^2 with p^_i the lowest
+// pressure in i's neighbourhood (Koshizuka & Oka 1996), the pressure of both ends of i's
+// bonds is measured from p^_i, so (p - p^_i) >= 0 and the pressure part of every bond
+// force on i pushes i away from j. The shift adds p^_i (G_i + G_j) r_k per bond, whose sum
+// vanishes on a full, symmetric stencil (so the interior is unchanged to O(h)); the price
+// is that the bond forces are no longer equal and opposite (momentum and energy are
+// conserved only approximately) and that at a free surface the shift acts like a surface
+// pressure p^_i (a body in tension is wrongly loaded there).
+// Hourglass control (zero-energy modes of a particle-wise gradient): the energy
+// E_hg = sum_i (K_i / 2) V_i sum_k V_j c_k |u_j - u_i - H_i r_k|^2, K_i = alpha mu_i d/(n0 V),
+// penalises the part of each bond's displacement that the particle's gradient does not
+// explain, so it vanishes for every linear field. H_i is the weighted least-squares fit of
+// exactly these residuals, so dE_hg/dH_i = 0 and the force is the plain pair sum
+//   V_i V_j [ (K_i + K_j)(u_j - u_i) - (K_i H_i + K_j H_j) r_k ]
+// (the residual is Ganzenmueller's 2015 SPH hourglass measure). mu_i is the shear modulus,
+// scaled in a plastic step by the radial return's deviatoric factor (the algorithmic shear
+// stiffness), so the penalty does not stiffen plastic flow far beyond the material.
+struct SolidForceInputs {
+  BondsView bonds;
+  VectorField u;
+  const ForceMatrices* matrices = nullptr;
+  const double* pressure_floor_pa = nullptr;  // nullptr: conservative form
+  const double* volume_m3 = nullptr;
+};
+
+BRECCIA_HD inline void solid_force_at(long long i, const SolidForceInputs& in, double out[3]) {
+  const BondsView& b = in.bonds;
+  const Mat3& ci = in.matrices[i].combined;
+  double f[3] = {0.0, 0.0, 0.0};
+  for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
+    const long long j = b.neighbour[k];
+    const double r[3] = {b.rx[k], b.ry[k], b.rz[k]};
+    const double c = in.volume_m3[j] * b.weight[k] / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    const Mat3& cj = in.matrices[j].combined;
+    const double hg = in.matrices[i].hourglass_stiffness + in.matrices[j].hourglass_stiffness;
+    const double du[3] = {in.u.x[j] - in.u.x[i], in.u.y[j] - in.u.y[i], in.u.z[j] - in.u.z[i]};
+    for (int p = 0; p < 3; ++p)
+      f[p] += c * ((ci.a[3 * p] + cj.a[3 * p]) * r[0] + (ci.a[3 * p + 1] + cj.a[3 * p + 1]) * r[1] +
+                   (ci.a[3 * p + 2] + cj.a[3 * p + 2]) * r[2] + hg * du[p]);
+    if (in.pressure_floor_pa) {
+      const double p_ref = in.pressure_floor_pa[i];
+      const Mat3& gi = in.matrices[i].pressure;
+      const Mat3& gj = in.matrices[j].pressure;
+      for (int p = 0; p < 3; ++p)
+        f[p] += c * p_ref * ((gi.a[3 * p] + gj.a[3 * p]) * r[0] + (gi.a[3 * p + 1] + gj.a[3 * p + 1]) * r[1] +
+                             (gi.a[3 * p + 2] + gj.a[3 * p + 2]) * r[2]);
+    }
+  }
+  const double vi = in.volume_m3[i];
+  out[0] = vi * f[0];
+  out[1] = vi * f[1];
+  out[2] = vi * f[2];
+}
+
+// Hourglass energy of particle i (J), the E_hg term above.
+BRECCIA_HD inline double hourglass_energy_at(long long i, BondsView b, VectorField u, const double* volume_m3,
+                                             const Mat3& h, double hourglass_stiffness) {
+  double sum = 0.0;
+  for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
+    const long long j = b.neighbour[k];
+    const double r[3] = {b.rx[k], b.ry[k], b.rz[k]};
+    const double c = volume_m3[j] * b.weight[k] / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    const double du[3] = {u.x[j] - u.x[i], u.y[j] - u.y[i], u.z[j] - u.z[i]};
+    for (int p = 0; p < 3; ++p) {
+      const double e = du[p] - (h(p, 0) * r[0] + h(p, 1) * r[1] + h(p, 2) * r[2]);
+      sum += c * e * e;
+    }
+  }
+  return 0.5 * hourglass_stiffness * volume_m3[i] * sum;
+}
+
+}  // namespace breccia::mps

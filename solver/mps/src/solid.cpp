@@ -1,0 +1,286 @@
+#include "breccia/mps/solid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "breccia/common/error.hpp"
+
+namespace breccia::mps {
+
+// Below this many particles thread start-up costs more than a step (as in simulation.cpp).
+constexpr long long kSolidParallelMin = 8192;
+
+Solid::Solid(std::vector<double> position_m, std::vector<double> volume_m3, double density_kg_m3, const SolidLaw& law,
+             const SolidOptions& options)
+    : position_m_(std::move(position_m)),
+      volume_m3_(std::move(volume_m3)),
+      density_kg_m3_(density_kg_m3),
+      law_(law),
+      options_(options) {
+  const size_t n = volume_m3_.size();
+  if (position_m_.size() != 3 * n) throw RunError("mps solid: positions and volumes disagree in size");
+  bonds_ = build_bonds(options_.dimension, position_m_, options_.re_over_spacing * options_.spacing_m);
+  norm_ = reference_normalisation(bonds_);
+  mean_volume_m3_ = 0.0;
+  for (double v : volume_m3_) mean_volume_m3_ += v / n;
+  const double mps_scale = options_.dimension / norm_.number_density_n0;
+  const BondsView b = bonds_.view();
+  moment_inverse_.resize(n);
+  for (size_t i = 0; i < n; ++i) moment_inverse_[i] = inverse_moment_matrix_at(i, b, volume_m3_.data(), options_.dimension, mps_scale);
+  full_stencil_.assign(n, 0);
+  for (size_t i = 0; i < n; ++i) {
+    double number_density = 0.0;
+    for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) number_density += b.weight[k];
+    full_stencil_[i] = number_density >= 0.97 * norm_.number_density_n0;
+  }
+  gradient_.assign(n, Mat3{});
+  f_inverse_.assign(n, identity3());
+  matrices_.assign(n, ForceMatrices{});
+  for (auto& m : matrices_) m.hourglass_stiffness = hourglass_stiffness();
+  stress_.assign(n, SymTensor{});
+  eq_plastic_strain_.assign(n, 0.0);
+  stress_work_j_m3_.assign(n, 0.0);
+  pressure_pa_.assign(n, 0.0);
+  pressure_floor_pa_.assign(n, 0.0);
+  for (int a = 0; a < 3; ++a) {
+    u_[a].assign(n, 0.0);
+    v_[a].assign(n, 0.0);
+    a_[a].assign(n, 0.0);
+    external_force_n_[a].assign(n, 0.0);
+  }
+  cfl_dt_s_ = options_.safety * options_.spacing_m / p_wave_speed();
+  dt_s_ = options_.dt_s ? *options_.dt_s : cfl_dt_s_;
+}
+
+// K_hg = alpha mu d / (n0 V_mean): with the volume-weighted residual sum, the hourglass
+// energy density is alpha mu times a dimensionless residual measure of order one.
+double Solid::hourglass_stiffness() const {
+  return options_.hourglass * law_.shear_modulus_pa * options_.dimension / (norm_.number_density_n0 * mean_volume_m3_);
+}
+
+double Solid::p_wave_speed() const {
+  return std::sqrt((law_.lame_lambda_pa + 2.0 * law_.shear_modulus_pa) / density_kg_m3_);
+}
+
+void Solid::add_prescribed(PrescribedSet set) {
+  prescribed_.push_back(std::move(set));
+  apply_prescribed(time_s_);
+}
+
+void Solid::set_floor(const RigidFloor& floor) {
+  RigidFloor f = floor;
+  const double len = std::sqrt(f.normal[0] * f.normal[0] + f.normal[1] * f.normal[1] + f.normal[2] * f.normal[2]);
+  for (double& c : f.normal) c /= len;
+  floor_ = f;
+}
+
+void Solid::apply_prescribed(double t) {
+  for (const auto& set : prescribed_) {
+    const double u = set.burst ? burst_displacement(*set.burst, t) : 0.0;
+    const double v = set.burst ? burst_velocity(*set.burst, t) : 0.0;
+    for (int a = 0; a < 3; ++a) {
+      if (!set.components[a]) continue;
+      for (int i : set.particles) {
+        u_[a][i] = u;
+        v_[a][i] = v;
+      }
+    }
+  }
+}
+
+double Solid::floor_penetration_m(long long i, double normal_out[3]) const {
+  const RigidFloor& f = *floor_;
+  double height = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    height += (position_m_[3 * i + a] + u_[a][i] - f.point_m[a]) * f.normal[a];
+    normal_out[a] = f.normal[a];
+  }
+  return height < 0.0 ? -height : 0.0;
+}
+
+double Solid::floor_stiffness_n_m(long long i) const {
+  const double face_area = options_.dimension == 2 ? options_.spacing_m * options_.thickness_m
+                                                   : options_.spacing_m * options_.spacing_m;
+  return floor_->stiffness_factor * (law_.lame_lambda_pa + 2.0 * law_.shear_modulus_pa) * face_area / options_.spacing_m;
+}
+
+void Solid::compute_acceleration() {
+  const long long n = static_cast<long long>(size());
+  const BondsView b = bonds_.view();
+  const VectorField u{u_[0].data(), u_[1].data(), u_[2].data()};
+  const int dim = options_.dimension;
+  const double hourglass = hourglass_stiffness();
+
+  // 1-2. gradient, stress update, force matrices (all per particle).
+  long long inverted = 0;
+#pragma omp parallel for schedule(static) reduction(+ : inverted) if (n > kSolidParallelMin)
+  for (long long i = 0; i < n; ++i) {
+    const Mat3 h_new = displacement_gradient_at(i, b, u, volume_m3_.data(), moment_inverse_[i]);
+    Mat3 f = h_new;
+    f(0, 0) += 1.0;
+    f(1, 1) += 1.0;
+    f(2, 2) += 1.0;
+    if (!(det(f) > 0.0)) {  // also catches NaN
+      ++inverted;
+      continue;
+    }
+    double deviatoric_scale = 1.0;
+    stress_work_j_m3_[i] +=
+        update_stress(law_, gradient_[i], f_inverse_[i], h_new, dim, stress_[i], eq_plastic_strain_[i], &deviatoric_scale);
+    gradient_[i] = h_new;
+    f_inverse_[i] = inverse(f);
+    pressure_pa_[i] = pressure_of(stress_[i]);
+    matrices_[i] = force_matrices(stress_[i], h_new, f_inverse_[i], moment_inverse_[i], hourglass * deviatoric_scale);
+  }
+  if (inverted > 0)
+    throw RunError("mps solid: " + std::to_string(inverted) + " particle(s) inverted (det F <= 0) at t = " +
+                   std::to_string(time_s_) + " s: the deformation is too large or too non-affine for the reference "
+                   "stencils (raise model.hourglass, refine, or lower time.safety)");
+  const bool repulsive = options_.pressure == PressureForce::Repulsive;
+  if (repulsive) {
+#pragma omp parallel for schedule(static) if (n > kSolidParallelMin)
+    for (long long i = 0; i < n; ++i) {
+      // Near a free surface the shift would act as a surface pressure (and feed back on
+      // itself); those particles keep the conservative form, as MPS fluids hold surface
+      // particles (number density below 0.97 n0) at zero pressure.
+      if (!full_stencil_[i]) {
+        pressure_floor_pa_[i] = 0.0;
+        continue;
+      }
+      double lowest = pressure_pa_[i];
+      for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) lowest = std::min(lowest, pressure_pa_[b.neighbour[k]]);
+      pressure_floor_pa_[i] = lowest;
+    }
+  }
+
+  // 3. forces and acceleration.
+  SolidForceInputs in;
+  in.bonds = b;
+  in.u = u;
+  in.matrices = matrices_.data();
+  in.pressure_floor_pa = repulsive ? pressure_floor_pa_.data() : nullptr;
+  in.volume_m3 = volume_m3_.data();
+  const double damping = options_.damping_per_s;
+  const auto& g = options_.gravity_m_s2;
+#pragma omp parallel for schedule(static) if (n > kSolidParallelMin)
+  for (long long i = 0; i < n; ++i) {
+    double f[3];
+    solid_force_at(i, in, f);
+    for (int a = 0; a < 3; ++a) f[a] += external_force_n_[a][i];
+    if (floor_) {
+      double normal[3];
+      const double depth = floor_penetration_m(i, normal);
+      if (depth > 0.0)
+        for (int a = 0; a < 3; ++a) f[a] += floor_stiffness_n_m(i) * depth * normal[a];
+    }
+    const double mass = density_kg_m3_ * volume_m3_[i];
+    for (int a = 0; a < dim; ++a) a_[a][i] = f[a] / mass + g[a] - damping * v_[a][i];
+  }
+}
+
+void Solid::step() {
+  const double dt = dt_s_;
+  const long long n = static_cast<long long>(size());
+  // Symplectic Euler (the paper's scheme): v^{k+1} = v^k + dt a(u^k), u^{k+1} = u^k + dt v^{k+1}.
+  compute_acceleration();
+  for (int a = 0; a < options_.dimension; ++a) {
+    double* u = u_[a].data();
+    double* v = v_[a].data();
+    const double* acc = a_[a].data();
+#pragma omp parallel for schedule(static) if (n > kSolidParallelMin)
+    for (long long i = 0; i < n; ++i) {
+      v[i] += dt * acc[i];
+      u[i] += dt * v[i];
+    }
+  }
+  time_s_ += dt;
+  apply_prescribed(time_s_);
+  ++steps_;
+}
+
+std::vector<double> Solid::internal_force_of_uniform_stress(const SymTensor& stress) const {
+  const long long n = static_cast<long long>(size());
+  std::vector<ForceMatrices> matrices(n);
+  const Mat3 zero{};
+  for (long long i = 0; i < n; ++i)
+    matrices[i] = force_matrices(stress, zero, identity3(), moment_inverse_[i], 0.0);
+  const std::vector<double> none(n, 0.0);
+  SolidForceInputs in;
+  in.bonds = bonds_.view();
+  in.u = {none.data(), none.data(), none.data()};
+  in.matrices = matrices.data();
+  in.volume_m3 = volume_m3_.data();
+  std::vector<double> force(3 * n);
+  for (long long i = 0; i < n; ++i) solid_force_at(i, in, &force[3 * i]);
+  return force;
+}
+
+double Solid::kinetic_energy_j() const {
+  double e = 0.0;
+  for (size_t i = 0; i < size(); ++i)
+    e += 0.5 * density_kg_m3_ * volume_m3_[i] * (v_[0][i] * v_[0][i] + v_[1][i] * v_[1][i] + v_[2][i] * v_[2][i]);
+  return e;
+}
+
+double Solid::stress_work_j() const {
+  double e = 0.0;
+  for (size_t i = 0; i < size(); ++i) e += stress_work_j_m3_[i] * volume_m3_[i];
+  return e;
+}
+
+double Solid::hourglass_energy_j() const {
+  const BondsView b = bonds_.view();
+  const VectorField u{u_[0].data(), u_[1].data(), u_[2].data()};
+  double e = 0.0;
+  for (size_t i = 0; i < size(); ++i) {
+    const Mat3 h = displacement_gradient_at(i, b, u, volume_m3_.data(), moment_inverse_[i]);
+    e += hourglass_energy_at(i, b, u, volume_m3_.data(), h, matrices_[i].hourglass_stiffness);
+  }
+  return e;
+}
+
+double Solid::floor_energy_j() const {
+  if (!floor_) return 0.0;
+  double e = 0.0;
+  for (size_t i = 0; i < size(); ++i) {
+    double normal[3];
+    const double depth = floor_penetration_m(i, normal);
+    e += 0.5 * floor_stiffness_n_m(i) * depth * depth;
+  }
+  return e;
+}
+
+double Solid::gravity_energy_j() const {
+  double e = 0.0;
+  for (size_t i = 0; i < size(); ++i)
+    for (int a = 0; a < 3; ++a) e -= density_kg_m3_ * volume_m3_[i] * options_.gravity_m_s2[a] * u_[a][i];
+  return e;
+}
+
+double Solid::plastic_fraction() const {
+  if (size() == 0) return 0.0;
+  const auto k = std::count_if(eq_plastic_strain_.begin(), eq_plastic_strain_.end(), [](double e) { return e > 0.0; });
+  return static_cast<double>(k) / size();
+}
+
+int Solid::nearest_particle(const std::array<double, 3>& p) const {
+  int best = -1;
+  double best_d2 = 1e300;
+  for (size_t i = 0; i < size(); ++i) {
+    double d2 = 0.0;
+    for (int a = 0; a < 3; ++a) d2 += std::pow(position_m_[3 * i + a] - p[a], 2);
+    if (d2 < best_d2) {
+      best_d2 = d2;
+      best = static_cast<int>(i);
+    }
+  }
+  return best;
+}
+
+double Solid::sample(int i, const std::string& field) const {
+  const int axis = field.back() - 'x';
+  return field.rfind("displacement", 0) == 0 ? u_[axis][i] : v_[axis][i];
+}
+
+}  // namespace breccia::mps

@@ -1,0 +1,51 @@
+#include "breccia/mps/solid_case.hpp"
+
+#include <cmath>
+
+#include "breccia/mps/particles.hpp"
+
+namespace breccia::mps {
+
+Solid make_solid(const CaseSpec& spec, std::string* content_id) {
+  ParticleCloud cloud = build_particle_cloud(spec);
+  if (content_id) *content_id = cloud.content_id;
+  const std::vector<PrescribedSet> prescribed = select_boundary(spec, cloud);
+  const MaterialSpec& m = spec.material;
+  SolidLaw law;
+  law.lame_lambda_pa = m.lame_lambda_pa;
+  law.shear_modulus_pa = m.shear_modulus_pa;
+  if (m.plasticity) {
+    law.plastic = true;
+    law.hardening = {m.shear_modulus_pa, m.plasticity->yield_stress_pa, m.plasticity->hardening_modulus_pa};
+  }
+  SolidOptions opt;
+  opt.dimension = cloud.dimension;
+  opt.spacing_m = cloud.spacing_m;
+  opt.thickness_m = cloud.thickness_m;
+  opt.re_over_spacing = spec.re_over_spacing;
+  opt.hourglass = spec.hourglass;
+  opt.damping_per_s = spec.damping_per_s;
+  opt.pressure = spec.repulsive_pressure ? PressureForce::Repulsive : PressureForce::Conservative;
+  opt.safety = spec.safety;
+  opt.dt_s = spec.dt_s;
+  opt.gravity_m_s2 = spec.gravity_m_s2;
+  const std::vector<double> position = cloud.position_m;
+  Solid solid(std::move(cloud.position_m), std::move(cloud.volume_m3), m.density_kg_m3, law, opt);
+  if (spec.floor) solid.set_floor({spec.floor->point_m, spec.floor->normal, spec.floor->stiffness_factor});
+  const size_t n = solid.size();
+  for (int a = 0; a < solid.dimension(); ++a)
+    for (size_t i = 0; i < n; ++i) solid.velocity(a)[i] = spec.initial_velocity_m_s[a];
+  if (spec.initial) {
+    const auto& g = *spec.initial;
+    for (size_t i = 0; i < n; ++i) {
+      double r2 = 0.0;
+      for (int a = 0; a < solid.dimension(); ++a) r2 += std::pow(position[3 * i + a] - g.center_m[a], 2);
+      const double f = std::exp(-r2 / (g.width_m * g.width_m));
+      for (int a = 0; a < solid.dimension(); ++a) solid.displacement(a)[i] = g.amplitude_m[a] * f;
+    }
+  }
+  for (const auto& set : prescribed) solid.add_prescribed(set);
+  return solid;
+}
+
+}  // namespace breccia::mps

@@ -1,0 +1,142 @@
+// Measured throughputs: read from throughputs.yaml (each number with its source) or
+// measured on this machine with a short breccia-solve run of a lattice shaped like the case.
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+
+#include "breccia/common/error.hpp"
+#include "breccia/common/yaml_input.hpp"
+#include "breccia/plan/plan.hpp"
+#include "breccia/solver/calibration.hpp"
+#include "breccia/solver/run.hpp"
+
+namespace breccia::plan {
+
+using solver::PdModel;
+
+const LoopRate& Throughputs::rate(PdModel model, int threads) const {
+  const std::string name = model == PdModel::LPS ? "lps" : "pmb";
+  const LoopRate* best = nullptr;
+  for (const auto& r : loop) {
+    if (r.model != name) continue;
+    if (!best || std::abs(r.threads - threads) < std::abs(best->threads - threads)) best = &r;
+  }
+  if (!best)
+    throw InputError(file, "loop", "no throughput for model " + name, "an entry {model: " + name + ", threads, ...}");
+  return *best;
+}
+
+std::string default_throughputs_path() {
+  if (const char* env = std::getenv("BRECCIA_PLAN_THROUGHPUTS")) return env;
+  return BRECCIA_PLAN_THROUGHPUTS;
+}
+
+Throughputs load_throughputs(const std::string& path) {
+  const Section root = Section::load_file(path);
+  root.allow_only({"loop", "setup", "adr", "gpu"});
+  Throughputs t;
+  t.file = path;
+  for (const Section& l : root.list("loop")) {
+    l.allow_only({"model", "threads", "bond_updates_per_core_s", "source"});
+    LoopRate r;
+    r.model = l.choice("model", {"pmb", "lps"});
+    r.threads = static_cast<int>(l.integer("threads"));
+    r.bond_updates_per_core_s = l.positive("bond_updates_per_core_s", Quantity::Dimensionless);
+    r.source = l.text("source", path);
+    t.loop.push_back(r);
+  }
+  if (t.loop.empty()) throw InputError(path, "loop", "no entries", "measured loop throughputs per model");
+  const Section setup = root.section("setup");
+  setup.allow_only({"bonds_per_core_s", "source", "power_iterations"});
+  t.setup_bonds_per_core_s = setup.positive("bonds_per_core_s", Quantity::Dimensionless);
+  t.setup_source = setup.text("source", path);
+  t.power_iterations = static_cast<int>(setup.integer("power_iterations", 60));
+  const Section adr = root.section("adr");
+  adr.allow_only({"iterations_per_cell_decade", "source"});
+  t.adr_iterations_per_cell_decade = adr.positive("iterations_per_cell_decade", Quantity::Dimensionless);
+  t.adr_source = adr.text("source", path);
+  if (auto gpu = root.optional_section("gpu")) {
+    gpu->allow_only({"bond_updates_per_s", "source"});
+    const YAML::Node n = gpu->node()["bond_updates_per_s"];
+    if (n && !n.IsNull()) t.gpu_bond_updates_per_s = gpu->positive("bond_updates_per_s", Quantity::Dimensionless);
+    t.gpu_source = gpu->text("source", "");
+  }
+  return t;
+}
+
+Throughputs calibrate(const solver::CaseConfig& like, int threads, const Throughputs& base, double target_bonds,
+                      double min_loop_s) {
+  // A lattice block with the case's dimension, model, influence and horizon factor; no
+  // loads and no breaking (the breaking check still runs), like the benchmark of
+  // docs/performance.md. The loop is breccia-solve's own time loop (run_system), so
+  // output-step diagnostics cost what they cost in a real run.
+  solver::CaseConfig c;
+  c.name = "calibration";
+  c.file = "(calibration)";
+  const int d = like.lattice ? like.lattice->dimension : (like.planar == solver::Planar::None ? 3 : 2);
+  const double m = like.horizon_m && like.lattice ? *like.horizon_m / like.lattice->spacing : like.horizon_factor;
+  const long long per_side = std::max<long long>(
+      8, std::llround(std::pow(target_bonds / std::max(1.0, bulk_family_size(d, m)), 1.0 / d)));
+  const double h = 1e-3;
+  solver::LatticeSpec lat;
+  lat.dimension = d;
+  lat.spacing = h;
+  lat.thickness = h;
+  for (int k = 0; k < 2 * d; ++k) lat.box.push_back(k < d ? 0.0 : per_side * h);
+  c.lattice = lat;
+  c.model = like.model;
+  c.model_name = like.model == PdModel::LPS ? "lps" : "pmb";
+  c.planar = d == 2 ? (like.planar == solver::Planar::None ? solver::Planar::PlaneStress : like.planar)
+                    : solver::Planar::None;
+  c.influence = like.influence;
+  c.horizon_factor = m;
+  solver::MaterialSpec mat = like.materials.empty() ? solver::MaterialSpec{} : like.materials.front();
+  if (mat.density <= 0) mat.density = 2500;
+  if (mat.youngs_modulus <= 0) mat.youngs_modulus = 50e9;
+  if (c.model == PdModel::PMB) mat.poisson_ratio = solver::pmb_poisson_ratio(d, c.planar);
+  mat.fracture_energy = 0;
+  mat.name = "calibration";
+  c.materials = {mat};
+  c.write_results = false;
+
+  omp_set_num_threads(std::max(1, threads));
+  const std::clock_t cpu0 = std::clock();
+  c.steps = 1;
+  solver::PdSystem s = solver::setup_system(c);
+  const double setup_cpu_s = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
+  const double bonds = static_cast<double>(s.bond_count());
+  // Enough steps for min_loop_s at the documented rate (a short loop is dominated by noise).
+  const double guess = base.rate(c.model, threads).bond_updates_per_core_s;
+  const long long steps = std::max<long long>(20, std::llround(min_loop_s * guess / std::max(1.0, bonds)));
+  s.config.steps = steps;
+  solver::RunOptions o;
+  o.progress = false;
+  o.out_dir = (std::filesystem::temp_directory_path() /
+               ("breccia-plan-calibration-" + std::to_string(std::chrono::steady_clock::now().time_since_epoch().count())))
+                  .string();
+  const solver::RunResult r = solver::run_system(s, o);
+  std::error_code ec;
+  std::filesystem::remove_all(o.out_dir, ec);
+
+  Throughputs t = base;
+  const double loop_rate = bonds * static_cast<double>(r.steps) / std::max(r.cpu_s, 1e-9);  // per CPU-second
+  const std::string what = std::to_string(s.n) + " particles, " + std::to_string(s.bond_count()) + " bonds, " +
+                           std::to_string(r.steps) + " steps, " + std::to_string(threads) + " thread(s)";
+  LoopRate lr{c.model_name, std::max(1, threads), loop_rate, "measured on this machine by --calibrate (" + what + ")"};
+  std::erase_if(t.loop, [&](const LoopRate& x) { return x.model == lr.model; });
+  t.loop.push_back(lr);
+  // Set-up other than the power iteration; never below a tenth of the documented rate's
+  // cost share (a very short set-up can measure as ~0 on a coarse clock).
+  const double power_s = t.power_iterations * bonds / loop_rate;
+  const double rest_s = std::max(setup_cpu_s - power_s, 0.1 * setup_cpu_s);
+  t.setup_bonds_per_core_s = bonds / rest_s;
+  t.setup_source = "measured on this machine by --calibrate (" + what + ")";
+  return t;
+}
+
+}  // namespace breccia::plan

@@ -1,0 +1,105 @@
+#include "breccia/solver/family_check.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+#include "breccia/common/error.hpp"
+#include "breccia/solver/calibration.hpp"
+
+namespace breccia::solver {
+
+EnergyScatter energy_scatter(PdSystem& s) {
+  EnergyScatter out;
+  const size_t n = s.n;
+  // A lattice's interior families are all alike: nothing to scatter, and a small block's
+  // truncated families would read as scatter. Only mesh-derived particles are irregular.
+  if (s.particles.nodes_per_cell == 0) return out;
+  // Linear response: a small strain with fracture off (as estimate_max_frequency), bond
+  // states and the dissipated energy restored afterwards.
+  const double strain = 1e-6;
+  const std::vector<uint8_t> state_saved(s.state);
+  const bool fracture = s.config.fracture, diagnostics = s.diagnostics;
+  const double dissipated = s.dissipated_energy;
+  const std::vector<double> dissipated_saved(s.dissipated);
+  s.config.fracture = false;
+  s.diagnostics = true;
+  std::fill(s.u.begin(), s.u.end(), 0.0);
+  for (size_t i = 0; i < n; ++i) s.u[3 * i] = strain * s.x0[3 * i];
+  cpu_compute_forces(s);
+  s.config.fracture = fracture;
+  s.diagnostics = diagnostics;
+  s.state = state_saved;
+  s.dissipated_energy = dissipated;
+  s.dissipated = dissipated_saved;
+  const std::vector<double> energy(s.energy_density);
+  std::fill(s.u.begin(), s.u.end(), 0.0);
+  if (s.x.size() == s.x0.size()) s.x = s.x0;
+  std::fill(s.force.begin(), s.force.end(), 0.0);
+  std::fill(s.energy_density.begin(), s.energy_density.end(), 0.0);
+  std::fill(s.damage.begin(), s.damage.end(), 0.0);
+  std::fill(s.max_stretch.begin(), s.max_stretch.end(), 0.0);
+  std::fill(s.dilatation.begin(), s.dilatation.end(), 0.0);
+  const double eps[9] = {strain, 0, 0, 0, 0, 0, 0, 0, 0};
+  // A family is complete when its partial volumes fill 95 % of the horizon: on a lattice
+  // a whole family fills 92 % (m = 1.5), 97 % (m = 2) and 98.5 % (m = 2.5) of it, measured, so
+  // the rule admits whole irregular families at m >= 2 while a family cut by a surface by more
+  // than a thin cap is left out. A specimen too small to hold such families is not judged.
+  std::vector<double> fill(n, -1.0);
+  for (size_t i = 0; i < n; ++i) {
+    double family_volume = 0.0;
+    bool one_material = true;
+    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
+      if (s.state[k] == 0) continue;
+      family_volume += s.vol_own[k];
+      one_material = one_material && s.material[s.neighbor[k]] == s.material[i];
+    }
+    const double h = s.horizon[i];
+    const double horizon_volume = s.dimension == 3 ? 4.0 / 3.0 * M_PI * h * h * h : M_PI * h * h * s.thickness;
+    if (one_material) fill[i] = family_volume / horizon_volume;
+  }
+  const double complete_fill = 0.95;
+  std::vector<double> ratio(n, NAN);
+  double sum = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    if (fill[i] < complete_fill) continue;
+    const MaterialSpec& m = s.config.materials[s.material[i]];
+    const ElasticInput in{s.dimension, s.config.planar, m.youngs_modulus, m.poisson_ratio, s.thickness};
+    ratio[i] = energy[i] / classical_energy_density(in, eps);
+    sum += ratio[i];
+    ++out.sampled;
+  }
+  // Scatter about the mean, not about 1: a lattice's mean offset at small m is a calibration
+  // error shared by every particle (the atlas measures it), not a random stiffness.
+  const double mean = out.sampled ? sum / out.sampled : 1.0;
+  double sum2 = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    if (std::isnan(ratio[i])) continue;
+    const double deviation = ratio[i] / mean - 1.0;
+    sum2 += deviation * deviation;
+    if (std::fabs(deviation) > out.worst) {
+      out.worst = std::fabs(deviation);
+      out.worst_particle = static_cast<int64_t>(i);
+    }
+  }
+  out.rms = out.sampled ? std::sqrt(sum2 / out.sampled) : 0.0;
+  return out;
+}
+
+void require_resolved_families(PdSystem& s) {
+  const EnergyScatter e = energy_scatter(s);
+  if (e.sampled < kMinScatterSample || e.rms <= kMaxEnergyScatter) return;
+  const int64_t i = e.worst_particle;
+  std::ostringstream found;
+  found << "per-particle strain energy under uniaxial strain scatters by " << 100.0 * e.rms << " % RMS over "
+        << e.sampled << " particles with complete families (limit " << 100.0 * kMaxEnergyScatter
+        << " %) about its mean; worst is particle " << s.original_index[i] << " at (" << s.x0[3 * i] << ", " << s.x0[3 * i + 1]
+        << ", " << s.x0[3 * i + 2] << "), off by " << 100.0 * e.worst << " %: the horizon (" << s.horizon[i]
+        << " m) is too small for this particle arrangement";
+  throw InputError(s.config.file, "model.horizon_factor", found.str(),
+                   "a larger horizon_factor (tet-centroid particles: 2.5 or more keeps the scatter at 7-8 %; docs/atlas.md), "
+                   "or time.check_stability: false to run anyway");
+}
+
+}  // namespace breccia::solver

@@ -1,0 +1,148 @@
+// Case keys of the stress formulation (model.formulation: stress): validation errors name
+// the file and field; the CLI runs a stress case end to end and exits 2 on bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "breccia/common/error.hpp"
+#include "breccia/common/h5.hpp"
+#include "breccia/mps/case_spec.hpp"
+#include "breccia/mps/solid_case.hpp"
+
+using namespace breccia::mps;
+
+namespace {
+
+// A 2D steel block falling at 1 m/s onto a rigid floor 0.5 mm below it.
+const std::string kStress = R"(
+specimen:
+  lattice: {dimension: 2, box: [0, 0.5 mm, 10 mm, 5.5 mm], spacing: 0.5 mm, thickness: 1 mm}
+model: {type: mps, formulation: stress, hourglass: 0.1, pressure_force: conservative}
+materials:
+  - {name: steel, density: 7850, youngs_modulus: 210 GPa, poisson_ratio: 0.3,
+     plasticity: {yield_stress: 240 MPa, hardening_modulus: 1 GPa}}
+initial: {velocity: [0, -1 m/s]}
+contact: {floor: {point: [0, 0], normal: [0, 1]}}
+time: {end: 1 us, safety: 0.3}
+)";
+
+std::string replaced(const std::string& from, const std::string& to) {
+  std::string s = kStress;
+  const auto pos = s.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  return s.replace(pos, from.size(), to);
+}
+
+std::string error_of(const std::string& yaml) {
+  try {
+    make_solid(parse_case_text(yaml, "case.yaml"));
+  } catch (const breccia::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+struct CliResult {
+  int exit_code = -1;
+  std::string stderr_text;
+};
+
+CliResult run_cli(const std::string& yaml, const std::filesystem::path& dir) {
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "case.yaml") << yaml;
+  const std::string cmd = std::string(BRECCIA_MPS_EXE) + " " + (dir / "case.yaml").string() + " -o " +
+                          (dir / "out").string() + " --threads 1 2> " + (dir / "stderr.txt").string();
+  const int status = std::system(cmd.c_str());
+  CliResult r;
+  if (WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
+  std::ifstream err(dir / "stderr.txt");
+  std::ostringstream text;
+  text << err.rdbuf();
+  r.stderr_text = text.str();
+  return r;
+}
+
+}  // namespace
+
+TEST(MpsSolidInput, GoodStressCaseBuildsWithItsKeys) {
+  const CaseSpec spec = parse_case_text(kStress, "case.yaml");
+  EXPECT_EQ(spec.formulation, Formulation::Stress);
+  ASSERT_TRUE(spec.material.plasticity.has_value());
+  EXPECT_DOUBLE_EQ(spec.material.plasticity->yield_stress_pa, 240e6);
+  EXPECT_DOUBLE_EQ(spec.material.plasticity->hardening_modulus_pa, 1e9);
+  ASSERT_TRUE(spec.floor.has_value());
+  EXPECT_DOUBLE_EQ(spec.initial_velocity_m_s[1], -1.0);
+  const Solid solid = make_solid(spec);
+  EXPECT_EQ(solid.size(), 200u);  // 20 x 10 lattice
+  EXPECT_TRUE(solid.law().plastic);
+  EXPECT_DOUBLE_EQ(solid.velocity(1)[0], -1.0);
+}
+
+TEST(MpsSolidInput, NonPositiveYieldStressIsRejectedNamingTheField) {
+  for (const std::string bad : {"yield_stress: 0", "yield_stress: -240 MPa"}) {
+    const auto msg = error_of(replaced("yield_stress: 240 MPa", bad));
+    EXPECT_NE(msg.find("case.yaml"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("materials[0].plasticity.yield_stress"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("yield stress > 0"), std::string::npos) << msg;
+  }
+}
+
+TEST(MpsSolidInput, NegativeHardeningModulusIsRejectedNamingTheField) {
+  const auto msg = error_of(replaced("hardening_modulus: 1 GPa", "hardening_modulus: -1 GPa"));
+  EXPECT_NE(msg.find("materials[0].plasticity.hardening_modulus"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(">= 0"), std::string::npos) << msg;
+}
+
+TEST(MpsSolidInput, StressOnlyKeysAreRejectedForTheDisplacementFormulation) {
+  auto msg = error_of(replaced("formulation: stress, hourglass: 0.1, pressure_force: conservative", "formulation: displacement"));
+  EXPECT_NE(msg.find("plasticity"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("formulation: stress"), std::string::npos) << msg;
+  msg = error_of(replaced("formulation: stress, ", ""));
+  EXPECT_NE(msg.find("model.hourglass"), std::string::npos) << msg;
+}
+
+TEST(MpsSolidInput, UnknownChoicesAndCracksAreRejected) {
+  auto msg = error_of(replaced("pressure_force: conservative", "pressure_force: attractive"));
+  EXPECT_NE(msg.find("repulsive"), std::string::npos) << msg;  // the allowed choices are named
+  msg = error_of(replaced("formulation: stress", "formulation: strain"));
+  EXPECT_NE(msg.find("model.formulation"), std::string::npos) << msg;
+  msg = error_of(kStress + "cracks: [{segment: [[4 mm, 2.25 mm], [6 mm, 2.25 mm]], static_friction: 0.5}]\n");
+  EXPECT_NE(msg.find("cracks[0]"), std::string::npos) << msg;
+  msg = error_of(replaced("normal: [0, 1]", "normal: [0, 0]"));
+  EXPECT_NE(msg.find("contact.floor.normal"), std::string::npos) << msg;
+}
+
+TEST(MpsSolidCli, BadYieldStressExitsWithCode2AndNamesTheField) {
+  const auto dir = std::filesystem::temp_directory_path() / "breccia_mps_solid_cli_bad";
+  const CliResult r = run_cli(replaced("yield_stress: 240 MPa", "yield_stress: 0 MPa"), dir);
+  EXPECT_EQ(r.exit_code, breccia::kExitBadInput);
+  EXPECT_EQ(r.stderr_text.rfind("error: ", 0), 0u) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("materials[0].plasticity.yield_stress"), std::string::npos) << r.stderr_text;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "results.h5"));
+}
+
+TEST(MpsSolidCli, StressCaseWritesStressAndPlasticStrainSnapshots) {
+  const auto dir = std::filesystem::temp_directory_path() / "breccia_mps_solid_cli_run";
+  const CliResult r = run_cli(kStress + "output: {every: 5, energy: true, progress: false}\n", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
+  breccia::h5::File f((dir / "out" / "results.h5").string(), breccia::h5::File::Mode::Read);
+  const auto groups = f.children("/output");
+  ASSERT_GE(groups.size(), 2u);
+  const auto stress = f.read_doubles("/output/" + groups.back() + "/stress");
+  EXPECT_EQ(stress.size(), 6u * 200u);
+  EXPECT_EQ(f.read_doubles("/output/" + groups.back() + "/eq_plastic_strain").size(), 200u);
+  std::ifstream hist(dir / "out" / "history.csv");
+  std::string header;
+  std::getline(hist, header);
+  EXPECT_EQ(header, "time_s,plastic_fraction,kinetic_energy_J,stress_work_J,hourglass_energy_J,contact_energy_J,gravity_energy_J");
+  std::ifstream js(dir / "out" / "summary.json");
+  std::ostringstream summary;
+  summary << js.rdbuf();
+  EXPECT_NE(summary.str().find("\"formulation\": \"stress\""), std::string::npos) << summary.str();
+}

@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "atlas.hpp"
+#include "measures.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/particle_file.hpp"
 #include "breccia/solver/calibration.hpp"
@@ -91,33 +92,11 @@ void wave_speed_bar(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& 
                 maker.specimen_yaml(st, 2, lo, hi) + model_yaml(st, "plane_stress", true) +
                     "materials: [{name: steel, density: 7850, youngs_modulus: 200 GPa, poisson_ratio: "
                     "0.3333333333333333}]\ntime: {steps: 1}\n");
-            std::vector<double> shape(s.n);
-            double norm = 0.0;
-            for (size_t i = 0; i < s.n; ++i) {
-              shape[i] = std::cos(std::numbers::pi * s.x0[3 * i] / L);
-              s.u[3 * i] = 1e-6 * shape[i];
-              norm += s.volume[i] * shape[i] * shape[i];
-            }
-            auto modal = [&] {
-              double q = 0.0;
-              for (size_t i = 0; i < s.n; ++i) q += s.volume[i] * shape[i] * s.u[3 * i];
-              return q / norm;
-            };
-            solver::cpu_compute_forces(s);
-            for (size_t k = 0; k < 3 * s.n; ++k) s.a[k] = s.force[k] / s.density[k / 3];
-            s.diagnostics = false;  // energies are not needed: only displacements
-            const long long max_steps = static_cast<long long>(4.0 * L / (2.0 * c0) / s.dt) + 10;
-            double t_quarter = -1.0, q = modal();
-            while (s.step < max_steps && t_quarter < 0) {
-              const double before = q;
-              solver::cpu_step(s);
-              q = modal();
-              if (before > 0 && q <= 0) t_quarter = s.time - s.dt * q / (q - before);
-            }
+            const double error = fundamental_mode_speed_error(s, L, c0);
             AtlasRow r = row_of("wave_speed_bar", st, s, plan.threads);
             r.steps = s.step;
             r.wall_s = seconds_since(t0);
-            r.error = t_quarter > 0 ? std::fabs(L / (2.0 * t_quarter) / c0 - 1.0) : 1.0;
+            r.error = error;
             r.error_measure = "|c/c0-1| of the fundamental mode period; 2D plane stress strip 100x10 mm";
             sink(r);
           });
@@ -284,27 +263,12 @@ void quasi_static_bar(const SweepPlan& plan, SpecimenMaker& maker, const RowSink
                     "loads: [{type: traction, surface: xmax, value: [100 MPa, 0, 0]}]\n"
                     "time: {integrator: adr, adr_tolerance: 1e-7, adr_max_steps: 400000}\n");
             // One particle near the held corner also held in y: no rigid sideways drift.
-            size_t corner = 0;
-            for (size_t i = 0; i < s.n; ++i)
-              if (std::hypot(s.x0[3 * i], s.x0[3 * i + 1]) < std::hypot(s.x0[3 * corner], s.x0[3 * corner + 1]))
-                corner = i;
-            s.fixed_dof[corner] |= 2u;
-            const long long iterations = solver::relax_to_equilibrium(s, false);
-            auto layer_mean = [&](const char* set, const std::vector<double>& field) {
-              double sum = 0, vol = 0;
-              for (auto f : s.particles.find_set(set)->indices) {
-                const int32_t i = s.internal_index[f];
-                sum += s.volume[i] * field[3 * i];
-                vol += s.volume[i];
-              }
-              return sum / vol;
-            };
-            const double L_eff = layer_mean("xmax", s.x0) - layer_mean("xmin", s.x0);
-            const double u_end = layer_mean("xmax", s.u) - layer_mean("xmin", s.u);
+            long long iterations = 0;
+            const double error = bar_end_displacement_error(s, sigma, E, &iterations);
             AtlasRow r = row_of("quasi_static_bar", st, s, plan.threads);
             r.steps = iterations < 0 ? s.config.adr_max_steps : iterations;
             r.wall_s = seconds_since(t0);
-            r.error = iterations < 0 ? 1.0 : std::fabs(u_end / (sigma * L_eff / E) - 1.0);
+            r.error = iterations < 0 ? 1.0 : error;
             r.error_measure = iterations < 0 ? "ADR not converged" : "|u_end / (sigma L / E) - 1| by ADR; 2D plane stress strip 100x20 mm";
             sink(r);
           });

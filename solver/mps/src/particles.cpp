@@ -121,4 +121,18 @@ std::vector<PrescribedSet> select_boundary(const CaseSpec& spec, const ParticleC
   return out;
 }
 
+int nearest_particle(const std::vector<double>& position_m, const std::array<double, 3>& p) {
+  int best = -1;
+  double best_d2 = 1e300;
+  for (size_t i = 0; 3 * i < position_m.size(); ++i) {
+    double d2 = 0.0;
+    for (int a = 0; a < 3; ++a) d2 += (position_m[3 * i + a] - p[a]) * (position_m[3 * i + a] - p[a]);
+    if (d2 < best_d2) {
+      best_d2 = d2;
+      best = static_cast<int>(i);
+    }
+  }
+  return best;
+}
+
 }  // namespace breccia::mps

@@ -1,3 +1,4 @@
+#include "breccia/mps/particles.hpp"
 #include "breccia/mps/solid.hpp"
 
 #include <algorithm>
@@ -265,17 +266,7 @@ double Solid::plastic_fraction() const {
 }
 
 int Solid::nearest_particle(const std::array<double, 3>& p) const {
-  int best = -1;
-  double best_d2 = 1e300;
-  for (size_t i = 0; i < size(); ++i) {
-    double d2 = 0.0;
-    for (int a = 0; a < 3; ++a) d2 += std::pow(position_m_[3 * i + a] - p[a], 2);
-    if (d2 < best_d2) {
-      best_d2 = d2;
-      best = static_cast<int>(i);
-    }
-  }
-  return best;
+  return mps::nearest_particle(position_m_, p);
 }
 
 double Solid::sample(int i, const std::string& field) const {

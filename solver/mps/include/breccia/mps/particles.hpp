@@ -40,6 +40,9 @@ struct PrescribedSet {
 // entry that selects no particle.
 std::vector<PrescribedSet> select_boundary(const CaseSpec& spec, const ParticleCloud& cloud);
 
+// Index of the particle nearest to p (position_m: 3N reference positions); -1 if none.
+int nearest_particle(const std::vector<double>& position_m, const std::array<double, 3>& p);
+
 double burst_displacement(const BurstHistory& h, double t);
 double burst_velocity(const BurstHistory& h, double t);
 

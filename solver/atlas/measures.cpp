@@ -1,0 +1,62 @@
+#include "measures.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "breccia/solver/run.hpp"
+
+namespace breccia::atlas {
+
+double fundamental_mode_speed_error(solver::PdSystem& s, double length_m, double c0_m_s) {
+  const double L = length_m;
+  std::vector<double> shape(s.n);
+  double norm = 0.0;
+  for (size_t i = 0; i < s.n; ++i) {
+    shape[i] = std::cos(std::numbers::pi * s.x0[3 * i] / L);
+    s.u[3 * i] = 1e-6 * shape[i];
+    norm += s.volume[i] * shape[i] * shape[i];
+  }
+  auto modal = [&] {
+    double q = 0.0;
+    for (size_t i = 0; i < s.n; ++i) q += s.volume[i] * shape[i] * s.u[3 * i];
+    return q / norm;
+  };
+  solver::cpu_compute_forces(s);
+  for (size_t k = 0; k < 3 * s.n; ++k) s.a[k] = s.force[k] / s.density[k / 3];
+  s.diagnostics = false;  // energies are not needed: only displacements
+  const long long max_steps = static_cast<long long>(4.0 * L / (2.0 * c0_m_s) / s.dt) + 10;
+  double t_quarter = -1.0, q = modal();
+  while (s.step < max_steps && t_quarter < 0) {
+    const double before = q;
+    solver::cpu_step(s);
+    q = modal();
+    if (before > 0 && q <= 0) t_quarter = s.time - s.dt * q / (q - before);
+  }
+  return t_quarter > 0 ? std::fabs(L / (2.0 * t_quarter) / c0_m_s - 1.0) : 1.0;
+}
+
+double bar_end_displacement_error(solver::PdSystem& s, double traction_pa, double youngs_modulus_pa,
+                                  long long* iterations) {
+  size_t corner = 0;
+  for (size_t i = 0; i < s.n; ++i)
+    if (std::hypot(s.x0[3 * i], s.x0[3 * i + 1]) < std::hypot(s.x0[3 * corner], s.x0[3 * corner + 1])) corner = i;
+  s.fixed_dof[corner] |= 2u;
+  const long long done = solver::relax_to_equilibrium(s, false);
+  if (iterations) *iterations = done;
+  if (done < 0) return -1.0;
+  auto layer_mean = [&](const char* set, const std::vector<double>& field) {
+    double sum = 0, vol = 0;
+    for (auto f : s.particles.find_set(set)->indices) {
+      const int32_t i = s.internal_index[f];
+      sum += s.volume[i] * field[3 * i];
+      vol += s.volume[i];
+    }
+    return sum / vol;
+  };
+  const double L_eff = layer_mean("xmax", s.x0) - layer_mean("xmin", s.x0);
+  const double u_end = layer_mean("xmax", s.u) - layer_mean("xmin", s.u);
+  return std::fabs(u_end / (traction_pa * L_eff / youngs_modulus_pa) - 1.0);
+}
+
+}  // namespace breccia::atlas

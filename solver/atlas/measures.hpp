@@ -1,0 +1,21 @@
+#pragma once
+// The error measures of the atlas problems, shared by breccia-atlas and the planner's tests
+// (a proposal is checked by running it and measuring its error exactly as the atlas did).
+#include "breccia/solver/pd_system.hpp"
+
+namespace breccia::atlas {
+
+// Wave speed in a thin bar of length `length_m` along x: the fundamental free-free mode
+// u = A cos(pi x / L) has period 2 L / c0; the modal amplitude first crosses zero at a
+// quarter period, so c = L / (2 t_quarter). Returns |c / c0 - 1| (1 if no crossing).
+// Advances s (explicit steps from rest).
+double fundamental_mode_speed_error(solver::PdSystem& s, double length_m, double c0_m_s);
+
+// Quasi-static bar relaxed by ADR: sets `free_end - held_end` mean displacement against
+// sigma L_eff / E (sets "xmin" held, "xmax" loaded; L_eff between their mean positions).
+// Holds the particle nearest the origin in y as well (no rigid sideways drift).
+// Returns |u_end / (sigma L_eff / E) - 1|, or a negative value when ADR did not converge.
+double bar_end_displacement_error(solver::PdSystem& s, double traction_pa, double youngs_modulus_pa,
+                                  long long* iterations = nullptr);
+
+}  // namespace breccia::atlas

@@ -1,7 +1,6 @@
 #pragma once
 // Peridynamic physics written once, as plain functions on plain data, callable from the
 // OpenMP loops and from CUDA kernels (BRECCIA_HD). Derivations: docs/theory.md.
-#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -41,39 +40,17 @@ inline double partial_volume_sampled(const double xi[3], double horizon, double 
   if (len - reach >= horizon) return 0.0;
   constexpr int n = 6;
   const double h = 2.0 * half_cell_j / n;
-  const double r2 = horizon * horizon;
-  int inside = 0;
-  if (dimension != 3) {
-    for (int a = 0; a < n; ++a)
-      for (int b = 0; b < n; ++b) {
+  int inside = 0, total = 0;
+  const int nz = dimension == 3 ? n : 1;
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b)
+      for (int c = 0; c < nz; ++c) {
         const double px = xi[0] - half_cell_j + (a + 0.5) * h;
         const double py = xi[1] - half_cell_j + (b + 0.5) * h;
-        inside += (px * px + py * py + xi[2] * xi[2] <= r2);
+        const double pz = dimension == 3 ? xi[2] - half_cell_j + (c + 0.5) * h : xi[2];
+        inside += (px * px + py * py + pz * pz <= horizon * horizon);
+        ++total;
       }
-    return static_cast<double>(inside) / (n * n);
-  }
-  // 3D: per (x, y) column, the samples inside are a run of consecutive z indices; count the
-  // run from its end points instead of testing all six (the set-up of a 291k-particle,
-  // 60M-bond model spent most of its time here). Boundary samples are re-tested exactly.
-  const double z0 = xi[2] - half_cell_j;
-  for (int a = 0; a < n; ++a)
-    for (int b = 0; b < n; ++b) {
-      const double px = xi[0] - half_cell_j + (a + 0.5) * h;
-      const double py = xi[1] - half_cell_j + (b + 0.5) * h;
-      const double rest = r2 - px * px - py * py;
-      if (rest < 0) continue;
-      const double s = std::sqrt(rest);
-      int lo = std::max(0, static_cast<int>(std::ceil((-s - z0) / h - 0.5)) - 1);
-      int hi = std::min(n - 1, static_cast<int>(std::floor((s - z0) / h - 0.5)) + 1);
-      auto in = [&](int c) {
-        const double pz = z0 + (c + 0.5) * h;
-        return px * px + py * py + pz * pz <= r2;
-      };
-      while (lo <= hi && !in(lo)) ++lo;
-      while (hi >= lo && !in(hi)) --hi;
-      if (hi >= lo) inside += hi - lo + 1;
-    }
-  const int total = n * n * n;
   return static_cast<double>(inside) / total;
 }
 

@@ -159,6 +159,21 @@ TEST(Energy, TimeStepAboveTheStableOneIsRejectedBeforeTheRun) {
   }
 }
 
+TEST(CaseInput, EnergySurfaceCorrectionAskedForLpsIsRefusedNotIgnored) {
+  try {
+    system_from_yaml("lps_surface_correction", R"(
+specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.004, 0.004], spacing: 1 mm}}
+model: {type: lps, horizon_factor: 3.015, surface_correction: energy}
+materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.3}]
+time: {steps: 1}
+)");
+    FAIL() << "LPS with the PMB-only energy correction must be refused";
+  } catch (const breccia::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("model.surface_correction"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("PMB"), std::string::npos) << e.what();
+  }
+}
+
 // Round-off (issue 3, test 5): every bond force acts equal and opposite on its two ends.
 TEST(Momentum, TotalLinearMomentumOfAFreeBodyStaysAtRoundOff) {
   PdSystem s = system_from_yaml("momentum", R"(

@@ -135,4 +135,19 @@ int nearest_particle(const std::vector<double>& position_m, const std::array<dou
   return best;
 }
 
+void symplectic_euler_update(std::array<std::vector<double>, 3>& u, std::array<std::vector<double>, 3>& v,
+                             const std::array<std::vector<double>, 3>& a, int dimension, double dt) {
+  for (int c = 0; c < dimension; ++c) {
+    double* uc = u[c].data();
+    double* vc = v[c].data();
+    const double* ac = a[c].data();
+    const long long n = static_cast<long long>(u[c].size());
+#pragma omp parallel for schedule(static) if (n > 8192)
+    for (long long i = 0; i < n; ++i) {
+      vc[i] += dt * ac[i];
+      uc[i] += dt * vc[i];
+    }
+  }
+}
+
 }  // namespace breccia::mps

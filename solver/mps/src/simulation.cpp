@@ -222,16 +222,7 @@ void Simulation::step() {
   if (spec_.integrator == Integrator::SymplecticEuler) {
     // eqs (7)-(8): v^{k+1} = v^k + dt a(u^k), u^{k+1} = u^k + dt v^{k+1}
     compute_acceleration(true);
-    for (int a = 0; a < dimension_; ++a) {
-      double* u = u_[a].data();
-      double* v = v_[a].data();
-      const double* acc = a_[a].data();
-#pragma omp parallel for schedule(static) if (n > kParallelMin)
-      for (long long i = 0; i < n; ++i) {
-        v[i] += dt * acc[i];
-        u[i] += dt * v[i];
-      }
-    }
+    symplectic_euler_update(u_, v_, a_, dimension_, dt);
     time_s_ += dt;
     apply_prescribed(time_s_);
   } else {

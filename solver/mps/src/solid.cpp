@@ -182,19 +182,9 @@ void Solid::compute_acceleration() {
 
 void Solid::step() {
   const double dt = dt_s_;
-  const long long n = static_cast<long long>(size());
   // Symplectic Euler (the paper's scheme): v^{k+1} = v^k + dt a(u^k), u^{k+1} = u^k + dt v^{k+1}.
   compute_acceleration();
-  for (int a = 0; a < options_.dimension; ++a) {
-    double* u = u_[a].data();
-    double* v = v_[a].data();
-    const double* acc = a_[a].data();
-#pragma omp parallel for schedule(static) if (n > kSolidParallelMin)
-    for (long long i = 0; i < n; ++i) {
-      v[i] += dt * acc[i];
-      u[i] += dt * v[i];
-    }
-  }
+  symplectic_euler_update(u_, v_, a_, options_.dimension, dt);
   time_s_ += dt;
   apply_prescribed(time_s_);
   ++steps_;

@@ -43,6 +43,11 @@ std::vector<PrescribedSet> select_boundary(const CaseSpec& spec, const ParticleC
 // Index of the particle nearest to p (position_m: 3N reference positions); -1 if none.
 int nearest_particle(const std::vector<double>& position_m, const std::array<double, 3>& p);
 
+// Symplectic Euler (the paper's eqs 7-8) on components 0..dimension-1:
+// v += dt a(u^k), then u += dt v^{k+1}. Shared by the linear and the stress solver.
+void symplectic_euler_update(std::array<std::vector<double>, 3>& u, std::array<std::vector<double>, 3>& v,
+                             const std::array<std::vector<double>, 3>& a, int dimension, double dt);
+
 double burst_displacement(const BurstHistory& h, double t);
 double burst_velocity(const BurstHistory& h, double t);
 

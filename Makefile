@@ -43,7 +43,8 @@ clean:
 	rm -rf $(BUILD)
 
 # make atlas [QUICK=1]: speed-accuracy sweeps and the measured stability map of the PD solver
-# -> docs/atlas/atlas.csv, docs/atlas/stability.csv, docs/atlas/*.png, docs/atlas.md.
+# -> docs/atlas/atlas.csv, docs/atlas/stability.csv (+ stability_graded.csv, stability_mps.csv),
+#    docs/atlas/*.png, docs/atlas.md.
 # QUICK=1: ~6 min on 2 quiet cores (measured in pieces), ~15 min on the shared machine; full: not yet run.
 .PHONY: atlas
 atlas: build

@@ -17,26 +17,29 @@ if ! command -v lmp >/dev/null 2>&1; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends lammps >/dev/null
 fi
 results="$OUT/bench.csv"
-echo "code,model,threads,particles,bonds_per_particle,steps,loop_wall_s,bond_updates_per_s,per_core_wall,loop_cpu_s,per_cpu_second" > "$results"
+echo "code,model,precision,threads,particles,bonds_per_particle,steps,loop_wall_s,bond_updates_per_s,per_core_wall,loop_cpu_s,per_cpu_second" > "$results"
 
+# PRECISIONS="float64 float32": model.precision (docs/performance.md, float32 rows).
 for model in pmb lps; do
-  cat > "$OUT/$model.yaml" <<YAML
-name: bench-$model
+for prec in ${PRECISIONS:-float64 float32}; do
+  cat > "$OUT/$model-$prec.yaml" <<YAML
+name: bench-$model-$prec
 specimen: {lattice: {dimension: 3, box: [0, 0, 0, $L, $L, $L], spacing: $DX}}
-model: {type: $model, horizon_factor: 3.015}
+model: {type: $model, horizon_factor: 3.015, precision: $prec}
 materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, fracture_energy: 1e6}]
 initial: [{type: radial_velocity, center: [0, 0, 0], strain_rate: 10}]
 time: {steps: $STEPS}
 output: {every: 1000000, history_every: 1000000, results: false}
 YAML
   for t in $THREADS_LIST; do
-    OMP_NUM_THREADS=$t "$BIN/breccia-solve" "$OUT/$model.yaml" -o "$OUT/breccia-$model-$t" --threads "$t" --quiet
-    $PYTHON - "$OUT/breccia-$model-$t/summary.json" "$model" "$t" >> "$results" <<'PY'
+    OMP_NUM_THREADS=$t "$BIN/breccia-solve" "$OUT/$model-$prec.yaml" -o "$OUT/breccia-$model-$prec-$t" --threads "$t" --quiet --backend cpu
+    $PYTHON - "$OUT/breccia-$model-$prec-$t/summary.json" "$model" "$t" "$prec" >> "$results" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1])); t = int(sys.argv[3])
-print(f"breccia,{sys.argv[2]},{t},{s['particles']},{s['mean_family_size']:.1f},{s['steps_this_run']},{s['wall_s']:.3f},{s['bond_updates_per_s']:.4g},{s['bond_updates_per_s']/t:.4g},{s['loop_cpu_s']:.3f},{s['bond_updates_per_cpu_s']:.4g}")
+print(f"breccia,{sys.argv[2]},{sys.argv[4]},{t},{s['particles']},{s['mean_family_size']:.1f},{s['steps_this_run']},{s['wall_s']:.3f},{s['bond_updates_per_s']:.4g},{s['bond_updates_per_s']/t:.4g},{s['loop_cpu_s']:.3f},{s['bond_updates_per_cpu_s']:.4g}")
 PY
   done
+done
 done
 
 # LAMMPS PERI on the same lattice (E 22.35 GPa, nu 1/4: K = 14.9 GPa, G = 8.94 GPa).
@@ -90,9 +93,9 @@ LMP
       pct=$(grep "CPU use with" "$OUT/lammps-$model-$t.log" | tail -1 | awk '{print $1}' | tr -d '%')
       cpu=$(awk -v l=$loop -v p=$pct -v t=$t 'BEGIN{printf "%.4g", l*p/100*t}')
       percpu=$(awk -v a=$atoms -v b=$BONDS -v s=$STEPS -v c=$cpu 'BEGIN{printf "%.4g", a*b*s/c}')
-      echo "lammps,$model,$t,$atoms,$BONDS,$STEPS,$loop,$rate,$per,$cpu,$percpu" >> "$results"
+      echo "lammps,$model,float64,$t,$atoms,$BONDS,$STEPS,$loop,$rate,$per,$cpu,$percpu" >> "$results"
     else
-      echo "lammps,$model,$t,,,,failed (see $OUT/lammps-$model-$t.log),," >> "$results"
+      echo "lammps,$model,float64,$t,,,,failed (see $OUT/lammps-$model-$t.log),," >> "$results"
     fi
   done
 done

@@ -1,6 +1,7 @@
 #include "breccia/postproc/bond_graph.hpp"
 
 #include <algorithm>
+#include <bit>
 
 #include "breccia/common/error.hpp"
 #include "breccia/postproc/union_find.hpp"
@@ -55,6 +56,39 @@ std::vector<int32_t> intact_components(const solver::Families& fam, const Remove
       while (bi != b.end() && *bi < j) ++bi;
       while (pi != p.end() && *pi < j) ++pi;
       if ((bi != b.end() && *bi == j) || (pi != p.end() && *pi == j)) continue;
+      uf.unite(static_cast<int32_t>(i), j);
+    }
+  }
+  return uf.labels(component_count);
+}
+
+size_t count_bits(std::span<const uint8_t> bits) {
+  size_t c = 0;
+  for (uint8_t byte : bits) c += static_cast<size_t>(std::popcount(byte));
+  return c;
+}
+
+int64_t bond_index(const solver::Families& half, int64_t i, int64_t j) {
+  if (i > j) std::swap(i, j);
+  if (i < 0 || static_cast<size_t>(i) >= half.particle_count()) return -1;
+  const auto first = half.neighbors.begin() + half.offsets[i], last = half.neighbors.begin() + half.offsets[i + 1];
+  const auto it = std::lower_bound(first, last, static_cast<int32_t>(j));
+  return it != last && *it == j ? static_cast<int64_t>(it - half.neighbors.begin()) : -1;
+}
+
+std::vector<int32_t> intact_components(const solver::Families& half, std::span<const uint8_t> graph,
+                                       std::span<const uint8_t> broken, const RemovedBonds& precracks,
+                                       int32_t* component_count) {
+  const size_t n = half.particle_count();
+  UnionFind uf(n);
+  for (size_t i = 0; i < n; ++i) {
+    const auto p = precracks.size() ? precracks.partners_above(i) : std::span<const int32_t>{};
+    auto pi = p.begin();
+    for (int64_t b = half.offsets[i]; b < half.offsets[i + 1]; ++b) {
+      if ((!graph.empty() && !bond_bit(graph, b)) || bond_bit(broken, b)) continue;
+      const int32_t j = half.neighbors[b];
+      while (pi != p.end() && *pi < j) ++pi;  // both ascending: one merge walk
+      if (pi != p.end() && *pi == j) continue;
       uf.unite(static_cast<int32_t>(i), j);
     }
   }

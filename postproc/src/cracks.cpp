@@ -300,7 +300,7 @@ CrackResult find_cracks(const CandidateFaces& faces, const CrackInputs& in, Crac
     if (in.precracks && in.precracks->contains(a, b)) {
       r.state[f] = kPrecrack;
     } else if (criterion == CrackCriterion::Bond) {
-      if (in.broken && in.broken->contains(a, b)) r.state[f] = kFractured;
+      if (in.broken && in.broken->contains_face(f, a, b)) r.state[f] = kFractured;
     } else if (in.damage[a] > damage_threshold && in.damage[b] > damage_threshold) {
       r.state[f] = kFractured;
     }

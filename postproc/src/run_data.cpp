@@ -23,7 +23,7 @@ void require(const h5::File& f, const std::string& obj, const std::string& expec
 void require_attr(const h5::File& f, const std::string& obj, const std::string& name) {
   if (!f.has_attr(obj, name))
     throw InputError(f.path(), (obj == "/" ? "/" : obj + "/") + "@" + name, "missing attribute",
-                     "written by breccia-solve (format breccia-results 1)");
+                     "written by breccia-solve (format breccia-results 2)");
 }
 
 template <class T>
@@ -32,6 +32,48 @@ std::vector<T> sized(std::vector<T> v, size_t expected, const std::string& file,
   if (v.size() != expected)
     throw InputError(file, name, "size " + std::to_string(v.size()), shape);
   return v;
+}
+
+size_t bit_bytes(size_t bonds) { return (bonds + 7) / 8; }
+
+// A bit array over the bond list: ceil(B / 8) bytes, the bits past B clear.
+std::vector<uint8_t> read_bits(const h5::File& f, const std::string& name, size_t bonds) {
+  std::vector<uint8_t> bits = sized(f.read_uint8(name), bit_bytes(bonds), f.path(), name,
+                                    "ceil(B / 8) = " + std::to_string(bit_bytes(bonds)) + " bytes for B = " +
+                                        std::to_string(bonds) + " bonds in /bonds/neighbors");
+  if (bonds % 8 != 0 && (bits.back() >> (bonds % 8)) != 0)
+    throw InputError(f.path(), name, "bits set past bond " + std::to_string(bonds), "the bits after the last bond clear");
+  return bits;
+}
+
+// /bonds: CSR of each bond once from its lower index. Checked in full (a bad index would
+// send the union-find or a face lookup out of bounds).
+void read_bonds(const h5::File& f, size_t n, RunData& run) {
+  const std::string rp = f.path();
+  for (const char* d : {"/bonds/offsets", "/bonds/neighbors", "/bonds/within_horizon"})
+    require(f, d, "written by breccia-solve (format breccia-results 2)");
+  run.bonds.offsets = sized(f.read_int64("/bonds/offsets"), n + 1, rp, "/bonds/offsets", "N + 1 row starts");
+  run.bonds.neighbors = f.read_int32("/bonds/neighbors");
+  const auto& off = run.bonds.offsets;
+  const auto& nb = run.bonds.neighbors;
+  if (off[0] != 0 || off[n] != static_cast<int64_t>(nb.size()))
+    throw InputError(rp, "/bonds/offsets", "starts at " + std::to_string(off[0]) + ", ends at " + std::to_string(off[n]),
+                     "0 .. " + std::to_string(nb.size()) + " (the length of /bonds/neighbors)");
+  for (size_t i = 0; i < n; ++i)
+    if (off[i + 1] < off[i])
+      throw InputError(rp, "/bonds/offsets[" + std::to_string(i + 1) + "]", std::to_string(off[i + 1]),
+                       "non-decreasing row starts");
+  for (size_t i = 0; i < n; ++i) {
+    for (int64_t b = off[i]; b < off[i + 1]; ++b) {
+      const int64_t lower = b == off[i] ? static_cast<int64_t>(i) : nb[b - 1];
+      if (nb[b] <= lower || static_cast<size_t>(nb[b]) >= n)
+        throw InputError(rp, "/bonds/neighbors[" + std::to_string(b) + "]",
+                         std::to_string(nb[b]) + " in the row of particle " + std::to_string(i),
+                         "partners j > i in [0, " + std::to_string(n) + "), ascending within a row");
+    }
+  }
+  run.within_horizon = read_bits(f, "/bonds/within_horizon", nb.size());
+  run.within_horizon_count = count_bits(run.within_horizon);
 }
 
 }  // namespace
@@ -61,8 +103,9 @@ RunData open_run(const fs::path& run_dir, const std::string& particles_override)
   if (f.attr_string("/", "format") != "breccia-results")
     throw InputError(rp, "/@format", "'" + f.attr_string("/", "format") + "'", "'breccia-results'");
   require_attr(f, "/", "format_version");
-  if (f.attr_int("/", "format_version") != 1)
-    throw InputError(rp, "/@format_version", std::to_string(f.attr_int("/", "format_version")), "1");
+  if (f.attr_int("/", "format_version") != 2)
+    throw InputError(rp, "/@format_version", std::to_string(f.attr_int("/", "format_version")),
+                     "2 (version 1 stored broken-bond pairs; rerun breccia-solve to write bonds and bit arrays)");
   for (const char* a : {"particles_file", "particles_content_id", "dimension", "output_count"})
     require_attr(f, "/", a);
   run.dimension = static_cast<int>(f.attr_int("/", "dimension"));
@@ -109,6 +152,8 @@ RunData open_run(const fs::path& run_dir, const std::string& particles_override)
     validate_pairs(run.precrack_bonds, n, rp, "/precrack_bonds");
   }
 
+  read_bonds(f, n, run);
+
   const long long count = f.attr_int("/", "output_count");
   for (long long k = 0; k < count; ++k) {
     OutputInfo o;
@@ -135,10 +180,13 @@ OutputFrame read_frame(const RunData& run, size_t k, bool full) {
   fr.info = run.outputs[k];
   const std::string& g = fr.info.group;
   const size_t n = run.size();
-  for (const char* d : {"/damage", "/broken_bonds"}) require(f, g + d, "written by breccia-solve");
+  for (const char* d : {"/damage", "/broken"}) require(f, g + d, "written by breccia-solve");
   fr.damage = sized(f.read_doubles(g + "/damage"), n, rp, g + "/damage", "N");
-  fr.broken_bonds = f.read_int64(g + "/broken_bonds");
-  validate_pairs(fr.broken_bonds, n, rp, g + "/broken_bonds");
+  fr.broken = read_bits(f, g + "/broken", run.bonds.bond_count());
+  fr.broken_count = count_bits(fr.broken);
+  if (f.has_attr(g, "broken_count") && f.attr_int(g, "broken_count") != static_cast<long long>(fr.broken_count))
+    throw InputError(rp, g + "/@broken_count", std::to_string(f.attr_int(g, "broken_count")),
+                     std::to_string(fr.broken_count) + ", the bits set in " + g + "/broken");
   if (full) {
     for (const char* d : {"/displacement", "/velocity"}) require(f, g + d, "written by breccia-solve");
     fr.displacement_m = sized(f.read_doubles(g + "/displacement"), 3 * n, rp, g + "/displacement", "N x 3");

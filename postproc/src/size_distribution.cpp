@@ -43,13 +43,14 @@ Eigen::Vector2d levenberg_marquardt(const Model& f, Eigen::Vector2d th, std::spa
     Eigen::Matrix2d jtj = Eigen::Matrix2d::Zero();
     Eigen::Vector2d jtr = Eigen::Vector2d::Zero();
     for (size_t k = 0; k < x.size(); ++k) {
-      const double r = f(th, x[k]) - y[k];
+      const double f0 = f(th, x[k]);  // once per point: the crushed block has 10^5 fragments
+      const double r = f0 - y[k];
       Eigen::Vector2d g;
       for (int p = 0; p < 2; ++p) {
         Eigen::Vector2d t2 = th;
         const double h = 1e-7 * std::max(1.0, std::abs(th[p]));
         t2[p] += h;
-        g[p] = (f(t2, x[k]) - f(th, x[k])) / h;
+        g[p] = (f(t2, x[k]) - f0) / h;
       }
       jtj += g * g.transpose();
       jtr += g * r;

@@ -17,6 +17,7 @@ struct Settings {
   std::string kind = "lattice";      // lattice | tet (tet-centroid; triangle-centroid in 2D)
   double m = 3.0;                    // nominal horizon / spacing
   double spacing_m = 1e-3;           // target particle spacing
+  std::string precision = "float64"; // float64 | float32 (model.precision)
 };
 
 // One row of docs/atlas/atlas.csv (header: kAtlasHeader).
@@ -25,6 +26,7 @@ struct AtlasRow {
   int dimension = 3;
   std::string particles_kind;
   double m = 0.0, spacing_m = 0.0;
+  std::string precision = "float64";
   int threads = 1;
   size_t particles = 0, bonds = 0;
   long long steps = 0;
@@ -76,6 +78,9 @@ struct SweepPlan {
   bool quick = false;
   std::vector<std::string> problems, models, kinds;
   std::vector<double> m_values{2, 3, 4, 5};
+  // float32 rows for the problems whose error float could change (wave speed, strain
+  // energy, quasi-static bar): --precisions float64,float32.
+  std::vector<std::string> precisions{"float64"};
   int threads = 1;
 };
 
@@ -89,6 +94,19 @@ inline constexpr const char* kStabilityHeader =
     "study,model,dimension,particles_kind,m,dt_factor,particles,bonds,min_family,steps,status,detected_by,"
     "energy_ratio,energy_scatter,message";
 void stability_map(const SweepPlan& plan, SpecimenMaker& maker, CsvTable& table);
+
+// Graded particle arrangements with and without dual horizon: docs/atlas/stability_graded.csv.
+inline constexpr const char* kGradedHeader =
+    "model,grading,dual_horizon,particles,bonds,min_family,min_local_m,coarse_energy_error,fine_energy_error,"
+    "ghost_force,net_force,reflected_energy,steps,status,detected_by,energy_ratio,message";
+void graded_stability(const SweepPlan& plan, SpecimenMaker& maker, CsvTable& table);
+
+// MPS (stress-based solid) rows: mps_wave_speed, thick_cylinder, thick_cylinder_hill
+// (mps_atlas.cpp), and the MPS stability map in tension: docs/atlas/stability_mps.csv.
+void mps_problems(const SweepPlan& plan, const RowSink& sink);
+inline constexpr const char* kMpsStabilityHeader =
+    "ramp_transits,pressure_force,hourglass,strain,particles,bonds,steps,min_neighbour_ratio,max_speed_ratio,status,detected_by,message";
+void mps_tension_stability(const SweepPlan& plan, CsvTable& table);
 
 // Elapsed seconds since a steady-clock start.
 double seconds_since(const std::chrono::steady_clock::time_point& t0);

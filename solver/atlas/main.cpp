@@ -2,9 +2,10 @@
 // and the measured stability map (docs/atlas.md; `make atlas`).
 //
 //   breccia-atlas [--quick] [--csv docs/atlas/atlas.csv] [--stability-csv docs/atlas/stability.csv]
-//                 [--problems wave_speed_bar,strain_energy,fracture_energy,quasi_static_bar,kalthoff_winkler]
+//                 [--problems wave_speed_bar,strain_energy,fracture_energy,quasi_static_bar,kalthoff_winkler,
+//                             mps_wave_speed,thick_cylinder,thick_cylinder_hill]
 //                 [--models pmb,lps] [--kinds lattice,tet] [--m 2,3,4,5] [--no-stability] [--only-stability]
-//                 [--append] [--threads N] [--work DIR] [--mesh-exe PATH] [--place-exe PATH]
+//                 [--stability-studies pd,graded,mps] [--append] [--threads N] [--work DIR] [--mesh-exe PATH] [--place-exe PATH]
 //
 // Each run appends one row to the CSV (rewritten atomically after every row). Tet-centroid
 // particles come from breccia-mesh + breccia-place (found next to this executable unless
@@ -24,8 +25,11 @@ namespace {
 const char* kUsage =
     "usage: breccia-atlas [--quick] [--csv FILE] [--stability-csv FILE] [--problems a,b] [--models pmb,lps]\n"
     "                     [--kinds lattice,tet] [--m 2,3,4,5] [--no-stability] [--only-stability] [--append]\n"
+    "                     [--precisions float64,float32] (default float64)\n"
+    "                     [--stability-studies pd,graded,mps] (default: all; stability_graded.csv, stability_mps.csv beside the stability CSV)\n"
     "                     [--threads N] [--work DIR] [--mesh-exe PATH] [--place-exe PATH]\n"
-    "problems: wave_speed_bar strain_energy fracture_energy quasi_static_bar kalthoff_winkler\n";
+    "problems: wave_speed_bar strain_energy fracture_energy quasi_static_bar kalthoff_winkler\n"
+    "          mps_wave_speed thick_cylinder thick_cylinder_hill (MPS stress solid)\n";
 
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
@@ -47,17 +51,28 @@ void require_known(const std::vector<std::string>& given, const std::vector<std:
   }
 }
 
+// Another table in the folder of the stability CSV.
+std::string sibling_csv(const std::string& csv, const std::string& name) {
+  return (std::filesystem::path(csv).parent_path() / name).string();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace breccia::atlas;
   try {
     SweepPlan plan;
-    plan.problems = {"wave_speed_bar", "strain_energy", "fracture_energy", "quasi_static_bar", "kalthoff_winkler"};
+    plan.problems = {"wave_speed_bar", "strain_energy", "fracture_energy", "quasi_static_bar", "kalthoff_winkler",
+                     "mps_wave_speed", "thick_cylinder", "thick_cylinder_hill"};
     plan.models = {"pmb", "lps"};
     plan.kinds = {"lattice", "tet"};
     std::string csv = "docs/atlas/atlas.csv", stability_csv = "docs/atlas/stability.csv";
     bool stability = true, sweeps = true, append = false;
+    std::vector<std::string> stability_studies;  // empty: all
+    auto has_study = [&](const char* name) {
+      for (const auto& q : stability_studies) if (q == name) return true;
+      return false;
+    };
     int threads = 0;
     const std::filesystem::path bin = std::filesystem::absolute(argv[0]).parent_path();
     SpecimenMaker maker{"runs/atlas", (bin / "breccia-mesh").string(), (bin / "breccia-place").string()};
@@ -73,10 +88,12 @@ int main(int argc, char** argv) {
       else if (a == "--problems") plan.problems = split(value());
       else if (a == "--models") plan.models = split(value());
       else if (a == "--kinds") plan.kinds = split(value());
+      else if (a == "--precisions") plan.precisions = split(value());
       else if (a == "--m") {
         plan.m_values.clear();
         for (const auto& v : split(value())) plan.m_values.push_back(std::stod(v));
-      } else if (a == "--no-stability") stability = false;
+      } else if (a == "--stability-studies") stability_studies = split(value());
+      else if (a == "--no-stability") stability = false;
       else if (a == "--only-stability") sweeps = false;
       else if (a == "--append") append = true;
       else if (a == "--threads") threads = std::stoi(value());
@@ -88,15 +105,18 @@ int main(int argc, char** argv) {
         return 0;
       } else {
         throw breccia::InputError("command line", a, "unknown option",
-                                  "--quick, --csv, --stability-csv, --problems, --models, --kinds, --m, "
-                                  "--no-stability, --only-stability, --append, --threads, --work, --mesh-exe, --place-exe");
+                                  "--quick, --csv, --stability-csv, --problems, --models, --kinds, --precisions, --m, "
+                                  "--stability-studies, --no-stability, --only-stability, --append, --threads, --work, --mesh-exe, --place-exe");
       }
     }
     require_known(plan.problems,
-                  {"wave_speed_bar", "strain_energy", "fracture_energy", "quasi_static_bar", "kalthoff_winkler"},
+                  {"wave_speed_bar", "strain_energy", "fracture_energy", "quasi_static_bar", "kalthoff_winkler",
+                   "mps_wave_speed", "thick_cylinder", "thick_cylinder_hill"},
                   "--problems");
-    require_known(plan.models, {"pmb", "lps"}, "--models");
+    require_known(plan.models, {"pmb", "lps", "correspondence"}, "--models");
+    require_known(stability_studies, {"pd", "graded", "mps"}, "--stability-studies");
     require_known(plan.kinds, {"lattice", "tet"}, "--kinds");
+    require_known(plan.precisions, {"float64", "float32"}, "--precisions");
     if (threads > 0) omp_set_num_threads(threads);
     plan.threads = omp_get_max_threads();
     maker.work_dir = std::filesystem::absolute(maker.work_dir).string();
@@ -118,10 +138,21 @@ int main(int argc, char** argv) {
       static_calibration(plan, maker, sink);
       if (has("quasi_static_bar")) quasi_static_bar(plan, maker, sink);
       if (has("kalthoff_winkler")) kalthoff_winkler(plan, maker, sink);
+      mps_problems(plan, sink);  // the MPS stress solid (mps_atlas.cpp)
     }
     if (stability) {
-      CsvTable table(stability_csv, kStabilityHeader, append);
-      stability_map(plan, maker, table);
+      if (stability_studies.empty() || has_study("pd")) {
+        CsvTable table(stability_csv, kStabilityHeader, append);
+        stability_map(plan, maker, table);
+      }
+      if (stability_studies.empty() || has_study("graded")) {
+        CsvTable graded(sibling_csv(stability_csv, "stability_graded.csv"), kGradedHeader, append);
+        graded_stability(plan, maker, graded);
+      }
+      if (stability_studies.empty() || has_study("mps")) {
+        CsvTable mps(sibling_csv(stability_csv, "stability_mps.csv"), kMpsStabilityHeader, append);
+        mps_tension_stability(plan, mps);
+      }
     }
     std::fprintf(stderr, "[atlas] done in %.0f s\n", seconds_since(t0));
     return 0;

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "atlas.hpp"
+#include "stability_correspondence.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/solver/family_check.hpp"
 #include "breccia/solver/run.hpp"
@@ -188,6 +189,9 @@ void stability_map(const SweepPlan& plan, SpecimenMaker& maker, CsvTable& table)
                      static_cast<long long>(row.min_family), row.energy_scatter);
         table.add(line_of(row));
       }
+  // (c) correspondence zero-energy modes on the (m, G) plane (stability_correspondence.cpp).
+  if (std::find(plan.models.begin(), plan.models.end(), "correspondence") != plan.models.end())
+    stability_correspondence(plan, maker, table);
 }
 
 }  // namespace breccia::atlas

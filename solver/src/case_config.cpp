@@ -123,9 +123,11 @@ CaseConfig parse_case_file(const std::string& path) {
 
   const Section model = root.section("model");
   model.allow_only({"type", "planar", "influence", "horizon", "horizon_factor", "variable_horizon",
-                    "surface_correction", "fracture", "no_fail"});
-  c.model_name = model.choice("type", {"pmb", "lps", "mps"});
+                    "surface_correction", "fracture", "no_fail", "precision",
+                    "stabilisation"});
+  c.model_name = model.choice("type", {"pmb", "lps", "mps", "correspondence"});
   c.model = c.model_name == "lps" ? PdModel::LPS : PdModel::PMB;
+  if (c.model_name == "correspondence") c.model = PdModel::Correspondence;
   const std::string planar = model.choice("planar", {"plane_stress", "plane_strain", "none"}, "none");
   c.planar = planar == "plane_stress" ? Planar::PlaneStress : planar == "plane_strain" ? Planar::PlaneStrain : Planar::None;
   const std::string infl = model.choice("influence", {"constant", "inverse", "gaussian"}, "constant");
@@ -146,7 +148,27 @@ CaseConfig parse_case_file(const std::string& path) {
                      "none for LPS (the energy correction is implemented for PMB; LPS's discrete weighted volume "
                      "and dilatation are its own correction, docs/theory.md)");
   c.fracture = model.boolean("fracture", true);
+  c.precision = model.choice("precision", {"float64", "float32"}, "float64") == "float32"
+                    ? CaseConfig::Precision::Float32
+                    : CaseConfig::Precision::Float64;
   c.no_fail_sets = model.texts("no_fail");
+  if (auto st = model.optional_section("stabilisation")) {
+    if (c.model != PdModel::Correspondence)
+      throw InputError(path, "model.stabilisation", "given with type: " + c.model_name,
+                       "only with type: correspondence (PMB and LPS have no zero-energy modes to stabilise)");
+    st->allow_only({"type", "coefficient"});
+    c.stabilisation = st->choice("type", {"none", "penalty"});
+    if (c.stabilisation == "none" && st->has("coefficient"))
+      throw InputError(path, st->field("coefficient"), "a coefficient with type: none", "no coefficient, or type: penalty");
+    c.stabilisation_coefficient = c.stabilisation == "none" ? 0.0 : st->positive("coefficient", Quantity::Dimensionless, 1.0);
+  }
+  if (c.model == PdModel::Correspondence && c.surface_correction)
+    throw InputError(path, "model.surface_correction", "energy with type: correspondence",
+                     "none (the shape tensor K is built from the bonds a particle has: an affine field is exact "
+                     "at surfaces already)");
+  if (c.model == PdModel::Correspondence && c.precision == CaseConfig::Precision::Float32)
+    throw InputError(path, "model.precision", "float32 with type: correspondence",
+                     "float64 (the correspondence kernels exist in double precision only)");
 
   for (const Section& m : root.list("materials")) {
     m.allow_only({"name", "density", "youngs_modulus", "poisson_ratio", "fracture_energy", "weibull"});

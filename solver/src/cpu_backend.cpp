@@ -3,6 +3,7 @@
 #include <cmath>
 #include <random>
 
+#include "breccia/solver/correspondence.hpp"
 #include "breccia/solver/forall.hpp"
 #include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_system.hpp"
@@ -10,6 +11,13 @@
 namespace breccia::solver {
 
 void cpu_compute_forces(PdSystem& sys) {
+  if (sys.f32.active) {  // model.precision: float32 — callers hold their state in double
+    float32_upload(sys);
+    float32_compute_forces(sys);
+    float32_download(sys);
+    return;
+  }
+  if (sys.config.model == PdModel::Correspondence) return cpu_correspondence_forces(sys);  // correspondence.cpp
   // Current positions once per force pass: the bond loop then gathers one array.
   if (sys.x.size() != sys.x0.size()) sys.x.resize(sys.x0.size());
   const int64_t n3 = static_cast<int64_t>(sys.x0.size());
@@ -76,6 +84,12 @@ void apply_constraints(PdSystem& sys, double t, double dt) {
 }
 
 void cpu_step(PdSystem& sys) {
+  if (sys.f32.active) {  // float32: the time loop keeps the float state (make_float32_backend)
+    float32_upload(sys);
+    float32_step(sys);
+    float32_download(sys);
+    return;
+  }
   const double dt = sys.dt, half = 0.5 * dt;
   PdView p = sys.view();
   // Work of external forces and reactions: trapezoid over the step.
@@ -142,6 +156,9 @@ double estimate_max_frequency(PdSystem& sys, int iterations) {
   const std::vector<uint8_t> state_saved(sys.state);
   const bool fracture = sys.config.fracture;
   const double dissipated = sys.dissipated_energy;
+  // Strains of 1e-9 are below float's resolution: the estimate is always made in double.
+  const bool float32 = sys.f32.active;
+  sys.f32.active = false;
   sys.config.fracture = false;
   double length_scale = 0.0;
   for (size_t i = 0; i < sys.n; ++i) length_scale = std::max(length_scale, 2.0 * sys.half_cell[i]);
@@ -170,6 +187,7 @@ double estimate_max_frequency(PdSystem& sys, int iterations) {
   sys.state = state_saved;
   sys.config.fracture = fracture;
   sys.dissipated_energy = dissipated;
+  sys.f32.active = float32;
   cpu_compute_forces(sys);  // restore force/energy fields at the real displacement
   // Power iteration approaches omega_max^2 from below; 2% margin keeps 'stable' honest.
   return std::sqrt(std::max(lambda, 1e-300)) * 1.02;

@@ -14,6 +14,9 @@
 namespace breccia::solver {
 namespace {
 
+// 2: bonds once in /bonds, one bit per bond and output (1 wrote broken pairs per output).
+constexpr long long kResultsFormatVersion = 2;
+
 std::string group_name(int index) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "/output/%06d", index);
@@ -38,20 +41,26 @@ bool is_precrack(const PdSystem& s, int64_t fi, int64_t fj) {
   return std::binary_search(s.precrack_pairs.begin(), s.precrack_pairs.end(), std::make_pair(fi, fj));
 }
 
+// Broken by fracture, seen from bond entry k: a half that never existed (outside that
+// horizon) is not a broken bond.
+bool fracture_broken(const PdSystem& s, int64_t k) {
+  const uint8_t st = s.state[k];
+  if (st == (kOwnIntact | kDualIntact)) return false;
+  const bool own_broken = s.vol_own[k] > 0 && !(st & kOwnIntact);
+  const bool dual_broken = s.k_dual[k] > 0 && !(st & kDualIntact);
+  return own_broken || dual_broken;
+}
+
+bool bit(const std::vector<uint8_t>& bits, int64_t b) { return (bits[b >> 3] >> (b & 7)) & 1; }
+
 }  // namespace
 
 std::vector<int64_t> broken_pairs(const PdSystem& s) {
   std::vector<std::pair<int64_t, int64_t>> pairs;
   for (size_t i = 0; i < s.n; ++i)
     for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
-      if (s.state[k] == (kOwnIntact | kDualIntact)) continue;
-      // A half that never existed (outside that horizon) is not a broken bond.
       const int64_t fi = s.original_index[i], fj = s.original_index[s.neighbor[k]];
-      if (fi >= fj) continue;
-      const bool own_exists = s.vol_own[k] > 0;
-      const bool own_broken = own_exists && !(s.state[k] & kOwnIntact);
-      const bool dual_broken = s.k_dual[k] > 0 && !(s.state[k] & kDualIntact);
-      if (!(own_broken || dual_broken)) continue;
+      if (fi >= fj || !fracture_broken(s, k)) continue;
       if (is_precrack(s, fi, fj)) continue;
       pairs.emplace_back(fi, fj);
     }
@@ -65,6 +74,89 @@ std::vector<int64_t> broken_pairs(const PdSystem& s) {
   return flat;
 }
 
+HalfBondList half_bond_list(const PdSystem& s) {
+  const size_t n = s.n;
+  HalfBondList h;
+  h.offsets.assign(n + 1, 0);
+  for (size_t i = 0; i < n; ++i) {
+    const int32_t fi = s.original_index[i];
+    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k)
+      if (fi < s.original_index[s.neighbor[k]]) ++h.offsets[fi + 1];
+  }
+  for (size_t i = 0; i < n; ++i) h.offsets[i + 1] += h.offsets[i];
+  const size_t b = static_cast<size_t>(h.offsets[n]);
+  h.neighbors.resize(b);
+  h.entry.resize(b);
+  {
+    std::vector<int64_t> fill(h.offsets.begin(), h.offsets.end() - 1);
+    for (size_t i = 0; i < n; ++i) {
+      const int32_t fi = s.original_index[i];
+      for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
+        const int32_t fj = s.original_index[s.neighbor[k]];
+        if (fi >= fj) continue;
+        const int64_t at = fill[fi]++;
+        h.neighbors[at] = fj;
+        h.entry[at] = k;
+      }
+    }
+  }
+#pragma omp parallel
+  {
+    std::vector<std::pair<int32_t, int64_t>> row;
+#pragma omp for schedule(dynamic, 1024)
+    for (size_t i = 0; i < n; ++i) {
+      row.clear();
+      for (int64_t at = h.offsets[i]; at < h.offsets[i + 1]; ++at) row.emplace_back(h.neighbors[at], h.entry[at]);
+      std::sort(row.begin(), row.end());
+      for (size_t r = 0; r < row.size(); ++r) {
+        h.neighbors[h.offsets[i] + r] = row[r].first;
+        h.entry[h.offsets[i] + r] = row[r].second;
+      }
+    }
+  }
+  // The fragment graph of breccia-post is the families of build_families(position, horizon)
+  // without pads; the same test, same arithmetic, on the same file-order doubles, so that it
+  // is exactly that graph (the pad bonds beyond it hold only a sliver of partial volume).
+  std::vector<double> horizon(n);
+  for (size_t k = 0; k < n; ++k) horizon[static_cast<size_t>(s.original_index[k])] = s.horizon[k];
+  const std::vector<double>& x = s.particles.position_m;
+  h.within_horizon.assign((b + 7) / 8, 0);
+  h.precrack.assign((b + 7) / 8, 0);
+  for (size_t i = 0; i < n; ++i)
+    for (int64_t at = h.offsets[i]; at < h.offsets[i + 1]; ++at) {
+      const size_t j = static_cast<size_t>(h.neighbors[at]);
+      double r2 = 0.0;
+      for (int d = 0; d < 3; ++d) {
+        const double e = x[3 * j + d] - x[3 * i + d];
+        r2 += e * e;
+      }
+      if (r2 <= horizon[i] * horizon[i] || r2 <= horizon[j] * horizon[j])
+        h.within_horizon[at >> 3] |= static_cast<uint8_t>(1u << (at & 7));
+      if (!s.precrack_pairs.empty() && is_precrack(s, static_cast<int64_t>(i), static_cast<int64_t>(j)))
+        h.precrack[at >> 3] |= static_cast<uint8_t>(1u << (at & 7));
+    }
+  return h;
+}
+
+std::vector<uint8_t> broken_bits(const PdSystem& s, const HalfBondList& h, int64_t* broken_count) {
+  const int64_t b = static_cast<int64_t>(h.neighbors.size());
+  const int64_t bytes = (b + 7) / 8;
+  std::vector<uint8_t> bits(static_cast<size_t>(bytes), 0);
+  int64_t total = 0;
+#pragma omp parallel for schedule(static) reduction(+ : total)
+  for (int64_t q = 0; q < bytes; ++q) {
+    uint8_t byte = 0;
+    for (int64_t at = 8 * q; at < std::min(b, 8 * q + 8); ++at)
+      if (fracture_broken(s, h.entry[at]) && !bit(h.precrack, at)) {
+        byte |= static_cast<uint8_t>(1u << (at & 7));
+        ++total;
+      }
+    bits[q] = byte;
+  }
+  if (broken_count) *broken_count = total;
+  return bits;
+}
+
 ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool restart) : dir_(out_dir) {
   std::filesystem::create_directories(out_dir);
   const std::string path = out_dir + "/results.h5";
@@ -73,6 +165,13 @@ ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool
     if (file_->attr_string("/", "particles_content_id") != s.particles.content_id)
       throw InputError(path, "/@particles_content_id", "belongs to a different particle model",
                        "the results of this case (or a fresh output directory)");
+    if (file_->attr_int("/", "format_version") != kResultsFormatVersion)
+      throw InputError(path, "/@format_version", std::to_string(file_->attr_int("/", "format_version")),
+                       std::to_string(kResultsFormatVersion) + " (results of this breccia-solve; use a fresh output directory)");
+    bonds_ = half_bond_list(s);
+    if (!file_->exists("/bonds/neighbors") || file_->dims("/bonds/neighbors").at(0) != bonds_.neighbors.size())
+      throw InputError(path, "/bonds/neighbors", "missing or a different bond count",
+                       std::to_string(bonds_.neighbors.size()) + " bonds, as this case builds");
     // Keep outputs up to the checkpoint; later ones are recomputed.
     const int stored = static_cast<int>(file_->attr_int("/", "output_count"));
     for (int k = 0; k < stored; ++k) {
@@ -91,7 +190,7 @@ ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool
   file_ = std::make_unique<h5::File>(path, h5::File::Mode::Create);
   h5::File& f = *file_;
   f.set_attr("/", "format", std::string("breccia-results"));
-  f.set_attr("/", "format_version", 1LL);
+  f.set_attr("/", "format_version", kResultsFormatVersion);
   // A lattice built from the case file has no particles.h5 yet: write one beside the
   // results so that post-processing and provenance work the same for every run.
   std::string particles_file = s.config.particles_path;
@@ -134,6 +233,10 @@ ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool
     pre.push_back(p.second);
   }
   f.write("/precrack_bonds", pre, {pre.size() / 2, 2});
+  bonds_ = half_bond_list(s);
+  f.write("/bonds/offsets", bonds_.offsets, {n + 1});
+  f.write("/bonds/neighbors", bonds_.neighbors, {bonds_.neighbors.size()});
+  f.write("/bonds/within_horizon", bonds_.within_horizon, {bonds_.within_horizon.size()});
   f.create_group("/output");
   f.set_attr("/", "output_count", 0LL);
   f.flush();
@@ -151,8 +254,10 @@ void ResultsWriter::write(const PdSystem& s) {
   if (wants("stretch")) f.write(g + "/stretch", to_file_order(s, s.max_stretch), {n});
   if (wants("dilatation")) f.write(g + "/dilatation", to_file_order(s, s.dilatation), {n});
   if (wants("strain_energy_density")) f.write(g + "/strain_energy_density", to_file_order(s, s.energy_density), {n});
-  const std::vector<int64_t> broken = broken_pairs(s);
-  f.write(g + "/broken_bonds", broken, {broken.size() / 2, 2});
+  int64_t broken_count = 0;
+  const std::vector<uint8_t> broken = broken_bits(s, bonds_, &broken_count);
+  f.write(g + "/broken", broken, {broken.size()});
+  f.set_attr(g, "broken_count", static_cast<long long>(broken_count));
   f.set_attr(g, "step", static_cast<long long>(s.step));
   f.set_attr(g, "time_s", s.time);
   ++count_;

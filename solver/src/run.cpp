@@ -13,6 +13,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/output_file.hpp"
+#include "breccia/solver/correspondence.hpp"
 #include "breccia/solver/outputs.hpp"
 
 namespace breccia::solver {
@@ -38,6 +39,7 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
     << "  \"message\": \"" << r.message << "\",\n"
     << "  \"model\": \"" << s.config.model_name << "\",\n"
     << "  \"backend\": \"" << o.backend << "\",\n"
+    << "  \"precision\": \"" << (s.f32.active ? "float32" : "float64") << "\",\n"
     << "  \"threads\": " << omp_get_max_threads() << ",\n"
     << "  \"dimension\": " << s.dimension << ",\n"
     << "  \"particles\": " << s.n << ",\n"
@@ -82,6 +84,11 @@ std::string instability_message(const PdSystem& s, const Energies& e, double ene
       << s.x0[3 * i + 2] << ")";
     return m.str();
   };
+  // Correspondence: zero-energy modes grow without a blow-up of the energy (correspondence.cpp).
+  if (e.finite) {
+    const std::string zero_energy = zero_energy_mode_message(s, e);
+    if (!zero_energy.empty()) return zero_energy;
+  }
   std::ostringstream m;
   if (!e.finite) {
     const int64_t i = e.bad_particle >= 0 ? e.bad_particle : 0;
@@ -285,6 +292,9 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
     if (results) results->write(s);
   } else if (o.backend_loop) {
     r = o.backend_loop(s, o, results.get(), history);
+  } else if (s.f32.active) {
+    const std::unique_ptr<StepBackend> cpu32 = make_float32_backend(s);
+    r = run_time_loop(s, o, *cpu32, results.get(), history);
   } else {
     CpuBackend cpu;
     r = run_time_loop(s, o, cpu, results.get(), history);

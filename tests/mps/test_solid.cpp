@@ -12,6 +12,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/mps/solid.hpp"
+#include "breccia/mps/thick_cylinder.hpp"
 #include "mps_test_util.hpp"
 
 using namespace breccia::mps;
@@ -37,113 +38,24 @@ SolidLaw law_of(const Elastic& e, double yield = 0.0, double hardening = 0.0) {
 }
 
 // ---------------------------------------------------------------------------------------
-// Thick-walled cylinder, plane strain, full ring of particles on concentric circles
-// (a polar arrangement follows both surfaces, which a square lattice would staircase).
-struct Ring {
-  std::vector<double> position, volume;
-  std::vector<int> inner;  // particles of the innermost circle (loaded)
-};
-
-Ring make_ring(double a, double b, int rings, double thickness) {
-  Ring g;
-  const double h = (b - a) / rings;
-  for (int k = 0; k < rings; ++k) {
-    const double r = a + (k + 0.5) * h;
-    const int count = static_cast<int>(std::lround(2 * pi * r / h));
-    const double dtheta = 2 * pi / count;
-    for (int m = 0; m < count; ++m) {
-      const double theta = (m + 0.5 * (k % 2)) * dtheta;
-      if (k == 0) g.inner.push_back(static_cast<int>(g.volume.size()));
-      g.position.insert(g.position.end(), {r * std::cos(theta), r * std::sin(theta), 0.0});
-      g.volume.push_back(r * dtheta * h * thickness);
-    }
-  }
-  return g;
-}
-
-// Per circle of particles: radius, mean polar stresses, the largest deviation of a single
-// particle from the circle's mean (scatter of the irregular stencils), share of plastic particles.
-struct RingProfile {
-  std::vector<double> radius, sigma_r, sigma_theta, scatter, plastic_share;
-};
-
-// Ramp the internal pressure linearly over `ramp_periods` breathing periods, hold, with
-// mass-proportional damping, so the end state is static. Returns per-particle polar stresses.
+// Thick-walled cylinder, plane strain, full ring of particles on concentric circles: the
+// set-up lives in mps/thick_cylinder.hpp (shared with breccia-atlas); this wrapper keeps the
+// tests' argument list. Returns per-circle polar stresses.
 RingProfile load_cylinder(const Elastic& e, double density, double yield, double a, double b, int rings,
                           double pressure, double* residual_kinetic_fraction,
                           PressureForce pressure_force = PressureForce::Conservative) {
-  const double thickness = 1.0;
-  Ring g = make_ring(a, b, rings, thickness);
-  SolidOptions opt;
-  opt.dimension = 2;
-  opt.spacing_m = (b - a) / rings;
-  opt.thickness_m = thickness;
-  // Fundamental (breathing) mode of the ring, omega ~ c_plate / r_mean; critical damping
-  // of that mode would be 2 omega, half of it settles it in a few periods without slowing
-  // the approach to equilibrium much.
-  const double c_bar = std::sqrt(e.young / (density * (1 - e.poisson * e.poisson)));
-  const double omega = c_bar / (0.5 * (a + b));
-  opt.damping_per_s = omega;
-  opt.pressure = pressure_force;
-  Solid solid(g.position, g.volume, density, law_of(e, yield), opt);
-  const double period = 2 * pi / omega;
-  const double ramp = 4 * period, hold = 3 * period;
-  const long long steps = static_cast<long long>((ramp + hold) / solid.dt_s());
-  // Consistent pressure load: minus the internal force of the uniform state -p I on the
-  // particles whose stencil reaches the inner surface (Solid::internal_force_of_uniform_stress).
-  SymTensor unit_pressure;
-  unit_pressure.xx = unit_pressure.yy = unit_pressure.zz = -1.0;
-  std::vector<double> unit_load = solid.internal_force_of_uniform_stress(unit_pressure);
-  const double re = opt.re_over_spacing * opt.spacing_m;
-  double total_radial = 0.0;
-  for (size_t i = 0; i < solid.size(); ++i) {
-    const double x = g.position[3 * i], y = g.position[3 * i + 1], r = std::hypot(x, y);
-    for (int ax = 0; ax < 3; ++ax) unit_load[3 * i + ax] = r < a + re ? -unit_load[3 * i + ax] : 0.0;
-    total_radial += (unit_load[3 * i] * x + unit_load[3 * i + 1] * y) / r;
-  }
-  // The distribution is exact for a flat surface (its resultant is p times the area, tested
-  // below); on this curved, polar arrangement its resultant comes out 1.4% above
-  // p 2 pi a t at both 10 and 20 circles, so it is scaled to the continuum resultant.
-  for (double& f : unit_load) f *= 2 * pi * a * thickness / total_radial;
-  for (long long s = 0; s < steps; ++s) {
-    const double p = pressure * std::min(1.0, solid.time_s() / ramp);
-    for (size_t i = 0; i < solid.size(); ++i)
-      for (int ax = 0; ax < 2; ++ax) solid.external_force(ax)[i] = p * unit_load[3 * i + ax];
-    solid.step();
-  }
-  if (residual_kinetic_fraction) *residual_kinetic_fraction = solid.kinetic_energy_j() / solid.stress_work_j();
-  RingProfile prof;
-  const double h = (b - a) / rings;
-  prof.radius.resize(rings);
-  prof.sigma_r.assign(rings, 0.0);
-  prof.sigma_theta.assign(rings, 0.0);
-  prof.scatter.assign(rings, 0.0);
-  prof.plastic_share.assign(rings, 0.0);
-  std::vector<int> count(rings, 0), ring_of(solid.size());
-  std::vector<double> sr(solid.size()), st(solid.size());
-  for (size_t i = 0; i < solid.size(); ++i) {
-    const double x = g.position[3 * i], y = g.position[3 * i + 1], r = std::hypot(x, y);
-    const double c = x / r, s = y / r;
-    const SymTensor& t = solid.stress_pa()[i];
-    const int k = std::clamp(static_cast<int>((r - a) / h), 0, rings - 1);
-    ring_of[i] = k;
-    sr[i] = c * c * t.xx + s * s * t.yy + 2 * c * s * t.xy;
-    st[i] = s * s * t.xx + c * c * t.yy - 2 * c * s * t.xy;
-    prof.radius[k] = r;
-    prof.sigma_r[k] += sr[i];
-    prof.sigma_theta[k] += st[i];
-    prof.plastic_share[k] += solid.eq_plastic_strain()[i] > 0 ? 1.0 : 0.0;
-    ++count[k];
-  }
-  for (int k = 0; k < rings; ++k) {
-    prof.sigma_r[k] /= count[k];
-    prof.sigma_theta[k] /= count[k];
-    prof.plastic_share[k] /= count[k];
-  }
-  for (size_t i = 0; i < solid.size(); ++i) {
-    const int k = ring_of[i];
-    prof.scatter[k] = std::max({prof.scatter[k], std::fabs(sr[i] - prof.sigma_r[k]), std::fabs(st[i] - prof.sigma_theta[k])});
-  }
+  ThickCylinder c;
+  c.young_pa = e.young;
+  c.poisson = e.poisson;
+  c.density_kg_m3 = density;
+  c.yield_pa = yield;
+  c.inner_m = a;
+  c.outer_m = b;
+  c.rings = rings;
+  c.pressure_pa = pressure;
+  c.pressure_force = pressure_force;
+  RingProfile prof = load_thick_cylinder(c);
+  if (residual_kinetic_fraction) *residual_kinetic_fraction = prof.residual_kinetic_fraction;
   return prof;
 }
 

@@ -146,3 +146,84 @@ TEST(MpsSolidCli, StressCaseWritesStressAndPlasticStrainSnapshots) {
   summary << js.rdbuf();
   EXPECT_NE(summary.str().find("\"formulation\": \"stress\""), std::string::npos) << summary.str();
 }
+
+// Contact keys (docs/mps.md, "Contact"): two bodies, a frictional floor, a rigid polygon.
+const std::string kBodies = R"(
+specimen:
+  bodies:
+    dimension: 2
+    spacing: 1 mm
+    shapes:
+      - {name: a, type: box, box: [0, 1 mm, 10 mm, 6 mm], velocity: [1 m/s, 0]}
+      - {name: b, type: annulus, center: [20 mm, 4 mm], inner_radius: 0, outer_radius: 3 mm}
+model: {type: mps, formulation: stress}
+materials:
+  - {name: rubber, density: 1000, youngs_modulus: 10 MPa, poisson_ratio: 0.3}
+contact:
+  particles: {distance_factor: 1, stiffness_factor: 1}
+  floor: {point: [0, 0], normal: [0, 1], static_friction: 0.5, kinetic_friction: 0.4}
+  rigid_bodies:
+    - {name: wall, vertices: [[30 mm, 0], [40 mm, 0], [40 mm, 10 mm], [30 mm, 10 mm]], static_friction: 0.3}
+time: {end: 1 us}
+)";
+
+std::string bodies_with(const std::string& from, const std::string& to) {
+  std::string s = kBodies;
+  const auto pos = s.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  return s.replace(pos, from.size(), to);
+}
+
+TEST(MpsSolidInput, TwoBodiesFloorAndPolygonBuildWithTheirKeys) {
+  const CaseSpec spec = parse_case_text(kBodies, "case.yaml");
+  ASSERT_TRUE(spec.bodies);
+  EXPECT_EQ(spec.bodies->shapes.size(), 2u);
+  EXPECT_DOUBLE_EQ(spec.floor->friction.kinetic_friction, 0.4);
+  ASSERT_EQ(spec.rigid_bodies.size(), 1u);
+  EXPECT_DOUBLE_EQ(spec.rigid_bodies[0].friction.kinetic_friction, 0.3);  // defaults to mu_s
+  const Solid solid = make_solid(spec);
+  EXPECT_EQ(solid.contact().polygon_count(), 1u);
+  EXPECT_DOUBLE_EQ(solid.velocity(0)[0], 1.0);            // body a moves
+  EXPECT_DOUBLE_EQ(solid.velocity(0)[solid.size() - 1], 0.0);  // body b does not
+}
+
+TEST(MpsSolidInput, NegativeFrictionAndKineticAboveStaticAreRejectedNamingTheField) {
+  EXPECT_NE(error_of(bodies_with("static_friction: 0.5", "static_friction: -0.1")).find("contact.floor.static_friction"),
+            std::string::npos);
+  const std::string e = error_of(bodies_with("static_friction: 0.3}", "static_friction: 0.3, kinetic_friction: 0.5}"));
+  EXPECT_NE(e.find("contact.rigid_bodies[0].kinetic_friction"), std::string::npos) << e;
+  EXPECT_NE(e.find("kinetic friction <= static friction"), std::string::npos) << e;
+}
+
+TEST(MpsSolidInput, OverlappingBodiesAtTheStartAreRejectedNamingTheBody) {
+  const std::string e = error_of(bodies_with("center: [20 mm, 4 mm]", "center: [11 mm, 4 mm]"));
+  EXPECT_NE(e.find("specimen.bodies.shapes[1]"), std::string::npos) << e;
+  EXPECT_NE(e.find("overlaps body 'a'"), std::string::npos) << e;
+}
+
+TEST(MpsSolidInput, OpenDegenerateOrSelfCrossingPolygonsAreRejected) {
+  const std::string square = "[[30 mm, 0], [40 mm, 0], [40 mm, 10 mm], [30 mm, 10 mm]]";
+  const std::string field = "contact.rigid_bodies[0].vertices";
+  const std::string open = error_of(bodies_with(square, "[[30 mm, 0], [40 mm, 0]]"));
+  EXPECT_NE(open.find(field), std::string::npos) << open;
+  EXPECT_NE(open.find("not a closed polygon"), std::string::npos) << open;
+  const std::string flat = error_of(bodies_with(square, "[[30 mm, 0], [35 mm, 0], [40 mm, 0]]"));
+  EXPECT_NE(flat.find("zero area"), std::string::npos) << flat;
+  const std::string bow = error_of(bodies_with(square, "[[30 mm, 0], [40 mm, 10 mm], [40 mm, 0], [30 mm, 10 mm]]"));
+  EXPECT_NE(bow.find("self-intersecting"), std::string::npos) << bow;
+  const std::string repeated = error_of(bodies_with(square, "[[30 mm, 0], [40 mm, 0], [40 mm, 0], [30 mm, 10 mm]]"));
+  EXPECT_NE(repeated.find("degenerate edge"), std::string::npos) << repeated;
+  // Closing the polygon explicitly (first vertex repeated) is fine.
+  EXPECT_EQ(error_of(bodies_with(square, "[[30 mm, 0], [40 mm, 0], [40 mm, 10 mm], [30 mm, 10 mm], [30 mm, 0]]")), "");
+  // A polygon that holds particles at the start.
+  const std::string inside = error_of(bodies_with(square, "[[5 mm, 0], [12 mm, 0], [12 mm, 10 mm], [5 mm, 10 mm]]"));
+  EXPECT_NE(inside.find(field), std::string::npos) << inside;
+  EXPECT_NE(inside.find("holds"), std::string::npos) << inside;
+}
+
+TEST(MpsSolidInput, BodiesAndRigidBodiesNeedTheStressFormulationAnd2D) {
+  std::string e = error_of(bodies_with("formulation: stress", "formulation: displacement"));
+  EXPECT_NE(e.find("specimen.bodies"), std::string::npos) << e;
+  e = error_of(bodies_with("inner_radius: 0, outer_radius: 3 mm", "inner_radius: 2.5 mm, outer_radius: 3 mm"));
+  EXPECT_NE(e.find("specimen.bodies.shapes[1].outer_radius"), std::string::npos) << e;
+}

@@ -2,10 +2,12 @@
 // Synthetic run directories for post-processing tests: structured tet/triangle meshes or
 // lattices with known geometry, written as particles.h5 + results.h5 following the
 // results contract (docs/postproc.md, "Inputs").
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -141,7 +143,7 @@ inline void write_run(const SyntheticRun& run) {
   const size_t n = written.size();
   h5::File f((run.dir / "results.h5").string(), h5::File::Mode::Create);
   f.set_attr("/", "format", std::string("breccia-results"));
-  f.set_attr("/", "format_version", 1LL);
+  f.set_attr("/", "format_version", 2LL);
   f.set_attr("/", "particles_file", run.particles_file);
   f.set_attr("/", "particles_content_id", run.content_id_override.empty() ? written.content_id : run.content_id_override);
   f.set_attr("/", "dimension", static_cast<long long>(written.dimension));
@@ -155,6 +157,22 @@ inline void write_run(const SyntheticRun& run) {
   f.write_strings("/materials/names", written.material_names);
   f.write("/materials/fracture_energy", run.fracture_energy_J_m2, {run.fracture_energy_J_m2.size()});
   f.write("/precrack_bonds", run.precrack_bonds, {run.precrack_bonds.size() / 2, 2});
+  // The bond list as breccia-solve writes it: each family pair once from its lower index.
+  // Here the families have no pad bonds, so every bond is within the horizon.
+  const auto fam = solver::build_families(written.position_m, std::vector<double>(n, run.horizon_m));
+  std::vector<int64_t> offsets(n + 1, 0);
+  std::vector<int32_t> partners;
+  for (size_t i = 0; i < n; ++i) {
+    for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k)
+      if (fam.neighbors[k] > static_cast<int32_t>(i)) partners.push_back(fam.neighbors[k]);
+    offsets[i + 1] = static_cast<int64_t>(partners.size());
+  }
+  const size_t bytes = (partners.size() + 7) / 8;
+  std::vector<uint8_t> all(bytes, 0);
+  for (size_t b = 0; b < partners.size(); ++b) all[b / 8] |= static_cast<uint8_t>(1u << (b % 8));
+  f.write("/bonds/offsets", offsets, {n + 1});
+  f.write("/bonds/neighbors", partners, {partners.size()});
+  f.write("/bonds/within_horizon", all, {bytes});
   f.set_attr("/", "output_count", static_cast<long long>(run.outputs.size()));
   for (size_t k = 0; k < run.outputs.size(); ++k) {
     const auto& o = run.outputs[k];
@@ -167,7 +185,17 @@ inline void write_run(const SyntheticRun& run) {
     f.write(std::string(g) + "/displacement", or_zero(o.displacement_m, 3 * n), {n, 3});
     f.write(std::string(g) + "/velocity", or_zero(o.velocity_m_s, 3 * n), {n, 3});
     f.write(std::string(g) + "/damage", or_zero(o.damage, n), {n});
-    f.write(std::string(g) + "/broken_bonds", o.broken_bonds, {o.broken_bonds.size() / 2, 2});
+    std::vector<uint8_t> broken(bytes, 0);
+    for (size_t p = 0; p + 1 < o.broken_bonds.size(); p += 2) {
+      const int64_t i = std::min(o.broken_bonds[p], o.broken_bonds[p + 1]);
+      const int64_t j = std::max(o.broken_bonds[p], o.broken_bonds[p + 1]);
+      const auto first = partners.begin() + offsets[i], last = partners.begin() + offsets[i + 1];
+      const auto it = std::lower_bound(first, last, static_cast<int32_t>(j));
+      if (it == last || *it != j) throw std::logic_error("synthetic broken bond is not a family bond");
+      const size_t b = static_cast<size_t>(it - partners.begin());
+      broken[b / 8] |= static_cast<uint8_t>(1u << (b % 8));
+    }
+    f.write(std::string(g) + "/broken", broken, {bytes});
   }
 }
 

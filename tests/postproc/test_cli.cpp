@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "breccia/common/error.hpp"
+#include "breccia/common/h5.hpp"
 #include "breccia/postproc/run_data.hpp"
 #include "synthetic_run.hpp"
 
@@ -193,6 +194,72 @@ TEST(BrecciaPostCli, ProvenanceMismatchIsBadInputNamingBothFiles) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.field(), "/@particles_content_id");
   }
+}
+
+// Replace one dataset of a written results.h5 (malformed-input tests).
+template <class T>
+void replace_dataset(const fs::path& results, const std::string& name, const std::vector<T>& data) {
+  h5::File f(results.string(), h5::File::Mode::ReadWrite);
+  H5Ldelete(f.id(), name.c_str(), H5P_DEFAULT);
+  f.write(name, data, {data.size()});
+}
+
+TEST(BrecciaPostCli, BondPartnerOutOfRangeIsBadInputNamingTheDataset) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_bad_partner";
+  const auto run = cracked_cubes(dir);
+  bt::write_run(run);
+  std::vector<int32_t> partners;
+  {
+    h5::File f((dir / "results.h5").string(), h5::File::Mode::Read);
+    partners = f.read_int32("/bonds/neighbors");
+  }
+  partners.at(3) = static_cast<int32_t>(run.model.size() + 5);
+  replace_dataset(dir / "results.h5", "/bonds/neighbors", partners);
+  const Result r = run_post("'" + dir.string() + "' --no-plots --quiet");
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.output.find((dir / "results.h5").string() + ": /bonds/neighbors[3]: " +
+                          std::to_string(run.model.size() + 5)),
+            std::string::npos) << r.output;
+}
+
+TEST(BrecciaPostCli, BrokenBitsOfTheWrongLengthAreBadInputNamingTheDataset) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_bad_bits";
+  bt::write_run(cracked_cubes(dir));
+  std::vector<uint8_t> bits;
+  {
+    h5::File f((dir / "results.h5").string(), h5::File::Mode::Read);
+    bits = f.read_uint8("/output/000001/broken");
+  }
+  bits.pop_back();
+  replace_dataset(dir / "results.h5", "/output/000001/broken", bits);
+  const Result r = run_post("'" + dir.string() + "' --no-plots --quiet");
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.output.find((dir / "results.h5").string() + ": /output/000001/broken: size " + std::to_string(bits.size())),
+            std::string::npos) << r.output;
+}
+
+TEST(BrecciaPostCli, BrokenCountThatDisagreesWithTheBitsIsBadInput) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_bad_count";
+  bt::write_run(cracked_cubes(dir));
+  {
+    h5::File f((dir / "results.h5").string(), h5::File::Mode::ReadWrite);
+    f.set_attr("/output/000001", "broken_count", 3LL);  // the cut breaks more than 3 bonds
+  }
+  const Result r = run_post("'" + dir.string() + "' --no-plots --quiet");
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.output.find("/output/000001/@broken_count: 3"), std::string::npos) << r.output;
+}
+
+TEST(BrecciaPostCli, FormatVersionOneIsBadInputAskingForANewRun) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_version1";
+  bt::write_run(cracked_cubes(dir));
+  {
+    h5::File f((dir / "results.h5").string(), h5::File::Mode::ReadWrite);
+    f.set_attr("/", "format_version", 1LL);
+  }
+  const Result r = run_post("'" + dir.string() + "' --no-plots --quiet");
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.output.find("/@format_version: 1 (expected 2"), std::string::npos) << r.output;
 }
 
 TEST(BrecciaPostCli, UnknownProbeIsBadInputListingTheProbes) {

@@ -156,3 +156,60 @@ TEST(DeformedMesh, NodesOnTheCrackAreDuplicatedPerFragmentAndMoveWithIt) {
       EXPECT_NEAR(d.points_m[3 * p + 2] - m.mesh_nodes_m[3 * v + 2], comp[c] ? 1e-4 : 0.0, 1e-15);
     }
 }
+
+// results.h5 stores the bonds once (half list) and one bit per bond and output; the
+// components over it must be the pair-list components exactly (same labels, same count).
+TEST(Fragments, BrokenBitsOverTheHalfBondListGiveThePairListComponents) {
+  const auto m = bt::structured_mesh(3, {5, 4, 4}, kH);
+  const double horizon = 1.6 * kH;
+  const auto fam = solver::build_families(m.position_m, std::vector<double>(m.size(), horizon));
+  solver::Families half;
+  half.offsets.assign(m.size() + 1, 0);
+  for (size_t i = 0; i < m.size(); ++i) {
+    for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k)
+      if (fam.neighbors[k] > static_cast<int32_t>(i)) half.neighbors.push_back(fam.neighbors[k]);
+    half.offsets[i + 1] = static_cast<int64_t>(half.neighbors.size());
+  }
+  // A full cut on x = 2 mm, 60 % of the bonds on z = 2 mm (not separating), a pre-crack
+  // on y = 2 mm below z = 1 mm, and a pseudo-random 30 % elsewhere.
+  std::vector<int64_t> broken_pairs, precrack_pairs;
+  std::vector<uint8_t> bits((half.bond_count() + 7) / 8, 0);
+  uint32_t rng = 12345;
+  for (size_t i = 0; i < m.size(); ++i)
+    for (int64_t b = half.offsets[i]; b < half.offsets[i + 1]; ++b) {
+      const int32_t j = half.neighbors[b];
+      const double* a = &m.position_m[3 * i];
+      const double* c = &m.position_m[3 * j];
+      rng = rng * 1664525u + 1013904223u;
+      const double u = (rng >> 8) / 16777216.0;
+      if ((a[1] - 2 * kH) * (c[1] - 2 * kH) < 0 && a[2] < kH && c[2] < kH) {
+        precrack_pairs.insert(precrack_pairs.end(), {static_cast<int64_t>(i), j});
+        continue;
+      }
+      const bool cut = (a[0] - 2 * kH) * (c[0] - 2 * kH) < 0 || ((a[2] - 2 * kH) * (c[2] - 2 * kH) < 0 && u < 0.6) ||
+                       u < 0.3;
+      if (!cut) continue;
+      broken_pairs.insert(broken_pairs.end(), {static_cast<int64_t>(i), j});
+      bits[b / 8] |= static_cast<uint8_t>(1u << (b % 8));
+    }
+  const RemovedBonds broken(broken_pairs, m.size()), precracks(precrack_pairs, m.size());
+  int32_t count_pairs = 0, count_bits = 0;
+  const auto by_pairs = intact_components(fam, broken, precracks, &count_pairs);
+  const auto by_bits = intact_components(half, {}, bits, precracks, &count_bits);
+  EXPECT_GE(count_pairs, 2);  // the x cut separates at least two pieces
+  EXPECT_EQ(count_bits, count_pairs);
+  EXPECT_EQ(by_bits, by_pairs);
+  // Bond lookups agree for every family pair, and pairs that are not bonds are not broken.
+  const BondBits lookup(half, bits);
+  for (size_t i = 0; i < m.size(); ++i)
+    for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k)
+      ASSERT_EQ(lookup.contains(static_cast<int64_t>(i), fam.neighbors[k]),
+                broken.contains(static_cast<int64_t>(i), fam.neighbors[k]));
+  EXPECT_EQ(bond_index(half, 0, static_cast<int64_t>(m.size()) - 1), -1);  // opposite corners: no bond
+  EXPECT_EQ(postproc::count_bits(bits), broken_pairs.size() / 2);
+  // A bond outside the fragment graph (within_horizon bit clear) connects nothing.
+  const std::vector<uint8_t> none(bits.size(), 0);
+  int32_t isolated = 0;
+  intact_components(half, none, none, RemovedBonds{}, &isolated);
+  EXPECT_EQ(static_cast<size_t>(isolated), m.size());
+}

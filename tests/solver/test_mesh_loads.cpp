@@ -138,3 +138,29 @@ TEST(Precracks, ANamedMeshSurfaceCutsExactlyTheBondsItsPolygonCuts) {
   // on either side of a conforming surface).
   EXPECT_EQ(by_surface.precrack_pairs, by_polygon.precrack_pairs);
 }
+
+TEST(Precracks, ASegmentEndingOnABondLineCutsBothHalvesOfEveryPair) {
+  // A 2D lattice (centres at (k + 1/2) h) and a crack along the row gap y = 5 mm whose tip
+  // moves in quarter spacings: at x = 10 mm the tip lies exactly on the line of the
+  // diagonal bonds (9.75, 4.75)-(10.25, 5.25) mm. The crossing test is then decided by a
+  // vanishing orientation whose sign depends on the bond's direction; a pair cut on one
+  // side only gave unbalanced forces (a fracture-free DCB gained 39 % of the work). The
+  // rule: every pair is cut on both sides or on neither (exact, a property of the set-up).
+  for (const char* tip : {"0.01", "0.010125", "0.01025", "0.0105", "0.011", "0.0115"}) {
+    const std::string yaml = std::string(
+        "specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.01], spacing: 0.5 mm, thickness: 1 mm}}\n"
+        "model: {type: pmb, planar: plane_stress, horizon_factor: 3.015}\n"
+        "materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.3333333333333333, fracture_energy: 3.8}]\n"
+        "precracks: [{type: segment, from: [0, 0.005], to: [") + tip + ", 0.005]}]\ntime: {steps: 1}\n";
+    const PdSystem s = system_from_yaml("tip_on_bond_line", yaml);
+    ASSERT_GT(s.precrack_pairs.size(), 10u) << "tip " << tip;
+    size_t one_sided = 0;
+    for (size_t i = 0; i < s.n; ++i)
+      for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
+        const int32_t j = s.neighbor[k];
+        for (int64_t r = s.offsets[j]; r < s.offsets[j + 1]; ++r)
+          if (s.neighbor[r] == static_cast<int32_t>(i) && (s.state[r] == 0) != (s.state[k] == 0)) ++one_sided;
+      }
+    EXPECT_EQ(one_sided, 0u) << "tip at x = " << tip << " m";
+  }
+}

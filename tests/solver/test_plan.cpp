@@ -495,3 +495,62 @@ time: {end: 10 us}
   ASSERT_TRUE(p.from_atlas);
   EXPECT_DOUBLE_EQ(p.horizon_factor, 3.015);
 }
+
+// Precision (docs/plan.md): float32 is proposed only where the atlas has float32 rows at the
+// proposed model that meet the tolerance and stay within a tenth of it of float64, and the
+// throughputs show a measured gain of 10% or more; each refusal says which part is missing.
+TEST(PlanProposal, Float32IsProposedOnlyWhenTheAtlasShowsItSafeAndTheThroughputsFaster) {
+  const std::string head =
+      "problem,model,dimension,particles_kind,m,spacing_m,precision,backend,threads,particles,bonds,steps,wall_s,"
+      "error,error_measure\n"
+      "wave_speed_bar,pmb,2,lattice,3,0.002,float64,cpu,1,600,18000,100,0.1,0.08,fixture\n"
+      "wave_speed_bar,pmb,2,lattice,3,0.001,float64,cpu,1,2400,80000,200,0.4,0.04,fixture\n";
+  const std::string safe_path = temp_path("f32_safe_atlas.csv");
+  std::ofstream(safe_path) << head << "wave_speed_bar,pmb,2,lattice,3,0.002,float32,cpu,1,600,18000,100,0.1,0.0801,fixture\n"
+                                      "wave_speed_bar,pmb,2,lattice,3,0.001,float32,cpu,1,2400,80000,200,0.4,0.0401,fixture\n";
+  const std::string unsafe_path = temp_path("f32_unsafe_atlas.csv");
+  std::ofstream(unsafe_path) << head << "wave_speed_bar,pmb,2,lattice,3,0.002,float32,cpu,1,600,18000,100,0.1,0.09,fixture\n"
+                                        "wave_speed_bar,pmb,2,lattice,3,0.001,float32,cpu,1,2400,80000,200,0.4,0.06,fixture\n";
+  omp_set_num_threads(1);
+  const CaseConfig c = case_from_yaml("f32_case", R"(
+specimen: {lattice: {dimension: 2, box: [0, 0, 0.1, 0.01], spacing: 0.5 mm, thickness: 1 mm}}
+model: {type: pmb, planar: plane_stress, horizon_factor: 3.015}
+materials: [{name: steel, density: 7850, youngs_modulus: 200 GPa, poisson_ratio: 0.3333333333333333}]
+boundary: [{type: velocity, set: xmin, value: [1, 0, 0], components: [x]}]
+time: {end: 10 us}
+)");
+  const Throughputs measured = load_throughputs(default_throughputs_path());
+  // The shipped file measures float32 slower on the CPU: it must keep the proposal float64.
+  const Proposal shipped = propose(c, read_atlas(safe_path), 0.05, measured, CostOptions{});
+  EXPECT_EQ(shipped.precision, "float64");
+  Throughputs faster = measured;
+  std::erase_if(faster.loop, [](const LoopRate& r) { return r.precision == "float32"; });
+  const std::vector<LoopRate> float64_rates = faster.loop;
+  for (const LoopRate& r : float64_rates) {
+    LoopRate f = r;
+    f.precision = "float32";
+    f.bond_updates_per_core_s *= 1.3;
+    faster.loop.push_back(f);
+  }
+  Throughputs slower = faster;
+  for (LoopRate& r : slower.loop)
+    if (r.precision == "float32") r.bond_updates_per_core_s /= 1.3 * 1.3;
+  const auto precision_line = [](const Proposal& p) {
+    for (const auto& l : p.reasoning)
+      if (l.rfind("Precision:", 0) == 0) return l;
+    return std::string();
+  };
+  const Proposal yes = propose(c, read_atlas(safe_path), 0.05, faster, CostOptions{});
+  EXPECT_EQ(yes.precision, "float32") << precision_line(yes);
+  EXPECT_NE(precision_line(yes).find("float32 / float64 throughput 1.3"), std::string::npos) << precision_line(yes);
+  const std::string proposed = temp_path("f32_proposed.yaml");
+  write_proposed_case(c, yes, proposed);
+  EXPECT_EQ(solver::parse_case_file(proposed).precision, CaseConfig::Precision::Float32);
+
+  const Proposal no_gain = propose(c, read_atlas(safe_path), 0.05, slower, CostOptions{});
+  EXPECT_EQ(no_gain.precision, "float64");
+  EXPECT_NE(precision_line(no_gain).find("no real gain"), std::string::npos) << precision_line(no_gain);
+  const Proposal unsafe = propose(c, read_atlas(unsafe_path), 0.05, faster, CostOptions{});
+  EXPECT_EQ(unsafe.precision, "float64");
+  EXPECT_NE(precision_line(unsafe).find("0 of 2 float32"), std::string::npos) << precision_line(unsafe);
+}

@@ -57,7 +57,7 @@ LatticeSpec parse_lattice(const Section& s) {
 }
 
 MaterialSpec parse_material(const Section& s) {
-  s.allow_only({"name", "density", "youngs_modulus", "poisson_ratio", "lambda", "mu", "C13", "C55", "plasticity"});
+  s.allow_only({"name", "density", "youngs_modulus", "poisson_ratio", "lambda", "mu", "C13", "C55", "plasticity", "fracture"});
   MaterialSpec m;
   m.name = s.text("name", "material");
   m.density_kg_m3 = s.positive("density", Quantity::Density);
@@ -94,6 +94,16 @@ MaterialSpec parse_material(const Section& s) {
       fail(*p, "hardening_modulus", pascal_text(ps.hardening_modulus_pa),
            "a hardening modulus >= 0 (0: perfectly plastic)");
     m.plasticity = ps;
+  }
+  if (auto f = s.optional_section("fracture")) {
+    f->allow_only({"tensile_strength"});
+    if (!f->has("tensile_strength"))
+      fail(*f, "tensile_strength", "missing", "the tensile strength (> 0) that the separation stress is compared with");
+    FractureSpec fs;
+    fs.tensile_strength_pa = f->number("tensile_strength", Quantity::Pressure);
+    if (!(fs.tensile_strength_pa > 0))
+      fail(*f, "tensile_strength", pascal_text(fs.tensile_strength_pa), "a tensile strength > 0");
+    m.fracture = fs;
   }
   return m;
 }
@@ -206,17 +216,19 @@ CaseSpec parse_root(const Section& root) {
   root.allow_only({"specimen", "model", "materials", "cracks", "boundary", "initial", "contact", "time", "output"});
 
   const Section spec = root.section("specimen");
-  spec.allow_only({"lattice", "particles"});
-  if (spec.has("lattice") == spec.has("particles"))
-    fail(spec, "lattice", "lattice and particles both or neither given", "exactly one of lattice, particles");
-  if (spec.has("lattice")) {
+  spec.allow_only({"lattice", "particles", "bodies"});
+  if (spec.has("lattice") + spec.has("particles") + spec.has("bodies") != 1)
+    fail(spec, "lattice", "lattice, particles, bodies: not exactly one given", "exactly one of lattice, particles, bodies");
+  if (spec.has("bodies")) {
+    c.bodies = parse_bodies(spec.section("bodies"));
+  } else if (spec.has("lattice")) {
     c.lattice = parse_lattice(spec.section("lattice"));
   } else {
     std::filesystem::path p = spec.text("particles");
     if (p.is_relative() && !c.file.empty()) p = std::filesystem::path(c.file).parent_path() / p;
     c.particle_file = p.string();
   }
-  const int dimension = c.lattice ? c.lattice->dimension : 2;
+  const int dimension = c.lattice ? c.lattice->dimension : (c.bodies ? c.bodies->dimension : 2);
 
   const Section model = root.section("model");
   model.allow_only({"type", "re_over_spacing", "equation", "integrator", "formulation", "hourglass", "pressure_force",
@@ -228,6 +240,8 @@ CaseSpec parse_root(const Section& root) {
   const bool stress = c.formulation == Formulation::Stress;
   for (const char* key : {"hourglass", "pressure_force", "damping", "gravity"})
     if (!stress && model.has(key)) fail(model, key, "given for the displacement formulation", "formulation: stress");
+  if (!stress && c.bodies)
+    fail(spec, "bodies", "several bodies in the displacement formulation (it has no contact)", "model.formulation: stress");
   if (stress && model.has("equation"))
     fail(model, "equation", "given for the stress formulation", "no equation key (it selects the displacement operator)");
   c.hourglass = model.number("hourglass", Quantity::Dimensionless, 0.1);
@@ -253,6 +267,9 @@ CaseSpec parse_root(const Section& root) {
     throw InputError(root.file(), "materials", std::to_string(materials.size()) + " materials",
                      "exactly one material (the MPS solver is single-material)");
   c.material = parse_material(materials[0]);
+  if (c.material.fracture && !stress)
+    fail(materials[0], "fracture", "given for the displacement formulation (it has no stress state)",
+         "model.formulation: stress");
   if (c.material.plasticity && !stress)
     fail(materials[0], "plasticity", "given for the displacement formulation (it has no stress state)",
          "model.formulation: stress");
@@ -273,11 +290,19 @@ CaseSpec parse_root(const Section& root) {
     if (init->has("velocity")) c.initial_velocity_m_s = init->vec3("velocity", Quantity::Velocity);
   }
   if (auto contact = root.optional_section("contact")) {
-    contact->allow_only({"floor"});
+    contact->allow_only({"floor", "particles", "rigid_bodies"});
     if (!stress) fail(*contact, "floor", "contact in the displacement formulation", "formulation: stress");
+    if (contact->has("particles")) c.particle_contact = parse_particle_contact(contact->section("particles"));
+    const auto rigid = contact->list("rigid_bodies");
+    for (size_t k = 0; k < rigid.size(); ++k) c.rigid_bodies.push_back(parse_rigid_body(rigid[k], k, dimension));
+  }
+  if (auto contact = root.optional_section("contact"); contact && contact->has("floor")) {
     const Section f = contact->section("floor");
-    f.allow_only({"point", "normal", "stiffness_factor"});
+    std::vector<std::string> floor_keys{"point", "normal", "stiffness_factor"};
+    for (const auto& k : friction_keys()) floor_keys.push_back(k);
+    f.allow_only(floor_keys);
     FloorSpec fs;
+    fs.friction = parse_friction(f);
     fs.point_m = f.vec3("point", Quantity::Length);
     fs.normal = f.has("normal") ? f.vec3("normal", Quantity::Dimensionless) : std::array<double, 3>{0.0, 1.0, 0.0};
     if (!(std::hypot(fs.normal[0], fs.normal[1], fs.normal[2]) > 0)) fail(f, "normal", "a zero vector", "a nonzero normal");

@@ -6,6 +6,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/particle_file.hpp"
+#include "breccia/mps/bodies.hpp"
 
 namespace breccia::mps {
 
@@ -28,6 +29,7 @@ double burst_velocity(const BurstHistory& h, double t) {
 }
 
 ParticleCloud build_particle_cloud(const CaseSpec& spec) {
+  if (spec.bodies) return build_bodies_cloud(spec);
   ParticleCloud c;
   if (spec.lattice) {
     const LatticeSpec& l = *spec.lattice;

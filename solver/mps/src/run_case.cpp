@@ -2,6 +2,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -53,6 +54,11 @@ void write_snapshot(const h5::File& f, const Model& sim) {
     }
     f.write(group + "/stress", stress, {n, 6});
     f.write(group + "/eq_plastic_strain", sim.eq_plastic_strain(), {n});
+    if (const FractureModel* fr = sim.fracture()) {
+      f.write(group + "/damage", fr->damage(sim.bonds()), {n});
+      const std::vector<int> labels = FractureModel::fragment_labels(sim.bonds());
+      f.write(group + "/fragment", std::vector<int32_t>(labels.begin(), labels.end()), {n});
+    }
   }
 }
 
@@ -99,15 +105,37 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
   history << "time_s";
   for (const auto& p : spec.probes) history << "," << p.name << "_" << p.field;
   if (sim.law().plastic) history << ",plastic_fraction";
+  if (sim.fracture()) history << ",failed_particles,cut_bonds,max_separation_stress_Pa";
   if (spec.energy) history << ",kinetic_energy_J,stress_work_J,hourglass_energy_J,contact_energy_J,gravity_energy_J";
+  // Contact (docs/mps.md, "Contact"): particle pairs in contact, friction dissipation, free rigid bodies.
+  const bool frictional = std::any_of(spec.rigid_bodies.begin(), spec.rigid_bodies.end(),
+                                      [](const RigidBodySpec& r) { return r.friction.static_friction > 0; }) ||
+                          (spec.floor && spec.floor->friction.static_friction > 0);
+  std::vector<size_t> free_bodies;
+  for (size_t k = 0; k < sim.contact().polygon_count(); ++k)
+    if (!sim.contact().polygon(k).fixed) free_bodies.push_back(k);
+  if (sim.contact().particle_contact()) history << ",contact_pairs";
+  if (spec.energy && frictional) history << ",friction_dissipation_J";
+  for (size_t k : free_bodies) {
+    const std::string& name = sim.contact().polygon(k).name;
+    history << "," << name << "_x_m," << name << "_y_m," << name << "_angle_rad";
+  }
   history << "\n";
   auto record = [&]() {
     history << fmt(sim.time_s());
     for (size_t k = 0; k < probe_particle.size(); ++k) history << "," << fmt(sim.sample(probe_particle[k], spec.probes[k].field));
     if (sim.law().plastic) history << "," << fmt(sim.plastic_fraction());
+    if (const FractureModel* fr = sim.fracture())
+      history << "," << fr->failed_particles() << "," << fr->cut_bonds() << "," << fmt(fr->max_separation_pa());
     if (spec.energy)
       history << "," << fmt(sim.kinetic_energy_j()) << "," << fmt(sim.stress_work_j()) << ","
               << fmt(sim.hourglass_energy_j()) << "," << fmt(sim.floor_energy_j()) << "," << fmt(sim.gravity_energy_j());
+    if (sim.contact().particle_contact()) history << "," << sim.contact().contact_pairs();
+    if (spec.energy && frictional) history << "," << fmt(sim.friction_dissipation_j());
+    for (size_t k : free_bodies) {
+      const auto c = sim.contact().polygon_centroid_m(k);
+      history << "," << fmt(c[0]) << "," << fmt(c[1]) << "," << fmt(sim.contact().polygon_angle_rad(k));
+    }
     history << "\n";
   };
   const auto loop_start = std::chrono::steady_clock::now();
@@ -148,6 +176,15 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
      << "  \"end_time_s\": " << fmt(sim.time_s()) << ",\n  \"p_wave_speed_m_s\": " << fmt(sim.p_wave_speed()) << ",\n"
      << "  \"kinetic_energy_j\": " << fmt(sim.kinetic_energy_j()) << ",\n  \"stress_work_j\": " << fmt(sim.stress_work_j()) << ",\n"
      << "  \"max_eq_plastic_strain\": " << fmt(max_plastic) << ",\n  \"plastic_fraction\": " << fmt(sim.plastic_fraction()) << ",\n"
+     << "  \"fracture\": " << (sim.fracture() ? "true" : "false") << ",\n"
+     << "  \"failed_particles\": " << (sim.fracture() ? sim.fracture()->failed_particles() : 0) << ",\n"
+     << "  \"cut_bonds\": " << (sim.fracture() ? sim.fracture()->cut_bonds() : 0) << ",\n"
+     << "  \"detached_particles\": " << (sim.fracture() ? sim.fracture()->detached_particles() : 0) << ",\n"
+     << "  \"fragments_min10\": "
+     << (sim.fracture() ? FractureModel::fragment_count(FractureModel::fragment_labels(sim.bonds()), 10) : 1) << ",\n"
+     << "  \"bodies\": " << (spec.bodies ? spec.bodies->shapes.size() : 1) << ",\n  \"rigid_bodies\": "
+     << spec.rigid_bodies.size() << ",\n  \"contact_pairs\": " << sim.contact().contact_pairs() << ",\n"
+     << "  \"friction_dissipation_j\": " << fmt(sim.friction_dissipation_j()) << ",\n"
      << "  \"threads\": " << omp_get_max_threads() << ",\n  \"wall_time_s\": " << fmt(wall_s) << ",\n"
      << "  \"step_loop_s\": " << fmt(loop_s) << ",\n"
      << "  \"particle_steps_per_s\": " << fmt(loop_s > 0 ? sim.size() * static_cast<double>(sim.steps()) / loop_s : 0.0)

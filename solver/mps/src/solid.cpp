@@ -1,5 +1,6 @@
 #include "breccia/mps/particles.hpp"
 #include "breccia/mps/solid.hpp"
+#include "breccia/mps/stability_checks.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -22,6 +23,10 @@ Solid::Solid(std::vector<double> position_m, std::vector<double> volume_m3, doub
   const size_t n = volume_m3_.size();
   if (position_m_.size() != 3 * n) throw RunError("mps solid: positions and volumes disagree in size");
   bonds_ = build_bonds(options_.dimension, position_m_, options_.re_over_spacing * options_.spacing_m);
+  if (!options_.body_id.empty()) {  // separate bodies meet through contact, not bonds
+    const std::vector<int>& body = options_.body_id;
+    remove_bonds(bonds_, [&body](long long i, long long j, long long) { return body[i] != body[j]; });
+  }
   norm_ = reference_normalisation(bonds_);
   mean_volume_m3_ = 0.0;
   for (double v : volume_m3_) mean_volume_m3_ += v / n;
@@ -70,10 +75,35 @@ void Solid::add_prescribed(PrescribedSet set) {
 }
 
 void Solid::set_floor(const RigidFloor& floor) {
-  RigidFloor f = floor;
-  const double len = std::sqrt(f.normal[0] * f.normal[0] + f.normal[1] * f.normal[1] + f.normal[2] * f.normal[2]);
-  for (double& c : f.normal) c /= len;
-  floor_ = f;
+  HalfSpace h;
+  h.point_m = floor.point_m;
+  h.normal = floor.normal;
+  h.law.normal_stiffness_n_m = floor.stiffness_factor * face_stiffness_n_m();
+  h.law.tangential_stiffness_n_m = floor.tangential_stiffness_factor * shear_face_stiffness_n_m();
+  h.law.static_friction = floor.static_friction;
+  h.law.kinetic_friction = floor.kinetic_friction;
+  contact_.add_half_space(h);
+}
+
+double Solid::face_stiffness_n_m() const {
+  const double face_area = options_.dimension == 2 ? options_.spacing_m * options_.thickness_m
+                                                   : options_.spacing_m * options_.spacing_m;
+  return (law_.lame_lambda_pa + 2.0 * law_.shear_modulus_pa) * face_area / options_.spacing_m;
+}
+
+double Solid::shear_face_stiffness_n_m() const {
+  return face_stiffness_n_m() * law_.shear_modulus_pa / (law_.lame_lambda_pa + 2.0 * law_.shear_modulus_pa);
+}
+
+ParticleStateView Solid::state_view() const {
+  ParticleStateView s;
+  s.dimension = options_.dimension;
+  s.count = static_cast<long long>(size());
+  s.position_m = position_m_.data();
+  s.u = {u_[0].data(), u_[1].data(), u_[2].data()};
+  s.v = {v_[0].data(), v_[1].data(), v_[2].data()};
+  s.bonds = bonds_.view();
+  return s;
 }
 
 void Solid::apply_prescribed(double t) {
@@ -88,22 +118,6 @@ void Solid::apply_prescribed(double t) {
       }
     }
   }
-}
-
-double Solid::floor_penetration_m(long long i, double normal_out[3]) const {
-  const RigidFloor& f = *floor_;
-  double height = 0.0;
-  for (int a = 0; a < 3; ++a) {
-    height += (position_m_[3 * i + a] + u_[a][i] - f.point_m[a]) * f.normal[a];
-    normal_out[a] = f.normal[a];
-  }
-  return height < 0.0 ? -height : 0.0;
-}
-
-double Solid::floor_stiffness_n_m(long long i) const {
-  const double face_area = options_.dimension == 2 ? options_.spacing_m * options_.thickness_m
-                                                   : options_.spacing_m * options_.spacing_m;
-  return floor_->stiffness_factor * (law_.lame_lambda_pa + 2.0 * law_.shear_modulus_pa) * face_area / options_.spacing_m;
 }
 
 void Solid::compute_acceleration() {
@@ -123,6 +137,7 @@ void Solid::compute_acceleration() {
     f(1, 1) += 1.0;
     f(2, 2) += 1.0;
     if (!(det(f) > 0.0)) {  // also catches NaN
+      if (fracture_ && fracture_->absorb_inversion(i, bonds_)) continue;  // debris at a crack face
       ++inverted;
       continue;
     }
@@ -138,6 +153,7 @@ void Solid::compute_acceleration() {
     throw RunError("mps solid: " + std::to_string(inverted) + " particle(s) inverted (det F <= 0) at t = " +
                    std::to_string(time_s_) + " s: the deformation is too large or too non-affine for the reference "
                    "stencils (raise model.hourglass, refine, or lower time.safety)");
+  if (fracture_) apply_fracture();  // cut bonds take no part in the forces below
   const bool repulsive = options_.pressure == PressureForce::Repulsive;
   if (repulsive) {
 #pragma omp parallel for schedule(static) if (n > kSolidParallelMin)
@@ -164,17 +180,15 @@ void Solid::compute_acceleration() {
   in.volume_m3 = volume_m3_.data();
   const double damping = options_.damping_per_s;
   const auto& g = options_.gravity_m_s2;
+  const bool contact = contact_.active();
+  if (contact) contact_.compute_forces(state_view(), dt_s_);
 #pragma omp parallel for schedule(static) if (n > kSolidParallelMin)
   for (long long i = 0; i < n; ++i) {
     double f[3];
     solid_force_at(i, in, f);
     for (int a = 0; a < 3; ++a) f[a] += external_force_n_[a][i];
-    if (floor_) {
-      double normal[3];
-      const double depth = floor_penetration_m(i, normal);
-      if (depth > 0.0)
-        for (int a = 0; a < 3; ++a) f[a] += floor_stiffness_n_m(i) * depth * normal[a];
-    }
+    if (contact)
+      for (int a = 0; a < 3; ++a) f[a] += contact_.force(a)[i];
     const double mass = density_kg_m3_ * volume_m3_[i];
     for (int a = 0; a < dim; ++a) a_[a][i] = f[a] / mass + g[a] - damping * v_[a][i];
   }
@@ -185,9 +199,11 @@ void Solid::step() {
   // Symplectic Euler (the paper's scheme): v^{k+1} = v^k + dt a(u^k), u^{k+1} = u^k + dt v^{k+1}.
   compute_acceleration();
   symplectic_euler_update(u_, v_, a_, options_.dimension, dt);
+  contact_.advance_rigid_bodies(dt, options_.gravity_m_s2);  // same step, reactions of the forces above
   time_s_ += dt;
   apply_prescribed(time_s_);
   ++steps_;
+  if (steps_ % kClumpingCheckEvery == 0) require_no_clumping(*this);  // stability_checks.hpp
 }
 
 std::vector<double> Solid::internal_force_of_uniform_stress(const SymTensor& stress) const {
@@ -211,7 +227,7 @@ double Solid::kinetic_energy_j() const {
   double e = 0.0;
   for (size_t i = 0; i < size(); ++i)
     e += 0.5 * density_kg_m3_ * volume_m3_[i] * (v_[0][i] * v_[0][i] + v_[1][i] * v_[1][i] + v_[2][i] * v_[2][i]);
-  return e;
+  return e + contact_.rigid_kinetic_energy_j();
 }
 
 double Solid::stress_work_j() const {
@@ -231,22 +247,13 @@ double Solid::hourglass_energy_j() const {
   return e;
 }
 
-double Solid::floor_energy_j() const {
-  if (!floor_) return 0.0;
-  double e = 0.0;
-  for (size_t i = 0; i < size(); ++i) {
-    double normal[3];
-    const double depth = floor_penetration_m(i, normal);
-    e += 0.5 * floor_stiffness_n_m(i) * depth * depth;
-  }
-  return e;
-}
+double Solid::contact_energy_j() const { return contact_.active() ? contact_.potential_energy_j(state_view()) : 0.0; }
 
 double Solid::gravity_energy_j() const {
   double e = 0.0;
   for (size_t i = 0; i < size(); ++i)
     for (int a = 0; a < 3; ++a) e -= density_kg_m3_ * volume_m3_[i] * options_.gravity_m_s2[a] * u_[a][i];
-  return e;
+  return e + contact_.rigid_gravity_energy_j(options_.gravity_m_s2);
 }
 
 double Solid::plastic_fraction() const {

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "breccia/mps/contact_case.hpp"
 #include "breccia/mps/particles.hpp"
 
 namespace breccia::mps {
@@ -29,9 +30,15 @@ Solid make_solid(const CaseSpec& spec, std::string* content_id) {
   opt.safety = spec.safety;
   opt.dt_s = spec.dt_s;
   opt.gravity_m_s2 = spec.gravity_m_s2;
+  opt.body_id = cloud.body_id;
   const std::vector<double> position = cloud.position_m;
   Solid solid(std::move(cloud.position_m), std::move(cloud.volume_m3), m.density_kg_m3, law, opt);
-  if (spec.floor) solid.set_floor({spec.floor->point_m, spec.floor->normal, spec.floor->stiffness_factor});
+  if (m.fracture) solid.set_fracture({m.fracture->tensile_strength_pa});
+  if (spec.floor) {
+    const FloorSpec& fl = *spec.floor;
+    solid.set_floor({fl.point_m, fl.normal, fl.stiffness_factor, fl.friction.static_friction,
+                     fl.friction.kinetic_friction, fl.friction.tangential_stiffness_factor});
+  }
   const size_t n = solid.size();
   for (int a = 0; a < solid.dimension(); ++a)
     for (size_t i = 0; i < n; ++i) solid.velocity(a)[i] = spec.initial_velocity_m_s[a];
@@ -44,6 +51,7 @@ Solid make_solid(const CaseSpec& spec, std::string* content_id) {
       for (int a = 0; a < solid.dimension(); ++a) solid.displacement(a)[i] = g.amplitude_m[a] * f;
     }
   }
+  configure_contact(spec, opt.body_id, solid);  // after the initial state: adds body velocities
   for (const auto& set : prescribed) solid.add_prescribed(set);
   return solid;
 }

@@ -187,6 +187,7 @@ CaseConfig proposed_config(const CaseConfig& c, const Proposal& p) {
   out.model_name = p.model;
   out.horizon_factor = p.horizon_factor;
   out.horizon_m.reset();
+  if (p.precision == "float32") out.precision = solver::CaseConfig::Precision::Float32;
   // The atlas measures PMB with the energy surface correction (solver/atlas, model_yaml):
   // a PMB proposal must run as its rows ran to have their error. LPS has no correction.
   if (p.from_atlas && p.model == "pmb") out.surface_correction = true;
@@ -372,18 +373,43 @@ Proposal propose(const CaseConfig& c, const std::vector<AtlasRow>& atlas, double
                   "breccia-place, and run with model.variable_horizon: true (dual horizon); for a uniform lattice "
                   "this can cut the particle count several-fold when the loads and cracks occupy a small region.");
   }
-  // Precision.
-  bool f32_rows = false, f32_safe = false;
-  for (const auto& r : atlas)
-    if (r.problem == problem.problem && (r.precision == "float32" || r.precision == "fp32" || r.precision == "single")) {
-      f32_rows = true;
-      f32_safe = f32_safe || r.error <= tol;
-    }
-  why.push_back(std::string("Precision: ") +
-                (!f32_rows ? "the atlas has no float32 rows for this problem, so float32 is not shown safe"
-                           : f32_safe ? "the atlas has float32 settings that meet the tolerance"
-                                      : "no float32 setting in the atlas meets the tolerance") +
-                "; in any case breccia-solve has no float32 path yet, so the proposal stays float64.");
+  // Precision: float32 where every float32 atlas row at the proposed model has the error of
+  // its float64 twin within a tenth of the tolerance (then the spacing chosen from float64
+  // rows holds for float32 too), and the measured throughputs show a gain of 10% at least
+  // (docs/plan.md, Precision).
+  const auto is_f32 = [](const std::string& p) { return p == "float32" || p == "fp32" || p == "single"; };
+  int f32_rows = 0, f32_safe = 0;
+  double worst_shift = 0.0;
+  for (const auto& r : atlas) {
+    if (r.problem != problem.problem || r.model != best.model || !is_f32(r.precision)) continue;
+    for (const auto& d : atlas)
+      if (d.problem == r.problem && d.model == r.model && d.dimension == r.dimension &&
+          d.particles_kind == r.particles_kind && std::fabs(d.m - r.m) < 1e-6 &&
+          std::fabs(d.spacing_m - r.spacing_m) <= 1e-6 * d.spacing_m && d.precision == "float64") {
+        ++f32_rows;
+        worst_shift = std::max(worst_shift, std::fabs(r.error - d.error));
+        f32_safe += std::fabs(r.error - d.error) <= 0.1 * tol;
+      }
+  }
+  const solver::PdModel best_model = best.model == "lps" ? solver::PdModel::LPS : solver::PdModel::PMB;
+  const std::optional<double> speedup = rates.float32_speedup(best_model, options.threads);
+  const bool safe = f32_rows > 0 && f32_safe == f32_rows;
+  const bool faster = speedup && *speedup >= 1.1;
+  if (safe && faster && !c.quasi_static) best.precision = "float32";
+  std::string text = "Precision: ";
+  if (f32_rows == 0) {
+    text += "the atlas has no float32 rows for " + problem.problem + " with " + best.model +
+            ", so float32 is not shown safe";
+  } else {
+    text += std::to_string(f32_safe) + " of " + std::to_string(f32_rows) + " float32 atlas rows for " +
+            problem.problem + " with " + best.model + " have float64's error within a tenth of the tolerance " +
+            "(largest shift " + fmt(worst_shift) + ")";
+  }
+  if (!speedup) text += "; no float32 throughput is measured (throughputs.yaml), so no speed gain is shown";
+  else text += "; measured float32 / float64 throughput " + fmt(*speedup) + (faster ? "" : " (no real gain)");
+  if (c.quasi_static) text += "; ADR with float forces stalls near a residual of 1e-5 (docs/theory.md)";
+  text += best.precision == "float32" ? ": propose model.precision: float32." : ": the proposal stays float64.";
+  why.push_back(text);
 
   best.cost = estimate_cost(proposed_config(c, best), rates, options);
   if (!best.from_atlas) best.expected_error = 0.0;
@@ -418,6 +444,7 @@ void write_proposed_case(const CaseConfig& c, const Proposal& p, const std::stri
   model["type"] = p.model;
   model.remove("horizon");
   model["horizon_factor"] = yaml_number(p.horizon_factor);
+  if (p.precision == "float32") model["precision"] = "float32";
   if (pc.surface_correction) model["surface_correction"] = "energy";
   if (pc.lattice && pc.lattice->dimension == 2)
     model["planar"] = pc.planar == Planar::PlaneStrain ? "plane_strain" : "plane_stress";

@@ -23,12 +23,27 @@ const LoopRate& Throughputs::rate(PdModel model, int threads) const {
   const std::string name = model == PdModel::LPS ? "lps" : "pmb";
   const LoopRate* best = nullptr;
   for (const auto& r : loop) {
-    if (r.model != name) continue;
+    if (r.model != name || r.precision != "float64") continue;
     if (!best || std::abs(r.threads - threads) < std::abs(best->threads - threads)) best = &r;
   }
   if (!best)
     throw InputError(file, "loop", "no throughput for model " + name, "an entry {model: " + name + ", threads, ...}");
   return *best;
+}
+
+std::optional<double> Throughputs::float32_speedup(PdModel model, int threads) const {
+  const std::string name = model == PdModel::LPS ? "lps" : "pmb";
+  const LoopRate* f32 = nullptr;
+  for (const auto& r : loop)
+    if (r.model == name && r.precision == "float32" &&
+        (!f32 || std::abs(r.threads - threads) < std::abs(f32->threads - threads)))
+      f32 = &r;
+  if (!f32) return std::nullopt;
+  // Against the float64 entry at the same thread count (same benchmark run).
+  for (const auto& r : loop)
+    if (r.model == name && r.precision == "float64" && r.threads == f32->threads)
+      return f32->bond_updates_per_core_s / r.bond_updates_per_core_s;
+  return std::nullopt;
 }
 
 std::string default_throughputs_path() {
@@ -42,12 +57,13 @@ Throughputs load_throughputs(const std::string& path) {
   Throughputs t;
   t.file = path;
   for (const Section& l : root.list("loop")) {
-    l.allow_only({"model", "threads", "bond_updates_per_core_s", "source"});
+    l.allow_only({"model", "threads", "bond_updates_per_core_s", "source", "precision"});
     LoopRate r;
     r.model = l.choice("model", {"pmb", "lps"});
     r.threads = static_cast<int>(l.integer("threads"));
     r.bond_updates_per_core_s = l.positive("bond_updates_per_core_s", Quantity::Dimensionless);
     r.source = l.text("source", path);
+    r.precision = l.choice("precision", {"float64", "float32"}, "float64");
     t.loop.push_back(r);
   }
   if (t.loop.empty()) throw InputError(path, "loop", "no entries", "measured loop throughputs per model");

@@ -68,8 +68,8 @@ struct CrackResult {
 };
 
 struct CrackInputs {
-  const RemovedBonds* broken = nullptr;
-  const RemovedBonds* precracks = nullptr;
+  const BondSet* broken = nullptr;     // bonds broken by fracture (state 1)
+  const BondSet* precracks = nullptr;  // bonds removed by pre-cracks (state 2)
   std::span<const double> damage;               // N (Damage criterion)
   std::span<const int32_t> material_id;         // N (for G0)
   std::span<const double> fracture_energy_J_m2; // per material

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "breccia/common/particle_file.hpp"
+#include "breccia/solver/family.hpp"
 
 namespace breccia::postproc {
 
@@ -30,6 +31,13 @@ struct RunData {
   std::vector<std::string> material_names;
   std::vector<double> fracture_energy_J_m2;  // per material, mean G0
   std::vector<int64_t> precrack_bonds;       // 2P, pairs i < j
+  // The run's bonds, each pair once from its lower index (partners j > i, ascending): the
+  // list the per-output broken bits index. /bonds in results.h5; not rebuilt here.
+  solver::Families bonds;
+  // Bit per bond: within max(horizon_i, horizon_j), i.e. in the fragment graph (the rest
+  // are the solver's partial-volume bonds whose neighbour cell only reaches the horizon).
+  std::vector<uint8_t> within_horizon;
+  size_t within_horizon_count = 0;
   std::vector<OutputInfo> outputs;
   ParticleModel particles;  // the source particles.h5 (mesh, spacing)
 
@@ -44,7 +52,8 @@ struct OutputFrame {
   std::vector<double> displacement_m;  // 3N
   std::vector<double> velocity_m_s;    // 3N
   std::vector<double> damage;          // N
-  std::vector<int64_t> broken_bonds;   // 2B, pairs i < j, cumulative
+  std::vector<uint8_t> broken;         // bit per bond of RunData::bonds: broken by fracture (cumulative)
+  size_t broken_count = 0;             // bits set
 };
 
 // Open RUN_DIR/results.h5 and the particles file it names (or `particles_override`), and

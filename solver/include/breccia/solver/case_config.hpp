@@ -104,7 +104,12 @@ struct CaseConfig {
   bool variable_horizon = false;    // per-particle horizon from local spacing
   bool surface_correction = false;  // energy method (Le & Bobaru 2018)
   bool fracture = true;
+  // Working precision of the bond loop and the state it streams (docs/theory.md, Precision).
+  enum class Precision { Float64, Float32 } precision = Precision::Float64;
   std::vector<std::string> no_fail_sets;
+  // Correspondence only: none | penalty (non-affine penalty, docs/theory.md), coefficient G
+  std::string stabilisation = "penalty";
+  double stabilisation_coefficient = 1.0;
   std::vector<MaterialSpec> materials;
   std::vector<PrecrackSpec> precracks;
   std::vector<LoadSpec> loads;

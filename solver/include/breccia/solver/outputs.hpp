@@ -11,6 +11,22 @@
 
 namespace breccia::solver {
 
+// The run's bonds once, as post-processing reads them (results.h5 /bonds, docs/formats.md):
+// each pair once from its lower file index, partners ascending. Built at start; an output
+// then only needs one bit per bond.
+struct HalfBondList {
+  std::vector<int64_t> offsets;       // N + 1, file order
+  std::vector<int32_t> neighbors;     // partners j > i, ascending within a row
+  std::vector<int64_t> entry;         // bond b -> the solver's bond entry (row of i, internal order)
+  std::vector<uint8_t> within_horizon;  // bits: |xi| <= max(horizon_i, horizon_j) (the fragment graph)
+  std::vector<uint8_t> precrack;        // bits: removed at start by a pre-crack
+};
+HalfBondList half_bond_list(const PdSystem& sys);
+
+// Bit b (byte b / 8, bit b % 8, least significant first) set when bond b of `list` is broken
+// by fracture (pre-cracks excluded): the same bonds as broken_pairs.
+std::vector<uint8_t> broken_bits(const PdSystem& sys, const HalfBondList& list, int64_t* broken_count);
+
 class ResultsWriter {
 public:
   // Creates out_dir/results.h5 (or reopens it on restart, dropping outputs after `step`).
@@ -24,6 +40,7 @@ private:
   std::unique_ptr<h5::File> file_;
   int count_ = 0;
   std::vector<double> times_;
+  HalfBondList bonds_;
 };
 
 class HistoryWriter {

@@ -3,13 +3,19 @@
 // decides how `for i in [0, n)` is launched (OpenMP here, CUDA in solver/cuda/).
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 
 #include "breccia/solver/pd_physics.hpp"
 
 namespace breccia::solver {
 
-// Everything a kernel reads or writes, as raw pointers (structure of arrays).
-struct PdView {
+// Everything a kernel reads or writes, as raw pointers (structure of arrays). Real is the
+// working precision of the bond loop and of the state it streams (double; float for
+// model.precision: float32). The per-particle diagnostics (energy density, damage, dissipated
+// energy, max stretch) stay double: they are written once per particle on output steps and
+// summed over the body, where float would lose the small terms.
+template <class Real>
+struct PdViewT {
   int64_t n = 0;
   int model = 0;  // PdModel
   bool fracture = true;
@@ -18,100 +24,148 @@ struct PdView {
   // One constant horizon: both halves of every entry are equal (k_own == k_dual,
   // s0_own == s0_dual, both bits set together), so the kernel reads one of each.
   bool symmetric_halves = false;
-  const double* x0 = nullptr;   // 3N reference positions
-  const double* x = nullptr;    // 3N current positions x0 + u (optional: fast PMB path)
-  double* u = nullptr;          // 3N displacement
-  double* v = nullptr;          // 3N velocity
-  double* a = nullptr;          // 3N acceleration
-  double* force = nullptr;      // 3N internal force density [N/m3]
-  const double* body = nullptr; // 3N external force density [N/m3]
-  const double* volume = nullptr;
-  const double* density = nullptr;
+  const Real* x0 = nullptr;   // 3N reference positions (float: relative to the body's centre)
+  const Real* x = nullptr;    // 3N current positions x0 + u (optional, double only: fast paths)
+  Real* u = nullptr;          // 3N displacement
+  Real* v = nullptr;          // 3N velocity
+  Real* a = nullptr;          // 3N acceleration
+  Real* force = nullptr;      // 3N internal force density [N/m3]
+  const Real* body = nullptr; // 3N external force density [N/m3]
+  const Real* volume = nullptr;
+  const Real* density = nullptr;
   const uint8_t* fixed_dof = nullptr;  // N, bit d set: component d is prescribed
   // bonds, CSR over full families
   const int64_t* offsets = nullptr;
   const int32_t* neighbor = nullptr;
-  const double* xi_len = nullptr;
-  const double* k_own = nullptr;   // PMB: c_half*omega*beta*V_j; LPS: omega*beta (own horizon)
-  const double* k_dual = nullptr;  // same for the neighbour's horizon
-  const double* vol_own = nullptr; // beta*V_j in the own horizon (damage weights)
+  const Real* xi_len = nullptr;
+  const Real* k_own = nullptr;   // PMB: c_half*omega*beta*V_j; LPS: omega*beta (own horizon)
+  const Real* k_dual = nullptr;  // same for the neighbour's horizon
+  const Real* vol_own = nullptr; // beta*V_j in the own horizon (damage weights)
   const float* s0_own = nullptr;   // critical stretch of each half-bond
   const float* s0_dual = nullptr;
   uint8_t* state = nullptr;        // kOwnIntact | kDualIntact
   // LPS per particle
   const LpsCoefficients* lps = nullptr;
-  const double* weighted_volume = nullptr;  // m_i
-  double* dilatation = nullptr;             // theta_i
+  const Real* weighted_volume = nullptr;  // m_i
+  Real* dilatation = nullptr;             // theta_i
   // Optional per-particle LPS factors for the fast path: t_i = omega (A_i |xi| + B_i e),
   // A_i = theta_i (c_b - c_s/d) / m_i, B_i = c_s / m_i (filled by the dilatation pass).
-  double* lps_a = nullptr;
-  double* lps_b = nullptr;
+  Real* lps_a = nullptr;
+  Real* lps_b = nullptr;
   // per-particle outputs
   double* energy_density = nullptr;   // W_i [J/m3]
   double* dissipated = nullptr;       // energy released by bonds broken this step, per particle [J]
   double* damage = nullptr;
   double* max_stretch = nullptr;      // optional
 };
+using PdView = PdViewT<double>;
+
+// The deformed bond vector j - i and its extension |xi + eta| - |xi|, computed the way each
+// precision keeps them. Double gathers the current positions x (one array) and subtracts
+// the lengths, as it always has. Float forms xi + eta from the reference and displacement
+// differences (x0 + u in float would round a small u away against the coordinate), and
+// the extension without cancellation, e = (2 xi.eta + eta.eta) / (|xi + eta| + |xi|):
+// |xi + eta| - |xi| in float has an absolute error of u |xi| (a stretch error of 6e-8 at any
+// strain), the quotient a relative one of a few u (docs/theory.md, Precision).
+// `BondOriginT` holds what particle i contributes, read once per particle.
+template <class Real>
+struct BondOriginT {
+  static constexpr bool kRelative = !std::is_same_v<Real, double>;
+  Real px = Real(0), py = Real(0), pz = Real(0), ux = Real(0), uy = Real(0), uz = Real(0);
+  BondOriginT() = default;
+  BRECCIA_HD BondOriginT(const PdViewT<Real>& p, int64_t i) {
+    const Real* pos = kRelative ? p.x0 : p.x;
+    px = pos[3 * i]; py = pos[3 * i + 1]; pz = pos[3 * i + 2];
+    if (kRelative) { ux = p.u[3 * i]; uy = p.u[3 * i + 1]; uz = p.u[3 * i + 2]; }
+    else { ux = uy = uz = Real(0); }
+  }
+  // Returns the extension; dx, dy, dz and len receive the deformed vector and its length.
+  BRECCIA_HD Real to(const PdViewT<Real>& p, int64_t j, Real xi_len, Real& dx, Real& dy, Real& dz,
+                     Real& len) const {
+    if constexpr (kRelative) {
+      const Real ax = p.x0[3 * j] - px, ay = p.x0[3 * j + 1] - py, az = p.x0[3 * j + 2] - pz;  // xi (exact)
+      const Real bx = p.u[3 * j] - ux, by = p.u[3 * j + 1] - uy, bz = p.u[3 * j + 2] - uz;      // eta
+      dx = ax + bx; dy = ay + by; dz = az + bz;
+      len = std::sqrt(dx * dx + dy * dy + dz * dz);
+      return (Real(2) * (ax * bx + ay * by + az * bz) + (bx * bx + by * by + bz * bz)) / (len + xi_len);
+    } else {
+      dx = p.x[3 * j] - px; dy = p.x[3 * j + 1] - py; dz = p.x[3 * j + 2] - pz;
+      len = std::sqrt(dx * dx + dy * dy + dz * dz);
+      return len - xi_len;
+    }
+  }
+};
+
+// Can the fast paths gather bond vectors? Double needs the current positions x; float
+// always can (reference positions and displacements).
+template <class Real>
+BRECCIA_HD bool has_bond_vectors(const PdViewT<Real>& p) {
+  return !std::is_same_v<Real, double> || p.x != nullptr;
+}
 
 // LPS first pass: theta_i = d/m_i * sum_j omega beta |xi| e V_j over intact own bonds.
-BRECCIA_HD void lps_dilatation_kernel(const PdView& p, int64_t i) {
-  double sum = 0.0;
+template <class Real>
+BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
+  Real sum = Real(0);
+  const bool gather = has_bond_vectors(p);
+  const BondOriginT<Real> origin = gather ? BondOriginT<Real>(p, i) : BondOriginT<Real>();
   for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
     if (!(p.state[k] & kOwnIntact)) continue;
     const int64_t j = p.neighbor[k];
-    double length;
-    if (p.x) {
-      const double dx = p.x[3 * j] - p.x[3 * i], dy = p.x[3 * j + 1] - p.x[3 * i + 1], dz = p.x[3 * j + 2] - p.x[3 * i + 2];
-      length = std::sqrt(dx * dx + dy * dy + dz * dz);
+    Real extension;
+    if (gather) {
+      Real dx, dy, dz, len;
+      extension = origin.to(p, j, p.xi_len[k], dx, dy, dz, len);
     } else {
-      length = bond_geometry(p.x0, p.u, i, j, p.xi_len[k]).length;
+      extension = bond_geometry(p.x0, p.u, i, j, p.xi_len[k]).extension;
     }
-    sum += p.k_own[k] * p.xi_len[k] * (length - p.xi_len[k]) * p.volume[j];
+    sum += p.k_own[k] * p.xi_len[k] * extension * p.volume[j];
   }
-  const double theta = p.lps[i].dilatation_factor * sum / p.weighted_volume[i];
+  const Real theta = static_cast<Real>(p.lps[i].dilatation_factor) * sum / p.weighted_volume[i];
   p.dilatation[i] = theta;
   if (p.lps_a) {
     const LpsCoefficients& c = p.lps[i];
-    p.lps_a[i] = theta * (c.bulk_term - c.shear_term / c.dilatation_factor) / p.weighted_volume[i];
-    p.lps_b[i] = c.shear_term / p.weighted_volume[i];
+    p.lps_a[i] = theta * static_cast<Real>(c.bulk_term - c.shear_term / c.dilatation_factor) / p.weighted_volume[i];
+    p.lps_b[i] = static_cast<Real>(c.shear_term) / p.weighted_volume[i];
   }
 }
 
 // LPS with one constant horizon: the pair's force state is omega ((A_i + A_j)|xi| +
 // (B_i + B_j) e), the same algebra as lps_force_state summed over both ends.
-BRECCIA_HD void lps_symmetric_force_kernel(const PdView& p, int64_t i) {
-  const double* x = p.x;
-  const double xi0 = x[3 * i], yi0 = x[3 * i + 1], zi0 = x[3 * i + 2];
-  const double a_i = p.lps_a[i], b_i = p.lps_b[i];
-  const double theta_i = p.dilatation[i], d = p.lps[i].dilatation_factor;
-  double fx = 0.0, fy = 0.0, fz = 0.0, released = 0.0, dev_sum = 0.0, smax = 0.0;
+// Forces accumulate in Real; the diagnostics (energy, damage, released energy) in double.
+template <class Real>
+BRECCIA_HD void lps_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
+  const BondOriginT<Real> origin(p, i);
+  const Real a_i = p.lps_a[i], b_i = p.lps_b[i];
+  const Real theta_i = p.dilatation[i], d = static_cast<Real>(p.lps[i].dilatation_factor);
+  Real fx = Real(0), fy = Real(0), fz = Real(0);
+  double released = 0.0, dev_sum = 0.0, smax = 0.0;
   double intact_vol = 0.0, total_vol = 0.0;
   const int64_t end = p.offsets[i + 1];
   for (int64_t k = p.offsets[i]; k < end; ++k) {
     if (p.diagnostics) total_vol += p.vol_own[k];
     if (!p.state[k]) continue;
     const int64_t j = p.neighbor[k];
-    const double dx = x[3 * j] - xi0, dy = x[3 * j + 1] - yi0, dz = x[3 * j + 2] - zi0;
-    const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
-    const double xi = p.xi_len[k];
-    const double e = len - xi;
-    const double omega = p.k_own[k];
+    const Real xi = p.xi_len[k];
+    Real dx, dy, dz, len;
+    const Real e = origin.to(p, j, xi, dx, dy, dz, len);
+    const Real omega = p.k_own[k];
     if (p.fracture && e > p.s0_own[k] * xi) {
-      const double dev = p.s0_own[k] * xi - theta_i * xi / d;  // at the critical extension
+      const double dev = double(p.s0_own[k]) * xi - double(theta_i) * xi / d;  // at the critical extension
       released += 0.5 * b_i * omega * dev * dev * p.volume[j] * p.volume[i];
       p.state[k] = 0;
       continue;
     }
-    const double t = omega * ((a_i + p.lps_a[j]) * xi + (b_i + p.lps_b[j]) * e);
-    const double f = t * p.volume[j] / len;
+    const Real t = omega * ((a_i + p.lps_a[j]) * xi + (b_i + p.lps_b[j]) * e);
+    const Real f = t * p.volume[j] / len;
     fx += f * dx;
     fy += f * dy;
     fz += f * dz;
     if (p.diagnostics) {
-      const double dev = e - theta_i * xi / d;
+      const double dev = double(e) - double(theta_i) * xi / d;
       dev_sum += omega * dev * dev * p.volume[j];
       intact_vol += p.vol_own[k];
-      if (e / xi > smax) smax = e / xi;
+      if (double(e) / xi > smax) smax = double(e) / xi;
     }
   }
   p.force[3 * i] = fx;
@@ -119,7 +173,7 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdView& p, int64_t i) {
   p.force[3 * i + 2] = fz;
   p.dissipated[i] = released;
   if (p.diagnostics) {
-    p.energy_density[i] = lps_bulk_energy(p.lps[i], theta_i) + 0.5 * b_i * dev_sum;
+    p.energy_density[i] = lps_bulk_energy(p.lps[i], double(theta_i)) + 0.5 * b_i * dev_sum;
     p.damage[i] = total_vol > 0.0 ? 1.0 - intact_vol / total_vol : 0.0;
     if (p.max_stretch) p.max_stretch[i] = smax;
   }
@@ -127,16 +181,18 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdView& p, int64_t i) {
 
 // Has entry k lost a half-bond that existed? (With variable horizons a half may never
 // have existed: j outside i's horizon, or i outside j's.)
-BRECCIA_HD bool entry_broken(const PdView& p, int64_t k) {
+template <class Real>
+BRECCIA_HD bool entry_broken(const PdViewT<Real>& p, int64_t k) {
   const uint8_t st = p.state[k];
-  const bool own_lost = p.vol_own[k] > 0.0 && !(st & kOwnIntact);
-  const bool dual_lost = p.k_dual[k] > 0.0 && !(st & kDualIntact);
+  const bool own_lost = p.vol_own[k] > Real(0) && !(st & kOwnIntact);
+  const bool dual_lost = p.k_dual[k] > Real(0) && !(st & kDualIntact);
   return own_lost || dual_lost;
 }
 
 // Break the half-bonds of entry k whose stretch passed their critical value. Each entry is
 // written only by its owner i; (i,j) and (j,i) see the same stretch, so they agree.
-BRECCIA_HD uint8_t break_bonds(const PdView& p, int64_t k, double stretch) {
+template <class Real>
+BRECCIA_HD uint8_t break_bonds(const PdViewT<Real>& p, int64_t k, SameReal<Real> stretch) {
   uint8_t st = p.state[k];
   if ((st & kOwnIntact) && stretch > p.s0_own[k]) st &= static_cast<uint8_t>(~kOwnIntact);
   if ((st & kDualIntact) && stretch > p.s0_dual[k]) st &= static_cast<uint8_t>(~kDualIntact);
@@ -146,36 +202,89 @@ BRECCIA_HD uint8_t break_bonds(const PdView& p, int64_t k, double stretch) {
 // PMB with one constant horizon, the common production case: reads one modulus and one
 // critical stretch per entry; the diagnostics (energy, damage) are compiled out of the
 // loop between output steps.
-template <bool kDiagnostics>
-BRECCIA_HD void pmb_symmetric_force_loop(const PdView& p, int64_t i) {
-  const double* x = p.x;
-  const double xi0 = x[3 * i], yi0 = x[3 * i + 1], zi0 = x[3 * i + 2];
-  double fx = 0.0, fy = 0.0, fz = 0.0, w = 0.0, released = 0.0, smax = 0.0;
+template <bool kDiagnostics, class Real>
+BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
+  const BondOriginT<Real> origin(p, i);
+  if constexpr (BondOriginT<Real>::kRelative && !kDiagnostics) {
+    // Float between output steps: no branch and one division per bond, so the compiler can
+    // run several bonds at once (SIMD); broken bonds are computed and masked. The extension
+    // e = (2 xi + eta).eta / (|xi + eta| + |xi|) enters as num / den (BondOriginT).
+    const Real* x0 = p.x0;
+    const Real* u = p.u;
+    Real fx = Real(0), fy = Real(0), fz = Real(0), released = Real(0);
+    int breaking = 0;
+    const Real vol_i = p.volume[i];
+    const bool fracture = p.fracture;
+    const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
+#if !defined(__CUDACC__)
+#pragma omp simd reduction(+ : fx, fy, fz, released, breaking)
+#endif
+    for (int64_t k = begin; k < end; ++k) {
+      const int64_t j = p.neighbor[k];
+      const Real ax = x0[3 * j] - origin.px, ay = x0[3 * j + 1] - origin.py, az = x0[3 * j + 2] - origin.pz;
+      const Real bx = u[3 * j] - origin.ux, by = u[3 * j + 1] - origin.uy, bz = u[3 * j + 2] - origin.uz;
+      const Real dx = ax + bx, dy = ay + by, dz = az + bz;
+      const Real len = std::sqrt(dx * dx + dy * dy + dz * dz);
+      const Real xi = p.xi_len[k];
+      const Real den = len + xi;
+      const Real num = bx * (ax + dx) + by * (ay + dy) + bz * (az + dz);
+      const Real k2 = Real(2) * p.k_own[k];
+      const Real s0 = p.s0_own[k];
+      const bool intact = p.state[k] != 0;
+      const bool breaks = fracture && intact && num > s0 * xi * den;
+      const Real f = (intact && !breaks) ? k2 * num / (xi * len * den) : Real(0);
+      released += breaks ? vol_i * Real(0.25) * k2 * s0 * s0 * xi : Real(0);
+      breaking += breaks ? 1 : 0;
+      fx += f * dx;
+      fy += f * dy;
+      fz += f * dz;
+    }
+    // Rare: mark the bonds that broke by a second pass of the same arithmetic, so that the
+    // loop above never writes the bond state and stays a pure reduction.
+    if (breaking)
+      for (int64_t k = begin; k < end; ++k) {
+        if (!p.state[k]) continue;
+        const int64_t j = p.neighbor[k];
+        const Real ax = x0[3 * j] - origin.px, ay = x0[3 * j + 1] - origin.py, az = x0[3 * j + 2] - origin.pz;
+        const Real bx = u[3 * j] - origin.ux, by = u[3 * j + 1] - origin.uy, bz = u[3 * j + 2] - origin.uz;
+        const Real dx = ax + bx, dy = ay + by, dz = az + bz;
+        const Real len = std::sqrt(dx * dx + dy * dy + dz * dz);
+        const Real xi = p.xi_len[k];
+        const Real num = bx * (ax + dx) + by * (ay + dy) + bz * (az + dz);
+        if (num > p.s0_own[k] * xi * (len + xi)) p.state[k] = 0;
+      }
+    p.force[3 * i] = fx;
+    p.force[3 * i + 1] = fy;
+    p.force[3 * i + 2] = fz;
+    p.dissipated[i] = released;
+    return;
+  }
+  Real fx = Real(0), fy = Real(0), fz = Real(0);
+  double w = 0.0, released = 0.0, smax = 0.0;
   double intact_vol = 0.0, total_vol = 0.0;
   const int64_t end = p.offsets[i + 1];
   for (int64_t k = p.offsets[i]; k < end; ++k) {
     if (kDiagnostics) total_vol += p.vol_own[k];
     if (!p.state[k]) continue;
     const int64_t j = p.neighbor[k];
-    const double dx = x[3 * j] - xi0, dy = x[3 * j + 1] - yi0, dz = x[3 * j + 2] - zi0;
-    const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
-    const double xi = p.xi_len[k];
-    const double extension = len - xi;
-    const double k2 = 2.0 * p.k_own[k];  // own + dual halves
+    const Real xi = p.xi_len[k];
+    Real dx, dy, dz, len;
+    const Real extension = origin.to(p, j, xi, dx, dy, dz, len);
+    const Real k2 = Real(2) * p.k_own[k];  // own + dual halves
     if (p.fracture && extension > p.s0_own[k] * xi) {
       // Dissipated: what the bond holds at its critical stretch. It broke somewhere inside
       // this step, so its force never worked against the stretch beyond s0.
       const double s0 = p.s0_own[k];
-      released += p.volume[i] * 0.25 * k2 * s0 * s0 * xi;
+      released += double(p.volume[i]) * 0.25 * k2 * s0 * s0 * xi;
       p.state[k] = 0;
       continue;
     }
-    const double f = k2 * extension / (xi * len);  // c s / |xi + eta|
+    const Real f = k2 * extension / (xi * len);  // c s / |xi + eta|
     fx += f * dx;
     fy += f * dy;
     fz += f * dz;
     if (kDiagnostics) {
-      const double stretch = extension / xi;
+      const double stretch = double(extension) / xi;
       w += 0.25 * k2 * stretch * stretch * xi;
       intact_vol += p.vol_own[k];
       if (stretch > smax) smax = stretch;
@@ -192,25 +301,29 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdView& p, int64_t i) {
   }
 }
 
-BRECCIA_HD void pmb_symmetric_force_kernel(const PdView& p, int64_t i) {
+template <class Real>
+BRECCIA_HD void pmb_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
   if (p.diagnostics) pmb_symmetric_force_loop<true>(p, i);
   else pmb_symmetric_force_loop<false>(p, i);
 }
 
 // Internal force density, strain-energy density, damage and breaking for particle i.
-BRECCIA_HD void force_kernel(const PdView& p, int64_t i) {
-  if (p.symmetric_halves && p.x && p.model == static_cast<int>(PdModel::PMB)) {
+template <class Real>
+BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
+  if (p.symmetric_halves && has_bond_vectors(p) && p.model == static_cast<int>(PdModel::PMB)) {
     pmb_symmetric_force_kernel(p, i);
     return;
   }
-  if (p.symmetric_halves && p.lps_a && p.x) {
+  if (p.symmetric_halves && p.lps_a && has_bond_vectors(p)) {
     lps_symmetric_force_kernel(p, i);
     return;
   }
-  double fx = 0.0, fy = 0.0, fz = 0.0, w = 0.0, released = 0.0, smax = 0.0;
+  Real fx = Real(0), fy = Real(0), fz = Real(0);
+  double w = 0.0, released = 0.0, smax = 0.0;
   double intact_vol = 0.0, total_vol = 0.0;
   const bool lps = p.model == static_cast<int>(PdModel::LPS);
-  double m_i = 0.0, theta_i = 0.0, dev_sum = 0.0;
+  Real m_i = Real(0), theta_i = Real(0);
+  double dev_sum = 0.0;
   if (lps) {
     m_i = p.weighted_volume[i];
     theta_i = p.dilatation[i];
@@ -220,8 +333,8 @@ BRECCIA_HD void force_kernel(const PdView& p, int64_t i) {
     uint8_t st = p.state[k];
     if (!st) continue;
     const int64_t j = p.neighbor[k];
-    const double xi = p.xi_len[k];
-    const BondGeometry g = bond_geometry(p.x0, p.u, i, j, xi);
+    const Real xi = p.xi_len[k];
+    const BondGeometryT<Real> g = bond_geometry(p.x0, p.u, i, j, xi);
     if (g.stretch > smax) smax = g.stretch;
     if (p.fracture) {
       const uint8_t after = break_bonds(p, k, g.stretch);
@@ -230,15 +343,15 @@ BRECCIA_HD void force_kernel(const PdView& p, int64_t i) {
         // What the broken halves hold at their critical stretch (see the symmetric kernel).
         const uint8_t lost = static_cast<uint8_t>(st & ~after);
         if (lps) {
-          const double e = p.s0_own[k] * xi;
-          const double dev_i = e - theta_i * xi / p.lps[i].dilatation_factor;
+          const double e = double(p.s0_own[k]) * xi;
+          const double dev_i = e - double(theta_i) * xi / p.lps[i].dilatation_factor;
           if (lost & kOwnIntact)
             released += 0.5 * (p.lps[i].shear_term / m_i) * p.k_own[k] * dev_i * dev_i * p.volume[j] * p.volume[i];
         } else {
           if (lost & kOwnIntact)
-            released += p.volume[i] * pmb_energy_density(p.k_own[k], 0.0, kOwnIntact, p.s0_own[k], xi);
+            released += p.volume[i] * pmb_energy_density<double>(p.k_own[k], 0.0, kOwnIntact, p.s0_own[k], xi);
           if (lost & kDualIntact)
-            released += p.volume[i] * pmb_energy_density(0.0, p.k_dual[k], kDualIntact, p.s0_dual[k], xi);
+            released += p.volume[i] * pmb_energy_density<double>(0.0, p.k_dual[k], kDualIntact, p.s0_dual[k], xi);
         }
         st = after;
         p.state[k] = st;
@@ -246,14 +359,14 @@ BRECCIA_HD void force_kernel(const PdView& p, int64_t i) {
     }
     if (st & kOwnIntact) intact_vol += p.vol_own[k];
     if (!st) continue;
-    double scalar;  // force density along the deformed bond direction
+    Real scalar;  // force density along the deformed bond direction
     if (lps) {
-      const double e = g.length - xi;
+      const Real e = g.extension;
       const int64_t jj = j;
-      double t = 0.0;
+      Real t = Real(0);
       if (st & kOwnIntact) {
         t += lps_force_state(p.lps[i], m_i, theta_i, p.k_own[k], xi, e);
-        const double dev = e - theta_i * xi / p.lps[i].dilatation_factor;
+        const double dev = double(e) - double(theta_i) * xi / p.lps[i].dilatation_factor;
         dev_sum += p.k_own[k] * dev * dev * p.volume[j];
       }
       if (st & kDualIntact)
@@ -261,14 +374,14 @@ BRECCIA_HD void force_kernel(const PdView& p, int64_t i) {
       scalar = t * p.volume[j];
     } else {
       scalar = pmb_force_scalar(p.k_own[k], p.k_dual[k], st, g.stretch);
-      w += pmb_energy_density(p.k_own[k], p.k_dual[k], st, g.stretch, xi);
+      w += pmb_energy_density<double>(p.k_own[k], p.k_dual[k], st, g.stretch, xi);
     }
-    const double inv_len = 1.0 / g.length;
+    const Real inv_len = Real(1) / g.length;
     fx += scalar * g.dx * inv_len;
     fy += scalar * g.dy * inv_len;
     fz += scalar * g.dz * inv_len;
   }
-  if (lps) w = lps_bulk_energy(p.lps[i], theta_i) + 0.5 * (p.lps[i].shear_term / m_i) * dev_sum;
+  if (lps) w = lps_bulk_energy(p.lps[i], double(theta_i)) + 0.5 * (p.lps[i].shear_term / m_i) * dev_sum;
   p.force[3 * i] = fx;
   p.force[3 * i + 1] = fy;
   p.force[3 * i + 2] = fz;
@@ -279,22 +392,26 @@ BRECCIA_HD void force_kernel(const PdView& p, int64_t i) {
 }
 
 // a = (f_int + b) / rho, then the second half kick of velocity Verlet.
-BRECCIA_HD void acceleration_kernel(const PdView& p, int64_t i, double half_dt) {
-  const double inv_rho = 1.0 / p.density[i];
+template <class Real>
+BRECCIA_HD void acceleration_kernel(const PdViewT<Real>& p, int64_t i, double half_dt) {
+  const Real inv_rho = Real(1) / p.density[i];
+  const Real h = static_cast<Real>(half_dt);
   for (int d = 0; d < 3; ++d) {
     const int64_t c = 3 * i + d;
     p.a[c] = (p.force[c] + p.body[c]) * inv_rho;
-    if (!(p.fixed_dof[i] & (1u << d))) p.v[c] += half_dt * p.a[c];
+    if (!(p.fixed_dof[i] & (1u << d))) p.v[c] += h * p.a[c];
   }
 }
 
 // First half kick and drift for free components (prescribed ones are set by the caller).
-BRECCIA_HD void kick_drift_kernel(const PdView& p, int64_t i, double half_dt, double dt) {
+template <class Real>
+BRECCIA_HD void kick_drift_kernel(const PdViewT<Real>& p, int64_t i, double half_dt, double dt) {
+  const Real h = static_cast<Real>(half_dt), step = static_cast<Real>(dt);
   for (int d = 0; d < 3; ++d) {
     const int64_t c = 3 * i + d;
     if (p.fixed_dof[i] & (1u << d)) continue;
-    p.v[c] += half_dt * p.a[c];
-    p.u[c] += dt * p.v[c];
+    p.v[c] += h * p.a[c];
+    p.u[c] += step * p.v[c];
   }
 }
 

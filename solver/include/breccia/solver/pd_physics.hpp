@@ -3,13 +3,21 @@
 // OpenMP loops and from CUDA kernels (BRECCIA_HD). Derivations: docs/theory.md.
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 
 #include "breccia/solver/hd.hpp"
 
 namespace breccia::solver {
 
+// The bond physics is templated over the real type (double, or float for model.precision:
+// float32, docs/theory.md "Precision"). The first argument fixes Real; `SameReal` keeps the
+// others from taking part in the deduction, so a call mixing a double modulus with a float
+// critical stretch still resolves to the double version, as before.
+template <class Real>
+using SameReal = typename std::type_identity<Real>::type;
+
 enum class Influence : int { Constant = 0, Inverse = 1, Gaussian = 2 };
-enum class PdModel : int { PMB = 0, LPS = 1 };
+enum class PdModel : int { PMB = 0, LPS = 1, Correspondence = 2 };  // correspondence: CPU only
 enum class Planar : int { None = 0, PlaneStress = 1, PlaneStrain = 2 };
 
 // Influence function in terms of q = |xi| / delta (dimensionless so that micro-moduli keep
@@ -55,20 +63,38 @@ inline double partial_volume_sampled(const double xi[3], double horizon, double 
 }
 
 // Bond stretch s = (|xi + eta| - |xi|) / |xi| and the deformed unit direction.
-struct BondGeometry {
-  double dx, dy, dz;   // deformed bond vector (j - i)
-  double length;       // |xi + eta|
-  double stretch;      // s
+template <class Real>
+struct BondGeometryT {
+  Real dx, dy, dz;   // deformed bond vector (j - i)
+  Real length;       // |xi + eta|
+  Real extension;    // |xi + eta| - |xi|
+  Real stretch;      // s
 };
+using BondGeometry = BondGeometryT<double>;
 
-BRECCIA_HD BondGeometry bond_geometry(const double* x0, const double* u, int64_t i, int64_t j,
-                                      double xi_len) {
-  BondGeometry g;
-  g.dx = (x0[3 * j] + u[3 * j]) - (x0[3 * i] + u[3 * i]);
-  g.dy = (x0[3 * j + 1] + u[3 * j + 1]) - (x0[3 * i + 1] + u[3 * i + 1]);
-  g.dz = (x0[3 * j + 2] + u[3 * j + 2]) - (x0[3 * i + 2] + u[3 * i + 2]);
-  g.length = std::sqrt(g.dx * g.dx + g.dy * g.dy + g.dz * g.dz);
-  g.stretch = (g.length - xi_len) / xi_len;
+// Double: (x0_j + u_j) - (x0_i + u_i), as always. Float: xi + eta = (x0_j - x0_i) + (u_j - u_i),
+// because x0 + u rounded to float would lose a displacement of 1e-6 of the coordinate.
+template <class Real>
+BRECCIA_HD BondGeometryT<Real> bond_geometry(const Real* x0, const Real* u, int64_t i, int64_t j,
+                                             SameReal<Real> xi_len) {
+  BondGeometryT<Real> g;
+  if constexpr (std::is_same_v<Real, double>) {
+    g.dx = (x0[3 * j] + u[3 * j]) - (x0[3 * i] + u[3 * i]);
+    g.dy = (x0[3 * j + 1] + u[3 * j + 1]) - (x0[3 * i + 1] + u[3 * i + 1]);
+    g.dz = (x0[3 * j + 2] + u[3 * j + 2]) - (x0[3 * i + 2] + u[3 * i + 2]);
+    g.length = std::sqrt(g.dx * g.dx + g.dy * g.dy + g.dz * g.dz);
+    g.extension = g.length - xi_len;
+  } else {
+    // Without cancellation: e = (2 xi.eta + eta.eta) / (|xi + eta| + |xi|) (pd_kernels.hpp, BondOriginT).
+    const Real ax = x0[3 * j] - x0[3 * i], ay = x0[3 * j + 1] - x0[3 * i + 1], az = x0[3 * j + 2] - x0[3 * i + 2];
+    const Real bx = u[3 * j] - u[3 * i], by = u[3 * j + 1] - u[3 * i + 1], bz = u[3 * j + 2] - u[3 * i + 2];
+    g.dx = ax + bx;
+    g.dy = ay + by;
+    g.dz = az + bz;
+    g.length = std::sqrt(g.dx * g.dx + g.dy * g.dy + g.dz * g.dz);
+    g.extension = (Real(2) * (ax * bx + ay * by + az * bz) + (bx * bx + by * by + bz * bz)) / (g.length + xi_len);
+  }
+  g.stretch = g.extension / xi_len;
   return g;
 }
 
@@ -82,15 +108,17 @@ inline constexpr uint8_t kDualIntact = 2;
 // (k_own [own intact] + k_dual [dual intact]) * s * e_ij, where k = c_half * omega * beta * V_j.
 // Returns the scalar multiplying the unit vector; also the bond's contribution to
 // i's strain-energy density: W_i += 1/4 * k * s^2 * |xi| (docs/theory.md, PMB energy).
-BRECCIA_HD double pmb_force_scalar(double k_own, double k_dual, uint8_t state, double stretch) {
-  const double k = ((state & kOwnIntact) ? k_own : 0.0) + ((state & kDualIntact) ? k_dual : 0.0);
+template <class Real>
+BRECCIA_HD Real pmb_force_scalar(Real k_own, SameReal<Real> k_dual, uint8_t state, SameReal<Real> stretch) {
+  const Real k = ((state & kOwnIntact) ? k_own : Real(0)) + ((state & kDualIntact) ? k_dual : Real(0));
   return k * stretch;
 }
 
-BRECCIA_HD double pmb_energy_density(double k_own, double k_dual, uint8_t state, double stretch,
-                                     double xi_len) {
-  const double k = ((state & kOwnIntact) ? k_own : 0.0) + ((state & kDualIntact) ? k_dual : 0.0);
-  return 0.25 * k * stretch * stretch * xi_len;
+template <class Real>
+BRECCIA_HD Real pmb_energy_density(Real k_own, SameReal<Real> k_dual, uint8_t state, SameReal<Real> stretch,
+                                   SameReal<Real> xi_len) {
+  const Real k = ((state & kOwnIntact) ? k_own : Real(0)) + ((state & kDualIntact) ? k_dual : Real(0));
+  return Real(0.25) * k * stretch * stretch * xi_len;
 }
 
 // LPS (Silling et al. 2007; seed 001 eqs. 6-8 with the 3/m factor restored).
@@ -104,10 +132,14 @@ struct LpsCoefficients {
 
 // Scalar force state t<xi> of one bond seen from a particle with weighted volume m and
 // dilatation theta; w = omega * beta * V_neighbour is carried separately by the caller.
-BRECCIA_HD double lps_force_state(const LpsCoefficients& c, double m, double theta, double omega,
-                                  double xi_len, double extension) {
-  const double deviatoric_extension = extension - theta * xi_len / c.dilatation_factor;
-  return (c.bulk_term * theta / m) * omega * xi_len + (c.shear_term / m) * omega * deviatoric_extension;
+// (The coefficients stay double per particle; they enter in the working precision.)
+template <class Real>
+BRECCIA_HD Real lps_force_state(const LpsCoefficients& c, Real m, SameReal<Real> theta, SameReal<Real> omega,
+                                SameReal<Real> xi_len, SameReal<Real> extension) {
+  const Real d = static_cast<Real>(c.dilatation_factor);
+  const Real bulk = static_cast<Real>(c.bulk_term), shear = static_cast<Real>(c.shear_term);
+  const Real deviatoric_extension = extension - theta * xi_len / d;
+  return (bulk * theta / m) * omega * xi_len + (shear / m) * omega * deviatoric_extension;
 }
 
 // Strain energy density of an LPS particle: K_d theta^2 / 2 + (shear/(2m)) sum w e_d^2 V.

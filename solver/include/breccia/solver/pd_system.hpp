@@ -8,6 +8,7 @@
 
 #include "breccia/common/particle_file.hpp"
 #include "breccia/solver/case_config.hpp"
+#include "breccia/solver/float32_state.hpp"
 #include "breccia/solver/pd_kernels.hpp"
 
 namespace breccia::solver {
@@ -37,6 +38,8 @@ struct PdSystem {
   std::vector<double> lps_a, lps_b;  // fast LPS path factors (pd_kernels.hpp)
   std::vector<LpsCoefficients> lps;
   std::vector<double> calibration_factor;  // PMB: classical / discrete energy (docs/theory.md)
+  // Correspondence (correspondence_kernels.hpp): 5 moduli, F (9), sigma K^-1 - G h F (9), non-affine energy
+  std::vector<double> corr_moduli, corr_deformation, corr_force_tensor, corr_nonaffine;
 
   // bonds (CSR over full families)
   std::vector<int64_t> offsets;
@@ -74,6 +77,7 @@ struct PdSystem {
   double indenter_position[3] = {0, 0, 0};
   bool symmetric_halves = false;  // one constant horizon (set-up decides)
   bool diagnostics = true;        // compute damage/energy in the next force pass
+  Float32State f32;               // model.precision: float32 (float32_state.hpp); inactive otherwise
 
   PdView view();
   size_t bond_count() const { return neighbor.size(); }

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "breccia/mps/contact_spec.hpp"
+
 namespace breccia::mps {
 
 enum class Equation { Navier, RotationFree };
@@ -21,11 +23,18 @@ struct PlasticitySpec {
   double hardening_modulus_pa = 0.0;  // >= 0 (0: perfectly plastic)
 };
 
-// Rigid frictionless floor (solid.hpp, RigidFloor): the allowed side is (x - point).normal >= 0.
+// Brittle fracture with the separation tensor (fracture.hpp): a particle fails when its
+// separation stress reaches tensile_strength.
+struct FractureSpec {
+  double tensile_strength_pa = 0.0;  // > 0
+};
+
+// Rigid floor (solid.hpp, RigidFloor): the allowed side is (x - point).normal >= 0.
 struct FloorSpec {
   std::array<double, 3> point_m{0.0, 0.0, 0.0};
   std::array<double, 3> normal{0.0, 1.0, 0.0};
   double stiffness_factor = 1.0;
+  FrictionSpec friction;  // none by default
 };
 
 struct LatticeSpec {
@@ -42,6 +51,7 @@ struct MaterialSpec {
   double lame_lambda_pa = 0.0;  // = C13 for isotropic media
   double shear_modulus_pa = 0.0;  // mu = C55
   std::optional<PlasticitySpec> plasticity;  // stress formulation only
+  std::optional<FractureSpec> fracture;      // stress formulation only
   double p_wave_speed() const;  // sqrt((lambda + 2 mu) / rho)
   double s_wave_speed() const;  // sqrt(mu / rho)
 };
@@ -93,6 +103,7 @@ struct CaseSpec {
   // specimen
   std::optional<LatticeSpec> lattice;
   std::string particle_file;
+  std::optional<BodiesSpec> bodies;  // several bodies (stress formulation)
   // model
   double re_over_spacing = 2.1;
   Equation equation = Equation::Navier;
@@ -104,6 +115,8 @@ struct CaseSpec {
   double damping_per_s = 0.0;      // mass-proportional damping (quasi-static runs)
   std::array<double, 3> gravity_m_s2{0.0, 0.0, 0.0};
   std::optional<FloorSpec> floor;
+  std::optional<ParticleContactSpec> particle_contact;  // contact.particles (implied by >= 2 bodies)
+  std::vector<RigidBodySpec> rigid_bodies;             // contact.rigid_bodies (2D)
   MaterialSpec material;
   std::vector<CrackSpec> cracks;
   std::vector<BoundarySpec> boundary;

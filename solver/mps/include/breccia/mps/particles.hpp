@@ -23,6 +23,7 @@ struct ParticleCloud {
   std::string content_id;          // "" for a lattice
   std::vector<std::string> set_names;
   std::vector<std::vector<int64_t>> set_members;
+  std::vector<int> body_id;        // per particle for specimen.bodies (bodies.hpp); empty: one body
 };
 
 // Lattice (x fastest, then y, then z) or particle file; throws InputError for a spacing

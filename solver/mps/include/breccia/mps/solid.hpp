@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "breccia/mps/fracture.hpp"
+#include "breccia/mps/contact.hpp"
 #include "breccia/mps/neighbours.hpp"
 #include "breccia/mps/particles.hpp"
 #include "breccia/mps/solid_kernels.hpp"
@@ -34,18 +36,24 @@ struct SolidOptions {
   double safety = 0.3;             // dt = safety * spacing / c_L
   std::optional<double> dt_s;      // used as given when set
   std::array<double, 3> gravity_m_s2{0.0, 0.0, 0.0};
+  // Body of each particle (empty: one body). No bond joins two bodies; they interact
+  // through contact only (contact.hpp).
+  std::vector<int> body_id;
 };
 
-// A rigid, frictionless half-space {x : (x - point) . normal >= 0} is the allowed side.
+// A rigid half-space {x : (x - point) . normal >= 0} is the allowed side.
 // A particle that penetrates by depth g feels the penalty force k g normal, with
 // k = stiffness_factor * (lambda + 2 mu) * A / spacing (A: particle face area), i.e. the
 // floor is as stiff as one layer of the material times the factor. The force is
 // conservative (energy 1/2 k g^2), so a frictionless bounce conserves energy up to the
-// time-integration error.
+// time-integration error. With friction, Coulomb's law through a tangential spring
+// k_t = tangential_stiffness_factor * mu * A / spacing (contact_kernels.hpp).
 struct RigidFloor {
   std::array<double, 3> point_m{0.0, 0.0, 0.0};
   std::array<double, 3> normal{0.0, 1.0, 0.0};
   double stiffness_factor = 1.0;
+  double static_friction = 0.0, kinetic_friction = 0.0;
+  double tangential_stiffness_factor = 1.0;
 };
 
 class Solid {
@@ -56,6 +64,17 @@ public:
 
   void add_prescribed(PrescribedSet set);
   void set_floor(const RigidFloor& floor);
+  // Contact between unbonded particles and with rigid polygons (contact.hpp); stiffnesses in
+  // N/m, e.g. factor * face_stiffness_n_m().
+  Contact& contact() { return contact_; }
+  const Contact& contact() const { return contact_; }
+  // Penalty stiffness of one particle layer: (lambda + 2 mu) A / spacing, and its shear
+  // counterpart mu A / spacing (A: particle face area, spacing x thickness in 2D).
+  double face_stiffness_n_m() const;
+  double shear_face_stiffness_n_m() const;
+  // Brittle fracture with the separation tensor (fracture.hpp); nullptr when not enabled.
+  void set_fracture(const FractureLaw& law);
+  const FractureModel* fracture() const { return fracture_ ? &*fracture_ : nullptr; }
   // Constant external force per particle (N), e.g. a pressure load; may be changed between steps.
   std::vector<double>& external_force(int axis) { return external_force_n_[axis]; }
 
@@ -95,12 +114,15 @@ public:
   // Current displacement gradient H = F - I per particle (up to date after a step).
   const std::vector<Mat3>& displacement_gradient() const { return gradient_; }
 
-  double kinetic_energy_j() const;
+  double kinetic_energy_j() const;  // particles and free rigid bodies
   // Stress work accumulated since the start (elastic energy + plastic dissipation).
   double stress_work_j() const;
   double hourglass_energy_j() const;
-  double floor_energy_j() const;
-  double gravity_energy_j() const;  // - m g . u, zero at the start
+  // Penalty energy of all contacts (floor, polygons, particle pairs) + friction springs.
+  double contact_energy_j() const;
+  double floor_energy_j() const { return contact_energy_j(); }  // the floor was the only contact once
+  double friction_dissipation_j() const { return contact_.friction_dissipation_j(); }
+  double gravity_energy_j() const;  // - m g . u (particles and free rigid bodies), zero at the start
   double plastic_fraction() const;  // share of particles with eq. plastic strain > 0
 
   int nearest_particle(const std::array<double, 3>& p) const;
@@ -109,15 +131,17 @@ public:
 private:
   void compute_acceleration();
   void apply_prescribed(double t);
-  double floor_penetration_m(long long i, double normal_out[3]) const;
-  double floor_stiffness_n_m(long long i) const;
+  ParticleStateView state_view() const;
   double hourglass_stiffness() const;
+  void apply_fracture();  // solid_fracture.cpp: fail, cut bonds, refresh the cut stencils
+  void refresh_cut_stencils(const std::vector<long long>& changed);
 
   std::vector<double> position_m_, volume_m3_;
   double density_kg_m3_ = 0.0;
   SolidLaw law_;
   SolidOptions options_;
-  std::optional<RigidFloor> floor_;
+  Contact contact_;
+  std::optional<FractureModel> fracture_;
   BondList bonds_;
   Normalisation norm_;
   std::vector<Mat3> moment_inverse_, gradient_, f_inverse_;  // L^-1, H = F - I, F^-1

@@ -20,6 +20,7 @@ struct LoopRate {
   int threads = 1;
   double bond_updates_per_core_s = 0.0;  // bond entries x steps / (time loop seconds x threads)
   std::string source;
+  std::string precision = "float64";     // model.precision the rate was measured with
 };
 
 struct Throughputs {
@@ -39,6 +40,9 @@ struct Throughputs {
   // Per-core rate for this model at this thread count: the entry measured at that count,
   // else the one at the nearest measured count (per-core rates fall with more threads).
   const LoopRate& rate(solver::PdModel model, int threads) const;
+  // float32 rate / float64 rate for this model at the nearest measured thread count, when
+  // both were measured (loop entries with precision: float32); empty otherwise.
+  std::optional<double> float32_speedup(solver::PdModel model, int threads) const;
 };
 
 Throughputs load_throughputs(const std::string& path);
@@ -174,6 +178,7 @@ struct Proposal {
   double horizon_factor = 3.015;
   double spacing_m = 0.0;  // lattice spacing (or the mesh size to ask the mesher for)
   double expected_error = 0.0;
+  std::string precision = "float64";  // float32 only where the atlas and the throughputs show it pays
   CostEstimate cost;
   std::vector<std::string> reasoning;  // plain sentences, in order
 };

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# PMMA ring dropped onto a rigid floor (docs/mps.md, "Fracture"): builds the polar-lattice
+# ring with cases/grady-ring/specimen.py, runs breccia-mps with the separation-tensor
+# fracture model, then draws the ring at several times coloured by damage.
+#   VARIANT=quick: spacing 0.5 mm (10 circles, 3,140 particles), 30 m/s, 300 us
+#   VARIANT=demo : spacing 0.5 mm, 15, 30 and 60 m/s (speed study)
+#   VARIANT=full : spacing 0.25 mm (20 circles, 12,560 particles), 30 m/s
+set -euo pipefail
+HERE="$(cd "$(dirname "$0")" && pwd)"
+source "$HERE/../../scripts/case_env.sh"
+case "$VARIANT" in
+  quick) DX=0.0005;  SPEEDS=${SPEEDS:-"30"} ;;
+  demo)  DX=0.0005;  SPEEDS=${SPEEDS:-"15 30 60"} ;;
+  full)  DX=0.00025; SPEEDS=${SPEEDS:-"30"} ;;
+  *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full)" >&2; exit 2 ;;
+esac
+END_US=${END_US:-300}
+mkdir -p "$OUT"
+"$PYTHON" "$HERE/../grady-ring/specimen.py" "$OUT/particles.h5" --radius 0.025 --width 0.005 --spacing "$DX" --thickness 0.005
+# Snapshot every ~END/12: dt = 0.3 dx / c_L with c_L = 2,110 m/s for this PMMA.
+EVERY=$("$PYTHON" -c "print(max(1, int($END_US * 1e-6 / 12 / (0.3 * $DX / 2110))))")
+RUNS=()
+for v in $SPEEDS; do
+  name="v${v}"
+  mkdir -p "$OUT/$name"
+  sed -e "s/SPEED/$v/" -e "s/END_US/$END_US/" -e "s/EVERY/$EVERY/" -e "s#particles: particles.h5#particles: ../particles.h5#" \
+      "$HERE/case.yaml" > "$OUT/$name/case.yaml"
+  echo "== $name ($v m/s, $END_US us)"
+  "$BRECCIA_BIN/breccia-mps" "$OUT/$name/case.yaml" -o "$OUT/$name" --threads "$THREADS"
+  RUNS+=("$name")
+done
+"$PYTHON" "$HERE/plot_ring.py" "$OUT" "${RUNS[@]}"
+echo "pictures and summary: $OUT/ring_*.png, $OUT/ring_summary.json"

@@ -1,0 +1,30 @@
+#pragma once
+// The correspondence model's host side: per-particle moduli at set-up, the OpenMP launch of
+// its two kernels (correspondence_kernels.hpp), and the run-time zero-energy-mode detector.
+// CPU only: breccia-solve refuses --backend cuda for it (docs/theory.md, correspondence).
+#include <string>
+#include <vector>
+
+#include "breccia/solver/calibration.hpp"
+#include "breccia/solver/correspondence_kernels.hpp"
+#include "breccia/solver/pd_system.hpp"
+
+namespace breccia::solver {
+
+// Fills the moduli and the per-particle tensors; `elastic` is indexed by material.
+void setup_correspondence(PdSystem& s, const std::vector<ElasticInput>& elastic);
+
+CorrespondenceView correspondence_view(PdSystem& s);
+
+// Both passes over all particles; adds the energy released by breaking to dissipated_energy.
+void cpu_correspondence_forces(PdSystem& s);
+
+// sum_i V_i (h/2) sum_j w |Y - F_i xi|^2 V_j [J]: the energy the particles' non-affine
+// motion would hold under a unit penalty (filled on diagnostics steps).
+double nonaffine_energy(const PdSystem& s);
+
+// Empty while the non-affine energy stays below kMaxNonAffineRatio x (kinetic + strain);
+// else the message that stops the run: zero-energy modes, where, and what to do.
+std::string zero_energy_mode_message(const PdSystem& s, const Energies& e);
+
+}  // namespace breccia::solver

@@ -1,0 +1,233 @@
+#pragma once
+// Correspondence (non-ordinary state-based) peridynamics (Silling, Epton, Weckner, Xu &
+// Askari 2007, section 18): a classical stress from a nonlocal deformation gradient, turned
+// into a force state. Two passes per step, as LPS: (1) shape tensor, deformation gradient,
+// stress; (2) forces, which need the neighbours' stresses. Derivations: docs/theory.md
+// ("Correspondence model"). Per particle the 3x3 tensors are row-major; in 2D only the
+// in-plane 2x2 block is used (zz of F is 1, of Q is 0).
+#include <cmath>
+#include <cstdint>
+
+#include "breccia/solver/pd_kernels.hpp"
+
+namespace breccia::solver {
+
+// The ratio of the non-affine energy measure to the body's mechanical energy above which
+// the run is stopped (docs/atlas.md, correspondence stability map). With a penalty of
+// coefficient G >= 1 the ratio is bounded by 1/G by energy conservation, so a stabilised run
+// cannot trip it; a smooth physical wave keeps it well below (measured <= 0.1 on the map).
+inline constexpr double kMaxNonAffineRatio = 1.0;
+
+struct CorrespondenceView {
+  PdView p;             // the shared arrays; k_own / k_dual hold w = omega * beta (as LPS)
+  int dimension = 3;
+  // Per particle, 5 values: dimensional bulk modulus K_d, shear modulus mu, the equivalent PMB
+  // micro-modulus c0 (critical-stretch energy), the unit penalty stiffness h = c0 / (2 delta),
+  // and the stabilisation coefficient G (0: none).
+  const double* moduli = nullptr;
+  double* deformation = nullptr;  // 9N: F_i
+  // 9N: A_i = sigma_i K_i^-1 - G h F_i (small strain: P ~ sigma). The force state is then
+  // T_i<xi> = w (A_i xi + G h Y): the penalty's F_i xi folded into one tensor per particle.
+  double* force_tensor = nullptr;
+  double* nonaffine = nullptr;    // N: (h/2) sum_j w |Y - F xi|^2 V_j, the G = 1 penalty energy density
+};
+
+inline constexpr int kCorrModuli = 5;
+
+// Inverse of the d x d block of a row-major 3x3 matrix; false if (nearly) singular, i.e.
+// the family does not span the space (fewer than d non-collinear bonds).
+BRECCIA_HD bool invert_block(const double* m, int d, double* inv) {
+  for (int k = 0; k < 9; ++k) inv[k] = 0.0;
+  if (d == 2) {
+    const double det = m[0] * m[4] - m[1] * m[3];
+    const double scale = m[0] * m[4] + m[1] * m[1] + m[3] * m[3];
+    if (!(std::fabs(det) > 1e-12 * scale)) return false;
+    inv[0] = m[4] / det;
+    inv[1] = -m[1] / det;
+    inv[3] = -m[3] / det;
+    inv[4] = m[0] / det;
+    return true;
+  }
+  const double c00 = m[4] * m[8] - m[5] * m[7], c01 = m[5] * m[6] - m[3] * m[8], c02 = m[3] * m[7] - m[4] * m[6];
+  const double det = m[0] * c00 + m[1] * c01 + m[2] * c02;
+  const double scale = m[0] * m[4] * m[8];
+  if (!(std::fabs(det) > 1e-12 * std::fabs(scale))) return false;
+  const double r = 1.0 / det;
+  inv[0] = c00 * r;
+  inv[1] = (m[2] * m[7] - m[1] * m[8]) * r;
+  inv[2] = (m[1] * m[5] - m[2] * m[4]) * r;
+  inv[3] = c01 * r;
+  inv[4] = (m[0] * m[8] - m[2] * m[6]) * r;
+  inv[5] = (m[2] * m[3] - m[0] * m[5]) * r;
+  inv[6] = c02 * r;
+  inv[7] = (m[1] * m[6] - m[0] * m[7]) * r;
+  inv[8] = (m[0] * m[4] - m[1] * m[3]) * r;
+  return true;
+}
+
+// Reference and deformed bond vectors j - i; the deformed one from the current positions x
+// when the launcher filled them (one gathered array), else x0 + u.
+BRECCIA_HD void bond_vectors(const PdView& p, int64_t i, int64_t j, double* xi, double* Y) {
+  for (int a = 0; a < 3; ++a) {
+    xi[a] = p.x0[3 * j + a] - p.x0[3 * i + a];
+    Y[a] = p.x ? p.x[3 * j + a] - p.x[3 * i + a] : xi[a] + p.u[3 * j + a] - p.u[3 * i + a];
+  }
+}
+
+// Linear isotropic elasticity on the small strain eps = sym(F) - I in d dimensions:
+// sigma = K_d tr(eps) I + 2 mu dev(eps) (K_d: 3D bulk, plane stress/strain 2D bulk, as LPS).
+// Returns the energy density K_d tr^2 / 2 + mu dev:dev.
+BRECCIA_HD double hooke_stress(const double* F, int d, double bulk, double shear, double* sigma) {
+  double eps[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  double tr = 0.0;
+  for (int a = 0; a < d; ++a)
+    for (int b = 0; b < d; ++b) eps[3 * a + b] = 0.5 * (F[3 * a + b] + F[3 * b + a]) - (a == b ? 1.0 : 0.0);
+  for (int a = 0; a < d; ++a) tr += eps[4 * a];
+  double dev2 = 0.0;
+  for (int k = 0; k < 9; ++k) sigma[k] = 0.0;
+  for (int a = 0; a < d; ++a)
+    for (int b = 0; b < d; ++b) {
+      const double dev = eps[3 * a + b] - (a == b ? tr / d : 0.0);
+      dev2 += dev * dev;
+      sigma[3 * a + b] = 2.0 * shear * dev + (a == b ? bulk * tr : 0.0);
+    }
+  return 0.5 * bulk * tr * tr + shear * dev2;
+}
+
+// Pass 1 for particle i: break over-stretched bonds (critical stretch, as PMB/LPS), then
+// K_i = sum_j w xi (x) xi V_j, F_i = (sum_j w Y (x) xi V_j) K_i^-1 over i's intact own bonds,
+// the stress and A_i = sigma K_i^-1 - G h F_i. Writes damage, energy density (elastic part) and the
+// energy released by bonds broken here.
+template <int d>
+BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int64_t i) {
+  const PdView& p = c.p;
+  const double* mod = c.moduli + kCorrModuli * i;
+  double K[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, N[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  double released = 0.0, smax = 0.0, intact_vol = 0.0, total_vol = 0.0;
+  for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
+    total_vol += p.vol_own[k];
+    uint8_t st = p.state[k];
+    if (!st) continue;
+    const int64_t j = p.neighbor[k];
+    double xi[3], Y[3];
+    bond_vectors(p, i, j, xi, Y);
+    const double len = std::sqrt(Y[0] * Y[0] + Y[1] * Y[1] + Y[2] * Y[2]);
+    const double stretch = (len - p.xi_len[k]) / p.xi_len[k];
+    if (p.fracture) {
+      const uint8_t after = break_bonds(p, k, stretch);
+      if (after != st) {
+        // Released: what the equivalent PMB half-bond holds at its critical stretch.
+        if ((st & ~after) & kOwnIntact) {
+          const double s0 = p.s0_own[k];
+          released += p.volume[i] * 0.25 * mod[2] * p.k_own[k] * s0 * s0 * p.xi_len[k] * p.volume[j];
+        }
+        st = after;
+        p.state[k] = st;
+      }
+    }
+    if (!(st & kOwnIntact)) continue;
+    intact_vol += p.vol_own[k];
+    if (stretch > smax) smax = stretch;
+    const double wv = p.k_own[k] * p.volume[j];
+    for (int a = 0; a < d; ++a)
+      for (int b = 0; b < d; ++b) {
+        K[3 * a + b] += wv * xi[a] * xi[b];
+        N[3 * a + b] += wv * Y[a] * xi[b];
+      }
+  }
+  double* F = c.deformation + 9 * i;
+  double* Q = c.force_tensor + 9 * i;  // becomes A_i
+  double Kinv[9];
+  double W = 0.0;
+  for (int k = 0; k < 9; ++k) {
+    F[k] = (k % 4 == 0) ? 1.0 : 0.0;
+    Q[k] = (k % 4 == 0 && k / 4 < d) ? -mod[4] * mod[3] : 0.0;  // A = -G h F with F = I
+  }
+  // A family that no longer spans the space (all bonds broken or collinear) carries no stress.
+  if (invert_block(K, d, Kinv)) {
+    for (int a = 0; a < d; ++a)
+      for (int b = 0; b < d; ++b) {
+        double s = 0.0;
+        for (int e = 0; e < d; ++e) s += N[3 * a + e] * Kinv[3 * e + b];
+        F[3 * a + b] = s;
+      }
+    double sigma[9];
+    W = hooke_stress(F, d, mod[0], mod[1], sigma);
+    for (int a = 0; a < d; ++a)
+      for (int b = 0; b < d; ++b) {
+        double s = 0.0;
+        for (int e = 0; e < d; ++e) s += sigma[3 * a + e] * Kinv[3 * e + b];
+        Q[3 * a + b] = s - mod[4] * mod[3] * F[3 * a + b];
+      }
+  }
+  p.dissipated[i] = released;
+  if (p.diagnostics) {
+    p.energy_density[i] = W;
+    p.damage[i] = total_vol > 0.0 ? 1.0 - intact_vol / total_vol : 0.0;
+    if (p.max_stretch) p.max_stretch[i] = smax;
+  }
+}
+
+// The dimension as a template argument so that the small tensor loops unroll.
+BRECCIA_HD void correspondence_deformation_kernel(const CorrespondenceView& c, int64_t i) {
+  if (c.dimension == 2) correspondence_deformation_pass<2>(c, i);
+  else correspondence_deformation_pass<3>(c, i);
+}
+
+// Pass 2 for particle i: f_i = sum_j (T_i<xi> - T_j<-xi>) V_j with
+// T_i<xi> = w_ij (sigma_i K_i^-1 xi + G_i h_i z_i) = w_ij (A_i xi + G_i h_i Y), with
+// z_i = Y - F_i xi the non-affine part of the bond's deformation (zero under any affine
+// field), and the same from j's side. The penalty's energy
+// (G h / 2) sum_j w |z|^2 V_j has dW/dF = 0 (sum_j w z (x) xi V_j = 0 by the definition of F),
+// so the force is exactly its derivative and velocity Verlet conserves the total.
+template <int d>
+BRECCIA_HD void correspondence_force_pass(const CorrespondenceView& c, int64_t i) {
+  const PdView& p = c.p;
+  const double* Fi = c.deformation + 9 * i;
+  const double* Ai = c.force_tensor + 9 * i;
+  const double gh_i = c.moduli[kCorrModuli * i + 4] * c.moduli[kCorrModuli * i + 3];
+  double f[3] = {0, 0, 0}, z2_sum = 0.0;
+  for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
+    const uint8_t st = p.state[k];
+    if (!st) continue;
+    const int64_t j = p.neighbor[k];
+    double xi[3], Y[3];
+    bond_vectors(p, i, j, xi, Y);
+    const double vj = p.volume[j];
+    const double* Aj = c.force_tensor + 9 * j;
+    const double gh_j = c.moduli[kCorrModuli * j + 4] * c.moduli[kCorrModuli * j + 3];
+    // Own half from i's horizon, dual half from j's: w (A xi + G h Y) for each intact one.
+    const double w_own = (st & kOwnIntact) ? p.k_own[k] * vj : 0.0;
+    const double w_dual = (st & kDualIntact) ? p.k_dual[k] * vj : 0.0;
+    for (int a = 0; a < d; ++a) {
+      double ai = 0.0, aj = 0.0;
+      for (int b = 0; b < d; ++b) {
+        ai += Ai[3 * a + b] * xi[b];
+        aj += Aj[3 * a + b] * xi[b];
+      }
+      f[a] += w_own * (ai + gh_i * Y[a]) + w_dual * (aj + gh_j * Y[a]);
+    }
+    if (p.diagnostics && w_own > 0.0) {
+      double z2 = 0.0;
+      for (int a = 0; a < d; ++a) {
+        double fx = 0.0;
+        for (int b = 0; b < d; ++b) fx += Fi[3 * a + b] * xi[b];
+        z2 += (Y[a] - fx) * (Y[a] - fx);
+      }
+      z2_sum += w_own * z2;
+    }
+  }
+  for (int a = 0; a < 3; ++a) p.force[3 * i + a] = f[a];
+  if (p.diagnostics) {
+    const double h = c.moduli[kCorrModuli * i + 3], G = c.moduli[kCorrModuli * i + 4];
+    c.nonaffine[i] = 0.5 * h * z2_sum;
+    p.energy_density[i] += G * c.nonaffine[i];
+  }
+}
+
+BRECCIA_HD void correspondence_force_kernel(const CorrespondenceView& c, int64_t i) {
+  if (c.dimension == 2) correspondence_force_pass<2>(c, i);
+  else correspondence_force_pass<3>(c, i);
+}
+
+}  // namespace breccia::solver

@@ -1,0 +1,54 @@
+#pragma once
+// model.precision: float32 — the float copy of everything the bond loop streams, and the
+// CPU step that runs on it. The kernels are the same templates as for double
+// (pd_kernels.hpp, Real = float); what differs is only where the state lives:
+//   float:  reference positions (relative to the body's centre), displacement, velocity,
+//           acceleration, forces, external force density, particle volume and density, bond
+//           lengths and moduli, LPS weighted volume, dilatation and fast-path factors;
+//           force sums per particle accumulate in float.
+//   double: the per-particle diagnostics (energy density, damage, dissipated energy),
+//           every reduction over the body (energies, external work, released energy), the
+//           loads and constraints (evaluated per step in double, then rounded), set-up,
+//           the stable step, outputs and checkpoints.
+// The double arrays of PdSystem stay allocated (set-up, outputs, checkpoints, ADR read
+// them); they are brought up to date by float32_download when a file or a check needs them.
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "breccia/solver/pd_kernels.hpp"
+
+namespace breccia::solver {
+
+struct PdSystem;
+class StepBackend;
+
+struct Float32State {
+  bool active = false;           // the run computes in float (config.precision == Float32)
+  double origin[3] = {0, 0, 0};  // x0 is held relative to it: float keeps 24 bits of |x0 - origin|
+  std::vector<float> x0, u, v, a, force, body;                        // 3N
+  std::vector<float> volume, density, weighted_volume, dilatation;    // N
+  std::vector<float> lps_a, lps_b;                                    // N (LPS fast path)
+  std::vector<float> xi_len, k_own, k_dual, vol_own;                  // per bond entry
+  bool loads_vary = true;        // false: no load at all, the body force stays zero
+  std::vector<float> u_before;   // scratch for the external-work trapezoid
+  std::vector<double> f_before;
+};
+
+// Build the float state from the double one (after set-up: the stable step is estimated in
+// double, since its power iteration uses strains of 1e-9, below float's resolution).
+void float32_enable(PdSystem& sys);
+PdViewT<float> float32_view(PdSystem& sys);
+// Double -> float: displacement, velocity, acceleration, external force density.
+void float32_upload(PdSystem& sys);
+// Float -> double: displacement, velocity, acceleration, internal force, dilatation.
+void float32_download(PdSystem& sys);
+// Internal forces at the float displacement (the float state is the truth).
+void float32_compute_forces(PdSystem& sys);
+// One velocity-Verlet step on the float state.
+void float32_step(PdSystem& sys);
+// The time loop's backend for float runs: keeps the float state between steps and copies to
+// the double arrays only when the loop measures or writes.
+std::unique_ptr<StepBackend> make_float32_backend(PdSystem& sys);
+
+}  // namespace breccia::solver

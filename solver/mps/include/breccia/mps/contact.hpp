@@ -1,0 +1,136 @@
+#pragma once
+// Contact of the stress-based MPS solid (solid.hpp; seed 002, physics.md section 3):
+//  - between particles that are not bonded (different bodies, or parts of one body far
+//    apart in the reference configuration) once they come within the contact distance in
+//    the current configuration: a cell list on the current positions, rebuilt every step
+//    (O(N)), and a central penalty force (contact_kernels.hpp);
+//  - with rigid obstacles: half-spaces (the floor) and 2D polygons, fixed or free rigid
+//    bodies (mass, moment of inertia, translation and rotation), with Coulomb friction;
+//    free polygons also rest on the half-spaces through their vertices.
+// The solid calls compute_forces() once per step before its force loop, adds force(a)[i],
+// and advance_rigid_bodies() after its own update (the same symplectic Euler step).
+#include <array>
+#include <string>
+#include <vector>
+
+#include "breccia/mps/contact_kernels.hpp"
+#include "breccia/mps/kernels.hpp"
+
+namespace breccia::mps {
+
+// Contact between particles that are not bonded (contact_kernels.hpp, particle_pair_contact).
+struct ParticleContact {
+  double distance_m = 0.0;     // centres closer than this repel (default: one spacing, particles touching)
+  double stiffness_n_m = 0.0;  // penalty k per pair
+  std::vector<int> body_id;    // per particle (may be empty: one body)
+};
+
+// Friction and penalty stiffness of one rigid obstacle (per contacting particle).
+struct RigidContactLaw {
+  double normal_stiffness_n_m = 0.0;
+  double tangential_stiffness_n_m = 0.0;
+  double static_friction = 0.0;   // mu_s
+  double kinetic_friction = 0.0;  // mu_k <= mu_s
+  bool frictional() const { return static_friction > 0.0 || kinetic_friction > 0.0; }
+};
+
+// Allowed side {x : (x - point) . normal >= 0}; particle centres below it are pushed out.
+struct HalfSpace {
+  std::array<double, 3> point_m{0.0, 0.0, 0.0};
+  std::array<double, 3> normal{0.0, 1.0, 0.0};  // normalised by add_half_space
+  RigidContactLaw law;
+};
+
+// A 2D rigid polygon: vertices in order (either orientation), closed implicitly. Particle
+// centres inside it are pushed out to the nearest boundary point. A free body moves under
+// the contact reactions and gravity (translation and rotation about its centroid).
+struct RigidPolygon {
+  std::string name;
+  std::vector<double> x_m, y_m;  // vertices, world frame at t = 0
+  bool fixed = true;
+  double mass_kg = 0.0, inertia_kg_m2 = 0.0;  // free bodies: about the centroid
+  std::array<double, 2> velocity_m_s{0.0, 0.0};
+  double angular_velocity_rad_s = 0.0;
+  RigidContactLaw law;
+};
+
+// Area, centroid and polar second moment of area about the centroid of a simple polygon.
+struct PolygonGeometry {
+  double area_m2 = 0.0;
+  double cx_m = 0.0, cy_m = 0.0;
+  double polar_moment_m4 = 0.0;  // integral of |x - c|^2 dA
+};
+PolygonGeometry polygon_geometry(const std::vector<double>& x, const std::vector<double>& y);
+
+// Current state of the particles, as the solid holds it.
+struct ParticleStateView {
+  int dimension = 2;
+  long long count = 0;
+  const double* position_m = nullptr;  // 3N reference positions
+  VectorField u, v;
+  BondsView bonds;                     // pairs bonded now do not contact
+};
+
+class Contact {
+public:
+  bool active() const { return particle_contact_on_ || !half_spaces_.empty() || !polygons_.empty(); }
+  bool particle_contact() const { return particle_contact_on_; }
+  void set_particle_contact(ParticleContact pc);
+  void add_half_space(HalfSpace h);
+  void add_polygon(RigidPolygon p);
+
+  // Contact forces on every particle at the current state (force(a)[i], N); updates the
+  // friction springs with the step dt and collects the reactions on free rigid bodies.
+  void compute_forces(const ParticleStateView& s, double dt);
+  const std::vector<double>& force(int axis) const { return force_n_[axis]; }
+  // Symplectic Euler step of the free rigid bodies under the reactions of the last
+  // compute_forces() and gravity: v += dt a, then x += dt v.
+  void advance_rigid_bodies(double dt, const std::array<double, 3>& gravity_m_s2);
+
+  // Penalty energy of all contacts in the state s, plus the energy stored in the friction
+  // springs (as left by the last compute_forces()).
+  double potential_energy_j(const ParticleStateView& s) const;
+  double friction_dissipation_j() const { return dissipated_j_; }
+  double rigid_kinetic_energy_j() const;
+  double rigid_gravity_energy_j(const std::array<double, 3>& gravity_m_s2) const;  // -m g . (c - c0)
+  long long contact_pairs() const { return contact_pairs_; }
+
+  size_t polygon_count() const { return polygons_.size(); }
+  const RigidPolygon& polygon(size_t k) const { return polygons_[k]; }
+  // Vertices of polygon k in the current position (world frame).
+  void polygon_vertices(size_t k, std::vector<double>& x, std::vector<double>& y) const;
+  std::array<double, 2> polygon_centroid_m(size_t k) const { return {body_[k].cx, body_[k].cy}; }
+  double polygon_angle_rad(size_t k) const { return body_[k].angle; }
+  // Linear momentum of the free rigid bodies (kg m/s).
+  std::array<double, 2> rigid_momentum() const;
+
+private:
+  struct BodyState {
+    double cx = 0.0, cy = 0.0, cx0 = 0.0, cy0 = 0.0, angle = 0.0;
+    double vx = 0.0, vy = 0.0, omega = 0.0;
+    double fx = 0.0, fy = 0.0, torque = 0.0;  // reactions of the last compute_forces()
+    std::vector<double> local_x, local_y;     // vertices relative to the centroid at angle 0
+  };
+  // Pair penalties in state s: returns their energy, adds the forces to *force (if given).
+  double pair_contacts(const ParticleStateView& s, std::array<std::vector<double>, 3>* force, long long* pairs) const;
+  void obstacle_forces(const ParticleStateView& s, double dt);
+  double obstacle_penalty_energy_j(const ParticleStateView& s) const;
+  void free_bodies_on_half_spaces(double dt);
+  void rigid_contact(long long i, long long slot, double depth, const double n[3], const double v_surface[3],
+                     const RigidContactLaw& law, const ParticleStateView& s, double dt, double f[3]);
+
+  bool particle_contact_on_ = false;
+  ParticleContact particles_;
+  std::vector<HalfSpace> half_spaces_;
+  std::vector<RigidPolygon> polygons_;
+  std::vector<BodyState> body_;
+  std::array<std::vector<double>, 3> force_n_;
+  // Friction springs, one per particle and obstacle (half-spaces first, then polygons).
+  std::vector<FrictionState> friction_;
+  // Friction springs of free polygons' vertices on the half-spaces (half-space major).
+  std::vector<FrictionState> vertex_friction_;
+  double spring_energy_j_ = 0.0, dissipated_j_ = 0.0;
+  long long contact_pairs_ = 0;
+};
+
+}  // namespace breccia::mps

@@ -1,0 +1,68 @@
+#pragma once
+// Case-file keys for several bodies and contact in the stress formulation (docs/mps.md,
+// "Contact"): specimen.bodies (shapes with their own initial velocity), contact.particles
+// (contact between unbonded particles) and contact.rigid_bodies (2D polygons, fixed or
+// free, with Coulomb friction). Plain structs, SI after parsing (contact_spec.cpp).
+#include <array>
+#include <string>
+#include <vector>
+
+namespace breccia {
+class Section;
+}
+
+namespace breccia::mps {
+
+// One body of specimen.bodies: a lattice box, or an annulus of particles on concentric
+// circles (inner_radius 0: a disc), which follows both round surfaces.
+struct BodyShapeSpec {
+  std::string name;
+  std::string type;                  // box | annulus
+  std::array<double, 6> box_m{};     // box: x0 y0 z0 x1 y1 z1
+  std::array<double, 3> center_m{};  // annulus
+  double inner_radius_m = 0.0, outer_radius_m = 0.0;
+  std::array<double, 3> velocity_m_s{};  // initial velocity of the body (added to initial.velocity)
+};
+
+struct BodiesSpec {
+  int dimension = 2;
+  double spacing_m = 0.0;
+  double thickness_m = 1.0;  // 2D out-of-plane thickness
+  std::vector<BodyShapeSpec> shapes;
+};
+
+// Contact between particles that are not bonded (contact.hpp).
+struct ParticleContactSpec {
+  double distance_factor = 1.0;   // contact distance / spacing
+  double stiffness_factor = 1.0;  // k = factor (lambda + 2 mu) A / spacing per pair
+};
+
+// Coulomb friction of a rigid surface (floor or polygon) against the particles.
+struct FrictionSpec {
+  double static_friction = 0.0;   // mu_s >= 0
+  double kinetic_friction = 0.0;  // 0 <= mu_k <= mu_s (default mu_s)
+  double tangential_stiffness_factor = 1.0;  // k_t = factor mu A / spacing
+};
+
+// A 2D rigid polygon (contact.hpp, RigidPolygon).
+struct RigidBodySpec {
+  std::string name;
+  std::vector<double> x_m, y_m;  // vertices in order, closed implicitly
+  bool fixed = true;
+  double density_kg_m3 = 0.0;    // free bodies: mass = density * area * thickness
+  std::array<double, 3> velocity_m_s{};
+  double angular_velocity_rad_s = 0.0;
+  double stiffness_factor = 1.0;  // penalty k = factor (lambda + 2 mu) A / spacing
+  FrictionSpec friction;
+};
+
+// Parsers (throw InputError naming the file and field).
+BodiesSpec parse_bodies(const Section& s);
+ParticleContactSpec parse_particle_contact(const Section& s);
+RigidBodySpec parse_rigid_body(const Section& s, size_t index, int dimension);
+// Reads static_friction, kinetic_friction, tangential_stiffness_factor from s.
+FrictionSpec parse_friction(const Section& s);
+// Keys parse_friction reads (for allow_only lists).
+std::vector<std::string> friction_keys();
+
+}  // namespace breccia::mps

@@ -1,0 +1,34 @@
+#pragma once
+// Run-time detector of particle clumping in the stress-based MPS solid (docs/mps.md,
+// docs/atlas.md "MPS in tension"). SPH-type particle methods under tension can pair
+// particles up (the tensile instability) or, without hourglass control, let the zero-energy
+// modes of a particle-wise gradient grow: in both, neighbours move in a way the particle's
+// own deformation gradient F does not explain. The measure is, over the nearest-neighbour
+// bonds (reference length below 1.5 spacings), the current length against |F_i r_ij|: it is
+// exactly 1 for any homogeneous deformation, tension or compression, and falls when
+// neighbours clump together.
+#include <cstdint>
+
+#include "breccia/mps/solid.hpp"
+
+namespace breccia::mps {
+
+// A neighbour at less than this share of the distance its particle's F predicts.
+inline constexpr double kMinNeighbourDistanceRatio = 0.5;
+// How often Solid::step runs the check (steps): the measure costs one pass over the bonds
+// (a step costs several); the atlas saw clumping grow from 0.5 to 0.1 within ~10-20 steps.
+inline constexpr long long kClumpingCheckEvery = 10;
+
+struct Clumping {
+  double min_ratio = 1.0;        // min over nearest-neighbour bonds of |x_j - x_i| / |F_i r_ij|
+  long long worst_particle = -1;
+  long long clumped_bonds = 0;   // bonds below kMinNeighbourDistanceRatio
+};
+
+Clumping measure_clumping(const Solid& solid);
+
+// Throws RunError naming the time, the worst particle and the keys that help
+// (model.hourglass, model.pressure_force, refinement) when a bond is below the limit.
+void require_no_clumping(const Solid& solid);
+
+}  // namespace breccia::mps

@@ -1,0 +1,364 @@
+#include "breccia/mps/contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace breccia::mps {
+
+// Below this many particles thread start-up costs more than the pair loop (as in solid.cpp).
+constexpr long long kContactParallelMin = 8192;
+
+PolygonGeometry polygon_geometry(const std::vector<double>& x, const std::vector<double>& y) {
+  // Green's theorem over the edges; the signs cancel for clockwise polygons.
+  const size_t n = x.size();
+  double a2 = 0.0, sx = 0.0, sy = 0.0, jx = 0.0, jy = 0.0;
+  for (size_t k = 0, m = n - 1; k < n; m = k++) {
+    const double cr = x[m] * y[k] - x[k] * y[m];
+    a2 += cr;
+    sx += (x[m] + x[k]) * cr;
+    sy += (y[m] + y[k]) * cr;
+    jx += (y[m] * y[m] + y[m] * y[k] + y[k] * y[k]) * cr;  // 12 * integral of y^2
+    jy += (x[m] * x[m] + x[m] * x[k] + x[k] * x[k]) * cr;  // 12 * integral of x^2
+  }
+  PolygonGeometry g;
+  const double area = 0.5 * a2;
+  g.area_m2 = std::fabs(area);
+  if (g.area_m2 == 0.0) return g;
+  g.cx_m = sx / (6.0 * area);
+  g.cy_m = sy / (6.0 * area);
+  const double polar_origin = (jx + jy) / 12.0 * (area < 0 ? -1.0 : 1.0);
+  g.polar_moment_m4 = polar_origin - g.area_m2 * (g.cx_m * g.cx_m + g.cy_m * g.cy_m);
+  return g;
+}
+
+void Contact::set_particle_contact(ParticleContact pc) {
+  particles_ = std::move(pc);
+  particle_contact_on_ = particles_.distance_m > 0.0 && particles_.stiffness_n_m > 0.0;
+}
+
+void Contact::add_half_space(HalfSpace h) {
+  const double len = std::sqrt(h.normal[0] * h.normal[0] + h.normal[1] * h.normal[1] + h.normal[2] * h.normal[2]);
+  for (double& c : h.normal) c /= len;
+  half_spaces_.push_back(h);
+  friction_.clear();
+}
+
+void Contact::add_polygon(RigidPolygon p) {
+  const PolygonGeometry g = polygon_geometry(p.x_m, p.y_m);
+  BodyState b;
+  b.cx = b.cx0 = g.cx_m;
+  b.cy = b.cy0 = g.cy_m;
+  for (size_t k = 0; k < p.x_m.size(); ++k) {
+    b.local_x.push_back(p.x_m[k] - g.cx_m);
+    b.local_y.push_back(p.y_m[k] - g.cy_m);
+  }
+  if (!p.fixed) {
+    b.vx = p.velocity_m_s[0];
+    b.vy = p.velocity_m_s[1];
+    b.omega = p.angular_velocity_rad_s;
+  }
+  polygons_.push_back(std::move(p));
+  body_.push_back(std::move(b));
+  friction_.clear();
+}
+
+void Contact::polygon_vertices(size_t k, std::vector<double>& x, std::vector<double>& y) const {
+  const BodyState& b = body_[k];
+  const double c = std::cos(b.angle), s = std::sin(b.angle);
+  x.resize(b.local_x.size());
+  y.resize(b.local_y.size());
+  for (size_t m = 0; m < x.size(); ++m) {
+    x[m] = b.cx + c * b.local_x[m] - s * b.local_y[m];
+    y[m] = b.cy + s * b.local_x[m] + c * b.local_y[m];
+  }
+}
+
+void Contact::compute_forces(const ParticleStateView& s, double dt) {
+  const long long n = s.count;
+  for (auto& f : force_n_) f.assign(n, 0.0);
+  spring_energy_j_ = 0.0;
+  contact_pairs_ = 0;
+  if (particle_contact_on_) pair_contacts(s, &force_n_, &contact_pairs_);
+  if (!half_spaces_.empty() || !polygons_.empty()) obstacle_forces(s, dt);
+}
+
+double Contact::potential_energy_j(const ParticleStateView& s) const {
+  double e = spring_energy_j_ + obstacle_penalty_energy_j(s);
+  if (particle_contact_on_) e += pair_contacts(s, nullptr, nullptr);
+  return e;
+}
+
+// Cell list of edge >= the contact distance on the current positions, then for each
+// particle the unbonded neighbours closer than the contact distance. Each particle sums its
+// own pair forces (gather, no write conflicts), so every pair is evaluated twice.
+double Contact::pair_contacts(const ParticleStateView& s, std::array<std::vector<double>, 3>* force,
+                              long long* pair_count) const {
+  const long long n = s.count;
+  const int dim = s.dimension;
+  const double d = particles_.distance_m, k = particles_.stiffness_n_m;
+  std::vector<double> x(3 * n);
+  for (long long i = 0; i < n; ++i) {
+    x[3 * i] = s.position_m[3 * i] + s.u.x[i];
+    x[3 * i + 1] = s.position_m[3 * i + 1] + s.u.y[i];
+    x[3 * i + 2] = s.position_m[3 * i + 2] + (dim == 3 ? s.u.z[i] : 0.0);
+  }
+  std::array<double, 3> lo{0, 0, 0}, cell{1, 1, 1};
+  std::array<long long, 3> count{1, 1, 1};
+  // At most ~4N cells, so a particle flung far away cannot make the grid huge (cells then
+  // grow beyond the contact distance, which stays correct).
+  const double cap = std::pow(4.0 * static_cast<double>(std::max<long long>(n, 1)), 1.0 / dim);
+  for (int a = 0; a < dim; ++a) {
+    double mn = 1e300, mx = -1e300;
+    for (long long i = 0; i < n; ++i) {
+      mn = std::min(mn, x[3 * i + a]);
+      mx = std::max(mx, x[3 * i + a]);
+    }
+    lo[a] = mn;
+    const double extent = std::max(mx - mn, 0.0);
+    count[a] = std::clamp<long long>(static_cast<long long>(std::floor(extent / d)), 1, static_cast<long long>(cap) + 1);
+    cell[a] = std::max(extent / count[a], d);
+  }
+  auto coord = [&](int a, double v) {
+    return std::clamp<long long>(static_cast<long long>(std::floor((v - lo[a]) / cell[a])), 0, count[a] - 1);
+  };
+  const long long ncell = count[0] * count[1] * count[2];
+  std::vector<long long> start(ncell + 1, 0), cell_of(n);
+  for (long long i = 0; i < n; ++i) {
+    cell_of[i] = (coord(2, x[3 * i + 2]) * count[1] + coord(1, x[3 * i + 1])) * count[0] + coord(0, x[3 * i]);
+    ++start[cell_of[i] + 1];
+  }
+  for (long long c = 0; c < ncell; ++c) start[c + 1] += start[c];
+  std::vector<int> order(n);
+  {
+    std::vector<long long> fill(start.begin(), start.end() - 1);
+    for (long long i = 0; i < n; ++i) order[fill[cell_of[i]]++] = static_cast<int>(i);
+  }
+  double energy = 0.0;
+  long long pairs = 0;
+  const BondsView b = s.bonds;
+#pragma omp parallel for schedule(static) reduction(+ : energy, pairs) if (n > kContactParallelMin)
+  for (long long i = 0; i < n; ++i) {
+    const long long c[3] = {coord(0, x[3 * i]), coord(1, x[3 * i + 1]), coord(2, x[3 * i + 2])};
+    double f[3] = {0.0, 0.0, 0.0};
+    for (long long cz = std::max(0LL, c[2] - 1); cz <= std::min(count[2] - 1, c[2] + 1); ++cz)
+      for (long long cy = std::max(0LL, c[1] - 1); cy <= std::min(count[1] - 1, c[1] + 1); ++cy)
+        for (long long cx = std::max(0LL, c[0] - 1); cx <= std::min(count[0] - 1, c[0] + 1); ++cx) {
+          const long long cell_index = (cz * count[1] + cy) * count[0] + cx;
+          for (long long q = start[cell_index]; q < start[cell_index + 1]; ++q) {
+            const int j = order[q];
+            if (j == i) continue;
+            const double dx[3] = {x[3 * i] - x[3 * j], x[3 * i + 1] - x[3 * j + 1], x[3 * i + 2] - x[3 * j + 2]};
+            if (dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2] >= d * d) continue;
+            // Bonded now: a bond with nonzero weight (fracture.cpp cuts a bond by zeroing it,
+            // so crack faces meet through contact).
+            bool bonded = false;
+            for (long long m = b.offset[i]; m < b.offset[i + 1] && !bonded; ++m)
+              bonded = b.neighbour[m] == j && b.weight[m] != 0.0;
+            if (bonded) continue;
+            energy += 0.5 * particle_pair_contact(dx, d, k, f);  // each pair is visited from both ends
+            ++pairs;
+          }
+        }
+    if (force) {
+      (*force)[0][i] += f[0];
+      (*force)[1][i] += f[1];
+      (*force)[2][i] += f[2];
+    }
+  }
+  if (pair_count) *pair_count += pairs / 2;
+  return energy;
+}
+
+void Contact::rigid_contact(long long i, long long slot, double depth, const double n[3], const double v_surface[3],
+                            const RigidContactLaw& law, const ParticleStateView& s, double dt, double f[3]) {
+  const double normal_force = law.normal_stiffness_n_m * depth;
+  for (int a = 0; a < 3; ++a) f[a] += normal_force * n[a];
+  if (!law.frictional()) return;
+  const double v_rel[3] = {s.v.x[i] - v_surface[0], s.v.y[i] - v_surface[1],
+                           (s.dimension == 3 ? s.v.z[i] : 0.0) - v_surface[2]};
+  FrictionState& st = friction_[slot * s.count + i];
+  dissipated_j_ += coulomb_tangential_force(st, n, v_rel, dt, normal_force, law.tangential_stiffness_n_m,
+                                            law.static_friction, law.kinetic_friction, f);
+  spring_energy_j_ += 0.5 * law.tangential_stiffness_n_m * (st.s[0] * st.s[0] + st.s[1] * st.s[1] + st.s[2] * st.s[2]);
+}
+
+// Rigid obstacles: a loop over particles per obstacle (few obstacles; the bounding-box test
+// rejects most particles of a polygon at once). Serial, because the reactions on a free
+// body are a sum over its particles.
+void Contact::obstacle_forces(const ParticleStateView& s, double dt) {
+  const long long n = s.count;
+  const long long slots = static_cast<long long>(half_spaces_.size() + polygons_.size());
+  if (friction_.size() != static_cast<size_t>(slots * n)) friction_.assign(slots * n, FrictionState{});
+  const double zero[3] = {0.0, 0.0, 0.0};
+  auto current = [&](long long i, int a) {
+    const double* u = a == 0 ? s.u.x : (a == 1 ? s.u.y : s.u.z);
+    return s.position_m[3 * i + a] + ((a < s.dimension) ? u[i] : 0.0);
+  };
+  for (size_t h = 0; h < half_spaces_.size(); ++h) {
+    const HalfSpace& hs = half_spaces_[h];
+    for (long long i = 0; i < n; ++i) {
+      double height = 0.0;
+      for (int a = 0; a < 3; ++a) height += (current(i, a) - hs.point_m[a]) * hs.normal[a];
+      if (height >= 0.0) {
+        if (!friction_.empty()) friction_[h * n + i] = FrictionState{};
+        continue;
+      }
+      double f[3] = {0.0, 0.0, 0.0};
+      rigid_contact(i, static_cast<long long>(h), -height, hs.normal.data(), zero, hs.law, s, dt, f);
+      for (int a = 0; a < 3; ++a) force_n_[a][i] += f[a];
+    }
+  }
+  std::vector<double> vx, vy;
+  for (size_t p = 0; p < polygons_.size(); ++p) {
+    const RigidPolygon& poly = polygons_[p];
+    BodyState& b = body_[p];
+    b.fx = b.fy = b.torque = 0.0;
+    polygon_vertices(p, vx, vy);
+    const double x0 = *std::min_element(vx.begin(), vx.end()), x1 = *std::max_element(vx.begin(), vx.end());
+    const double y0 = *std::min_element(vy.begin(), vy.end()), y1 = *std::max_element(vy.begin(), vy.end());
+    const long long slot = static_cast<long long>(half_spaces_.size() + p);
+    for (long long i = 0; i < n; ++i) {
+      const double px = current(i, 0), py = current(i, 1);
+      double normal2[2] = {0.0, 0.0};
+      const double depth = (px < x0 || px > x1 || py < y0 || py > y1)
+                               ? 0.0
+                               : polygon_penetration(vx.data(), vy.data(), static_cast<int>(vx.size()), px, py, normal2);
+      if (depth <= 0.0) {
+        if (!friction_.empty()) friction_[slot * n + i] = FrictionState{};
+        continue;
+      }
+      // The penalty pushes the particle out towards the nearest boundary point.
+      const double nrm[3] = {normal2[0], normal2[1], 0.0};
+      const double v_surface[3] = {b.vx - b.omega * (py - b.cy), b.vy + b.omega * (px - b.cx), 0.0};
+      double f[3] = {0.0, 0.0, 0.0};
+      rigid_contact(i, slot, depth, nrm, v_surface, poly.law, s, dt, f);
+      for (int a = 0; a < 3; ++a) force_n_[a][i] += f[a];
+      // Equal and opposite reaction at the particle's position.
+      b.fx -= f[0];
+      b.fy -= f[1];
+      b.torque -= (px - b.cx) * f[1] - (py - b.cy) * f[0];
+    }
+  }
+  free_bodies_on_half_spaces(dt);
+}
+
+// Free rigid polygons on the half-spaces (the floor): each vertex below a plane is pushed
+// out with the plane's penalty and friction law, as a particle would be, the force acting
+// at the vertex. Vertices only: an edge crossing the plane between two vertices above it
+// is not seen (fine for a body resting on or bouncing off the plane).
+void Contact::free_bodies_on_half_spaces(double dt) {
+  size_t vertices = 0;
+  for (const auto& poly : polygons_) vertices += poly.x_m.size();
+  if (vertex_friction_.size() != half_spaces_.size() * vertices)
+    vertex_friction_.assign(half_spaces_.size() * vertices, FrictionState{});
+  std::vector<double> vx, vy;
+  size_t first = 0;
+  for (size_t p = 0; p < polygons_.size(); first += polygons_[p].x_m.size(), ++p) {
+    if (polygons_[p].fixed) continue;
+    BodyState& b = body_[p];
+    polygon_vertices(p, vx, vy);
+    for (size_t h = 0; h < half_spaces_.size(); ++h) {
+      const HalfSpace& hs = half_spaces_[h];
+      for (size_t m = 0; m < vx.size(); ++m) {
+        FrictionState& st = vertex_friction_[h * vertices + first + m];
+        const double height = (vx[m] - hs.point_m[0]) * hs.normal[0] + (vy[m] - hs.point_m[1]) * hs.normal[1] -
+                              hs.point_m[2] * hs.normal[2];
+        if (height >= 0.0) {
+          st = FrictionState{};
+          continue;
+        }
+        const double normal_force = -hs.law.normal_stiffness_n_m * height;
+        double f[3] = {normal_force * hs.normal[0], normal_force * hs.normal[1], normal_force * hs.normal[2]};
+        if (hs.law.frictional()) {
+          const double v_vertex[3] = {b.vx - b.omega * (vy[m] - b.cy), b.vy + b.omega * (vx[m] - b.cx), 0.0};
+          dissipated_j_ += coulomb_tangential_force(st, hs.normal.data(), v_vertex, dt, normal_force,
+                                                    hs.law.tangential_stiffness_n_m, hs.law.static_friction,
+                                                    hs.law.kinetic_friction, f);
+          spring_energy_j_ +=
+              0.5 * hs.law.tangential_stiffness_n_m * (st.s[0] * st.s[0] + st.s[1] * st.s[1] + st.s[2] * st.s[2]);
+        }
+        b.fx += f[0];
+        b.fy += f[1];
+        b.torque += (vx[m] - b.cx) * f[1] - (vy[m] - b.cy) * f[0];
+      }
+    }
+  }
+}
+
+double Contact::obstacle_penalty_energy_j(const ParticleStateView& s) const {
+  double e = 0.0;
+  auto current = [&](long long i, int a) {
+    const double* u = a == 0 ? s.u.x : (a == 1 ? s.u.y : s.u.z);
+    return s.position_m[3 * i + a] + ((a < s.dimension) ? u[i] : 0.0);
+  };
+  for (const HalfSpace& hs : half_spaces_)
+    for (long long i = 0; i < s.count; ++i) {
+      double height = 0.0;
+      for (int a = 0; a < 3; ++a) height += (current(i, a) - hs.point_m[a]) * hs.normal[a];
+      if (height < 0.0) e += 0.5 * hs.law.normal_stiffness_n_m * height * height;
+    }
+  std::vector<double> vx, vy;
+  for (size_t p = 0; p < polygons_.size(); ++p) {
+    polygon_vertices(p, vx, vy);
+    for (long long i = 0; i < s.count; ++i) {
+      double normal2[2];
+      const double depth =
+          polygon_penetration(vx.data(), vy.data(), static_cast<int>(vx.size()), current(i, 0), current(i, 1), normal2);
+      e += 0.5 * polygons_[p].law.normal_stiffness_n_m * depth * depth;
+    }
+    if (polygons_[p].fixed) continue;
+    for (const HalfSpace& hs : half_spaces_)  // free bodies' vertices on the planes
+      for (size_t m = 0; m < vx.size(); ++m) {
+        const double height = (vx[m] - hs.point_m[0]) * hs.normal[0] + (vy[m] - hs.point_m[1]) * hs.normal[1] -
+                              hs.point_m[2] * hs.normal[2];
+        if (height < 0.0) e += 0.5 * hs.law.normal_stiffness_n_m * height * height;
+      }
+  }
+  return e;
+}
+
+void Contact::advance_rigid_bodies(double dt, const std::array<double, 3>& g) {
+  for (size_t p = 0; p < polygons_.size(); ++p) {
+    if (polygons_[p].fixed) continue;
+    BodyState& b = body_[p];
+    const RigidPolygon& poly = polygons_[p];
+    b.vx += dt * (b.fx / poly.mass_kg + g[0]);
+    b.vy += dt * (b.fy / poly.mass_kg + g[1]);
+    b.omega += dt * b.torque / poly.inertia_kg_m2;
+    b.cx += dt * b.vx;
+    b.cy += dt * b.vy;
+    b.angle += dt * b.omega;
+  }
+}
+
+double Contact::rigid_kinetic_energy_j() const {
+  double e = 0.0;
+  for (size_t p = 0; p < polygons_.size(); ++p) {
+    if (polygons_[p].fixed) continue;
+    const BodyState& b = body_[p];
+    e += 0.5 * polygons_[p].mass_kg * (b.vx * b.vx + b.vy * b.vy) + 0.5 * polygons_[p].inertia_kg_m2 * b.omega * b.omega;
+  }
+  return e;
+}
+
+double Contact::rigid_gravity_energy_j(const std::array<double, 3>& g) const {
+  double e = 0.0;
+  for (size_t p = 0; p < polygons_.size(); ++p) {
+    if (polygons_[p].fixed) continue;
+    const BodyState& b = body_[p];
+    e -= polygons_[p].mass_kg * (g[0] * (b.cx - b.cx0) + g[1] * (b.cy - b.cy0));
+  }
+  return e;
+}
+
+std::array<double, 2> Contact::rigid_momentum() const {
+  std::array<double, 2> m{0.0, 0.0};
+  for (size_t p = 0; p < polygons_.size(); ++p) {
+    if (polygons_[p].fixed) continue;
+    m[0] += polygons_[p].mass_kg * body_[p].vx;
+    m[1] += polygons_[p].mass_kg * body_[p].vy;
+  }
+  return m;
+}
+
+}  // namespace breccia::mps

@@ -1,0 +1,57 @@
+#include "breccia/mps/contact_case.hpp"
+
+#include <string>
+
+#include "breccia/common/error.hpp"
+
+namespace breccia::mps {
+
+void configure_contact(const CaseSpec& spec, const std::vector<int>& body_id, Solid& solid) {
+  const size_t n = solid.size();
+  if (spec.bodies) {
+    for (size_t i = 0; i < n; ++i)
+      for (int a = 0; a < solid.dimension(); ++a) solid.velocity(a)[i] += spec.bodies->shapes[body_id[i]].velocity_m_s[a];
+  }
+  // Particle contact: asked for, or implied by two or more bodies (which would otherwise
+  // pass through each other).
+  const bool several = spec.bodies && spec.bodies->shapes.size() > 1;
+  if (spec.particle_contact || several) {
+    const ParticleContactSpec pc = spec.particle_contact.value_or(ParticleContactSpec{});
+    ParticleContact p;
+    p.distance_m = pc.distance_factor * solid.spacing_m();
+    p.stiffness_n_m = pc.stiffness_factor * solid.face_stiffness_n_m();
+    p.body_id = body_id;
+    solid.contact().set_particle_contact(std::move(p));
+  }
+  for (size_t k = 0; k < spec.rigid_bodies.size(); ++k) {
+    const RigidBodySpec& r = spec.rigid_bodies[k];
+    RigidPolygon p;
+    p.name = r.name;
+    p.x_m = r.x_m;
+    p.y_m = r.y_m;
+    p.fixed = r.fixed;
+    const PolygonGeometry g = polygon_geometry(r.x_m, r.y_m);
+    p.mass_kg = r.density_kg_m3 * g.area_m2 * solid.thickness_m();
+    p.inertia_kg_m2 = r.density_kg_m3 * g.polar_moment_m4 * solid.thickness_m();
+    p.velocity_m_s = {r.velocity_m_s[0], r.velocity_m_s[1]};
+    p.angular_velocity_rad_s = r.angular_velocity_rad_s;
+    p.law.normal_stiffness_n_m = r.stiffness_factor * solid.face_stiffness_n_m();
+    p.law.tangential_stiffness_n_m = r.friction.tangential_stiffness_factor * solid.shear_face_stiffness_n_m();
+    p.law.static_friction = r.friction.static_friction;
+    p.law.kinetic_friction = r.friction.kinetic_friction;
+    long long inside = 0;
+    for (size_t i = 0; i < n; ++i) {
+      double normal[2];
+      const double px = solid.position_m()[3 * i] + solid.displacement(0)[i];
+      const double py = solid.position_m()[3 * i + 1] + solid.displacement(1)[i];
+      inside += polygon_penetration(p.x_m.data(), p.y_m.data(), static_cast<int>(p.x_m.size()), px, py, normal) > 0.0;
+    }
+    if (inside > 0)
+      throw InputError(spec.file, "contact.rigid_bodies[" + std::to_string(k) + "].vertices",
+                       "polygon '" + r.name + "' holds " + std::to_string(inside) + " particle(s) at the start",
+                       "a rigid body clear of the particles at t = 0");
+    solid.contact().add_polygon(std::move(p));
+  }
+}
+
+}  // namespace breccia::mps

@@ -1,0 +1,58 @@
+#include "breccia/mps/stability_checks.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "breccia/common/error.hpp"
+
+namespace breccia::mps {
+
+Clumping measure_clumping(const Solid& solid) {
+  Clumping c;
+  const BondList& b = solid.bonds();
+  const double near = 1.5 * solid.spacing_m();
+  const auto& ux = solid.displacement(0);
+  const auto& uy = solid.displacement(1);
+  const auto& uz = solid.displacement(2);
+  const auto& grad = solid.displacement_gradient();
+  const long long n = static_cast<long long>(solid.size());
+  for (long long i = 0; i < n; ++i) {
+    const Mat3& h = grad[i];
+    for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
+      const double r[3] = {b.rx[k], b.ry[k], b.rz[k]};
+      if (std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) > near) continue;
+      const int j = b.neighbour[k];
+      double predicted2 = 0.0;
+      for (int a = 0; a < 3; ++a) {
+        const double fr = r[a] + h(a, 0) * r[0] + h(a, 1) * r[1] + h(a, 2) * r[2];
+        predicted2 += fr * fr;
+      }
+      // Reference bond vectors may be periodic images: the current one is r + u_j - u_i.
+      const double d[3] = {r[0] + ux[j] - ux[i], r[1] + uy[j] - uy[i], r[2] + uz[j] - uz[i]};
+      const double ratio = std::sqrt((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / predicted2);
+      if (!(ratio >= kMinNeighbourDistanceRatio)) ++c.clumped_bonds;  // NaN counts
+      if (!(ratio >= c.min_ratio)) {
+        c.min_ratio = ratio;
+        c.worst_particle = i;
+      }
+    }
+  }
+  return c;
+}
+
+void require_no_clumping(const Solid& solid) {
+  const Clumping c = measure_clumping(solid);
+  if (c.clumped_bonds == 0) return;
+  const long long i = c.worst_particle;
+  const auto& p = solid.position_m();
+  std::ostringstream msg;
+  msg << "mps solid: particles clumping at t = " << solid.time_s() << " s: " << c.clumped_bonds
+      << " nearest-neighbour bond(s) shorter than " << kMinNeighbourDistanceRatio
+      << " of the length their particle's deformation gradient predicts (worst " << c.min_ratio << " at particle " << i
+      << ", reference position (" << p[3 * i] << ", " << p[3 * i + 1] << ", " << p[3 * i + 2]
+      << ")): tensile instability or hourglass (zero-energy) modes; raise model.hourglass (default 0.1), "
+         "try model.pressure_force: repulsive, or refine";
+  throw RunError(msg.str());
+}
+
+}  // namespace breccia::mps

@@ -1,0 +1,195 @@
+// model.precision: float32 on the CPU (float32_state.hpp): the float copy of the state, the
+// step on it, and the time loop's backend. The kernels are pd_kernels.hpp with Real = float.
+#include <algorithm>
+#include <cmath>
+
+#include "breccia/solver/float32_state.hpp"
+#include "breccia/solver/forall.hpp"
+#include "breccia/solver/load_kernels.hpp"
+#include "breccia/solver/pd_system.hpp"
+#include "breccia/solver/run.hpp"
+
+namespace breccia::solver {
+namespace {
+
+template <class From, class To>
+void convert(const std::vector<From>& from, std::vector<To>& to) {
+  to.resize(from.size());
+  const int64_t n = static_cast<int64_t>(from.size());
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < n; ++k) to[k] = static_cast<To>(from[k]);
+}
+
+}  // namespace
+
+void float32_enable(PdSystem& s) {
+  Float32State& f = s.f32;
+  // Coordinates relative to the bounding box centre: float resolves 6e-8 of |x0 - origin|,
+  // which perturbs the reference geometry by that much but not the stretch (xi_len below is
+  // measured on the same float positions, so an undeformed bond has zero stretch).
+  for (int d = 0; d < 3; ++d) {
+    double lo = 1e300, hi = -1e300;
+    for (size_t i = 0; i < s.n; ++i) {
+      lo = std::min(lo, s.x0[3 * i + d]);
+      hi = std::max(hi, s.x0[3 * i + d]);
+    }
+    f.origin[d] = s.n ? 0.5 * (lo + hi) : 0.0;
+  }
+  f.x0.resize(3 * s.n);
+  for (size_t k = 0; k < 3 * s.n; ++k) f.x0[k] = static_cast<float>(s.x0[k] - f.origin[k % 3]);
+  convert(s.volume, f.volume);
+  convert(s.density, f.density);
+  convert(s.weighted_volume, f.weighted_volume);
+  convert(s.dilatation, f.dilatation);
+  convert(s.lps_a, f.lps_a);
+  convert(s.lps_b, f.lps_b);
+  convert(s.k_own, f.k_own);
+  convert(s.k_dual, f.k_dual);
+  convert(s.vol_own, f.vol_own);
+  f.xi_len.resize(s.bond_count());
+  const int64_t n = static_cast<int64_t>(s.n);
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < n; ++i)
+    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
+      const int64_t j = s.neighbor[k];
+      double len2 = 0.0;  // exact differences of the float coordinates, summed in double
+      for (int d = 0; d < 3; ++d) {
+        const double dx = static_cast<double>(f.x0[3 * j + d]) - static_cast<double>(f.x0[3 * i + d]);
+        len2 += dx * dx;
+      }
+      f.xi_len[k] = static_cast<float>(std::sqrt(len2));
+    }
+  f.loads_vary = !s.surface_loads.empty() || !s.body_loads.empty() || s.config.indenter.enabled;
+  f.active = true;
+  float32_upload(s);
+  convert(s.force, f.force);
+}
+
+PdViewT<float> float32_view(PdSystem& s) {
+  Float32State& f = s.f32;
+  PdViewT<float> p;
+  p.n = static_cast<int64_t>(s.n);
+  p.model = static_cast<int>(s.config.model);
+  p.fracture = s.config.fracture;
+  p.diagnostics = s.diagnostics;
+  p.symmetric_halves = s.symmetric_halves;
+  p.x0 = f.x0.data();
+  p.x = nullptr;  // float never forms x0 + u (float32_state.hpp)
+  p.u = f.u.data(); p.v = f.v.data(); p.a = f.a.data(); p.force = f.force.data(); p.body = f.body.data();
+  p.volume = f.volume.data(); p.density = f.density.data(); p.fixed_dof = s.fixed_dof.data();
+  p.offsets = s.offsets.data(); p.neighbor = s.neighbor.data(); p.xi_len = f.xi_len.data();
+  p.k_own = f.k_own.data(); p.k_dual = f.k_dual.data(); p.vol_own = f.vol_own.data();
+  p.s0_own = s.s0_own.data(); p.s0_dual = s.s0_dual.data(); p.state = s.state.data();
+  p.lps = s.lps.empty() ? nullptr : s.lps.data();
+  p.weighted_volume = f.weighted_volume.data(); p.dilatation = f.dilatation.data();
+  p.lps_a = f.lps_a.size() == s.n && s.n ? f.lps_a.data() : nullptr;
+  p.lps_b = f.lps_b.size() == s.n && s.n ? f.lps_b.data() : nullptr;
+  p.energy_density = s.energy_density.data(); p.dissipated = s.dissipated.data();
+  p.damage = s.damage.data(); p.max_stretch = s.max_stretch.empty() ? nullptr : s.max_stretch.data();
+  return p;
+}
+
+void float32_upload(PdSystem& s) {
+  convert(s.u, s.f32.u);
+  convert(s.v, s.f32.v);
+  convert(s.a, s.f32.a);
+  convert(s.body, s.f32.body);
+}
+
+void float32_download(PdSystem& s) {
+  convert(s.f32.u, s.u);
+  convert(s.f32.v, s.v);
+  convert(s.f32.a, s.a);
+  convert(s.f32.force, s.force);
+  convert(s.f32.dilatation, s.dilatation);
+}
+
+void float32_compute_forces(PdSystem& s) {
+  const PdViewT<float> p = float32_view(s);
+  if (s.config.model == PdModel::LPS) for_each_particle(p.n, [&](int64_t i) { lps_dilatation_kernel(p, i); });
+  for_each_particle(p.n, [&](int64_t i) { force_kernel(p, i); });
+  double released = 0.0;
+#pragma omp parallel for reduction(+ : released)
+  for (int64_t i = 0; i < p.n; ++i) released += p.dissipated[i];
+  s.dissipated_energy += released;
+}
+
+void float32_step(PdSystem& s) {
+  Float32State& f = s.f32;
+  const double dt = s.dt, half = 0.5 * dt;
+  const PdViewT<float> p = float32_view(s);
+  const int64_t n3 = static_cast<int64_t>(3 * s.n);
+  // Work of external forces and reactions: trapezoid over the step, summed in double.
+  f.u_before.resize(n3);
+  f.f_before.resize(n3);
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < n3; ++k) {
+    const int64_t i = k / 3;
+    const bool constrained = s.fixed_dof[i] & (1u << (k % 3));
+    f.u_before[k] = f.u[k];
+    f.f_before[k] = double(f.volume[i]) * (constrained ? -double(f.force[k]) : double(f.body[k]));
+  }
+  for_each_particle(p.n, [&](int64_t i) { kick_drift_kernel(p, i, half, dt); });
+  s.time += dt;
+  // Constraints: the ramped values in double (host, once per step), imposed on the float state.
+  for (const auto& con : s.constraints) {
+    const BoundarySpec& b = *con.spec;
+    double velocity[3], target[3];
+    prescribed_values(b, s.time, dt, velocity, target);
+    const int kind = static_cast<int>(b.kind);
+    for (auto i : con.particles)
+      for (int d = 0; d < 3; ++d) {
+        if (!b.components[d]) continue;
+        const int64_t k = 3 * static_cast<int64_t>(i) + d;
+        double u = f.u[k], v = f.v[k];
+        constrain_component(kind, velocity[d], target[d], dt, u, v);
+        f.u[k] = static_cast<float>(u);
+        f.v[k] = static_cast<float>(v);
+      }
+  }
+  if (f.loads_vary) {
+    if (s.config.indenter.enabled) convert(f.u, s.u);  // the indenter reads the double displacement
+    compute_external(s, s.time);
+    convert(s.body, f.body);
+  }
+  float32_compute_forces(s);
+  for_each_particle(p.n, [&](int64_t i) { acceleration_kernel(p, i, half); });
+  double work = 0.0;
+#pragma omp parallel for reduction(+ : work)
+  for (int64_t k = 0; k < n3; ++k) {
+    const int64_t i = k / 3;
+    const bool constrained = s.fixed_dof[i] & (1u << (k % 3));
+    const double f_after = double(f.volume[i]) * (constrained ? -double(f.force[k]) : double(f.body[k]));
+    work += 0.5 * (f.f_before[k] + f_after) * (double(f.u[k]) - double(f.u_before[k]));
+  }
+  s.external_work += work;
+  ++s.step;
+}
+
+namespace {
+
+class Float32Backend final : public StepBackend {
+public:
+  explicit Float32Backend(PdSystem& s) { float32_upload(s); }  // a checkpoint may have been read
+  void step(PdSystem& s) override { float32_step(s); }
+  Energies measure(PdSystem& s) override {
+    convert(s.f32.u, s.u);
+    convert(s.f32.v, s.v);
+    return solver::measure(s);
+  }
+  void compute_forces(PdSystem& s) override {
+    float32_compute_forces(s);
+    float32_download(s);
+  }
+  void download(PdSystem& s) override { float32_download(s); }
+  void download_kinematics(PdSystem& s) override {
+    convert(s.f32.u, s.u);
+    convert(s.f32.v, s.v);
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<StepBackend> make_float32_backend(PdSystem& s) { return std::make_unique<Float32Backend>(s); }
+
+}  // namespace breccia::solver

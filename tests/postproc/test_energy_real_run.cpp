@@ -1,0 +1,139 @@
+// Dissipated energy against G0 x crack area on a real breccia-solve fracture run whose crack
+// grows stably: the quick variant of cases/dcb-energy (a glass double cantilever beam, 2D
+// PMB plane stress, lattice spacing 0.1 mm, arms 2 mm high, 8 mm long, pre-crack to 2.037 mm,
+// arms pinned one spacing from the load line and pulled apart at 0.025 m/s each). At a fixed
+// opening a DCB's energy release rate falls as the crack grows, so the crack advances only as
+// the opening grows: it runs slowly (about 25 m/s) along the mid-plane, one lattice column at
+// a time, with no branching and no chips. docs/postproc.md "Energy check" has the numbers.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "breccia/common/particle_file.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+
+int run(const std::string& cmd) {
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The number after the first "key": at or after `from`.
+double json_number(const std::string& json, const std::string& key, const std::string& from = "") {
+  const size_t start = from.empty() ? 0 : json.find(from);
+  const size_t at = json.find("\"" + key + "\": ", start == std::string::npos ? 0 : start);
+  if (at == std::string::npos) return NAN;
+  return std::strtod(json.c_str() + at + key.size() + 4, nullptr);
+}
+
+constexpr double kSpacing_m = 1e-4, kThickness_m = 1e-3, kG0 = 3.8;
+constexpr int kColumns = 80, kArmRows = 20;  // 8 mm long, arms 2 mm high
+constexpr double kPrecrackTip_m = 2.037e-3;
+
+// The particles of cases/dcb-energy/specimen.py (same order, sets and pins): cell centres of
+// the dx-square lattice on 0 <= x <= 8 mm, -2 <= y <= 2 mm, rows from the bottom.
+breccia::ParticleModel dcb_particles() {
+  breccia::ParticleModel m;
+  m.dimension = 2;
+  m.thickness_m = kThickness_m;
+  breccia::ParticleSet load_top{"load_top", {}}, load_bottom{"load_bottom", {}}, grips{"grips", {}};
+  const int pin_row = kArmRows + (kArmRows - 1) / 2;  // nearest the top arm's mid-height
+  for (int row = 0; row < 2 * kArmRows; ++row)
+    for (int col = 0; col < kColumns; ++col) {
+      const int64_t id = static_cast<int64_t>(m.volume_m3.size());
+      const double x = (col + 0.5) * kSpacing_m, y = (row - kArmRows + 0.5) * kSpacing_m;
+      m.position_m.insert(m.position_m.end(), {x, y, 0.0});
+      m.volume_m3.push_back(kSpacing_m * kSpacing_m * kThickness_m);
+      m.spacing_m.push_back(kSpacing_m);
+      m.material_id.push_back(0);
+      if (col == 0 && row == pin_row) load_top.indices.push_back(id);
+      if (col == 0 && row == 2 * kArmRows - 1 - pin_row) load_bottom.indices.push_back(id);
+      if (x < 0.5e-3) grips.indices.push_back(id);
+    }
+  m.sets = {load_top, load_bottom, grips};
+  m.source = "double cantilever beam 8 x 2 x 2 mm, lattice dx 0.1 mm (test_energy_real_run)";
+  return m;
+}
+
+// Runs the solver and breccia-post once for all tests of this file.
+const std::string& dcb_post_json() {
+  static const std::string json = [] {
+    const fs::path dir = fs::temp_directory_path() / ("breccia_energy_real_run_" + std::to_string(getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    breccia::write_particle_file((dir / "particles.h5").string(), dcb_particles());
+    // The pre-crack tip is off every bond's line (a lattice bond crosses y = 0 at multiples of
+    // dx/12): see cases/dcb-energy/README.md. End: 170 us, while the crack is still growing
+    // stably (it leaves that range near 5 mm, about 1.5 arm heights from the far end).
+    std::ofstream(dir / "case.yaml") << R"(name: dcb-energy-quick
+specimen: {particles: particles.h5}
+model: {type: pmb, planar: plane_stress, horizon_factor: 3.015, no_fail: [grips]}
+materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.3333333333333333, fracture_energy: 3.8}]
+precracks:
+  - {type: segment, from: [-0.001, 0], to: [0.002037, 0]}
+boundary:
+  - {type: velocity, set: load_top, value: [0, 0.025, 0], components: [x, y], ramp_time: 20 us}
+  - {type: velocity, set: load_bottom, value: [0, -0.025, 0], components: [x, y], ramp_time: 20 us}
+time: {end: 170 us}
+output: {every: 1000000, history_every: 100}
+)";
+    const std::string solve = quoted(BRECCIA_SOLVE_EXE) + " " + quoted(dir / "case.yaml") + " -o " +
+                              quoted(dir / "run") + " --quiet > " + quoted(dir / "solve.log") + " 2>&1";
+    if (run(solve) != 0) return std::string();
+    const std::string post = quoted(BRECCIA_POST_EXE) + " " + quoted(dir / "run") + " --no-plots --quiet > " +
+                             quoted(dir / "post.log") + " 2>&1";
+    if (run(post) != 0) return std::string();
+    std::string out = read(dir / "run" / "post" / "post.json");
+    fs::remove_all(dir);
+    return out;
+  }();
+  return json;
+}
+
+}  // namespace
+
+TEST(EnergyRealRun, StableDcbCrackDissipatesG0TimesItsAreaWithinTenPercent) {
+  const std::string& json = dcb_post_json();
+  ASSERT_FALSE(json.empty()) << "breccia-solve or breccia-post failed";
+  // One piece: the crack has not run through and tore out no chips.
+  EXPECT_EQ(json_number(json, "fragment_count", "\"fragments\""), 1);
+  // The crack grew well past the pre-crack: 2.9 mm measured (29 lattice columns). At least
+  // 2 mm, so that the crack front (a fan of partly broken bonds about one horizon, 0.3 mm,
+  // long) and stray faces (below) are a small part of what is compared.
+  const double area = json_number(json, "smoothed_fracture_area_m2", "\"cracks\"");
+  EXPECT_GT(area, 2e-3 * kThickness_m);
+  EXPECT_LT(area, 5.5e-3 * kThickness_m);  // not past the far end's unstable range
+  // The smoothed area is the projected crack area: a broken bond between two particles of the
+  // same row (a face normal to the crack) adds face area but no crack area; 4 such faces of
+  // 33 here. The separating area is 0 by design (the beam is one piece), so `ratio` is the
+  // like-for-like measure on this run.
+  EXPECT_NEAR(json_number(json, "G0_times_crack_area_J", "\"energy\""), kG0 * area, 1e-6 * kG0 * area);
+  // The claim of issue 5. Measured 1.006 (0.975-1.006 from 0.9 mm of growth on). Tolerance
+  // 10 %: the lattice quadrature of the bonds crossing a straight crack gives 1.015-1.025 G0
+  // per area; the crack front, whose bonds are partly broken over about one horizon (0.3 mm,
+  // 10 % of the 2.9 mm grown), adds or withholds part of that share depending on where in the
+  // column-by-column advance the run stops; and a face parallel to the crack one row off it,
+  // broken in the initiation jump, counts dx of area for one bond's energy (the 12 mm beam of
+  // cases/dcb-energy has two such: 0.2 mm, 7 % at this growth; this run has none).
+  const double ratio = json_number(json, "ratio", "\"energy\"");
+  EXPECT_GT(ratio, 0.9);
+  EXPECT_LT(ratio, 1.1);
+}

@@ -143,16 +143,27 @@ Mesh deformed_mesh(const ParticleModel& m, std::span<const double> u, std::span<
     return m.dimension == 3 ? affine_fit<3>(cells, m.position_m, u, m.volume_m3, xv)
                             : affine_fit<2>(cells, m.position_m, u, m.volume_m3, xv);
   };
+  // A fragment of fewer than d + 1 cells can never determine an affine field, not even
+  // widened (widening stays inside the fragment): it takes the weighted mean at once. In a
+  // crushed block most fragments are single cells and each of their nodes would otherwise
+  // try two fits (a sixth of the post-processing time of the full concrete case).
+  std::vector<int32_t> component_cells;
+  for (size_t c = 0; c < m.size(); ++c) {
+    if (component[c] >= static_cast<int32_t>(component_cells.size())) component_cells.resize(component[c] + 1, 0);
+    ++component_cells[component[c]];
+  }
+  std::vector<int32_t> inc;
   for (size_t v = 0; v < nodes; ++v) {
-    std::vector<int32_t> inc(nc.cells.begin() + nc.offsets[v], nc.cells.begin() + nc.offsets[v + 1]);
+    inc.assign(nc.cells.begin() + nc.offsets[v], nc.cells.begin() + nc.offsets[v + 1]);
     std::sort(inc.begin(), inc.end(), [&](int32_t a, int32_t b) { return component[a] < component[b]; });
     const Eigen::Vector3d xv(m.mesh_nodes_m[3 * v], m.mesh_nodes_m[3 * v + 1], m.mesh_nodes_m[3 * v + 2]);
     for (size_t k = 0; k < inc.size();) {
       size_t e = k;
       while (e < inc.size() && component[inc[e]] == component[inc[k]]) ++e;
       group.assign(inc.begin() + k, inc.begin() + e);
-      std::optional<Eigen::Vector3d> uv = fit(group, xv);
-      if (!uv) {
+      const bool fittable = component_cells[component[inc[k]]] > m.dimension;
+      std::optional<Eigen::Vector3d> uv = fittable ? fit(group, xv) : std::nullopt;
+      if (!uv && fittable) {
         // Degenerate stencil (a block corner: its cells' centroids can be coplanar): widen
         // to the cells around the group's nodes, same component.
         wide.clear();

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <numeric>
 
 namespace breccia::postproc {
@@ -154,10 +155,14 @@ SizeDistribution size_distribution(std::span<const double> size_m, std::span<con
       const auto [a, b] = line_fit(lx, ly);
       if (b > 0) th = Eigen::Vector2d(-a / b, std::log(b));
     }
-    const Model rr = [](const Eigen::Vector2d& t, double xx) {
-      return 1.0 - std::exp(-std::pow(xx / std::exp(t[0]), std::exp(t[1])));
+    // Evaluated on z = ln x (computed once): (x/xc)^n = exp(n (z - ln xc)), one exp per point
+    // instead of a pow (the fits were a sixth of the post-processing time of a crushed block).
+    const Model rr = [](const Eigen::Vector2d& t, double z) {
+      return 1.0 - std::exp(-std::exp(std::exp(t[1]) * (z - t[0])));
     };
-    th = levenberg_marquardt(rr, th, x, y);
+    std::vector<double> z(x.size());
+    for (size_t k = 0; k < x.size(); ++k) z[k] = std::log(x[k]);
+    th = levenberg_marquardt(rr, th, z, y);
     d.rosin_rammler.xc_m = std::exp(th[0]);
     d.rosin_rammler.n = std::exp(th[1]);
     d.rosin_rammler.x50_m = d.rosin_rammler.size_at(0.5);
@@ -167,11 +172,14 @@ SizeDistribution size_distribution(std::span<const double> size_m, std::span<con
   // Swebrec with xmax = largest size; theta = (ln ln(xmax/x50), ln b) keeps x50 < xmax, b > 0.
   {
     const double xmax = x.back();
-    const Model sw = [xmax](const Eigen::Vector2d& t, double xx) {
-      if (xx >= xmax) return 1.0;
-      const double l50 = std::exp(t[0]);
-      return 1.0 / (1.0 + std::pow(std::log(xmax / xx) / l50, std::exp(t[1])));
+    // Evaluated on z = ln ln(xmax/x) (computed once; -inf at x = xmax, where P = 1):
+    // (ln(xmax/x)/l50)^b = exp(b (z - ln l50)).
+    const Model sw = [](const Eigen::Vector2d& t, double z) {
+      return 1.0 / (1.0 + std::exp(std::exp(t[1]) * (z - t[0])));
     };
+    std::vector<double> z(x.size());
+    for (size_t k = 0; k < x.size(); ++k)
+      z[k] = x[k] < xmax ? std::log(std::log(xmax / x[k])) : -std::numeric_limits<double>::infinity();
     double l50 = std::log(xmax / std::min(d.x50_m, 0.999 * xmax));
     Eigen::Vector2d th(std::log(l50), std::log(2.0));
     {  // linearised: ln(1/P - 1) = b ln ln(xmax/x) - b ln ln(xmax/x50)
@@ -186,7 +194,7 @@ SizeDistribution size_distribution(std::span<const double> size_m, std::span<con
         if (b > 0) th = Eigen::Vector2d(-a / b, std::log(b));
       }
     }
-    th = levenberg_marquardt(sw, th, x, y);
+    th = levenberg_marquardt(sw, th, z, y);
     d.swebrec.xmax_m = xmax;
     d.swebrec.x50_m = xmax / std::exp(std::exp(th[0]));
     d.swebrec.b = std::exp(th[1]);

@@ -11,6 +11,7 @@
 #include <numbers>
 
 #include "atlas.hpp"
+#include "measures.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/particle_file.hpp"
 #include "breccia/solver/calibration.hpp"
@@ -22,26 +23,8 @@ namespace {
 
 using solver::PdSystem;
 
-// Strip [0, L] x [0, W]: spacing h for x < L/2, r h beyond (plane strain, thickness h).
 std::string graded_strip(const std::string& path, double L, double W, double h, double r) {
-  ParticleModel m;
-  m.dimension = 2;
-  m.thickness_m = h;
-  auto add = [&](double x, double y, double s) {
-    m.position_m.insert(m.position_m.end(), {x, y, 0.0});
-    m.volume_m3.push_back(s * s * h);
-    m.spacing_m.push_back(s);
-    m.material_id.push_back(0);
-  };
-  for (double x = 0.5 * h; x < L / 2; x += h)
-    for (double y = 0.5 * h; y < W; y += h) add(x, y, h);
-  const double H = r * h;
-  for (double x = L / 2 + 0.5 * H; x < L; x += H)
-    for (double y = 0.5 * H; y < W; y += H) add(x, y, H);
-  m.material_names = {"rock"};
-  m.source = "graded strip (atlas)";
-  write_particle_file(path, m);
-  return path;
+  return write_graded_strip(path, L, W, h, r);  // measures.hpp
 }
 
 struct GradedRow {

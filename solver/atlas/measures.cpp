@@ -1,5 +1,7 @@
 #include "measures.hpp"
 
+#include "breccia/common/particle_file.hpp"
+
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -57,6 +59,27 @@ double bar_end_displacement_error(solver::PdSystem& s, double traction_pa, doubl
   const double L_eff = layer_mean("xmax", s.x0) - layer_mean("xmin", s.x0);
   const double u_end = layer_mean("xmax", s.u) - layer_mean("xmin", s.u);
   return std::fabs(u_end / (traction_pa * L_eff / youngs_modulus_pa) - 1.0);
+}
+
+std::string write_graded_strip(const std::string& path, double L, double W, double h, double r) {
+  ParticleModel m;
+  m.dimension = 2;
+  m.thickness_m = h;
+  auto add = [&](double x, double y, double s) {
+    m.position_m.insert(m.position_m.end(), {x, y, 0.0});
+    m.volume_m3.push_back(s * s * h);
+    m.spacing_m.push_back(s);
+    m.material_id.push_back(0);
+  };
+  for (double x = 0.5 * h; x < L / 2; x += h)
+    for (double y = 0.5 * h; y < W; y += h) add(x, y, h);
+  const double H = r * h;
+  for (double x = L / 2 + 0.5 * H; x < L; x += H)
+    for (double y = 0.5 * H; y < W; y += H) add(x, y, H);
+  m.material_names = {"rock"};
+  m.source = "graded strip";
+  write_particle_file(path, m);
+  return path;
 }
 
 }  // namespace breccia::atlas

@@ -1,6 +1,8 @@
 #pragma once
 // The error measures of the atlas problems, shared by breccia-atlas and the planner's tests
 // (a proposal is checked by running it and measuring its error exactly as the atlas did).
+#include <string>
+
 #include "breccia/solver/pd_system.hpp"
 
 namespace breccia::atlas {
@@ -17,5 +19,10 @@ double fundamental_mode_speed_error(solver::PdSystem& s, double length_m, double
 // Returns |u_end / (sigma L_eff / E) - 1|, or a negative value when ADR did not converge.
 double bar_end_displacement_error(solver::PdSystem& s, double traction_pa, double youngs_modulus_pa,
                                   long long* iterations = nullptr);
+
+// A graded 2D particle file (plane, thickness h): strip [0, L] x [0, W], square lattice of
+// spacing h for x < L/2 and r h beyond, volumes s^2 h, one material "rock". Written to
+// `path` (returned). The graded-mesh study of the atlas and the dual-horizon tests share it.
+std::string write_graded_strip(const std::string& path, double L, double W, double h, double r);
 
 }  // namespace breccia::atlas

@@ -12,11 +12,13 @@
 #include "breccia/common/error.hpp"
 #include "breccia/common/h5.hpp"
 #include "breccia/postproc/run_data.hpp"
+#include "real_run.hpp"
 #include "synthetic_run.hpp"
 
 using namespace breccia;
 namespace bt = breccia::postproc::testing;
 namespace fs = std::filesystem;
+using breccia::postproc::testing::json_number;
 
 namespace {
 
@@ -37,21 +39,6 @@ Result run_post(const std::string& args, const std::string& env = "") {
   const int status = pclose(p);
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
-}
-
-std::string read(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// The number after the first "key": at or after `from`.
-double json_number(const std::string& json, const std::string& key, const std::string& from = "") {
-  size_t start = from.empty() ? 0 : json.find(from);
-  const size_t at = json.find("\"" + key + "\": ", start == std::string::npos ? 0 : start);
-  if (at == std::string::npos) return NAN;
-  return std::strtod(json.c_str() + at + key.size() + 4, nullptr);
 }
 
 // Cubes of 2, 3 and 4 mm, 3 mm apart; the 4 mm cube cut on z = 1 mm (16 mm^2).
@@ -102,7 +89,7 @@ TEST(BrecciaPostCli, FullRunWritesEveryOutputWithTheKnownAnswers) {
                         "deformed.vtu", "size_distribution.csv", "post.json", "probe_A.csv", "spectrum_A.csv",
                         "fragment_sizes.png", "energy.png", "probe_A.png", "spectrum_A.png"})
     EXPECT_TRUE(fs::exists(dir / "post" / f)) << f << "\n" << r.output;
-  const std::string json = read(dir / "post" / "post.json");
+  const std::string json = bt::read_text(dir / "post" / "post.json");
   EXPECT_EQ(json_number(json, "fragment_count", "\"fragments\""), 4);
   EXPECT_NEAR(json_number(json, "crack_area_m2"), 16e-6, 1e-15);
   EXPECT_EQ(json_number(json, "crack_count"), 1);
@@ -110,7 +97,7 @@ TEST(BrecciaPostCli, FullRunWritesEveryOutputWithTheKnownAnswers) {
   EXPECT_NEAR(json_number(json, "ratio", "\"energy\""), 1.0, 1e-6);
   EXPECT_NEAR(json_number(json, "ratio", "\"order\": 3"), 0.1, 0.001);  // on-bin tones: 1 %
   // Crack area history: nothing at output 0, 16 mm^2 at output 1.
-  const std::string hist = read(dir / "post" / "crack_history.csv");
+  const std::string hist = bt::read_text(dir / "post" / "crack_history.csv");
   EXPECT_NE(hist.find("\n0,0,0,0,"), std::string::npos) << hist;
   EXPECT_NE(hist.find("\n1,100,1e-05,1.6e-05,"), std::string::npos) << hist;
 }
@@ -133,7 +120,7 @@ TEST(BrecciaPostCli, FailingChartScriptIsReportedAndResultsAreKept) {
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("chart not drawn"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(dir / "post" / "fragments.csv"));
-  EXPECT_NE(read(dir / "post" / "post.json").find("fragment_sizes.png: plot_fragment_sizes.py failed"), std::string::npos);
+  EXPECT_NE(bt::read_text(dir / "post" / "post.json").find("fragment_sizes.png: plot_fragment_sizes.py failed"), std::string::npos);
 }
 
 TEST(BrecciaPostCli, TwoDimensionalLatticeRunReportsCrackLengthAndTwoFragments) {
@@ -151,7 +138,7 @@ TEST(BrecciaPostCli, TwoDimensionalLatticeRunReportsCrackLengthAndTwoFragments) 
   bt::write_run(run);
   const Result r = run_post("'" + dir.string() + "' --no-plots --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
-  const std::string json = read(dir / "post" / "post.json");
+  const std::string json = bt::read_text(dir / "post" / "post.json");
   EXPECT_NEAR(json_number(json, "crack_length_m"), 10 * kH, 1e-15);
   EXPECT_NEAR(json_number(json, "crack_area_m2"), 10 * kH * 5e-3, 1e-18);
   EXPECT_EQ(json_number(json, "fragment_count", "\"fragments\""), 2);

@@ -17,32 +17,13 @@
 #include <string>
 
 #include "breccia/common/particle_file.hpp"
+#include "real_run.hpp"
 
 namespace fs = std::filesystem;
+using breccia::postproc::testing::json_number;
 
 namespace {
 
-std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
-
-int run(const std::string& cmd) {
-  const int status = std::system(cmd.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::string read(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// The number after the first "key": at or after `from`.
-double json_number(const std::string& json, const std::string& key, const std::string& from = "") {
-  const size_t start = from.empty() ? 0 : json.find(from);
-  const size_t at = json.find("\"" + key + "\": ", start == std::string::npos ? 0 : start);
-  if (at == std::string::npos) return NAN;
-  return std::strtod(json.c_str() + at + key.size() + 4, nullptr);
-}
 
 constexpr double kSpacing_m = 1e-4, kThickness_m = 1e-3, kG0 = 3.8;
 constexpr int kColumns = 80, kArmRows = 20;  // 8 mm long, arms 2 mm high
@@ -76,10 +57,8 @@ breccia::ParticleModel dcb_particles() {
 // Runs the solver and breccia-post once for all tests of this file.
 const std::string& dcb_post_json() {
   static const std::string json = [] {
-    const fs::path dir = fs::temp_directory_path() / ("breccia_energy_real_run_" + std::to_string(getpid()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    breccia::write_particle_file((dir / "particles.h5").string(), dcb_particles());
+    return breccia::postproc::testing::solve_and_post("breccia_energy_real_run", [](const fs::path& dir) {
+      breccia::write_particle_file((dir / "particles.h5").string(), dcb_particles());
     // The pre-crack tip is off every bond's line (a lattice bond crosses y = 0 at multiples of
     // dx/12): see cases/dcb-energy/README.md. End: 170 us, while the crack is still growing
     // stably (it leaves that range near 5 mm, about 1.5 arm heights from the far end).
@@ -95,15 +74,7 @@ boundary:
 time: {end: 170 us}
 output: {every: 1000000, history_every: 100}
 )";
-    const std::string solve = quoted(BRECCIA_SOLVE_EXE) + " " + quoted(dir / "case.yaml") + " -o " +
-                              quoted(dir / "run") + " --quiet > " + quoted(dir / "solve.log") + " 2>&1";
-    if (run(solve) != 0) return std::string();
-    const std::string post = quoted(BRECCIA_POST_EXE) + " " + quoted(dir / "run") + " --no-plots --quiet > " +
-                             quoted(dir / "post.log") + " 2>&1";
-    if (run(post) != 0) return std::string();
-    std::string out = read(dir / "run" / "post" / "post.json");
-    fs::remove_all(dir);
-    return out;
+    });
   }();
   return json;
 }

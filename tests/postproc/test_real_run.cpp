@@ -16,46 +16,20 @@
 #include <sstream>
 #include <string>
 
+#include "real_run.hpp"
+
 namespace fs = std::filesystem;
+using breccia::postproc::testing::json_number;
 
 namespace {
-
-std::string quoted(const fs::path& p) {
-  std::string q = "'";
-  q += p.string();
-  q += "'";
-  return q;
-}
-
-int run(const std::string& cmd) {
-  const int status = std::system(cmd.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::string read(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// The number after the first "key": at or after `from`.
-double json_number(const std::string& json, const std::string& key, const std::string& from = "") {
-  const size_t start = from.empty() ? 0 : json.find(from);
-  const size_t at = json.find("\"" + key + "\": ", start == std::string::npos ? 0 : start);
-  if (at == std::string::npos) return NAN;
-  return std::strtod(json.c_str() + at + key.size() + 4, nullptr);
-}
 
 constexpr double kLigament_m = 1.9e-3, kThickness_m = 1e-3, kG0 = 3.8;
 
 // Runs the solver and breccia-post once for all tests of this file.
 const std::string& ligament_post_json() {
   static const std::string json = [] {
-    const fs::path dir = fs::temp_directory_path() / ("breccia_post_real_run_" + std::to_string(getpid()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    std::ofstream(dir / "case.yaml") << R"(name: ligament
+    return breccia::postproc::testing::solve_and_post("breccia_post_real_run", [](const fs::path& dir) {
+      std::ofstream(dir / "case.yaml") << R"(name: ligament
 specimen: {lattice: {dimension: 2, box: [0, 0, 0.008, 0.004], spacing: 0.2 mm, thickness: 1 mm}}
 model: {type: pmb, planar: plane_stress, horizon_factor: 3.015, no_fail: [xmin, xmax]}
 materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.3333333333333333, fracture_energy: 3.8}]
@@ -68,15 +42,7 @@ boundary:
 time: {end: 120 us}
 output: {every: 100000, history_every: 50}
 )";
-    const std::string solve = quoted(BRECCIA_SOLVE_EXE) + " " + quoted(dir / "case.yaml") + " -o " +
-                              quoted(dir / "run") + " > " + quoted(dir / "solve.log") + " 2>&1";
-    if (run(solve) != 0) return std::string();
-    const std::string post = quoted(BRECCIA_POST_EXE) + " " + quoted(dir / "run") + " --no-plots --quiet > " +
-                             quoted(dir / "post.log") + " 2>&1";
-    if (run(post) != 0) return std::string();
-    std::string out = read(dir / "run" / "post" / "post.json");
-    fs::remove_all(dir);
-    return out;
+    });
   }();
   return json;
 }

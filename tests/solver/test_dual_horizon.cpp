@@ -7,6 +7,7 @@
 
 #include "breccia/common/particle_file.hpp"
 #include "helpers.hpp"
+#include "measures.hpp"
 
 using namespace breccia;
 using namespace breccia::solver;
@@ -16,24 +17,7 @@ namespace {
 
 // 2D strip [0, L] x [0, W]: spacing h for x < L/2, 2h beyond (thickness h).
 std::string graded_strip(const std::string& name, double L, double W, double h) {
-  ParticleModel m;
-  m.dimension = 2;
-  m.thickness_m = h;
-  auto add = [&](double x, double y, double s) {
-    m.position_m.insert(m.position_m.end(), {x, y, 0.0});
-    m.volume_m3.push_back(s * s * h);
-    m.spacing_m.push_back(s);
-    m.material_id.push_back(0);
-  };
-  for (double x = 0.5 * h; x < L / 2; x += h)
-    for (double y = 0.5 * h; y < W; y += h) add(x, y, h);
-  for (double x = L / 2 + h; x < L; x += 2 * h)
-    for (double y = h; y < W; y += 2 * h) add(x, y, 2 * h);
-  m.material_names = {"rock"};
-  m.source = "graded strip (test)";
-  const std::string path = breccia::solver::testing::process_temp_dir() + "/" + name + ".h5";
-  write_particle_file(path, m);
-  return path;
+  return breccia::atlas::write_graded_strip(breccia::solver::testing::process_temp_dir() + "/" + name + ".h5", L, W, h, 2.0);
 }
 
 std::string graded_case(const std::string& particles) {

@@ -10,6 +10,7 @@
 #include "breccia/common/particle_file.hpp"
 #include "breccia/solver/graded_check.hpp"
 #include "helpers.hpp"
+#include "measures.hpp"
 
 using namespace breccia;
 using namespace breccia::solver;
@@ -20,25 +21,8 @@ namespace {
 // 2D strip 20 x 10 mm: spacing 0.5 mm for x < 10 mm, r x 0.5 mm beyond (the atlas's strip,
 // smaller: 400 fine particles and 100 / r^2 coarse ones).
 std::string graded_strip(double r) {
-  const double L = 0.02, W = 0.01, h = 0.5e-3, H = r * h;
-  ParticleModel m;
-  m.dimension = 2;
-  m.thickness_m = h;
-  auto add = [&](double x, double y, double s) {
-    m.position_m.insert(m.position_m.end(), {x, y, 0.0});
-    m.volume_m3.push_back(s * s * h);
-    m.spacing_m.push_back(s);
-    m.material_id.push_back(0);
-  };
-  for (double x = 0.5 * h; x < L / 2; x += h)
-    for (double y = 0.5 * h; y < W; y += h) add(x, y, h);
-  for (double x = L / 2 + 0.5 * H; x < L; x += H)
-    for (double y = 0.5 * H; y < W; y += H) add(x, y, H);
-  m.material_names = {"rock"};
-  m.source = "graded strip (test)";
-  const std::string path = process_temp_dir() + "/graded_stability_r" + std::to_string(static_cast<int>(10 * r)) + ".h5";
-  write_particle_file(path, m);
-  return path;
+  return breccia::atlas::write_graded_strip(
+      process_temp_dir() + "/graded_stability_r" + std::to_string(static_cast<int>(10 * r)) + ".h5", 0.02, 0.01, 0.5e-3, r);
 }
 
 std::string graded_yaml(double r, bool dual_horizon, bool check) {

@@ -43,8 +43,13 @@ def main():
                 label=f"Swebrec: $x_{{max}}$ = {xmax:.3g} mm, $x_{{50}}$ = {x50:.3g} mm, b = {b:.3g}")
     ax.set_xscale("log")
     ax.xaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
-    ax.xaxis.set_minor_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
-    ax.tick_params(axis="x", which="minor", labelsize=7)
+    # Minor labels (2, 3, ... 9) help within a decade or so; over a wider range they collide.
+    lo, hi = ax.get_xlim()
+    if hi / lo < 30:
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
+        ax.tick_params(axis="x", which="minor", labelsize=7)
+    else:
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax.set_ylim(0, 102)
     ax.set_xlabel(f"fragment {a.size_label} [mm]")
     ax.set_ylabel("cumulative passing by mass [%]")

@@ -133,32 +133,7 @@ double reflected_energy(const std::string& work_dir, const std::string& model, d
   for (auto& f : s.fixed_dof) f |= 2u;
   const double E = 50e9, nu = 0.25, rho = 2600;
   const double cp = std::sqrt(E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) / rho);
-  const double x0 = 0.07, sigma = 0.012, A = 1e-6;
-  for (size_t i = 0; i < s.n; ++i) {
-    const double x = s.x0[3 * i] - x0;
-    const double g = A * std::exp(-x * x / (2 * sigma * sigma));
-    s.u[3 * i] = g;
-    s.v[3 * i] = cp * g * x / (sigma * sigma);
-  }
-  s.diagnostics = true;
-  solver::cpu_compute_forces(s);
-  for (size_t i = 0; i < s.n; ++i) s.a[3 * i] = s.force[3 * i] / s.density[i];
-  auto energy_left_of = [&](double xcut) {
-    double e = 0;
-    for (size_t i = 0; i < s.n; ++i)
-      if (s.x0[3 * i] < xcut)
-        e += 0.5 * s.density[i] * s.volume[i] * s.v[3 * i] * s.v[3 * i] + s.volume[i] * s.energy_density[i];
-    return e;
-  };
-  const double e0 = energy_left_of(L / 2);
-  const double t_end = (L / 2 + 4 * sigma - x0) / cp;
-  while (s.time < t_end) {
-    s.diagnostics = true;
-    solver::cpu_step(s);
-  }
-  double reach = 0;
-  for (size_t i = 0; i < s.n; ++i) reach = std::max(reach, s.horizon[i]);
-  return energy_left_of(L / 2 - reach) / e0;
+  return reflected_pulse_energy(s, L / 2, 0.07, 0.012, cp);  // measures.hpp
 }
 
 }  // namespace

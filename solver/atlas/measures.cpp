@@ -2,6 +2,7 @@
 
 #include "breccia/common/particle_file.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -59,6 +60,36 @@ double bar_end_displacement_error(solver::PdSystem& s, double traction_pa, doubl
   const double L_eff = layer_mean("xmax", s.x0) - layer_mean("xmin", s.x0);
   const double u_end = layer_mean("xmax", s.u) - layer_mean("xmin", s.u);
   return std::fabs(u_end / (traction_pa * L_eff / youngs_modulus_pa) - 1.0);
+}
+
+double reflected_pulse_energy(solver::PdSystem& s, double interface_x, double pulse_x, double pulse_width,
+                              double c_p) {
+  const double A = 1e-6, w = pulse_width;
+  for (size_t i = 0; i < s.n; ++i) {
+    const double x = s.x0[3 * i] - pulse_x;
+    const double g = A * std::exp(-x * x / (2 * w * w));
+    s.u[3 * i] = g;
+    s.v[3 * i] = c_p * g * x / (w * w);  // right-going: v = -c dg/dx
+  }
+  s.diagnostics = true;  // the strain energy density is needed at every step
+  solver::cpu_compute_forces(s);
+  for (size_t i = 0; i < s.n; ++i) s.a[3 * i] = s.force[3 * i] / s.density[i];
+  auto energy_left_of = [&](double xcut) {
+    double e = 0;
+    for (size_t i = 0; i < s.n; ++i)
+      if (s.x0[3 * i] < xcut)
+        e += 0.5 * s.density[i] * s.volume[i] * s.v[3 * i] * s.v[3 * i] + s.volume[i] * s.energy_density[i];
+    return e;
+  };
+  const double e0 = energy_left_of(interface_x);
+  const double t_end = (interface_x + 4 * w - pulse_x) / c_p;
+  while (s.time < t_end) {
+    s.diagnostics = true;
+    solver::cpu_step(s);
+  }
+  double reach = 0;
+  for (size_t i = 0; i < s.n; ++i) reach = std::max(reach, s.horizon[i]);
+  return e0 > 0 ? energy_left_of(interface_x - reach) / e0 : NAN;
 }
 
 std::string write_graded_strip(const std::string& path, double L, double W, double h, double r) {

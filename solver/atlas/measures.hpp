@@ -20,6 +20,14 @@ double fundamental_mode_speed_error(solver::PdSystem& s, double length_m, double
 double bar_end_displacement_error(solver::PdSystem& s, double traction_pa, double youngs_modulus_pa,
                                   long long* iterations = nullptr);
 
+// A right-going P pulse in uniaxial strain (the caller holds y) along a strip whose
+// resolution changes at x = interface_x: Gaussian u = A exp(-(x - x0)^2 / 2 w^2) moving
+// at c_p, run until its centre is four widths past the change. Returns the share of the
+// initial energy left of the interface (minus the largest horizon) then: the reflection.
+// Advances s. The dual-horizon test and the atlas's graded study share it.
+double reflected_pulse_energy(solver::PdSystem& s, double interface_x, double pulse_x, double pulse_width,
+                              double c_p);
+
 // A graded 2D particle file (plane, thickness h): strip [0, L] x [0, W], square lattice of
 // spacing h for x < L/2 and r h beyond, volumes s^2 h, one material "rock". Written to
 // `path` (returned). The graded-mesh study of the atlas and the dual-horizon tests share it.

@@ -36,6 +36,20 @@ inline PdSystem system_from_yaml(const std::string& name, const std::string& yam
   return setup_system(parse_case_file(write_case(name, yaml)));
 }
 
+// Time at which the x-displacement of particle p first reaches `level` (stepping s), or -1
+// if it does not within max_steps.
+inline double arrival_time(PdSystem& s, int64_t p, double level, long long max_steps) {
+  for (long long k = 0; k < max_steps; ++k) {
+    const double before = s.u[3 * p];
+    cpu_step(s);
+    if (s.u[3 * p] >= level) {  // linear interpolation inside the step
+      const double f = (level - before) / (s.u[3 * p] - before);
+      return s.time - s.dt + f * s.dt;
+    }
+  }
+  return -1;
+}
+
 // Internal index of the particle nearest to a point.
 inline int64_t nearest(const PdSystem& s, double x, double y, double z) {
   int64_t best = 0;

@@ -15,19 +15,6 @@ using namespace breccia::solver::testing;
 
 namespace {
 
-// Time at which the x-displacement of particle p first reaches `level`.
-double arrival_time(PdSystem& s, int64_t p, double level, long long max_steps) {
-  for (long long k = 0; k < max_steps; ++k) {
-    const double before = s.u[3 * p];
-    cpu_step(s);
-    if (s.u[3 * p] >= level) {  // linear interpolation inside the step
-      const double f = (level - before) / (s.u[3 * p] - before);
-      return s.time - s.dt + f * s.dt;
-    }
-  }
-  return -1;
-}
-
 // Speed of a step front between two probes: the half-plateau displacement level moves
 // with the long-wave speed; dispersion spreads the front but not its midpoint.
 double front_speed(PdSystem& s, double x1, double x2, double y, double velocity, double c_guess) {

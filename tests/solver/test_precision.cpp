@@ -150,22 +150,6 @@ TEST(Precision, HomogeneousStrainEnergyMatchesElasticityAndFloat64WithinRoundOff
   }
 }
 
-namespace {
-
-double arrival_time(PdSystem& s, int64_t p, double level, long long max_steps) {
-  for (long long k = 0; k < max_steps; ++k) {
-    const double before = s.u[3 * p];
-    cpu_step(s);
-    if (s.u[3 * p] >= level) {
-      const double f = (level - before) / (s.u[3 * p] - before);
-      return s.time - s.dt + f * s.dt;
-    }
-  }
-  return -1;
-}
-
-}  // namespace
-
 // Wave speed in a thin bar (plane stress, c0 = sqrt(E/rho)): both precisions within the 2%
 // of test_dynamics.cpp (dispersion + front timing). The front's strain is v/c0 = 2e-4, so
 // float perturbs each bond force by delta/s ~ 1.5e-3 of itself, at random across bonds:

@@ -122,37 +122,60 @@ time: {steps: 1}
 // calibrated on this machine in this test: not a test of the solver's speed (the rate is
 // measured, whatever it is) but of the cost model, that bond entries x steps plus set-up
 // (power iteration and per-bond work) predicts cases of another size, shape and model than
-// the calibration block. Timed in process CPU seconds on one thread, which a shared,
-// loaded machine does not inflate the way it inflates wall time.
+// the calibration block. Timed in process CPU seconds on one thread.
+//
+// Best of three, interleaved: calibration and measurement alternate three times and each
+// side keeps its fastest sample (highest rate, shortest time). CPU seconds are not immune
+// to a neighbour on the other core (shared cache and memory bandwidth, clock changes): in
+// one CI run a single calibration landed in a busy second and came out 1.5x slow against
+// the run it predicted. The fastest of three is the usual estimator of a code's own cost
+// on a shared machine; both sides get the same treatment, so the ratio still tests the model.
 TEST(PlanCost, CountsAreExactAndSecondsWithinAFactorOnePointFiveOnThreeCases) {
   const Throughputs documented = load_throughputs(default_throughputs_path());
+  constexpr int kSamples = 3;
   int k = 0;
   for (const char* yaml : {kCase2dPmb, kCase3dPmb, kCase3dLps}) {
     const CaseConfig c = case_from_yaml("timed" + std::to_string(k++), yaml);
-    const Throughputs rates = calibrate(c, 1, documented, 0.5e6, 0.4);
+    Throughputs rates;
+    double setup_s = 1e300, loop_s = 1e300;
+    for (int sample = 0; sample < kSamples; ++sample) {
+      const Throughputs r_cal = calibrate(c, 1, documented, 0.5e6, 0.4);
+      if (sample == 0) {
+        rates = r_cal;
+      } else {
+        if (r_cal.rate(c.model, 1).bond_updates_per_core_s > rates.rate(c.model, 1).bond_updates_per_core_s)
+          rates.loop = r_cal.loop;
+        rates.setup_bonds_per_core_s = std::max(rates.setup_bonds_per_core_s, r_cal.setup_bonds_per_core_s);
+      }
+
+      omp_set_num_threads(1);
+      const double t0 = cpu_seconds();
+      PdSystem s = solver::setup_system(c);
+      setup_s = std::min(setup_s, cpu_seconds() - t0);
+      if (sample == 0) {
+        const CostEstimate e = estimate_cost(c, documented);
+        EXPECT_EQ(e.particles, static_cast<long long>(s.n));
+        EXPECT_EQ(e.bonds, static_cast<long long>(s.bond_count()));
+        EXPECT_EQ(e.steps, solver_steps(s));
+      }
+      solver::RunOptions o;
+      o.progress = false;
+      o.out_dir = temp_path("timed_run" + std::to_string(k) + "_" + std::to_string(sample));
+      const solver::RunResult r = solver::run_system(s, o);
+      ASSERT_EQ(r.status, "completed");
+      loop_s = std::min(loop_s, r.cpu_s);
+    }
     omp_set_num_threads(1);
     const CostEstimate e = estimate_cost(c, rates);
-
-    const double t0 = cpu_seconds();
-    PdSystem s = solver::setup_system(c);
-    const double setup_s = cpu_seconds() - t0;
-    EXPECT_EQ(e.particles, static_cast<long long>(s.n));
-    EXPECT_EQ(e.bonds, static_cast<long long>(s.bond_count()));
-    EXPECT_EQ(e.steps, solver_steps(s));
-    solver::RunOptions o;
-    o.progress = false;
-    o.out_dir = temp_path("timed_run" + std::to_string(k));
-    const solver::RunResult r = solver::run_system(s, o);
-    ASSERT_EQ(r.status, "completed");
-    const double measured = setup_s + r.cpu_s;
-    std::printf("case %d: estimated %.3g s (set-up %.3g + loop %.3g), measured %.3g s (set-up %.3g + loop %.3g)\n", k,
-                e.total_s(), e.setup_s, e.loop_s, measured, setup_s, r.cpu_s);
+    const double measured = setup_s + loop_s;
+    std::printf("case %d: estimated %.3g s (set-up %.3g + loop %.3g), measured %.3g s (set-up %.3g + loop %.3g), best of %d\n",
+                k, e.total_s(), e.setup_s, e.loop_s, measured, setup_s, loop_s, kSamples);
     // 1.5: the acceptance band for the planner's cost estimate (set-up + time loop,
     // what the user waits for). The loop alone is printed, not checked: loops this short
     // (a few tenths of a second) vary by more than 1.5x on a loaded machine.
     EXPECT_NEAR(std::log(e.total_s() / measured), 0.0, std::log(1.5))
         << "case " << k << ": estimated " << e.total_s() << " s (set-up " << e.setup_s << " + loop " << e.loop_s
-        << "), measured " << measured << " s (set-up " << setup_s << " + loop " << r.cpu_s << ")";
+        << "), measured " << measured << " s (set-up " << setup_s << " + loop " << loop_s << ")";
   }
 }
 

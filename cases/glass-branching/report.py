@@ -26,6 +26,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+import case_report  # noqa: E402  (cases/case_report.py)
+
 DAMAGE_THRESHOLD = 0.35
 NOTCH_TIP = np.array([0.05, 0.02])
 E, RHO, NU = 72e9, 2440.0, 1.0 / 3.0
@@ -50,15 +53,21 @@ C_R = rayleigh_speed(NU, C_S)  # 3,102 m/s: the value Ha & Bobaru quote (benchma
 C_R_PLANE_STRESS = rayleigh_speed(NU / (1 + NU), C_S)  # 3,058 m/s
 
 
-def load_run(run_dir):
-    with h5py.File(os.path.join(run_dir, "results.h5"), "r") as f:
-        x = f["particles/position"][:, :2]
-        keys = sorted(f["output"].keys())
-        times = np.array([f["output"][k].attrs["time_s"] for k in keys])
-        damage = np.array([f["output"][k]["damage"][:] for k in keys])
-    with open(os.path.join(run_dir, "summary.json")) as fh:
-        summary = json.load(fh)
-    return x, times, damage, summary
+def finish_tip_speed_chart(fig_s, ax_s, c_r, c_r_label, path):
+    """Labels, reference speeds and the experiments' band on the (crack length, tip speed) pair."""
+    ax_s[0].set_ylabel("crack length from notch tip (mm)")
+    ax_s[0].legend(fontsize=8)
+    ax_s[0].grid(alpha=0.3)
+    ax_s[1].axhline(c_r, color="k", lw=1, label=c_r_label)
+    ax_s[1].axhline(0.6 * c_r, color="k", lw=1, ls="--", label="0.6 c_R")
+    ax_s[1].axhspan(1500, 1580, color="0.8", label="soda-lime experiments (branching)")
+    ax_s[1].set_ylim(0, 1.1 * c_r)
+    ax_s[1].set_xlabel("time (us)")
+    ax_s[1].set_ylabel("tip speed (m/s)")
+    ax_s[1].legend(fontsize=7, loc="upper left")
+    ax_s[1].grid(alpha=0.3)
+    fig_s.tight_layout()
+    fig_s.savefig(path, dpi=120)
 
 
 def tip_history(x, times, damage, threshold=DAMAGE_THRESHOLD):
@@ -133,7 +142,7 @@ def branching(x, final_damage, initially, dx, threshold=DAMAGE_THRESHOLD):
 
 def analyse(out, name):
     run_dir = os.path.join(out, name)
-    x, times, damage, summary = load_run(run_dir)
+    x, times, damage, summary = case_report.load_damage_history(run_dir)
     dx = float(np.min(np.diff(np.unique(np.round(x[:, 0], 9)))))
     initially = damage[0] > DAMAGE_THRESHOLD
     length, tip_x, speed, raw = tip_history(x, times, damage)
@@ -219,19 +228,7 @@ def main(argv):
         plt.close(fig)
     fig_p.tight_layout()
     fig_p.savefig(os.path.join(out, "crack_paths.png"), dpi=120)
-    ax_s[0].set_ylabel("crack length from notch tip (mm)")
-    ax_s[0].legend(fontsize=8)
-    ax_s[0].grid(alpha=0.3)
-    ax_s[1].axhline(C_R, color="k", lw=1, label="c_R = %.0f m/s" % C_R)
-    ax_s[1].axhline(0.6 * C_R, color="k", lw=1, ls="--", label="0.6 c_R")
-    ax_s[1].axhspan(1500, 1580, color="0.8", label="soda-lime experiments (branching)")
-    ax_s[1].set_ylim(0, 1.1 * C_R)
-    ax_s[1].set_xlabel("time (us)")
-    ax_s[1].set_ylabel("tip speed (m/s)")
-    ax_s[1].legend(fontsize=7, loc="upper left")
-    ax_s[1].grid(alpha=0.3)
-    fig_s.tight_layout()
-    fig_s.savefig(os.path.join(out, "tip_speed.png"), dpi=120)
+    finish_tip_speed_chart(fig_s, ax_s, C_R, "c_R = %.0f m/s" % C_R, os.path.join(out, "tip_speed.png"))
     with open(os.path.join(out, "report.json"), "w") as fh:
         json.dump(report, fh, indent=1)
     for r in report["runs"]:

@@ -179,19 +179,8 @@ def main(argv):
         plt.close(fig)
     fig_p.tight_layout()
     fig_p.savefig(os.path.join(out, "crack_paths_3d.png"), dpi=120)
-    ax_s[0].set_ylabel("crack length from notch tip (mm)")
-    ax_s[0].legend(fontsize=8)
-    ax_s[0].grid(alpha=0.3)
-    ax_s[1].axhline(C_R_3D, color="k", lw=1, label="c_R = %.0f m/s (nu = 1/4)" % C_R_3D)
-    ax_s[1].axhline(0.6 * C_R_3D, color="k", lw=1, ls="--", label="0.6 c_R")
-    ax_s[1].axhspan(1500, 1580, color="0.8", label="soda-lime experiments (branching)")
-    ax_s[1].set_ylim(0, 1.1 * C_R_3D)
-    ax_s[1].set_xlabel("time (us)")
-    ax_s[1].set_ylabel("tip speed (m/s)")
-    ax_s[1].legend(fontsize=7, loc="upper left")
-    ax_s[1].grid(alpha=0.3)
-    fig_s.tight_layout()
-    fig_s.savefig(os.path.join(out, "tip_speed_3d.png"), dpi=120)
+    report.finish_tip_speed_chart(fig_s, ax_s, C_R_3D, "c_R = %.0f m/s (nu = 1/4)" % C_R_3D,
+                                  os.path.join(out, "tip_speed_3d.png"))
     with open(os.path.join(out, "report_3d.json"), "w") as fh:
         json.dump(rep, fh, indent=1)
     for r in rep["runs"]:

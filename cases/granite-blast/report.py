@@ -14,12 +14,14 @@ import os
 import re
 import sys
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+import case_report  # noqa: E402  (cases/case_report.py)
 
 DAMAGE_THRESHOLD = 0.35
 HOLE_RADIUS, OUTER_RADIUS = 0.0012875, 0.036
@@ -57,13 +59,7 @@ def cracks_at(r, theta, damaged, radius, dx):
 
 def analyse(out, name):
     run = os.path.join(out, name)
-    with h5py.File(os.path.join(run, "results.h5"), "r") as f:
-        x = f["particles/position"][:, :2]
-        keys = sorted(f["output"].keys())
-        times = np.array([f["output"][k].attrs["time_s"] for k in keys])
-        damage = np.array([f["output"][k]["damage"][:] for k in keys])
-    with open(os.path.join(run, "summary.json")) as fh:
-        summary = json.load(fh)
+    x, times, damage, summary = case_report.load_damage_history(run)
     g0 = float(re.search(r"fracture_energy:\s*([0-9.eE+-]+)", open(os.path.join(run, "case.yaml")).read()).group(1))
     dx = float(np.min(np.diff(np.unique(np.round(x[:, 0], 9)))))
     r = np.hypot(x[:, 0], x[:, 1])

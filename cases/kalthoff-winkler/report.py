@@ -14,12 +14,14 @@ import math
 import os
 import sys
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+import case_report  # noqa: E402  (cases/case_report.py)
 
 DAMAGE_THRESHOLD = 0.35
 TIPS = {"lower": (np.array([0.05, 0.075]), -1.0), "upper": (np.array([0.05, 0.125]), 1.0)}
@@ -53,13 +55,7 @@ def crack_angles(x, damage, initially, tip, side):
 def main(argv):
     out, name = argv[1], argv[2]
     run = os.path.join(out, name)
-    with h5py.File(os.path.join(run, "results.h5"), "r") as f:
-        x = f["particles/position"][:, :2]
-        keys = sorted(f["output"].keys())
-        times = np.array([f["output"][k].attrs["time_s"] for k in keys])
-        damage = np.array([f["output"][k]["damage"][:] for k in keys])
-    with open(os.path.join(run, "summary.json")) as fh:
-        summary = json.load(fh)
+    x, times, damage, summary = case_report.load_damage_history(run)
     initially = damage[0] > DAMAGE_THRESHOLD
     dx = float(np.min(np.diff(np.unique(np.round(x[:, 0], 9)))))
     res = {"case": "kalthoff-winkler", "run": name, "particles": summary["particles"], "dx_m": dx,

@@ -53,6 +53,11 @@ C_R = rayleigh_speed(NU, C_S)  # 3,102 m/s: the value Ha & Bobaru quote (benchma
 C_R_PLANE_STRESS = rayleigh_speed(NU / (1 + NU), C_S)  # 3,058 m/s
 
 
+# Module-level name: homalite-branching and inclusion-plate reuse this report and replace
+# or call the loader.
+load_run = case_report.load_damage_history
+
+
 def finish_tip_speed_chart(fig_s, ax_s, c_r, c_r_label, path):
     """Labels, reference speeds and the experiments' band on the (crack length, tip speed) pair."""
     ax_s[0].set_ylabel("crack length from notch tip (mm)")
@@ -142,7 +147,7 @@ def branching(x, final_damage, initially, dx, threshold=DAMAGE_THRESHOLD):
 
 def analyse(out, name):
     run_dir = os.path.join(out, name)
-    x, times, damage, summary = case_report.load_damage_history(run_dir)
+    x, times, damage, summary = load_run(run_dir)
     dx = float(np.min(np.diff(np.unique(np.round(x[:, 0], 9)))))
     initially = damage[0] > DAMAGE_THRESHOLD
     length, tip_x, speed, raw = tip_history(x, times, damage)

@@ -8,15 +8,18 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <span>
 #include <sstream>
 
 #include "breccia/common/error.hpp"
+#include "breccia/common/h5.hpp"
 #include "breccia/common/output_file.hpp"
 #include "breccia/common/progress.hpp"
 #include "breccia/postproc/bond_graph.hpp"
 #include "breccia/postproc/fragments.hpp"
 #include "breccia/postproc/history.hpp"
 #include "breccia/postproc/meshes.hpp"
+#include "breccia/postproc/mps_history.hpp"
 #include "breccia/postproc/run_data.hpp"
 #include "breccia/postproc/size_distribution.hpp"
 #include "breccia/postproc/spectrum.hpp"
@@ -48,6 +51,19 @@ std::string step_suffix(const OutputInfo& o) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "_%06lld", o.step);
   return buf;
+}
+
+// Whether two labelings split the particles into the same pieces (labels may differ): a
+// bijection maps one onto the other. Returns the number of particles that break it.
+size_t partition_mismatches(std::span<const int32_t> a, std::span<const int32_t> b) {
+  std::map<int32_t, int32_t> ab, ba;
+  size_t bad = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const auto [x, fresh_a] = ab.try_emplace(a[i], b[i]);
+    const auto [y, fresh_b] = ba.try_emplace(b[i], a[i]);
+    bad += x->second != b[i] || y->second != a[i];
+  }
+  return bad;
 }
 
 std::string shell_quote(const std::string& s) {
@@ -97,7 +113,7 @@ public:
     }
     if (opt_.all_steps) write_collections();
     load_history();
-    if (opt_.energy && history_) energy();
+    if (opt_.energy && history_ && energy_available_) energy();
     if (opt_.probes && history_) probes();
     write_json();
     return summary_;
@@ -130,14 +146,17 @@ private:
     csv << "output,step,time_s,crack_area_m2,fracture_area_m2,precrack_area_m2,crack_length_m,crack_count,"
            "crack_faces,broken_bonds,G0_times_fracture_area_J,smoothed_crack_area_m2,smoothed_fracture_area_m2,"
            "G0_times_smoothed_fracture_area_J\n";
+    // No fracture energy (MPS): the G0 x area cells stay empty rather than 0.
+    const bool g0 = !run_.fracture_energy_J_m2.empty();
     for (size_t k = 0; k < run_.outputs.size(); ++k) {
       const OutputFrame fr = read_output_cracks_only(run_, k);
       const BondBits broken(run_.bonds, fr.broken, face_bond_);
       const CrackResult c = find_cracks(faces_, crack_inputs(broken, fr.damage), opt_.crack_criterion, opt_.damage_threshold);
       csv << k << ',' << fr.info.step << ',' << fmt(fr.info.time_s) << ',' << fmt(c.area_m2) << ','
           << fmt(c.fracture_area_m2) << ',' << fmt(c.precrack_area_m2) << ',' << fmt(c.length_m) << ','
-          << c.crack_count << ',' << c.face_count << ',' << fr.broken_count << ',' << fmt(c.G0_area_J) << ','
-          << fmt(c.smoothed_area_m2) << ',' << fmt(c.smoothed_fracture_area_m2) << ',' << fmt(c.G0_smoothed_area_J) << '\n';
+          << c.crack_count << ',' << c.face_count << ',' << fr.broken_count << ',' << (g0 ? fmt(c.G0_area_J) : "") << ','
+          << fmt(c.smoothed_area_m2) << ',' << fmt(c.smoothed_fracture_area_m2) << ','
+          << (g0 ? fmt(c.G0_smoothed_area_J) : "") << '\n';
       if (opt_.progress) progress.update(static_cast<long long>(k + 1));
     }
     write_text_file(out("crack_history.csv"), csv.str());
@@ -179,6 +198,7 @@ private:
       const FragmentResult frag = measure_fragments(in, comp, count, opt_.min_fragment_particles);
       rec.has_fragments = true;
       rec.fragment_count = static_cast<int32_t>(frag.fragments.size());
+      if (last) compare_solver_fragments(fr.info, comp);
       write_fragments_csv(out("fragments" + sfx + ".csv"), frag);
       write_fragments_vtu(out("fragments" + sfx + ".vtu"), frag, fr);
       Mesh deformed = deformed_mesh(run_.particles, fr.displacement_m, comp);
@@ -199,6 +219,21 @@ private:
       }
     }
     records_.push_back(std::move(rec));
+  }
+
+  // An MPS run with fracture writes its own pieces (/output/NNNNNN/fragment, a union-find over
+  // the same intact bonds): post's components must be the same partition.
+  void compare_solver_fragments(const OutputInfo& info, const std::vector<int32_t>& comp) {
+    const h5::File f(run_.results_path.string(), h5::File::Mode::Read);
+    if (!f.exists(info.group + "/fragment")) return;
+    const std::vector<int32_t> labels = f.read_int32(info.group + "/fragment");
+    if (labels.size() != comp.size())
+      throw InputError(run_.results_path.string(), info.group + "/fragment", "size " + std::to_string(labels.size()),
+                       "N = " + std::to_string(comp.size()));
+    solver_fragment_mismatches_ = static_cast<long long>(partition_mismatches(comp, labels));
+    if (solver_fragment_mismatches_ > 0)
+      notes_.push_back("the solver's fragment labels differ from post's components at " +
+                       std::to_string(solver_fragment_mismatches_) + " particles");
   }
 
   void write_collections() {
@@ -291,6 +326,35 @@ private:
       return;
     }
     history_ = read_history(p);
+    if (run_.model == "mps") map_mps(p);
+  }
+
+  // An MPS history in post's names (mps_history.hpp); the mapped balance terms also go to
+  // post/energy_history.csv, which the energy chart reads.
+  void map_mps(const fs::path& p) {
+    MpsHistoryMapping m = map_mps_history(*history_);
+    history_ = std::move(m.history);
+    mps_terms_ = std::move(m.terms);
+    if (opt_.energy)  // every note of the mapping is about the energy balance
+      for (auto& note : m.notes) notes_.push_back(std::move(note));
+    energy_available_ = m.energy;
+    if (!m.energy) {
+      if (opt_.energy && opt_.history_required)
+        throw InputError(p.string(), "header", "no kinetic_energy_J column",
+                         "the energy columns of an MPS run (output.energy: true in the case) for --energy");
+      return;
+    }
+    const History& h = *history_;
+    std::ostringstream csv;
+    csv << "time_s,kinetic_J,strain_J,external_work_J,dissipated_J,total_J\n";
+    for (size_t r = 0; r < h.rows(); ++r) {
+      const double k = h.column("kinetic_J")[r], u = h.column("strain_J")[r], w = h.column("external_work_J")[r],
+                   d = h.column("dissipated_J")[r];
+      csv << fmt(h.column("time_s")[r]) << ',' << fmt(k) << ',' << fmt(u) << ',' << fmt(w) << ',' << fmt(d) << ','
+          << fmt(k + u + d - w) << '\n';
+    }
+    energy_history_ = out("energy_history.csv");
+    write_text_file(energy_history_, csv.str());
   }
 
   void energy() {
@@ -304,18 +368,25 @@ private:
       const auto& steps = h.column("step");
       for (size_t k = 0; k < h.rows(); ++k)
         if (steps[k] <= static_cast<double>(rec->info.step)) row = k;
+    } else if (rec) {  // an MPS history has times only: the last row at or before the output
+      const auto& t = h.column("time_s");
+      for (size_t k = 0; k < h.rows(); ++k)
+        if (t[k] <= rec->info.time_s * (1.0 + 1e-12)) row = k;
     }
     if (h.rows() == 0) return;
     energy_row_ = row;
     energy_dissipated_J_ = dissipated[row];
-    energy_G0_area_J_ = rec && rec->has_cracks ? rec->cracks.G0_smoothed_area_J : NAN;
-    energy_G0_face_area_J_ = rec && rec->has_cracks ? rec->cracks.G0_area_J : NAN;
-    energy_G0_separating_area_J_ = rec && rec->has_cracks && rec->cracks.has_separating ? rec->cracks.G0_smoothed_separating_area_J : NAN;
+    // No fracture energy in the run (MPS: a strength criterion): no G0 x area to compare with.
+    const bool g0 = rec && rec->has_cracks && !run_.fracture_energy_J_m2.empty();
+    energy_G0_area_J_ = g0 ? rec->cracks.G0_smoothed_area_J : NAN;
+    energy_G0_face_area_J_ = g0 ? rec->cracks.G0_area_J : NAN;
+    energy_G0_separating_area_J_ = g0 && rec->cracks.has_separating ? rec->cracks.G0_smoothed_separating_area_J : NAN;
     const double w = h.column("external_work_J")[row];
     const double stored = h.column("kinetic_J")[row] + h.column("strain_J")[row] + dissipated[row];
     energy_imbalance_ = (w - stored) / std::max({std::abs(w), std::abs(stored), 1e-300});
     if (opt_.plots)
-      plot("plot_energy.py", "--history " + shell_quote(h.path.string()), "energy.png");
+      plot("plot_energy.py", "--history " + shell_quote((energy_history_.empty() ? h.path : energy_history_).string()),
+           "energy.png");
   }
 
   // Uniform samples for the FFT; linear resampling when the history is not uniform.
@@ -416,12 +487,15 @@ private:
     j.value("smoothed_crack_area_m2", c.smoothed_area_m2).value("smoothed_fracture_area_m2", c.smoothed_fracture_area_m2);
     if (run_.dimension == 2) j.value("smoothed_crack_length_m", c.smoothed_length_m);
     j.value("smoothing_radius_m", c.smoothing_radius_m);
-    j.value("crack_count", c.crack_count).value("crack_faces", c.face_count).value("G0_times_fracture_area_J", c.G0_area_J)
-        .value("G0_times_smoothed_fracture_area_J", c.G0_smoothed_area_J);
-    if (c.has_separating)
+    // Without a fracture energy (MPS) the G0 x area terms would be zeros standing for "unknown".
+    const bool g0 = !run_.fracture_energy_J_m2.empty();
+    j.value("crack_count", c.crack_count).value("crack_faces", c.face_count);
+    if (g0) j.value("G0_times_fracture_area_J", c.G0_area_J).value("G0_times_smoothed_fracture_area_J", c.G0_smoothed_area_J);
+    if (c.has_separating) {
       j.value("separating_faces", c.separating_face_count).value("separating_fracture_area_m2", c.separating_fracture_area_m2)
-          .value("smoothed_separating_fracture_area_m2", c.smoothed_separating_fracture_area_m2)
-          .value("G0_times_smoothed_separating_area_J", c.G0_smoothed_separating_area_J);
+          .value("smoothed_separating_fracture_area_m2", c.smoothed_separating_fracture_area_m2);
+      if (g0) j.value("G0_times_smoothed_separating_area_J", c.G0_smoothed_separating_area_J);
+    }
   }
 
   void write_json() {
@@ -446,6 +520,8 @@ private:
       j.value("fragment_count", fragments_.fragments.size()).value("component_count", fragments_.component_count);
       j.value("min_fragment_particles", opt_.min_fragment_particles);
       j.value("filtered_out_count", fragments_.filtered_count).value("filtered_out_mass_kg", fragments_.filtered_mass_kg);
+      // MPS with fracture: particles where the solver's own `fragment` labels split differently (0: same pieces).
+      if (solver_fragment_mismatches_ >= 0) j.value("solver_fragment_mismatches", solver_fragment_mismatches_);
       if (!fragments_.fragments.empty()) {
         const Fragment& big = fragments_.fragments.front();
         j.value("largest_mass_kg", big.mass_kg).value("largest_volume_m3", big.volume_m3);
@@ -475,6 +551,11 @@ private:
       j.value("G0_times_separating_area_J", energy_G0_separating_area_J_);
       j.value("ratio_separating", energy_G0_separating_area_J_ > 0 ? energy_dissipated_J_ / energy_G0_separating_area_J_ : NAN);
       j.value("relative_imbalance", energy_imbalance_);
+      if (!mps_terms_.empty()) {
+        j.begin_object("mps_terms");  // what each balance term is made of in an MPS run
+        for (const auto& [term, source] : mps_terms_) j.value(term, source);
+        j.end_object();
+      }
       j.end_object();
     }
     if (!spectra_.empty()) {
@@ -539,6 +620,10 @@ private:
   std::vector<std::string> notes_;
   std::vector<SpectrumRecord> spectra_;
   bool energy_done_ = false;
+  bool energy_available_ = true;  // false: an MPS history without energy columns
+  long long solver_fragment_mismatches_ = -1;  // -1: the run has no fragment labels of its own
+  fs::path energy_history_;       // MPS: the mapped balance terms (post/energy_history.csv)
+  std::vector<std::pair<std::string, std::string>> mps_terms_;
   size_t energy_row_ = 0;
   double energy_dissipated_J_ = NAN, energy_G0_area_J_ = NAN, energy_G0_face_area_J_ = NAN, energy_G0_separating_area_J_ = NAN, energy_imbalance_ = NAN;
 };

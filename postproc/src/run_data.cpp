@@ -105,7 +105,8 @@ RunData open_run(const fs::path& run_dir, const std::string& particles_override)
   require_attr(f, "/", "format_version");
   if (f.attr_int("/", "format_version") != 2)
     throw InputError(rp, "/@format_version", std::to_string(f.attr_int("/", "format_version")),
-                     "2 (version 1 stored broken-bond pairs; rerun breccia-solve to write bonds and bit arrays)");
+                     "2 (version 1 files, PD ones with broken-bond pairs or MPS ones without a bond list, cannot be "
+                     "read: rerun breccia-solve to write the bond list and bit arrays)");
   for (const char* a : {"particles_file", "particles_content_id", "dimension", "output_count"})
     require_attr(f, "/", a);
   run.dimension = static_cast<int>(f.attr_int("/", "dimension"));

@@ -81,6 +81,8 @@ struct SweepPlan {
   // float32 rows for the problems whose error float could change (wave speed, strain
   // energy, quasi-static bar): --precisions float64,float32.
   std::vector<std::string> precisions{"float64"};
+  // Grading ratios of the graded study (--gradings); empty: its default list.
+  std::vector<double> gradings;
   int threads = 1;
 };
 

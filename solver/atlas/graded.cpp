@@ -140,7 +140,9 @@ double reflected_energy(const std::string& work_dir, const std::string& model, d
 
 void graded_stability(const SweepPlan& plan, SpecimenMaker& maker, CsvTable& table) {
   const double L = 0.06, W = 0.03, h = 0.5e-3;
-  const std::vector<double> gradings = plan.quick ? std::vector<double>{2, 4} : std::vector<double>{1, 1.5, 2, 3, 4, 6};
+  const std::vector<double> gradings = !plan.gradings.empty() ? plan.gradings
+                                       : plan.quick            ? std::vector<double>{2, 4}
+                                                               : std::vector<double>{1, 1.5, 2, 3, 4, 6};
   for (const auto& model : plan.models) {
     if (model != "pmb" && model != "lps") continue;  // the graded study is about PMB and LPS
     for (double r : gradings)

@@ -5,7 +5,7 @@
 //                 [--problems wave_speed_bar,strain_energy,fracture_energy,quasi_static_bar,kalthoff_winkler,
 //                             mps_wave_speed,thick_cylinder,thick_cylinder_hill]
 //                 [--models pmb,lps] [--kinds lattice,tet] [--m 2,3,4,5] [--no-stability] [--only-stability]
-//                 [--stability-studies pd,graded,mps] [--append] [--threads N] [--work DIR] [--mesh-exe PATH] [--place-exe PATH]
+//                 [--stability-studies pd,graded,mps] [--gradings 1.5,2,3] [--append] [--threads N] [--work DIR] [--mesh-exe PATH] [--place-exe PATH]
 //
 // Each run appends one row to the CSV (rewritten atomically after every row). Tet-centroid
 // particles come from breccia-mesh + breccia-place (found next to this executable unless
@@ -27,6 +27,7 @@ const char* kUsage =
     "                     [--kinds lattice,tet] [--m 2,3,4,5] [--no-stability] [--only-stability] [--append]\n"
     "                     [--precisions float64,float32] (default float64)\n"
     "                     [--stability-studies pd,graded,mps] (default: all; stability_graded.csv, stability_mps.csv beside the stability CSV)\n"
+    "                     [--gradings 1.5,2,3] (grading ratios of the graded study; default 1,1.5,2,3,4,6, --quick 2,4)\n"
     "                     [--threads N] [--work DIR] [--mesh-exe PATH] [--place-exe PATH]\n"
     "problems: wave_speed_bar strain_energy fracture_energy quasi_static_bar kalthoff_winkler\n"
     "          mps_wave_speed thick_cylinder thick_cylinder_hill (MPS stress solid)\n";
@@ -92,6 +93,8 @@ int main(int argc, char** argv) {
       else if (a == "--m") {
         plan.m_values.clear();
         for (const auto& v : split(value())) plan.m_values.push_back(std::stod(v));
+      } else if (a == "--gradings") {
+        for (const auto& g : split(value())) plan.gradings.push_back(std::stod(g));
       } else if (a == "--stability-studies") stability_studies = split(value());
       else if (a == "--no-stability") stability = false;
       else if (a == "--only-stability") sweeps = false;
@@ -106,7 +109,7 @@ int main(int argc, char** argv) {
       } else {
         throw breccia::InputError("command line", a, "unknown option",
                                   "--quick, --csv, --stability-csv, --problems, --models, --kinds, --precisions, --m, "
-                                  "--stability-studies, --no-stability, --only-stability, --append, --threads, --work, --mesh-exe, --place-exe");
+                                  "--stability-studies, --gradings, --no-stability, --only-stability, --append, --threads, --work, --mesh-exe, --place-exe");
       }
     }
     require_known(plan.problems,

@@ -13,6 +13,9 @@
 #ifdef BRECCIA_WITH_CUDA
 #include "breccia/solver/cuda_backend.hpp"
 #endif
+#ifdef BRECCIA_WITH_MPS_CUDA
+#include "breccia/mps/cuda_simulation.hpp"
+#endif
 
 namespace {
 
@@ -78,6 +81,10 @@ int main(int argc, char** argv) {
     return kExitBadInput;
   }
   opt.backend = (backend == "cuda" || (backend == "auto" && gpu_available())) ? "cuda" : "cpu";
+  if (backend == "auto" && opt.progress)
+    std::fprintf(stderr, "note: --backend auto: %s\n",
+                 opt.backend == "cuda" ? "a CUDA device is present, running on it"
+                                       : "no CUDA device found, running on the CPU");
 #ifdef BRECCIA_WITH_CUDA
   if (opt.backend == "cuda") opt.backend_loop = solver::cuda_time_loop;
 #endif
@@ -86,7 +93,25 @@ int main(int argc, char** argv) {
     const Section root = Section::load_file(case_file);
     if (root.has("model") && root.section("model").text("type", "") == "mps") {
 #ifdef BRECCIA_WITH_MPS
-      return mps::run_case(case_file, opt.out_dir, opt.threads);
+      mps::RunCaseOptions mps_options;
+      mps_options.threads = opt.threads;
+      if (opt.backend == "cuda") {
+        // The displacement formulation has a CUDA launcher; the stress formulation does not:
+        // refused under --backend cuda (run_case names model.formulation), CPU under auto.
+        const bool stress = root.section("model").text("formulation", "displacement") == "stress";
+#ifdef BRECCIA_WITH_MPS_CUDA
+        if (stress && backend == "auto") {
+          if (opt.progress) std::fprintf(stderr, "note: the MPS stress formulation runs on the CPU (no CUDA launcher)\n");
+        } else {
+          mps_options.device = mps::make_cuda_step_device;
+        }
+#else
+        if (backend == "cuda")
+          throw InputError(case_file, stress ? "model.formulation" : "model.type", "mps with --backend cuda",
+                           "--backend cpu (this build has no MPS CUDA launcher)");
+#endif
+      }
+      return mps::run_case(case_file, opt.out_dir, mps_options);
 #else
       throw InputError(case_file, "model.type", "'mps' but this build has no MPS solver", "pmb or lps");
 #endif

@@ -1,6 +1,7 @@
 #include "breccia/solver/graded_check.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <sstream>
 #include <vector>
 
@@ -8,9 +9,37 @@
 
 namespace breccia::solver {
 
+const GradedLimits& graded_limits(PdModel model) {
+  if (model == PdModel::LPS) return kLpsGradedLimits;
+  // PMB, and correspondence (not measured on the graded strip): PMB's limits are the stricter
+  // of the two measured (a larger minimum local ratio, a smaller spacing jump).
+  static_assert(kPmbGradedLimits.min_local_ratio >= kLpsGradedLimits.min_local_ratio);
+  return kPmbGradedLimits;
+}
+
+namespace {
+
+std::string pct(double fraction, bool sign = true) {
+  char b[32];
+  std::snprintf(b, sizeof b, sign ? "%+.1f %%" : "%.2g %%", 100.0 * fraction);
+  return b;
+}
+
+// Where the limits of this model come from, in words, for the messages.
+std::string provenance(PdModel model) {
+  const GradedLimits& g = graded_limits(model);
+  std::string s = model == PdModel::Correspondence ? "correspondence is not measured on the graded strip, so the "
+                                                     "stricter PMB limits apply; "
+                                                   : "";
+  return s + g.model + " measured on the graded strip (docs/atlas.md, Per-model graded limits)";
+}
+
+}  // namespace
+
 HorizonGrading horizon_grading(const PdSystem& s) {
   HorizonGrading g;
   if (s.n == 0) return g;
+  const double limit = graded_limits(s.config.model).min_local_ratio;
   g.min_local_ratio = 1e300;
   double h_min = 1e300, h_max = 0.0;
   for (size_t i = 0; i < s.n; ++i) {
@@ -29,7 +58,7 @@ HorizonGrading horizon_grading(const PdSystem& s) {
   std::nth_element(spacing.begin(), spacing.begin() + s.n / 2, spacing.end());
   const double median = spacing[s.n / 2];
   for (size_t i = 0; i < s.n; ++i)
-    if (2.0 * s.half_cell[i] >= kCoarseSpacingFactor * median && s.horizon[i] < kMinLocalHorizonRatio * 2.0 * s.half_cell[i])
+    if (2.0 * s.half_cell[i] >= kCoarseSpacingFactor * median && s.horizon[i] < limit * 2.0 * s.half_cell[i])
       ++g.under_resolved;
   g.spacing_ratio = h_max / h_min;
   for (size_t i = 0; i < s.n; ++i)
@@ -42,13 +71,18 @@ void require_graded_horizon(const PdSystem& s) {
   if (s.config.variable_horizon || s.config.horizon_m) return;  // dual horizon, or a fixed horizon checked in setup
   const HorizonGrading g = horizon_grading(s);
   if (g.worst_particle < 0 || g.under_resolved <= kMaxUnderResolvedShare * static_cast<double>(s.n)) return;
+  const GradedLimits& lim = graded_limits(s.config.model);
   const int64_t i = g.worst_particle;
   std::ostringstream found;
   found << "particle spacings vary by " << g.spacing_ratio << "x and the single horizon (" << s.horizon[i]
         << " m, horizon_factor x median spacing) is " << g.min_local_ratio << " times the spacing of particle "
         << s.original_index[i] << " at (" << s.x0[3 * i] << ", " << s.x0[3 * i + 1] << ", " << s.x0[3 * i + 2]
-        << "); " << g.under_resolved << " of " << s.n << " particles are below " << kMinLocalHorizonRatio
-        << " spacings: the coarse particles are under-resolved (their stiffness is wrong or they have no bonds)";
+        << "); " << g.under_resolved << " of " << s.n << " particles are below the measured limit of "
+        << lim.min_local_ratio << " spacings for " << s.config.model_name
+        << ": the coarse particles are under-resolved (their stiffness is wrong or they have no bonds). The limit: "
+        << provenance(s.config.model) << ", coarse-interior strain energy " << pct(lim.good_error) << " at local ratio "
+        << lim.good_ratio << ", " << pct(lim.bad_error) << " at " << lim.bad_ratio
+        << "; refused beyond 5 %, the limit midway";
   throw InputError(s.config.file, "model.variable_horizon", found.str(),
                    "variable_horizon: true (dual horizon: horizon = horizon_factor x local spacing; docs/atlas.md), "
                    "or time.check_stability: false to run anyway");
@@ -57,11 +91,15 @@ void require_graded_horizon(const PdSystem& s) {
 std::string graded_horizon_warning(const PdSystem& s) {
   if (!s.config.variable_horizon) return "";
   const HorizonGrading g = horizon_grading(s);
-  if (g.max_neighbour_jump < kWarnNeighbourSpacingJump) return "";
+  const GradedLimits& lim = graded_limits(s.config.model);
+  if (g.max_neighbour_jump < lim.warn_jump) return "";
   std::ostringstream w;
   w << "warning: " << s.config.file << ": bonded particles differ in spacing by up to " << g.max_neighbour_jump
-    << "x; with dual horizon (model.variable_horizon) a wave crossing such a change reflects part of its energy "
-       "(measured 3.9 % at 4x, 35 % at 6x; docs/atlas.md): grade the mesh more gently for dynamic problems";
+    << "x, beyond the measured limit of " << lim.warn_jump << "x for " << s.config.model_name
+    << "; with dual horizon (model.variable_horizon) a wave crossing such a change reflects part of its energy ("
+    << provenance(s.config.model) << ": a P pulse reflects " << pct(lim.quiet_reflected, false) << " at "
+    << lim.quiet_jump << "x, " << pct(lim.loud_reflected, false) << " at " << lim.loud_jump
+    << "x; warned beyond 1 %): grade the mesh more gently for dynamic problems";
   return w.str();
 }
 

@@ -14,15 +14,6 @@
 namespace breccia::solver {
 namespace {
 
-// 2: bonds once in /bonds, one bit per bond and output (1 wrote broken pairs per output).
-constexpr long long kResultsFormatVersion = 2;
-
-std::string group_name(int index) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "/output/%06d", index);
-  return buf;
-}
-
 // Internal-order 3N array -> file order.
 std::vector<double> to_file_order3(const PdSystem& s, const std::vector<double>& a) {
   std::vector<double> out(3 * s.n);
@@ -175,7 +166,7 @@ ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool
     // Keep outputs up to the checkpoint; later ones are recomputed.
     const int stored = static_cast<int>(file_->attr_int("/", "output_count"));
     for (int k = 0; k < stored; ++k) {
-      const std::string g = group_name(k);
+      const std::string g = results_output_group(k);
       if (file_->attr_int(g, "step") > s.step) {
         H5Ldelete(file_->id(), g.c_str(), H5P_DEFAULT);
       } else {
@@ -189,22 +180,11 @@ ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool
   }
   file_ = std::make_unique<h5::File>(path, h5::File::Mode::Create);
   h5::File& f = *file_;
-  f.set_attr("/", "format", std::string("breccia-results"));
-  f.set_attr("/", "format_version", kResultsFormatVersion);
-  // A lattice built from the case file has no particles.h5 yet: write one beside the
-  // results so that post-processing and provenance work the same for every run.
+  // A lattice built from the case file has no particles.h5 yet: one is written beside the results.
   std::string particles_file = s.config.particles_path;
-  if (particles_file.empty()) {
-    particles_file = out_dir + "/particles.h5";
-    write_particle_file(particles_file, s.particles);
-  }
-  f.set_attr("/", "particles_file", std::filesystem::absolute(particles_file).string());
-  f.set_attr("/", "particles_content_id", s.particles.content_id);
-  f.set_attr("/", "dimension", static_cast<long long>(s.dimension));
-  f.set_attr("/", "thickness_m", s.thickness);
-  f.set_attr("/", "model", s.config.model_name);
-  f.set_attr("/", "case_file", std::filesystem::absolute(s.config.file).string());
-  f.set_attr("/", "complete", 0LL);
+  if (particles_file.empty()) particles_file = write_particles_beside_results(out_dir, s.particles);
+  write_results_identity(f, {std::filesystem::absolute(particles_file).string(), s.particles.content_id, s.dimension,
+                             s.thickness, s.config.model_name, std::filesystem::absolute(s.config.file).string()});
   const size_t n = s.n;
   std::vector<double> density(n), horizon(n);
   std::vector<int32_t> material(n);
@@ -234,17 +214,14 @@ ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool
   }
   f.write("/precrack_bonds", pre, {pre.size() / 2, 2});
   bonds_ = half_bond_list(s);
-  f.write("/bonds/offsets", bonds_.offsets, {n + 1});
-  f.write("/bonds/neighbors", bonds_.neighbors, {bonds_.neighbors.size()});
-  f.write("/bonds/within_horizon", bonds_.within_horizon, {bonds_.within_horizon.size()});
+  write_results_bonds(f, bonds_);
   f.create_group("/output");
-  f.set_attr("/", "output_count", 0LL);
   f.flush();
 }
 
 void ResultsWriter::write(const PdSystem& s) {
   h5::File& f = *file_;
-  const std::string g = group_name(count_);
+  const std::string g = results_output_group(count_);
   const size_t n = s.n;
   const auto& fields = s.config.fields;
   auto wants = [&](const char* name) { return std::find(fields.begin(), fields.end(), name) != fields.end(); };
@@ -256,47 +233,17 @@ void ResultsWriter::write(const PdSystem& s) {
   if (wants("strain_energy_density")) f.write(g + "/strain_energy_density", to_file_order(s, s.energy_density), {n});
   int64_t broken_count = 0;
   const std::vector<uint8_t> broken = broken_bits(s, bonds_, &broken_count);
-  f.write(g + "/broken", broken, {broken.size()});
-  f.set_attr(g, "broken_count", static_cast<long long>(broken_count));
-  f.set_attr(g, "step", static_cast<long long>(s.step));
-  f.set_attr(g, "time_s", s.time);
+  finish_results_output(f, count_, static_cast<long long>(s.step), s.time, broken, broken_count);
   ++count_;
   times_.push_back(s.time);
-  f.set_attr("/", "output_count", static_cast<long long>(count_));
-  f.flush();
   write_xdmf(s);
 }
 
 void ResultsWriter::write_xdmf(const PdSystem& s) const {
-  std::ostringstream x;
-  const size_t n = s.n;
-  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
-    << "  <Grid Name=\"results\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
-  auto item = [&](const std::string& path, const std::string& dims) {
-    return "<DataItem Dimensions=\"" + dims + "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">results.h5:" +
-           path + "</DataItem>";
-  };
-  for (int k = 0; k < count_; ++k) {
-    const std::string g = group_name(k);
-    x << "   <Grid Name=\"step" << k << "\" GridType=\"Uniform\">\n"
-      << "    <Time Value=\"" << times_[k] << "\"/>\n"
-      << "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\" NodesPerElement=\"1\"/>\n"
-      << "    <Geometry GeometryType=\"XYZ\">" << item("/particles/position", std::to_string(n) + " 3")
-      << "</Geometry>\n";
-    for (const char* v : {"displacement", "velocity"})
-      x << "    <Attribute Name=\"" << v << "\" AttributeType=\"Vector\" Center=\"Node\">"
-        << item(g + "/" + v, std::to_string(n) + " 3") << "</Attribute>\n";
-    for (const char* v : {"damage", "stretch", "dilatation", "strain_energy_density"}) {
-      if (std::string(v) != "damage" &&
-          std::find(s.config.fields.begin(), s.config.fields.end(), v) == s.config.fields.end())
-        continue;
-      x << "    <Attribute Name=\"" << v << "\" AttributeType=\"Scalar\" Center=\"Node\">"
-        << item(g + "/" + v, std::to_string(n)) << "</Attribute>\n";
-    }
-    x << "   </Grid>\n";
-  }
-  x << "  </Grid>\n </Domain>\n</Xdmf>\n";
-  write_text_file(dir_ + "/results.xdmf", x.str());
+  std::vector<XdmfField> fields{{"displacement", 3}, {"velocity", 3}, {"damage", 1}};
+  for (const char* v : {"stretch", "dilatation", "strain_energy_density"})
+    if (std::find(s.config.fields.begin(), s.config.fields.end(), v) != s.config.fields.end()) fields.push_back({v, 1});
+  write_results_xdmf(dir_ + "/results.xdmf", s.n, times_, fields);
 }
 
 HistoryWriter::HistoryWriter(const PdSystem& s, const std::string& out_dir, bool append) {

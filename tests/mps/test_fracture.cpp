@@ -329,3 +329,51 @@ time: {end: 1 us}
   const std::string displacement = error_of(with("{tensile_strength: 70 MPa}", "displacement"));
   EXPECT_NE(displacement.find("fracture"), std::string::npos) << displacement;
 }
+
+// Remnant stencils (fracture.hpp, kRemnantConditioning): on a 9 x 9 lattice (re = 2.1
+// spacings) the centre particle keeps only the bonds a selection allows. A crack face (half
+// stencil) and a crack meeting a surface (quarter) stay; a stencil of two bonds at 45 deg,
+// (2,0) and (1,1) spacings, has conditioning 0.046 (closed form: L = [[0.2925, 0.2425],
+// [0.2425, 0.2425]] h^2 V / h^2, eigenvalues 0.5113 and 0.0237) and is detached; a collinear
+// sliver (bonds on one line only) is kept.
+TEST(MpsFracture, RemnantStencilIsDetachedButFacesCornersAndSliversStay) {
+  const double h = 1e-3;
+  const auto pos = test::lattice(2, 9, 9, 1, h);
+  const std::vector<double> vol(pos.size() / 3, h * h);
+  const long long centre = 4 * 9 + 4;
+  struct Case {
+    const char* name;
+    bool (*keep)(double x, double y);  // bond vector in spacings
+    bool detached;
+  };
+  const Case cases[] = {
+      {"intact", [](double, double) { return true; }, false},
+      {"crack face (half)", [](double x, double) { return x > -1e-9; }, false},
+      {"crack at a surface (quarter)", [](double x, double y) { return x > -1e-9 && y > -1e-9; }, false},
+      {"collinear sliver", [](double x, double y) { return std::fabs(y) < 1e-9 && x > 0; }, false},
+      {"remnant (2,0) + (1,1)", [](double x, double y) {
+         return (std::fabs(x - 2) < 1e-9 && std::fabs(y) < 1e-9) || (std::fabs(x - 1) < 1e-9 && std::fabs(y - 1) < 1e-9);
+       }, true},
+  };
+  for (const Case& c : cases) {
+    BondList bonds = build_bonds(2, pos, 2.1 * h);
+    FractureModel model(FractureLaw{1e6}, bonds, h);
+    for (long long k = bonds.offset[centre]; k < bonds.offset[centre + 1]; ++k) {
+      if (c.keep(bonds.rx[k] / h, bonds.ry[k] / h)) continue;
+      const long long j = bonds.neighbour[k];
+      bonds.weight[k] = 0.0;
+      for (long long m = bonds.offset[j]; m < bonds.offset[j + 1]; ++m)
+        if (bonds.neighbour[m] == centre) bonds.weight[m] = 0.0;
+    }
+    const double conditioning = stencil_conditioning(centre, bonds.view(), vol.data(), 2);
+    const bool flagged = model.absorb_remnant(centre, bonds, vol.data(), 2);
+    model.detach_flagged(bonds);
+    int intact = 0;
+    for (long long k = bonds.offset[centre]; k < bonds.offset[centre + 1]; ++k) intact += bonds.weight[k] > 0.0;
+    std::printf("%-30s conditioning %.4f, %s, %d bonds left\n", c.name, conditioning, flagged ? "detached" : "kept", intact);
+    EXPECT_EQ(flagged, c.detached) << c.name;
+    EXPECT_EQ(intact == 0, c.detached) << c.name;
+    EXPECT_EQ(model.detached_particles(), c.detached ? 1 : 0) << c.name;
+    if (c.detached) EXPECT_NEAR(conditioning, 0.0237 / 0.5113, 2e-3) << c.name;  // the closed form above
+  }
+}

@@ -227,3 +227,25 @@ TEST(MpsSolidInput, BodiesAndRigidBodiesNeedTheStressFormulationAnd2D) {
   e = error_of(bodies_with("inner_radius: 0, outer_radius: 3 mm", "inner_radius: 2.5 mm, outer_radius: 3 mm"));
   EXPECT_NE(e.find("specimen.bodies.shapes[1].outer_radius"), std::string::npos) << e;
 }
+
+// model.lagrangian: updated (docs/mps.md, "Taylor bar"): its threshold only with it, and not
+// with fracture (rebuilt stencils would rejoin cut bonds).
+TEST(MpsSolidInput, UpdatedLagrangianKeysAreCheckedNamingTheField) {
+  const CaseSpec ok = parse_case_text(replaced("pressure_force: conservative", "lagrangian: updated, stencil_update_strain: 0.2"),
+                                      "case.yaml");
+  EXPECT_TRUE(ok.updated_lagrangian);
+  EXPECT_DOUBLE_EQ(ok.stencil_update_strain, 0.2);
+  EXPECT_FALSE(parse_case_text(kStress, "case.yaml").updated_lagrangian);  // total is the default
+  auto msg = error_of(replaced("pressure_force: conservative", "lagrangian: eulerian"));
+  EXPECT_NE(msg.find("model.lagrangian"), std::string::npos) << msg;
+  msg = error_of(replaced("pressure_force: conservative", "stencil_update_strain: 0.2"));
+  EXPECT_NE(msg.find("model.stencil_update_strain"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("lagrangian: updated"), std::string::npos) << msg;
+  msg = error_of(replaced("pressure_force: conservative", "lagrangian: updated, stencil_update_strain: 2"));
+  EXPECT_NE(msg.find("0 < stencil_update_strain <= 1"), std::string::npos) << msg;
+  msg = error_of(replaced("plasticity: {yield_stress: 240 MPa, hardening_modulus: 1 GPa}",
+                          "fracture: {tensile_strength: 100 MPa}").replace(kStress.find("pressure_force: conservative"),
+                                                                           28, "lagrangian: updated"));
+  EXPECT_NE(msg.find("materials[0].fracture"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("lagrangian: total"), std::string::npos) << msg;
+}

@@ -59,7 +59,8 @@ long long solver_steps(const PdSystem& s) {
   return s.config.steps ? *s.config.steps : static_cast<long long>(std::ceil(*s.config.end_time / s.dt - 1e-9));
 }
 
-// Three small dynamic cases of different dimension and model, each a second or two of CPU.
+// Small dynamic cases of different dimension and model, each a second or two of CPU; the
+// fourth is correspondence PD (docs/plan.md: its rate is its own, about 2x LPS's cost per bond).
 const char* kCase2dPmb = R"(
 specimen: {lattice: {dimension: 2, box: [0, 0, 0.1, 0.03], spacing: 0.4 mm, thickness: 1 mm}}
 model: {type: pmb, planar: plane_strain, horizon_factor: 3.015}
@@ -82,6 +83,14 @@ model: {type: lps, horizon_factor: 3.015}
 materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.22}]
 initial: [{type: velocity, set: xmin, value: [1, 0, 0]}]
 time: {end: 30 us}
+output: {results: false}
+)";
+const char* kCase2dCorrespondence = R"(
+specimen: {lattice: {dimension: 2, box: [0, 0, 0.04, 0.02], spacing: 0.4 mm, thickness: 1 mm}}
+model: {type: correspondence, planar: plane_strain, horizon_factor: 3.015, stabilisation: {type: penalty, coefficient: 1}}
+materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25}]
+initial: [{type: velocity, set: xmin, value: [1, 0, 0]}]
+time: {end: 10 us}
 output: {results: false}
 )";
 
@@ -134,7 +143,7 @@ TEST(PlanCost, CountsAreExactAndSecondsWithinAFactorOnePointFiveOnThreeCases) {
   const Throughputs documented = load_throughputs(default_throughputs_path());
   constexpr int kSamples = 3;
   int k = 0;
-  for (const char* yaml : {kCase2dPmb, kCase3dPmb, kCase3dLps}) {
+  for (const char* yaml : {kCase2dPmb, kCase3dPmb, kCase3dLps, kCase2dCorrespondence}) {
     const CaseConfig c = case_from_yaml("timed" + std::to_string(k++), yaml);
     Throughputs rates;
     double setup_s = 1e300, loop_s = 1e300;
@@ -576,4 +585,86 @@ time: {end: 10 us}
   const Proposal unsafe = propose(c, read_atlas(unsafe_path), 0.05, faster, CostOptions{});
   EXPECT_EQ(unsafe.precision, "float64");
   EXPECT_NE(precision_line(unsafe).find("0 of 2 float32"), std::string::npos) << precision_line(unsafe);
+}
+
+// Correspondence (docs/plan.md): the planner knows its measured cost relative to LPS and that
+// it needs stabilisation. Where the atlas shows LPS meets the tolerance it proposes LPS and says
+// why; the written case drops model.stabilisation (refused for LPS) and loads. Without atlas
+// rows nothing shows LPS meets the tolerance, so correspondence is kept. The fixture's numbers
+// are not results.
+TEST(PlanProposal, CorrespondenceIsReplacedByLpsWhereTheAtlasShowsLpsMeetsTheToleranceAndSaysWhy) {
+  const std::string path = temp_path("corr_atlas.csv");
+  std::ofstream(path)
+      << "problem,model,dimension,particles_kind,m,spacing_m,precision,backend,threads,particles,bonds,steps,wall_s,"
+         "error,error_measure\n"
+         "wave_speed_bar,lps,2,lattice,3,0.002,float64,cpu,1,600,18000,100,0.1,0.08,fixture\n"
+         "wave_speed_bar,lps,2,lattice,3,0.001,float64,cpu,1,2400,80000,200,0.4,0.04,fixture\n";
+  omp_set_num_threads(1);
+  const CaseConfig c = case_from_yaml("corr_case", R"(
+specimen: {lattice: {dimension: 2, box: [0, 0, 0.1, 0.01], spacing: 0.5 mm, thickness: 1 mm}}
+model: {type: correspondence, planar: plane_strain, horizon_factor: 3.015, stabilisation: {type: penalty, coefficient: 1}}
+materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.3}]
+boundary: [{type: velocity, set: xmin, value: [1, 0, 0], components: [x]}]
+time: {end: 10 us}
+)");
+  const Throughputs rates = load_throughputs(default_throughputs_path());
+  // The shipped throughputs measure correspondence (make bench): dearer per bond than LPS.
+  const std::optional<double> relative = rates.relative_cost(solver::PdModel::Correspondence, solver::PdModel::LPS, 1);
+  ASSERT_TRUE(relative.has_value());
+  EXPECT_GT(*relative, 1.0);
+  // Same bonds (correspondence keeps LPS's families); the steps are each model's own (its
+  // stable step differs), so per bond-update the estimates differ by the measured rates alone.
+  CaseConfig as_lps = c;
+  as_lps.model = solver::PdModel::LPS;
+  as_lps.model_name = "lps";
+  as_lps.stabilisation = "none";
+  const CostEstimate corr_cost = estimate_cost(c, rates), lps_cost = estimate_cost(as_lps, rates);
+  EXPECT_EQ(corr_cost.bonds, lps_cost.bonds);
+  const auto per_update = [](const CostEstimate& e) { return e.loop_s / (double(e.bonds) * double(e.steps)); };
+  EXPECT_NEAR(per_update(corr_cost) / per_update(lps_cost), *relative, 1e-9 * *relative);
+  EXPECT_GT(corr_cost.run_bytes, lps_cost.run_bytes);  // F, force tensor, moduli per particle
+
+  const Proposal p = propose(c, read_atlas(path), 0.05, rates, CostOptions{});
+  std::string all;
+  for (const auto& l : p.reasoning) all += l + "\n";
+  ASSERT_TRUE(p.tolerance_met) << all;
+  EXPECT_EQ(p.model, "lps") << all;
+  EXPECT_NE(all.find("asks for correspondence PD"), std::string::npos) << all;
+  EXPECT_NE(all.find("x LPS's per bond entry"), std::string::npos) << all;
+  EXPECT_NE(all.find("stabilisation"), std::string::npos) << all;
+  EXPECT_NE(all.find("Correspondence is replaced by lps"), std::string::npos) << all;
+  const std::string proposed = temp_path("corr_proposed.yaml");
+  write_proposed_case(c, p, proposed);
+  const CaseConfig back = solver::parse_case_file(proposed);
+  EXPECT_EQ(back.model, solver::PdModel::LPS);
+
+  const std::string empty = temp_path("corr_empty_atlas.csv");
+  std::ofstream(empty) << "problem,model,dimension,particles_kind,m,spacing_m,precision,backend,threads,particles,bonds,"
+                          "steps,wall_s,error,error_measure\n";
+  const Proposal kept = propose(c, read_atlas(empty), 0.05, rates, CostOptions{});
+  EXPECT_EQ(kept.model, "correspondence");
+  EXPECT_EQ(kept.precision, "float64");
+  std::string kept_text;
+  for (const auto& l : kept.reasoning) kept_text += l + "\n";
+  EXPECT_NE(kept_text.find("Correspondence is kept"), std::string::npos) << kept_text;
+}
+
+// A float32 case is costed at the measured float32 rate, not float64's (docs/plan.md).
+TEST(PlanCost, Float32CaseIsCostedAtTheMeasuredFloat32Rate) {
+  omp_set_num_threads(1);
+  const CaseConfig c64 = case_from_yaml("f32_cost64", R"(
+specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.01], spacing: 0.5 mm, thickness: 1 mm}}
+model: {type: lps, planar: plane_strain, horizon_factor: 3.015}
+materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25}]
+time: {steps: 100}
+)");
+  CaseConfig c32 = c64;
+  c32.precision = CaseConfig::Precision::Float32;
+  const Throughputs rates = load_throughputs(default_throughputs_path());
+  const std::optional<double> speedup = rates.float32_speedup(solver::PdModel::LPS, 1);
+  ASSERT_TRUE(speedup.has_value());
+  const CostEstimate e64 = estimate_cost(c64, rates), e32 = estimate_cost(c32, rates);
+  EXPECT_EQ(e64.bonds, e32.bonds);
+  EXPECT_NEAR(e64.loop_s / e32.loop_s, *speedup, 1e-9);
+  EXPECT_NE(e32.rate_source.find("float32"), std::string::npos) << e32.rate_source;
 }

@@ -15,6 +15,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/solver/cuda_backend.hpp"
+#include "breccia/solver/cuda_memory.cuh"
 #include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_kernels.hpp"
 
@@ -25,60 +26,11 @@ constexpr int kBlock = 256;
 constexpr int kMaxReduceBlocks = 1024;  // partial sums per reduction: fixed, so results are reproducible
 constexpr int kMaxSurfaceLoads = 64;    // load histories travel as one kernel parameter
 
-void check(cudaError_t status, const std::string& what) {
-  if (status != cudaSuccess)
-    throw RunError("CUDA backend: " + what + " failed: " + cudaGetErrorName(status) + " (" +
-                   cudaGetErrorString(status) + ")");
-}
+using cuda::check;
+using cuda::check_launch;
+using cuda::DeviceArray;
 
 int64_t blocks_for(int64_t n) { return (n + kBlock - 1) / kBlock; }
-
-// Every launch is followed by this: the error state is checked with the kernel's name.
-void check_launch(const char* kernel, bool synchronize) {
-  check(cudaGetLastError(), std::string("launch of ") + kernel);
-  if (synchronize) check(cudaDeviceSynchronize(), std::string("kernel ") + kernel);
-}
-
-// ---------------------------------------------------------------------------------------
-// Device memory
-
-template <class T>
-class DeviceArray {
-public:
-  DeviceArray() = default;
-  DeviceArray(const DeviceArray&) = delete;
-  DeviceArray& operator=(const DeviceArray&) = delete;
-  DeviceArray(DeviceArray&& other) noexcept : ptr_(other.ptr_), count_(other.count_) {
-    other.ptr_ = nullptr;
-    other.count_ = 0;
-  }
-  ~DeviceArray() {
-    if (ptr_) cudaFree(ptr_);
-  }
-  void allocate(size_t count, const char* name) {
-    count_ = count;
-    if (count == 0) return;
-    check(cudaMalloc(&ptr_, count * sizeof(T)), std::string("cudaMalloc of ") + name);
-  }
-  void upload(const std::vector<T>& host, const char* name) {
-    allocate(host.size(), name);
-    if (count_ == 0) return;
-    check(cudaMemcpy(ptr_, host.data(), count_ * sizeof(T), cudaMemcpyHostToDevice),
-          std::string("upload of ") + name);
-  }
-  void download(std::vector<T>& host, const char* name) const {
-    if (count_ == 0) return;
-    host.resize(count_);
-    check(cudaMemcpy(host.data(), ptr_, count_ * sizeof(T), cudaMemcpyDeviceToHost),
-          std::string("download of ") + name);
-  }
-  T* get() const { return ptr_; }  // nullptr when empty, as PdView expects for absent arrays
-  size_t size() const { return count_; }
-
-private:
-  T* ptr_ = nullptr;
-  size_t count_ = 0;
-};
 
 // ---------------------------------------------------------------------------------------
 // Kernels: each is a launcher around BRECCIA_HD bodies; the only arithmetic of their own is

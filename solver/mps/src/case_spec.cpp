@@ -232,13 +232,13 @@ CaseSpec parse_root(const Section& root) {
 
   const Section model = root.section("model");
   model.allow_only({"type", "re_over_spacing", "equation", "integrator", "formulation", "hourglass", "pressure_force",
-                    "damping", "gravity"});
+                    "damping", "gravity", "lagrangian", "stencil_update_strain"});
   model.choice("type", {"mps"});
   c.formulation = model.choice("formulation", {"displacement", "stress"}, "displacement") == "stress"
                       ? Formulation::Stress
                       : Formulation::Displacement;
   const bool stress = c.formulation == Formulation::Stress;
-  for (const char* key : {"hourglass", "pressure_force", "damping", "gravity"})
+  for (const char* key : {"hourglass", "pressure_force", "damping", "gravity", "lagrangian", "stencil_update_strain"})
     if (!stress && model.has(key)) fail(model, key, "given for the displacement formulation", "formulation: stress");
   if (!stress && c.bodies)
     fail(spec, "bodies", "several bodies in the displacement formulation (it has no contact)", "model.formulation: stress");
@@ -247,6 +247,12 @@ CaseSpec parse_root(const Section& root) {
   c.hourglass = model.number("hourglass", Quantity::Dimensionless, 0.1);
   if (!(c.hourglass >= 0 && c.hourglass <= 10)) fail(model, "hourglass", std::to_string(c.hourglass), "0 <= hourglass <= 10");
   c.repulsive_pressure = model.choice("pressure_force", {"conservative", "repulsive"}, "conservative") == "repulsive";
+  c.updated_lagrangian = model.choice("lagrangian", {"total", "updated"}, "total") == "updated";
+  c.stencil_update_strain = model.positive("stencil_update_strain", Quantity::Dimensionless, 0.1);
+  if (c.stencil_update_strain > 1.0)
+    fail(model, "stencil_update_strain", std::to_string(c.stencil_update_strain), "0 < stencil_update_strain <= 1");
+  if (model.has("stencil_update_strain") && !c.updated_lagrangian)
+    fail(model, "stencil_update_strain", "given with total Lagrangian stencils", "lagrangian: updated");
   c.damping_per_s = model.number("damping", Quantity::Frequency, 0.0);
   if (!(c.damping_per_s >= 0)) fail(model, "damping", std::to_string(c.damping_per_s), "a damping rate >= 0 (1/s)");
   if (model.has("gravity")) c.gravity_m_s2 = model.vec3("gravity", Quantity::Acceleration);
@@ -270,6 +276,9 @@ CaseSpec parse_root(const Section& root) {
   if (c.material.fracture && !stress)
     fail(materials[0], "fracture", "given for the displacement formulation (it has no stress state)",
          "model.formulation: stress");
+  if (c.material.fracture && c.updated_lagrangian)  // a rebuild would reconnect cut bonds
+    fail(materials[0], "fracture", "given with model.lagrangian: updated (rebuilt stencils would rejoin cracks)",
+         "model.lagrangian: total");
   if (c.material.plasticity && !stress)
     fail(materials[0], "plasticity", "given for the displacement formulation (it has no stress state)",
          "model.formulation: stress");

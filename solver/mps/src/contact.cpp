@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <omp.h>
+
 namespace breccia::mps {
 
 // Below this many particles thread start-up costs more than the pair loop (as in solid.cpp).
@@ -34,6 +36,8 @@ PolygonGeometry polygon_geometry(const std::vector<double>& x, const std::vector
 void Contact::set_particle_contact(ParticleContact pc) {
   particles_ = std::move(pc);
   particle_contact_on_ = particles_.distance_m > 0.0 && particles_.stiffness_n_m > 0.0;
+  pair_friction_key_.clear();
+  pair_friction_.clear();
 }
 
 void Contact::add_half_space(HalfSpace h) {
@@ -78,30 +82,34 @@ void Contact::compute_forces(const ParticleStateView& s, double dt) {
   for (auto& f : force_n_) f.assign(n, 0.0);
   spring_energy_j_ = 0.0;
   contact_pairs_ = 0;
-  if (particle_contact_on_) pair_contacts(s, &force_n_, &contact_pairs_);
+  if (particle_contact_on_) pair_forces(s, dt);
   if (!half_spaces_.empty() || !polygons_.empty()) obstacle_forces(s, dt);
 }
 
 double Contact::potential_energy_j(const ParticleStateView& s) const {
   double e = spring_energy_j_ + obstacle_penalty_energy_j(s);
-  if (particle_contact_on_) e += pair_contacts(s, nullptr, nullptr);
+  if (particle_contact_on_) e += pair_energy_j(s);
   return e;
 }
 
-// Cell list of edge >= the contact distance on the current positions, then for each
-// particle the unbonded neighbours closer than the contact distance. Each particle sums its
-// own pair forces (gather, no write conflicts), so every pair is evaluated twice.
-double Contact::pair_contacts(const ParticleStateView& s, std::array<std::vector<double>, 3>* force,
-                              long long* pair_count) const {
+// Cell list of edge >= the search radius d on the current positions, then for each
+// particle the unbonded partners j > i closer than d (two passes, count then fill, parallel
+// over i).
+Contact::PairCandidates Contact::pair_candidates(const ParticleStateView& s) const {
   const long long n = s.count;
   const int dim = s.dimension;
-  const double d = particles_.distance_m, k = particles_.stiffness_n_m;
-  std::vector<double> x(3 * n);
+  PairCandidates c;
+  c.x.resize(3 * n);
   for (long long i = 0; i < n; ++i) {
-    x[3 * i] = s.position_m[3 * i] + s.u.x[i];
-    x[3 * i + 1] = s.position_m[3 * i + 1] + s.u.y[i];
-    x[3 * i + 2] = s.position_m[3 * i + 2] + (dim == 3 ? s.u.z[i] : 0.0);
+    c.x[3 * i] = s.position_m[3 * i] + s.u.x[i];
+    c.x[3 * i + 1] = s.position_m[3 * i + 1] + s.u.y[i];
+    c.x[3 * i + 2] = s.position_m[3 * i + 2] + (dim == 3 ? s.u.z[i] : 0.0);
   }
+  const std::vector<double>& x = c.x;
+  const BondsView b = s.bonds;
+  const bool distribution = particles_.normal == ContactNormal::NeighbourDistribution;
+  // Planar face-face pairs reach one window sideways (contact_kernels.hpp).
+  const double d = distribution ? std::hypot(particles_.distance_m, window_m()) : particles_.distance_m;
   std::array<double, 3> lo{0, 0, 0}, cell{1, 1, 1};
   std::array<long long, 3> count{1, 1, 1};
   // At most ~4N cells, so a particle flung far away cannot make the grid huge (cells then
@@ -127,26 +135,22 @@ double Contact::pair_contacts(const ParticleStateView& s, std::array<std::vector
     cell_of[i] = (coord(2, x[3 * i + 2]) * count[1] + coord(1, x[3 * i + 1])) * count[0] + coord(0, x[3 * i]);
     ++start[cell_of[i] + 1];
   }
-  for (long long c = 0; c < ncell; ++c) start[c + 1] += start[c];
+  for (long long cc = 0; cc < ncell; ++cc) start[cc + 1] += start[cc];
   std::vector<int> order(n);
   {
     std::vector<long long> fill(start.begin(), start.end() - 1);
     for (long long i = 0; i < n; ++i) order[fill[cell_of[i]]++] = static_cast<int>(i);
   }
-  double energy = 0.0;
-  long long pairs = 0;
-  const BondsView b = s.bonds;
-#pragma omp parallel for schedule(static) reduction(+ : energy, pairs) if (n > kContactParallelMin)
-  for (long long i = 0; i < n; ++i) {
-    const long long c[3] = {coord(0, x[3 * i]), coord(1, x[3 * i + 1]), coord(2, x[3 * i + 2])};
-    double f[3] = {0.0, 0.0, 0.0};
-    for (long long cz = std::max(0LL, c[2] - 1); cz <= std::min(count[2] - 1, c[2] + 1); ++cz)
-      for (long long cy = std::max(0LL, c[1] - 1); cy <= std::min(count[1] - 1, c[1] + 1); ++cy)
-        for (long long cx = std::max(0LL, c[0] - 1); cx <= std::min(count[0] - 1, c[0] + 1); ++cx) {
+  // visit(i, emit): every unbonded j > i within d of i.
+  auto visit = [&](long long i, auto&& emit) {
+    const long long ci[3] = {coord(0, x[3 * i]), coord(1, x[3 * i + 1]), coord(2, x[3 * i + 2])};
+    for (long long cz = std::max(0LL, ci[2] - 1); cz <= std::min(count[2] - 1, ci[2] + 1); ++cz)
+      for (long long cy = std::max(0LL, ci[1] - 1); cy <= std::min(count[1] - 1, ci[1] + 1); ++cy)
+        for (long long cx = std::max(0LL, ci[0] - 1); cx <= std::min(count[0] - 1, ci[0] + 1); ++cx) {
           const long long cell_index = (cz * count[1] + cy) * count[0] + cx;
           for (long long q = start[cell_index]; q < start[cell_index + 1]; ++q) {
             const int j = order[q];
-            if (j == i) continue;
+            if (j <= i) continue;
             const double dx[3] = {x[3 * i] - x[3 * j], x[3 * i + 1] - x[3 * j + 1], x[3 * i + 2] - x[3 * j + 2]};
             if (dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2] >= d * d) continue;
             // Bonded now: a bond with nonzero weight (fracture.cpp cuts a bond by zeroing it,
@@ -154,19 +158,91 @@ double Contact::pair_contacts(const ParticleStateView& s, std::array<std::vector
             bool bonded = false;
             for (long long m = b.offset[i]; m < b.offset[i + 1] && !bonded; ++m)
               bonded = b.neighbour[m] == j && b.weight[m] != 0.0;
-            if (bonded) continue;
-            energy += 0.5 * particle_pair_contact(dx, d, k, f);  // each pair is visited from both ends
-            ++pairs;
+            if (!bonded) emit(j);
           }
         }
-    if (force) {
-      (*force)[0][i] += f[0];
-      (*force)[1][i] += f[1];
-      (*force)[2][i] += f[2];
+  };
+  // One pass: each thread appends the pairs of its contiguous block of particles (static
+  // schedule) to its own list; the lists joined in thread order are sorted by i, and each
+  // particle's partners are sorted by j.
+  std::vector<std::vector<std::array<int, 2>>> found(1);
+#pragma omp parallel if (n > kContactParallelMin)
+  {
+#pragma omp single
+    found.resize(omp_get_num_threads());
+    std::vector<std::array<int, 2>>& mine = found[omp_get_thread_num()];
+#pragma omp for schedule(static)
+    for (long long i = 0; i < n; ++i) {
+      const size_t from = mine.size();
+      visit(i, [&](int j) { mine.push_back({static_cast<int>(i), j}); });
+      std::sort(mine.begin() + from, mine.end());
     }
   }
-  if (pair_count) *pair_count += pairs / 2;
+  for (const auto& part : found) c.pairs.insert(c.pairs.end(), part.begin(), part.end());
+  if (distribution) {  // surface directions of the particles in candidate pairs only
+    c.surface.assign(3 * n, 0.0);
+    std::vector<char> needed(n, 0);
+    for (const auto& [i, j] : c.pairs) needed[i] = needed[j] = 1;
+    for (long long i = 0; i < n; ++i)
+      if (needed[i]) neighbour_distribution_direction(i, b, x.data(), &c.surface[3 * i]);
+  }
+  return c;
+}
+
+PairContactGeometry Contact::pair_geometry(const PairCandidates& c, int i, int j) const {
+  const double dx[3] = {c.x[3 * i] - c.x[3 * j], c.x[3 * i + 1] - c.x[3 * j + 1], c.x[3 * i + 2] - c.x[3 * j + 2]};
+  if (particles_.normal == ContactNormal::Pair) return pair_direction_geometry(dx, particles_.distance_m);
+  return distribution_normal_geometry(dx, &c.surface[3 * i], &c.surface[3 * j], particles_.distance_m, window_m());
+}
+
+double Contact::pair_energy_j(const ParticleStateView& s) const {
+  const PairCandidates c = pair_candidates(s);
+  double energy = 0.0;
+  for (const auto& [i, j] : c.pairs) {
+    double f[3] = {0.0, 0.0, 0.0}, normal_force = 0.0;
+    energy += pair_normal_force(pair_geometry(c, i, j), particles_.stiffness_n_m, f, &normal_force);
+  }
   return energy;
+}
+
+// Each pair once (i < j): the force on i and minus it on j, so the pair forces are equal
+// and opposite by construction (linear momentum exact). Serial over the pairs: they are
+// surface pairs only, few against the solid's bond loop.
+void Contact::pair_forces(const ParticleStateView& s, double dt) {
+  const PairCandidates c = pair_candidates(s);
+  const long long n = s.count;
+  const bool friction = particles_.frictional();
+  std::vector<long long> keys;
+  std::vector<FrictionState> springs;
+  size_t previous = 0;  // merge cursor into the springs of the last step (both sorted by key)
+  for (const auto& [i, j] : c.pairs) {
+    const PairContactGeometry g = pair_geometry(c, i, j);
+    double f[3] = {0.0, 0.0, 0.0}, normal_force = 0.0;
+    pair_normal_force(g, particles_.stiffness_n_m, f, &normal_force);
+    if (normal_force <= 0.0) continue;
+    ++contact_pairs_;
+    if (friction) {
+      const long long key = static_cast<long long>(i) * n + j;
+      while (previous < pair_friction_key_.size() && pair_friction_key_[previous] < key) ++previous;
+      FrictionState st = (previous < pair_friction_key_.size() && pair_friction_key_[previous] == key)
+                             ? pair_friction_[previous]
+                             : FrictionState{};
+      const double v_rel[3] = {s.v.x[i] - s.v.x[j], s.v.y[i] - s.v.y[j],
+                               s.dimension == 3 ? s.v.z[i] - s.v.z[j] : 0.0};
+      const double k_t = particles_.tangential_stiffness_n_m * g.weight;
+      dissipated_j_ += coulomb_tangential_force(st, g.n, v_rel, dt, normal_force, k_t, particles_.static_friction,
+                                                particles_.kinetic_friction, f);
+      spring_energy_j_ += 0.5 * k_t * (st.s[0] * st.s[0] + st.s[1] * st.s[1] + st.s[2] * st.s[2]);
+      keys.push_back(key);
+      springs.push_back(st);
+    }
+    for (int a = 0; a < 3; ++a) {
+      force_n_[a][i] += f[a];
+      force_n_[a][j] -= f[a];
+    }
+  }
+  pair_friction_key_ = std::move(keys);
+  pair_friction_ = std::move(springs);
 }
 
 void Contact::rigid_contact(long long i, long long slot, double depth, const double n[3], const double v_surface[3],
@@ -240,6 +316,56 @@ void Contact::obstacle_forces(const ParticleStateView& s, double dt) {
     }
   }
   free_bodies_on_half_spaces(dt);
+  if (polygons_.size() > 1) {
+    std::vector<std::array<double, 3>> reactions(polygons_.size(), {0.0, 0.0, 0.0});
+    polygon_pairs(&reactions);
+    for (size_t p = 0; p < polygons_.size(); ++p) {
+      body_[p].fx += reactions[p][0];
+      body_[p].fy += reactions[p][1];
+      body_[p].torque += reactions[p][2];
+    }
+  }
+}
+
+// Vertices only, as for the floor: two edges crossing with no vertex inside the other body
+// are not seen (fine for bodies that meet face to face or corner first and do not pass
+// through each other within a step).
+double Contact::polygon_pairs(std::vector<std::array<double, 3>>* reactions) const {
+  double energy = 0.0;
+  std::vector<double> ax, ay, bx, by;
+  for (size_t p = 0; p < polygons_.size(); ++p)
+    for (size_t q = p + 1; q < polygons_.size(); ++q) {
+      if (polygons_[p].fixed && polygons_[q].fixed) continue;
+      const double kp = polygons_[p].law.normal_stiffness_n_m, kq = polygons_[q].law.normal_stiffness_n_m;
+      if (!(kp > 0.0) || !(kq > 0.0)) continue;
+      const double k = kp * kq / (kp + kq);
+      polygon_vertices(p, ax, ay);
+      polygon_vertices(q, bx, by);
+      // Vertices of `from` (body f) inside `into` (body t): the force on f pushes the vertex out.
+      auto push = [&](size_t f, const std::vector<double>& fx, const std::vector<double>& fy, size_t t,
+                      const std::vector<double>& tx, const std::vector<double>& ty) {
+        for (size_t m = 0; m < fx.size(); ++m) {
+          double normal[2];
+          const double depth =
+              polygon_penetration(tx.data(), ty.data(), static_cast<int>(tx.size()), fx[m], fy[m], normal);
+          if (depth <= 0.0) continue;
+          energy += 0.5 * k * depth * depth;
+          if (!reactions) continue;
+          const double force[2] = {k * depth * normal[0], k * depth * normal[1]};
+          std::array<double, 3>& a = (*reactions)[f];
+          std::array<double, 3>& b = (*reactions)[t];
+          a[0] += force[0];
+          a[1] += force[1];
+          a[2] += (fx[m] - body_[f].cx) * force[1] - (fy[m] - body_[f].cy) * force[0];
+          b[0] -= force[0];
+          b[1] -= force[1];
+          b[2] -= (fx[m] - body_[t].cx) * force[1] - (fy[m] - body_[t].cy) * force[0];
+        }
+      };
+      push(p, ax, ay, q, bx, by);
+      push(q, bx, by, p, ax, ay);
+    }
+  return energy;
 }
 
 // Free rigid polygons on the half-spaces (the floor): each vertex below a plane is pushed
@@ -314,6 +440,7 @@ double Contact::obstacle_penalty_energy_j(const ParticleStateView& s) const {
         if (height < 0.0) e += 0.5 * hs.law.normal_stiffness_n_m * height * height;
       }
   }
+  if (polygons_.size() > 1) e += polygon_pairs(nullptr);
   return e;
 }
 

@@ -20,6 +20,11 @@ void configure_contact(const CaseSpec& spec, const std::vector<int>& body_id, So
     ParticleContact p;
     p.distance_m = pc.distance_factor * solid.spacing_m();
     p.stiffness_n_m = pc.stiffness_factor * solid.face_stiffness_n_m();
+    p.normal = pc.normal == "pair" ? ContactNormal::Pair : ContactNormal::NeighbourDistribution;
+    p.window_m = solid.spacing_m();
+    p.tangential_stiffness_n_m = pc.friction.tangential_stiffness_factor * solid.shear_face_stiffness_n_m();
+    p.static_friction = pc.friction.static_friction;
+    p.kinetic_friction = pc.friction.kinetic_friction;
     p.body_id = body_id;
     solid.contact().set_particle_contact(std::move(p));
   }

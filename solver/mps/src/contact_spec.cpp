@@ -102,12 +102,16 @@ BodiesSpec parse_bodies(const Section& s) {
 }
 
 ParticleContactSpec parse_particle_contact(const Section& s) {
-  s.allow_only({"distance_factor", "stiffness_factor"});
+  std::vector<std::string> keys{"distance_factor", "stiffness_factor", "normal"};
+  for (const auto& k : friction_keys()) keys.push_back(k);
+  s.allow_only(keys);
   ParticleContactSpec p;
   p.distance_factor = s.positive("distance_factor", Quantity::Dimensionless, 1.0);
   if (p.distance_factor > 2.0)
     fail(s, "distance_factor", text_of(p.distance_factor), "0 < distance_factor <= 2 (contact distance in spacings)");
   p.stiffness_factor = s.positive("stiffness_factor", Quantity::Dimensionless, 1.0);
+  if (s.has("normal")) p.normal = s.choice("normal", {"pair", "neighbour_distribution"});
+  p.friction = parse_friction(s);
   return p;
 }
 

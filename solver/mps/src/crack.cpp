@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <limits>
+#include <unordered_map>
+#include <utility>
 
 #include "breccia/common/error.hpp"
 
@@ -118,6 +120,30 @@ CrackPairs build_crack_pairs(const CaseSpec& spec, const std::vector<double>& p,
     return false;
   });
   return pairs;
+}
+
+PairIncidence pair_incidence(const CrackPairs& pairs) {
+  std::unordered_map<int, std::vector<std::pair<int, unsigned char>>> by_particle;
+  std::vector<int> order;
+  auto add = [&](int i, int p, unsigned char plus) {
+    auto [it, fresh] = by_particle.try_emplace(i);
+    if (fresh) order.push_back(i);
+    it->second.emplace_back(p, plus);
+  };
+  for (size_t p = 0; p < pairs.size(); ++p) {
+    add(pairs.plus[p], static_cast<int>(p), 1);
+    add(pairs.minus[p], static_cast<int>(p), 0);
+  }
+  PairIncidence inc;
+  for (int i : order) {
+    inc.particle.push_back(i);
+    for (const auto& [p, plus] : by_particle[i]) {
+      inc.pair.push_back(p);
+      inc.plus_side.push_back(plus);
+    }
+    inc.offset.push_back(static_cast<long long>(inc.pair.size()));
+  }
+  return inc;
 }
 
 }  // namespace breccia::mps

@@ -126,6 +126,17 @@ bool FractureModel::absorb_inversion(long long i, const BondList& bonds) {
   return true;
 }
 
+bool FractureModel::absorb_remnant(long long i, const BondList& bonds, const double* volume_m3, int dimension) {
+  int intact = 0;
+  for (long long k = bonds.offset[i]; k < bonds.offset[i + 1]; ++k) intact += bonds.weight[k] > 0.0;
+  if (intact == 0 || intact == initial_bonds_[i] || inverted_[i]) return false;
+  const double conditioning = stencil_conditioning(i, bonds.view(), volume_m3, dimension);
+  if (!(conditioning < kRemnantConditioning && conditioning >= kCollinearStencil)) return false;
+  inverted_[i] = 1;
+  ++remnants_;
+  return true;
+}
+
 std::vector<long long> FractureModel::detach_flagged(BondList& bonds) {
   std::vector<long long> touched;
   const long long n = static_cast<long long>(bonds.particles());

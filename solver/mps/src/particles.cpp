@@ -145,10 +145,7 @@ void symplectic_euler_update(std::array<std::vector<double>, 3>& u, std::array<s
     const double* ac = a[c].data();
     const long long n = static_cast<long long>(u[c].size());
 #pragma omp parallel for schedule(static) if (n > 8192)
-    for (long long i = 0; i < n; ++i) {
-      vc[i] += dt * ac[i];
-      uc[i] += dt * vc[i];
-    }
+    for (long long i = 0; i < n; ++i) symplectic_euler_at(uc[i], vc[i], ac[i], dt);
   }
 }
 

@@ -9,13 +9,12 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <type_traits>
 
 #include "breccia/common/error.hpp"
-#include "breccia/common/h5.hpp"
 #include "breccia/common/output_file.hpp"
 #include "breccia/common/progress.hpp"
 #include "breccia/mps/case_spec.hpp"
+#include "breccia/mps/results_output.hpp"
 #include "breccia/mps/simulation.hpp"
 #include "breccia/mps/solid_case.hpp"
 
@@ -26,62 +25,6 @@ std::string fmt(double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.10g", v);
   return buf;
-}
-
-template <class Model>
-void write_snapshot(const h5::File& f, const Model& sim) {
-  char name[32];
-  std::snprintf(name, sizeof name, "/output/%06lld", sim.steps());
-  const std::string group = name;
-  f.create_group(group);
-  f.set_attr(group, "step", static_cast<long long>(sim.steps()));
-  f.set_attr(group, "time_s", sim.time_s());
-  const size_t n = sim.size();
-  std::vector<double> u(3 * n), v(3 * n);
-  for (size_t i = 0; i < n; ++i)
-    for (int a = 0; a < 3; ++a) {
-      u[3 * i + a] = sim.displacement(a)[i];
-      v[3 * i + a] = sim.velocity(a)[i];
-    }
-  f.write(group + "/displacement", u, {n, 3});
-  f.write(group + "/velocity", v, {n, 3});
-  if constexpr (std::is_same_v<Model, Solid>) {
-    std::vector<double> stress(6 * n);
-    for (size_t i = 0; i < n; ++i) {
-      const SymTensor& t = sim.stress_pa()[i];
-      const double c[6] = {t.xx, t.yy, t.zz, t.xy, t.yz, t.zx};
-      for (int k = 0; k < 6; ++k) stress[6 * i + k] = c[k];
-    }
-    f.write(group + "/stress", stress, {n, 6});
-    f.write(group + "/eq_plastic_strain", sim.eq_plastic_strain(), {n});
-    if (const FractureModel* fr = sim.fracture()) {
-      f.write(group + "/damage", fr->damage(sim.bonds()), {n});
-      const std::vector<int> labels = FractureModel::fragment_labels(sim.bonds());
-      f.write(group + "/fragment", std::vector<int32_t>(labels.begin(), labels.end()), {n});
-    }
-  }
-}
-
-template <class Model>
-void write_header(const h5::File& f, const Model& sim, const CaseSpec& spec, const std::string& case_file,
-                  const std::string& content_id, double thickness_m) {
-  const MaterialSpec& m = spec.material;
-  f.set_attr("/", "format", std::string("breccia-results"));
-  f.set_attr("/", "model", std::string("mps"));
-  f.set_attr("/", "dimension", static_cast<long long>(sim.dimension()));
-  f.set_attr("/", "case_file", case_file);
-  // The layout of docs/formats.md (results.h5) where it applies to MPS.
-  f.set_attr("/", "format_version", 1LL);
-  f.set_attr("/", "thickness_m", thickness_m);
-  f.set_attr("/", "particles_file",
-             spec.particle_file.empty() ? std::string() : std::filesystem::absolute(spec.particle_file).string());
-  f.set_attr("/", "particles_content_id", content_id);
-  f.set_attr("/", "complete", 0LL);
-  f.write("/particles/position", sim.position_m(), {sim.size(), 3});
-  f.write("/particles/volume", sim.volume_m3(), {sim.size()});
-  f.write("/particles/density", std::vector<double>(sim.size(), m.density_kg_m3), {sim.size()});
-  f.write("/particles/material_id", std::vector<int32_t>(sim.size(), 0), {sim.size()});
-  f.write_strings("/materials/names", {m.name});
 }
 
 // The stress formulation (solid.hpp): same files, with stress and plastic strain in the
@@ -110,7 +53,8 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
   // Contact (docs/mps.md, "Contact"): particle pairs in contact, friction dissipation, free rigid bodies.
   const bool frictional = std::any_of(spec.rigid_bodies.begin(), spec.rigid_bodies.end(),
                                       [](const RigidBodySpec& r) { return r.friction.static_friction > 0; }) ||
-                          (spec.floor && spec.floor->friction.static_friction > 0);
+                          (spec.floor && spec.floor->friction.static_friction > 0) ||
+                          (spec.particle_contact && spec.particle_contact->friction.static_friction > 0);
   std::vector<size_t> free_bodies;
   for (size_t k = 0; k < sim.contact().polygon_count(); ++k)
     if (!sim.contact().polygon(k).fixed) free_bodies.push_back(k);
@@ -140,23 +84,21 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
   };
   const auto loop_start = std::chrono::steady_clock::now();
   {
-    h5::File f(results.temp_path().string(), h5::File::Mode::Create);
-    write_header(f, sim, spec, case_file, content_id, sim.thickness_m());
-    write_snapshot(f, sim);
+    MpsResultsWriter writer(results.temp_path().string(), out_dir, spec, case_file, content_id, sim);
+    writer.write(sim);
     record();
     Progress progress("mps", total_steps, spec.progress ? 5.0 : 1e300);
     for (long long s = 1; s <= total_steps; ++s) {
       sim.step();
       if (s % spec.history_every == 0) record();
-      if (spec.snapshot_every > 0 && s % spec.snapshot_every == 0 && s != total_steps) write_snapshot(f, sim);
+      if (spec.snapshot_every > 0 && s % spec.snapshot_every == 0 && s != total_steps) writer.write(sim);
       if ((s % 100 == 0 || s == total_steps) && !std::isfinite(sim.kinetic_energy_j()))
         throw RunError("mps: velocities became non-finite at step " + std::to_string(s) +
                        " (time step above the stability limit? lower time.safety)");
       progress.update(s, "t=" + fmt(sim.time_s()) + " s");
     }
-    write_snapshot(f, sim);
-    f.set_attr("/", "output_count", static_cast<long long>(f.children("/output").size()));
-    f.set_attr("/", "complete", 1LL);
+    writer.write(sim);
+    writer.mark_complete();
     if (spec.progress) progress.finish("t=" + fmt(sim.time_s()) + " s");
   }
   results.commit();
@@ -198,13 +140,26 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
 }  // namespace
 
 int run_case(const std::string& case_file, const std::string& out_dir, int threads) {
+  RunCaseOptions options;
+  options.threads = threads;
+  return run_case(case_file, out_dir, options);
+}
+
+int run_case(const std::string& case_file, const std::string& out_dir, const RunCaseOptions& options) {
   const CaseSpec spec = load_case(case_file);
-  if (threads > 0) omp_set_num_threads(threads);
+  if (options.threads > 0) omp_set_num_threads(options.threads);
+  // The stress formulation has no device launcher (docs/cuda.md, "MPS").
+  if (spec.formulation == Formulation::Stress && options.device)
+    throw InputError(case_file, "model.formulation", "stress with --backend cuda",
+                     "formulation: displacement for the CUDA backend (the stress formulation runs on the CPU only), "
+                     "or --backend cpu");
   std::filesystem::create_directories(out_dir);
   if (spec.formulation == Formulation::Stress) return run_solid(spec, case_file, out_dir);
   const auto wall_start = std::chrono::steady_clock::now();
 
   Simulation sim(spec);
+  if (options.device) sim.attach_device(options.device(sim));
+  if (spec.progress) std::fprintf(stderr, "mps: backend %s\n", sim.backend_description().c_str());
   const MaterialSpec& m = spec.material;
   const long long total_steps = static_cast<long long>(std::ceil(spec.end_time_s / sim.dt_s() - 1e-9));
   std::fprintf(stderr,
@@ -243,9 +198,8 @@ int run_case(const std::string& case_file, const std::string& out_dir, int threa
   double max_slip = 0.0, max_open = 0.0;
   const auto loop_start = std::chrono::steady_clock::now();
   {
-    h5::File f(results.temp_path().string(), h5::File::Mode::Create);
-    write_header(f, sim, spec, case_file, sim.particles_content_id(), sim.thickness_m());
-    write_snapshot(f, sim);
+    MpsResultsWriter writer(results.temp_path().string(), out_dir, spec, case_file, sim.particles_content_id(), sim);
+    writer.write(sim);
     record();
     Progress progress("mps", total_steps, spec.progress ? 5.0 : 1e300);
     for (long long s = 1; s <= total_steps; ++s) {
@@ -253,15 +207,14 @@ int run_case(const std::string& case_file, const std::string& out_dir, int threa
       if (s % spec.history_every == 0) record();
       max_slip = std::max(max_slip, sim.slipping_fraction());
       max_open = std::max(max_open, sim.open_fraction());
-      if (spec.snapshot_every > 0 && s % spec.snapshot_every == 0 && s != total_steps) write_snapshot(f, sim);
+      if (spec.snapshot_every > 0 && s % spec.snapshot_every == 0 && s != total_steps) writer.write(sim);
       if ((s % 100 == 0 || s == total_steps) && !std::isfinite(sim.kinetic_energy_j()))
         throw RunError("mps: velocities became non-finite at step " + std::to_string(s) +
                        " (time step above the stability limit?)");
       progress.update(s, "t=" + fmt(sim.time_s()) + " s");
     }
-    write_snapshot(f, sim);
-    f.set_attr("/", "output_count", static_cast<long long>(f.children("/output").size()));
-    f.set_attr("/", "complete", 1LL);
+    writer.write(sim);
+    writer.mark_complete();
     if (spec.progress) progress.finish("t=" + fmt(sim.time_s()) + " s");
   }
   results.commit();
@@ -281,7 +234,8 @@ int run_case(const std::string& case_file, const std::string& out_dir, int threa
      << "  \"end_time_s\": " << fmt(sim.time_s()) << ",\n  \"p_wave_speed_m_s\": " << fmt(m.p_wave_speed()) << ",\n"
      << "  \"s_wave_speed_m_s\": " << fmt(m.s_wave_speed()) << ",\n"
      << "  \"max_slipping_fraction\": " << fmt(max_slip) << ",\n  \"max_open_fraction\": " << fmt(max_open) << ",\n"
-     << "  \"threads\": " << omp_get_max_threads() << ",\n  \"wall_time_s\": " << fmt(wall_s) << ",\n"
+     << "  \"threads\": " << omp_get_max_threads() << ",\n  \"backend\": \"" << sim.backend_description() << "\",\n"
+     << "  \"wall_time_s\": " << fmt(wall_s) << ",\n"
      << "  \"step_loop_s\": " << fmt(loop_s) << ",\n"
      << "  \"particle_steps_per_s\": " << fmt(loop_s > 0 ? sim.size() * static_cast<double>(sim.steps()) / loop_s : 0.0)
      << "\n}\n";

@@ -1,6 +1,8 @@
 #include "breccia/mps/particles.hpp"
 #include "breccia/mps/simulation.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -121,21 +123,19 @@ void elastic_pass(const BondList& bonds, OperatorScales s, ElasticCoefficients c
 
 void Simulation::compute_acceleration(bool update_crack_state) {
   elastic_pass(bonds_, scales_, coeffs_, u_, div_, a_);
+  // Pairs in order, each adding to its two particles: the CUDA launcher adds them per
+  // particle in the same pair order (crack.hpp, add_pair_acceleration).
   const double rho = spec_.material.density_kg_m3;
-  for (size_t p = 0; p < pairs_.size(); ++p) {
-    const int i = pairs_.plus[p], j = pairs_.minus[p];
-    const double nx = pairs_.normal_x[p], ny = pairs_.normal_y[p], sx = pairs_.tangent_x[p], sy = pairs_.tangent_y[p];
-    const double gx = u_[0][i] - u_[0][j], gy = u_[1][i] - u_[1][j];
-    const double vs = (v_[0][i] - v_[0][j]) * sx + (v_[1][i] - v_[1][j]) * sy;
-    PairState scratch = pairs_.state[p];
-    PairState& st = update_crack_state ? pairs_.state[p] : scratch;
-    const PairForce f = friction_pair_force(pairs_.law[pairs_.crack[p]], gx * nx + gy * ny, gx * sx + gy * sy, vs, st);
-    const double fx = f.normal_n * nx + f.tangent_n * sx, fy = f.normal_n * ny + f.tangent_n * sy;
-    const double mi = rho * volume_m3_[i], mj = rho * volume_m3_[j];
-    a_[0][i] += fx / mi;
-    a_[1][i] += fy / mi;
-    a_[0][j] -= fx / mj;
-    a_[1][j] -= fy / mj;
+  const CrackPairsView c = pairs_.view();
+  const VectorField u{u_[0].data(), u_[1].data(), u_[2].data()}, v{v_[0].data(), v_[1].data(), v_[2].data()};
+  for (long long p = 0; p < c.count; ++p) {
+    PairState scratch = c.state[p];
+    PairState& st = update_crack_state ? c.state[p] : scratch;
+    double force[2];
+    crack_pair_force_at(p, c, u, v, st, force);
+    const int i = c.plus[p], j = c.minus[p];
+    add_pair_acceleration(a_[0][i], a_[1][i], force, rho * volume_m3_[i], true);
+    add_pair_acceleration(a_[0][j], a_[1][j], force, rho * volume_m3_[j], false);
   }
 }
 
@@ -216,9 +216,40 @@ void Simulation::choose_time_step() {
   dt_s_ = spec_.dt_s ? *spec_.dt_s : std::min(cfl_dt_s_, 0.9 * spectral_dt_limit_s_);
 }
 
+void Simulation::attach_device(std::unique_ptr<StepDevice> device) {
+  sync_host();
+  device_ = std::move(device);
+  host_current_ = pairs_current_ = true;
+}
+
+std::string Simulation::backend_description() const {
+  if (device_) return device_->description();
+  return "cpu (OpenMP, " + std::to_string(omp_get_max_threads()) + " threads)";
+}
+
+void Simulation::sync_host() const {
+  if (!device_ || host_current_) return;
+  device_->download(u_, v_, a_, pairs_.state);
+  host_current_ = pairs_current_ = true;
+}
+
+void Simulation::sync_pair_states() const {
+  if (!device_ || pairs_current_) return;
+  device_->download_pair_states(pairs_.state);
+  pairs_current_ = true;
+}
+
 void Simulation::step() {
   const double dt = dt_s_;
   const long long n = static_cast<long long>(size());
+  if (device_) {  // the same phases on the device (StepDevice); the clock stays here
+    time_s_ += dt;
+    device_->step(time_s_);
+    host_current_ = pairs_current_ = false;
+    acceleration_valid_ = true;
+    ++steps_;
+    return;
+  }
   if (spec_.integrator == Integrator::SymplecticEuler) {
     // eqs (7)-(8): v^{k+1} = v^k + dt a(u^k), u^{k+1} = u^k + dt v^{k+1}
     compute_acceleration(true);
@@ -226,16 +257,14 @@ void Simulation::step() {
     time_s_ += dt;
     apply_prescribed(time_s_);
   } else {
+    const double half_dt = 0.5 * dt;
     if (!acceleration_valid_) compute_acceleration(true);
     for (int a = 0; a < dimension_; ++a) {
       double* u = u_[a].data();
       double* v = v_[a].data();
       const double* acc = a_[a].data();
 #pragma omp parallel for schedule(static) if (n > kParallelMin)
-      for (long long i = 0; i < n; ++i) {
-        v[i] += 0.5 * dt * acc[i];
-        u[i] += dt * v[i];
-      }
+      for (long long i = 0; i < n; ++i) verlet_kick_drift_at(u[i], v[i], acc[i], half_dt, dt);
     }
     time_s_ += dt;
     apply_prescribed(time_s_);
@@ -244,7 +273,7 @@ void Simulation::step() {
       double* v = v_[a].data();
       const double* acc = a_[a].data();
 #pragma omp parallel for schedule(static) if (n > kParallelMin)
-      for (long long i = 0; i < n; ++i) v[i] += 0.5 * dt * acc[i];
+      for (long long i = 0; i < n; ++i) verlet_kick_at(v[i], acc[i], half_dt);
     }
     apply_prescribed(time_s_);
     acceleration_valid_ = true;
@@ -253,6 +282,7 @@ void Simulation::step() {
 }
 
 double Simulation::kinetic_energy_j() const {
+  sync_host();
   const double rho = spec_.material.density_kg_m3;
   double e = 0.0;
   const long long n = static_cast<long long>(size());
@@ -263,6 +293,7 @@ double Simulation::kinetic_energy_j() const {
 }
 
 double Simulation::elastic_energy_j() const {
+  sync_host();
   const long long n = static_cast<long long>(size());
   std::vector<double> div(n);
   const BondsView b = bonds_.view();
@@ -293,11 +324,13 @@ int Simulation::nearest_particle(const std::array<double, 3>& p) const {
 
 double Simulation::sample(int i, const std::string& field) const {
   const int axis = field.back() - 'x';
+  if (device_ && !host_current_) return device_->sample(i, axis, field.rfind("velocity", 0) == 0);
   return field.rfind("displacement", 0) == 0 ? u_[axis][i] : v_[axis][i];
 }
 
 double Simulation::slipping_fraction() const {
   if (pairs_.size() == 0) return 0.0;
+  if (device_ && !host_current_) return static_cast<double>(device_->slipping_pairs()) / pairs_.size();
   size_t k = 0;
   for (const auto& s : pairs_.state) k += s.slipping;
   return static_cast<double>(k) / pairs_.size();
@@ -305,6 +338,7 @@ double Simulation::slipping_fraction() const {
 
 double Simulation::open_fraction() const {
   if (pairs_.size() == 0) return 0.0;
+  if (device_ && !host_current_) return static_cast<double>(device_->open_pairs()) / pairs_.size();
   size_t k = 0;
   for (const auto& s : pairs_.state) k += s.open;
   return static_cast<double>(k) / pairs_.size();

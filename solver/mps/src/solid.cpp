@@ -22,31 +22,18 @@ Solid::Solid(std::vector<double> position_m, std::vector<double> volume_m3, doub
       options_(options) {
   const size_t n = volume_m3_.size();
   if (position_m_.size() != 3 * n) throw RunError("mps solid: positions and volumes disagree in size");
-  bonds_ = build_bonds(options_.dimension, position_m_, options_.re_over_spacing * options_.spacing_m);
-  if (!options_.body_id.empty()) {  // separate bodies meet through contact, not bonds
-    const std::vector<int>& body = options_.body_id;
-    remove_bonds(bonds_, [&body](long long i, long long j, long long) { return body[i] != body[j]; });
-  }
-  norm_ = reference_normalisation(bonds_);
   mean_volume_m3_ = 0.0;
   for (double v : volume_m3_) mean_volume_m3_ += v / n;
-  const double mps_scale = options_.dimension / norm_.number_density_n0;
-  const BondsView b = bonds_.view();
-  moment_inverse_.resize(n);
-  for (size_t i = 0; i < n; ++i) moment_inverse_[i] = inverse_moment_matrix_at(i, b, volume_m3_.data(), options_.dimension, mps_scale);
-  full_stencil_.assign(n, 0);
-  for (size_t i = 0; i < n; ++i) {
-    double number_density = 0.0;
-    for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) number_density += b.weight[k];
-    full_stencil_[i] = number_density >= 0.97 * norm_.number_density_n0;
-  }
+  stencil_volume_m3_ = volume_m3_;
+  stencil_volume_ratio_.assign(n, 1.0);
+  build_stencils(position_m_);
   gradient_.assign(n, Mat3{});
   f_inverse_.assign(n, identity3());
   matrices_.assign(n, ForceMatrices{});
   for (auto& m : matrices_) m.hourglass_stiffness = hourglass_stiffness();
   stress_.assign(n, SymTensor{});
   eq_plastic_strain_.assign(n, 0.0);
-  stress_work_j_m3_.assign(n, 0.0);
+  stress_work_j_.assign(n, 0.0);
   pressure_pa_.assign(n, 0.0);
   pressure_floor_pa_.assign(n, 0.0);
   for (int a = 0; a < 3; ++a) {
@@ -54,9 +41,93 @@ Solid::Solid(std::vector<double> position_m, std::vector<double> volume_m3, doub
     v_[a].assign(n, 0.0);
     a_[a].assign(n, 0.0);
     external_force_n_[a].assign(n, 0.0);
+    if (options_.updated_lagrangian) {
+      u_at_rebuild_[a].assign(n, 0.0);
+      u_stencil_[a].assign(n, 0.0);
+    }
   }
   cfl_dt_s_ = options_.safety * options_.spacing_m / p_wave_speed();
   dt_s_ = options_.dt_s ? *options_.dt_s : cfl_dt_s_;
+}
+
+// Bonds within re of each other in the given configuration, their moment matrices and the
+// surface flags. n0 is taken from the first (initial) build and kept: it sets the MPS
+// scales and the hourglass stiffness, which must not jump at a stencil rebuild.
+void Solid::build_stencils(const std::vector<double>& position_m) {
+  const size_t n = volume_m3_.size();
+  bonds_ = build_bonds(options_.dimension, position_m, options_.re_over_spacing * options_.spacing_m);
+  if (!options_.body_id.empty()) {  // separate bodies meet through contact, not bonds
+    const std::vector<int>& body = options_.body_id;
+    remove_bonds(bonds_, [&body](long long i, long long j, long long) { return body[i] != body[j]; });
+  }
+  if (norm_.number_density_n0 == 0.0) norm_ = reference_normalisation(bonds_);
+  const double mps_scale = options_.dimension / norm_.number_density_n0;
+  const BondsView b = bonds_.view();
+  moment_inverse_.resize(n);
+  for (size_t i = 0; i < n; ++i)
+    moment_inverse_[i] = inverse_moment_matrix_at(i, b, stencil_volume_m3_.data(), options_.dimension, mps_scale);
+  full_stencil_.assign(n, 0);
+  for (size_t i = 0; i < n; ++i) {
+    double number_density = 0.0;
+    for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) number_density += b.weight[k];
+    full_stencil_[i] = number_density >= 0.97 * norm_.number_density_n0;
+  }
+}
+
+// Updated Lagrangian: the current configuration becomes the stencils' reference. Each
+// particle keeps its stress and plastic strain (they live on particles); its gradient
+// restarts from H = 0 on the new stencil, so the next increment dF = F_new F_old^-1 is
+// measured from here. Volumes follow the deformation (V = V0 J); masses do not change.
+// The hourglass residual of the old stencils is discarded (it was the non-affine part of
+// the flow since the last rebuild, which plastic flow does not recover): its energy is
+// booked as dissipated so the energy balance stays closed.
+void Solid::rebuild_stencils_on_current_configuration() {
+  hourglass_released_j_ = hourglass_energy_j();  // what the stencils hold now + what earlier ones held
+  const size_t n = size();
+  std::vector<double> current(3 * n);
+  for (size_t i = 0; i < n; ++i) {
+    for (int a = 0; a < 3; ++a) current[3 * i + a] = position_m_[3 * i + a] + u_[a][i];
+    Mat3 f = gradient_[i];
+    f(0, 0) += 1.0;
+    f(1, 1) += 1.0;
+    f(2, 2) += 1.0;
+    stencil_volume_ratio_[i] *= det(f);
+    stencil_volume_m3_[i] = volume_m3_[i] * stencil_volume_ratio_[i];
+  }
+  for (int a = 0; a < 3; ++a) {
+    u_at_rebuild_[a] = u_[a];
+    std::fill(u_stencil_[a].begin(), u_stencil_[a].end(), 0.0);
+  }
+  build_stencils(current);
+  // The stable step follows the current particle spacing: the stencil coefficients grow as
+  // 1/r^2 where the flow has squeezed neighbours together (a Taylor bar's face reaches a
+  // quarter of the spacing axially and blows up within 20 us at the initial step). Each
+  // step() is split into as many equal substeps as bring the step down to safety x the
+  // shortest current bond / c_L, so dt_s() and the step count the caller sees do not change.
+  double shortest2 = options_.spacing_m * options_.spacing_m;
+  for (size_t k = 0; k < bonds_.size(); ++k)
+    shortest2 = std::min(shortest2, bonds_.rx[k] * bonds_.rx[k] + bonds_.ry[k] * bonds_.ry[k] + bonds_.rz[k] * bonds_.rz[k]);
+  const double stable_dt = options_.safety * std::sqrt(shortest2) / p_wave_speed();
+  substeps_ = std::max(1, static_cast<int>(std::ceil(dt_s_ / stable_dt - 1e-9)));
+  const Mat3 zero{};
+  for (size_t i = 0; i < n; ++i) {
+    gradient_[i] = zero;
+    f_inverse_[i] = identity3();
+    matrices_[i] = force_matrices(stress_[i], zero, f_inverse_[i], moment_inverse_[i], matrices_[i].hourglass_stiffness);
+  }
+  ++stencil_rebuilds_;
+}
+
+std::vector<double> Solid::volume_ratio() const {
+  std::vector<double> j(size());
+  for (size_t i = 0; i < size(); ++i) {
+    Mat3 f = gradient_[i];
+    f(0, 0) += 1.0;
+    f(1, 1) += 1.0;
+    f(2, 2) += 1.0;
+    j[i] = stencil_volume_ratio_[i] * det(f);
+  }
+  return j;
 }
 
 // K_hg = alpha mu d / (n0 V_mean): with the volume-weighted residual sum, the hourglass
@@ -120,18 +191,25 @@ void Solid::apply_prescribed(double t) {
   }
 }
 
-void Solid::compute_acceleration() {
+void Solid::compute_acceleration(double dt) {
   const long long n = static_cast<long long>(size());
-  const BondsView b = bonds_.view();
-  const VectorField u{u_[0].data(), u_[1].data(), u_[2].data()};
+  BondsView b = bonds_.view();
+  const bool updated = options_.updated_lagrangian;
+  if (updated)
+    for (int a = 0; a < 3; ++a)
+      for (long long i = 0; i < n; ++i) u_stencil_[a][i] = u_[a][i] - u_at_rebuild_[a][i];
+  const auto& us = updated ? u_stencil_ : u_;  // displacement since the stencils' reference
+  const VectorField u{us[0].data(), us[1].data(), us[2].data()};
+  const double* volume = stencil_volume_m3_.data();
   const int dim = options_.dimension;
   const double hourglass = hourglass_stiffness();
 
   // 1-2. gradient, stress update, force matrices (all per particle).
   long long inverted = 0;
-#pragma omp parallel for schedule(static) reduction(+ : inverted) if (n > kSolidParallelMin)
+  double largest_gradient2 = 0.0;  // max |H|^2 (Frobenius) over the particles
+#pragma omp parallel for schedule(static) reduction(+ : inverted) reduction(max : largest_gradient2) if (n > kSolidParallelMin)
   for (long long i = 0; i < n; ++i) {
-    const Mat3 h_new = displacement_gradient_at(i, b, u, volume_m3_.data(), moment_inverse_[i]);
+    const Mat3 h_new = displacement_gradient_at(i, b, u, volume, moment_inverse_[i]);
     Mat3 f = h_new;
     f(0, 0) += 1.0;
     f(1, 1) += 1.0;
@@ -142,8 +220,11 @@ void Solid::compute_acceleration() {
       continue;
     }
     double deviatoric_scale = 1.0;
-    stress_work_j_m3_[i] +=
-        update_stress(law_, gradient_[i], f_inverse_[i], h_new, dim, stress_[i], eq_plastic_strain_[i], &deviatoric_scale);
+    stress_work_j_[i] += volume[i] * update_stress(law_, gradient_[i], f_inverse_[i], h_new, dim, stress_[i],
+                                                   eq_plastic_strain_[i], &deviatoric_scale);
+    double h2 = 0.0;
+    for (double v : h_new.a) h2 += v * v;
+    largest_gradient2 = std::max(largest_gradient2, h2);
     gradient_[i] = h_new;
     f_inverse_[i] = inverse(f);
     pressure_pa_[i] = pressure_of(stress_[i]);
@@ -153,6 +234,10 @@ void Solid::compute_acceleration() {
     throw RunError("mps solid: " + std::to_string(inverted) + " particle(s) inverted (det F <= 0) at t = " +
                    std::to_string(time_s_) + " s: the deformation is too large or too non-affine for the reference "
                    "stencils (raise model.hourglass, refine, or lower time.safety)");
+  if (updated && largest_gradient2 > options_.stencil_update_strain * options_.stencil_update_strain) {
+    rebuild_stencils_on_current_configuration();  // the forces below use the new stencils
+    b = bonds_.view();
+  }
   if (fracture_) apply_fracture();  // cut bonds take no part in the forces below
   const bool repulsive = options_.pressure == PressureForce::Repulsive;
   if (repulsive) {
@@ -177,11 +262,11 @@ void Solid::compute_acceleration() {
   in.u = u;
   in.matrices = matrices_.data();
   in.pressure_floor_pa = repulsive ? pressure_floor_pa_.data() : nullptr;
-  in.volume_m3 = volume_m3_.data();
+  in.volume_m3 = volume;
   const double damping = options_.damping_per_s;
   const auto& g = options_.gravity_m_s2;
   const bool contact = contact_.active();
-  if (contact) contact_.compute_forces(state_view(), dt_s_);
+  if (contact) contact_.compute_forces(state_view(), dt);
 #pragma omp parallel for schedule(static) if (n > kSolidParallelMin)
   for (long long i = 0; i < n; ++i) {
     double f[3];
@@ -195,13 +280,17 @@ void Solid::compute_acceleration() {
 }
 
 void Solid::step() {
-  const double dt = dt_s_;
-  // Symplectic Euler (the paper's scheme): v^{k+1} = v^k + dt a(u^k), u^{k+1} = u^k + dt v^{k+1}.
-  compute_acceleration();
-  symplectic_euler_update(u_, v_, a_, options_.dimension, dt);
-  contact_.advance_rigid_bodies(dt, options_.gravity_m_s2);  // same step, reactions of the forces above
-  time_s_ += dt;
-  apply_prescribed(time_s_);
+  // Substeps: 1 unless updated-Lagrangian stencils have been squeezed (see the rebuild).
+  const int substeps = substeps_;
+  const double dt = dt_s_ / substeps;
+  for (int s = 0; s < substeps; ++s) {
+    // Symplectic Euler (the paper's scheme): v^{k+1} = v^k + dt a(u^k), u^{k+1} = u^k + dt v^{k+1}.
+    compute_acceleration(dt);
+    symplectic_euler_update(u_, v_, a_, options_.dimension, dt);
+    contact_.advance_rigid_bodies(dt, options_.gravity_m_s2);  // same step, reactions of the forces above
+    time_s_ += dt;
+    apply_prescribed(time_s_);
+  }
   ++steps_;
   if (steps_ % kClumpingCheckEvery == 0) require_no_clumping(*this);  // stability_checks.hpp
 }
@@ -217,7 +306,7 @@ std::vector<double> Solid::internal_force_of_uniform_stress(const SymTensor& str
   in.bonds = bonds_.view();
   in.u = {none.data(), none.data(), none.data()};
   in.matrices = matrices.data();
-  in.volume_m3 = volume_m3_.data();
+  in.volume_m3 = stencil_volume_m3_.data();
   std::vector<double> force(3 * n);
   for (long long i = 0; i < n; ++i) solid_force_at(i, in, &force[3 * i]);
   return force;
@@ -232,17 +321,24 @@ double Solid::kinetic_energy_j() const {
 
 double Solid::stress_work_j() const {
   double e = 0.0;
-  for (size_t i = 0; i < size(); ++i) e += stress_work_j_m3_[i] * volume_m3_[i];
+  for (double w : stress_work_j_) e += w;
   return e;
 }
 
 double Solid::hourglass_energy_j() const {
   const BondsView b = bonds_.view();
-  const VectorField u{u_[0].data(), u_[1].data(), u_[2].data()};
-  double e = 0.0;
+  std::array<std::vector<double>, 3> us;  // displacement since the stencils' reference
+  for (int a = 0; a < 3; ++a) {
+    us[a] = u_[a];
+    if (options_.updated_lagrangian)
+      for (size_t i = 0; i < size(); ++i) us[a][i] -= u_at_rebuild_[a][i];
+  }
+  const VectorField u{us[0].data(), us[1].data(), us[2].data()};
+  // Plus what earlier stencils held when they were rebuilt (updated Lagrangian; dissipated).
+  double e = hourglass_released_j_;
   for (size_t i = 0; i < size(); ++i) {
-    const Mat3 h = displacement_gradient_at(i, b, u, volume_m3_.data(), moment_inverse_[i]);
-    e += hourglass_energy_at(i, b, u, volume_m3_.data(), h, matrices_[i].hourglass_stiffness);
+    const Mat3 h = displacement_gradient_at(i, b, u, stencil_volume_m3_.data(), moment_inverse_[i]);
+    e += hourglass_energy_at(i, b, u, stencil_volume_m3_.data(), h, matrices_[i].hourglass_stiffness);
   }
   return e;
 }

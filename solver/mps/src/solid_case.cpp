@@ -25,6 +25,8 @@ Solid make_solid(const CaseSpec& spec, std::string* content_id) {
   opt.thickness_m = cloud.thickness_m;
   opt.re_over_spacing = spec.re_over_spacing;
   opt.hourglass = spec.hourglass;
+  opt.updated_lagrangian = spec.updated_lagrangian;
+  opt.stencil_update_strain = spec.stencil_update_strain;
   opt.damping_per_s = spec.damping_per_s;
   opt.pressure = spec.repulsive_pressure ? PressureForce::Repulsive : PressureForce::Conservative;
   opt.safety = spec.safety;

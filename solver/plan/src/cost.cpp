@@ -195,8 +195,10 @@ long long lattice_bond_count(const std::array<long long, 3>& count, int dimensio
 // LPS coefficients (3 doubles) plus lps_a, lps_b (2); original_index internal_index
 // material (3 int32); fixed_dof (1 byte); offsets (1 int64); and the ParticleModel copy it
 // keeps (position 3, volume, spacing: 5 doubles; material_id: 1 int32).
+// Correspondence keeps LPS's arrays plus its moduli (5), F and the force tensor (9 + 9) and
+// the non-affine energy (1) per particle (correspondence.cpp, setup_correspondence).
 double bytes_per_particle(int dimension, PdModel model) {
-  const double doubles = 21 + 10 + (model == PdModel::LPS ? 5 : 1) + 5;
+  const double doubles = 21 + 10 + (model == PdModel::PMB ? 1 : 5) + 5 + (model == PdModel::Correspondence ? 24 : 0);
   return doubles * sizeof(double) + 4 * sizeof(int32_t) + sizeof(uint8_t) + sizeof(int64_t);
 }
 
@@ -206,7 +208,8 @@ double bytes_per_bond() { return sizeof(int32_t) + 4 * sizeof(double) + 2 * size
 
 CostEstimate estimate_cost(const CaseConfig& c, const Throughputs& rates, const CostOptions& o) {
   if (c.model_name == "mps")
-    throw InputError(c.file, "model.type", "'mps'", "pmb or lps (breccia-plan plans PD cases; MPS costs: docs/mps.md)");
+    throw InputError(c.file, "model.type", "'mps'",
+                     "pmb, lps or correspondence (breccia-plan plans PD cases; MPS costs: docs/mps.md)");
   if (c.materials.empty()) throw InputError(c.file, "materials", "none given", "at least one material");
   CostEstimate e;
   e.model = c.model_name;
@@ -292,12 +295,16 @@ CostEstimate estimate_cost(const CaseConfig& c, const Throughputs& rates, const 
   e.run_bytes = e.particles * bytes_per_particle(e.dimension, model) + e.bonds * bytes_per_bond();
   e.setup_bytes = e.run_bytes + padded * sizeof(int32_t) + e.particles * (sizeof(int64_t) + 12 * sizeof(double));
 
-  // Seconds: bond-updates over the measured per-core rate times the threads.
-  const LoopRate& r = rates.rate(model, e.threads);
+  // Seconds: bond-updates over the measured per-core rate of the model and precision times
+  // the threads. float32 without a measured float32 rate falls back to float64's, and says so.
+  const bool f32 = c.precision == CaseConfig::Precision::Float32;
+  const LoopRate* measured = f32 ? rates.find(model, e.threads, "float32") : nullptr;
+  const LoopRate& r = measured ? *measured : rates.rate(model, e.threads);
   const double rate = r.bond_updates_per_core_s * e.threads;
   e.rate_source = r.source + (r.threads != e.threads ? " (measured at " + std::to_string(r.threads) +
                                                            " thread(s); per-core rate assumed to hold)"
                                                      : "");
+  if (f32 && !measured) e.rate_source += " (float64 rate: no float32 rate measured for " + r.model + ")";
   e.setup_source = "power iteration (" + std::to_string(rates.power_iterations) + " force passes) at that rate + " +
                    "other set-up work at " + fmt_rate(rates.setup_bonds_per_core_s) + " bond entries per core-second (" +
                    rates.setup_source + ")";

@@ -183,7 +183,7 @@ PlaneCheck plane_check(const CaseConfig& c) {
 
 CaseConfig proposed_config(const CaseConfig& c, const Proposal& p) {
   CaseConfig out = c;
-  out.model = p.model == "lps" ? PdModel::LPS : PdModel::PMB;
+  out.model = p.model == "lps" ? PdModel::LPS : p.model == "correspondence" ? PdModel::Correspondence : PdModel::PMB;
   out.model_name = p.model;
   out.horizon_factor = p.horizon_factor;
   out.horizon_m.reset();
@@ -221,6 +221,27 @@ Proposal propose(const CaseConfig& c, const std::vector<AtlasRow>& atlas, double
   const ProblemClass problem = classify_problem(c);
   why.push_back("Problem class: " + problem.problem + ", because " + problem.why + ".");
   const std::string kind = given.particles_kind;
+  // Correspondence (docs/plan.md): dearer per bond than LPS, CPU and float64 only, and it needs
+  // stabilisation; the atlas measures PMB and LPS, which are the candidates below.
+  const bool correspondence = c.model == PdModel::Correspondence;
+  const std::optional<double> corr_cost = rates.relative_cost(PdModel::Correspondence, PdModel::LPS, options.threads);
+  if (correspondence) {
+    std::string text = "The case asks for correspondence PD (model.type: correspondence). Its time loop costs ";
+    if (corr_cost) {
+      const LoopRate* r = rates.find(PdModel::Correspondence, options.threads, "float64");
+      text += fmt(*corr_cost) + "x LPS's per bond entry (" + r->source + ")";
+    } else {
+      text += "an unmeasured multiple of LPS's per bond entry (no correspondence rate in " + rates.file + ")";
+    }
+    text += "; it runs on the CPU in float64 only, and it needs stabilisation against its zero-energy (hourglass) "
+            "modes: the stability map stopped every unstabilised run and none at penalty G >= 1 (docs/atlas.md)";
+    if (c.stabilisation == "none") text += ", and this case has model.stabilisation: none";
+    text += ". For the elastic response LPS gives the same constants for any Poisson's ratio, and the atlas has no "
+            "correspondence rows, so the candidates are LPS (and PMB where Poisson's ratio allows): one that meets "
+            "the tolerance is proposed instead. Keep correspondence if the case needs a constitutive law through the "
+            "deformation gradient.";
+    why.push_back(text);
+  }
 
   // Dimensions worth trying.
   const PlaneCheck plane = plane_check(c);
@@ -313,12 +334,18 @@ Proposal propose(const CaseConfig& c, const std::vector<AtlasRow>& atlas, double
     best.dimension = dims.front().first;
     best.planar = dims.front().second;
     best.model = models_for(best.dimension, best.planar).front() == PdModel::PMB ? "pmb" : "lps";
+    // Without atlas rows nothing shows LPS meets the tolerance either: correspondence stays.
+    if (correspondence) best.model = "correspondence";
     best.horizon_factor = given.horizon_factor;
     best.spacing_m = given.spacing_m;
     why.push_back("The atlas has no float64 rows for " + problem.problem + " with " + kind +
                   " particles: the expected error is unknown, so the spacing and horizon factor are kept as given "
                   "and the tolerance cannot be checked.");
-    if (best.model != c.model_name)
+    if (correspondence)
+      why.push_back("Correspondence is kept: LPS would cost " +
+                    (corr_cost ? fmt(1.0 / *corr_cost) + "x as much per bond entry" : std::string("less")) +
+                    ", but without atlas rows nothing shows that it meets the tolerance.");
+    else if (best.model != c.model_name)
       why.push_back("The switch to " + best.model + " rests on Poisson's ratio alone (both models give the same "
                     "elastic constants then); near free surfaces and in fracture they differ, and without atlas rows "
                     "that difference is not checked. Keep " + c.model_name + " if that matters more than the cost.");
@@ -344,6 +371,11 @@ Proposal propose(const CaseConfig& c, const std::vector<AtlasRow>& atlas, double
       if (best.model == "pmb")
         why.push_back("The atlas measures PMB with the energy surface correction, so the proposal turns it on "
                       "(model.surface_correction: energy).");
+      if (correspondence)
+        why.push_back("Correspondence is replaced by " + best.model + ": the atlas shows it meets the tolerance, and "
+                      "correspondence would cost " + (corr_cost ? fmt(*corr_cost) + "x LPS's time per bond entry" :
+                      std::string("more per bond entry (not measured)")) + " and need stabilisation "
+                      "(model.stabilisation is dropped from the proposed case).");
     } else {
       why.push_back("No measured setting meets " + fmt(tol) + ": proposed the setting with the smallest measured error (" +
                     fmt(pick.expected_error) + "); the tolerance is NOT met by anything the atlas has measured.");
@@ -391,11 +423,13 @@ Proposal propose(const CaseConfig& c, const std::vector<AtlasRow>& atlas, double
         f32_safe += std::fabs(r.error - d.error) <= 0.1 * tol;
       }
   }
-  const solver::PdModel best_model = best.model == "lps" ? solver::PdModel::LPS : solver::PdModel::PMB;
+  const solver::PdModel best_model = best.model == "lps"              ? solver::PdModel::LPS
+                                     : best.model == "correspondence" ? solver::PdModel::Correspondence
+                                                                      : solver::PdModel::PMB;
   const std::optional<double> speedup = rates.float32_speedup(best_model, options.threads);
   const bool safe = f32_rows > 0 && f32_safe == f32_rows;
   const bool faster = speedup && *speedup >= 1.1;
-  if (safe && faster && !c.quasi_static) best.precision = "float32";
+  if (safe && faster && !c.quasi_static && best_model != PdModel::Correspondence) best.precision = "float32";
   std::string text = "Precision: ";
   if (f32_rows == 0) {
     text += "the atlas has no float32 rows for " + problem.problem + " with " + best.model +
@@ -408,6 +442,7 @@ Proposal propose(const CaseConfig& c, const std::vector<AtlasRow>& atlas, double
   if (!speedup) text += "; no float32 throughput is measured (throughputs.yaml), so no speed gain is shown";
   else text += "; measured float32 / float64 throughput " + fmt(*speedup) + (faster ? "" : " (no real gain)");
   if (c.quasi_static) text += "; ADR with float forces stalls near a residual of 1e-5 (docs/theory.md)";
+  if (best_model == PdModel::Correspondence) text += "; the correspondence kernels exist in float64 only";
   text += best.precision == "float32" ? ": propose model.precision: float32." : ": the proposal stays float64.";
   why.push_back(text);
 
@@ -445,6 +480,7 @@ void write_proposed_case(const CaseConfig& c, const Proposal& p, const std::stri
   model.remove("horizon");
   model["horizon_factor"] = yaml_number(p.horizon_factor);
   if (p.precision == "float32") model["precision"] = "float32";
+  if (p.model != "correspondence") model.remove("stabilisation");  // the loader refuses it for PMB and LPS
   if (pc.surface_correction) model["surface_correction"] = "energy";
   if (pc.lattice && pc.lattice->dimension == 2)
     model["planar"] = pc.planar == Planar::PlaneStrain ? "plane_strain" : "plane_stress";

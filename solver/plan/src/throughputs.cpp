@@ -19,31 +19,41 @@ namespace breccia::plan {
 
 using solver::PdModel;
 
-const LoopRate& Throughputs::rate(PdModel model, int threads) const {
-  const std::string name = model == PdModel::LPS ? "lps" : "pmb";
+std::string model_key(PdModel model) {
+  return model == PdModel::LPS ? "lps" : model == PdModel::Correspondence ? "correspondence" : "pmb";
+}
+
+const LoopRate* Throughputs::find(PdModel model, int threads, const std::string& precision) const {
+  const std::string name = model_key(model);
   const LoopRate* best = nullptr;
   for (const auto& r : loop) {
-    if (r.model != name || r.precision != "float64") continue;
+    if (r.model != name || r.precision != precision) continue;
     if (!best || std::abs(r.threads - threads) < std::abs(best->threads - threads)) best = &r;
   }
-  if (!best)
-    throw InputError(file, "loop", "no throughput for model " + name, "an entry {model: " + name + ", threads, ...}");
-  return *best;
+  return best;
+}
+
+const LoopRate& Throughputs::rate(PdModel model, int threads) const {
+  if (const LoopRate* best = find(model, threads, "float64")) return *best;
+  const std::string name = model_key(model);
+  throw InputError(file, "loop", "no throughput for model " + name, "an entry {model: " + name + ", threads, ...}");
 }
 
 std::optional<double> Throughputs::float32_speedup(PdModel model, int threads) const {
-  const std::string name = model == PdModel::LPS ? "lps" : "pmb";
-  const LoopRate* f32 = nullptr;
-  for (const auto& r : loop)
-    if (r.model == name && r.precision == "float32" &&
-        (!f32 || std::abs(r.threads - threads) < std::abs(f32->threads - threads)))
-      f32 = &r;
+  const LoopRate* f32 = find(model, threads, "float32");
   if (!f32) return std::nullopt;
   // Against the float64 entry at the same thread count (same benchmark run).
   for (const auto& r : loop)
-    if (r.model == name && r.precision == "float64" && r.threads == f32->threads)
+    if (r.model == f32->model && r.precision == "float64" && r.threads == f32->threads)
       return f32->bond_updates_per_core_s / r.bond_updates_per_core_s;
   return std::nullopt;
+}
+
+std::optional<double> Throughputs::relative_cost(PdModel model, PdModel reference, int threads) const {
+  const LoopRate* a = find(model, threads, "float64");
+  const LoopRate* b = find(reference, threads, "float64");
+  if (!a || !b) return std::nullopt;
+  return b->bond_updates_per_core_s / a->bond_updates_per_core_s;
 }
 
 std::string default_throughputs_path() {
@@ -59,7 +69,7 @@ Throughputs load_throughputs(const std::string& path) {
   for (const Section& l : root.list("loop")) {
     l.allow_only({"model", "threads", "bond_updates_per_core_s", "source", "precision"});
     LoopRate r;
-    r.model = l.choice("model", {"pmb", "lps"});
+    r.model = l.choice("model", {"pmb", "lps", "correspondence"});
     r.threads = static_cast<int>(l.integer("threads"));
     r.bond_updates_per_core_s = l.positive("bond_updates_per_core_s", Quantity::Dimensionless);
     r.source = l.text("source", path);
@@ -106,7 +116,9 @@ Throughputs calibrate(const solver::CaseConfig& like, int threads, const Through
   for (int k = 0; k < 2 * d; ++k) lat.box.push_back(k < d ? 0.0 : per_side * h);
   c.lattice = lat;
   c.model = like.model;
-  c.model_name = like.model == PdModel::LPS ? "lps" : "pmb";
+  c.model_name = model_key(like.model);
+  c.stabilisation = like.stabilisation;  // correspondence: the penalty pass costs what it costs
+  c.stabilisation_coefficient = like.stabilisation_coefficient;
   c.planar = d == 2 ? (like.planar == solver::Planar::None ? solver::Planar::PlaneStress : like.planar)
                     : solver::Planar::None;
   c.influence = like.influence;
@@ -119,6 +131,7 @@ Throughputs calibrate(const solver::CaseConfig& like, int threads, const Through
   mat.name = "calibration";
   c.materials = {mat};
   c.write_results = false;
+  c.precision = like.precision;  // a float32 case is calibrated in float32
 
   omp_set_num_threads(std::max(1, threads));
   const std::clock_t cpu0 = std::clock();
@@ -143,8 +156,13 @@ Throughputs calibrate(const solver::CaseConfig& like, int threads, const Through
   const double loop_rate = bonds * static_cast<double>(r.steps) / std::max(r.cpu_s, 1e-9);  // per CPU-second
   const std::string what = std::to_string(s.n) + " particles, " + std::to_string(s.bond_count()) + " bonds, " +
                            std::to_string(r.steps) + " steps, " + std::to_string(threads) + " thread(s)";
-  LoopRate lr{c.model_name, std::max(1, threads), loop_rate, "measured on this machine by --calibrate (" + what + ")"};
-  std::erase_if(t.loop, [&](const LoopRate& x) { return x.model == lr.model; });
+  const bool f32 = c.precision == solver::CaseConfig::Precision::Float32;
+  LoopRate lr{c.model_name, std::max(1, threads), loop_rate, "measured on this machine by --calibrate (" + what + ")",
+              f32 ? "float32" : "float64"};
+  // A float64 calibration replaces the model's entries (a float32 entry from another machine
+  // would no longer compare); a float32 one only the float32 entries (float64 candidates of
+  // the proposal still need their rate).
+  std::erase_if(t.loop, [&](const LoopRate& x) { return x.model == lr.model && (!f32 || x.precision == "float32"); });
   t.loop.push_back(lr);
   // Set-up other than the power iteration; never below a tenth of the documented rate's
   // cost share (a very short set-up can measure as ~0 on a coarse clock).

@@ -3,17 +3,20 @@
 // With one horizon for the whole body (model.variable_horizon: false, the default) the
 // horizon is horizon_factor x the median spacing, so where the particles are coarser than
 // the median the local horizon ratio m_i = horizon / spacing_i falls. Nothing blows up:
-// measured on a graded strip (2D, PMB, horizon_factor 3.015; docs/atlas.md), the worse of the
-// uniaxial and shear strain energies of the coarse interior is off by 1.7 % at local m 2.0,
-// -18 % at 1.5, -56 % at 1.0, and at 0.75 and below the coarse region has no shear stiffness
-// or no bonds at all, silently. The check refuses a set-up in which more than
-// kMaxUnderResolvedShare of the particles see a local ratio below kMinLocalHorizonRatio and
-// names model.variable_horizon (dual horizon keeps m_i = horizon_factor everywhere and the
-// coarse energy within 1 % at every grading measured, 1.5 to 6).
+// measured on a graded strip (2D, horizon_factor 3.015; docs/atlas.md), the worse of the
+// uniaxial and shear strain energies of the coarse interior is, for PMB, off by 1.3 % at local
+// m 1.77, -12 % at 1.68, -18 % at 1.5, -56 % at 1.0; LPS holds out longer (+2.7 % at 1.51, -7 %
+// at 1.34, -20 % at 1.21, -45 % at 1.0); at 0.75 and below the coarse region has no shear
+// stiffness or no bonds at all, silently. The check refuses a set-up in which more than
+// kMaxUnderResolvedShare of the particles see a local ratio below the model's limit
+// (GradedLimits below) and names model.variable_horizon (dual horizon keeps
+// m_i = horizon_factor everywhere and the coarse energy within 1 % at every grading measured,
+// 1.5 to 6).
 //
 // Dual horizon has a limit too, of accuracy, not stability: a P pulse crossing the change
-// reflects 0.2-0.4 % of its energy at gradings 1.5-3, 3.9 % at 4 and 35 % at 6 (the pulse is
-// also only four coarse spacings wide there). graded_horizon_warning() says so at start-up.
+// reflects 0.1-1 % of its energy up to grading 3 (PMB) or 2.75 (LPS), then several percent
+// (PMB 5.5 % at 3.5, 35 % at 6, where the pulse is only four coarse spacings wide; LPS 1.8 % at
+// 3, 5.5 % at 5). graded_horizon_warning() says so at start-up.
 #include <cstdint>
 #include <string>
 
@@ -21,11 +24,33 @@
 
 namespace breccia::solver {
 
-// Between the last ratio measured good (2.0: 1.7 %) and the first measured bad (1.5: 18 %).
-inline constexpr double kMinLocalHorizonRatio = 1.75;
-// Dual horizon: spacing ratio between bonded neighbours from which the atlas measured
-// reflections of several percent (4: 3.9 %, 6: 35 %).
-inline constexpr double kWarnNeighbourSpacingJump = 4.0;
+// Per-model limits, measured (breccia-atlas --only-stability --stability-studies graded
+// --models pmb,lps --gradings 1.5,...,6; docs/atlas.md "Per-model graded limits"; 2D PMB / LPS
+// strip, horizon_factor 3.015, grading r -> coarse local ratio 3.015 / r).
+//  One horizon: refused where the worse of the uniaxial and shear strain energies of the
+//  coarse interior is off by more than 5 % (the atlas's looser band). The limit is the
+//  midpoint between the smallest local ratio measured within 5 % and the largest measured
+//  beyond it.
+//  Dual horizon: warned about where a P pulse crossing the change reflects more than 1 % of
+//  its energy (the atlas's tighter band; statics stay right, so it is not refused). The limit
+//  is the midpoint between the largest spacing jump measured below 1 % (every smaller
+//  grading below 1 % too) and the first measured above.
+// Models without their own measurement (correspondence) get the stricter of the two.
+struct GradedLimits {
+  const char* model;         // whose measurement the numbers are
+  double min_local_ratio;    // one horizon: refuse below this horizon_i / spacing_i
+  double good_ratio, good_error;  // smallest local ratio measured within 5 %, its energy error
+  double bad_ratio, bad_error;    // largest local ratio measured beyond 5 %, its energy error
+  double warn_jump;          // dual horizon: warn from this spacing jump between bonded neighbours
+  double quiet_jump, quiet_reflected;  // largest jump measured below 1 % reflected, its value
+  double loud_jump, loud_reflected;    // first jump measured above 1 %, its value
+};
+inline constexpr GradedLimits kPmbGradedLimits{"PMB", 1.72, 1.774, 0.01284, 1.675, -0.1175,
+                                               3.25, 3.0, 0.002499, 3.5, 0.05466};
+inline constexpr GradedLimits kLpsGradedLimits{"LPS", 1.42, 1.508, 0.02703, 1.34, -0.07143,
+                                               2.875, 2.75, 0.008552, 3.0, 0.0176};
+// The limits that apply to a model: its own, or (correspondence, not measured) the stricter.
+const GradedLimits& graded_limits(PdModel model);
 // A few large cells of an irregular mesh are the energy-scatter check's business
 // (family_check.hpp); a coarse region is a share of the body (the graded strip: 10 %).
 inline constexpr double kMaxUnderResolvedShare = 0.01;
@@ -39,7 +64,7 @@ struct HorizonGrading {
   double max_local_ratio = 0.0;
   double spacing_ratio = 1.0;     // largest / smallest particle spacing
   size_t under_resolved = 0;      // particles coarser than kCoarseSpacingFactor x median with
-                                  // horizon_i / spacing_i < kMinLocalHorizonRatio
+                                  // horizon_i / spacing_i < the model's min_local_ratio
   int64_t worst_particle = -1;    // internal index of the smallest ratio
   double max_neighbour_jump = 1.0;  // largest spacing_j / spacing_i over bonds
 };
@@ -53,7 +78,7 @@ HorizonGrading horizon_grading(const PdSystem& s);
 void require_graded_horizon(const PdSystem& s);
 
 // Empty, or a warning (printed by setup_system) that bonded neighbours differ in spacing by
-// kWarnNeighbourSpacingJump or more: waves reflect at the change (docs/atlas.md).
+// more than the model's warn_jump: waves reflect at the change (docs/atlas.md).
 std::string graded_horizon_warning(const PdSystem& s);
 
 }  // namespace breccia::solver

@@ -1,26 +1,19 @@
 #pragma once
 // Files a PD run writes (docs/formats.md): results.h5 + results.xdmf (fields in particles.h5
-// order), history.csv, summary.json, checkpoint.h5.
+// order), history.csv, summary.json, checkpoint.h5; and the results.h5 layout (identity, bond
+// list, broken bits per output, XDMF sidecar) that the MPS runs write through the same functions.
 #include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "breccia/common/h5.hpp"
+#include "breccia/solver/results_layout.hpp"
 #include "breccia/solver/pd_system.hpp"
 
 namespace breccia::solver {
 
-// The run's bonds once, as post-processing reads them (results.h5 /bonds, docs/formats.md):
-// each pair once from its lower file index, partners ascending. Built at start; an output
-// then only needs one bit per bond.
-struct HalfBondList {
-  std::vector<int64_t> offsets;       // N + 1, file order
-  std::vector<int32_t> neighbors;     // partners j > i, ascending within a row
-  std::vector<int64_t> entry;         // bond b -> the solver's bond entry (row of i, internal order)
-  std::vector<uint8_t> within_horizon;  // bits: |xi| <= max(horizon_i, horizon_j) (the fragment graph)
-  std::vector<uint8_t> precrack;        // bits: removed at start by a pre-crack
-};
+// The PD run's bond list (results_layout.hpp) from its internal-order families.
 HalfBondList half_bond_list(const PdSystem& sys);
 
 // Bit b (byte b / 8, bit b % 8, least significant first) set when bond b of `list` is broken

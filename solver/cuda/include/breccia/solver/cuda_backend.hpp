@@ -8,17 +8,11 @@
 #include <memory>
 #include <string>
 
+#include "breccia/solver/cuda_device.hpp"  // cuda_device_available, cuda_device_description
 #include "breccia/solver/pd_system.hpp"
 #include "breccia/solver/run.hpp"
 
 namespace breccia::solver {
-
-// True when a CUDA driver and at least one device are present. Never throws: a machine
-// without a GPU or without the driver library simply answers false.
-bool cuda_device_available();
-
-// Name and memory of device 0, for logs ("NVIDIA H100 80GB HBM3, 79.1 GiB"); empty if none.
-std::string cuda_device_description();
 
 // A PdSystem's arrays on the device. The host PdSystem stays the owner of the case (config,
 // loads, constraints, metadata); this object owns the device copies of every array a step

@@ -112,6 +112,8 @@ struct CaseSpec {
   // stress formulation (docs/mps.md, "Stress-based solid")
   double hourglass = 0.1;          // hourglass stiffness / shear modulus
   bool repulsive_pressure = false; // pressure_force: repulsive (Inagaki) | conservative
+  bool updated_lagrangian = false; // lagrangian: updated (stencils rebuilt on the current configuration) | total
+  double stencil_update_strain = 0.1;  // rebuild when some |H| (since the last rebuild) exceeds this
   double damping_per_s = 0.0;      // mass-proportional damping (quasi-static runs)
   std::array<double, 3> gravity_m_s2{0.0, 0.0, 0.0};
   std::optional<FloorSpec> floor;

@@ -2,8 +2,10 @@
 // Contact of the stress-based MPS solid (solid.hpp; seed 002, physics.md section 3):
 //  - between particles that are not bonded (different bodies, or parts of one body far
 //    apart in the reference configuration) once they come within the contact distance in
-//    the current configuration: a cell list on the current positions, rebuilt every step
-//    (O(N)), and a central penalty force (contact_kernels.hpp);
+//    the current configuration (a cut bond, weight 0, no longer counts as a bond): a cell
+//    list on the current positions, rebuilt every step (O(N)), and a penalty force along
+//    the pair direction or the neighbour-distribution normal (contact_kernels.hpp), with
+//    optional Coulomb friction per pair;
 //  - with rigid obstacles: half-spaces (the floor) and 2D polygons, fixed or free rigid
 //    bodies (mass, moment of inertia, translation and rotation), with Coulomb friction;
 //    free polygons also rest on the half-spaces through their vertices.
@@ -18,11 +20,24 @@
 
 namespace breccia::mps {
 
-// Contact between particles that are not bonded (contact_kernels.hpp, particle_pair_contact).
+// Direction of the contact force between two particles (contact_kernels.hpp).
+enum class ContactNormal {
+  Pair,                  // line of centres, penetration d - r (central force)
+  NeighbourDistribution  // from both particles' neighbour distributions (the thesis' normal)
+};
+
+// Contact between particles that are not bonded (contact_kernels.hpp).
 struct ParticleContact {
   double distance_m = 0.0;     // centres closer than this repel (default: one spacing, particles touching)
   double stiffness_n_m = 0.0;  // penalty k per pair
+  ContactNormal normal = ContactNormal::Pair;
+  double window_m = 0.0;       // NeighbourDistribution: tangential hat width (the spacing; 0: distance_m)
+  // Coulomb friction between the particles (as RigidContactLaw; k_t per pair, times the
+  // pair's weight with NeighbourDistribution).
+  double tangential_stiffness_n_m = 0.0;
+  double static_friction = 0.0, kinetic_friction = 0.0;
   std::vector<int> body_id;    // per particle (may be empty: one body)
+  bool frictional() const { return static_friction > 0.0 || kinetic_friction > 0.0; }
 };
 
 // Friction and penalty stiffness of one rigid obstacle (per contacting particle).
@@ -111,11 +126,27 @@ private:
     double fx = 0.0, fy = 0.0, torque = 0.0;  // reactions of the last compute_forces()
     std::vector<double> local_x, local_y;     // vertices relative to the centroid at angle 0
   };
-  // Pair penalties in state s: returns their energy, adds the forces to *force (if given).
-  double pair_contacts(const ParticleStateView& s, std::array<std::vector<double>, 3>* force, long long* pairs) const;
+  // Particle pairs in contact candidates: current positions, surface directions (for the
+  // distribution normal) and the unbonded pairs i < j within reach, sorted by (i, j).
+  struct PairCandidates {
+    std::vector<double> x, surface;       // 3N each
+    std::vector<std::array<int, 2>> pairs;
+  };
+  PairCandidates pair_candidates(const ParticleStateView& s) const;
+  PairContactGeometry pair_geometry(const PairCandidates& c, int i, int j) const;
+  double window_m() const { return particles_.window_m > 0.0 ? particles_.window_m : particles_.distance_m; }
+  // Penalty energy of the particle pairs in state s (friction springs not included).
+  double pair_energy_j(const ParticleStateView& s) const;
+  // Pair forces (normal penalty and friction) into force_n_; updates the pair friction springs.
+  void pair_forces(const ParticleStateView& s, double dt);
   void obstacle_forces(const ParticleStateView& s, double dt);
   double obstacle_penalty_energy_j(const ParticleStateView& s) const;
   void free_bodies_on_half_spaces(double dt);
+  // Contact between two rigid polygons (at least one free): each vertex of one inside the
+  // other is pushed out to the nearest boundary point, k g, equal and opposite at the vertex
+  // on both bodies; k the two laws' normal stiffnesses in series. Frictionless. Adds the
+  // reactions (fx, fy, torque per polygon) to *reactions when given; returns the penalty energy.
+  double polygon_pairs(std::vector<std::array<double, 3>>* reactions) const;
   void rigid_contact(long long i, long long slot, double depth, const double n[3], const double v_surface[3],
                      const RigidContactLaw& law, const ParticleStateView& s, double dt, double f[3]);
 
@@ -129,6 +160,10 @@ private:
   std::vector<FrictionState> friction_;
   // Friction springs of free polygons' vertices on the half-spaces (half-space major).
   std::vector<FrictionState> vertex_friction_;
+  // Friction springs of the particle pairs in contact at the last step, sorted by key
+  // i * N + j (i < j); a pair that leaves contact loses its spring.
+  std::vector<long long> pair_friction_key_;
+  std::vector<FrictionState> pair_friction_;
   double spring_energy_j_ = 0.0, dissipated_j_ = 0.0;
   long long contact_pairs_ = 0;
 };

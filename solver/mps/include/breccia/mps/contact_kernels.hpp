@@ -2,7 +2,8 @@
 // Contact physics of the stress-based MPS solid (contact.hpp), written once as BRECCIA_HD
 // functions over plain values, so the OpenMP loops in contact.cpp and a CUDA launcher call
 // the same bodies. Every normal force derives from a penalty potential k g^2 / 2 (g the
-// penetration), so frictionless contact conserves energy up to the time-integration error;
+// penetration), so frictionless contact conserves energy up to the time-integration error
+// (with the neighbour-distribution normal, up to the neglected change of the normal);
 // friction is a tangential spring with a Coulomb slip limit (coulomb_tangential_force).
 #include <cmath>
 
@@ -10,17 +11,126 @@
 
 namespace breccia::mps {
 
-// Two particles of different bodies (or not bonded) closer than the contact distance d
-// repel along the line of their centres: energy k (d - r)^2 / 2, force on i
-// k (d - r) (x_i - x_j)/r. A central pair force conserves linear and angular momentum and
-// is the exact gradient of the energy. dx = x_i - x_j (current). Returns the energy of the
-// pair (0 when apart) and adds the force on i to f.
-BRECCIA_HD inline double particle_pair_contact(const double dx[3], double distance, double stiffness, double f[3]) {
+// Outward surface direction of particle i from its neighbour distribution (seed 002: "the
+// contact normal is estimated from the neighbour relations, so the roughness of the
+// particle arrangement does not matter"): the weighted mean of the unit directions from its
+// intact neighbours to i in the current configuration, sum_j w_ij (x_i - x_j)/r_ij / sum_j
+// w_ij. Not normalised on purpose: its length says how one-sided the neighbourhood is
+// (re = 2.1 spacings, square lattice: 0 inside, 0.008 one row below a face, 0.42 on a flat
+// face, 0.76 at a corner), which distribution_normal_geometry uses to tell faces from the
+// inside. x: 3N current positions; bonds with weight 0 (cut) do not count, so crack faces
+// get their own normal.
+BRECCIA_HD inline void neighbour_distribution_direction(long long i, const BondsView& b, const double* x, double out[3]) {
+  double sum[3] = {0.0, 0.0, 0.0}, weights = 0.0;
+  for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
+    const double w = b.weight[k];
+    if (w == 0.0) continue;
+    const long long j = b.neighbour[k];
+    const double d[3] = {x[3 * i] - x[3 * j], x[3 * i + 1] - x[3 * j + 1], x[3 * i + 2] - x[3 * j + 2]};
+    const double r = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    if (r <= 0.0) continue;
+    for (int a = 0; a < 3; ++a) sum[a] += w * d[a] / r;
+    weights += w;
+  }
+  for (int a = 0; a < 3; ++a) out[a] = weights > 0.0 ? sum[a] / weights : 0.0;
+}
+
+// Geometry of one contact pair: the unit normal n (direction of the force on i), the
+// penetration along it g = d - (x_i - x_j) . n, the tangential offset t (the part of
+// x_i - x_j across n) and the pair's weight w(|t|).
+struct PairContactGeometry {
+  double n[3] = {0.0, 0.0, 0.0};
+  double gap = 0.0;         // penetration, > 0 in contact
+  double t[3] = {0.0, 0.0, 0.0};
+  double weight = 1.0;      // share of the pair in the contact, 0..1
+  double dweight_dt = 0.0;  // d weight / d |t|
+};
+
+// Pair direction (contact.particles.normal: pair): two particles (of different bodies, or
+// not bonded) closer than the contact distance d repel along the line of their centres,
+// n = e = (x_i - x_j)/r, g = d - r, w = 1: energy k (d - r)^2 / 2, force on i k (d - r) e.
+// A central pair force conserves linear and angular momentum and is the exact gradient of
+// the energy; but between laterally offset particles of two flat faces it has a tangential
+// part and its size depends on the offset: the faces ride over an egg-crate potential
+// ("washboard"; a block over a slab whose particles sit over its gaps rests on pairs
+// 30 deg off the normal, so Coulomb friction mu_k k (d - r) per pair is 1/cos 30 = 1.15
+// times mu_k times the weight).
+BRECCIA_HD inline PairContactGeometry pair_direction_geometry(const double dx[3], double distance) {
+  PairContactGeometry c;
   const double r = std::sqrt(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2]);
-  if (!(r < distance) || r <= 0.0) return 0.0;
-  const double g = distance - r;
-  for (int a = 0; a < 3; ++a) f[a] += stiffness * g * dx[a] / r;
-  return 0.5 * stiffness * g * g;
+  if (r <= 0.0) return c;
+  for (int a = 0; a < 3; ++a) c.n[a] = dx[a] / r;
+  c.gap = distance - r;
+  return c;
+}
+
+BRECCIA_HD inline double contact_smoothstep(double x) {
+  x = x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x);
+  return x * x * (3.0 - 2.0 * x);
+}
+
+// Neighbour-distribution normal (contact.particles.normal: neighbour_distribution).
+// From the two particles' outward surface directions m_i, m_j
+// (neighbour_distribution_direction), the face normal n_f = (m_j - m_i)/|m_j - m_i| (j's
+// outward and i's inward normal). Between two faces that face each other the contact is
+// planar: penetration along the normal, g = d - (x_i - x_j) . n, independent of the lateral
+// offset t, and each pair counts with the hat weight w = 1 - |t|/window (window = spacing),
+// so the weights of a particle's partners on a regular facing surface sum to one at any
+// lateral position: the normal force does not depend on how the lattices are offset and
+// has no tangential part - no washboard. Energy k w g^2 / 2 per pair, force its gradient
+// with n held fixed (normal part k w g n, tangential part -k g^2/2 dw/d|t| t/|t|, which
+// cancels between the partners of a regular surface).
+// The face normal is used only where both particles are on faces that face each other; a
+// corner (its m is 45 deg off the face it touches, so a planar penetration along a blend of
+// the two would be off by up to h sin(22 deg)) or a particle inside a body (|m| near 0, its
+// direction noise; a flat face has |m| = 0.42 at re = 2.1 spacings) meets the other body
+// through the pair direction, exact for a point contact: n = normalize((1 - b) e + b n_f),
+//   b = S((a - cos 10 deg)/(cos 3 deg - cos 10 deg)) S((min(|m_i|, |m_j|) - 0.1)/0.1),
+// a = -m_i . m_j / (|m_i| |m_j|) the alignment of the two face normals, S the smoothstep.
+// With b = 0 this is the pair direction exactly (t = 0, w = 1, g = d - r).
+// Antisymmetric in i and j: the forces on i and j are equal and opposite (linear momentum
+// exact); angular momentum is not exact (face-face forces are not central), nor is the
+// energy where n turns (its own derivative is neglected; zero between flat faces).
+BRECCIA_HD inline PairContactGeometry distribution_normal_geometry(const double dx[3], const double m_i[3],
+                                                                  const double m_j[3], double distance,
+                                                                  double window) {
+  PairContactGeometry c = pair_direction_geometry(dx, distance);
+  const double mi = std::sqrt(m_i[0] * m_i[0] + m_i[1] * m_i[1] + m_i[2] * m_i[2]);
+  const double mj = std::sqrt(m_j[0] * m_j[0] + m_j[1] * m_j[1] + m_j[2] * m_j[2]);
+  if (!(mi > 0.0) || !(mj > 0.0)) return c;
+  const double align = -(m_i[0] * m_j[0] + m_i[1] * m_j[1] + m_i[2] * m_j[2]) / (mi * mj);
+  const double cos3 = 0.99862953475457383, cos10 = 0.98480775301220802;
+  const double blend = contact_smoothstep((align - cos10) / (cos3 - cos10)) *
+                       contact_smoothstep(((mi < mj ? mi : mj) - 0.1) / 0.1);
+  if (blend <= 0.0) return c;
+  const double nf[3] = {m_j[0] - m_i[0], m_j[1] - m_i[1], m_j[2] - m_i[2]};
+  const double lf = std::sqrt(nf[0] * nf[0] + nf[1] * nf[1] + nf[2] * nf[2]);
+  double n[3];
+  for (int a = 0; a < 3; ++a) n[a] = (1.0 - blend) * c.n[a] + blend * nf[a] / lf;
+  const double ln = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (!(ln > 1e-12)) return c;
+  for (int a = 0; a < 3; ++a) c.n[a] = n[a] / ln;
+  const double along = dx[0] * c.n[0] + dx[1] * c.n[1] + dx[2] * c.n[2];
+  c.gap = distance - along;
+  for (int a = 0; a < 3; ++a) c.t[a] = dx[a] - along * c.n[a];
+  const double tl = std::sqrt(c.t[0] * c.t[0] + c.t[1] * c.t[1] + c.t[2] * c.t[2]);
+  c.weight = tl < window ? 1.0 - tl / window : 0.0;
+  c.dweight_dt = tl < window ? -1.0 / window : 0.0;
+  return c;
+}
+
+// Normal penalty of a pair with geometry c: adds the force on i (minus it acts on j) to f,
+// returns the energy k w g^2 / 2 (0 when apart) and the normal force k w g in *normal_force.
+BRECCIA_HD inline double pair_normal_force(const PairContactGeometry& c, double stiffness, double f[3],
+                                           double* normal_force) {
+  *normal_force = 0.0;
+  if (!(c.gap > 0.0) || !(c.weight > 0.0)) return 0.0;
+  *normal_force = stiffness * c.weight * c.gap;
+  for (int a = 0; a < 3; ++a) f[a] += *normal_force * c.n[a];
+  const double tl = std::sqrt(c.t[0] * c.t[0] + c.t[1] * c.t[1] + c.t[2] * c.t[2]);
+  if (tl > 0.0 && c.dweight_dt != 0.0)
+    for (int a = 0; a < 3; ++a) f[a] -= 0.5 * stiffness * c.gap * c.gap * c.dweight_dt * c.t[a] / tl;
+  return 0.5 * stiffness * c.weight * c.gap * c.gap;
 }
 
 // Signed penetration of point (px, py) into a closed 2D polygon (vertices x[k], y[k],

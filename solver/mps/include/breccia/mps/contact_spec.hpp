@@ -31,17 +31,19 @@ struct BodiesSpec {
   std::vector<BodyShapeSpec> shapes;
 };
 
-// Contact between particles that are not bonded (contact.hpp).
-struct ParticleContactSpec {
-  double distance_factor = 1.0;   // contact distance / spacing
-  double stiffness_factor = 1.0;  // k = factor (lambda + 2 mu) A / spacing per pair
-};
-
-// Coulomb friction of a rigid surface (floor or polygon) against the particles.
+// Coulomb friction of a surface (floor, polygon, or between particle bodies).
 struct FrictionSpec {
   double static_friction = 0.0;   // mu_s >= 0
   double kinetic_friction = 0.0;  // 0 <= mu_k <= mu_s (default mu_s)
   double tangential_stiffness_factor = 1.0;  // k_t = factor mu A / spacing
+};
+
+// Contact between particles that are not bonded (contact.hpp).
+struct ParticleContactSpec {
+  double distance_factor = 1.0;   // contact distance / spacing
+  double stiffness_factor = 1.0;  // k = factor (lambda + 2 mu) A / spacing per pair
+  std::string normal = "pair";  // pair | neighbour_distribution (contact.hpp, ContactNormal)
+  FrictionSpec friction;          // between the particles (default none)
 };
 
 // A 2D rigid polygon (contact.hpp, RigidPolygon).

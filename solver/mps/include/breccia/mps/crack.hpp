@@ -91,6 +91,48 @@ BRECCIA_HD inline PairForce friction_pair_force(const FrictionLaw& law, double g
   return f;
 }
 
+// Non-owning view of the pairs (below) for the per-pair function: raw pointers, so the CPU
+// loop and the CUDA pair kernel share it. law: per crack; state: per pair, updated.
+struct CrackPairsView {
+  long long count = 0;
+  const int* plus = nullptr;
+  const int* minus = nullptr;
+  const int* crack = nullptr;
+  const double* normal_x = nullptr;
+  const double* normal_y = nullptr;
+  const double* tangent_x = nullptr;
+  const double* tangent_y = nullptr;
+  const FrictionLaw* law = nullptr;
+  PairState* state = nullptr;
+};
+
+// Friction force of pair p on its + particle (x, y; the - particle receives the opposite),
+// from the relative displacement and velocity of the two particles; advances `st`, the
+// pair's state (a copy of it when the caller only probes the force).
+BRECCIA_HD inline void crack_pair_force_at(long long p, const CrackPairsView& c, VectorField u, VectorField v,
+                                           PairState& st, double force[2]) {
+  const int i = c.plus[p], j = c.minus[p];
+  const double nx = c.normal_x[p], ny = c.normal_y[p], sx = c.tangent_x[p], sy = c.tangent_y[p];
+  const double gx = u.x[i] - u.x[j], gy = u.y[i] - u.y[j];
+  const double vs = (v.x[i] - v.x[j]) * sx + (v.y[i] - v.y[j]) * sy;
+  const PairForce f = friction_pair_force(c.law[c.crack[p]], gx * nx + gy * ny, gx * sx + gy * sy, vs, st);
+  force[0] = f.normal_n * nx + f.tangent_n * sx;
+  force[1] = f.normal_n * ny + f.tangent_n * sy;
+}
+
+// Add a pair force to the acceleration of one of its particles (mass = rho V): +force on the
+// + particle, -force on the - particle. A particle in several pairs must receive them in pair
+// order on every backend for the sums to round alike.
+BRECCIA_HD inline void add_pair_acceleration(double& ax, double& ay, const double force[2], double mass, bool plus_side) {
+  if (plus_side) {
+    ax += force[0] / mass;
+    ay += force[1] / mass;
+  } else {
+    ax -= force[0] / mass;
+    ay -= force[1] / mass;
+  }
+}
+
 // All pairs of all cracks, structure of arrays.
 struct CrackPairs {
   std::vector<int> plus, minus;  // particle indices; + side is left of start->end
@@ -100,7 +142,23 @@ struct CrackPairs {
   std::vector<std::string> name; // per crack
   std::vector<PairState> state;  // per pair
   size_t size() const { return plus.size(); }
+  CrackPairsView view() {
+    return {static_cast<long long>(size()), plus.data(), minus.data(), crack.data(), normal_x.data(), normal_y.data(),
+            tangent_x.data(), tangent_y.data(), law.data(), state.data()};
+  }
 };
+
+// Each particle's pairs, in pair order (CSR over the particles that belong to a pair): a
+// launcher that adds the pair forces per particle (one thread each, no atomics) adds them in
+// the order of the CPU loop over pairs, so a particle in several pairs (cracks one row apart)
+// sums them alike on both backends.
+struct PairIncidence {
+  std::vector<int> particle;            // particles in at least one pair, by first appearance
+  std::vector<long long> offset{0};     // entries of particle[q]: [offset[q], offset[q+1])
+  std::vector<int> pair;                // pair index, ascending within a particle
+  std::vector<unsigned char> plus_side; // 1: the particle is that pair's + particle
+};
+PairIncidence pair_incidence(const CrackPairs& pairs);
 
 // Build the pairs of every crack of the case and remove the continuum bonds crossing the
 // crack segments. Throws InputError when a crack finds no particle pairs (outside the body)

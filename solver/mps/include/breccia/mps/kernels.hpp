@@ -4,8 +4,8 @@
 // operators below act on the reference configuration (physics.md section 2, eqs 1-3).
 //
 // Physics written once: plain inline functions over raw arrays (structure of arrays,
-// CSR bonds), no containers, so the OpenMP loops here and a CUDA launcher later call
-// the same bodies. BRECCIA_HD marks them for host and device.
+// CSR bonds), no containers, so the OpenMP loops here and the CUDA launcher call
+// the same bodies (solver/cuda/src/mps_cuda.cu). BRECCIA_HD marks them for host and device.
 #include <cmath>
 
 #if defined(__CUDACC__)
@@ -167,5 +167,22 @@ BRECCIA_HD inline double elastic_energy_per_rho_at(long long i, BondsView b, Vec
   }
   return 0.5 * c.graddiv_per_rho * div[i] * div[i] + 0.25 * c.laplacian_per_rho * s.laplacian * pair;
 }
+
+// Time integration of one particle component (the CPU loops and the CUDA launcher call these,
+// so both round alike). Symplectic Euler, the paper's eqs (7)-(8): v^{k+1} = v^k + dt a(u^k),
+// u^{k+1} = u^k + dt v^{k+1}.
+BRECCIA_HD inline void symplectic_euler_at(double& u, double& v, double a, double dt) {
+  v += dt * a;
+  u += dt * v;
+}
+
+// Velocity Verlet, first half: half kick with a(u^k), then the drift with the half-step velocity.
+BRECCIA_HD inline void verlet_kick_drift_at(double& u, double& v, double a, double half_dt, double dt) {
+  v += half_dt * a;
+  u += dt * v;
+}
+
+// Velocity Verlet, second half kick with a(u^{k+1}).
+BRECCIA_HD inline void verlet_kick_at(double& v, double a, double half_dt) { v += half_dt * a; }
 
 }  // namespace breccia::mps

@@ -11,6 +11,7 @@
 //   3. force = MPS divergence of stress (+ hourglass control, external and contact forces)
 //   4. v += dt a, u += dt v (symplectic Euler), prescribed displacements
 #include <array>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -39,6 +40,14 @@ struct SolidOptions {
   // Body of each particle (empty: one body). No bond joins two bodies; they interact
   // through contact only (contact.hpp).
   std::vector<int> body_id;
+  // Updated Lagrangian stencils: when some particle's gradient relative to its stencil's
+  // reference, |H| (Frobenius), exceeds stencil_update_strain, every stencil (neighbours,
+  // bond vectors, weights, moment matrices, volumes) is rebuilt on the current
+  // configuration. Stress and plastic strain live on the particles and are carried; the
+  // hourglass residual restarts from zero (its energy is counted as dissipated).
+  // false: total Lagrangian (the reference stencils are kept for the whole run).
+  bool updated_lagrangian = false;
+  double stencil_update_strain = 0.1;
 };
 
 // A rigid half-space {x : (x - point) . normal >= 0} is the allowed side.
@@ -75,6 +84,10 @@ public:
   // Brittle fracture with the separation tensor (fracture.hpp); nullptr when not enabled.
   void set_fracture(const FractureLaw& law);
   const FractureModel* fracture() const { return fracture_ ? &*fracture_ : nullptr; }
+  // Pre-cut: gives every intact bond (i, j) with cut(i, j) weight 0, as fracture does (no
+  // stress or hourglass force, out of the gradient, stencils refreshed; the pair becomes a
+  // contact candidate). Returns the number of bonds cut, each pair once (solid_cut.cpp).
+  long long cut_bonds(const std::function<bool(long long i, long long j)>& cut);
   // Constant external force per particle (N), e.g. a pressure load; may be changed between steps.
   std::vector<double>& external_force(int axis) { return external_force_n_[axis]; }
 
@@ -111,8 +124,18 @@ public:
   std::vector<double>& velocity(int axis) { return v_[axis]; }
   const std::vector<SymTensor>& stress_pa() const { return stress_; }
   const std::vector<double>& eq_plastic_strain() const { return eq_plastic_strain_; }
-  // Current displacement gradient H = F - I per particle (up to date after a step).
+  // Current displacement gradient H = F - I per particle (up to date after a step), relative
+  // to the stencil's reference configuration (the initial one unless updated Lagrangian).
   const std::vector<Mat3>& displacement_gradient() const { return gradient_; }
+  // Displacement since the stencils' reference configuration (= displacement() in total
+  // Lagrangian form); with bonds().rx etc. it gives the current bond vectors.
+  const std::vector<double>& stencil_displacement(int axis) const {
+    return options_.updated_lagrangian ? u_stencil_[axis] : u_[axis];
+  }
+  // Volume ratio J = det F of each particle relative to the initial configuration.
+  std::vector<double> volume_ratio() const;
+  long long stencil_rebuilds() const { return stencil_rebuilds_; }
+  int substeps() const { return substeps_; }  // substeps per step() (updated Lagrangian, squeezed stencils)
 
   double kinetic_energy_j() const;  // particles and free rigid bodies
   // Stress work accumulated since the start (elastic energy + plastic dissipation).
@@ -129,12 +152,14 @@ public:
   double sample(int particle, const std::string& field) const;
 
 private:
-  void compute_acceleration();
+  void compute_acceleration(double dt);
   void apply_prescribed(double t);
   ParticleStateView state_view() const;
   double hourglass_stiffness() const;
   void apply_fracture();  // solid_fracture.cpp: fail, cut bonds, refresh the cut stencils
   void refresh_cut_stencils(const std::vector<long long>& changed);
+  void build_stencils(const std::vector<double>& position_m);  // bonds, L^-1, surface flags
+  void rebuild_stencils_on_current_configuration();            // updated Lagrangian
 
   std::vector<double> position_m_, volume_m3_;
   double density_kg_m3_ = 0.0;
@@ -148,8 +173,15 @@ private:
   std::vector<ForceMatrices> matrices_;
   std::vector<SymTensor> stress_;
   std::vector<char> full_stencil_;  // number density >= 0.97 n0 (not a surface particle)
-  std::vector<double> eq_plastic_strain_, stress_work_j_m3_, pressure_pa_, pressure_floor_pa_;
+  std::vector<double> eq_plastic_strain_, stress_work_j_, pressure_pa_, pressure_floor_pa_;
   std::array<std::vector<double>, 3> u_, v_, a_, external_force_n_;
+  // Updated Lagrangian: stencil volumes V0 J (mass stays density x volume_m3_), the
+  // displacement at the last rebuild, the displacement since then, and J at the last rebuild.
+  std::vector<double> stencil_volume_m3_, stencil_volume_ratio_;
+  std::array<std::vector<double>, 3> u_at_rebuild_, u_stencil_;
+  long long stencil_rebuilds_ = 0;
+  int substeps_ = 1;  // per step(): keeps the step stable on squeezed updated stencils
+  double hourglass_released_j_ = 0.0;  // hourglass energy at rebuilds (dissipated)
   std::vector<PrescribedSet> prescribed_;
   double mean_volume_m3_ = 0.0;
   double dt_s_ = 0.0, cfl_dt_s_ = 0.0, time_s_ = 0.0;

@@ -6,7 +6,10 @@
 // own deformation gradient F does not explain. The measure is, over the nearest-neighbour
 // bonds (reference length below 1.5 spacings), the current length against |F_i r_ij|: it is
 // exactly 1 for any homogeneous deformation, tension or compression, and falls when
-// neighbours clump together.
+// neighbours clump together. Only bonds shorter than their reference length count: particles
+// moved as one rigid block (driven or held ends) next to a stretching region keep their
+// bonds' length while F_i, fitted over a stencil reaching into the stretch, predicts more;
+// they read 1 / (1 + strain) without being clumped (docs/atlas.md "MPS in tension").
 #include <cstdint>
 
 #include "breccia/mps/solid.hpp"
@@ -20,7 +23,7 @@ inline constexpr double kMinNeighbourDistanceRatio = 0.5;
 inline constexpr long long kClumpingCheckEvery = 10;
 
 struct Clumping {
-  double min_ratio = 1.0;        // min over nearest-neighbour bonds of |x_j - x_i| / |F_i r_ij|
+  double min_ratio = 1.0;        // min over shortened nearest-neighbour bonds of |x_j - x_i| / |F_i r_ij|
   long long worst_particle = -1;
   long long clumped_bonds = 0;   // bonds below kMinNeighbourDistanceRatio
 };

@@ -16,7 +16,7 @@ namespace breccia::plan {
 // ---- measured throughputs (throughputs.yaml, or --calibrate) ----------------------------
 
 struct LoopRate {
-  std::string model;  // pmb | lps
+  std::string model;  // pmb | lps | correspondence
   int threads = 1;
   double bond_updates_per_core_s = 0.0;  // bond entries x steps / (time loop seconds x threads)
   std::string source;
@@ -37,13 +37,21 @@ struct Throughputs {
   std::string gpu_source;
   std::string file;
 
-  // Per-core rate for this model at this thread count: the entry measured at that count,
-  // else the one at the nearest measured count (per-core rates fall with more threads).
+  // Per-core float64 rate for this model at this thread count: the entry measured at that
+  // count, else the one at the nearest measured count (per-core rates fall with more threads).
   const LoopRate& rate(solver::PdModel model, int threads) const;
+  // The entry of this model and precision nearest in thread count; nullptr if none.
+  const LoopRate* find(solver::PdModel model, int threads, const std::string& precision) const;
   // float32 rate / float64 rate for this model at the nearest measured thread count, when
   // both were measured (loop entries with precision: float32); empty otherwise.
   std::optional<double> float32_speedup(solver::PdModel model, int threads) const;
+  // Time per bond entry of `model` over that of `reference` (float64, nearest thread count):
+  // e.g. correspondence against LPS. Empty when either is not measured.
+  std::optional<double> relative_cost(solver::PdModel model, solver::PdModel reference, int threads) const;
 };
+
+// The model's name in throughputs.yaml and the atlas: pmb | lps | correspondence.
+std::string model_key(solver::PdModel model);
 
 Throughputs load_throughputs(const std::string& path);
 std::string default_throughputs_path();

@@ -1,0 +1,68 @@
+#pragma once
+// Device memory and error checks shared by the CUDA launchers (cuda_backend.cu for PD,
+// mps_cuda.cu for MPS). Only .cu files include this: it needs cuda_runtime.h.
+#include <cuda_runtime.h>
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "breccia/common/error.hpp"
+
+namespace breccia::cuda {
+
+inline void check(cudaError_t status, const std::string& what) {
+  if (status != cudaSuccess)
+    throw RunError("CUDA backend: " + what + " failed: " + cudaGetErrorName(status) + " (" +
+                   cudaGetErrorString(status) + ")");
+}
+
+// Every launch is followed by this: the error state is checked with the kernel's name.
+// synchronize (BRECCIA_CUDA_SYNC=1) attributes an asynchronous fault to the kernel causing it.
+inline void check_launch(const char* kernel, bool synchronize) {
+  check(cudaGetLastError(), std::string("launch of ") + kernel);
+  if (synchronize) check(cudaDeviceSynchronize(), std::string("kernel ") + kernel);
+}
+
+// One cudaMalloc'd array; nullptr when empty, as the kernels' views expect for absent arrays.
+template <class T>
+class DeviceArray {
+public:
+  DeviceArray() = default;
+  DeviceArray(const DeviceArray&) = delete;
+  DeviceArray& operator=(const DeviceArray&) = delete;
+  DeviceArray(DeviceArray&& other) noexcept : ptr_(other.ptr_), count_(other.count_) {
+    other.ptr_ = nullptr;
+    other.count_ = 0;
+  }
+  ~DeviceArray() {
+    if (ptr_) cudaFree(ptr_);
+  }
+  void allocate(size_t count, const char* name) {  // replaces any earlier allocation
+    if (ptr_) cudaFree(ptr_);
+    ptr_ = nullptr;
+    count_ = count;
+    if (count == 0) return;
+    check(cudaMalloc(&ptr_, count * sizeof(T)), std::string("cudaMalloc of ") + name);
+  }
+  void upload(const std::vector<T>& host, const char* name) {
+    allocate(host.size(), name);
+    if (count_ == 0) return;
+    check(cudaMemcpy(ptr_, host.data(), count_ * sizeof(T), cudaMemcpyHostToDevice),
+          std::string("upload of ") + name);
+  }
+  void download(std::vector<T>& host, const char* name) const {
+    if (count_ == 0) return;
+    host.resize(count_);
+    check(cudaMemcpy(host.data(), ptr_, count_ * sizeof(T), cudaMemcpyDeviceToHost),
+          std::string("download of ") + name);
+  }
+  T* get() const { return ptr_; }
+  size_t size() const { return count_; }
+
+private:
+  T* ptr_ = nullptr;
+  size_t count_ = 0;
+};
+
+}  // namespace breccia::cuda

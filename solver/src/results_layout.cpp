@@ -1,0 +1,79 @@
+#include "breccia/solver/results_layout.hpp"
+
+#include <cstdio>
+#include <sstream>
+
+#include "breccia/common/output_file.hpp"
+
+namespace breccia::solver {
+
+std::string results_output_group(int index) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "/output/%06d", index);
+  return buf;
+}
+
+void write_results_identity(const h5::File& f, const ResultsIdentity& id) {
+  f.set_attr("/", "format", std::string("breccia-results"));
+  f.set_attr("/", "format_version", kResultsFormatVersion);
+  f.set_attr("/", "particles_file", id.particles_file);
+  f.set_attr("/", "particles_content_id", id.particles_content_id);
+  f.set_attr("/", "dimension", static_cast<long long>(id.dimension));
+  f.set_attr("/", "thickness_m", id.thickness_m);
+  f.set_attr("/", "model", id.model);
+  f.set_attr("/", "case_file", id.case_file);
+  f.set_attr("/", "complete", 0LL);
+  f.set_attr("/", "output_count", 0LL);
+}
+
+std::string write_particles_beside_results(const std::string& out_dir, const ParticleModel& model) {
+  const std::string path = out_dir + "/particles.h5";
+  write_particle_file(path, model);
+  return path;
+}
+
+void write_results_bonds(const h5::File& f, const HalfBondList& bonds) {
+  f.write("/bonds/offsets", bonds.offsets, {bonds.offsets.size()});
+  f.write("/bonds/neighbors", bonds.neighbors, {bonds.neighbors.size()});
+  f.write("/bonds/within_horizon", bonds.within_horizon, {bonds.within_horizon.size()});
+}
+
+void finish_results_output(const h5::File& f, int index, long long step, double time_s,
+                           const std::vector<uint8_t>& broken, int64_t broken_count) {
+  const std::string g = results_output_group(index);
+  f.write(g + "/broken", broken, {broken.size()});
+  f.set_attr(g, "broken_count", static_cast<long long>(broken_count));
+  f.set_attr(g, "step", step);
+  f.set_attr(g, "time_s", time_s);
+  f.set_attr("/", "output_count", static_cast<long long>(index + 1));
+  f.flush();
+}
+
+void write_results_xdmf(const std::string& path, size_t n, const std::vector<double>& times,
+                        const std::vector<XdmfField>& fields) {
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+    << "  <Grid Name=\"results\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  auto item = [&](const std::string& dataset, int components, bool integer) {
+    const std::string dims = std::to_string(n) + (components > 1 ? " " + std::to_string(components) : "");
+    return "<DataItem Dimensions=\"" + dims + "\" NumberType=\"" + (integer ? "Int" : "Float") + "\" Precision=\"" +
+           (integer ? "4" : "8") + "\" Format=\"HDF\">results.h5:" + dataset + "</DataItem>";
+  };
+  for (size_t k = 0; k < times.size(); ++k) {
+    const std::string g = results_output_group(static_cast<int>(k));
+    x << "   <Grid Name=\"step" << k << "\" GridType=\"Uniform\">\n"
+      << "    <Time Value=\"" << times[k] << "\"/>\n"
+      << "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\" NodesPerElement=\"1\"/>\n"
+      << "    <Geometry GeometryType=\"XYZ\">" << item("/particles/position", 3, false) << "</Geometry>\n";
+    for (const XdmfField& v : fields) {
+      const char* type = v.components == 3 ? "Vector" : v.components == 6 ? "Tensor6" : "Scalar";
+      x << "    <Attribute Name=\"" << v.name << "\" AttributeType=\"" << type << "\" Center=\"Node\">"
+        << item(g + "/" + v.name, v.components, v.integer) << "</Attribute>\n";
+    }
+    x << "   </Grid>\n";
+  }
+  x << "  </Grid>\n </Domain>\n</Xdmf>\n";
+  write_text_file(path, x.str());
+}
+
+}  // namespace breccia::solver

@@ -14,19 +14,14 @@
 #include "breccia/mps/contact.hpp"
 #include "breccia/mps/solid.hpp"
 #include "breccia/mps/solid_case.hpp"
+#include "contact_test_util.hpp"
 #include "mps_test_util.hpp"
 
 using namespace breccia::mps;
+using breccia::mps::test::soft_law;
+using breccia::mps::test::total_energy;
 
 namespace {
-
-SolidLaw soft_law() {  // E = 1 MPa, nu = 0.3: c_L = 37 m/s, so g-driven runs take few steps
-  const double e = 1e6, nu = 0.3;
-  SolidLaw law;
-  law.lame_lambda_pa = e * nu / ((1 + nu) * (1 - 2 * nu));
-  law.shear_modulus_pa = e / (2 * (1 + nu));
-  return law;
-}
 
 double mass_of(const Solid& s, size_t i) { return s.density_kg_m3() * s.volume_m3()[i]; }
 
@@ -35,11 +30,6 @@ std::array<double, 2> momentum(const Solid& s, const std::vector<int>& members) 
   for (int i : members)
     for (int a = 0; a < 2; ++a) p[a] += mass_of(s, i) * s.velocity(a)[i];
   return p;
-}
-
-double total_energy(const Solid& s) {
-  return s.kinetic_energy_j() + s.stress_work_j() + s.hourglass_energy_j() + s.contact_energy_j() + s.gravity_energy_j() +
-         s.friction_dissipation_j();
 }
 
 }  // namespace

@@ -18,24 +18,14 @@
 #include "breccia/mps/contact.hpp"
 #include "breccia/mps/solid.hpp"
 #include "breccia/mps/solid_case.hpp"
+#include "contact_test_util.hpp"
 #include "mps_test_util.hpp"
 
 using namespace breccia::mps;
+using breccia::mps::test::soft_law;
+using breccia::mps::test::total_energy;
 
 namespace {
-
-SolidLaw soft_law() {  // E = 1 MPa, nu = 0.3: c_L = 37 m/s, so g-driven runs take few steps
-  const double e = 1e6, nu = 0.3;
-  SolidLaw law;
-  law.lame_lambda_pa = e * nu / ((1 + nu) * (1 - 2 * nu));
-  law.shear_modulus_pa = e / (2 * (1 + nu));
-  return law;
-}
-
-double total_energy(const Solid& s) {
-  return s.kinetic_energy_j() + s.stress_work_j() + s.hourglass_energy_j() + s.contact_energy_j() + s.gravity_energy_j() +
-         s.friction_dissipation_j();
-}
 
 // A block (body 1, bx x by particles) on a slab (body 0, 40 x 3 particles, held fixed), both
 // lattices of spacing h, the block's columns offset by half a spacing from the slab's (its

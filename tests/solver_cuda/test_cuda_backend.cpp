@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "cpu_gpu_compare.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/solver/cuda_backend.hpp"
 #include "breccia/solver/outputs.hpp"
@@ -40,16 +41,7 @@ PdSystem system_from_yaml(const std::string& name, const std::string& yaml) {
   return setup_system(parse_case_file(path));
 }
 
-// max_k |a_k - b_k| / max_k |b_k|: relative to the field's scale, since single components
-// pass through zero.
-double field_difference(const std::vector<double>& a, const std::vector<double>& b) {
-  double diff = 0.0, scale = 0.0;
-  for (size_t k = 0; k < b.size(); ++k) {
-    diff = std::max(diff, std::fabs(a[k] - b[k]));
-    scale = std::max(scale, std::fabs(b[k]));
-  }
-  return scale > 0 ? diff / scale : diff;
-}
+using breccia::cuda_test::field_difference;
 
 double relative(double a, double b) { return std::fabs(a - b) / std::max(std::fabs(b), 1e-300); }
 
@@ -229,22 +221,8 @@ TEST(CudaBackend, RunLoopWritesTheSameHistoryAsTheCpuLoop) {
   EXPECT_EQ(rg.status, rc.status);
   EXPECT_EQ(rg.steps, rc.steps);
   EXPECT_LE(field_difference(gpu.u, cpu.u), kAgreement);
-  auto read_rows = [](const std::string& path) {
-    std::ifstream in(path);
-    std::vector<std::vector<double>> rows;
-    std::string line;
-    std::getline(in, line);  // header
-    while (std::getline(in, line)) {
-      std::vector<double> row;
-      std::stringstream cells(line);
-      std::string cell;
-      while (std::getline(cells, cell, ',')) row.push_back(std::stod(cell));
-      rows.push_back(row);
-    }
-    return rows;
-  };
-  const auto hc = read_rows(::testing::TempDir() + "/cuda_run_cpu/history.csv");
-  const auto hg = read_rows(::testing::TempDir() + "/cuda_run_gpu/history.csv");
+  const auto hc = breccia::cuda_test::read_history_rows(::testing::TempDir() + "/cuda_run_cpu/history.csv");
+  const auto hg = breccia::cuda_test::read_history_rows(::testing::TempDir() + "/cuda_run_gpu/history.csv");
   ASSERT_EQ(hg.size(), hc.size());
   ASSERT_EQ(hc.size(), 31u) << "rows at step 0, 10, ..., 300";
   for (size_t row = 0; row < hc.size(); ++row) {

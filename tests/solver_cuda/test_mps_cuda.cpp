@@ -19,6 +19,7 @@
 #include <tuple>
 #include <vector>
 
+#include "cpu_gpu_compare.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/crack.hpp"
@@ -40,15 +41,7 @@ constexpr const char* kNoDevice = "no CUDA device: the CPU/GPU comparison needs 
 // shows at 1e-3 or more within a few steps.
 constexpr double kAgreement = 1e-9;
 
-// max_k |a_k - b_k| / max_k |b_k|: relative to the field's scale, since components pass zero.
-double field_difference(const std::vector<double>& a, const std::vector<double>& b) {
-  double diff = 0.0, scale = 0.0;
-  for (size_t k = 0; k < b.size(); ++k) {
-    diff = std::max(diff, std::fabs(a[k] - b[k]));
-    scale = std::max(scale, std::fabs(b[k]));
-  }
-  return scale > 0 ? diff / scale : diff;
-}
+using breccia::cuda_test::field_difference;
 
 // A 2D plate (40 x 30 particles) with a Gaussian initial displacement and a five-cycle shear
 // burst prescribed on its top face: waves reflect off free faces and cross each other.
@@ -292,20 +285,6 @@ std::string write_case(const std::string& name, const std::string& yaml) {
   return path;
 }
 
-std::vector<std::vector<double>> read_rows(const std::string& path) {
-  std::ifstream in(path);
-  std::vector<std::vector<double>> rows;
-  std::string line;
-  std::getline(in, line);  // header
-  while (std::getline(in, line)) {
-    std::vector<double> row;
-    std::stringstream cells(line);
-    std::string cell;
-    while (std::getline(cells, cell, ',')) row.push_back(std::stod(cell));
-    rows.push_back(row);
-  }
-  return rows;
-}
 
 std::string read_text(const std::string& path) {
   std::ifstream in(path);
@@ -327,7 +306,8 @@ TEST(MpsCuda, RunCaseWritesTheSameHistoryAsTheCpu) {
   RunCaseOptions o;
   o.device = make_cuda_step_device;
   ASSERT_EQ(run_case(file, gpu_dir, o), 0);
-  const auto hc = read_rows(cpu_dir + "/history.csv"), hg = read_rows(gpu_dir + "/history.csv");
+  const auto hc = breccia::cuda_test::read_history_rows(cpu_dir + "/history.csv");
+  const auto hg = breccia::cuda_test::read_history_rows(gpu_dir + "/history.csv");
   ASSERT_EQ(hg.size(), hc.size());
   ASSERT_GT(hc.size(), 10u);
   for (size_t row = 0; row < hc.size(); ++row) {

@@ -368,8 +368,10 @@ struct Command {
   std::string output;
 };
 
-Command run_solve(const std::string& args) {
-  const std::string log = ::testing::TempDir() + "/mps_cuda_cli.log";
+// The log is named after the test's own output folder: ctest -j runs these tests at the same
+// time, and one shared log file let one test read the other's output.
+Command run_solve(const std::string& args, const std::string& out) {
+  const std::string log = out + ".log";
   const std::string cmd = std::string(BRECCIA_SOLVE_EXE) + " " + args + " > " + log + " 2>&1";
   const int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_text(log)};
@@ -382,7 +384,7 @@ TEST(MpsCuda, CliBackendCudaWithoutADeviceExitsWithBadInput) {
   const std::string file = write_case("cli", wave_case("symplectic_euler"));
   const std::string out = ::testing::TempDir() + "/mps_cuda_cli_cuda";
   std::filesystem::remove_all(out);
-  const Command c = run_solve(file + " -o " + out + " --backend cuda");
+  const Command c = run_solve(file + " -o " + out + " --backend cuda", out);
   EXPECT_EQ(c.exit_code, 2) << c.output;
   EXPECT_NE(c.output.find("no CUDA device"), std::string::npos) << c.output;
   EXPECT_FALSE(std::filesystem::exists(out + "/history.csv")) << "nothing may be written";
@@ -396,7 +398,7 @@ TEST(MpsCuda, CliBackendAutoWithoutADeviceRunsOnTheCpuAndSaysSo) {
   yaml.replace(yaml.find("end: 8 us"), std::string("end: 8 us").size(), "end: 1 us");
   const std::string file = write_case("cli_auto", yaml);
   const std::string out = ::testing::TempDir() + "/mps_cuda_cli_auto";
-  const Command c = run_solve(file + " -o " + out + " --backend auto --threads 1");
+  const Command c = run_solve(file + " -o " + out + " --backend auto --threads 1", out);
   EXPECT_EQ(c.exit_code, 0) << c.output;
   EXPECT_NE(c.output.find("no CUDA device found, running on the CPU"), std::string::npos) << c.output;
   EXPECT_NE(read_text(out + "/summary.json").find("\"backend\": \"cpu"), std::string::npos);

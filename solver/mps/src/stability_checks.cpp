@@ -19,6 +19,9 @@ Clumping measure_clumping(const Solid& solid) {
   for (long long i = 0; i < n; ++i) {
     const Mat3& h = grad[i];
     for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
+      // A cut bond (fracture, weight 0) carries nothing: its two particles closing in is a
+      // crack face or debris coming back, not clumping (and a detached particle has no F).
+      if (b.weight[k] == 0.0) continue;
       const double r[3] = {b.rx[k], b.ry[k], b.rz[k]};
       if (std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) > near) continue;
       const int j = b.neighbour[k];
@@ -27,9 +30,6 @@ Clumping measure_clumping(const Solid& solid) {
         const double fr = r[a] + h(a, 0) * r[0] + h(a, 1) * r[1] + h(a, 2) * r[2];
         predicted2 += fr * fr;
       }
-      // A cut bond (fracture, weight 0) carries nothing: its two particles closing in is a
-      // crack face or debris coming back, not clumping (and a detached particle has no F).
-      if (b.weight[k] == 0.0) continue;
       // Reference bond vectors may be periodic images: the current one is r + u_j - u_i.
       const double d[3] = {r[0] + ux[j] - ux[i], r[1] + uy[j] - uy[i], r[2] + uz[j] - uz[i]};
       const double length2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];

@@ -144,7 +144,9 @@ void graded_stability(const SweepPlan& plan, SpecimenMaker& maker, CsvTable& tab
                                        : plan.quick            ? std::vector<double>{2, 4}
                                                                : std::vector<double>{1, 1.5, 2, 3, 4, 6};
   for (const auto& model : plan.models) {
-    if (model != "pmb" && model != "lps") continue;  // the graded study is about PMB and LPS
+    // PMB, LPS and correspondence (its default penalty stabilisation, G = 1); each has its own
+    // measured limits in graded_check.hpp.
+    if (model != "pmb" && model != "lps" && model != "correspondence") continue;
     for (double r : gradings)
       for (bool dh : {false, true}) {
         GradedRow row;

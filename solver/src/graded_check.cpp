@@ -10,10 +10,11 @@
 namespace breccia::solver {
 
 const GradedLimits& graded_limits(PdModel model) {
-  if (model == PdModel::LPS) return kLpsGradedLimits;
-  // PMB, and correspondence (not measured on the graded strip): PMB's limits are the stricter
-  // of the two measured (a larger minimum local ratio, a smaller spacing jump).
-  static_assert(kPmbGradedLimits.min_local_ratio >= kLpsGradedLimits.min_local_ratio);
+  switch (model) {
+    case PdModel::LPS: return kLpsGradedLimits;
+    case PdModel::Correspondence: return kCorrespondenceGradedLimits;
+    case PdModel::PMB: break;
+  }
   return kPmbGradedLimits;
 }
 
@@ -27,11 +28,7 @@ std::string pct(double fraction, bool sign = true) {
 
 // Where the limits of this model come from, in words, for the messages.
 std::string provenance(PdModel model) {
-  const GradedLimits& g = graded_limits(model);
-  std::string s = model == PdModel::Correspondence ? "correspondence is not measured on the graded strip, so the "
-                                                     "stricter PMB limits apply; "
-                                                   : "";
-  return s + g.model + " measured on the graded strip (docs/atlas.md, Per-model graded limits)";
+  return std::string(graded_limits(model).model) + " measured on the graded strip (docs/atlas.md, Per-model graded limits)";
 }
 
 }  // namespace

@@ -113,15 +113,44 @@ TEST(GradedStability, EachModelIsRefusedJustBeyondItsMeasuredLimitAndPassesJustW
   }
   // LPS holds out where PMB does not: the grading that refuses PMB passes LPS.
   EXPECT_EQ(refusal(1.8, "lps"), "");
-  // Correspondence is not measured: the stricter PMB limit applies, and the message says so.
-  const std::string corr = refusal(1.8, "correspondence");
-  EXPECT_NE(corr.find("stricter PMB limits apply"), std::string::npos) << corr;
-  EXPECT_EQ(refusal(1.7, "correspondence"), "");
+
+  // Correspondence (penalty G = 1) has limits of its own. Its F reproduces any affine field
+  // wherever a family spans the plane, so the coarse energy was exact (to 1e-11) at every
+  // grading that leaves the coarse particles bonds: 3:1 (local ratio 1.0, PMB -56 %, LPS -45 %)
+  // and 5.1:1 (0.591, the last measured within) pass; at 5.25:1 (0.574, the first beyond) a
+  // coarse particle has no bonds and the set-up itself refuses it, before the graded check. The
+  // check's own limit (0.583, midway) is therefore tested on the 5.1:1 strip with the single
+  // horizon cut to a local ratio just below it (refused, naming correspondence's limit, not
+  // PMB's) and just above it (passes).
+  EXPECT_EQ(refusal(3.0, "correspondence"), "");
+  EXPECT_EQ(refusal(5.1, "correspondence"), "");
+  const std::string no_bonds = refusal(5.25, "correspondence");
+  EXPECT_NE(no_bonds.find("has no neighbours"), std::string::npos) << no_bonds;
+
+  const double limit = kCorrespondenceGradedLimits.min_local_ratio;
+  auto check_at = [&](double local_ratio) -> std::string {
+    PdSystem s = system_from_yaml("graded_corr_cut", graded_yaml(5.1, false, false, "correspondence"));
+    const double scale = local_ratio / horizon_grading(s).min_local_ratio;
+    for (double& h : s.horizon) h *= scale;  // the check reads horizon / spacing only
+    try {
+      require_graded_horizon(s);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const std::string beyond = check_at(limit - 0.007);  // 0.576: between the limit and 0.574
+  EXPECT_NE(beyond.find("model.variable_horizon"), std::string::npos) << beyond;
+  EXPECT_NE(beyond.find("measured limit of 0.583 spacings for correspondence"), std::string::npos) << beyond;
+  EXPECT_NE(beyond.find("correspondence measured on the graded strip"), std::string::npos) << beyond;
+  EXPECT_EQ(beyond.find("PMB"), std::string::npos) << beyond;
+  EXPECT_EQ(check_at(limit + 0.005), "");  // 0.588: between the limit and 0.591
 }
 
 // Per-model limits of dual horizon: warned where a P pulse crossing the change reflects more
 // than 1 % of its energy (measured PMB 0.25 % at 3:1, 5.5 % at 3.5:1; LPS 0.86 % at 2.75:1,
-// 1.8 % at 3:1): just within passes silently, just beyond warns, naming the limit.
+// 1.8 % at 3:1; correspondence 0.32 % at 4.5:1, 1.1 % at 5:1): just within passes silently,
+// just beyond warns, naming the limit.
 TEST(GradedStability, DualHorizonWarnsJustBeyondEachModelsMeasuredReflectionLimit) {
   struct Case {
     std::string model;
@@ -129,7 +158,8 @@ TEST(GradedStability, DualHorizonWarnsJustBeyondEachModelsMeasuredReflectionLimi
     std::string limit;
   };
   for (const Case& c : {Case{"pmb", 3.0, 3.5, "measured limit of 3.25x for pmb"},
-                        Case{"lps", 2.75, 3.0, "measured limit of 2.875x for lps"}}) {
+                        Case{"lps", 2.75, 3.0, "measured limit of 2.875x for lps"},
+                        Case{"correspondence", 4.5, 5.0, "measured limit of 4.75x for correspondence"}}) {
     PdSystem quiet = system_from_yaml("graded_dh_" + c.model, graded_yaml(c.within, true, true, c.model));
     EXPECT_TRUE(graded_horizon_warning(quiet).empty()) << graded_horizon_warning(quiet);
     PdSystem loud = system_from_yaml("graded_dh_" + c.model, graded_yaml(c.beyond, true, true, c.model));

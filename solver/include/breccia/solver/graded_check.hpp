@@ -7,16 +7,20 @@
 // uniaxial and shear strain energies of the coarse interior is, for PMB, off by 1.3 % at local
 // m 1.77, -12 % at 1.68, -18 % at 1.5, -56 % at 1.0; LPS holds out longer (+2.7 % at 1.51, -7 %
 // at 1.34, -20 % at 1.21, -45 % at 1.0); at 0.75 and below the coarse region has no shear
-// stiffness or no bonds at all, silently. The check refuses a set-up in which more than
+// stiffness or no bonds at all, silently. Correspondence is exact (to 1e-11) wherever a coarse
+// family still spans the plane, down to local m 0.59: its F reproduces any affine field by
+// construction (docs/theory.md), so it is limited only where the coarse particles lose their
+// bonds (0.57: the set-up refuses "no neighbours"). The check refuses a set-up in which more than
 // kMaxUnderResolvedShare of the particles see a local ratio below the model's limit
 // (GradedLimits below) and names model.variable_horizon (dual horizon keeps
 // m_i = horizon_factor everywhere and the coarse energy within 1 % at every grading measured,
 // 1.5 to 6).
 //
 // Dual horizon has a limit too, of accuracy, not stability: a P pulse crossing the change
-// reflects 0.1-1 % of its energy up to grading 3 (PMB) or 2.75 (LPS), then several percent
-// (PMB 5.5 % at 3.5, 35 % at 6, where the pulse is only four coarse spacings wide; LPS 1.8 % at
-// 3, 5.5 % at 5). graded_horizon_warning() says so at start-up.
+// reflects 0.1-1 % of its energy up to grading 3 (PMB), 2.75 (LPS) or 4.5 (correspondence),
+// then several percent (PMB 5.5 % at 3.5, 35 % at 6, where the pulse is only four coarse
+// spacings wide; LPS 1.8 % at 3, 5.5 % at 5; correspondence 1.1 % at 5, 7.9 % at 5.5).
+// graded_horizon_warning() says so at start-up.
 #include <cstdint>
 #include <string>
 
@@ -25,8 +29,9 @@
 namespace breccia::solver {
 
 // Per-model limits, measured (breccia-atlas --only-stability --stability-studies graded
-// --models pmb,lps --gradings 1.5,...,6; docs/atlas.md "Per-model graded limits"; 2D PMB / LPS
-// strip, horizon_factor 3.015, grading r -> coarse local ratio 3.015 / r).
+// --models pmb,lps,correspondence --gradings 1.5,...,6; docs/atlas.md "Per-model graded
+// limits"; 2D strip, horizon_factor 3.015, grading r -> coarse local ratio 3.015 / r;
+// correspondence with its default penalty stabilisation, G = 1).
 //  One horizon: refused where the worse of the uniaxial and shear strain energies of the
 //  coarse interior is off by more than 5 % (the atlas's looser band). The limit is the
 //  midpoint between the smallest local ratio measured within 5 % and the largest measured
@@ -35,7 +40,6 @@ namespace breccia::solver {
 //  its energy (the atlas's tighter band; statics stay right, so it is not refused). The limit
 //  is the midpoint between the largest spacing jump measured below 1 % (every smaller
 //  grading below 1 % too) and the first measured above.
-// Models without their own measurement (correspondence) get the stricter of the two.
 struct GradedLimits {
   const char* model;         // whose measurement the numbers are
   double min_local_ratio;    // one horizon: refuse below this horizon_i / spacing_i
@@ -49,7 +53,13 @@ inline constexpr GradedLimits kPmbGradedLimits{"PMB", 1.72, 1.774, 0.01284, 1.67
                                                3.25, 3.0, 0.002499, 3.5, 0.05466};
 inline constexpr GradedLimits kLpsGradedLimits{"LPS", 1.42, 1.508, 0.02703, 1.34, -0.07143,
                                                2.875, 2.75, 0.008552, 3.0, 0.0176};
-// The limits that apply to a model: its own, or (correspondence, not measured) the stricter.
+// Correspondence: within at 0.591 (r = 5.1, energy +3e-12: round-off), beyond at 0.574 (r = 5.25:
+// a coarse particle has no bonds of non-zero weight and the set-up refuses it, so -100 %).
+// The criterion sees the affine response only; the particle-scale response of a coarse particle
+// bonded to its nearest neighbours alone is held by the penalty and is not measured here.
+inline constexpr GradedLimits kCorrespondenceGradedLimits{"correspondence", 0.583, 0.591, 3.1e-12, 0.574, -1.0,
+                                                          4.75, 4.5, 0.003154, 5.0, 0.01103};
+// The limits measured for a model.
 const GradedLimits& graded_limits(PdModel model);
 // A few large cells of an irregular mesh are the energy-scatter check's business
 // (family_check.hpp); a coarse region is a share of the body (the graded strip: 10 %).

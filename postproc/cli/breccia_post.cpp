@@ -2,7 +2,8 @@
 // one solver run directory. Outputs go to RUN_DIR/post/ (docs/postproc.md).
 //
 //   breccia-post RUN_DIR [--particles FILE] [--step K | --all] [--cracks] [--fragments]
-//                [--energy] [--spectrum PROBE [--frequency F] [--hann]]
+//                [--energy] [--spectrum PROBE [--frequency F] [--hann] [--gate T0,T1]
+//                                             [--resolution DF] [--band W]]
 //                [--damage-threshold D] [--crack-criterion bond|damage]
 //                [--min-fragment-particles N] [--size sieve|diameter] [--no-plots]
 //
@@ -20,7 +21,8 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: breccia-post RUN_DIR [--particles FILE] [--step K | --all] [--cracks] [--fragments]\n"
-    "                    [--energy] [--spectrum PROBE [--frequency F] [--hann]]\n"
+    "                    [--energy] [--spectrum PROBE [--frequency F] [--hann] [--gate T0,T1]\n"
+    "                                                 [--resolution DF] [--band W]]\n"
     "                    [--damage-threshold D] [--crack-criterion bond|damage]\n"
     "                    [--min-fragment-particles N] [--size sieve|diameter] [--no-plots] [--quiet]\n"
     "Writes RUN_DIR/post/: cracks.vtp, damage_iso.vtp, crack_history.csv, fragments.csv/.vtu,\n"
@@ -46,6 +48,7 @@ breccia::postproc::PostOptions parse(const std::vector<std::string>& args) {
   bool cracks = false, fragments = false, energy = false, any = false;
   std::string run_dir;
   bool have_frequency = false, have_hann = false;
+  std::string spectrum_detail;  // the last of --gate/--resolution/--band given
   for (size_t k = 0; k < args.size(); ++k) {
     const std::string& a = args[k];
     if (a == "--particles") o.particles_file = value_of(args, k);
@@ -59,6 +62,25 @@ breccia::postproc::PostOptions parse(const std::vector<std::string>& args) {
       o.frequency_Hz = breccia::parse_quantity(value_of(args, k), breccia::Quantity::Frequency, "command line", a);
       have_frequency = true;
     } else if (a == "--hann") { o.hann = true; have_hann = true; }
+    else if (a == "--gate") {
+      // T0,T1: two times (seconds, or with a unit: "17 us,28 us"); inside the record is checked
+      // against history.csv.
+      const std::string v = value_of(args, k);
+      const size_t comma = v.find(',');
+      const std::string expected = "T0,T1: two times with T0 < T1, e.g. 17e-6,28e-6 (s)";
+      if (comma == std::string::npos || v.find(',', comma + 1) != std::string::npos)
+        throw InputError("command line", a, "'" + v + "'", expected);
+      const double t0 = breccia::parse_quantity(v.substr(0, comma), breccia::Quantity::Time, "command line", a);
+      const double t1 = breccia::parse_quantity(v.substr(comma + 1), breccia::Quantity::Time, "command line", a);
+      if (!(t0 < t1)) throw InputError("command line", a, "'" + v + "'", expected);
+      o.gate_s = std::pair{t0, t1};
+      spectrum_detail = a;
+    } else if (a == "--resolution" || a == "--band") {
+      const double f = breccia::parse_quantity(value_of(args, k), breccia::Quantity::Frequency, "command line", a);
+      if (!(f > 0)) throw InputError("command line", a, std::to_string(f) + " Hz", "a positive frequency");
+      (a == "--band" ? o.band_Hz : o.resolution_Hz) = f;
+      spectrum_detail = a;
+    }
     else if (a == "--damage-threshold") {
       const std::string v = value_of(args, k);
       char* end = nullptr;
@@ -87,6 +109,8 @@ breccia::postproc::PostOptions parse(const std::vector<std::string>& args) {
   if (o.step && o.all_steps) throw InputError("command line", "--step", "given with --all", "one of --step K or --all");
   if ((have_frequency || have_hann) && o.spectrum_probes.empty())
     throw InputError("command line", have_frequency ? "--frequency" : "--hann", "without --spectrum", "--spectrum PROBE");
+  if (!spectrum_detail.empty() && o.spectrum_probes.empty())
+    throw InputError("command line", spectrum_detail, "without --spectrum", "--spectrum PROBE");
   o.run_dir = run_dir;
   if (any) {
     o.cracks = cracks;

@@ -449,18 +449,41 @@ private:
       notes_.push_back("spectrum of " + probe + " skipped: fewer than 4 samples");
       return;
     }
+    // --gate: the rows with t0 <= t <= t1 (the record's own sample times, before any resampling).
+    GateRows rows{0, t.size()};
+    if (opt_.gate_s) {
+      const auto [t0, t1] = *opt_.gate_s;
+      if (!(t0 >= t.front() && t1 <= t.back()))
+        throw InputError("command line", "--gate", fmt(t0) + "," + fmt(t1) + " s",
+                         "a gate inside the record of " + h.path.string() + ", [" + fmt(t.front()) + ", " + fmt(t.back()) + "] s");
+      rows = gate_rows(t, t0, t1);
+      if (rows.last - rows.first < 4)
+        throw InputError("command line", "--gate", std::to_string(rows.last - rows.first) + " samples in " + fmt(t0) + "," + fmt(t1) + " s",
+                         "a gate holding at least 4 samples of " + h.path.string());
+    }
+    const std::vector<double> tg(t.begin() + rows.first, t.begin() + rows.last);
+    SpectrumOptions so;
+    so.window = !opt_.hann ? Window::Rectangular : opt_.gate_s ? Window::HannSymmetric : Window::Hann;
+    so.reference_Hz = opt_.frequency_Hz;
+    so.resolution_Hz = opt_.resolution_Hz;
+    so.band_Hz = opt_.band_Hz;
     std::vector<std::pair<std::string, Spectrum>> comps;
     bool resampled = false;
     for (const auto& c : cols) {
       double dt = 0;
       bool rs = false;
-      const std::vector<double> v = uniform(t, h.column(c), dt, rs);
+      const std::vector<double> vg(h.column(c).begin() + rows.first, h.column(c).begin() + rows.last);
+      const std::vector<double> v = uniform(tg, vg, dt, rs);
       if (!(dt > 0))
-        throw InputError(h.path.string(), "time_s", "no increase over " + std::to_string(t.size()) + " rows",
+        throw InputError(h.path.string(), "time_s", "no increase over " + std::to_string(tg.size()) + " rows",
                          "increasing sample times for the spectrum of probe " + probe);
       resampled = resampled || rs;
       const std::string comp = c.size() > 7 + probe.size() ? c.substr(7 + probe.size()) : c;
-      comps.emplace_back(comp, amplitude_spectrum(v, dt, opt_.hann, opt_.frequency_Hz));
+      try {
+        comps.emplace_back(comp, amplitude_spectrum(v, dt, so));
+      } catch (const std::invalid_argument& e) {  // a band holding no bin
+        throw InputError("command line", "--band", fmt(*opt_.band_Hz) + " Hz", std::string("a band wider than the bins (") + e.what() + ")");
+      }
     }
     std::ostringstream csv;
     csv << "frequency_Hz";
@@ -476,7 +499,8 @@ private:
     spectra_.push_back({probe, comps, resampled});
     if (opt_.plots)
       plot("plot_series.py", "--kind spectrum --data " + shell_quote((summary_.post_dir / file).string()) +
-                                 " --title " + shell_quote("probe " + probe + (opt_.hann ? ", Hann window" : "")),
+                                 " --title " + shell_quote("probe " + probe + (opt_.hann ? ", Hann window" : "") +
+                                                           (opt_.gate_s ? ", gate " + fmt(opt_.gate_s->first) + "-" + fmt(opt_.gate_s->second) + " s" : "")),
            "spectrum_" + probe + ".png");
   }
 
@@ -562,7 +586,13 @@ private:
       j.begin_array("spectra");
       for (const auto& sp : spectra_) {
         for (const auto& [comp, s] : sp.components) {
-          j.begin_object().value("probe", sp.probe).value("component", comp).value("window", opt_.hann ? "hann" : "rectangular");
+          j.begin_object().value("probe", sp.probe).value("component", comp)
+              .value("window", !opt_.hann ? "rectangular" : opt_.gate_s ? "hann_symmetric" : "hann");
+          if (opt_.gate_s) {
+            j.begin_array("gate_s").value("", opt_.gate_s->first).value("", opt_.gate_s->second).end_array();
+          }
+          j.value("samples", static_cast<long long>(s.samples)).value("transform_length", static_cast<long long>(s.transform_length));
+          if (opt_.band_Hz) j.value("band_Hz", *opt_.band_Hz);
           j.value("resampled", sp.resampled).value("reference_frequency_Hz", s.reference_frequency_Hz);
           j.value("reference_amplitude", s.reference_amplitude);
           j.begin_array("harmonics");

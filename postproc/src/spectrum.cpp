@@ -69,33 +69,53 @@ std::vector<cd> fft(std::vector<cd> x) {
   return x;
 }
 
-Spectrum amplitude_spectrum(std::span<const double> signal, double dt_s, bool hann,
-                            std::optional<double> reference_Hz) {
+Spectrum amplitude_spectrum(std::span<const double> signal, double dt_s, const SpectrumOptions& o) {
   const size_t n = signal.size();
   if (n < 4) throw std::invalid_argument("amplitude_spectrum: need at least 4 samples");
   if (!(dt_s > 0)) throw std::invalid_argument("amplitude_spectrum: dt must be positive");
+  size_t length = n;
+  if (o.resolution_Hz) {
+    if (!(*o.resolution_Hz > 0)) throw std::invalid_argument("amplitude_spectrum: resolution must be positive");
+    const double wanted = std::max(static_cast<double>(n), 1.0 / (*o.resolution_Hz * dt_s));
+    length = 1;
+    while (static_cast<double>(length) < wanted) length <<= 1;
+  }
   const double mean = std::accumulate(signal.begin(), signal.end(), 0.0) / static_cast<double>(n);
-  std::vector<cd> x(n);
+  std::vector<cd> x(length, 0.0);
   double window_sum = 0;
+  const double period = o.window == Window::HannSymmetric ? static_cast<double>(n - 1) : static_cast<double>(n);
   for (size_t k = 0; k < n; ++k) {
-    // Periodic Hann (denominator N): exact coherent gain 1/2, bins stay orthogonal.
-    const double w = hann ? 0.5 * (1.0 - std::cos(2.0 * std::numbers::pi * k / static_cast<double>(n))) : 1.0;
+    const double w = o.window == Window::Rectangular ? 1.0 : 0.5 * (1.0 - std::cos(2.0 * std::numbers::pi * k / period));
     window_sum += w;
     x[k] = (signal[k] - mean) * w;
   }
   const std::vector<cd> X = fft(std::move(x));
   Spectrum s;
-  const size_t bins = n / 2 + 1;
-  const double df = 1.0 / (static_cast<double>(n) * dt_s);
+  s.samples = n;
+  s.transform_length = length;
+  const size_t bins = length / 2 + 1;
+  const double df = 1.0 / (static_cast<double>(length) * dt_s);
   for (size_t k = 0; k < bins; ++k) {
     s.frequency_Hz.push_back(k * df);
-    // Single-sided: double every bin but DC (and Nyquist for even N).
-    const double factor = (k == 0 || (n % 2 == 0 && k == n / 2)) ? 1.0 : 2.0;
+    // Single-sided: double every bin but DC (and Nyquist for an even length).
+    const double factor = (k == 0 || (length % 2 == 0 && k == length / 2)) ? 1.0 : 2.0;
     s.amplitude.push_back(factor * std::abs(X[k]) / window_sum);
   }
+  // Largest amplitude with |f - centre| < half_width (strictly, as a band edge on a bin
+  // belongs to neither side); bins - 1 when the band holds no bin.
+  const auto largest_in = [&](double centre, double half_width) {
+    size_t best = bins;
+    for (size_t k = 1; k < bins; ++k)
+      if (std::fabs(s.frequency_Hz[k] - centre) < half_width && (best == bins || s.amplitude[k] > s.amplitude[best]))
+        best = k;
+    return best;
+  };
   size_t ref = 1;
-  if (reference_Hz) {
-    ref = static_cast<size_t>(std::llround(*reference_Hz / df));
+  if (o.reference_Hz && o.band_Hz) {
+    ref = largest_in(*o.reference_Hz, *o.band_Hz);
+    if (ref == bins) throw std::invalid_argument("amplitude_spectrum: no bin within the band around the reference frequency");
+  } else if (o.reference_Hz) {
+    ref = static_cast<size_t>(std::llround(*o.reference_Hz / df));
     ref = std::clamp<size_t>(ref, 1, bins - 1);
   } else {
     for (size_t k = 1; k < bins; ++k)
@@ -105,15 +125,40 @@ Spectrum amplitude_spectrum(std::span<const double> signal, double dt_s, bool ha
   s.reference_amplitude = s.amplitude[ref];
   const double norm = s.reference_amplitude > 0 ? s.reference_amplitude : 1.0;
   for (double a : s.amplitude) s.normalised.push_back(a / norm);
+  // Harmonics of the nominal reference (the given frequency, else the peak's bin).
+  const double nominal = o.reference_Hz ? *o.reference_Hz : s.reference_frequency_Hz;
   for (int order = 2; order <= 5; ++order) {
-    const size_t centre = order * ref;
-    if (centre + 1 >= bins) break;
-    size_t best = centre;
-    for (size_t k = centre - 1; k <= centre + 1; ++k)
-      if (s.amplitude[k] > s.amplitude[best]) best = k;
+    size_t best = bins;
+    if (o.band_Hz) {
+      if (order * nominal + *o.band_Hz > s.frequency_Hz.back()) break;
+      best = largest_in(order * nominal, *o.band_Hz);
+      if (best == bins) break;
+    } else {
+      const size_t centre = order * ref;
+      if (centre + 1 >= bins) break;
+      best = centre;
+      for (size_t k = centre - 1; k <= centre + 1; ++k)
+        if (s.amplitude[k] > s.amplitude[best]) best = k;
+    }
     s.harmonics.push_back({order, s.frequency_Hz[best], s.amplitude[best], s.amplitude[best] / norm});
   }
   return s;
+}
+
+Spectrum amplitude_spectrum(std::span<const double> signal, double dt_s, bool hann,
+                            std::optional<double> reference_Hz) {
+  SpectrumOptions o;
+  o.window = hann ? Window::Hann : Window::Rectangular;
+  o.reference_Hz = reference_Hz;
+  return amplitude_spectrum(signal, dt_s, o);
+}
+
+GateRows gate_rows(std::span<const double> t, double t0, double t1) {
+  GateRows g;
+  while (g.first < t.size() && t[g.first] < t0) ++g.first;
+  g.last = g.first;
+  while (g.last < t.size() && t[g.last] <= t1) ++g.last;
+  return g;
 }
 
 }  // namespace breccia::postproc

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "breccia/postproc/cracks.hpp"
@@ -21,6 +22,11 @@ struct PostOptions {
   bool history_required = false;       // history.csv must exist (energy/spectrum asked for)
   std::optional<double> frequency_Hz;
   bool hann = false;
+  // Spectra of the rows with gate_s->first <= time_s <= gate_s->second only (--gate); with
+  // --hann the window is then the symmetric Hann over the gate (spectrum.hpp, Window).
+  std::optional<std::pair<double, double>> gate_s;
+  std::optional<double> resolution_Hz;  // zero padding to bins at most this wide (--resolution)
+  std::optional<double> band_Hz;        // peak search half-width (--band); unset: +-1 bin
   double damage_threshold = 0.5;
   CrackCriterion crack_criterion = CrackCriterion::Bond;
   long long min_fragment_particles = 1;

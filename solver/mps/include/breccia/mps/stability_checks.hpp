@@ -10,6 +10,11 @@
 // moved as one rigid block (driven or held ends) next to a stretching region keep their
 // bonds' length while F_i, fitted over a stencil reaching into the stretch, predicts more;
 // they read 1 / (1 + strain) without being clumped (docs/atlas.md "MPS in tension").
+// Bonds between two crack-face particles (each with a cut nearest-neighbour bond) are not
+// measured either: F fitted on a one-sided stencil does not follow a flank sliding and
+// closing ahead of a crack tip, and the fracture model detaches a face particle that inverts
+// or keeps a remnant stencil (docs/mps.md "Clumping detector"). Bonds from an intact particle
+// to a face particle are measured, so pairing next to a crack is still caught.
 #include <cstdint>
 
 #include "breccia/mps/solid.hpp"
@@ -26,6 +31,7 @@ struct Clumping {
   double min_ratio = 1.0;        // min over shortened nearest-neighbour bonds of |x_j - x_i| / |F_i r_ij|
   long long worst_particle = -1;
   long long clumped_bonds = 0;   // bonds below kMinNeighbourDistanceRatio
+  long long skipped_face_bonds = 0;  // bonds between two crack-face particles below it (not counted)
 };
 
 Clumping measure_clumping(const Solid& solid);

@@ -50,6 +50,17 @@ inline double arrival_time(PdSystem& s, int64_t p, double level, long long max_s
   return -1;
 }
 
+// A glass plate with a Weibull strength scatter and a pre-crack halfway in, pulled apart
+// by tractions: bonds break within a few hundred steps. The restart and precision tests
+// both run it; they append their own `time:` and `output:` lines.
+inline const std::string kPrecrackedGlassPlateDeck = R"(
+specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.01], spacing: 0.5 mm, thickness: 1 mm}}
+model: {type: pmb, planar: plane_stress, horizon_factor: 3.015}
+materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.3333333333333333, fracture_energy: 3.8, weibull: {modulus: 5, seed: 3}}]
+precracks: [{type: segment, from: [0, 0.005], to: [0.01, 0.005]}]
+loads: [{type: traction, surface: ymax, value: [0, 20 MPa, 0]}, {type: traction, surface: ymin, value: [0, -20 MPa, 0]}]
+)";
+
 // Internal index of the particle nearest to a point.
 inline int64_t nearest(const PdSystem& s, double x, double y, double z) {
   int64_t best = 0;

@@ -69,16 +69,8 @@ TEST(Loads, DoubleExponentialPressurePeaksAtTheRiseTime) {
 }
 
 TEST(Restart, HalfRunsWithACheckpointEqualOneStraightRunBitForBit) {
-  const char* yaml = R"(
-specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.01], spacing: 0.5 mm, thickness: 1 mm}}
-model: {type: pmb, planar: plane_stress, horizon_factor: 3.015}
-materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.3333333333333333, fracture_energy: 3.8, weibull: {modulus: 5, seed: 3}}]
-precracks: [{type: segment, from: [0, 0.005], to: [0.01, 0.005]}]
-loads: [{type: traction, surface: ymax, value: [0, 20 MPa, 0]}, {type: traction, surface: ymin, value: [0, -20 MPa, 0]}]
-time: {steps: 400}
-output: {every: 100, history_every: 20}
-)";
-  const std::string case_file = write_case("restart", yaml);
+  const std::string case_file =
+      write_case("restart", kPrecrackedGlassPlateDeck + "time: {steps: 400}\noutput: {every: 100, history_every: 20}\n");
   const CaseConfig config = parse_case_file(case_file);
   RunOptions o;
   o.progress = false;

@@ -220,15 +220,8 @@ time: {integrator: adr, adr_tolerance: 3e-5, adr_max_steps: 20000}
 // crack tip amplifies such differences, so the counts cannot agree exactly; they agree
 // within 5% (a crack front of a few bonds either way over some hundreds).
 TEST(Precision, FractureBreaksNearlyAsManyBondsInFloat32) {
-  const char* yaml = R"(
-specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.01], spacing: 0.5 mm, thickness: 1 mm}}
-model: {type: pmb, planar: plane_stress, horizon_factor: 3.015}
-materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.3333333333333333, fracture_energy: 3.8, weibull: {modulus: 5, seed: 3}}]
-precracks: [{type: segment, from: [0, 0.005], to: [0.01, 0.005]}]
-loads: [{type: traction, surface: ymax, value: [0, 20 MPa, 0]}, {type: traction, surface: ymin, value: [0, -20 MPa, 0]}]
-time: {steps: 400}
-output: {every: 1000, history_every: 1000, results: false}
-)";
+  const std::string yaml =
+      kPrecrackedGlassPlateDeck + "time: {steps: 400}\noutput: {every: 1000, history_every: 1000, results: false}\n";
   long long broken[2];
   double dissipated[2];
   int k = 0;

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 #include "breccia/common/error.hpp"
@@ -25,6 +26,37 @@ std::string fmt(double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.10g", v);
   return buf;
+}
+
+// The time loop both formulations share. results.h5 is written into its temporary file and
+// committed only after the last output, so a run stopped by an error leaves no file that
+// reads as complete. `after_step` collects per-step maxima; `hint` says what to change when
+// the velocities turn non-finite. Returns the loop's wall time in seconds.
+template <class Model, class AfterStep>
+double run_time_loop(Model& sim, const CaseSpec& spec, const std::string& case_file, const std::string& out_dir,
+                     const std::string& content_id, long long total_steps, OutputFile& results,
+                     const std::function<void()>& record, AfterStep after_step, const char* hint) {
+  const auto loop_start = std::chrono::steady_clock::now();
+  {
+    MpsResultsWriter writer(results.temp_path().string(), out_dir, spec, case_file, content_id, sim);
+    writer.write(sim);
+    record();
+    Progress progress("mps", total_steps, spec.progress ? 5.0 : 1e300);
+    for (long long s = 1; s <= total_steps; ++s) {
+      sim.step();
+      if (s % spec.history_every == 0) record();
+      after_step();
+      if (spec.snapshot_every > 0 && s % spec.snapshot_every == 0 && s != total_steps) writer.write(sim);
+      if ((s % 100 == 0 || s == total_steps) && !std::isfinite(sim.kinetic_energy_j()))
+        throw RunError("mps: velocities became non-finite at step " + std::to_string(s) + " (" + hint + ")");
+      progress.update(s, "t=" + fmt(sim.time_s()) + " s");
+    }
+    writer.write(sim);
+    writer.mark_complete();
+    if (spec.progress) progress.finish("t=" + fmt(sim.time_s()) + " s");
+  }
+  results.commit();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
 }
 
 // The stress formulation (solid.hpp): same files, with stress and plastic strain in the
@@ -82,27 +114,8 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
     }
     history << "\n";
   };
-  const auto loop_start = std::chrono::steady_clock::now();
-  {
-    MpsResultsWriter writer(results.temp_path().string(), out_dir, spec, case_file, content_id, sim);
-    writer.write(sim);
-    record();
-    Progress progress("mps", total_steps, spec.progress ? 5.0 : 1e300);
-    for (long long s = 1; s <= total_steps; ++s) {
-      sim.step();
-      if (s % spec.history_every == 0) record();
-      if (spec.snapshot_every > 0 && s % spec.snapshot_every == 0 && s != total_steps) writer.write(sim);
-      if ((s % 100 == 0 || s == total_steps) && !std::isfinite(sim.kinetic_energy_j()))
-        throw RunError("mps: velocities became non-finite at step " + std::to_string(s) +
-                       " (time step above the stability limit? lower time.safety)");
-      progress.update(s, "t=" + fmt(sim.time_s()) + " s");
-    }
-    writer.write(sim);
-    writer.mark_complete();
-    if (spec.progress) progress.finish("t=" + fmt(sim.time_s()) + " s");
-  }
-  results.commit();
-  const double loop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
+  const double loop_s = run_time_loop(sim, spec, case_file, out_dir, content_id, total_steps, results, record, [] {},
+                                      "time step above the stability limit? lower time.safety");
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   write_text_file(dir / "history.csv", history.str());
   double max_plastic = 0.0;
@@ -196,29 +209,13 @@ int run_case(const std::string& case_file, const std::string& out_dir, const Run
   };
 
   double max_slip = 0.0, max_open = 0.0;
-  const auto loop_start = std::chrono::steady_clock::now();
-  {
-    MpsResultsWriter writer(results.temp_path().string(), out_dir, spec, case_file, sim.particles_content_id(), sim);
-    writer.write(sim);
-    record();
-    Progress progress("mps", total_steps, spec.progress ? 5.0 : 1e300);
-    for (long long s = 1; s <= total_steps; ++s) {
-      sim.step();
-      if (s % spec.history_every == 0) record();
-      max_slip = std::max(max_slip, sim.slipping_fraction());
-      max_open = std::max(max_open, sim.open_fraction());
-      if (spec.snapshot_every > 0 && s % spec.snapshot_every == 0 && s != total_steps) writer.write(sim);
-      if ((s % 100 == 0 || s == total_steps) && !std::isfinite(sim.kinetic_energy_j()))
-        throw RunError("mps: velocities became non-finite at step " + std::to_string(s) +
-                       " (time step above the stability limit?)");
-      progress.update(s, "t=" + fmt(sim.time_s()) + " s");
-    }
-    writer.write(sim);
-    writer.mark_complete();
-    if (spec.progress) progress.finish("t=" + fmt(sim.time_s()) + " s");
-  }
-  results.commit();
-  const double loop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
+  const double loop_s = run_time_loop(
+      sim, spec, case_file, out_dir, sim.particles_content_id(), total_steps, results, record,
+      [&] {
+        max_slip = std::max(max_slip, sim.slipping_fraction());
+        max_open = std::max(max_open, sim.open_fraction());
+      },
+      "time step above the stability limit?");
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   write_text_file(dir / "history.csv", history.str());
 

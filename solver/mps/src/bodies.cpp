@@ -15,16 +15,25 @@ namespace {
 void add_box(const BodiesSpec& b, const BodyShapeSpec& s, int id, ParticleCloud& c) {
   std::array<long long, 3> count{1, 1, 1};
   for (int a = 0; a < b.dimension; ++a) count[a] = std::max(1LL, std::llround((s.box_m[3 + a] - s.box_m[a]) / b.spacing_m));
-  const double volume = b.dimension == 2 ? b.spacing_m * b.spacing_m * b.thickness_m : std::pow(b.spacing_m, 3);
-  for (long long k = 0; k < count[2]; ++k)
-    for (long long j = 0; j < count[1]; ++j)
-      for (long long i = 0; i < count[0]; ++i) {
-        c.position_m.push_back(s.box_m[0] + (i + 0.5) * b.spacing_m);
-        c.position_m.push_back(s.box_m[1] + (j + 0.5) * b.spacing_m);
-        c.position_m.push_back(b.dimension == 3 ? s.box_m[2] + (k + 0.5) * b.spacing_m : 0.0);
-        c.volume_m3.push_back(volume);
-        c.body_id.push_back(id);
-      }
+  const size_t added = append_lattice(b.dimension, {s.box_m[0], s.box_m[1], s.box_m[2]}, count, b.spacing_m, b.thickness_m, c);
+  c.body_id.insert(c.body_id.end(), added, id);
+}
+
+// The cubic lattice cut to a cylinder along z: the axis runs along a cell corner, so the
+// cross-section is symmetric under x -> -x and y -> -y (ceil(R/h) cells each side of it),
+// and a particle is kept when its centre lies within the radius; round(length/h) layers.
+// The surface is a staircase: the outermost centres lie between R - h and R from the axis.
+void add_cylinder(const BodiesSpec& b, const BodyShapeSpec& s, int id, ParticleCloud& c) {
+  const double h = b.spacing_m, radius = s.outer_radius_m;
+  const long long across = static_cast<long long>(std::ceil(radius / h - 1e-9));
+  const long long layers = std::max(1LL, std::llround(s.length_m / h));
+  const std::array<double, 3> low{s.center_m[0] - across * h, s.center_m[1] - across * h, s.center_m[2]};
+  const auto inside = [&](double x, double y, double) {
+    const double dx = x - s.center_m[0], dy = y - s.center_m[1];
+    return dx * dx + dy * dy <= radius * radius * (1.0 + 1e-12);
+  };
+  const size_t added = append_lattice(3, low, {2 * across, 2 * across, layers}, h, h, c, inside);
+  c.body_id.insert(c.body_id.end(), added, id);
 }
 
 // Concentric circles, as many as fit the wall at about one spacing, each with about one
@@ -61,6 +70,7 @@ ParticleCloud build_bodies_cloud(const CaseSpec& spec) {
     const BodyShapeSpec& s = b.shapes[k];
     const size_t first = c.volume_m3.size();
     if (s.type == "box") add_box(b, s, static_cast<int>(k), c);
+    else if (s.type == "cylinder") add_cylinder(b, s, static_cast<int>(k), c);
     else add_annulus(b, s, static_cast<int>(k), c);
     c.set_names.push_back(s.name);
     c.set_members.emplace_back();

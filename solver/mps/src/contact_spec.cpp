@@ -65,12 +65,15 @@ BodiesSpec parse_bodies(const Section& s) {
   if (shapes.empty()) fail(s, "shapes", "missing or empty", "a list of bodies, e.g. [{type: annulus, ...}]");
   for (size_t k = 0; k < shapes.size(); ++k) {
     const Section& e = shapes[k];
-    e.allow_only({"name", "type", "box", "center", "inner_radius", "outer_radius", "velocity"});
+    e.allow_only({"name", "type", "box", "center", "inner_radius", "outer_radius", "radius", "length", "velocity"});
     BodyShapeSpec sh;
     sh.name = e.text("name", "body" + std::to_string(k));
     for (size_t m = 0; m < k; ++m)
       if (b.shapes[m].name == sh.name) fail(e, "name", "'" + sh.name + "' used twice", "a unique body name");
-    sh.type = e.choice("type", {"box", "annulus"});
+    sh.type = e.choice("type", {"box", "annulus", "cylinder"});
+    if (sh.type != "cylinder")
+      for (const char* key : {"radius", "length"})
+        if (e.has(key)) fail(e, key, "given for a " + sh.type, "radius and length for type: cylinder only");
     if (sh.type == "box") {
       const auto v = e.numbers("box", Quantity::Length, b.dimension == 2 ? 4 : 6);
       sh.box_m = {0, 0, 0, 0, 0, 0};
@@ -84,8 +87,19 @@ BodiesSpec parse_bodies(const Section& s) {
       }
       for (const char* key : {"center", "inner_radius", "outer_radius"})
         if (e.has(key)) fail(e, key, "given for a box", "center and radii for type: annulus only");
+    } else if (sh.type == "cylinder") {
+      if (b.dimension != 3) fail(e, "type", "cylinder in a 2D model", "cylinder in 3D only (annulus in 2D)");
+      for (const char* key : {"box", "inner_radius", "outer_radius"})
+        if (e.has(key)) fail(e, key, "given for a cylinder", "center (of the lower end face), radius, length");
+      sh.center_m = e.vec3("center", Quantity::Length);
+      sh.outer_radius_m = e.positive("radius", Quantity::Length);
+      sh.length_m = e.positive("length", Quantity::Length);
+      if (sh.outer_radius_m < b.spacing_m)
+        fail(e, "radius", text_of(sh.outer_radius_m) + " m", "at least one spacing (" + text_of(b.spacing_m) + " m)");
+      if (sh.length_m < b.spacing_m)
+        fail(e, "length", text_of(sh.length_m) + " m", "at least one spacing (" + text_of(b.spacing_m) + " m)");
     } else {
-      if (b.dimension != 2) fail(e, "type", "annulus in a 3D model", "annulus in 2D only (box in 3D)");
+      if (b.dimension != 2) fail(e, "type", "annulus in a 3D model", "annulus in 2D only (box or cylinder in 3D)");
       if (e.has("box")) fail(e, "box", "given for an annulus", "center, inner_radius, outer_radius");
       sh.center_m = e.vec3("center", Quantity::Length);
       sh.inner_radius_m = e.number("inner_radius", Quantity::Length, 0.0);

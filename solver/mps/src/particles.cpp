@@ -42,20 +42,12 @@ ParticleCloud build_particle_cloud(const CaseSpec& spec) {
       if (count[a] < 1) throw InputError(spec.file, "specimen.lattice.spacing", "larger than the box", "spacing < box size");
       if (l.periodic[a]) c.periodic.period_m[a] = count[a] * l.spacing_m;
     }
-    const double volume = c.dimension == 2 ? l.spacing_m * l.spacing_m * l.thickness_m : std::pow(l.spacing_m, 3);
     const double re = spec.re_over_spacing * c.spacing_m;
     for (int a = 0; a < 3; ++a)
       if (c.periodic.period_m[a] > 0 && c.periodic.period_m[a] < 2.0 * re)
         throw InputError(spec.file, "specimen.lattice.periodic", "periodic box shorter than 2 re",
                          "a periodic length of at least " + std::to_string(2.0 * re) + " m");
-    for (long long k = 0; k < count[2]; ++k)
-      for (long long j = 0; j < count[1]; ++j)
-        for (long long i = 0; i < count[0]; ++i) {
-          c.position_m.push_back(l.low_m[0] + (i + 0.5) * l.spacing_m);
-          c.position_m.push_back(l.low_m[1] + (j + 0.5) * l.spacing_m);
-          c.position_m.push_back(c.dimension == 3 ? l.low_m[2] + (k + 0.5) * l.spacing_m : 0.0);
-          c.volume_m3.push_back(volume);
-        }
+    append_lattice(c.dimension, l.low_m, count, l.spacing_m, l.thickness_m, c);
     return c;
   }
   const ParticleModel model = read_particle_file(spec.particle_file);
@@ -72,6 +64,23 @@ ParticleCloud build_particle_cloud(const CaseSpec& spec) {
     c.set_members.push_back(s.indices);
   }
   return c;
+}
+
+size_t append_lattice(int dimension, const std::array<double, 3>& low_m, const std::array<long long, 3>& count,
+                      double spacing_m, double thickness_m, ParticleCloud& cloud,
+                      const std::function<bool(double, double, double)>& keep) {
+  const double volume = dimension == 2 ? spacing_m * spacing_m * thickness_m : std::pow(spacing_m, 3);
+  const size_t before = cloud.volume_m3.size();
+  for (long long k = 0; k < (dimension == 3 ? count[2] : 1); ++k)
+    for (long long j = 0; j < count[1]; ++j)
+      for (long long i = 0; i < count[0]; ++i) {
+        const double x = low_m[0] + (i + 0.5) * spacing_m, y = low_m[1] + (j + 0.5) * spacing_m;
+        const double z = dimension == 3 ? low_m[2] + (k + 0.5) * spacing_m : 0.0;
+        if (keep && !keep(x, y, z)) continue;
+        cloud.position_m.insert(cloud.position_m.end(), {x, y, z});
+        cloud.volume_m3.push_back(volume);
+      }
+  return cloud.volume_m3.size() - before;
 }
 
 std::vector<PrescribedSet> select_boundary(const CaseSpec& spec, const ParticleCloud& cloud) {

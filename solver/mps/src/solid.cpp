@@ -99,16 +99,7 @@ void Solid::rebuild_stencils_on_current_configuration() {
     std::fill(u_stencil_[a].begin(), u_stencil_[a].end(), 0.0);
   }
   build_stencils(current);
-  // The stable step follows the current particle spacing: the stencil coefficients grow as
-  // 1/r^2 where the flow has squeezed neighbours together (a Taylor bar's face reaches a
-  // quarter of the spacing axially and blows up within 20 us at the initial step). Each
-  // step() is split into as many equal substeps as bring the step down to safety x the
-  // shortest current bond / c_L, so dt_s() and the step count the caller sees do not change.
-  double shortest2 = options_.spacing_m * options_.spacing_m;
-  for (size_t k = 0; k < bonds_.size(); ++k)
-    shortest2 = std::min(shortest2, bonds_.rx[k] * bonds_.rx[k] + bonds_.ry[k] * bonds_.ry[k] + bonds_.rz[k] * bonds_.rz[k]);
-  const double stable_dt = options_.safety * std::sqrt(shortest2) / p_wave_speed();
-  substeps_ = std::max(1, static_cast<int>(std::ceil(dt_s_ / stable_dt - 1e-9)));
+  update_substeps();  // on the new stencils (their bonds are the current ones)
   const Mat3 zero{};
   for (size_t i = 0; i < n; ++i) {
     gradient_[i] = zero;
@@ -116,6 +107,63 @@ void Solid::rebuild_stencils_on_current_configuration() {
     matrices_[i] = force_matrices(stress_[i], zero, f_inverse_[i], moment_inverse_[i], matrices_[i].hourglass_stiffness);
   }
   ++stencil_rebuilds_;
+}
+
+// The stable step follows the current distance between bonded particles: where the flow
+// squeezes neighbours together the stiffness grows, through the stencil coefficients w/r^2
+// (updated stencils) or the tangent of P = J sigma F^-T (total Lagrangian, ~F^-T F^-T), and
+// at the initial step a Taylor bar's face, axially a quarter of the spacing, inverts within
+// 20 us. Each step() is split into as many equal substeps as bring the step down to
+// safety x the shortest current bond / c_L (a quarter above it allowed, below), so dt_s()
+// and the step count the caller sees do not change. A bond's length counts as:
+// - total Lagrangian: spacing x current / reference length. The reference stencils were
+//   stable at dt_s_, so what matters is the shortening; bonds shorter than the spacing from
+//   the start (particles on circles) do not substep a body at rest.
+// - updated: its current length (capped at the spacing), as the rebuilt coefficients' w/r^2.
+// The count is recomputed every kClumpingCheckEvery steps, and a bond may close further in
+// between: each is taken at its closest approach within that window at its present relative
+// velocity. Cut bonds (fracture, weight 0) carry no force and do not count.
+void Solid::update_substeps() {
+  if (!options_.substeps) return;
+  const long long n = static_cast<long long>(size());
+  const BondsView b = bonds_.view();
+  const bool updated = options_.updated_lagrangian;
+  const double spacing = options_.spacing_m, window = kClumpingCheckEvery * dt_s_;
+  // Displacement since the stencils' reference (u_stencil_ is refreshed per substep only).
+  const auto since_reference = [&](int a, long long i) { return updated ? u_[a][i] - u_at_rebuild_[a][i] : u_[a][i]; };
+  double shortest = spacing;
+#pragma omp parallel for schedule(static) reduction(min : shortest) if (n > kSolidParallelMin)
+  for (long long i = 0; i < n; ++i) {
+    for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
+      if (b.weight[k] == 0.0) continue;
+      const long long j = b.neighbour[k];
+      const double r[3] = {b.rx[k], b.ry[k], b.rz[k]};
+      double d[3], w[3], dw = 0.0, ww = 0.0;
+      for (int a = 0; a < 3; ++a) {
+        d[a] = r[a] + since_reference(a, j) - since_reference(a, i);
+        w[a] = v_[a][j] - v_[a][i];
+        dw += d[a] * w[a];
+        ww += w[a] * w[a];
+      }
+      const double t = dw < 0.0 && ww > 0.0 ? std::min(window, -dw / ww) : 0.0;  // closest approach
+      double closest2 = 0.0;
+      for (int a = 0; a < 3; ++a) closest2 += (d[a] + t * w[a]) * (d[a] + t * w[a]);
+      const double closest = std::sqrt(closest2);
+      const double length = updated ? closest : spacing * closest / std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+      shortest = std::min(shortest, length);
+    }
+  }
+  // A bond at 1/kMaxSubsteps of its length is a collapse that the inversion and clumping
+  // checks stop; the cap only keeps a projected closest approach of ~0 from stalling the run.
+  constexpr int kMaxSubsteps = 64;
+  // A substep may exceed safety x shortest / c_L by a quarter, so the step is split only once
+  // a bond has shortened by more than a fifth (safety 0.3 leaves that margin): split at any
+  // shortening, an elastic body in contact (strains ~1e-4) would run at twice the cost.
+  constexpr double kSubstepExcess = 1.25;
+  const double stable_dt = kSubstepExcess * options_.safety * shortest / p_wave_speed();
+  double wanted = std::ceil(dt_s_ / stable_dt - 1e-9);
+  if (!(wanted >= 1.0)) wanted = 1.0;  // NaN from non-finite fields: the inversion check reports those
+  substeps_ = static_cast<int>(std::min(wanted, static_cast<double>(kMaxSubsteps)));
 }
 
 std::vector<double> Solid::volume_ratio() const {
@@ -280,7 +328,9 @@ void Solid::compute_acceleration(double dt) {
 }
 
 void Solid::step() {
-  // Substeps: 1 unless updated-Lagrangian stencils have been squeezed (see the rebuild).
+  // Substeps: 1 unless bonds have been squeezed (update_substeps()); counted before the
+  // first step too, since the initial velocities are set after construction.
+  if (steps_ % kClumpingCheckEvery == 0) update_substeps();
   const int substeps = substeps_;
   const double dt = dt_s_ / substeps;
   for (int s = 0; s < substeps; ++s) {

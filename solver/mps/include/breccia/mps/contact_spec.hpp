@@ -13,14 +13,16 @@ class Section;
 
 namespace breccia::mps {
 
-// One body of specimen.bodies: a lattice box, or an annulus of particles on concentric
-// circles (inner_radius 0: a disc), which follows both round surfaces.
+// One body of specimen.bodies: a lattice box, an annulus of particles on concentric
+// circles (inner_radius 0: a disc), which follows both round surfaces, or (3D) a cylinder
+// along z: the cubic lattice cut to it (a staircase surface, as a Taylor bar is set up).
 struct BodyShapeSpec {
   std::string name;
-  std::string type;                  // box | annulus
+  std::string type;                  // box | annulus | cylinder
   std::array<double, 6> box_m{};     // box: x0 y0 z0 x1 y1 z1
-  std::array<double, 3> center_m{};  // annulus
-  double inner_radius_m = 0.0, outer_radius_m = 0.0;
+  std::array<double, 3> center_m{};  // annulus: centre; cylinder: centre of the lower end face
+  double inner_radius_m = 0.0, outer_radius_m = 0.0;  // annulus; cylinder: outer_radius_m = radius
+  double length_m = 0.0;             // cylinder: along +z from center_m
   std::array<double, 3> velocity_m_s{};  // initial velocity of the body (added to initial.velocity)
 };
 

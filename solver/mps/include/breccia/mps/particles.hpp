@@ -4,6 +4,7 @@
 // (simulation.hpp) and the stress-based solid (solid.hpp).
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -29,6 +30,14 @@ struct ParticleCloud {
 // Lattice (x fastest, then y, then z) or particle file; throws InputError for a spacing
 // larger than the box or a periodic length below 2 re.
 ParticleCloud build_particle_cloud(const CaseSpec& spec);
+
+// Appends one particle at the centre of each cell of a square (2D, z = 0) or cubic lattice of
+// count cells from the corner low_m, x fastest, then y, then z, each with the cell's volume
+// (2D: spacing^2 x thickness), and returns how many it appended. keep (x, y, z), when given,
+// cuts the lattice to a shape. Shared by specimen.lattice and the bodies' box and cylinder.
+size_t append_lattice(int dimension, const std::array<double, 3>& low_m, const std::array<long long, 3>& count,
+                      double spacing_m, double thickness_m, ParticleCloud& cloud,
+                      const std::function<bool(double, double, double)>& keep = {});
 
 // Particles whose displacement components follow a history (or stay zero).
 struct PrescribedSet {

@@ -35,6 +35,10 @@ struct SolidOptions {
   double damping_per_s = 0.0;      // mass-proportional damping a -= damping v (quasi-static runs)
   PressureForce pressure = PressureForce::Conservative;
   double safety = 0.3;             // dt = safety * spacing / c_L
+  // Split step() into substeps where bonds are squeezed (Solid::update_substeps). false: the
+  // fixed step of the reference spacing throughout (for comparisons: it inverts the 16-across
+  // Taylor bar at safety 0.3).
+  bool substeps = true;
   std::optional<double> dt_s;      // used as given when set
   std::array<double, 3> gravity_m_s2{0.0, 0.0, 0.0};
   // Body of each particle (empty: one body). No bond joins two bodies; they interact
@@ -135,7 +139,7 @@ public:
   // Volume ratio J = det F of each particle relative to the initial configuration.
   std::vector<double> volume_ratio() const;
   long long stencil_rebuilds() const { return stencil_rebuilds_; }
-  int substeps() const { return substeps_; }  // substeps per step() (updated Lagrangian, squeezed stencils)
+  int substeps() const { return substeps_; }  // substeps per step() (squeezed bonds; update_substeps())
 
   double kinetic_energy_j() const;  // particles and free rigid bodies
   // Stress work accumulated since the start (elastic energy + plastic dissipation).
@@ -160,6 +164,7 @@ private:
   void refresh_cut_stencils(const std::vector<long long>& changed);
   void build_stencils(const std::vector<double>& position_m);  // bonds, L^-1, surface flags
   void rebuild_stencils_on_current_configuration();            // updated Lagrangian
+  void update_substeps();  // substeps per step() from the shortest current bond
 
   std::vector<double> position_m_, volume_m3_;
   double density_kg_m3_ = 0.0;
@@ -180,7 +185,7 @@ private:
   std::vector<double> stencil_volume_m3_, stencil_volume_ratio_;
   std::array<std::vector<double>, 3> u_at_rebuild_, u_stencil_;
   long long stencil_rebuilds_ = 0;
-  int substeps_ = 1;  // per step(): keeps the step stable on squeezed updated stencils
+  int substeps_ = 1;  // per step(): keeps the step stable where bonds are squeezed
   double hourglass_released_j_ = 0.0;  // hourglass energy at rebuilds (dissipated)
   std::vector<PrescribedSet> prescribed_;
   double mean_volume_m3_ = 0.0;

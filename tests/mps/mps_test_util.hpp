@@ -8,6 +8,9 @@
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
+
+#include "breccia/common/error.hpp"
 #include "breccia/mps/neighbours.hpp"
 #include "breccia/mps/simulation.hpp"
 
@@ -24,6 +27,25 @@ inline std::vector<double> lattice(int dimension, int nx, int ny, int nz, double
         p.push_back(dimension == 3 ? (k + 0.5) * h : 0.0);
       }
   return p;
+}
+
+// `text` with the first occurrence of `from` replaced by `to`; a deck edit that finds
+// nothing to replace fails the test instead of testing the unchanged deck.
+inline std::string replace_once(std::string text, const std::string& from, const std::string& to) {
+  const auto pos = text.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  return pos == std::string::npos ? text : text.replace(pos, from.size(), to);
+}
+
+// The message of the InputError that build() throws, or "" when it accepts its input.
+template <class Build>
+std::string input_error_of(Build build) {
+  try {
+    build();
+  } catch (const breccia::InputError& e) {
+    return e.what();
+  }
+  return "";
 }
 
 // Replace each "${KEY}" in text by its value (the standard library here has no <format>).

@@ -12,6 +12,7 @@
 #include "breccia/common/error.hpp"
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/particles.hpp"
+#include "mps_test_util.hpp"
 
 using namespace breccia::mps;
 
@@ -31,20 +32,10 @@ materials:
 time: {end: 1 us}
 )";
 
-std::string bar_with(const std::string& from, const std::string& to) {
-  std::string s = kBar;
-  const auto pos = s.find(from);
-  EXPECT_NE(pos, std::string::npos) << from;
-  return s.replace(pos, from.size(), to);
-}
+std::string bar_with(const std::string& from, const std::string& to) { return test::replace_once(kBar, from, to); }
 
 std::string error_of(const std::string& yaml) {
-  try {
-    build_particle_cloud(parse_case_text(yaml, "case.yaml"));
-  } catch (const breccia::InputError& e) {
-    return e.what();
-  }
-  return "";
+  return test::input_error_of([&] { build_particle_cloud(parse_case_text(yaml, "case.yaml")); });
 }
 
 }  // namespace

@@ -31,21 +31,11 @@ cracks:
 time: {end: 1 us}
 )";
 
-std::string replaced(const std::string& from, const std::string& to) {
-  std::string s = kGood;
-  const auto pos = s.find(from);
-  EXPECT_NE(pos, std::string::npos) << from;
-  return s.replace(pos, from.size(), to);
-}
+std::string replaced(const std::string& from, const std::string& to) { return test::replace_once(kGood, from, to); }
 
 // The message of the InputError thrown while parsing and building the case ("" if none).
 std::string error_of(const std::string& yaml) {
-  try {
-    Simulation sim(parse_case_text(yaml, "case.yaml"));
-  } catch (const breccia::InputError& e) {
-    return e.what();
-  }
-  return "";
+  return test::input_error_of([&] { Simulation sim(parse_case_text(yaml, "case.yaml")); });
 }
 
 }  // namespace

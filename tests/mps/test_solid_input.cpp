@@ -13,6 +13,7 @@
 #include "breccia/common/h5.hpp"
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/solid_case.hpp"
+#include "mps_test_util.hpp"
 
 using namespace breccia::mps;
 
@@ -31,20 +32,10 @@ contact: {floor: {point: [0, 0], normal: [0, 1]}}
 time: {end: 1 us, safety: 0.3}
 )";
 
-std::string replaced(const std::string& from, const std::string& to) {
-  std::string s = kStress;
-  const auto pos = s.find(from);
-  EXPECT_NE(pos, std::string::npos) << from;
-  return s.replace(pos, from.size(), to);
-}
+std::string replaced(const std::string& from, const std::string& to) { return test::replace_once(kStress, from, to); }
 
 std::string error_of(const std::string& yaml) {
-  try {
-    make_solid(parse_case_text(yaml, "case.yaml"));
-  } catch (const breccia::InputError& e) {
-    return e.what();
-  }
-  return "";
+  return test::input_error_of([&] { make_solid(parse_case_text(yaml, "case.yaml")); });
 }
 
 struct CliResult {

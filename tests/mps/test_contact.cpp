@@ -19,6 +19,7 @@
 
 using namespace breccia::mps;
 using breccia::mps::test::soft_law;
+using breccia::mps::test::LineFit;
 using breccia::mps::test::total_energy;
 
 namespace {
@@ -155,22 +156,16 @@ TEST(MpsContact, BlockSlidingOnFrictionalFloorDeceleratesAtMuKineticG) {
   const double t_stop = v0 / (mu_k * g);
   // Least-squares slope of the mean velocity over the sliding phase, skipping the first
   // settling oscillations.
-  double st = 0, sv = 0, stt = 0, stv = 0, count = 0, x_stop = 0.0;
+  LineFit fit;
   const double x0 = mean(solid.displacement(0));
   const double total_energy_start = total_energy(solid);
   while (solid.time_s() < 1.4 * t_stop) {
     solid.step();
-    const double t = solid.time_s(), v = mean(solid.velocity(0));
-    if (t > 0.1 * t_stop && t < 0.8 * t_stop) {
-      st += t;
-      sv += v;
-      stt += t * t;
-      stv += t * v;
-      count += 1;
-    }
+    const double t = solid.time_s();
+    if (t > 0.1 * t_stop && t < 0.8 * t_stop) fit.add(t, mean(solid.velocity(0)));
   }
-  x_stop = mean(solid.displacement(0)) - x0;
-  const double slope = (count * stv - st * sv) / (count * stt - st * st);
+  const double x_stop = mean(solid.displacement(0)) - x0;
+  const double slope = fit.slope();
   const double v_end = mean(solid.velocity(0));
   const double distance = v0 * v0 / (2 * mu_k * g);
   std::printf("sliding on the %s: deceleration %.4f m/s^2 (mu_k g = %.4f), distance %.4f m (%.4f), final velocity %.2e m/s, "
@@ -346,7 +341,8 @@ TEST(MpsContact, FreeRigidSquareBouncesAndSlidesOnTheFloor) {
     box.velocity_m_s = {sliding ? v0 : 0.0, 0.0};
     solid.contact().add_polygon(box);
     const double t_end = sliding ? 1.3 * v0 / (mu_k * g) : 2.0 * std::sqrt(2 * lift / g) * 0.9;
-    double impact_speed = 0.0, rebound_speed = 0.0, st = 0, sv = 0, stt = 0, stv = 0, count = 0;
+    double impact_speed = 0.0, rebound_speed = 0.0;
+    LineFit fit;
     while (solid.time_s() < t_end) {
       solid.step();
       const double vx = solid.contact().rigid_momentum()[0] / box.mass_kg;
@@ -354,17 +350,11 @@ TEST(MpsContact, FreeRigidSquareBouncesAndSlidesOnTheFloor) {
       impact_speed = std::max(impact_speed, -vy);  // just before the contact
       rebound_speed = std::max(rebound_speed, vy);   // just after it
       const double t = solid.time_s();
-      if (sliding && t > 0.1 * v0 / (mu_k * g) && t < 0.8 * v0 / (mu_k * g)) {
-        st += t;
-        sv += vx;
-        stt += t * t;
-        stv += t * vx;
-        count += 1;
-      }
+      if (sliding && t > 0.1 * v0 / (mu_k * g) && t < 0.8 * v0 / (mu_k * g)) fit.add(t, vx);
     }
     const double vx = solid.contact().rigid_momentum()[0] / box.mass_kg;
     if (sliding) {
-      const double slope = (count * stv - st * sv) / (count * stt - st * st);
+      const double slope = fit.slope();
       std::printf("rigid square sliding: deceleration %.4f m/s^2 (mu_k g %.4f), final speed %.2e m/s, angle %.2e rad\n",
                   -slope, mu_k * g, vx, solid.contact().polygon_angle_rad(0));
       // 1%: the vertical penalty oscillation after the start averages out over the window.

@@ -156,19 +156,13 @@ TEST(MpsContactParticles, BlockSlidingOnAParticleSlabDeceleratesAtMuKineticG) {
     for (int i : b.block) b.solid.velocity(0)[i] = v0;
     const double x0 = block_mean(b, b.solid.displacement(0));
     const double e0 = total_energy(b.solid), kinetic0 = b.solid.kinetic_energy_j();
-    double st = 0, sv = 0, stt = 0, stv = 0, count = 0;
+    test::LineFit fit;
     while (b.solid.time_s() < 1.4 * t_stop) {
       b.solid.step();
-      const double t = b.solid.time_s(), v = block_mean(b, b.solid.velocity(0));
-      if (t > 0.1 * t_stop && t < 0.8 * t_stop) {
-        st += t;
-        sv += v;
-        stt += t * t;
-        stv += t * v;
-        count += 1;
-      }
+      const double t = b.solid.time_s();
+      if (t > 0.1 * t_stop && t < 0.8 * t_stop) fit.add(t, block_mean(b, b.solid.velocity(0)));
     }
-    const double slope = (count * stv - st * sv) / (count * stt - st * st);
+    const double slope = fit.slope();
     const double x_stop = block_mean(b, b.solid.displacement(0)) - x0, v_end = block_mean(b, b.solid.velocity(0));
     const double balance = (total_energy(b.solid) - e0) / kinetic0;
     std::printf("friction on a particle slab, normal %s: deceleration %.4f m/s^2 (mu_k g = %.4f), distance %.4f m (%.4f), "

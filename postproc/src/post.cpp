@@ -39,6 +39,16 @@ fs::path default_scripts_dir() {
 
 namespace {
 
+// --hann tapers a gate cut out of a longer record at both ends (symmetric Hann) and a whole
+// record periodically (its DFT bins stay orthogonal); spectrum.hpp, Window.
+Window spectrum_window(const PostOptions& o) {
+  return !o.hann ? Window::Rectangular : o.gate_s ? Window::HannSymmetric : Window::Hann;
+}
+
+const char* window_name(Window w) {
+  return w == Window::Rectangular ? "rectangular" : w == Window::HannSymmetric ? "hann_symmetric" : "hann";
+}
+
 // printf's "%.10g" (the standard defines to_chars with a precision so), without the
 // locale and format-string work: 254 k fragment rows of 18 numbers on a crushed block.
 std::string fmt(double v) {
@@ -463,7 +473,7 @@ private:
     }
     const std::vector<double> tg(t.begin() + rows.first, t.begin() + rows.last);
     SpectrumOptions so;
-    so.window = !opt_.hann ? Window::Rectangular : opt_.gate_s ? Window::HannSymmetric : Window::Hann;
+    so.window = spectrum_window(opt_);
     so.reference_Hz = opt_.frequency_Hz;
     so.resolution_Hz = opt_.resolution_Hz;
     so.band_Hz = opt_.band_Hz;
@@ -481,7 +491,8 @@ private:
       const std::string comp = c.size() > 7 + probe.size() ? c.substr(7 + probe.size()) : c;
       try {
         comps.emplace_back(comp, amplitude_spectrum(v, dt, so));
-      } catch (const std::invalid_argument& e) {  // a band holding no bin
+      } catch (const std::invalid_argument& e) {  // samples and dt are checked above: a band holding no bin
+        if (!opt_.band_Hz) throw;
         throw InputError("command line", "--band", fmt(*opt_.band_Hz) + " Hz", std::string("a band wider than the bins (") + e.what() + ")");
       }
     }
@@ -587,7 +598,7 @@ private:
       for (const auto& sp : spectra_) {
         for (const auto& [comp, s] : sp.components) {
           j.begin_object().value("probe", sp.probe).value("component", comp)
-              .value("window", !opt_.hann ? "rectangular" : opt_.gate_s ? "hann_symmetric" : "hann");
+              .value("window", window_name(spectrum_window(opt_)));
           if (opt_.gate_s) {
             j.begin_array("gate_s").value("", opt_.gate_s->first).value("", opt_.gate_s->second).end_array();
           }

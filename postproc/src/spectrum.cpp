@@ -102,7 +102,7 @@ Spectrum amplitude_spectrum(std::span<const double> signal, double dt_s, const S
     s.amplitude.push_back(factor * std::abs(X[k]) / window_sum);
   }
   // Largest amplitude with |f - centre| < half_width (strictly, as a band edge on a bin
-  // belongs to neither side); bins - 1 when the band holds no bin.
+  // belongs to neither side); `bins` (no such bin) when the band holds none.
   const auto largest_in = [&](double centre, double half_width) {
     size_t best = bins;
     for (size_t k = 1; k < bins; ++k)

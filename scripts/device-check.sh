@@ -31,10 +31,10 @@ if [ "${1:-}" = prepare ]; then
   command -v ccache >/dev/null && LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_CUDA_COMPILER_LAUNCHER=ccache)
   cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DBRECCIA_STAGES=solver -DBRECCIA_CUDA=ON \
     -DCMAKE_CUDA_ARCHITECTURES=90 "${LAUNCHER[@]}" >"$BUILD.configure.log" 2>&1 || { cat "$BUILD.configure.log"; exit 1; }
-  nice -n 10 cmake --build "$BUILD" -j"${JOBS:-2}" --target breccia-solve test_solver_cuda test_mps_cuda
+  nice -n 10 cmake --build "$BUILD" -j"${JOBS:-2}" --target breccia-solve test_solver_cuda test_mps_cuda test_mps_solid_cuda
   rm -rf "$KIT"
   mkdir -p "$KIT/bin" "$KIT/lib" "$KIT/runtime" "$KIT/glibc" "$KIT/cases"
-  cp "$BUILD/bin/breccia-solve" "$BUILD/bin/test_solver_cuda" "$BUILD/bin/test_mps_cuda" "$KIT/bin/"
+  cp "$BUILD/bin/breccia-solve" "$BUILD/bin/test_solver_cuda" "$BUILD/bin/test_mps_cuda" "$BUILD/bin/test_mps_solid_cuda" "$KIT/bin/"
   # Libraries by layer: lib/ (HDF5, yaml-cpp and what they load) always; runtime/ (the GCC
   # runtime) only if the device's own is missing or older; glibc/ with its loader as a last resort.
   for exe in "$KIT"/bin/*; do ldd "$exe"; done | awk '$3 ~ /^\// {print $3} $1 ~ /^\/.*ld-linux/ {print $1}' | sort -u |
@@ -47,6 +47,7 @@ if [ "${1:-}" = prepare ]; then
       esac
     done
   cp "$ROOT/cases/mps-harmonics/case.yaml" "$KIT/cases/mps-harmonics.yaml"
+  cp "$ROOT/cases/mps-taylor-bar/case.yaml" "$KIT/cases/mps-taylor-bar.yaml"
   {
     echo "built: $(date -u +%FT%TZ) on $(hostname)"
     echo "commit: $(git -C "$ROOT" rev-parse HEAD 2>/dev/null) (+ uncommitted changes: $(git -C "$ROOT" status --porcelain 2>/dev/null | wc -l) paths)"
@@ -102,7 +103,8 @@ rows = [
   "# device-check results" + (" (DRY: no GPU runs)" if res.get("dry") == 1 else ""),
   "", f"device: {g('device')}; binaries: {g('binaries')}; elapsed {g('elapsed_s')} s", "",
   "| check | result |", "|---|---|",
-  f"| test_mps_cuda | {g('test_mps_cuda')} |", f"| test_solver_cuda | {g('test_solver_cuda')} |",
+  f"| test_mps_cuda | {g('test_mps_cuda')} |", f"| test_mps_solid_cuda | {g('test_mps_solid_cuda')} |",
+  f"| test_solver_cuda | {g('test_solver_cuda')} |",
   f"| compute-sanitizer memcheck (MPS) | {g('sanitizer_mps')} |",
   f"| MPS harmonics history GPU vs CPU (max rel. diff) | {g('mps_history_max_rel_diff', '{:.3e}')} |",
   "", "| run | particles | steps | loop wall (s) | rate |", "|---|---|---|---|---|",
@@ -111,6 +113,10 @@ for leg in ("gpu", "cpu"):
     k = f"mps_{leg}"
     rows.append(f"| MPS harmonics {g('mps_spacing_mm')} mm, {leg} ({g(k + '_backend')}) | {g(k + '_particles')} | "
                 f"{g(k + '_steps')} | {g(k + '_loop_s')} | {g(k + '_particle_steps_per_s', '{:.3g}')} particle-steps/s |")
+rows.append(f"| MPS Taylor bar {g('taylor_across')} across, gpu ({g('taylor_backend')}) | {g('taylor_particles')} | "
+            f"{g('taylor_steps')} (max {g('taylor_max_substeps')} substeps) | {g('taylor_loop_s')} | "
+            f"{g('taylor_particle_steps_per_s', '{:.3g}')} particle-steps/s; length {g('taylor_length_mm', '{:.2f}')} mm, "
+            f"face radius {g('taylor_radius_mm', '{:.2f}')} mm |")
 for model in ("pmb", "lps"):
     for leg in ("gpu", "cpu"):
         k = f"pd_{model}_{leg}"
@@ -169,7 +175,7 @@ if [ "$MODE" = none ]; then
     echo "no runnable kit: building the solver stage here with -j$THREADS"
     cmake -S "$ROOT" -B /tmp/breccia-build -DCMAKE_BUILD_TYPE=Release -DBRECCIA_STAGES=solver -DBRECCIA_CUDA=ON \
       -DCMAKE_CUDA_ARCHITECTURES=90 >/tmp/breccia-configure.log 2>&1 &&
-      cmake --build /tmp/breccia-build -j"$THREADS" --target breccia-solve test_solver_cuda test_mps_cuda >/tmp/breccia-build.log 2>&1 &&
+      cmake --build /tmp/breccia-build -j"$THREADS" --target breccia-solve test_solver_cuda test_mps_cuda test_mps_solid_cuda >/tmp/breccia-build.log 2>&1 &&
       use_mode native && BIN=/tmp/breccia-build/bin
     [ "$MODE" = none ] && tail -30 /tmp/breccia-configure.log /tmp/breccia-build.log
   else
@@ -200,6 +206,7 @@ run_tests() {  # run_tests NAME TIMEOUT [gtest args]
   echo "$name: rc $rc: $passed passed, $failed failed, $skipped skipped"
 }
 run_tests test_mps_cuda 180
+in_budget test_mps_solid_cuda && run_tests test_mps_solid_cuda 90
 in_budget test_solver_cuda && run_tests test_solver_cuda 240
 
 # MPS: the harmonics case at one spacing, GPU then CPU on every core; histories compared.
@@ -240,6 +247,43 @@ else:
     print(f"mps_history_max_rel_diff={float((np.abs(g - c) / scale).max()):.6e}")
 PY
   grep mps_history "$RESULTS"
+fi
+
+# MPS stress formulation: the Taylor bar at TAYLOR_ACROSS particles across (default 32: about
+# 130k particles, finer than any CPU run), GPU only; length and face radius at 80 us as
+# cases/mps-taylor-bar/report.py measures them (where h5py is present).
+TAYLOR_ACROSS=${TAYLOR_ACROSS:-32}
+[ "$DRY" = 1 ] && TAYLOR_ACROSS=4
+if in_budget taylor; then
+  step "MPS Taylor bar, $TAYLOR_ACROSS across"
+  TAYLOR_CASE="$KIT/cases/mps-taylor-bar.yaml"
+  [ -f "$TAYLOR_CASE" ] || TAYLOR_CASE="$ROOT/cases/mps-taylor-bar/case.yaml"
+  read -r H < <("$PYTHON" -c "print(repr(6.4e-3 / $TAYLOR_ACROSS))")
+  sed -e "s/spacing: 0.8 mm .*/spacing: $H/" -e "s/every: 100000 .*/every: 1000000/" -e "s/end: 80 us/end: ${TAYLOR_END:-80 us}/" \
+    "$TAYLOR_CASE" >"$WORK/taylor.yaml"
+  result taylor_across "$TAYLOR_ACROSS"
+  timeout "$(limit 200)" "${ENVP[@]}" "${LOADP[@]}" "$BIN/breccia-solve" "$WORK/taylor.yaml" -o "$WORK/taylor" \
+    --backend "$GPU_BACKEND" --threads "$THREADS" >"$WORK/taylor.log" 2>&1
+  result taylor_rc "$?"
+  grep -E "^mps|error" "$WORK/taylor.log" | tail -4
+  [ -f "$WORK/taylor/summary.json" ] && "$PYTHON" - "$WORK/taylor" "$H" >>"$RESULTS" <<'PY'
+import json, sys
+d, h = sys.argv[1], float(sys.argv[2])
+s = json.load(open(d + "/summary.json"))
+for f in ("particles", "steps", "max_substeps", "particle_steps_per_s", "backend", "max_eq_plastic_strain"):
+    print(f"taylor_{f}={s[f]}")
+print(f"taylor_loop_s={s['step_loop_s']}")
+try:
+    import h5py, numpy as np
+    with h5py.File(d + "/results.h5") as f:
+        last = sorted(f["output"].keys())[-1]
+        x = f["particles/position"][:] + f["output"][last]["displacement"][:]
+    print(f"taylor_length_mm={(x[:, 2].max() + 0.5 * h) * 1e3}")
+    print(f"taylor_radius_mm={(np.hypot(x[:, 0], x[:, 1]).max() + 0.5 * h) * 1e3}")
+except Exception as e:  # no h5py here: the wall time still counts
+    print(f"taylor_shape=not measured ({type(e).__name__})")
+PY
+  grep taylor_ "$RESULTS"
 fi
 
 # PD: bond-updates/s of PMB and LPS on a cubic lattice (the bench.sh case, larger), GPU vs CPU.

@@ -8,6 +8,8 @@
 #   VARIANT=full : 8, 16 and 24 across (54,208 particles; ~1 h more on 2 cores)
 # ACROSS="8 16" overrides the list; a resolution whose run already finished (summary.json
 # present) is not run again, so a full run after a demo run only adds 24 across.
+# BACKEND=cuda runs through breccia-solve on the GPU (the stress formulation's launcher,
+# docs/cuda.md "MPS"); default cpu (breccia-mps).
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 source "$HERE/../../scripts/case_env.sh"
@@ -30,7 +32,11 @@ for n in $ACROSS; do
   read -r H EVERY < <("$PYTHON" -c "h = 6.4e-3 / $n; print(repr(h), max(1, int(10e-6 / (0.3 * h / 4586.0))))")
   sed -e "s/spacing: 0.8 mm .*/spacing: $H/" -e "s/every: 100000 .*/every: $EVERY/" "$HERE/case.yaml" > "$dir/case.yaml"
   echo "== $name: spacing $H m"
-  "$BRECCIA_BIN/breccia-mps" "$dir/case.yaml" -o "$dir" --threads "$THREADS" 2>&1 | tee "$dir/log.txt"
+  if [ "${BACKEND:-cpu}" = cpu ]; then
+    "$BRECCIA_BIN/breccia-mps" "$dir/case.yaml" -o "$dir" --threads "$THREADS" 2>&1 | tee "$dir/log.txt"
+  else
+    "$BRECCIA_BIN/breccia-solve" "$dir/case.yaml" -o "$dir" --threads "$THREADS" --backend "$BACKEND" 2>&1 | tee "$dir/log.txt"
+  fi
 done
 "$PYTHON" "$HERE/report.py" "$OUT" "${RUNS[@]}"
 echo "table and chart: $OUT/taylor_convergence.md, $OUT/taylor_convergence.png"

@@ -15,6 +15,7 @@
 #endif
 #ifdef BRECCIA_WITH_MPS_CUDA
 #include "breccia/mps/cuda_simulation.hpp"
+#include "breccia/mps/cuda_solid.hpp"
 #endif
 
 namespace {
@@ -96,18 +97,16 @@ int main(int argc, char** argv) {
       mps::RunCaseOptions mps_options;
       mps_options.threads = opt.threads;
       if (opt.backend == "cuda") {
-        // The displacement formulation has a CUDA launcher; the stress formulation does not:
-        // refused under --backend cuda (run_case names model.formulation), CPU under auto.
-        const bool stress = root.section("model").text("formulation", "displacement") == "stress";
+        // Both formulations have a CUDA launcher. A stress case using a feature its launcher
+        // does not run is refused under --backend cuda (run_case names the key) and runs on
+        // the CPU under auto.
 #ifdef BRECCIA_WITH_MPS_CUDA
-        if (stress && backend == "auto") {
-          if (opt.progress) std::fprintf(stderr, "note: the MPS stress formulation runs on the CPU (no CUDA launcher)\n");
-        } else {
-          mps_options.device = mps::make_cuda_step_device;
-        }
+        mps_options.device = mps::make_cuda_step_device;
+        mps_options.solid_device = mps::make_cuda_solid_device;
+        mps_options.cpu_when_refused = backend == "auto";
 #else
         if (backend == "cuda")
-          throw InputError(case_file, stress ? "model.formulation" : "model.type", "mps with --backend cuda",
+          throw InputError(case_file, "model.type", "mps with --backend cuda",
                            "--backend cpu (this build has no MPS CUDA launcher)");
 #endif
       }

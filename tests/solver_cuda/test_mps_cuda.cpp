@@ -338,8 +338,9 @@ TEST(MpsCuda, DeviceWithoutAGpuFailsWithARunErrorNamingTheRemedy) {
   }
 }
 
-// The stress formulation has no launcher: refused before any device is touched, so this
-// holds with or without a GPU.
+// A device for the displacement formulation alone (RunCaseOptions::device without
+// solid_device, test_mps_solid_cuda.cpp has the stress launcher) does not take a stress case:
+// refused before any device is touched, so this holds with or without a GPU.
 TEST(MpsCuda, StressFormulationOnTheDeviceIsRefusedNamingModelFormulation) {
   const std::string file = write_case("stress", R"(
 specimen: {lattice: {dimension: 2, box: [0, 0, 5 mm, 5 mm], spacing: 0.5 mm, thickness: 1 mm}}

@@ -19,25 +19,13 @@
 #include "breccia/mps/simulation.hpp"
 #include "breccia/solver/cuda_device.hpp"
 #include "breccia/solver/cuda_memory.cuh"
+#include "mps_cuda_common.cuh"
 
 namespace breccia::mps {
 namespace {
 
 using cuda::check;
 using cuda::DeviceArray;
-
-constexpr int kBlock = 256;
-
-long long blocks_for(long long n) { return (n + kBlock - 1) / kBlock; }
-
-__device__ long long thread_index() { return static_cast<long long>(blockIdx.x) * blockDim.x + threadIdx.x; }
-
-// Mutable view of a vector field on the device (VectorField is const).
-struct DeviceField {
-  double* x;
-  double* y;
-  double* z;
-};
 
 // elastic_pass, first half: <div u>_i for every particle.
 __global__ void divergence_cuda(long long n, BondsView b, VectorField u, double scale, double* div) {
@@ -85,58 +73,6 @@ __global__ void add_pair_forces_cuda(PairIncidenceView inc, const double* pair_f
   const int i = inc.particle[q];
   for (long long e = inc.offset[q]; e < inc.offset[q + 1]; ++e)
     add_pair_acceleration(a.x[i], a.y[i], &pair_force[2 * inc.pair[e]], inc.mass[i], inc.plus[e] != 0);
-}
-
-// Integrators on components 0..dimension-1 (symplectic_euler_update, Simulation::step).
-__global__ void symplectic_euler_cuda(long long n, int dimension, DeviceField u, DeviceField v, VectorField a, double dt) {
-  const long long i = thread_index();
-  if (i >= n) return;
-  double* uc[3] = {u.x, u.y, u.z};
-  double* vc[3] = {v.x, v.y, v.z};
-  const double* ac[3] = {a.x, a.y, a.z};
-  // Unrolled over a constant bound so the pointer arrays stay in registers.
-#pragma unroll
-  for (int d = 0; d < 3; ++d)
-    if (d < dimension) symplectic_euler_at(uc[d][i], vc[d][i], ac[d][i], dt);
-}
-
-__global__ void verlet_kick_drift_cuda(long long n, int dimension, DeviceField u, DeviceField v, VectorField a,
-                                       double half_dt, double dt) {
-  const long long i = thread_index();
-  if (i >= n) return;
-  double* uc[3] = {u.x, u.y, u.z};
-  double* vc[3] = {v.x, v.y, v.z};
-  const double* ac[3] = {a.x, a.y, a.z};
-  // Unrolled over a constant bound so the pointer arrays stay in registers.
-#pragma unroll
-  for (int d = 0; d < 3; ++d)
-    if (d < dimension) verlet_kick_drift_at(uc[d][i], vc[d][i], ac[d][i], half_dt, dt);
-}
-
-__global__ void verlet_kick_cuda(long long n, int dimension, DeviceField v, VectorField a, double half_dt) {
-  const long long i = thread_index();
-  if (i >= n) return;
-  double* vc[3] = {v.x, v.y, v.z};
-  const double* ac[3] = {a.x, a.y, a.z};
-  // Unrolled over a constant bound so the pointer arrays stay in registers.
-#pragma unroll
-  for (int d = 0; d < 3; ++d)
-    if (d < dimension) verlet_kick_at(vc[d][i], ac[d][i], half_dt);
-}
-
-// One prescribed set at this step (apply_prescribed): the history is evaluated on the host.
-__global__ void prescribe_cuda(long long count, const int* particles, unsigned components, double u_value,
-                               double v_value, DeviceField u, DeviceField v) {
-  const long long q = thread_index();
-  if (q >= count) return;
-  const int i = particles[q];
-  double* uc[3] = {u.x, u.y, u.z};
-  double* vc[3] = {v.x, v.y, v.z};
-  for (int d = 0; d < 3; ++d)
-    if (components & (1u << d)) {
-      uc[d][i] = u_value;
-      vc[d][i] = v_value;
-    }
 }
 
 // The per-step read-back: u and v of the watched particles (probes), then the pair counts.
@@ -303,19 +239,7 @@ void CudaStepDevice::compute_acceleration() {
 }
 
 void CudaStepDevice::apply_prescribed(double t) {
-  for (size_t k = 0; k < prescribed_.size(); ++k) {
-    const PrescribedSet& set = prescribed_[k];
-    const double u = set.burst ? burst_displacement(*set.burst, t) : 0.0;
-    const double v = set.burst ? burst_velocity(*set.burst, t) : 0.0;
-    unsigned components = 0;
-    for (int d = 0; d < 3; ++d)
-      if (set.components[d]) components |= 1u << d;
-    const long long count = static_cast<long long>(prescribed_particles_[k].size());
-    if (count == 0 || components == 0) continue;
-    prescribe_cuda<<<blocks_for(count), kBlock>>>(count, prescribed_particles_[k].get(), components, u, v, field(u_),
-                                                  field(v_));
-    after_launch("prescribed displacement");
-  }
+  launch_prescribed(prescribed_, prescribed_particles_, t, field(u_), field(v_), sync_after_launch_);
 }
 
 void CudaStepDevice::step(double t) {
@@ -323,17 +247,20 @@ void CudaStepDevice::step(double t) {
   const double dt = dt_;
   if (integrator_ == Integrator::SymplecticEuler) {
     compute_acceleration();
-    symplectic_euler_cuda<<<blocks_for(n_), kBlock>>>(n_, dimension_, field(u_), field(v_), view(a_), dt);
+    integrate_cuda<Integration::SymplecticEuler>
+        <<<blocks_for(n_), kBlock>>>(n_, dimension_, field(u_), field(v_), view(a_), 0.5 * dt, dt);
     after_launch("symplectic_euler_at");
     apply_prescribed(t);
   } else {
     const double half_dt = 0.5 * dt;
     if (!acceleration_valid_) compute_acceleration();
-    verlet_kick_drift_cuda<<<blocks_for(n_), kBlock>>>(n_, dimension_, field(u_), field(v_), view(a_), half_dt, dt);
+    integrate_cuda<Integration::VerletKickDrift>
+        <<<blocks_for(n_), kBlock>>>(n_, dimension_, field(u_), field(v_), view(a_), half_dt, dt);
     after_launch("verlet_kick_drift_at");
     apply_prescribed(t);
     compute_acceleration();
-    verlet_kick_cuda<<<blocks_for(n_), kBlock>>>(n_, dimension_, field(v_), view(a_), half_dt);
+    integrate_cuda<Integration::VerletKick>
+        <<<blocks_for(n_), kBlock>>>(n_, dimension_, field(u_), field(v_), view(a_), half_dt, dt);
     after_launch("verlet_kick_at");
     apply_prescribed(t);
     acceleration_valid_ = true;

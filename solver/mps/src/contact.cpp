@@ -1,4 +1,5 @@
 #include "breccia/mps/contact.hpp"
+#include "breccia/mps/solid_phases.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -249,6 +250,12 @@ void Contact::rigid_contact(long long i, long long slot, double depth, const dou
                             const RigidContactLaw& law, const ParticleStateView& s, double dt, double f[3]) {
   const double normal_force = law.normal_stiffness_n_m * depth;
   for (int a = 0; a < 3; ++a) f[a] += normal_force * n[a];
+  rigid_friction(i, slot, normal_force, n, v_surface, law, s, dt, f);
+}
+
+void Contact::rigid_friction(long long i, long long slot, double normal_force, const double n[3],
+                             const double v_surface[3], const RigidContactLaw& law, const ParticleStateView& s,
+                             double dt, double f[3]) {
   if (!law.frictional()) return;
   const double v_rel[3] = {s.v.x[i] - v_surface[0], s.v.y[i] - v_surface[1],
                            (s.dimension == 3 ? s.v.z[i] : 0.0) - v_surface[2]};
@@ -273,14 +280,16 @@ void Contact::obstacle_forces(const ParticleStateView& s, double dt) {
   for (size_t h = 0; h < half_spaces_.size(); ++h) {
     const HalfSpace& hs = half_spaces_[h];
     for (long long i = 0; i < n; ++i) {
-      double height = 0.0;
-      for (int a = 0; a < 3; ++a) height += (current(i, a) - hs.point_m[a]) * hs.normal[a];
-      if (height >= 0.0) {
+      const double x[3] = {current(i, 0), current(i, 1), current(i, 2)};
+      double f[3] = {0.0, 0.0, 0.0};
+      // The normal penalty is the body the CUDA launcher runs too (solid_phases.hpp).
+      const double depth = half_space_force_at(x, hs.point_m.data(), hs.normal.data(), hs.law.normal_stiffness_n_m, f);
+      if (depth <= 0.0) {
         if (!friction_.empty()) friction_[h * n + i] = FrictionState{};
         continue;
       }
-      double f[3] = {0.0, 0.0, 0.0};
-      rigid_contact(i, static_cast<long long>(h), -height, hs.normal.data(), zero, hs.law, s, dt, f);
+      rigid_friction(i, static_cast<long long>(h), hs.law.normal_stiffness_n_m * depth, hs.normal.data(), zero,
+                     hs.law, s, dt, f);
       for (int a = 0; a < 3; ++a) force_n_[a][i] += f[a];
     }
   }

@@ -61,10 +61,13 @@ double run_time_loop(Model& sim, const CaseSpec& spec, const std::string& case_f
 
 // The stress formulation (solid.hpp): same files, with stress and plastic strain in the
 // snapshots and the energy terms of the stress solid in history.csv.
-int run_solid(const CaseSpec& spec, const std::string& case_file, const std::string& out_dir) {
+int run_solid(const CaseSpec& spec, const std::string& case_file, const std::string& out_dir,
+              std::unique_ptr<SolidStepDevice> (*device)(const Solid&)) {
   const auto wall_start = std::chrono::steady_clock::now();
   std::string content_id;
   Solid sim = make_solid(spec, &content_id);
+  if (device) sim.attach_device(device(sim));
+  if (spec.progress) std::fprintf(stderr, "mps: backend %s\n", sim.backend_description().c_str());
   const long long total_steps = static_cast<long long>(std::ceil(spec.end_time_s / sim.dt_s() - 1e-9));
   std::fprintf(stderr,
                "mps (stress): %zu particles, %zu bonds, %dD; spacing %.4g m, re %.3g spacing; c_L %.1f m/s; dt %.4g s "
@@ -144,7 +147,8 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
      << "  \"bodies\": " << (spec.bodies ? spec.bodies->shapes.size() : 1) << ",\n  \"rigid_bodies\": "
      << spec.rigid_bodies.size() << ",\n  \"contact_pairs\": " << sim.contact().contact_pairs() << ",\n"
      << "  \"friction_dissipation_j\": " << fmt(sim.friction_dissipation_j()) << ",\n"
-     << "  \"threads\": " << omp_get_max_threads() << ",\n  \"wall_time_s\": " << fmt(wall_s) << ",\n"
+     << "  \"threads\": " << omp_get_max_threads() << ",\n  \"backend\": \"" << sim.backend_description() << "\",\n"
+     << "  \"wall_time_s\": " << fmt(wall_s) << ",\n"
      << "  \"step_loop_s\": " << fmt(loop_s) << ",\n"
      << "  \"particle_steps_per_s\": " << fmt(loop_s > 0 ? sim.size() * static_cast<double>(sim.steps()) / loop_s : 0.0)
      << "\n}\n";
@@ -165,13 +169,21 @@ int run_case(const std::string& case_file, const std::string& out_dir, int threa
 int run_case(const std::string& case_file, const std::string& out_dir, const RunCaseOptions& options) {
   const CaseSpec spec = load_case(case_file);
   if (options.threads > 0) omp_set_num_threads(options.threads);
-  // The stress formulation has no device launcher (docs/cuda.md, "MPS").
-  if (spec.formulation == Formulation::Stress && options.device)
-    throw InputError(case_file, "model.formulation", "stress with --backend cuda",
-                     "formulation: displacement for the CUDA backend (the stress formulation runs on the CPU only), "
-                     "or --backend cpu");
+  // The stress formulation's launcher runs a subset of its features (docs/cuda.md, "MPS").
+  auto solid_device = options.solid_device;
+  if (spec.formulation == Formulation::Stress && solid_device)
+    if (const auto refusal = solid_device_refusal(spec)) {
+      if (!options.cpu_when_refused) throw InputError(case_file, refusal->field, refusal->got, refusal->expected);
+      if (spec.progress)
+        std::fprintf(stderr, "note: %s is not run by the CUDA launcher of the stress formulation; running on the CPU\n",
+                     refusal->field.c_str());
+      solid_device = nullptr;
+    }
+  if (spec.formulation == Formulation::Stress && options.device && !options.solid_device)
+    throw InputError(case_file, "model.formulation", "stress with a device for the displacement formulation only",
+                     "formulation: displacement, or --backend cpu");
   std::filesystem::create_directories(out_dir);
-  if (spec.formulation == Formulation::Stress) return run_solid(spec, case_file, out_dir);
+  if (spec.formulation == Formulation::Stress) return run_solid(spec, case_file, out_dir, solid_device);
   const auto wall_start = std::chrono::steady_clock::now();
 
   Simulation sim(spec);

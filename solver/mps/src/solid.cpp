@@ -1,6 +1,9 @@
 #include "breccia/mps/particles.hpp"
 #include "breccia/mps/solid.hpp"
+#include "breccia/mps/solid_phases.hpp"
 #include "breccia/mps/stability_checks.hpp"
+
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -123,8 +126,7 @@ void Solid::rebuild_stencils_on_current_configuration() {
 // The count is recomputed every kClumpingCheckEvery steps, and a bond may close further in
 // between: each is taken at its closest approach within that window at its present relative
 // velocity. Cut bonds (fracture, weight 0) carry no force and do not count.
-void Solid::update_substeps() {
-  if (!options_.substeps) return;
+double Solid::shortest_squeezed_bond_m() const {
   const long long n = static_cast<long long>(size());
   const BondsView b = bonds_.view();
   const bool updated = options_.updated_lagrangian;
@@ -135,24 +137,24 @@ void Solid::update_substeps() {
 #pragma omp parallel for schedule(static) reduction(min : shortest) if (n > kSolidParallelMin)
   for (long long i = 0; i < n; ++i) {
     for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
-      if (b.weight[k] == 0.0) continue;
+      if (b.weight[k] == 0.0) continue;  // cut: carries no force
       const long long j = b.neighbour[k];
       const double r[3] = {b.rx[k], b.ry[k], b.rz[k]};
-      double d[3], w[3], dw = 0.0, ww = 0.0;
+      double d[3], w[3];
       for (int a = 0; a < 3; ++a) {
         d[a] = r[a] + since_reference(a, j) - since_reference(a, i);
         w[a] = v_[a][j] - v_[a][i];
-        dw += d[a] * w[a];
-        ww += w[a] * w[a];
       }
-      const double t = dw < 0.0 && ww > 0.0 ? std::min(window, -dw / ww) : 0.0;  // closest approach
-      double closest2 = 0.0;
-      for (int a = 0; a < 3; ++a) closest2 += (d[a] + t * w[a]) * (d[a] + t * w[a]);
-      const double closest = std::sqrt(closest2);
-      const double length = updated ? closest : spacing * closest / std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-      shortest = std::min(shortest, length);
+      shortest = std::min(shortest, squeezed_bond_length(r, d, w, window, spacing, updated));
     }
   }
+  return shortest;
+}
+
+void Solid::update_substeps() {
+  if (!options_.substeps) return;
+  const double shortest =
+      device_ ? device_->shortest_squeezed_bond_m(kClumpingCheckEvery * dt_s_) : shortest_squeezed_bond_m();
   // A bond at 1/kMaxSubsteps of its length is a collapse that the inversion and clumping
   // checks stop; the cap only keeps a projected closest approach of ~0 from stalling the run.
   constexpr int kMaxSubsteps = 64;
@@ -167,6 +169,7 @@ void Solid::update_substeps() {
 }
 
 std::vector<double> Solid::volume_ratio() const {
+  sync_host(false);
   std::vector<double> j(size());
   for (size_t i = 0; i < size(); ++i) {
     Mat3 f = gradient_[i];
@@ -252,36 +255,30 @@ void Solid::compute_acceleration(double dt) {
   const int dim = options_.dimension;
   const double hourglass = hourglass_stiffness();
 
-  // 1-2. gradient, stress update, force matrices (all per particle).
+  // 1. gradient, stress update, force matrices (all per particle).
+  SolidStressInputs stress_in;
+  stress_in.bonds = b;
+  stress_in.u = u;
+  stress_in.volume_m3 = volume;
+  stress_in.moment_inverse = moment_inverse_.data();
+  stress_in.law = law_;
+  stress_in.dimension = dim;
+  stress_in.hourglass_stiffness = hourglass;
+  const SolidStressState state{gradient_.data(), f_inverse_.data(),   stress_.data(), eq_plastic_strain_.data(),
+                               stress_work_j_.data(), pressure_pa_.data(), matrices_.data()};
   long long inverted = 0;
   double largest_gradient2 = 0.0;  // max |H|^2 (Frobenius) over the particles
 #pragma omp parallel for schedule(static) reduction(+ : inverted) reduction(max : largest_gradient2) if (n > kSolidParallelMin)
   for (long long i = 0; i < n; ++i) {
-    const Mat3 h_new = displacement_gradient_at(i, b, u, volume, moment_inverse_[i]);
-    Mat3 f = h_new;
-    f(0, 0) += 1.0;
-    f(1, 1) += 1.0;
-    f(2, 2) += 1.0;
-    if (!(det(f) > 0.0)) {  // also catches NaN
+    const double h2 = stress_phase_at(i, stress_in, state);
+    if (h2 < 0.0) {  // det F <= 0: left unchanged
       if (fracture_ && fracture_->absorb_inversion(i, bonds_)) continue;  // debris at a crack face
       ++inverted;
       continue;
     }
-    double deviatoric_scale = 1.0;
-    stress_work_j_[i] += volume[i] * update_stress(law_, gradient_[i], f_inverse_[i], h_new, dim, stress_[i],
-                                                   eq_plastic_strain_[i], &deviatoric_scale);
-    double h2 = 0.0;
-    for (double v : h_new.a) h2 += v * v;
     largest_gradient2 = std::max(largest_gradient2, h2);
-    gradient_[i] = h_new;
-    f_inverse_[i] = inverse(f);
-    pressure_pa_[i] = pressure_of(stress_[i]);
-    matrices_[i] = force_matrices(stress_[i], h_new, f_inverse_[i], moment_inverse_[i], hourglass * deviatoric_scale);
   }
-  if (inverted > 0)
-    throw RunError("mps solid: " + std::to_string(inverted) + " particle(s) inverted (det F <= 0) at t = " +
-                   std::to_string(time_s_) + " s: the deformation is too large or too non-affine for the reference "
-                   "stencils (raise model.hourglass, refine, or lower time.safety)");
+  if (inverted > 0) throw_inverted(inverted, time_s_);
   if (updated && largest_gradient2 > options_.stencil_update_strain * options_.stencil_update_strain) {
     rebuild_stencils_on_current_configuration();  // the forces below use the new stencils
     b = bonds_.view();
@@ -290,41 +287,30 @@ void Solid::compute_acceleration(double dt) {
   const bool repulsive = options_.pressure == PressureForce::Repulsive;
   if (repulsive) {
 #pragma omp parallel for schedule(static) if (n > kSolidParallelMin)
-    for (long long i = 0; i < n; ++i) {
-      // Near a free surface the shift would act as a surface pressure (and feed back on
-      // itself); those particles keep the conservative form, as MPS fluids hold surface
-      // particles (number density below 0.97 n0) at zero pressure.
-      if (!full_stencil_[i]) {
-        pressure_floor_pa_[i] = 0.0;
-        continue;
-      }
-      double lowest = pressure_pa_[i];
-      for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) lowest = std::min(lowest, pressure_pa_[b.neighbour[k]]);
-      pressure_floor_pa_[i] = lowest;
-    }
+    for (long long i = 0; i < n; ++i) pressure_floor_pa_[i] = pressure_floor_at(i, b, full_stencil_.data(), pressure_pa_.data());
   }
 
-  // 3. forces and acceleration.
-  SolidForceInputs in;
-  in.bonds = b;
-  in.u = u;
-  in.matrices = matrices_.data();
-  in.pressure_floor_pa = repulsive ? pressure_floor_pa_.data() : nullptr;
-  in.volume_m3 = volume;
-  const double damping = options_.damping_per_s;
-  const auto& g = options_.gravity_m_s2;
+  // 3-4. contact, forces and acceleration.
+  SolidAccelerationInputs in;
+  in.forces.bonds = b;
+  in.forces.u = u;
+  in.forces.matrices = matrices_.data();
+  in.forces.pressure_floor_pa = repulsive ? pressure_floor_pa_.data() : nullptr;
+  in.forces.volume_m3 = volume;
   const bool contact = contact_.active();
   if (contact) contact_.compute_forces(state_view(), dt);
-#pragma omp parallel for schedule(static) if (n > kSolidParallelMin)
-  for (long long i = 0; i < n; ++i) {
-    double f[3];
-    solid_force_at(i, in, f);
-    for (int a = 0; a < 3; ++a) f[a] += external_force_n_[a][i];
-    if (contact)
-      for (int a = 0; a < 3; ++a) f[a] += contact_.force(a)[i];
-    const double mass = density_kg_m3_ * volume_m3_[i];
-    for (int a = 0; a < dim; ++a) a_[a][i] = f[a] / mass + g[a] - damping * v_[a][i];
+  for (int a = 0; a < 3; ++a) {
+    in.external_n[a] = external_force_n_[a].data();
+    in.contact_n[a] = contact ? contact_.force(a).data() : nullptr;
+    in.gravity_m_s2[a] = options_.gravity_m_s2[a];
   }
+  in.v = {v_[0].data(), v_[1].data(), v_[2].data()};
+  in.volume_m3 = volume_m3_.data();
+  in.density_kg_m3 = density_kg_m3_;
+  in.damping_per_s = options_.damping_per_s;
+  in.dimension = dim;
+#pragma omp parallel for schedule(static) if (n > kSolidParallelMin)
+  for (long long i = 0; i < n; ++i) solid_acceleration_at(i, in, a_[0].data(), a_[1].data(), a_[2].data());
 }
 
 void Solid::step() {
@@ -334,6 +320,15 @@ void Solid::step() {
   const int substeps = substeps_;
   const double dt = dt_s_ / substeps;
   for (int s = 0; s < substeps; ++s) {
+    if (device_) {  // the same phases on the device (SolidStepDevice); the clock stays here
+      time_s_ += dt;
+      device_->substep(dt, time_s_);
+      kinematics_current_ = state_current_ = false;
+      // Checked after every substep, as the host loop throws before its forces: the message
+      // names the time at the end of the substep in which F inverted.
+      if (const long long inverted = device_->inverted_particles(); inverted > 0) throw_inverted(inverted, time_s_);
+      continue;
+    }
     // Symplectic Euler (the paper's scheme): v^{k+1} = v^k + dt a(u^k), u^{k+1} = u^k + dt v^{k+1}.
     compute_acceleration(dt);
     symplectic_euler_update(u_, v_, a_, options_.dimension, dt);
@@ -342,7 +337,63 @@ void Solid::step() {
     apply_prescribed(time_s_);
   }
   ++steps_;
-  if (steps_ % kClumpingCheckEvery == 0) require_no_clumping(*this);  // stability_checks.hpp
+  if (steps_ % kClumpingCheckEvery != 0) return;
+  // stability_checks.hpp. On a device the count is taken there; the host measure, on the
+  // downloaded state, only writes the message.
+  if (device_) {
+    const long long clumped = device_->clumped_bonds();
+    if (clumped == 0) return;
+    require_no_clumping(*this);
+    throw RunError("mps solid: particles clumping at t = " + std::to_string(time_s_) + " s: the device counted " +
+                   std::to_string(clumped) + " nearest-neighbour bond(s) below " +
+                   std::to_string(kMinNeighbourDistanceRatio) + " of their predicted length (raise model.hourglass, "
+                   "try model.pressure_force: repulsive, or refine)");
+  }
+  require_no_clumping(*this);
+}
+
+void Solid::throw_inverted(long long inverted, double time_s) const {
+  throw RunError("mps solid: " + std::to_string(inverted) + " particle(s) inverted (det F <= 0) at t = " +
+                 std::to_string(time_s) + " s: the deformation is too large or too non-affine for the reference "
+                 "stencils (raise model.hourglass, refine, or lower time.safety)");
+}
+
+void Solid::attach_device(std::unique_ptr<SolidStepDevice> device) {
+  // What the launcher does not run (solid_device_refusal names the case keys; this guards
+  // callers that build a Solid themselves).
+  std::string missing;
+  if (fracture_) missing = "fracture";
+  else if (options_.updated_lagrangian) missing = "updated Lagrangian stencils";
+  else if (contact_.particle_contact()) missing = "contact between particles";
+  else if (contact_.polygon_count() > 0) missing = "rigid polygons";
+  for (const HalfSpace& h : contact_.half_spaces())
+    if (h.law.frictional()) missing = "friction on a rigid plane";
+  if (!missing.empty()) throw RunError("mps solid: the CUDA launcher does not run " + missing + "; use --backend cpu");
+  sync_host(false);
+  device_ = std::move(device);
+  kinematics_current_ = state_current_ = true;  // the device starts from the host's state
+}
+
+std::string Solid::backend_description() const {
+  if (device_) return device_->description();
+  return "cpu (OpenMP, " + std::to_string(omp_get_max_threads()) + " threads)";
+}
+
+void Solid::sync_host(bool kinematics_only) const {
+  if (!device_) return;
+  if (kinematics_only ? kinematics_current_ : (kinematics_current_ && state_current_)) return;
+  SolidHostState host;
+  host.u = &u_;
+  host.v = &v_;
+  host.gradient = &gradient_;
+  host.f_inverse = &f_inverse_;
+  host.stress = &stress_;
+  host.eq_plastic_strain = &eq_plastic_strain_;
+  host.stress_work_j = &stress_work_j_;
+  host.matrices = &matrices_;
+  device_->download(host, kinematics_only);
+  kinematics_current_ = true;
+  if (!kinematics_only) state_current_ = true;
 }
 
 std::vector<double> Solid::internal_force_of_uniform_stress(const SymTensor& stress) const {
@@ -363,6 +414,7 @@ std::vector<double> Solid::internal_force_of_uniform_stress(const SymTensor& str
 }
 
 double Solid::kinetic_energy_j() const {
+  sync_host(true);
   double e = 0.0;
   for (size_t i = 0; i < size(); ++i)
     e += 0.5 * density_kg_m3_ * volume_m3_[i] * (v_[0][i] * v_[0][i] + v_[1][i] * v_[1][i] + v_[2][i] * v_[2][i]);
@@ -370,12 +422,14 @@ double Solid::kinetic_energy_j() const {
 }
 
 double Solid::stress_work_j() const {
+  sync_host(false);
   double e = 0.0;
   for (double w : stress_work_j_) e += w;
   return e;
 }
 
 double Solid::hourglass_energy_j() const {
+  sync_host(false);
   const BondsView b = bonds_.view();
   std::array<std::vector<double>, 3> us;  // displacement since the stencils' reference
   for (int a = 0; a < 3; ++a) {
@@ -393,9 +447,13 @@ double Solid::hourglass_energy_j() const {
   return e;
 }
 
-double Solid::contact_energy_j() const { return contact_.active() ? contact_.potential_energy_j(state_view()) : 0.0; }
+double Solid::contact_energy_j() const {
+  sync_host(true);
+  return contact_.active() ? contact_.potential_energy_j(state_view()) : 0.0;
+}
 
 double Solid::gravity_energy_j() const {
+  sync_host(true);
   double e = 0.0;
   for (size_t i = 0; i < size(); ++i)
     for (int a = 0; a < 3; ++a) e -= density_kg_m3_ * volume_m3_[i] * options_.gravity_m_s2[a] * u_[a][i];
@@ -403,6 +461,7 @@ double Solid::gravity_energy_j() const {
 }
 
 double Solid::plastic_fraction() const {
+  sync_host(false);
   if (size() == 0) return 0.0;
   const auto k = std::count_if(eq_plastic_strain_.begin(), eq_plastic_strain_.end(), [](double e) { return e > 0.0; });
   return static_cast<double>(k) / size();
@@ -413,6 +472,7 @@ int Solid::nearest_particle(const std::array<double, 3>& p) const {
 }
 
 double Solid::sample(int i, const std::string& field) const {
+  sync_host(true);
   const int axis = field.back() - 'x';
   return field.rfind("displacement", 0) == 0 ? u_[axis][i] : v_[axis][i];
 }

@@ -58,4 +58,21 @@ Solid make_solid(const CaseSpec& spec, std::string* content_id) {
   return solid;
 }
 
+std::optional<DeviceRefusal> solid_device_refusal(const CaseSpec& spec) {
+  const std::string cpu = " (or --backend cpu)";
+  if (spec.material.fracture)
+    return DeviceRefusal{"materials.fracture", "fracture with --backend cuda", "no fracture on the GPU" + cpu};
+  if (spec.updated_lagrangian)
+    return DeviceRefusal{"model.lagrangian", "updated with --backend cuda", "total on the GPU" + cpu};
+  if (spec.particle_contact || (spec.bodies && spec.bodies->shapes.size() > 1))  // as configure_contact
+    return DeviceRefusal{"contact.particles", "contact between particles (given, or implied by two or more bodies) "
+                         "with --backend cuda", "no particle contact on the GPU" + cpu};
+  if (!spec.rigid_bodies.empty())
+    return DeviceRefusal{"contact.rigid_bodies", "rigid polygons with --backend cuda", "none on the GPU" + cpu};
+  if (spec.floor && (spec.floor->friction.static_friction > 0.0 || spec.floor->friction.kinetic_friction > 0.0))
+    return DeviceRefusal{"contact.floor.static_friction", "a frictional floor with --backend cuda",
+                         "a frictionless floor on the GPU" + cpu};
+  return std::nullopt;
+}
+
 }  // namespace breccia::mps

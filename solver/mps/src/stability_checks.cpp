@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "breccia/common/error.hpp"
+#include "breccia/mps/solid_phases.hpp"
 
 namespace breccia::mps {
 
@@ -17,37 +18,22 @@ Clumping measure_clumping(const Solid& solid) {
   const auto& uz = solid.stencil_displacement(2);
   const auto& grad = solid.displacement_gradient();
   const long long n = static_cast<long long>(solid.size());
-  const auto is_near = [&](long long k) { return std::sqrt(b.rx[k] * b.rx[k] + b.ry[k] * b.ry[k] + b.rz[k] * b.rz[k]) <= near; };
+  const VectorField u{ux.data(), uy.data(), uz.data()};
+  const BondsView bv = b.view();
   // Crack-face particles: the first layer on a crack, those with a cut nearest-neighbour bond
   // (fracture or Solid::cut_bonds, weight 0); a particle whose only cut bonds reach further
   // (two spacings, across the crack) is inside the material and stays measured.
   std::vector<char> on_face(n, 0);
-  for (long long i = 0; i < n; ++i)
-    for (long long k = b.offset[i]; k < b.offset[i + 1] && !on_face[i]; ++k) on_face[i] = b.weight[k] == 0.0 && is_near(k);
+  for (long long i = 0; i < n; ++i) on_face[i] = on_crack_face_at(i, bv, near);
   for (long long i = 0; i < n; ++i) {
-    const Mat3& h = grad[i];
     for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
-      // A cut bond (fracture, weight 0) carries nothing: its two particles closing in is a
-      // crack face or debris coming back, not clumping (and a detached particle has no F).
-      if (b.weight[k] == 0.0) continue;
-      if (!is_near(k)) continue;
-      const double r[3] = {b.rx[k], b.ry[k], b.rz[k]};
+      // Not measured (solid_phases.hpp): a cut bond carries nothing, and its two particles
+      // closing in is a crack face or debris coming back, not clumping (a detached particle
+      // has no F); bonds beyond the nearest neighbours; bonds no shorter than their
+      // reference length.
+      double ratio = 1.0;
+      if (!clumping_ratio(bv, i, k, u, grad[i], near, &ratio)) continue;
       const int j = b.neighbour[k];
-      double predicted2 = 0.0;
-      for (int a = 0; a < 3; ++a) {
-        const double fr = r[a] + h(a, 0) * r[0] + h(a, 1) * r[1] + h(a, 2) * r[2];
-        predicted2 += fr * fr;
-      }
-      // Reference bond vectors may be periodic images: the current one is r + u_j - u_i.
-      const double d[3] = {r[0] + ux[j] - ux[i], r[1] + uy[j] - uy[i], r[2] + uz[j] - uz[i]};
-      const double length2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-      // Clumping pulls neighbours together: a bond no shorter than its reference length is
-      // not clumping, whatever F_i predicts. Without this, particles moved as one rigid block
-      // (a driven or held end) next to a stretching region read 1 / (1 + strain): F_i, fitted
-      // over a stencil reaching into the stretching part, predicts a stretch that the block's
-      // own bonds do not have (measured: 0.64 at 70 % nominal strain, 0.50 at 100 %).
-      if (length2 >= r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) continue;
-      const double ratio = std::sqrt(length2 / predicted2);
       // An intact bond between two crack-face particles is a bond along a crack flank. There
       // F_i is fitted on a one-sided stencil that cannot follow the flank sliding and closing
       // under the compression ahead of a crack tip, so the ratio reads the flank's motion, not

@@ -92,6 +92,7 @@ public:
   bool particle_contact() const { return particle_contact_on_; }
   void set_particle_contact(ParticleContact pc);
   void add_half_space(HalfSpace h);
+  const std::vector<HalfSpace>& half_spaces() const { return half_spaces_; }
   void add_polygon(RigidPolygon p);
 
   // Contact forces on every particle at the current state (force(a)[i], N); updates the
@@ -149,6 +150,9 @@ private:
   double polygon_pairs(std::vector<std::array<double, 3>>* reactions) const;
   void rigid_contact(long long i, long long slot, double depth, const double n[3], const double v_surface[3],
                      const RigidContactLaw& law, const ParticleStateView& s, double dt, double f[3]);
+  // The Coulomb part of rigid_contact (normal_force = the normal penalty's size).
+  void rigid_friction(long long i, long long slot, double normal_force, const double n[3], const double v_surface[3],
+                      const RigidContactLaw& law, const ParticleStateView& s, double dt, double f[3]);
 
   bool particle_contact_on_ = false;
   ParticleContact particles_;

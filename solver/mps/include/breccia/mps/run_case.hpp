@@ -9,15 +9,20 @@ namespace breccia::mps {
 
 class Simulation;
 class StepDevice;
+class Solid;
+class SolidStepDevice;
 
 struct RunCaseOptions {
   int threads = 0;  // OpenMP threads (0: the default)
-  // Builds the device that runs the displacement formulation's steps (breccia-solve
-  // --backend cuda passes make_cuda_step_device); empty: the OpenMP loops. The stress
-  // formulation has no device launcher: a case with formulation: stress is refused
-  // (InputError naming model.formulation) when this is set.
-  // (A plain function pointer: callers that see StepDevice only declared can still set it.)
+  // Build the devices that run the steps (breccia-solve --backend cuda passes
+  // make_cuda_step_device and make_cuda_solid_device); empty: the OpenMP loops. A stress
+  // case with a feature the solid launcher does not run is refused (InputError naming the
+  // key, solid_device_refusal) when solid_device is set.
+  // (Plain function pointers: callers that see the device classes only declared can set them.)
   std::unique_ptr<StepDevice> (*device)(const Simulation&) = nullptr;
+  std::unique_ptr<SolidStepDevice> (*solid_device)(const Solid&) = nullptr;
+  // --backend auto: a refused stress case runs on the CPU instead, saying why.
+  bool cpu_when_refused = false;
 };
 
 int run_case(const std::string& case_file, const std::string& out_dir, const RunCaseOptions& options);

@@ -12,6 +12,7 @@
 //   4. v += dt a, u += dt v (symplectic Euler), prescribed displacements
 #include <array>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -69,6 +70,41 @@ struct RigidFloor {
   double tangential_stiffness_factor = 1.0;
 };
 
+// Where Solid::step's substeps run instead of the OpenMP loops: a device with its own copy of
+// the state (the CUDA launcher, breccia/mps/cuda_solid.hpp). It runs the phases of
+// solid_phases.hpp in Solid's order; Solid keeps the clock, the substep count and the error
+// checks, and its host arrays become a cache, refreshed by download() only when read.
+// Supported: total Lagrangian stencils, plasticity, both pressure forms, frictionless rigid
+// planes, prescribed sets, constant external forces, gravity, damping, pre-cut bonds; the
+// rest is refused before a device is built (solid_device_refusal, solid_case.hpp).
+struct SolidHostState {  // what download() refreshes (sized by the caller)
+  std::array<std::vector<double>, 3>* u = nullptr;
+  std::array<std::vector<double>, 3>* v = nullptr;
+  std::vector<Mat3>* gradient = nullptr;
+  std::vector<Mat3>* f_inverse = nullptr;
+  std::vector<SymTensor>* stress = nullptr;
+  std::vector<double>* eq_plastic_strain = nullptr;
+  std::vector<double>* stress_work_j = nullptr;
+  std::vector<ForceMatrices>* matrices = nullptr;
+};
+
+class SolidStepDevice {
+public:
+  virtual ~SolidStepDevice() = default;
+  // One substep of length dt (phases 1-4, symplectic Euler), then the prescribed values at
+  // time_after_s. Queued: returns before the device has finished.
+  virtual void substep(double dt, double time_after_s) = 0;
+  // Particles found inverted (det F <= 0) by the substeps since the last call; waits for them.
+  virtual long long inverted_particles() = 0;
+  // min over intact bonds of squeezed_bond_length (Solid::update_substeps), capped at spacing.
+  virtual double shortest_squeezed_bond_m(double window_s) = 0;
+  // Bonds below kMinNeighbourDistanceRatio by the clumping measure (stability_checks.hpp).
+  virtual long long clumped_bonds() = 0;
+  // u and v only (kinematics), or every field of SolidHostState.
+  virtual void download(const SolidHostState& host, bool kinematics_only) = 0;
+  virtual std::string description() const = 0;  // backend and device, for logs and summary.json
+};
+
 class Solid {
 public:
   // position_m: 3N reference positions; volume_m3: N (2D: area x thickness).
@@ -96,6 +132,13 @@ public:
   std::vector<double>& external_force(int axis) { return external_force_n_[axis]; }
 
   void step();
+  // Hand the substeps to a device built from this solid's current state; from then on the
+  // host arrays are refreshed from the device when read. Set initial values, external forces
+  // and prescribed sets first: writes through the non-const accessors after attaching do not
+  // reach the device.
+  void attach_device(std::unique_ptr<SolidStepDevice> device);
+  bool on_device() const { return device_ != nullptr; }
+  std::string backend_description() const;  // "cpu (OpenMP, N threads)" or the device's
 
   // Internal force (N, 3N array) that a uniform stress state would produce in the reference
   // configuration. It vanishes on particles whose stencil is full and equals the discrete
@@ -122,18 +165,40 @@ public:
 
   const std::vector<double>& position_m() const { return position_m_; }
   const std::vector<double>& volume_m3() const { return volume_m3_; }
-  const std::vector<double>& displacement(int axis) const { return u_[axis]; }
-  const std::vector<double>& velocity(int axis) const { return v_[axis]; }
-  std::vector<double>& displacement(int axis) { return u_[axis]; }
-  std::vector<double>& velocity(int axis) { return v_[axis]; }
-  const std::vector<SymTensor>& stress_pa() const { return stress_; }
-  const std::vector<double>& eq_plastic_strain() const { return eq_plastic_strain_; }
+  const std::vector<double>& displacement(int axis) const {
+    sync_host(true);
+    return u_[axis];
+  }
+  const std::vector<double>& velocity(int axis) const {
+    sync_host(true);
+    return v_[axis];
+  }
+  std::vector<double>& displacement(int axis) {
+    sync_host(true);
+    return u_[axis];
+  }
+  std::vector<double>& velocity(int axis) {
+    sync_host(true);
+    return v_[axis];
+  }
+  const std::vector<SymTensor>& stress_pa() const {
+    sync_host(false);
+    return stress_;
+  }
+  const std::vector<double>& eq_plastic_strain() const {
+    sync_host(false);
+    return eq_plastic_strain_;
+  }
   // Current displacement gradient H = F - I per particle (up to date after a step), relative
   // to the stencil's reference configuration (the initial one unless updated Lagrangian).
-  const std::vector<Mat3>& displacement_gradient() const { return gradient_; }
+  const std::vector<Mat3>& displacement_gradient() const {
+    sync_host(false);
+    return gradient_;
+  }
   // Displacement since the stencils' reference configuration (= displacement() in total
   // Lagrangian form); with bonds().rx etc. it gives the current bond vectors.
   const std::vector<double>& stencil_displacement(int axis) const {
+    sync_host(true);
     return options_.updated_lagrangian ? u_stencil_[axis] : u_[axis];
   }
   // Volume ratio J = det F of each particle relative to the initial configuration.
@@ -152,6 +217,27 @@ public:
   double gravity_energy_j() const;  // - m g . u (particles and free rigid bodies), zero at the start
   double plastic_fraction() const;  // share of particles with eq. plastic strain > 0
 
+  // What a device launcher needs beyond the public state.
+  const std::vector<double>& stencil_volume_m3() const { return stencil_volume_m3_; }
+  const std::vector<Mat3>& moment_inverse() const { return moment_inverse_; }
+  const std::vector<char>& full_stencil() const { return full_stencil_; }
+  const std::vector<double>& external_force_n(int axis) const { return external_force_n_[axis]; }
+  const std::vector<PrescribedSet>& prescribed() const { return prescribed_; }
+  double hourglass_stiffness() const;  // K_hg of an elastic particle (Pa/m^3)
+  // State that the host arrays above do not show (sync_host(false) included).
+  const std::vector<Mat3>& f_inverse() const {
+    sync_host(false);
+    return f_inverse_;
+  }
+  const std::vector<ForceMatrices>& force_matrices_of_particles() const {
+    sync_host(false);
+    return matrices_;
+  }
+  const std::vector<double>& stress_work_of_particles_j() const {
+    sync_host(false);
+    return stress_work_j_;
+  }
+
   int nearest_particle(const std::array<double, 3>& p) const;
   double sample(int particle, const std::string& field) const;
 
@@ -159,7 +245,11 @@ private:
   void compute_acceleration(double dt);
   void apply_prescribed(double t);
   ParticleStateView state_view() const;
-  double hourglass_stiffness() const;
+  // Refresh the host arrays from the device after it has stepped (no-op without one): u and v
+  // only, or everything.
+  void sync_host(bool kinematics_only) const;
+  double shortest_squeezed_bond_m() const;  // update_substeps' measure on the host arrays
+  [[noreturn]] void throw_inverted(long long inverted, double time_s) const;
   void apply_fracture();  // solid_fracture.cpp: fail, cut bonds, refresh the cut stencils
   void refresh_cut_stencils(const std::vector<long long>& changed);
   void build_stencils(const std::vector<double>& position_m);  // bonds, L^-1, surface flags
@@ -174,12 +264,19 @@ private:
   std::optional<FractureModel> fracture_;
   BondList bonds_;
   Normalisation norm_;
-  std::vector<Mat3> moment_inverse_, gradient_, f_inverse_;  // L^-1, H = F - I, F^-1
-  std::vector<ForceMatrices> matrices_;
-  std::vector<SymTensor> stress_;
+  // mutable: with a device attached, the state below is a cache of its state (sync_host).
+  std::vector<Mat3> moment_inverse_;                   // L^-1
+  mutable std::vector<Mat3> gradient_, f_inverse_;     // H = F - I, F^-1
+  mutable std::vector<ForceMatrices> matrices_;
+  mutable std::vector<SymTensor> stress_;
   std::vector<char> full_stencil_;  // number density >= 0.97 n0 (not a surface particle)
-  std::vector<double> eq_plastic_strain_, stress_work_j_, pressure_pa_, pressure_floor_pa_;
-  std::array<std::vector<double>, 3> u_, v_, a_, external_force_n_;
+  mutable std::vector<double> eq_plastic_strain_, stress_work_j_;
+  std::vector<double> pressure_pa_, pressure_floor_pa_;
+  mutable std::array<std::vector<double>, 3> u_, v_;
+  std::array<std::vector<double>, 3> a_, external_force_n_;
+  std::unique_ptr<SolidStepDevice> device_;
+  mutable bool kinematics_current_ = true;  // host u, v hold the device's latest state
+  mutable bool state_current_ = true;       // the other cached arrays do
   // Updated Lagrangian: stencil volumes V0 J (mass stays density x volume_m3_), the
   // displacement at the last rebuild, the displacement since then, and J at the last rebuild.
   std::vector<double> stencil_volume_m3_, stencil_volume_ratio_;

@@ -1,0 +1,307 @@
+// The CUDA launcher of the MPS stress formulation: Solid::step's substep as launches of the
+// BRECCIA_HD phases of solid_phases.hpp over device copies of the state (docs/cuda.md, "MPS").
+// No physics is written here: launches, data movement, and the reductions behind the checks
+// that Solid makes every kClumpingCheckEvery steps (shortest squeezed bond, clumped bonds).
+// Compiled with --fmad=false (CMakeLists.txt), so each particle's arithmetic rounds as on the CPU.
+#include <cuda_runtime.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "breccia/common/error.hpp"
+#include "breccia/mps/cuda_solid.hpp"
+#include "breccia/mps/solid.hpp"
+#include "breccia/mps/solid_phases.hpp"
+#include "breccia/mps/stability_checks.hpp"
+#include "breccia/solver/cuda_device.hpp"
+#include "breccia/solver/cuda_memory.cuh"
+#include "mps_cuda_common.cuh"
+
+namespace breccia::mps {
+namespace {
+
+using cuda::check;
+using cuda::DeviceArray;
+
+// Phase 1; inverted particles are counted (integers: the atomic sum is exact).
+__global__ void stress_phase_cuda(long long n, SolidStressInputs in, SolidStressState s, unsigned long long* inverted) {
+  const long long i = thread_index();
+  if (i < n && stress_phase_at(i, in, s) < 0.0) atomicAdd(inverted, 1ull);
+}
+
+__global__ void pressure_floor_cuda(long long n, BondsView b, const char* full_stencil, const double* pressure,
+                                    double* floor) {
+  const long long i = thread_index();
+  if (i < n) floor[i] = pressure_floor_at(i, b, full_stencil, pressure);
+}
+
+// Rigid planes, 7 values each: point (3), unit normal (3), normal stiffness. The sum over the
+// planes starts from zero for every particle, as Contact::compute_forces does.
+__global__ void half_spaces_cuda(long long n, int dimension, const double* position, VectorField u, int planes,
+                                 const double* plane, DeviceField contact) {
+  const long long i = thread_index();
+  if (i >= n) return;
+  const double ui[3] = {u.x[i], u.y[i], u.z[i]};
+  double x[3];
+  for (int a = 0; a < 3; ++a) x[a] = position[3 * i + a] + (a < dimension ? ui[a] : 0.0);
+  double sum[3] = {0.0, 0.0, 0.0};
+  for (int p = 0; p < planes; ++p) {
+    double f[3] = {0.0, 0.0, 0.0};
+    half_space_force_at(x, &plane[7 * p], &plane[7 * p + 3], plane[7 * p + 6], f);
+    for (int a = 0; a < 3; ++a) sum[a] += f[a];
+  }
+  contact.x[i] = sum[0];
+  contact.y[i] = sum[1];
+  contact.z[i] = sum[2];
+}
+
+__global__ void acceleration_cuda(long long n, SolidAccelerationInputs in, DeviceField a) {
+  const long long i = thread_index();
+  if (i < n) solid_acceleration_at(i, in, a.x, a.y, a.z);
+}
+
+// For non-negative doubles the IEEE bit patterns order as the values do, so atomicMin on
+// them is a minimum of the lengths.
+__global__ void shortest_bond_cuda(long long n, BondsView b, VectorField u, VectorField v, double window_s,
+                                   double spacing_m, unsigned long long* shortest_bits) {
+  const long long i = thread_index();
+  if (i >= n) return;
+  double shortest = spacing_m;
+  for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
+    if (b.weight[k] == 0.0) continue;  // cut: carries no force
+    const long long j = b.neighbour[k];
+    const double r[3] = {b.rx[k], b.ry[k], b.rz[k]};
+    const double d[3] = {r[0] + u.x[j] - u.x[i], r[1] + u.y[j] - u.y[i], r[2] + u.z[j] - u.z[i]};
+    const double w[3] = {v.x[j] - v.x[i], v.y[j] - v.y[i], v.z[j] - v.z[i]};
+    const double length = squeezed_bond_length(r, d, w, window_s, spacing_m, false);
+    shortest = length < shortest ? length : shortest;  // NaN is passed over, as std::min does
+  }
+  atomicMin(shortest_bits, static_cast<unsigned long long>(__double_as_longlong(shortest)));
+}
+
+__global__ void crack_face_cuda(long long n, BondsView b, double near_m, char* on_face) {
+  const long long i = thread_index();
+  if (i < n) on_face[i] = on_crack_face_at(i, b, near_m);
+}
+
+// measure_clumping's count (stability_checks.cpp): bonds below the ratio, NaN included, not
+// counting bonds between two crack-face particles.
+__global__ void clumping_cuda(long long n, BondsView b, VectorField u, const Mat3* gradient, double near_m,
+                              const char* on_face, unsigned long long* clumped) {
+  const long long i = thread_index();
+  if (i >= n) return;
+  unsigned long long count = 0;
+  for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
+    double ratio = 1.0;
+    if (!clumping_ratio(b, i, k, u, gradient[i], near_m, &ratio)) continue;
+    if (on_face[i] && on_face[b.neighbour[k]]) continue;
+    if (!(ratio >= kMinNeighbourDistanceRatio)) ++count;
+  }
+  if (count > 0) atomicAdd(clumped, count);
+}
+
+class CudaSolidDevice final : public SolidStepDevice {
+public:
+  explicit CudaSolidDevice(const Solid& solid);
+  void substep(double dt, double time_after_s) override;
+  long long inverted_particles() override { return take_counter(kInverted); }
+  double shortest_squeezed_bond_m(double window_s) override;
+  long long clumped_bonds() override;
+  void download(const SolidHostState& host, bool kinematics_only) override;
+  std::string description() const override { return "cuda (" + solver::cuda_device_description() + ")"; }
+
+private:
+  enum Counter { kInverted = 0, kClumped = 1, kShortest = 2 };
+  void after_launch(const char* kernel) const { cuda::check_launch(kernel, sync_after_launch_); }
+  long long take_counter(Counter c);  // waits, reads, resets
+  DeviceField field(DeviceArray<double>* f) const { return {f[0].get(), f[1].get(), f[2].get()}; }
+  VectorField view(const DeviceArray<double>* f) const { return {f[0].get(), f[1].get(), f[2].get()}; }
+
+  long long n_ = 0;
+  int dimension_ = 3;
+  double spacing_m_ = 0.0;
+  bool sync_after_launch_ = false;
+  bool repulsive_ = false;
+  int planes_ = 0;
+  SolidStressInputs stress_in_{};
+  SolidStressState state_{};
+  SolidAccelerationInputs accel_in_{};
+
+  DeviceArray<double> u_[3], v_[3], a_[3], external_[3], contact_[3];
+  DeviceArray<double> position_, volume_, stencil_volume_, stress_work_, eq_plastic_, pressure_, pressure_floor_, plane_;
+  DeviceArray<Mat3> gradient_, f_inverse_, moment_inverse_;
+  DeviceArray<SymTensor> stress_;
+  DeviceArray<ForceMatrices> matrices_;
+  DeviceArray<char> full_stencil_, on_face_;
+  DeviceArray<long long> bond_offset_;
+  DeviceArray<int> bond_neighbour_;
+  DeviceArray<double> rx_, ry_, rz_, weight_;
+  BondsView bonds_{};
+  DeviceArray<unsigned long long> counters_;
+  std::vector<PrescribedSet> prescribed_;
+  std::vector<DeviceArray<int>> prescribed_particles_;
+};
+
+CudaSolidDevice::CudaSolidDevice(const Solid& solid) {
+  if (!solver::cuda_device_available())
+    throw RunError("CUDA backend: no CUDA device is available (no GPU, or no NVIDIA driver); use --backend cpu");
+  check(cudaSetDevice(0), "cudaSetDevice(0)");
+  const char* sync = std::getenv("BRECCIA_CUDA_SYNC");
+  sync_after_launch_ = sync && std::string(sync) == "1";
+  n_ = static_cast<long long>(solid.size());
+  dimension_ = solid.dimension();
+  spacing_m_ = solid.spacing_m();
+  repulsive_ = solid.options().pressure == PressureForce::Repulsive;
+
+  static const char* names[3] = {"u", "v", "external force"};
+  for (int d = 0; d < 3; ++d) {
+    u_[d].upload(solid.displacement(d), names[0]);
+    v_[d].upload(solid.velocity(d), names[1]);
+    external_[d].upload(solid.external_force_n(d), names[2]);
+    a_[d].upload(std::vector<double>(n_, 0.0), "a");
+    contact_[d].upload(std::vector<double>(n_, 0.0), "contact force");
+  }
+  position_.upload(solid.position_m(), "positions");
+  volume_.upload(solid.volume_m3(), "volumes");
+  stencil_volume_.upload(solid.stencil_volume_m3(), "stencil volumes");
+  stress_work_.upload(solid.stress_work_of_particles_j(), "stress work");
+  eq_plastic_.upload(solid.eq_plastic_strain(), "plastic strain");
+  pressure_.upload(std::vector<double>(n_, 0.0), "pressure");
+  pressure_floor_.upload(std::vector<double>(n_, 0.0), "pressure floor");
+  gradient_.upload(solid.displacement_gradient(), "gradients");
+  f_inverse_.upload(solid.f_inverse(), "F^-1");
+  moment_inverse_.upload(solid.moment_inverse(), "moment matrices");
+  stress_.upload(solid.stress_pa(), "stress");
+  matrices_.upload(solid.force_matrices_of_particles(), "force matrices");
+  full_stencil_.upload(solid.full_stencil(), "surface flags");
+  on_face_.allocate(n_, "crack-face flags");
+
+  const BondList& b = solid.bonds();
+  bond_offset_.upload(b.offset, "bond offsets");
+  bond_neighbour_.upload(b.neighbour, "bond neighbours");
+  rx_.upload(b.rx, "bond rx");
+  ry_.upload(b.ry, "bond ry");
+  rz_.upload(b.rz, "bond rz");
+  weight_.upload(b.weight, "bond weights");
+  bonds_ = {bond_offset_.get(), bond_neighbour_.get(), rx_.get(), ry_.get(), rz_.get(), weight_.get()};
+
+  std::vector<double> planes;
+  for (const HalfSpace& h : solid.contact().half_spaces()) {
+    planes.insert(planes.end(), h.point_m.begin(), h.point_m.end());
+    planes.insert(planes.end(), h.normal.begin(), h.normal.end());
+    planes.push_back(h.law.normal_stiffness_n_m);
+  }
+  planes_ = static_cast<int>(solid.contact().half_spaces().size());
+  plane_.upload(planes, "rigid planes");
+  counters_.upload(std::vector<unsigned long long>(3, 0), "counters");
+
+  prescribed_ = solid.prescribed();
+  prescribed_particles_ = std::vector<DeviceArray<int>>(prescribed_.size());
+  for (size_t k = 0; k < prescribed_.size(); ++k) prescribed_particles_[k].upload(prescribed_[k].particles, "boundary set");
+
+  // The inputs of the phases, as Solid::compute_acceleration fills them.
+  const VectorField u = view(u_);
+  stress_in_.bonds = bonds_;
+  stress_in_.u = u;
+  stress_in_.volume_m3 = stencil_volume_.get();
+  stress_in_.moment_inverse = moment_inverse_.get();
+  stress_in_.law = solid.law();
+  stress_in_.dimension = dimension_;
+  stress_in_.hourglass_stiffness = solid.hourglass_stiffness();
+  state_ = {gradient_.get(), f_inverse_.get(), stress_.get(), eq_plastic_.get(), stress_work_.get(), pressure_.get(),
+            matrices_.get()};
+  accel_in_.forces.bonds = bonds_;
+  accel_in_.forces.u = u;
+  accel_in_.forces.matrices = matrices_.get();
+  accel_in_.forces.pressure_floor_pa = repulsive_ ? pressure_floor_.get() : nullptr;
+  accel_in_.forces.volume_m3 = stencil_volume_.get();
+  for (int d = 0; d < 3; ++d) {
+    accel_in_.external_n[d] = external_[d].get();
+    accel_in_.contact_n[d] = planes_ > 0 ? contact_[d].get() : nullptr;
+    accel_in_.gravity_m_s2[d] = solid.options().gravity_m_s2[d];
+  }
+  accel_in_.v = view(v_);
+  accel_in_.volume_m3 = volume_.get();
+  accel_in_.density_kg_m3 = solid.density_kg_m3();
+  accel_in_.damping_per_s = solid.options().damping_per_s;
+  accel_in_.dimension = dimension_;
+}
+
+void CudaSolidDevice::substep(double dt, double time_after_s) {
+  if (n_ == 0) return;
+  const long long blocks = blocks_for(n_);
+  stress_phase_cuda<<<blocks, kBlock>>>(n_, stress_in_, state_, counters_.get() + kInverted);
+  after_launch("stress_phase_at");
+  if (repulsive_) {
+    pressure_floor_cuda<<<blocks, kBlock>>>(n_, bonds_, full_stencil_.get(), pressure_.get(), pressure_floor_.get());
+    after_launch("pressure_floor_at");
+  }
+  if (planes_ > 0) {
+    half_spaces_cuda<<<blocks, kBlock>>>(n_, dimension_, position_.get(), view(u_), planes_, plane_.get(), field(contact_));
+    after_launch("half_space_force_at");
+  }
+  acceleration_cuda<<<blocks, kBlock>>>(n_, accel_in_, field(a_));
+  after_launch("solid_acceleration_at");
+  integrate_cuda<Integration::SymplecticEuler>
+      <<<blocks, kBlock>>>(n_, dimension_, field(u_), field(v_), view(a_), 0.5 * dt, dt);
+  after_launch("symplectic_euler_at");
+  launch_prescribed(prescribed_, prescribed_particles_, time_after_s, field(u_), field(v_), sync_after_launch_);
+}
+
+long long CudaSolidDevice::take_counter(Counter c) {
+  unsigned long long value = 0;
+  check(cudaMemcpy(&value, counters_.get() + c, sizeof value, cudaMemcpyDeviceToHost), "reading a counter");
+  check(cudaMemset(counters_.get() + c, 0, sizeof value), "clearing a counter");
+  return static_cast<long long>(value);
+}
+
+double CudaSolidDevice::shortest_squeezed_bond_m(double window_s) {
+  unsigned long long start = 0;
+  std::memcpy(&start, &spacing_m_, sizeof start);
+  check(cudaMemcpy(counters_.get() + kShortest, &start, sizeof start, cudaMemcpyHostToDevice), "setting a counter");
+  if (n_ > 0) {
+    shortest_bond_cuda<<<blocks_for(n_), kBlock>>>(n_, bonds_, view(u_), view(v_), window_s, spacing_m_,
+                                                   counters_.get() + kShortest);
+    after_launch("squeezed_bond_length");
+  }
+  unsigned long long bits = 0;
+  check(cudaMemcpy(&bits, counters_.get() + kShortest, sizeof bits, cudaMemcpyDeviceToHost), "reading a counter");
+  double shortest = 0.0;
+  std::memcpy(&shortest, &bits, sizeof shortest);
+  return shortest;
+}
+
+long long CudaSolidDevice::clumped_bonds() {
+  if (n_ == 0) return 0;
+  const double near = 1.5 * spacing_m_;  // as measure_clumping
+  crack_face_cuda<<<blocks_for(n_), kBlock>>>(n_, bonds_, near, on_face_.get());
+  after_launch("on_crack_face_at");
+  clumping_cuda<<<blocks_for(n_), kBlock>>>(n_, bonds_, view(u_), gradient_.get(), near, on_face_.get(),
+                                            counters_.get() + kClumped);
+  after_launch("clumping_ratio");
+  return take_counter(kClumped);
+}
+
+void CudaSolidDevice::download(const SolidHostState& host, bool kinematics_only) {
+  for (int d = 0; d < 3; ++d) {
+    u_[d].download((*host.u)[d], "u");
+    v_[d].download((*host.v)[d], "v");
+  }
+  if (kinematics_only) return;
+  gradient_.download(*host.gradient, "gradients");
+  f_inverse_.download(*host.f_inverse, "F^-1");
+  stress_.download(*host.stress, "stress");
+  eq_plastic_.download(*host.eq_plastic_strain, "plastic strain");
+  stress_work_.download(*host.stress_work_j, "stress work");
+  matrices_.download(*host.matrices, "force matrices");
+}
+
+}  // namespace
+
+std::unique_ptr<SolidStepDevice> make_cuda_solid_device(const Solid& solid) {
+  return std::make_unique<CudaSolidDevice>(solid);
+}
+
+}  // namespace breccia::mps

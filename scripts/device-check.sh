@@ -117,10 +117,10 @@ rows.append(f"| MPS Taylor bar {g('taylor_across')} across, gpu ({g('taylor_back
             f"{g('taylor_steps')} (max {g('taylor_max_substeps')} substeps) | {g('taylor_loop_s')} | "
             f"{g('taylor_particle_steps_per_s', '{:.3g}')} particle-steps/s; length {g('taylor_length_mm', '{:.2f}')} mm, "
             f"face radius {g('taylor_radius_mm', '{:.2f}')} mm |")
-for model in ("pmb", "lps"):
+for model in ("pmb", "lps", "correspondence"):
     for leg in ("gpu", "cpu"):
         k = f"pd_{model}_{leg}"
-        rows.append(f"| PD {model.upper()} lattice {g('pd_n')}^3, {leg} ({g(k + '_backend')}, {g(k + '_threads')} threads) | "
+        rows.append(f"| PD {model} lattice {g('pd_n')}^3, {leg} ({g(k + '_backend')}, {g(k + '_threads')} threads) | "
                     f"{g(k + '_particles')} | {g(k + '_steps')} | {g(k + '_wall_s')} | {g(k + '_bond_updates_per_s', '{:.3g}')} bond-updates/s |")
 open(sys.argv[2] + "/summary.md", "w").write("\n".join(rows) + "\n")
 print("\n".join(rows))
@@ -289,8 +289,10 @@ fi
 # PD: bond-updates/s of PMB and LPS on a cubic lattice (the bench.sh case, larger), GPU vs CPU.
 L=$(awk -v n="$PD_N" 'BEGIN{printf "%.6g", n*0.0005}')
 result pd_n "$PD_N"
-for model in pmb lps; do
+for model in pmb lps correspondence; do
   step "PD $model, lattice $PD_N^3"
+  MODEL_LINE="{type: $model, horizon_factor: 3.015}"
+  [ $model = correspondence ] && MODEL_LINE="{type: correspondence, horizon_factor: 3.015, stabilisation: {type: penalty, coefficient: 1}}"
   for leg in gpu cpu; do
     in_budget "pd_${model}_$leg" || continue
     backend=$GPU_BACKEND steps=$PD_GPU_STEPS
@@ -298,7 +300,7 @@ for model in pmb lps; do
     cat >"$WORK/pd_$model.yaml" <<YAML
 name: device-bench-$model
 specimen: {lattice: {dimension: 3, box: [0, 0, 0, $L, $L, $L], spacing: 0.0005}}
-model: {type: $model, horizon_factor: 3.015}
+model: $MODEL_LINE
 materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, fracture_energy: 1e6}]
 initial: [{type: radial_velocity, center: [0, 0, 0], strain_rate: 10}]
 time: {steps: $steps}

@@ -117,16 +117,6 @@ int main(int argc, char** argv) {
     }
     const solver::CaseConfig config = solver::parse_case_file(case_file);
 #ifdef BRECCIA_WITH_CUDA
-    // Correspondence has no CUDA launch: refuse it when asked for, run on the CPU under auto.
-    if (config.model == solver::PdModel::Correspondence && opt.backend == "cuda") {
-      if (backend == "cuda")
-        throw InputError(case_file, "model.type", "correspondence with --backend cuda",
-                         "--backend cpu (the correspondence model runs on the CPU only)");
-      opt.backend = "cpu";
-      opt.backend_loop = nullptr;
-    }
-#endif
-#ifdef BRECCIA_WITH_CUDA
     // The CUDA launcher has no float path yet: refuse it when asked for, fall back under auto.
     if (config.precision == solver::CaseConfig::Precision::Float32 && opt.backend == "cuda") {
       if (backend == "cuda")

@@ -158,7 +158,32 @@ loads:
 time: {steps: 1000}
 )";
 
+// Correspondence (two kernels per step, F and A_i of the neighbours read in the second) with
+// the penalty stabilisation, the PMB plate's loads and constraints, plane strain.
+std::string correspondence_plate(const std::string& pmb_case, bool fracture) {
+  std::string yaml = pmb_case;
+  const size_t from = yaml.find("model: {"), to = yaml.find('\n', from);
+  yaml.replace(from, to - from,
+               std::string("model: {type: correspondence, planar: plane_strain, horizon_factor: 3.015, stabilisation: "
+                           "{type: penalty, coefficient: 1}") + (fracture ? "}" : ", fracture: false}"));
+  return yaml;
+}
+
 }  // namespace
+
+TEST(CudaBackend, CorrespondencePlateWithPenaltyMatchesTheCpuOver1000Steps) {
+  if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
+  const Pair r = run_both("corr_plate", correspondence_plate(kPmbPlateNoFracture, false));
+  ASSERT_GT(r.cpu_e.strain, 0.0) << "the loads must deform the plate";
+  expect_same_motion_and_energies(r);
+  EXPECT_LE(field_difference(r.gpu.corr_nonaffine, r.cpu.corr_nonaffine), kAgreement);
+}
+
+TEST(CudaBackend, CorrespondenceCrackBreaksTheSameBondsAsOnTheCpu) {
+  if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
+  const Pair r = run_both("corr_crack", correspondence_plate(kPmbPlateFracture, true));
+  expect_same_cracks(r, "correspondence");
+}
 
 TEST(CudaBackend, PmbPlateWithoutFractureMatchesTheCpuOver1000Steps) {
   if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;

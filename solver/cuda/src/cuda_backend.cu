@@ -15,6 +15,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/solver/cuda_backend.hpp"
+#include "breccia/solver/correspondence_kernels.hpp"
 #include "breccia/solver/cuda_memory.cuh"
 #include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_kernels.hpp"
@@ -57,6 +58,18 @@ __global__ void lps_dilatation_cuda(PdView p) {
 __global__ void force_cuda(PdView p) {
   const int64_t i = thread_index();
   if (i < p.n) force_kernel(p, i);
+}
+
+// Correspondence (correspondence_kernels.hpp): F, the stress and A_i for every particle,
+// then the forces, which read A_j of the neighbours.
+__global__ void correspondence_deformation_cuda(CorrespondenceView c) {
+  const int64_t i = thread_index();
+  if (i < c.p.n) correspondence_deformation_kernel(c, i);
+}
+
+__global__ void correspondence_force_cuda(CorrespondenceView c) {
+  const int64_t i = thread_index();
+  if (i < c.p.n) correspondence_force_kernel(c, i);
 }
 
 __global__ void acceleration_cuda(PdView p, double half_dt) {
@@ -303,6 +316,9 @@ struct CudaSystem::Impl {
   DeviceArray<StepSums> step_partial;
   DeviceArray<MeasureSums> measure_partial;
   DeviceArray<DeviceScalars> scalars;
+  // correspondence model: per-particle moduli (kCorrModuli), F and A_i (9 each), non-affine energy
+  DeviceArray<double> corr_moduli, corr_deformation, corr_force_tensor, corr_nonaffine;
+  int dimension = 3;
 
   PdView view;
   FacetView facets{};
@@ -351,6 +367,13 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   m.s0_own.upload(s.s0_own, "s0_own");
   m.s0_dual.upload(s.s0_dual, "s0_dual");
   m.state.upload(s.state, "state");
+  if (s.config.model == PdModel::Correspondence) {
+    m.corr_moduli.upload(s.corr_moduli, "correspondence moduli");
+    m.corr_deformation.upload(s.corr_deformation, "correspondence F");
+    m.corr_force_tensor.upload(s.corr_force_tensor, "correspondence force tensors");
+    m.corr_nonaffine.upload(s.corr_nonaffine, "correspondence non-affine energy");
+  }
+  m.dimension = s.dimension;
   m.u_before.allocate(3 * s.n, "u_before");
   m.f_before.allocate(3 * s.n, "f_before");
 
@@ -450,6 +473,20 @@ void CudaSystem::Impl::compute_forces(const PdSystem& sys) {
   const int64_t grid = blocks_for(p.n);
   current_positions_cuda<<<blocks_for(3 * p.n), kBlock>>>(3 * p.n, p.x0, p.u, x.get());
   after_launch("current_positions");
+  if (p.model == static_cast<int>(PdModel::Correspondence)) {  // cpu_correspondence_forces
+    CorrespondenceView c;
+    c.p = p;
+    c.dimension = dimension;
+    c.moduli = corr_moduli.get();
+    c.deformation = corr_deformation.get();
+    c.force_tensor = corr_force_tensor.get();
+    c.nonaffine = corr_nonaffine.get();
+    correspondence_deformation_cuda<<<grid, kBlock>>>(c);
+    after_launch("correspondence_deformation_kernel");
+    correspondence_force_cuda<<<grid, kBlock>>>(c);
+    after_launch("correspondence_force_kernel");
+    return;
+  }
   if (p.model == static_cast<int>(PdModel::LPS)) {
     lps_dilatation_cuda<<<grid, kBlock>>>(p);
     after_launch("lps_dilatation_kernel");
@@ -541,6 +578,8 @@ Energies CudaSystem::measure(PdSystem& sys) {
            "measure reduction", m.sync_after_launch);
   std::vector<DeviceScalars> host;
   m.scalars.download(host, "energy sums");  // synchronises with the default stream
+  // The zero-energy-mode detector (zero_energy_mode_message) reads the non-affine energy.
+  if (m.corr_nonaffine.size() > 0) m.corr_nonaffine.download(sys.corr_nonaffine, "correspondence non-affine energy");
   const DeviceScalars& s = host[0];
   sys.external_work = s.external_work;
   sys.dissipated_energy = s.dissipated_energy;

@@ -128,9 +128,7 @@ private:
   bool sync_after_launch_ = false;
 
   DeviceArray<double> u_[3], v_[3], a_[3], div_, mass_;
-  DeviceArray<long long> bond_offset_;
-  DeviceArray<int> bond_neighbour_;
-  DeviceArray<double> rx_, ry_, rz_, weight_;
+  DeviceBonds bond_arrays_;
   BondsView bonds_{};
 
   // crack pairs
@@ -188,14 +186,7 @@ CudaStepDevice::CudaStepDevice(const Simulation& sim) {
   for (long long i = 0; i < n_; ++i) mass[i] = rho * sim.volume_m3()[i];  // as the CPU's rho * volume
   mass_.upload(mass, "mass");
 
-  const BondList& b = sim.bonds();
-  bond_offset_.upload(b.offset, "bond offsets");
-  bond_neighbour_.upload(b.neighbour, "bond neighbours");
-  rx_.upload(b.rx, "bond rx");
-  ry_.upload(b.ry, "bond ry");
-  rz_.upload(b.rz, "bond rz");
-  weight_.upload(b.weight, "bond weights");
-  bonds_ = {bond_offset_.get(), bond_neighbour_.get(), rx_.get(), ry_.get(), rz_.get(), weight_.get()};
+  bonds_ = bond_arrays_.upload(sim.bonds());
 
   const CrackPairs& c = sim.cracks();
   pair_plus_.upload(c.plus, "pair + particles");

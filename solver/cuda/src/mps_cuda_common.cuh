@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "breccia/mps/kernels.hpp"
+#include "breccia/mps/neighbours.hpp"
 #include "breccia/mps/particles.hpp"
 #include "breccia/solver/cuda_memory.cuh"
 
@@ -26,6 +27,22 @@ struct DeviceField {
   double* x;
   double* y;
   double* z;
+};
+
+// The reference bond list (CSR) on the device; upload() returns the view the kernels take.
+struct DeviceBonds {
+  cuda::DeviceArray<long long> offset;
+  cuda::DeviceArray<int> neighbour;
+  cuda::DeviceArray<double> rx, ry, rz, weight;
+  BondsView upload(const BondList& b) {
+    offset.upload(b.offset, "bond offsets");
+    neighbour.upload(b.neighbour, "bond neighbours");
+    rx.upload(b.rx, "bond rx");
+    ry.upload(b.ry, "bond ry");
+    rz.upload(b.rz, "bond rz");
+    weight.upload(b.weight, "bond weights");
+    return {offset.get(), neighbour.get(), rx.get(), ry.get(), rz.get(), weight.get()};
+  }
 };
 
 // Integrators on components 0..dimension-1: one kernel, the kernels.hpp body chosen at

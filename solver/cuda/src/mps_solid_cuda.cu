@@ -135,9 +135,7 @@ private:
   DeviceArray<SymTensor> stress_;
   DeviceArray<ForceMatrices> matrices_;
   DeviceArray<char> full_stencil_, on_face_;
-  DeviceArray<long long> bond_offset_;
-  DeviceArray<int> bond_neighbour_;
-  DeviceArray<double> rx_, ry_, rz_, weight_;
+  DeviceBonds bond_arrays_;
   BondsView bonds_{};
   DeviceArray<unsigned long long> counters_;
   std::vector<PrescribedSet> prescribed_;
@@ -178,14 +176,7 @@ CudaSolidDevice::CudaSolidDevice(const Solid& solid) {
   full_stencil_.upload(solid.full_stencil(), "surface flags");
   on_face_.allocate(n_, "crack-face flags");
 
-  const BondList& b = solid.bonds();
-  bond_offset_.upload(b.offset, "bond offsets");
-  bond_neighbour_.upload(b.neighbour, "bond neighbours");
-  rx_.upload(b.rx, "bond rx");
-  ry_.upload(b.ry, "bond ry");
-  rz_.upload(b.rz, "bond rz");
-  weight_.upload(b.weight, "bond weights");
-  bonds_ = {bond_offset_.get(), bond_neighbour_.get(), rx_.get(), ry_.get(), rz_.get(), weight_.get()};
+  bonds_ = bond_arrays_.upload(solid.bonds());
 
   std::vector<double> planes;
   for (const HalfSpace& h : solid.contact().half_spaces()) {

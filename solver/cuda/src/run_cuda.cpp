@@ -30,10 +30,6 @@ RunResult cuda_time_loop(PdSystem& s, const RunOptions& o, ResultsWriter* result
   if (s.f32.active)
     throw InputError(s.config.file, "model.precision", "float32 with --backend cuda",
                      "float64 for the CUDA backend (its float path is not written yet), or --backend cpu");
-  // The correspondence kernels (correspondence_kernels.hpp) have no CUDA launch yet.
-  if (s.config.model == PdModel::Correspondence)
-    throw InputError(s.config.file, "model.type", "correspondence with --backend cuda",
-                     "--backend cpu (the correspondence model runs on the CPU only)");
   CudaSystem gpu(s);
   if (o.progress) std::fprintf(stderr, "  CUDA device: %s\n", cuda_device_description().c_str());
   CudaStepBackend backend(gpu);

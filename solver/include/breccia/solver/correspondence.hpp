@@ -1,7 +1,7 @@
 #pragma once
 // The correspondence model's host side: per-particle moduli at set-up, the OpenMP launch of
 // its two kernels (correspondence_kernels.hpp), and the run-time zero-energy-mode detector.
-// CPU only: breccia-solve refuses --backend cuda for it (docs/theory.md, correspondence).
+// The CUDA backend (cuda_backend.cu) launches the same two kernels on its device arrays.
 #include <string>
 #include <vector>
 

@@ -16,6 +16,8 @@
 #      Everything it measures lands in $OUT (results.json, summary.md, logs), written as it
 #      goes, so a run cut short still returns what it finished.
 #
+# ONLY=tests,mps,taylor,pd runs only the named sections (the device's 15 minutes may need two
+# calls: e.g. ONLY=tests,pd then ONLY=mps,taylor).
 # Environment: OUT (results folder), BRECCIA_DEVICE_DRY=1 (no GPU runs), PD_N (lattice edge,
 # default 81: 531k particles, 6.5e7 bond entries), PD_GPU_STEPS (500), PD_CPU_STEPS (20),
 # MPS_SPACING (0.125 mm), SANITIZER=0 to skip compute-sanitizer, BUDGET_S (480: no new check
@@ -117,7 +119,7 @@ rows.append(f"| MPS Taylor bar {g('taylor_across')} across, gpu ({g('taylor_back
             f"{g('taylor_steps')} (max {g('taylor_max_substeps')} substeps) | {g('taylor_loop_s')} | "
             f"{g('taylor_particle_steps_per_s', '{:.3g}')} particle-steps/s; length {g('taylor_length_mm', '{:.2f}')} mm, "
             f"face radius {g('taylor_radius_mm', '{:.2f}')} mm |")
-for model in ("pmb", "lps", "correspondence"):
+for model in ("pmb", "lps", "correspondence", "pmb32", "lps32"):
     for leg in ("gpu", "cpu"):
         k = f"pd_{model}_{leg}"
         rows.append(f"| PD {model} lattice {g('pd_n')}^3, {leg} ({g(k + '_backend')}, {g(k + '_threads')} threads) | "
@@ -205,9 +207,12 @@ run_tests() {  # run_tests NAME TIMEOUT [gtest args]
   result "$name" "rc $rc: $passed passed, $failed failed, $skipped skipped"
   echo "$name: rc $rc: $passed passed, $failed failed, $skipped skipped"
 }
-run_tests test_mps_cuda 180
-in_budget test_mps_solid_cuda && run_tests test_mps_solid_cuda 90
-in_budget test_solver_cuda && run_tests test_solver_cuda 240
+wanted() { [ -z "${ONLY:-}" ] || [[ ",$ONLY," == *",$1,"* ]]; }
+if wanted tests; then
+  run_tests test_mps_cuda 180
+  in_budget test_mps_solid_cuda && run_tests test_mps_solid_cuda 90
+  in_budget test_solver_cuda && run_tests test_solver_cuda 240
+fi
 
 # MPS: the harmonics case at one spacing, GPU then CPU on every core; histories compared.
 step "MPS harmonics at $MPS_SPACING mm"
@@ -232,8 +237,8 @@ print(f"{k}_loop_s={s['step_loop_s']}")
 print(f"{k}_backend={s.get('backend', '?')}")
 PY
 }
-in_budget mps_gpu && mps_leg gpu "$GPU_BACKEND"
-in_budget mps_cpu && mps_leg cpu cpu
+wanted mps && in_budget mps_gpu && mps_leg gpu "$GPU_BACKEND"
+wanted mps && in_budget mps_cpu && mps_leg cpu cpu
 if [ -f "$WORK/mps_gpu/history.csv" ] && [ -f "$WORK/mps_cpu/history.csv" ]; then
   "$PYTHON" - "$WORK/mps_gpu/history.csv" "$WORK/mps_cpu/history.csv" >>"$RESULTS" <<'PY'
 import sys
@@ -254,7 +259,7 @@ fi
 # cases/mps-taylor-bar/report.py measures them (where h5py is present).
 TAYLOR_ACROSS=${TAYLOR_ACROSS:-32}
 [ "$DRY" = 1 ] && TAYLOR_ACROSS=4
-if in_budget taylor; then
+if wanted taylor && in_budget taylor; then
   step "MPS Taylor bar, $TAYLOR_ACROSS across"
   TAYLOR_CASE="$KIT/cases/mps-taylor-bar.yaml"
   [ -f "$TAYLOR_CASE" ] || TAYLOR_CASE="$ROOT/cases/mps-taylor-bar/case.yaml"
@@ -289,10 +294,15 @@ fi
 # PD: bond-updates/s of PMB and LPS on a cubic lattice (the bench.sh case, larger), GPU vs CPU.
 L=$(awk -v n="$PD_N" 'BEGIN{printf "%.6g", n*0.0005}')
 result pd_n "$PD_N"
-for model in pmb lps correspondence; do
+# pmb32 / lps32: the same with model.precision float32 (the GPU's float path, docs/cuda.md).
+for model in pmb lps correspondence pmb32 lps32; do
+  wanted pd || break
   step "PD $model, lattice $PD_N^3"
-  MODEL_LINE="{type: $model, horizon_factor: 3.015}"
-  [ $model = correspondence ] && MODEL_LINE="{type: correspondence, horizon_factor: 3.015, stabilisation: {type: penalty, coefficient: 1}}"
+  case $model in
+    correspondence) MODEL_LINE="{type: correspondence, horizon_factor: 3.015, stabilisation: {type: penalty, coefficient: 1}}" ;;
+    *32) MODEL_LINE="{type: ${model%32}, horizon_factor: 3.015, precision: float32}" ;;
+    *) MODEL_LINE="{type: $model, horizon_factor: 3.015}" ;;
+  esac
   for leg in gpu cpu; do
     in_budget "pd_${model}_$leg" || continue
     backend=$GPU_BACKEND steps=$PD_GPU_STEPS

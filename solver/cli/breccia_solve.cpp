@@ -116,17 +116,6 @@ int main(int argc, char** argv) {
 #endif
     }
     const solver::CaseConfig config = solver::parse_case_file(case_file);
-#ifdef BRECCIA_WITH_CUDA
-    // The CUDA launcher has no float path yet: refuse it when asked for, fall back under auto.
-    if (config.precision == solver::CaseConfig::Precision::Float32 && opt.backend == "cuda") {
-      if (backend == "cuda")
-        throw InputError(case_file, "model.precision", "float32 with --backend cuda",
-                         "float64 for the CUDA backend (its float path is not written yet), or --backend cpu");
-      if (opt.progress) std::fprintf(stderr, "note: model.precision float32 runs on the CPU (no CUDA float path yet)\n");
-      opt.backend = "cpu";
-      opt.backend_loop = nullptr;
-    }
-#endif
     const solver::RunResult r = solver::run_case(config, opt);
     if (r.status == "unstable" || r.status == "not_converged") {
       std::fprintf(stderr, "error: %s\n", r.message.c_str());

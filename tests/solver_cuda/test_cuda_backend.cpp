@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "cpu_gpu_compare.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/solver/cuda_backend.hpp"
+#include "breccia/solver/float32_state.hpp"
 #include "breccia/solver/outputs.hpp"
 #include "breccia/solver/run.hpp"
 
@@ -169,7 +171,66 @@ std::string correspondence_plate(const std::string& pmb_case, bool fracture) {
   return yaml;
 }
 
+// model.precision: float32, the same case on the CPU's float path (float32_backend.cpp) and the
+// CUDA backend's: both run the float kernel templates with FMA off and IEEE division and
+// square root, so the float trajectories should agree to the bit; 1e-6 (about 16 float ulps)
+// allows a host compiler that contracts differently, while a missed conversion (a double
+// array read as float, a load not rounded) shows at 1e-3 or more.
+constexpr double kFloatAgreement = 1e-6;
+
+std::string float32_case(std::string yaml) {
+  const size_t at = yaml.find("model: {") + std::string("model: {").size();
+  yaml.insert(at, "precision: float32, ");
+  return yaml;
+}
+
+Pair run_both_float32(const std::string& name, const std::string& yaml) {
+  Pair r{system_from_yaml(name, yaml), system_from_yaml(name, yaml), {}, {}};
+  const std::unique_ptr<StepBackend> cpu32 = make_float32_backend(r.cpu);
+  for (int k = 0; k < kSteps; ++k) cpu32->step(r.cpu);
+  r.cpu_e = cpu32->measure(r.cpu);
+  cpu32->download(r.cpu);
+  CudaSystem device(r.gpu);
+  for (int k = 0; k < kSteps; ++k) device.step(r.gpu);
+  r.gpu_e = device.measure(r.gpu);
+  device.download(r.gpu);
+  return r;
+}
+
+void expect_same_float_motion(const Pair& r) {
+  ASSERT_TRUE(r.cpu.f32.active) << "the case must run in float32";
+  ASSERT_EQ(r.gpu.step, r.cpu.step);
+  const double du = field_difference(r.gpu.u, r.cpu.u), dv = field_difference(r.gpu.v, r.cpu.v);
+  std::printf("  [cuda float32] max |u_gpu - u_cpu| / max |u| = %.3e, velocity %.3e\n", du, dv);
+  EXPECT_LE(du, kFloatAgreement);
+  EXPECT_LE(dv, kFloatAgreement);
+  EXPECT_LE(relative(r.gpu_e.kinetic, r.cpu_e.kinetic), kFloatAgreement);
+  EXPECT_LE(relative(r.gpu_e.strain, r.cpu_e.strain), kFloatAgreement);
+  EXPECT_LE(relative(r.gpu.external_work, r.cpu.external_work), kFloatAgreement);
+}
+
 }  // namespace
+
+TEST(CudaBackend, Float32PmbPlateMatchesTheCpuFloat32PathOver1000Steps) {
+  if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
+  const Pair r = run_both_float32("f32_pmb_plate", float32_case(kPmbPlateNoFracture));
+  ASSERT_GT(r.cpu_e.strain, 0.0) << "the loads must deform the plate";
+  expect_same_float_motion(r);
+}
+
+TEST(CudaBackend, Float32LpsBlockWithPressureAndIndenterMatchesTheCpuFloat32Path) {
+  if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
+  const Pair r = run_both_float32("f32_lps_block", float32_case(kLpsBlockNoFracture));
+  ASSERT_GT(r.cpu_e.strain, 0.0) << "the loads must deform the block";
+  expect_same_float_motion(r);
+  EXPECT_LE(field_difference(r.gpu.dilatation, r.cpu.dilatation), kFloatAgreement);
+}
+
+TEST(CudaBackend, Float32PmbCrackBreaksTheSameBondsAsTheCpuFloat32Path) {
+  if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
+  const Pair r = run_both_float32("f32_pmb_crack", float32_case(kPmbPlateFracture));
+  expect_same_cracks(r, "PMB float32");
+}
 
 TEST(CudaBackend, CorrespondencePlateWithPenaltyMatchesTheCpuOver1000Steps) {
   if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;

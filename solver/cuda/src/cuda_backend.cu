@@ -11,12 +11,14 @@
 #include <cstdlib>
 #include <numeric>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "breccia/common/error.hpp"
 #include "breccia/solver/cuda_backend.hpp"
 #include "breccia/solver/correspondence_kernels.hpp"
 #include "breccia/solver/cuda_memory.cuh"
+#include "breccia/solver/float32_state.hpp"
 #include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_kernels.hpp"
 
@@ -39,7 +41,9 @@ int64_t blocks_for(int64_t n) { return (n + kBlock - 1) / kBlock; }
 
 __device__ int64_t thread_index() { return static_cast<int64_t>(blockIdx.x) * blockDim.x + threadIdx.x; }
 
-__global__ void kick_drift_cuda(PdView p, double half_dt, double dt) {
+// Kernels over PdViewT<Real>: double, or float for model.precision: float32 (float32_state.hpp).
+template <class Real>
+__global__ void kick_drift_cuda(PdViewT<Real> p, double half_dt, double dt) {
   const int64_t i = thread_index();
   if (i < p.n) kick_drift_kernel(p, i, half_dt, dt);
 }
@@ -50,12 +54,14 @@ __global__ void current_positions_cuda(int64_t n3, const double* x0, const doubl
   if (k < n3) x[k] = x0[k] + u[k];
 }
 
-__global__ void lps_dilatation_cuda(PdView p) {
+template <class Real>
+__global__ void lps_dilatation_cuda(PdViewT<Real> p) {
   const int64_t i = thread_index();
   if (i < p.n) lps_dilatation_kernel(p, i);
 }
 
-__global__ void force_cuda(PdView p) {
+template <class Real>
+__global__ void force_cuda(PdViewT<Real> p) {
   const int64_t i = thread_index();
   if (i < p.n) force_kernel(p, i);
 }
@@ -72,19 +78,29 @@ __global__ void correspondence_force_cuda(CorrespondenceView c) {
   if (i < c.p.n) correspondence_force_kernel(c, i);
 }
 
-__global__ void acceleration_cuda(PdView p, double half_dt) {
+template <class Real>
+__global__ void acceleration_cuda(PdViewT<Real> p, double half_dt) {
   const int64_t i = thread_index();
   if (i < p.n) acceleration_kernel(p, i, half_dt);
 }
 
-// Force times displacement before the step, for the trapezoidal work of loads and reactions.
-__global__ void work_before_cuda(PdView p, double* u_before, double* f_before) {
+// Force times displacement before the step, for the trapezoidal work of loads and reactions
+// (in double for float runs too, as float32_step sums it).
+template <class Real>
+__global__ void work_before_cuda(PdViewT<Real> p, Real* u_before, double* f_before) {
   const int64_t k = thread_index();
   if (k >= 3 * p.n) return;
   const int64_t i = k / 3;
   const bool constrained = p.fixed_dof[i] & (1u << (k % 3));
-  f_before[k] = p.volume[i] * (constrained ? -p.force[k] : p.body[k]);
+  f_before[k] = double(p.volume[i]) * (constrained ? -double(p.force[k]) : double(p.body[k]));
   u_before[k] = p.u[k];
+}
+
+// Float <-> double copies of a float run's state (float32_upload / float32_download).
+template <class From, class To>
+__global__ void convert_cuda(int64_t count, const From* from, To* to) {
+  const int64_t k = thread_index();
+  if (k < count) to[k] = static_cast<To>(from[k]);
 }
 
 // Prescribed components of one constraint at this step; the ramps are evaluated on the host.
@@ -96,12 +112,19 @@ struct ConstraintStep {
   double dt;
 };
 
-__global__ void constraint_cuda(int64_t count, const int32_t* particles, ConstraintStep c, double* u, double* v) {
+// The ramped values are imposed in double and rounded to Real, as float32_step does.
+template <class Real>
+__global__ void constraint_cuda(int64_t count, const int32_t* particles, ConstraintStep c, Real* u, Real* v) {
   const int64_t q = thread_index();
   if (q >= count) return;
   const int64_t i = particles[q];
   for (int d = 0; d < 3; ++d)
-    if (c.components & (1u << d)) constrain_component(c.kind, c.velocity[d], c.target[d], c.dt, u[3 * i + d], v[3 * i + d]);
+    if (c.components & (1u << d)) {
+      double uk = u[3 * i + d], vk = v[3 * i + d];
+      constrain_component(c.kind, c.velocity[d], c.target[d], c.dt, uk, vk);
+      u[3 * i + d] = static_cast<Real>(uk);
+      v[3 * i + d] = static_cast<Real>(vk);
+    }
 }
 
 struct LoadHistories {
@@ -207,10 +230,11 @@ struct DeviceScalars {
   MeasureSums measured;
 };
 
+template <class Real>
 struct StepLoad {
   using Value = StepSums;
-  PdView p;
-  const double* u_before;
+  PdViewT<Real> p;
+  const Real* u_before;
   const double* f_before;
   __device__ static Value identity() { return {0.0, 0.0}; }
   __device__ static Value combine(Value a, Value b) { return {a.released + b.released, a.work + b.work}; }
@@ -218,8 +242,8 @@ struct StepLoad {
   __device__ Value operator()(int64_t k) const {
     const int64_t i = k / 3;
     const bool constrained = p.fixed_dof[i] & (1u << (k % 3));
-    const double f_after = p.volume[i] * (constrained ? -p.force[k] : p.body[k]);
-    return {k < p.n ? p.dissipated[k] : 0.0, 0.5 * (f_before[k] + f_after) * (p.u[k] - u_before[k])};
+    const double f_after = double(p.volume[i]) * (constrained ? -double(p.force[k]) : double(p.body[k]));
+    return {k < p.n ? p.dissipated[k] : 0.0, 0.5 * (f_before[k] + f_after) * (double(p.u[k]) - double(u_before[k]))};
   }
 };
 
@@ -316,6 +340,14 @@ struct CudaSystem::Impl {
   DeviceArray<StepSums> step_partial;
   DeviceArray<MeasureSums> measure_partial;
   DeviceArray<DeviceScalars> scalars;
+  // model.precision: float32 (float32_state.hpp): the arrays the kernels stream, in float;
+  // the double arrays above keep what a float run keeps in double (loads, constraints'
+  // ramps, diagnostics, every reduction) and receive u and v before a measure or download.
+  bool f32 = false;
+  bool loads_vary = true;  // false: no load at all, the body force stays as uploaded
+  DeviceArray<float> fx0, fu, fv, fa, fforce, fbody, fvolume, fdensity, fweighted_volume, fdilatation, flps_a, flps_b;
+  DeviceArray<float> fxi_len, fk_own, fk_dual, fvol_own, fu_before;
+  PdViewT<float> fview;
   // correspondence model: per-particle moduli (kCorrModuli), F and A_i (9 each), non-affine energy
   DeviceArray<double> corr_moduli, corr_deformation, corr_force_tensor, corr_nonaffine;
   int dimension = 3;
@@ -325,7 +357,18 @@ struct CudaSystem::Impl {
   bool sync_after_launch = false;  // BRECCIA_CUDA_SYNC=1: attribute asynchronous faults to their kernel
 
   void after_launch(const char* kernel) const { check_launch(kernel, sync_after_launch); }
-  void compute_forces(const PdSystem& sys);
+  template <class Real>
+  void compute_forces(const PdSystem& sys, PdViewT<Real> p);
+  template <class Real>
+  void step(PdSystem& sys, const PdViewT<Real>& p, Real* u_before_of_step);
+  void compute_external(PdSystem& sys, double t);
+  template <class From, class To>
+  void convert(int64_t count, const From* from, To* to, const char* what) {
+    if (count == 0) return;
+    convert_cuda<From, To><<<blocks_for(count), kBlock>>>(count, from, to);
+    after_launch(what);
+  }
+  void float_kinematics_to_double();  // fu, fv -> u, v (a float run's measure and probes)
 };
 
 CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
@@ -375,6 +418,30 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   }
   m.dimension = s.dimension;
   m.u_before.allocate(3 * s.n, "u_before");
+  if (s.f32.active) {
+    const Float32State& f = s.f32;
+    m.f32 = true;
+    m.loads_vary = f.loads_vary;
+    m.fx0.upload(f.x0, "float x0");
+    m.fu.upload(f.u, "float u");
+    m.fv.upload(f.v, "float v");
+    m.fa.upload(f.a, "float a");
+    m.fforce.upload(f.force, "float force");
+    m.fbody.upload(f.body, "float body");
+    m.fvolume.upload(f.volume, "float volume");
+    m.fdensity.upload(f.density, "float density");
+    m.fweighted_volume.upload(f.weighted_volume, "float weighted_volume");
+    m.fdilatation.upload(f.dilatation, "float dilatation");
+    if (f.lps_a.size() == s.n && f.lps_b.size() == s.n) {
+      m.flps_a.upload(f.lps_a, "float lps_a");
+      m.flps_b.upload(f.lps_b, "float lps_b");
+    }
+    m.fxi_len.upload(f.xi_len, "float xi_len");
+    m.fk_own.upload(f.k_own, "float k_own");
+    m.fk_dual.upload(f.k_dual, "float k_dual");
+    m.fvol_own.upload(f.vol_own, "float vol_own");
+    m.fu_before.allocate(3 * s.n, "float u_before");
+  }
   m.f_before.allocate(3 * s.n, "f_before");
 
   // Every field set here by name; one added to PdView later stays nullptr (its optional
@@ -396,6 +463,20 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   p.lps_a = m.lps_a.get(); p.lps_b = m.lps_b.get();
   p.energy_density = m.energy_density.get(); p.dissipated = m.dissipated.get();
   p.damage = m.damage.get(); p.max_stretch = m.max_stretch.get();
+  if (m.f32) {  // as float32_view: float where the state is float, the shared rest from above
+    PdViewT<float>& q = m.fview;
+    q.n = p.n; q.model = p.model; q.fracture = p.fracture; q.diagnostics = p.diagnostics;
+    q.symmetric_halves = p.symmetric_halves;
+    q.x0 = m.fx0.get(); q.x = nullptr;  // float never forms x0 + u
+    q.u = m.fu.get(); q.v = m.fv.get(); q.a = m.fa.get(); q.force = m.fforce.get(); q.body = m.fbody.get();
+    q.volume = m.fvolume.get(); q.density = m.fdensity.get(); q.fixed_dof = p.fixed_dof;
+    q.offsets = p.offsets; q.neighbor = p.neighbor; q.xi_len = m.fxi_len.get();
+    q.k_own = m.fk_own.get(); q.k_dual = m.fk_dual.get(); q.vol_own = m.fvol_own.get();
+    q.s0_own = p.s0_own; q.s0_dual = p.s0_dual; q.state = p.state; q.lps = p.lps;
+    q.weighted_volume = m.fweighted_volume.get(); q.dilatation = m.fdilatation.get();
+    q.lps_a = m.flps_a.get(); q.lps_b = m.flps_b.get();
+    q.energy_density = p.energy_density; q.dissipated = p.dissipated; q.damage = p.damage; q.max_stretch = p.max_stretch;
+  }
 
   // Surface-load facets regrouped by particle; a stable sort keeps compute_external's order.
   if (s.surface_loads.size() > static_cast<size_t>(kMaxSurfaceLoads))
@@ -465,47 +546,86 @@ void reduce(int64_t n, const Load& load, typename Load::Value* partial, Finish f
 
 }  // namespace
 
-// cpu_compute_forces on the device, less the sum of the released energy (the caller adds it).
-void CudaSystem::Impl::compute_forces(const PdSystem& sys) {
-  PdView& p = view;
-  p.diagnostics = sys.diagnostics;  // the run loop turns diagnostics off between output steps
-  p.symmetric_halves = sys.symmetric_halves;
+// cpu_compute_forces (float: float32_compute_forces) on the device, less the sum of the
+// released energy (the caller adds it).
+template <class Real>
+void CudaSystem::Impl::compute_forces(const PdSystem& sys, PdViewT<Real> p) {
+  // The run loop turns diagnostics off between output steps; the later launches of the step
+  // (acceleration, reductions) read the members.
+  view.diagnostics = fview.diagnostics = p.diagnostics = sys.diagnostics;
+  view.symmetric_halves = fview.symmetric_halves = p.symmetric_halves = sys.symmetric_halves;
   const int64_t grid = blocks_for(p.n);
-  current_positions_cuda<<<blocks_for(3 * p.n), kBlock>>>(3 * p.n, p.x0, p.u, x.get());
-  after_launch("current_positions");
-  if (p.model == static_cast<int>(PdModel::Correspondence)) {  // cpu_correspondence_forces
-    CorrespondenceView c;
-    c.p = p;
-    c.dimension = dimension;
-    c.moduli = corr_moduli.get();
-    c.deformation = corr_deformation.get();
-    c.force_tensor = corr_force_tensor.get();
-    c.nonaffine = corr_nonaffine.get();
-    correspondence_deformation_cuda<<<grid, kBlock>>>(c);
-    after_launch("correspondence_deformation_kernel");
-    correspondence_force_cuda<<<grid, kBlock>>>(c);
-    after_launch("correspondence_force_kernel");
-    return;
+  if constexpr (std::is_same_v<Real, double>) {  // float never forms x0 + u (float32_state.hpp)
+    current_positions_cuda<<<blocks_for(3 * p.n), kBlock>>>(3 * p.n, p.x0, p.u, x.get());
+    after_launch("current_positions");
+    if (p.model == static_cast<int>(PdModel::Correspondence)) {  // cpu_correspondence_forces
+      CorrespondenceView c;
+      c.p = p;
+      c.dimension = dimension;
+      c.moduli = corr_moduli.get();
+      c.deformation = corr_deformation.get();
+      c.force_tensor = corr_force_tensor.get();
+      c.nonaffine = corr_nonaffine.get();
+      correspondence_deformation_cuda<<<grid, kBlock>>>(c);
+      after_launch("correspondence_deformation_kernel");
+      correspondence_force_cuda<<<grid, kBlock>>>(c);
+      after_launch("correspondence_force_kernel");
+      return;
+    }
   }
   if (p.model == static_cast<int>(PdModel::LPS)) {
-    lps_dilatation_cuda<<<grid, kBlock>>>(p);
+    lps_dilatation_cuda<Real><<<grid, kBlock>>>(p);
     after_launch("lps_dilatation_kernel");
   }
-  force_cuda<<<grid, kBlock>>>(p);
+  force_cuda<Real><<<grid, kBlock>>>(p);
   after_launch("force_kernel");
 }
 
 void CudaSystem::compute_forces(PdSystem& sys) {
   Impl& m = *impl_;
   if (m.view.n == 0) return;
-  m.compute_forces(sys);
+  if (m.f32) m.compute_forces(sys, m.fview);
+  else m.compute_forces(sys, m.view);
   reduce(m.view.n, ReleasedLoad{m.view.dissipated}, m.step_partial.get(), StepFinish{m.scalars.get()},
          "released energy reduction", m.sync_after_launch);
 }
 
-void CudaSystem::step(PdSystem& sys) {
-  Impl& m = *impl_;
-  const PdView& p = m.view;
+// External force density (compute_external) on the double arrays, float runs included (as
+// float32_step evaluates its loads in double and rounds them once).
+void CudaSystem::Impl::compute_external(PdSystem& sys, double t) {
+  const PdView& p = view;
+  const int64_t n = p.n;
+  check(cudaMemsetAsync(body.get(), 0, 3 * n * sizeof(double)), "clearing body forces");
+  if (facets.particle_count > 0) {
+    LoadHistories h{};
+    for (size_t l = 0; l < sys.surface_loads.size(); ++l) h.value[l] = sys.surface_loads[l].spec->history.at(t);
+    surface_load_cuda<<<blocks_for(facets.particle_count), kBlock>>>(facets, h, p.volume, p.offsets, p.state,
+                                                                       body.get());
+    after_launch("surface_load");
+  }
+  for (size_t b = 0; b < sys.body_loads.size(); ++b) {
+    const auto& bl = sys.body_loads[b];
+    const double h = bl.spec->history.at(t);
+    const auto& set = body_load_particles[b];
+    const int64_t count = bl.particles.empty() ? n : static_cast<int64_t>(set.size());
+    body_load_cuda<<<blocks_for(count), kBlock>>>(count, set.get(), h, bl.spec->vector[0], bl.spec->vector[1],
+                                                  bl.spec->vector[2], p.density, body.get());
+    after_launch("body_load");
+  }
+  const IndenterSpec& ind = sys.config.indenter;
+  if (ind.enabled) {
+    double c[3];
+    for (int d = 0; d < 3; ++d) c[d] = ind.center[d] + ind.velocity[d] * t;
+    for (int d = 0; d < 3; ++d) sys.indenter_position[d] = c[d];
+    indenter_cuda<<<blocks_for(n), kBlock>>>(p, c[0], c[1], c[2], ind.radius, ind.stiffness, body.get());
+    after_launch("indenter");
+  }
+}
+
+// cpu_step (float: float32_step): the same phases in the same order.
+template <class Real>
+void CudaSystem::Impl::step(PdSystem& sys, const PdViewT<Real>& p, Real* u_before_of_step) {
+  constexpr bool single = std::is_same_v<Real, float>;
   const double dt = sys.dt, half = 0.5 * dt;
   const int64_t n = p.n;
   if (n == 0) {  // nothing to launch (a grid of zero blocks is a launch error)
@@ -515,10 +635,10 @@ void CudaSystem::step(PdSystem& sys) {
   }
   const int64_t grid = blocks_for(n), grid3 = blocks_for(3 * n);
 
-  work_before_cuda<<<grid3, kBlock>>>(p, m.u_before.get(), m.f_before.get());
-  m.after_launch("work_before");
-  kick_drift_cuda<<<grid, kBlock>>>(p, half, dt);
-  m.after_launch("kick_drift_kernel");
+  work_before_cuda<Real><<<grid3, kBlock>>>(p, u_before_of_step, f_before.get());
+  after_launch("work_before");
+  kick_drift_cuda<Real><<<grid, kBlock>>>(p, half, dt);
+  after_launch("kick_drift_kernel");
   sys.time += dt;
   const double t = sys.time;
 
@@ -529,50 +649,42 @@ void CudaSystem::step(PdSystem& sys) {
     for (int d = 0; d < 3; ++d)
       if (b.components[d]) cs.components |= 1u << d;
     prescribed_values(b, t, dt, cs.velocity, cs.target);
-    const auto& set = m.constraint_particles[c];
+    const auto& set = constraint_particles[c];
     if (set.size() == 0) continue;
-    constraint_cuda<<<blocks_for(set.size()), kBlock>>>(set.size(), set.get(), cs, m.u.get(), m.v.get());
-    m.after_launch("constraint");
+    constraint_cuda<Real><<<blocks_for(set.size()), kBlock>>>(set.size(), set.get(), cs, p.u, p.v);
+    after_launch("constraint");
   }
 
-  // External force density (compute_external).
-  check(cudaMemsetAsync(m.body.get(), 0, 3 * n * sizeof(double)), "clearing body forces");
-  if (m.facets.particle_count > 0) {
-    LoadHistories h{};
-    for (size_t l = 0; l < sys.surface_loads.size(); ++l) h.value[l] = sys.surface_loads[l].spec->history.at(t);
-    surface_load_cuda<<<blocks_for(m.facets.particle_count), kBlock>>>(m.facets, h, p.volume, p.offsets, p.state,
-                                                                         m.body.get());
-    m.after_launch("surface_load");
-  }
-  for (size_t b = 0; b < sys.body_loads.size(); ++b) {
-    const auto& bl = sys.body_loads[b];
-    const double h = bl.spec->history.at(t);
-    const auto& set = m.body_load_particles[b];
-    const int64_t count = bl.particles.empty() ? n : static_cast<int64_t>(set.size());
-    body_load_cuda<<<blocks_for(count), kBlock>>>(count, set.get(), h, bl.spec->vector[0], bl.spec->vector[1],
-                                                  bl.spec->vector[2], p.density, m.body.get());
-    m.after_launch("body_load");
-  }
-  const IndenterSpec& ind = sys.config.indenter;
-  if (ind.enabled) {
-    double c[3];
-    for (int d = 0; d < 3; ++d) c[d] = ind.center[d] + ind.velocity[d] * t;
-    for (int d = 0; d < 3; ++d) sys.indenter_position[d] = c[d];
-    indenter_cuda<<<grid, kBlock>>>(p, c[0], c[1], c[2], ind.radius, ind.stiffness, m.body.get());
-    m.after_launch("indenter");
+  if (!single || loads_vary) {
+    // The indenter reads the double displacement (float32_step converts it first).
+    if (single && sys.config.indenter.enabled) convert(3 * n, fu.get(), u.get(), "float u to double");
+    compute_external(sys, t);
+    if (single) convert(3 * n, body.get(), fbody.get(), "body force to float");
   }
 
-  m.compute_forces(sys);
-  acceleration_cuda<<<grid, kBlock>>>(p, half);
-  m.after_launch("acceleration_kernel");
-  reduce(3 * n, StepLoad{p, m.u_before.get(), m.f_before.get()}, m.step_partial.get(), StepFinish{m.scalars.get()},
-         "step energy reduction", m.sync_after_launch);
+  compute_forces(sys, p);
+  acceleration_cuda<Real><<<grid, kBlock>>>(p, half);
+  after_launch("acceleration_kernel");
+  reduce(3 * n, StepLoad<Real>{p, u_before_of_step, f_before.get()}, step_partial.get(), StepFinish{scalars.get()},
+         "step energy reduction", sync_after_launch);
   ++sys.step;
+}
+
+void CudaSystem::step(PdSystem& sys) {
+  Impl& m = *impl_;
+  if (m.f32) m.step(sys, m.fview, m.fu_before.get());
+  else m.step(sys, m.view, m.u_before.get());
+}
+
+void CudaSystem::Impl::float_kinematics_to_double() {
+  convert(3 * view.n, fu.get(), u.get(), "float u to double");
+  convert(3 * view.n, fv.get(), v.get(), "float v to double");
 }
 
 Energies CudaSystem::measure(PdSystem& sys) {
   Impl& m = *impl_;
   Energies e;
+  if (m.f32) m.float_kinematics_to_double();  // float32 measures the double copies, as on the CPU
   if (m.view.n > 0)
     reduce(m.view.n, MeasureLoad{m.view}, m.measure_partial.get(), MeasureFinish{m.scalars.get()},
            "measure reduction", m.sync_after_launch);
@@ -594,14 +706,21 @@ Energies CudaSystem::measure(PdSystem& sys) {
 }
 
 void CudaSystem::download_kinematics(PdSystem& sys) {
+  if (impl_->f32) impl_->float_kinematics_to_double();
   impl_->u.download(sys.u, "u");
   impl_->v.download(sys.v, "v");
 }
 
 void CudaSystem::download(PdSystem& sys) {
   Impl& m = *impl_;
+  if (m.f32) {  // float32_download: the float state is the truth
+    const int64_t n3 = 3 * m.view.n;
+    m.convert(n3, m.fa.get(), m.a.get(), "float a to double");
+    m.convert(n3, m.fforce.get(), m.force.get(), "float force to double");
+    m.convert(m.view.n, m.fdilatation.get(), m.dilatation.get(), "float dilatation to double");
+  }
   download_kinematics(sys);
-  m.x.download(sys.x, "x");
+  if (!m.f32) m.x.download(sys.x, "x");  // float runs never form x0 + u
   m.a.download(sys.a, "a");
   m.force.download(sys.force, "force");
   m.body.download(sys.body, "body");

@@ -5,6 +5,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/solver/cuda_backend.hpp"
+#include "breccia/solver/float32_state.hpp"
 #include "breccia/solver/outputs.hpp"
 
 namespace breccia::solver {
@@ -26,10 +27,9 @@ private:
 }  // namespace
 
 RunResult cuda_time_loop(PdSystem& s, const RunOptions& o, ResultsWriter* results, HistoryWriter& history) {
-  // The kernels are templated over float too, but this launcher uploads double arrays only.
-  if (s.f32.active)
-    throw InputError(s.config.file, "model.precision", "float32 with --backend cuda",
-                     "float64 for the CUDA backend (its float path is not written yet), or --backend cpu");
+  // float32: the float state from the double one, which a checkpoint may have replaced (as
+  // the CPU's float backend does when it starts).
+  if (s.f32.active) float32_upload(s);
   CudaSystem gpu(s);
   if (o.progress) std::fprintf(stderr, "  CUDA device: %s\n", cuda_device_description().c_str());
   CudaStepBackend backend(gpu);

@@ -23,6 +23,7 @@
 #include "breccia/common/error.hpp"
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/cuda_solid.hpp"
+#include "breccia/mps/particles.hpp"
 #include "breccia/mps/run_case.hpp"
 #include "breccia/mps/solid.hpp"
 #include "breccia/mps/solid_case.hpp"
@@ -153,16 +154,7 @@ public:
     for (long long i = 0; i < n_; ++i) solid_acceleration_at(i, accel_, a_[0].data(), a_[1].data(), a_[2].data());
     for (int d = 0; d < dimension_; ++d)
       for (long long i = 0; i < n_; ++i) symplectic_euler_at(u_[d][i], v_[d][i], a_[d][i], dt);
-    for (const PrescribedSet& set : prescribed_) {
-      const double uv = set.burst ? burst_displacement(*set.burst, time_after_s) : 0.0;
-      const double vv = set.burst ? burst_velocity(*set.burst, time_after_s) : 0.0;
-      for (int d = 0; d < 3; ++d)
-        if (set.components[d])
-          for (int i : set.particles) {
-            u_[d][i] = uv;
-            v_[d][i] = vv;
-          }
-    }
+    apply_prescribed_sets(prescribed_, time_after_s, u_, v_);
     ++substeps_run;
   }
   long long inverted_particles() override {

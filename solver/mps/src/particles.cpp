@@ -158,4 +158,19 @@ void symplectic_euler_update(std::array<std::vector<double>, 3>& u, std::array<s
   }
 }
 
+void apply_prescribed_sets(const std::vector<PrescribedSet>& sets, double t, std::array<std::vector<double>, 3>& u,
+                           std::array<std::vector<double>, 3>& v) {
+  for (const auto& set : sets) {
+    const double u_value = set.burst ? burst_displacement(*set.burst, t) : 0.0;
+    const double v_value = set.burst ? burst_velocity(*set.burst, t) : 0.0;
+    for (int a = 0; a < 3; ++a) {
+      if (!set.components[a]) continue;
+      for (int i : set.particles) {
+        u[a][i] = u_value;
+        v[a][i] = v_value;
+      }
+    }
+  }
+}
+
 }  // namespace breccia::mps

@@ -28,6 +28,29 @@ std::string fmt(double v) {
   return buf;
 }
 
+template <class Model>
+double particle_steps_per_s(const Model& sim, double loop_s) {
+  return loop_s > 0 ? sim.size() * static_cast<double>(sim.steps()) / loop_s : 0.0;
+}
+
+// The last keys of summary.json, both formulations: threads, backend, wall and loop time,
+// and the rate; then the closing brace.
+template <class Model>
+std::string timing_json(const Model& sim, double wall_s, double loop_s) {
+  std::ostringstream js;
+  js << "  \"threads\": " << omp_get_max_threads() << ",\n  \"backend\": \"" << sim.backend_description() << "\",\n"
+     << "  \"wall_time_s\": " << fmt(wall_s) << ",\n"
+     << "  \"step_loop_s\": " << fmt(loop_s) << ",\n"
+     << "  \"particle_steps_per_s\": " << fmt(particle_steps_per_s(sim, loop_s)) << "\n}\n";
+  return js.str();
+}
+
+template <class Model>
+void report_timing(const Model& sim, double wall_s, double loop_s, const std::string& out_dir) {
+  std::fprintf(stderr, "mps: %lld steps in %.2f s (%.3g particle-steps/s); outputs in %s\n", sim.steps(), wall_s,
+               particle_steps_per_s(sim, loop_s), out_dir.c_str());
+}
+
 // The time loop both formulations share. results.h5 is written into its temporary file and
 // committed only after the last output, so a run stopped by an error leaves no file that
 // reads as complete. `after_step` collects per-step maxima; `hint` says what to change when
@@ -147,14 +170,9 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
      << "  \"bodies\": " << (spec.bodies ? spec.bodies->shapes.size() : 1) << ",\n  \"rigid_bodies\": "
      << spec.rigid_bodies.size() << ",\n  \"contact_pairs\": " << sim.contact().contact_pairs() << ",\n"
      << "  \"friction_dissipation_j\": " << fmt(sim.friction_dissipation_j()) << ",\n"
-     << "  \"threads\": " << omp_get_max_threads() << ",\n  \"backend\": \"" << sim.backend_description() << "\",\n"
-     << "  \"wall_time_s\": " << fmt(wall_s) << ",\n"
-     << "  \"step_loop_s\": " << fmt(loop_s) << ",\n"
-     << "  \"particle_steps_per_s\": " << fmt(loop_s > 0 ? sim.size() * static_cast<double>(sim.steps()) / loop_s : 0.0)
-     << "\n}\n";
+     << timing_json(sim, wall_s, loop_s);
   write_text_file(dir / "summary.json", js.str());
-  std::fprintf(stderr, "mps: %lld steps in %.2f s (%.3g particle-steps/s); outputs in %s\n", sim.steps(), wall_s,
-               loop_s > 0 ? sim.size() * static_cast<double>(sim.steps()) / loop_s : 0.0, out_dir.c_str());
+  report_timing(sim, wall_s, loop_s, out_dir);
   return 0;
 }
 
@@ -247,14 +265,9 @@ int run_case(const std::string& case_file, const std::string& out_dir, const Run
      << "  \"end_time_s\": " << fmt(sim.time_s()) << ",\n  \"p_wave_speed_m_s\": " << fmt(m.p_wave_speed()) << ",\n"
      << "  \"s_wave_speed_m_s\": " << fmt(m.s_wave_speed()) << ",\n"
      << "  \"max_slipping_fraction\": " << fmt(max_slip) << ",\n  \"max_open_fraction\": " << fmt(max_open) << ",\n"
-     << "  \"threads\": " << omp_get_max_threads() << ",\n  \"backend\": \"" << sim.backend_description() << "\",\n"
-     << "  \"wall_time_s\": " << fmt(wall_s) << ",\n"
-     << "  \"step_loop_s\": " << fmt(loop_s) << ",\n"
-     << "  \"particle_steps_per_s\": " << fmt(loop_s > 0 ? sim.size() * static_cast<double>(sim.steps()) / loop_s : 0.0)
-     << "\n}\n";
+     << timing_json(sim, wall_s, loop_s);
   write_text_file(dir / "summary.json", js.str());
-  std::fprintf(stderr, "mps: %lld steps in %.2f s (%.3g particle-steps/s); outputs in %s\n", sim.steps(), wall_s,
-               loop_s > 0 ? sim.size() * static_cast<double>(sim.steps()) / loop_s : 0.0, out_dir.c_str());
+  report_timing(sim, wall_s, loop_s, out_dir);
   return 0;
 }
 

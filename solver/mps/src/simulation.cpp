@@ -82,17 +82,7 @@ void Simulation::build_boundary() {
 }
 
 void Simulation::apply_prescribed(double t) {
-  for (const auto& set : prescribed_) {
-    const double u = set.burst ? burst_displacement(*set.burst, t) : 0.0;
-    const double v = set.burst ? burst_velocity(*set.burst, t) : 0.0;
-    for (int a = 0; a < 3; ++a) {
-      if (!set.components[a]) continue;
-      for (int i : set.particles) {
-        u_[a][i] = u;
-        v_[a][i] = v;
-      }
-    }
-  }
+  apply_prescribed_sets(prescribed_, t, u_, v_);
 }
 
 namespace {

@@ -58,6 +58,10 @@ int nearest_particle(const std::vector<double>& position_m, const std::array<dou
 void symplectic_euler_update(std::array<std::vector<double>, 3>& u, std::array<std::vector<double>, 3>& v,
                              const std::array<std::vector<double>, 3>& a, int dimension, double dt);
 
+// Every set's prescribed displacement and velocity at time t (both solvers' apply_prescribed).
+void apply_prescribed_sets(const std::vector<PrescribedSet>& sets, double t, std::array<std::vector<double>, 3>& u,
+                           std::array<std::vector<double>, 3>& v);
+
 double burst_displacement(const BurstHistory& h, double t);
 double burst_velocity(const BurstHistory& h, double t);
 

@@ -19,6 +19,7 @@
 // PD headers as `inline`: the MPS ones come first and the macro is reset for the PD ones.
 #include "breccia/mps/solid.hpp"
 #include "breccia/mps/stability_checks.hpp"
+#include "breccia/mps/strip_pull.hpp"
 #include "breccia/mps/thick_cylinder.hpp"
 #undef BRECCIA_HD
 #include "atlas.hpp"
@@ -209,30 +210,17 @@ void mps_tension_stability(const SweepPlan& plan, CsvTable& table) {
         opt.pressure = repulsive ? mps::PressureForce::Repulsive : mps::PressureForce::Conservative;
         mps::Solid solid(pos, vol, rock.density, elastic_law(rock), opt);
         // Two particle columns at each end are driven: u_x = -/+ strain(t) L / 2, the strain
-        // ramped smoothly over eight transit times, then held for four.
-        std::vector<int> left, right;
-        for (size_t i = 0; i < solid.size(); ++i) {
-          if (pos[3 * i] < 2 * h) left.push_back(static_cast<int>(i));
-          if (pos[3 * i] > L - 2 * h) right.push_back(static_cast<int>(i));
-        }
+        // ramped smoothly over the ramp, then held for four transit times (strip_pull.hpp).
         const double ramp = ramp_transits * L / c_l, end = ramp + 4 * L / c_l;
+        const mps::StripPull pull = mps::strip_pull(solid, L, h, strain, ramp);
         std::string status = "stable", detected = "-", message;
         double min_ratio = 1.0, max_speed = 0.0, worst_x = 0.0, worst_y = 0.0;
         long long first_detection = -1;
         try {
           while (solid.time_s() < end) {
             solid.step();
-            const double t = solid.time_s(), s = std::min(1.0, t / ramp);
-            const double e = strain * (s - std::sin(2 * pi * s) / (2 * pi));  // smooth start and stop
-            const double de = t < ramp ? strain * (1 - std::cos(2 * pi * s)) / ramp : 0.0;
-            for (int i : left) {
-              solid.displacement(0)[i] = -0.5 * e * L;
-              solid.velocity(0)[i] = -0.5 * de * L;
-            }
-            for (int i : right) {
-              solid.displacement(0)[i] = 0.5 * e * L;
-              solid.velocity(0)[i] = 0.5 * de * L;
-            }
+            const double t = solid.time_s();
+            mps::drive_strip_pull(solid, pull);
             if (solid.steps() % 10 == 0) {
               const mps::Clumping cl = mps::measure_clumping(solid);
               if (cl.min_ratio < min_ratio) {

@@ -13,6 +13,7 @@
 #include "breccia/common/error.hpp"
 #include "breccia/mps/solid.hpp"
 #include "breccia/mps/stability_checks.hpp"
+#include "breccia/mps/strip_pull.hpp"
 #include "mps_test_util.hpp"
 
 using namespace breccia::mps;
@@ -104,27 +105,13 @@ PullResult slow_pull(double strain, double hourglass, PressureForce pressure, do
   opt.hourglass = hourglass;
   opt.pressure = pressure;
   Solid solid(pos, vol, rho, law, opt);
-  std::vector<int> left, right;
-  for (size_t i = 0; i < solid.size(); ++i) {
-    if (pos[3 * i] < 2 * kH) left.push_back(static_cast<int>(i));
-    if (pos[3 * i] > L - 2 * kH) right.push_back(static_cast<int>(i));
-  }
   const double c_l = std::sqrt((law.lame_lambda_pa + 2 * law.shear_modulus_pa) / rho);
   const double ramp = ramp_transits * L / c_l, end = ramp + 2 * L / c_l;
+  const StripPull pull = strip_pull(solid, L, kH, strain, ramp);
   PullResult r;
   while (solid.time_s() < end) {
     solid.step();
-    const double t = solid.time_s(), s = std::min(1.0, t / ramp);
-    const double e = strain * (s - std::sin(2 * std::numbers::pi * s) / (2 * std::numbers::pi));
-    const double de = t < ramp ? strain * (1 - std::cos(2 * std::numbers::pi * s)) / ramp : 0.0;
-    for (int i : left) {
-      solid.displacement(0)[i] = -0.5 * e * L;
-      solid.velocity(0)[i] = -0.5 * de * L;
-    }
-    for (int i : right) {
-      solid.displacement(0)[i] = 0.5 * e * L;
-      solid.velocity(0)[i] = 0.5 * de * L;
-    }
+    drive_strip_pull(solid, pull);
     if (solid.steps() % kClumpingCheckEvery == 0) {
       const Clumping c = measure_clumping(solid);
       if (c.min_ratio < r.min_ratio) {

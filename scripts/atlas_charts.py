@@ -74,7 +74,8 @@ def read_rows(path):
 def label(r):
     # float32 rows (model.precision) say so; float64, the default, stays unmarked.
     precision = " f32" if r.get("precision", "float64") == "float32" else ""
-    return f"{r['model']} {r['particles_kind'][:3]} m{r['m']:g} dx{r['spacing_m'] * 1e3:.2g}{precision}"
+    backend = "" if r.get("backend", "cpu") == "cpu" else f" {r['backend']}"  # GPU rows say so
+    return f"{r['model']} {r['particles_kind'][:3]} m{r['m']:g} dx{r['spacing_m'] * 1e3:.2g}{precision}{backend}"
 
 
 def pareto(rows):
@@ -115,7 +116,8 @@ def chart_error_vs_time(problem, rows, path):
     ax.set_xscale("log")
     ax.set_yscale("log")
     precisions = sorted({r.get("precision", "float64") for r in rows})
-    ax.set_xlabel(f"wall time per run [s] (set-up + solve, 2 threads, {' + '.join(precisions)} (f32: float32), CPU)")
+    backends = " + ".join(b.upper() for b in sorted({r.get("backend", "cpu") for r in rows}))
+    ax.set_xlabel(f"wall time per run [s] (set-up + solve, 2 threads, {' + '.join(precisions)} (f32: float32), {backends})")
     ax.set_ylabel("relative error [-]")
     ax.set_title(f"{PROBLEMS[problem][0]}: error against wall time")
     ax.grid(True, which="both", alpha=0.3)
@@ -179,7 +181,8 @@ def table(rows):
     out = ["| model | particles | m | spacing [mm] | particles | bonds | steps | wall [s] | error |",
            "|---|---|---|---|---|---|---|---|---|"]
     for r in sorted(rows, key=lambda r: (r["model"], r["particles_kind"], r["m"], -r["spacing_m"])):
-        model = r["model"] + (" float32" if r.get("precision", "float64") == "float32" else "")
+        model = r["model"] + (" float32" if r.get("precision", "float64") == "float32" else "") + \
+            ("" if r.get("backend", "cpu") == "cpu" else f" ({r['backend']})")
         out.append(f"| {model} | {r['particles_kind']} | {r['m']:g} | {r['spacing_m'] * 1e3:.3g} | "
                    f"{r['particles']:,} | {r['bonds']:,} | {r['steps']:,} | {r['wall_s']:.2f} | {r['error']:.2e} |")
     return "\n".join(out)
@@ -635,7 +638,7 @@ def graded_and_mps_sections(graded, mps, chart_dir):
             "stencil's F predicts (0.64 at 70 %, 0.50 at 100 % without hourglass control: false alarms in stable "
             "pulls).", "",
             "![MPS stability map](atlas/stability_mps.png)", "",
-            "Reading (re-measured 2026-12-01 19:20 UTC with the detector's reference-length skip, shared machine; `build/bin/breccia-atlas --only-stability --stability-studies mps`, 28 s): the classical SPH tensile instability does not appear in a quasi-static pull to 50 % (total Lagrangian stencils keep their neighbours; the ratio stays at 0.59-0.80). With the default hourglass control (alpha 0.1) the conservative form pulls to 100 % without a stop (ratio 0.67; before the skip it read 0.57 there, at the driven columns, and 0.64 / 0.61 at 70 / 80 %: `MpsClumping.SlowPullOfAStableStripToSeventyAndEightyPercentDoesNotTripTheDetector` now reads 0.74 / 0.72). At 100 % the check still stops both forms without hourglass control (ratio 0.50, near the grip corners, where the strain field bends and nothing resists hourglass modes: not the driven block, but whether this is instability or only a non-affine field the test cannot tell) and the repulsive form with it (0.35, mid-strip: real pairing). A sudden tension wave does break the arrangement. Every verdict of this table is the one the detector gave before the skip (same 56 runs, same statuses); the ratios with hourglass control rise (e.g. 0.71 -> 0.80 at 50 %, the driven block no longer counted) and one tension-wave stop comes later (conservative alpha 0.1 at strain 0.5: step 60 instead of 40), the price of skipping bonds that are short against F but not against their start (det F <= 0 remains the backstop). Before the check was hooked into `Solid::step` (the same study with the measure passive, quick sweep): at strain 0.5 every form went on to invert particles (det F <= 0, ten or more steps after the ratio fell below 0.5), and at strain 0.1 the repulsive form without hourglass control paired particles up (ratio 0.12) with no other signal. With the check every such run is stopped at the first check below 0.5, with a message naming model.hourglass and model.pressure_force. The hourglass term (alpha 0.1, the default) keeps the ratio above 0.7 at strain 0.1.", "",
+            "Reading (this table is the full `make atlas` of 2026-12-02 on a quiet machine; alone, `build/bin/breccia-atlas --only-stability --stability-studies mps` takes about 20 s; against the 2026-12-01 19:20 UTC table, measured before substeps for squeezed bonds and the crack-flank rule of the clumping measure were added, the 56 verdicts are the same and three stops moved by one to five checks: conservative alpha 0 at 100 %: step 690 instead of 700; repulsive alpha 0 at 100 %: 760 instead of 810; repulsive alpha 0 tension wave at 0.3: 110 instead of 100; one already-stopped tension wave reads 0.03 instead of 0.26 at the same stop step): the classical SPH tensile instability does not appear in a quasi-static pull to 50 % (total Lagrangian stencils keep their neighbours; the ratio stays at 0.59-0.80). With the default hourglass control (alpha 0.1) the conservative form pulls to 100 % without a stop (ratio 0.67; before the skip it read 0.57 there, at the driven columns, and 0.64 / 0.61 at 70 / 80 %: `MpsClumping.SlowPullOfAStableStripToSeventyAndEightyPercentDoesNotTripTheDetector` now reads 0.74 / 0.72). At 100 % the check still stops both forms without hourglass control (ratio 0.50, near the grip corners, where the strain field bends and nothing resists hourglass modes: not the driven block, but whether this is instability or only a non-affine field the test cannot tell) and the repulsive form with it (0.35, mid-strip: real pairing). A sudden tension wave does break the arrangement. Every verdict of this table is the one the detector gave before the skip (same 56 runs, same statuses); the ratios with hourglass control rise (e.g. 0.71 -> 0.80 at 50 %, the driven block no longer counted) and one tension-wave stop comes later (conservative alpha 0.1 at strain 0.5: step 60 instead of 40), the price of skipping bonds that are short against F but not against their start (det F <= 0 remains the backstop). Before the check was hooked into `Solid::step` (the same study with the measure passive, quick sweep): at strain 0.5 every form went on to invert particles (det F <= 0, ten or more steps after the ratio fell below 0.5), and at strain 0.1 the repulsive form without hourglass control paired particles up (ratio 0.12) with no other signal. With the check every such run is stopped at the first check below 0.5, with a message naming model.hourglass and model.pressure_force. The hourglass term (alpha 0.1, the default) keeps the ratio above 0.7 at strain 0.1.", "",
             "<details><summary>MPS tension table</summary>", "",
             "| ramp [transits] | pressure form | hourglass | strain | steps | min neighbour ratio | status | detected by |",
             "|---|---|---|---|---|---|---|---|"]
@@ -701,10 +704,9 @@ def main():
           "What each PD set-up costs and how accurate it is, measured on problems with known answers, and",
           "where the solver fails and how it tells you. Generated by `scripts/atlas_charts.py` from",
           f"`docs/atlas/atlas.csv` and `docs/atlas/stability.csv`, written by `breccia-atlas`. This page was",
-          f"produced by `{args.command}`; `make atlas QUICK=1` takes about 1.3 min and the full `make atlas`",
-          "(four spacings for the wave bar, three for the others) about 4 min on 2 quiet cores, before the "
-          "graded and MPS studies were added: under a load of ~14 on 2 cores they took 3.5 min more in the quick "
-          "variant (graded 3.5 min, MPS 12 s) and about an hour more in the full one (graded 50 min, MPS 10 min; not timed on a quiet machine).",
+          f"produced by `{args.command}`; with every study (the sweeps, the PD stability map, the graded and",
+          "MPS studies) `make atlas QUICK=1` takes about 1.8 min and the full `make atlas` (four spacings for the",
+          "wave bar, three for the others) about 8.1 min on 2 quiet cores (both measured 2026-12-02).",
           "",
           "`particles_kind` tet means tet centroids in 3D and triangle centroids in 2D (breccia-mesh +",
           "breccia-place of the same box); lattice means the solver's square/cubic lattice.",
@@ -715,8 +717,9 @@ def main():
           "",
           "**Gaps (not measured, not faked):** the rows of this page are float64 (float32 rows: section",
           "\"Precision: float32 against float64\", from `--precisions float64,float32`);",
-          "no GPU was available to this sweep, so every row is `cpu` (the CUDA backend exists:",
-          "docs/cuda.md); the MPS rows (model `mps`: wave speed, thick-walled cylinder, Lame and Hill) are",
+          "no GPU was available to this sweep, so every row is `cpu`: `breccia-atlas --backends cpu,cuda` runs the",
+          "time-stepping problems (wave speed bar, Kalthoff-Winkler) on the GPU beside the CPU where a device exists",
+          "(`scripts/device-check.sh`, section atlas; docs/cuda.md); the static, ADR and MPS problems stay on the CPU; the MPS rows (model `mps`: wave speed, thick-walled cylinder, Lame and Hill) are",
           "the stress solid on a lattice or on circles only, at one re / spacing for the cylinder; Kalthoff-Winkler runs on the lattice",
           "only (a notched tet specimen per spacing costs more meshing than the sweep budget allows); the",
           "quasi-static bar on triangle centroids is measured at dx 2 mm only (at dx 1 mm adaptive dynamic",
@@ -901,7 +904,7 @@ def summary_text(by_problem, orders_all, stab):
 
         out.append("- **Kalthoff-Winkler** (lattice, m = 3): " + "; ".join(
             f"{r['model'].upper()} dx {r['spacing_m'] * 1e3:g} mm: {angle(r)} deg ({r['wall_s']:.0f} s)" for r in rs)
-                   + " against 70 deg; cases/kalthoff-winkler reports 65.5 deg for PMB at dx 0.5 mm.")
+                   + " against 70 deg; cases/kalthoff-winkler (influence constant) reports 67.9 deg for PMB at dx 0.5 mm.")
     if "mps_wave_speed" in by_problem or "thick_cylinder" in by_problem:
         parts = []
         for problem in ("mps_wave_speed", "thick_cylinder", "thick_cylinder_hill"):

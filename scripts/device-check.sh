@@ -16,8 +16,8 @@
 #      Everything it measures lands in $OUT (results.json, summary.md, logs), written as it
 #      goes, so a run cut short still returns what it finished.
 #
-# ONLY=tests,mps,taylor,pd runs only the named sections (the device's 15 minutes may need two
-# calls: e.g. ONLY=tests,pd then ONLY=mps,taylor).
+# ONLY=tests,mps,taylor,pd,atlas runs only the named sections (the device's 15 minutes need two
+# calls: e.g. ONLY=tests,pd then ONLY=mps,taylor,atlas).
 # Environment: OUT (results folder), BRECCIA_DEVICE_DRY=1 (no GPU runs), PD_N (lattice edge,
 # default 81: 531k particles, 6.5e7 bond entries), PD_GPU_STEPS (500), PD_CPU_STEPS (20),
 # MPS_SPACING (0.125 mm), SANITIZER=0 to skip compute-sanitizer, BUDGET_S (480: no new check
@@ -33,10 +33,11 @@ if [ "${1:-}" = prepare ]; then
   command -v ccache >/dev/null && LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_CUDA_COMPILER_LAUNCHER=ccache)
   cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DBRECCIA_STAGES=solver -DBRECCIA_CUDA=ON \
     -DCMAKE_CUDA_ARCHITECTURES=90 "${LAUNCHER[@]}" >"$BUILD.configure.log" 2>&1 || { cat "$BUILD.configure.log"; exit 1; }
-  nice -n 10 cmake --build "$BUILD" -j"${JOBS:-2}" --target breccia-solve test_solver_cuda test_mps_cuda test_mps_solid_cuda
+  nice -n 10 cmake --build "$BUILD" -j"${JOBS:-2}" --target breccia-solve breccia-atlas test_solver_cuda test_mps_cuda test_mps_solid_cuda test_atlas_backends
   rm -rf "$KIT"
   mkdir -p "$KIT/bin" "$KIT/lib" "$KIT/runtime" "$KIT/glibc" "$KIT/cases"
-  cp "$BUILD/bin/breccia-solve" "$BUILD/bin/test_solver_cuda" "$BUILD/bin/test_mps_cuda" "$BUILD/bin/test_mps_solid_cuda" "$KIT/bin/"
+  cp "$BUILD/bin/breccia-solve" "$BUILD/bin/breccia-atlas" "$BUILD/bin/test_solver_cuda" "$BUILD/bin/test_mps_cuda" \
+    "$BUILD/bin/test_mps_solid_cuda" "$BUILD/bin/test_atlas_backends" "$KIT/bin/"
   # Libraries by layer: lib/ (HDF5, yaml-cpp and what they load) always; runtime/ (the GCC
   # runtime) only if the device's own is missing or older; glibc/ with its loader as a last resort.
   for exe in "$KIT"/bin/*; do ldd "$exe"; done | awk '$3 ~ /^\// {print $3} $1 ~ /^\/.*ld-linux/ {print $1}' | sort -u |
@@ -106,7 +107,8 @@ rows = [
   "", f"device: {g('device')}; binaries: {g('binaries')}; elapsed {g('elapsed_s')} s", "",
   "| check | result |", "|---|---|",
   f"| test_mps_cuda | {g('test_mps_cuda')} |", f"| test_mps_solid_cuda | {g('test_mps_solid_cuda')} |",
-  f"| test_solver_cuda | {g('test_solver_cuda')} |",
+  f"| test_solver_cuda | {g('test_solver_cuda')} |", f"| test_atlas_backends | {g('test_atlas_backends')} |",
+  f"| atlas GPU rows (wave speed bar, Kalthoff-Winkler; lattice, m = 3) | {g('atlas_rows')} rows in atlas_gpu.csv, rc {g('atlas_rc')} |",
   f"| compute-sanitizer memcheck (MPS) | {g('sanitizer_mps')} |",
   f"| MPS harmonics history GPU vs CPU (max rel. diff) | {g('mps_history_max_rel_diff', '{:.3e}')} |",
   "", "| run | particles | steps | loop wall (s) | rate |", "|---|---|---|---|---|",
@@ -177,7 +179,7 @@ if [ "$MODE" = none ]; then
     echo "no runnable kit: building the solver stage here with -j$THREADS"
     cmake -S "$ROOT" -B /tmp/breccia-build -DCMAKE_BUILD_TYPE=Release -DBRECCIA_STAGES=solver -DBRECCIA_CUDA=ON \
       -DCMAKE_CUDA_ARCHITECTURES=90 >/tmp/breccia-configure.log 2>&1 &&
-      cmake --build /tmp/breccia-build -j"$THREADS" --target breccia-solve test_solver_cuda test_mps_cuda test_mps_solid_cuda >/tmp/breccia-build.log 2>&1 &&
+      cmake --build /tmp/breccia-build -j"$THREADS" --target breccia-solve breccia-atlas test_solver_cuda test_mps_cuda test_mps_solid_cuda test_atlas_backends >/tmp/breccia-build.log 2>&1 &&
       use_mode native && BIN=/tmp/breccia-build/bin
     [ "$MODE" = none ] && tail -30 /tmp/breccia-configure.log /tmp/breccia-build.log
   else
@@ -212,6 +214,7 @@ if wanted tests; then
   run_tests test_mps_cuda 180
   in_budget test_mps_solid_cuda && run_tests test_mps_solid_cuda 90
   in_budget test_solver_cuda && run_tests test_solver_cuda 240
+  in_budget test_atlas_backends && run_tests test_atlas_backends 60
 fi
 
 # MPS: the harmonics case at one spacing, GPU then CPU on every core; histories compared.
@@ -330,6 +333,20 @@ print(f"{k}_steps={s['steps_this_run']}")
 PY
   done
 done
+
+# The atlas's time-stepping problems on both backends (breccia-atlas --backends cpu,cuda), lattice,
+# m = 3: rows for docs/atlas/atlas.csv (append them with --append on the CPU machine's copy).
+if wanted atlas && in_budget atlas; then
+  step "atlas rows, CPU and GPU"
+  ATLAS_BACKENDS=cpu,cuda
+  [ "$DRY" = 1 ] && ATLAS_BACKENDS=cpu
+  timeout "$(limit 200)" "${ENVP[@]}" "${LOADP[@]}" "$BIN/breccia-atlas" --problems wave_speed_bar,kalthoff_winkler \
+    --kinds lattice --m 3 --no-stability --backends "$ATLAS_BACKENDS" --threads "$THREADS" $([ "$DRY" = 1 ] && echo --quick) \
+    --work "$WORK/atlas" --csv "$OUT/atlas_gpu.csv" >"$WORK/atlas.log" 2>&1
+  result atlas_rc "$?"
+  result atlas_rows "$(($(wc -l <"$OUT/atlas_gpu.csv" 2>/dev/null || echo 1) - 1))"
+  tail -5 "$WORK/atlas.log"
+fi
 
 # Last, as it is the slowest and optional: out-of-bounds and race checks of the MPS kernels.
 if [ "${SANITIZER:-1}" = 1 ] && [ "$DRY" != 1 ] && command -v compute-sanitizer >/dev/null && in_budget sanitizer; then

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "breccia/solver/pd_system.hpp"
+#include "measures.hpp"
 
 namespace breccia::atlas {
 
@@ -18,6 +19,7 @@ struct Settings {
   double m = 3.0;                    // nominal horizon / spacing
   double spacing_m = 1e-3;           // target particle spacing
   std::string precision = "float64"; // float64 | float32 (model.precision)
+  std::string backend = "cpu";       // cpu | cuda (time-stepping problems only)
 };
 
 // One row of docs/atlas/atlas.csv (header: kAtlasHeader).
@@ -27,6 +29,7 @@ struct AtlasRow {
   std::string particles_kind;
   double m = 0.0, spacing_m = 0.0;
   std::string precision = "float64";
+  std::string backend = "cpu";
   int threads = 1;
   size_t particles = 0, bonds = 0;
   long long steps = 0;
@@ -81,6 +84,10 @@ struct SweepPlan {
   // float32 rows for the problems whose error float could change (wave speed, strain
   // energy, quasi-static bar): --precisions float64,float32.
   std::vector<std::string> precisions{"float64"};
+  // --backends cpu,cuda: the time-stepping problems (wave speed bar, Kalthoff-Winkler) run on
+  // each; the static, ADR and MPS problems and the stability studies stay on the CPU.
+  std::vector<std::string> backends{"cpu"};
+  BackendFactory cuda_backend;  // set by main when the build has the CUDA backend
   // Grading ratios of the graded study (--gradings); empty: its default list.
   std::vector<double> gradings;
   int threads = 1;

@@ -4,12 +4,13 @@
 //   breccia-atlas [--quick] [--csv docs/atlas/atlas.csv] [--stability-csv docs/atlas/stability.csv]
 //                 [--problems wave_speed_bar,strain_energy,fracture_energy,quasi_static_bar,kalthoff_winkler,
 //                             mps_wave_speed,thick_cylinder,thick_cylinder_hill]
-//                 [--models pmb,lps] [--kinds lattice,tet] [--m 2,3,4,5] [--no-stability] [--only-stability]
+//                 [--models pmb,lps] [--kinds lattice,tet] [--m 2,3,4,5] [--backends cpu,cuda] [--no-stability] [--only-stability]
 //                 [--stability-studies pd,graded,mps] [--gradings 1.5,2,3] [--append] [--threads N] [--work DIR] [--mesh-exe PATH] [--place-exe PATH]
 //
 // Each run appends one row to the CSV (rewritten atomically after every row). Tet-centroid
 // particles come from breccia-mesh + breccia-place (found next to this executable unless
-// given). Only float64 on the CPU exists: the precision and backend columns say so.
+// given). The precision and backend columns say how each row ran; --backends cuda runs the
+// time-stepping problems (wave speed bar, Kalthoff-Winkler) on the GPU too.
 #include <omp.h>
 
 #include <cstdio>
@@ -19,6 +20,9 @@
 
 #include "atlas.hpp"
 #include "breccia/common/error.hpp"
+#ifdef BRECCIA_WITH_CUDA
+#include "breccia/solver/cuda_backend.hpp"
+#endif
 
 namespace {
 
@@ -26,6 +30,7 @@ const char* kUsage =
     "usage: breccia-atlas [--quick] [--csv FILE] [--stability-csv FILE] [--problems a,b] [--models pmb,lps]\n"
     "                     [--kinds lattice,tet] [--m 2,3,4,5] [--no-stability] [--only-stability] [--append]\n"
     "                     [--precisions float64,float32] (default float64)\n"
+    "                     [--backends cpu,cuda] (default cpu; cuda: wave_speed_bar and kalthoff_winkler on the GPU)\n"
     "                     [--stability-studies pd,graded,mps] (default: all; stability_graded.csv, stability_mps.csv beside the stability CSV)\n"
     "                     [--gradings 1.5,2,3] (grading ratios of the graded study; default 1,1.5,2,3,4,6, --quick 2,4)\n"
     "                     [--threads N] [--work DIR] [--mesh-exe PATH] [--place-exe PATH]\n"
@@ -90,6 +95,7 @@ int main(int argc, char** argv) {
       else if (a == "--models") plan.models = split(value());
       else if (a == "--kinds") plan.kinds = split(value());
       else if (a == "--precisions") plan.precisions = split(value());
+      else if (a == "--backends") plan.backends = split(value());
       else if (a == "--m") {
         plan.m_values.clear();
         for (const auto& v : split(value())) plan.m_values.push_back(std::stod(v));
@@ -108,7 +114,7 @@ int main(int argc, char** argv) {
         return 0;
       } else {
         throw breccia::InputError("command line", a, "unknown option",
-                                  "--quick, --csv, --stability-csv, --problems, --models, --kinds, --precisions, --m, "
+                                  "--quick, --csv, --stability-csv, --problems, --models, --kinds, --precisions, --backends, --m, "
                                   "--stability-studies, --gradings, --no-stability, --only-stability, --append, --threads, --work, --mesh-exe, --place-exe");
       }
     }
@@ -120,6 +126,19 @@ int main(int argc, char** argv) {
     require_known(stability_studies, {"pd", "graded", "mps"}, "--stability-studies");
     require_known(plan.kinds, {"lattice", "tet"}, "--kinds");
     require_known(plan.precisions, {"float64", "float32"}, "--precisions");
+    require_known(plan.backends, {"cpu", "cuda"}, "--backends");
+    for (const auto& b : plan.backends) {
+      if (b != "cuda") continue;
+#ifdef BRECCIA_WITH_CUDA
+      if (!breccia::solver::cuda_device_available())
+        throw breccia::InputError("command line", "--backends", "cuda, but no CUDA device is available on this machine",
+                                  "cpu, or a machine with an NVIDIA GPU and driver");
+      plan.cuda_backend = breccia::solver::make_cuda_step_backend;
+#else
+      throw breccia::InputError("command line", "--backends", "cuda, but this build has no CUDA backend",
+                                "cpu, or a build with CUDA=ON");
+#endif
+    }
     if (threads > 0) omp_set_num_threads(threads);
     plan.threads = omp_get_max_threads();
     maker.work_dir = std::filesystem::absolute(maker.work_dir).string();
@@ -129,9 +148,9 @@ int main(int argc, char** argv) {
       CsvTable table(csv, kAtlasHeader, append);
       const RowSink sink = [&](const AtlasRow& r) {
         table.add(csv_line(r));
-        std::fprintf(stderr, "[atlas] %-17s %s %-7s m=%g dx=%.3g mm  N=%zu  %.2f s  error %.3e\n", r.problem.c_str(),
+        std::fprintf(stderr, "[atlas] %-17s %s %-7s m=%g dx=%.3g mm  N=%zu  %.2f s  error %.3e%s\n", r.problem.c_str(),
                      r.model.c_str(), r.particles_kind.c_str(), r.m, r.spacing_m * 1e3, r.particles, r.wall_s,
-                     r.error);
+                     r.error, r.backend == "cpu" ? "" : ("  (" + r.backend + ")").c_str());
       };
       auto has = [&](const char* p) {
         for (const auto& q : plan.problems) if (q == p) return true;

@@ -11,7 +11,7 @@
 
 namespace breccia::atlas {
 
-double fundamental_mode_speed_error(solver::PdSystem& s, double length_m, double c0_m_s) {
+double fundamental_mode_speed_error(solver::PdSystem& s, double length_m, double c0_m_s, const BackendFactory& backend) {
   const double L = length_m;
   std::vector<double> shape(s.n);
   double norm = 0.0;
@@ -29,10 +29,16 @@ double fundamental_mode_speed_error(solver::PdSystem& s, double length_m, double
   for (size_t k = 0; k < 3 * s.n; ++k) s.a[k] = s.force[k] / s.density[k / 3];
   s.diagnostics = false;  // energies are not needed: only displacements
   const long long max_steps = static_cast<long long>(4.0 * L / (2.0 * c0_m_s) / s.dt) + 10;
+  const std::unique_ptr<solver::StepBackend> device = backend ? backend(s) : nullptr;  // from the state above
   double t_quarter = -1.0, q = modal();
   while (s.step < max_steps && t_quarter < 0) {
     const double before = q;
-    solver::cpu_step(s);
+    if (device) {
+      device->step(s);
+      device->download_kinematics(s);
+    } else {
+      solver::cpu_step(s);
+    }
     q = modal();
     if (before > 0 && q <= 0) t_quarter = s.time - s.dt * q / (q - before);
   }

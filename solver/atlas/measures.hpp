@@ -1,17 +1,25 @@
 #pragma once
 // The error measures of the atlas problems, shared by breccia-atlas and the planner's tests
 // (a proposal is checked by running it and measuring its error exactly as the atlas did).
+#include <functional>
+#include <memory>
 #include <string>
 
 #include "breccia/solver/pd_system.hpp"
+#include "breccia/solver/run.hpp"
 
 namespace breccia::atlas {
+
+// Builds the backend that steps a system from its current state (the CUDA backend's
+// make_cuda_step_backend); empty: the CPU (cpu_step).
+using BackendFactory = std::function<std::unique_ptr<solver::StepBackend>(solver::PdSystem&)>;
 
 // Wave speed in a thin bar of length `length_m` along x: the fundamental free-free mode
 // u = A cos(pi x / L) has period 2 L / c0; the modal amplitude first crosses zero at a
 // quarter period, so c = L / (2 t_quarter). Returns |c / c0 - 1| (1 if no crossing).
-// Advances s (explicit steps from rest).
-double fundamental_mode_speed_error(solver::PdSystem& s, double length_m, double c0_m_s);
+// Advances s (explicit steps from rest), on `backend` when given (u is read back every step).
+double fundamental_mode_speed_error(solver::PdSystem& s, double length_m, double c0_m_s,
+                                    const BackendFactory& backend = {});
 
 // Quasi-static bar relaxed by ADR: sets `free_end - held_end` mean displacement against
 // sigma L_eff / E (sets "xmin" held, "xmax" loaded; L_eff between their mean positions).

@@ -41,6 +41,7 @@ AtlasRow row_of(const std::string& problem, const Settings& st, const PdSystem& 
   // Tet-centroid spacing is what the particle file reports (median), not the mesh target.
   r.spacing_m = st.kind == "lattice" ? st.spacing_m : median_spacing(s);
   r.precision = st.precision;
+  r.backend = st.backend;
   r.threads = threads;
   r.particles = s.n;
   r.bonds = s.bond_count();
@@ -54,6 +55,13 @@ std::string model_yaml(const Settings& st, const std::string& planar, bool surfa
   // The energy surface correction exists for PMB only (setup.cpp); LPS runs without it.
   if (surface_correction && st.model == "pmb") y += ", surface_correction: energy";
   return y + "}\n";
+}
+
+// The stepping backend of a sweep point: empty (cpu_step) for the CPU.
+BackendFactory backend_of(const SweepPlan& plan, const Settings& st) {
+  if (st.backend == "cpu") return {};
+  if (!plan.cuda_backend) throw InputError("command line", "--backends", st.backend, "cpu (this build has no CUDA backend)");
+  return plan.cuda_backend;
 }
 
 // Runs one sweep point, turning bad set-ups (e.g. no neighbours) into a log line: a sweep
@@ -86,8 +94,9 @@ void wave_speed_bar(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& 
     for (double dx : spacings)
       for (const auto& model : plan.models)
         for (double m : plan.m_values)
-          for (const auto& precision : plan.precisions) {
-          const Settings st{model, kind, m, dx, precision};
+          for (const auto& precision : plan.precisions)
+          for (const auto& backend : plan.backends) {
+          const Settings st{model, kind, m, dx, precision, backend};
           guarded("wave_speed_bar", st, [&] {
             const auto t0 = std::chrono::steady_clock::now();
             PdSystem s = system_from_yaml(
@@ -95,7 +104,7 @@ void wave_speed_bar(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& 
                 maker.specimen_yaml(st, 2, lo, hi) + model_yaml(st, "plane_stress", true) +
                     "materials: [{name: steel, density: 7850, youngs_modulus: 200 GPa, poisson_ratio: "
                     "0.3333333333333333}]\ntime: {steps: 1}\n");
-            const double error = fundamental_mode_speed_error(s, L, c0);
+            const double error = fundamental_mode_speed_error(s, L, c0, backend_of(plan, st));
             AtlasRow r = row_of("wave_speed_bar", st, s, plan.threads);
             r.steps = s.step;
             r.wall_s = seconds_since(t0);
@@ -349,10 +358,11 @@ double crack_angle(const PdSystem& s, const std::vector<double>& initial_damage,
 void kalthoff_winkler(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& sink) {
   std::vector<double> spacings = plan.quick ? std::vector<double>{1.25e-3} : std::vector<double>{1.25e-3, 1e-3, 0.5e-3};
   for (const auto& model : plan.models)
-    for (double dx : spacings) {
+    for (double dx : spacings)
+      for (const auto& backend : plan.backends) {
       // LPS at dx 0.5 mm would take ~3x the PMB run; the full sweep keeps it to PMB.
       if (model == "lps" && dx < 0.9e-3) continue;
-      const Settings st{model, "lattice", 3.0, dx};
+      const Settings st{model, "lattice", 3.0, dx, "float64", backend};
       guarded("kalthoff_winkler", st, [&] {
         const auto t0 = std::chrono::steady_clock::now();
         const std::string particles = kalthoff_particles(maker.work_dir + "/specimens", dx);
@@ -369,10 +379,14 @@ void kalthoff_winkler(const SweepPlan& plan, SpecimenMaker& maker, const RowSink
         solver::cpu_compute_forces(s);
         const std::vector<double> initial_damage = s.damage;
         const long long steps = static_cast<long long>(std::ceil(80e-6 / s.dt - 1e-9));
+        const BackendFactory factory = backend_of(plan, st);
+        const std::unique_ptr<solver::StepBackend> device = factory ? factory(s) : nullptr;
         for (long long k = 0; k < steps; ++k) {
           s.diagnostics = k + 1 == steps;  // damage is read only at the end
-          solver::cpu_step(s);
+          if (device) device->step(s);
+          else solver::cpu_step(s);
         }
+        if (device) device->download(s);
         const double lower = crack_angle(s, initial_damage, 0.075, -1.0);
         const double upper = crack_angle(s, initial_damage, 0.125, 1.0);
         double sum = 0;

@@ -57,7 +57,7 @@ void CsvTable::add(const std::string& line) {
 std::string csv_line(const AtlasRow& r) {
   std::ostringstream o;
   o << r.problem << "," << r.model << "," << r.dimension << "," << r.particles_kind << "," << num(r.m) << ","
-    << num(r.spacing_m) << "," << r.precision << ",cpu," << r.threads << "," << r.particles << "," << r.bonds << "," << r.steps
+    << num(r.spacing_m) << "," << r.precision << "," << r.backend << "," << r.threads << "," << r.particles << "," << r.bonds << "," << r.steps
     << "," << num(r.wall_s) << "," << num(r.error) << "," << r.error_measure;
   return o.str();
 }

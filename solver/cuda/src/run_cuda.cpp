@@ -11,9 +11,11 @@
 namespace breccia::solver {
 namespace {
 
+// Owns the device copy. float32: the float state is refreshed from the double one first,
+// which a checkpoint may have replaced (as the CPU's float backend does when it starts).
 class CudaStepBackend final : public StepBackend {
 public:
-  explicit CudaStepBackend(CudaSystem& gpu) : gpu_(gpu) {}
+  explicit CudaStepBackend(PdSystem& s) : gpu_(prepared(s)) {}
   void step(PdSystem& s) override { gpu_.step(s); }
   Energies measure(PdSystem& s) override { return gpu_.measure(s); }
   void compute_forces(PdSystem& s) override { gpu_.compute_forces(s); }
@@ -21,20 +23,22 @@ public:
   void download_kinematics(PdSystem& s) override { gpu_.download_kinematics(s); }
 
 private:
-  CudaSystem& gpu_;
+  static PdSystem& prepared(PdSystem& s) {
+    if (s.f32.active) float32_upload(s);
+    return s;
+  }
+  CudaSystem gpu_;
 };
 
 }  // namespace
 
 RunResult cuda_time_loop(PdSystem& s, const RunOptions& o, ResultsWriter* results, HistoryWriter& history) {
-  // float32: the float state from the double one, which a checkpoint may have replaced (as
-  // the CPU's float backend does when it starts).
-  if (s.f32.active) float32_upload(s);
-  CudaSystem gpu(s);
+  CudaStepBackend backend(s);
   if (o.progress) std::fprintf(stderr, "  CUDA device: %s\n", cuda_device_description().c_str());
-  CudaStepBackend backend(gpu);
   return run_time_loop(s, o, backend, results, history);
 }
+
+std::unique_ptr<StepBackend> make_cuda_step_backend(PdSystem& s) { return std::make_unique<CudaStepBackend>(s); }
 
 RunResult run_system_cuda(PdSystem& s, const RunOptions& o) {
   // Without a device nothing may be written: fail before run_system opens any file.

@@ -53,6 +53,9 @@ private:
 // same instability check and Ctrl-C handling; arrays are downloaded only when an output,
 // a probe row or a checkpoint needs them. Quasi-static cases (ADR) run on the host.
 RunResult run_system_cuda(PdSystem& sys, const RunOptions& options);
+// A StepBackend (run.hpp) owning a CudaSystem built from `sys` as it is now (float32: after
+// float32_upload), for callers that drive the steps themselves (breccia-atlas).
+std::unique_ptr<StepBackend> make_cuda_step_backend(PdSystem& sys);
 // The dynamic loop on the GPU, for RunOptions::backend_loop (run_system calls it).
 RunResult cuda_time_loop(PdSystem& sys, const RunOptions& options, ResultsWriter* results, HistoryWriter& history);
 

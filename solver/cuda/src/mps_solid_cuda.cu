@@ -25,10 +25,32 @@ namespace {
 using cuda::check;
 using cuda::DeviceArray;
 
-// Phase 1; inverted particles are counted (integers: the atomic sum is exact).
-__global__ void stress_phase_cuda(long long n, SolidStressInputs in, SolidStressState s, unsigned long long* inverted) {
+// Phase 1; inverted particles are flagged and counted (integers: the atomic sum is exact).
+__global__ void stress_phase_cuda(long long n, SolidStressInputs in, SolidStressState s, char* inverted_flag,
+                                  unsigned long long* inverted) {
   const long long i = thread_index();
-  if (i < n && stress_phase_at(i, in, s) < 0.0) atomicAdd(inverted, 1ull);
+  if (i >= n) return;
+  const bool folded = stress_phase_at(i, in, s) < 0.0;
+  inverted_flag[i] = folded;
+  if (folded) atomicAdd(inverted, 1ull);
+}
+
+// FractureModel::evaluate's two passes; only the largest value leaves the device. NaN and
+// infinities are passed over (the host's candidate test, S >= strength, skips a NaN too), and
+// for non-negative doubles the bit patterns order as the values, so atomicMax on them is the
+// maximum.
+__global__ void separation_parts_cuda(long long n, const SymTensor* stress, const ForceMatrices* matrices,
+                                      int dimension, Mat3* tensile, Mat3* compressive, char* tensile_nonzero) {
+  const long long i = thread_index();
+  if (i < n) separation_parts_at(i, stress, matrices, dimension, tensile, compressive, tensile_nonzero);
+}
+
+__global__ void largest_separation_cuda(long long n, SeparationInputs in, unsigned long long* largest_bits) {
+  const long long i = thread_index();
+  if (i >= n) return;
+  const double s = separation_at(i, in).stress_pa;
+  if (s > 0.0 && s <= 1.7976931348623157e308)
+    atomicMax(largest_bits, static_cast<unsigned long long>(__double_as_longlong(s)));
 }
 
 __global__ void pressure_floor_cuda(long long n, BondsView b, const char* full_stencil, const double* pressure,
@@ -105,15 +127,19 @@ __global__ void clumping_cuda(long long n, BondsView b, VectorField u, const Mat
 class CudaSolidDevice final : public SolidStepDevice {
 public:
   explicit CudaSolidDevice(const Solid& solid);
-  void substep(double dt, double time_after_s) override;
+  void stress_phase() override;
+  void motion_phase(double dt, double time_after_s) override;
   long long inverted_particles() override { return take_counter(kInverted); }
+  void inverted_flags(std::vector<char>& flags) override { inverted_flag_.download(flags, "inverted flags"); }
+  double largest_separation_pa() override;
+  void upload_cut(const SolidCutState& host, const std::vector<long long>& particles) override;
   double shortest_squeezed_bond_m(double window_s) override;
   long long clumped_bonds() override;
   void download(const SolidHostState& host, bool kinematics_only) override;
   std::string description() const override { return "cuda (" + solver::cuda_device_description() + ")"; }
 
 private:
-  enum Counter { kInverted = 0, kClumped = 1, kShortest = 2 };
+  enum Counter { kInverted = 0, kClumped = 1, kShortest = 2, kSeparation = 3 };
   void after_launch(const char* kernel) const { cuda::check_launch(kernel, sync_after_launch_); }
   long long take_counter(Counter c);  // waits, reads, resets
   DeviceField field(DeviceArray<double>* f) const { return {f[0].get(), f[1].get(), f[2].get()}; }
@@ -134,7 +160,11 @@ private:
   DeviceArray<Mat3> gradient_, f_inverse_, moment_inverse_;
   DeviceArray<SymTensor> stress_;
   DeviceArray<ForceMatrices> matrices_;
-  DeviceArray<char> full_stencil_, on_face_;
+  DeviceArray<char> full_stencil_, on_face_, inverted_flag_;
+  // Fracture only: the separation's per-particle parts (fracture.hpp, SeparationInputs).
+  DeviceArray<Mat3> tensile_, compressive_;
+  DeviceArray<char> tensile_nonzero_;
+  SeparationInputs separation_in_{};
   DeviceBonds bond_arrays_;
   BondsView bonds_{};
   DeviceArray<unsigned long long> counters_;
@@ -175,6 +205,7 @@ CudaSolidDevice::CudaSolidDevice(const Solid& solid) {
   matrices_.upload(solid.force_matrices_of_particles(), "force matrices");
   full_stencil_.upload(solid.full_stencil(), "surface flags");
   on_face_.allocate(n_, "crack-face flags");
+  inverted_flag_.upload(std::vector<char>(n_, 0), "inverted flags");
 
   bonds_ = bond_arrays_.upload(solid.bonds());
 
@@ -186,7 +217,7 @@ CudaSolidDevice::CudaSolidDevice(const Solid& solid) {
   }
   planes_ = static_cast<int>(solid.contact().half_spaces().size());
   plane_.upload(planes, "rigid planes");
-  counters_.upload(std::vector<unsigned long long>(3, 0), "counters");
+  counters_.upload(std::vector<unsigned long long>(4, 0), "counters");
 
   prescribed_ = solid.prescribed();
   prescribed_particles_ = std::vector<DeviceArray<int>>(prescribed_.size());
@@ -218,13 +249,30 @@ CudaSolidDevice::CudaSolidDevice(const Solid& solid) {
   accel_in_.density_kg_m3 = solid.density_kg_m3();
   accel_in_.damping_per_s = solid.options().damping_per_s;
   accel_in_.dimension = dimension_;
+  if (solid.fracture()) {
+    tensile_.allocate(n_, "separation (tensile part)");
+    compressive_.allocate(n_, "separation (compressive part)");
+    tensile_nonzero_.allocate(n_, "separation (tension flags)");
+    separation_in_.bonds = bonds_;
+    separation_in_.volume_m3 = stencil_volume_.get();
+    separation_in_.tensile = tensile_.get();
+    separation_in_.compressive = compressive_.get();
+    separation_in_.matrices = matrices_.get();
+    separation_in_.tensile_nonzero = tensile_nonzero_.get();
+    separation_in_.dimension = dimension_;
+  }
 }
 
-void CudaSolidDevice::substep(double dt, double time_after_s) {
+void CudaSolidDevice::stress_phase() {
+  if (n_ == 0) return;
+  stress_phase_cuda<<<blocks_for(n_), kBlock>>>(n_, stress_in_, state_, inverted_flag_.get(),
+                                                counters_.get() + kInverted);
+  after_launch("stress_phase_at");
+}
+
+void CudaSolidDevice::motion_phase(double dt, double time_after_s) {
   if (n_ == 0) return;
   const long long blocks = blocks_for(n_);
-  stress_phase_cuda<<<blocks, kBlock>>>(n_, stress_in_, state_, counters_.get() + kInverted);
-  after_launch("stress_phase_at");
   if (repulsive_) {
     pressure_floor_cuda<<<blocks, kBlock>>>(n_, bonds_, full_stencil_.get(), pressure_.get(), pressure_floor_.get());
     after_launch("pressure_floor_at");
@@ -239,6 +287,38 @@ void CudaSolidDevice::substep(double dt, double time_after_s) {
       <<<blocks, kBlock>>>(n_, dimension_, field(u_), field(v_), view(a_), 0.5 * dt, dt);
   after_launch("symplectic_euler_at");
   launch_prescribed(prescribed_, prescribed_particles_, time_after_s, field(u_), field(v_), sync_after_launch_);
+}
+
+double CudaSolidDevice::largest_separation_pa() {
+  if (n_ == 0 || !tensile_.get()) return 0.0;
+  const long long blocks = blocks_for(n_);
+  separation_parts_cuda<<<blocks, kBlock>>>(n_, stress_.get(), matrices_.get(), dimension_, tensile_.get(),
+                                            compressive_.get(), tensile_nonzero_.get());
+  after_launch("separation_parts_at");
+  largest_separation_cuda<<<blocks, kBlock>>>(n_, separation_in_, counters_.get() + kSeparation);
+  after_launch("separation_at");
+  const long long bits = take_counter(kSeparation);
+  double largest = 0.0;
+  std::memcpy(&largest, &bits, sizeof largest);
+  return largest;
+}
+
+// A few particles per cutting substep: one small copy per array and particle (their CSR rows
+// of bond weights, their stencil state) is cheaper than moving the arrays.
+void CudaSolidDevice::upload_cut(const SolidCutState& host, const std::vector<long long>& particles) {
+  const BondList& b = *host.bonds;
+  auto put = [](auto* device, const auto& host_array, long long i, long long count, const char* what) {
+    check(cudaMemcpy(device + i, host_array.data() + i, count * sizeof host_array[0], cudaMemcpyHostToDevice), what);
+  };
+  for (long long i : particles) {
+    put(bond_arrays_.weight.get(), b.weight, b.offset[i], b.offset[i + 1] - b.offset[i], "uploading cut bond weights");
+    put(moment_inverse_.get(), *host.moment_inverse, i, 1, "uploading a cut stencil (moment matrix)");
+    put(full_stencil_.get(), *host.full_stencil, i, 1, "uploading a cut stencil (surface flag)");
+    put(gradient_.get(), *host.gradient, i, 1, "uploading a cut stencil (gradient)");
+    put(f_inverse_.get(), *host.f_inverse, i, 1, "uploading a cut stencil (F^-1)");
+    put(stress_.get(), *host.stress, i, 1, "uploading a cut stencil (stress)");
+    put(matrices_.get(), *host.matrices, i, 1, "uploading a cut stencil (force matrices)");
+  }
 }
 
 long long CudaSolidDevice::take_counter(Counter c) {

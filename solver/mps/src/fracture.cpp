@@ -25,7 +25,7 @@ FractureModel::FractureModel(const FractureLaw& law, const BondList& bonds, doub
   failures_.assign(n, 0);
 }
 
-std::vector<long long> FractureModel::fail_and_cut(BondList& bonds, const State& s) {
+double FractureModel::evaluate(const BondList& bonds, const State& s) {
   const long long n = static_cast<long long>(bonds.particles());
   SeparationInputs in;
   in.bonds = bonds.view();
@@ -36,20 +36,22 @@ std::vector<long long> FractureModel::fail_and_cut(BondList& bonds, const State&
   in.dimension = s.dimension;
   in.tensile_nonzero = tensile_nonzero_.data();
 #pragma omp parallel for schedule(static) if (n > kFractureParallelMin)
-  for (long long i = 0; i < n; ++i) {
-    Mat3 plus, minus;
-    split_tensile(s.stress[i], s.dimension, plus, minus);
-    tensile_[i] = mul(plus, s.matrices[i].pressure);
-    compressive_[i] = mul(minus, s.matrices[i].pressure);
-    tensile_nonzero_[i] = plus(0, 0) + plus(1, 1) + plus(2, 2) > 0.0;  // trace of a PSD part
-  }
-  std::vector<long long> candidates;
+  for (long long i = 0; i < n; ++i)
+    separation_parts_at(i, s.stress, s.matrices, s.dimension, tensile_.data(), compressive_.data(),
+                        tensile_nonzero_.data());
 #pragma omp parallel for schedule(static) if (n > kFractureParallelMin)
   for (long long i = 0; i < n; ++i) {
     const Separation sep = separation_at(i, in);
     separation_pa_[i] = sep.stress_pa;
     normal_[i] = {sep.normal[0], sep.normal[1], sep.normal[2]};
   }
+  return max_separation_pa();
+}
+
+std::vector<long long> FractureModel::fail_and_cut(BondList& bonds, const State& s) {
+  const long long n = static_cast<long long>(bonds.particles());
+  evaluate(bonds, s);
+  std::vector<long long> candidates;
   for (long long i = 0; i < n; ++i)
     if (separation_pa_[i] >= law_.tensile_strength_pa) candidates.push_back(i);
   std::vector<long long> touched;
@@ -122,7 +124,11 @@ bool FractureModel::absorb_inversion(long long i, const BondList& bonds) {
   int intact = 0;
   for (long long k = bonds.offset[i]; k < bonds.offset[i + 1]; ++k) intact += bonds.weight[k] > 0.0;
   if (intact == initial_bonds_[i]) return false;
-  inverted_[i] = 1;
+  if (!inverted_[i]) {  // called for distinct particles by the threads of one loop
+    inverted_[i] = 1;
+#pragma omp atomic
+    ++flagged_;
+  }
   return true;
 }
 
@@ -133,6 +139,7 @@ bool FractureModel::absorb_remnant(long long i, const BondList& bonds, const dou
   const double conditioning = stencil_conditioning(i, bonds.view(), volume_m3, dimension);
   if (!(conditioning < kRemnantConditioning && conditioning >= kCollinearStencil)) return false;
   inverted_[i] = 1;
+  ++flagged_;
   ++remnants_;
   return true;
 }
@@ -143,6 +150,7 @@ std::vector<long long> FractureModel::detach_flagged(BondList& bonds) {
   for (long long i = 0; i < n; ++i) {
     if (!inverted_[i]) continue;
     inverted_[i] = 0;
+    --flagged_;
     ++detached_;
     for (long long k = bonds.offset[i]; k < bonds.offset[i + 1]; ++k) {
       if (bonds.weight[k] == 0.0) continue;

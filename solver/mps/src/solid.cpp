@@ -310,13 +310,15 @@ void Solid::step() {
   const int substeps = substeps_;
   const double dt = dt_s_ / substeps;
   for (int s = 0; s < substeps; ++s) {
-    if (device_) {  // the same phases on the device (SolidStepDevice); the clock stays here
+    if (device_) {  // the same phases on the device (SolidStepDevice); clock, checks and cuts stay here
+      device_->stress_phase();
+      state_current_ = false;
+      // Checked after every stress phase, as compute_acceleration throws before its forces.
+      if (const long long inverted = device_->inverted_particles(); inverted > 0) absorb_inverted_on_device(inverted);
+      if (fracture_) fracture_on_device();  // cut bonds take no part in the forces below
       time_s_ += dt;
-      device_->substep(dt, time_s_);
-      kinematics_current_ = state_current_ = false;
-      // Checked after every substep, as the host loop throws before its forces: the message
-      // names the time at the end of the substep in which F inverted.
-      if (const long long inverted = device_->inverted_particles(); inverted > 0) throw_inverted(inverted, time_s_);
+      device_->motion_phase(dt, time_s_);
+      kinematics_current_ = false;
       continue;
     }
     // Symplectic Euler (the paper's scheme): v^{k+1} = v^k + dt a(u^k), u^{k+1} = u^k + dt v^{k+1}.
@@ -352,8 +354,7 @@ void Solid::attach_device(std::unique_ptr<SolidStepDevice> device) {
   // What the launcher does not run (solid_device_refusal names the case keys; this guards
   // callers that build a Solid themselves).
   std::string missing;
-  if (fracture_) missing = "fracture";
-  else if (options_.updated_lagrangian) missing = "updated Lagrangian stencils";
+  if (options_.updated_lagrangian) missing = "updated Lagrangian stencils";
   else if (contact_.particle_contact()) missing = "contact between particles";
   else if (contact_.polygon_count() > 0) missing = "rigid polygons";
   for (const HalfSpace& h : contact_.half_spaces())
@@ -361,7 +362,7 @@ void Solid::attach_device(std::unique_ptr<SolidStepDevice> device) {
   if (!missing.empty()) throw RunError("mps solid: the CUDA launcher does not run " + missing + "; use --backend cpu");
   sync_host(false);
   device_ = std::move(device);
-  kinematics_current_ = state_current_ = true;  // the device starts from the host's state
+  kinematics_current_ = state_current_ = separation_current_ = true;  // the device starts from the host's state
 }
 
 std::string Solid::backend_description() const {

@@ -60,8 +60,6 @@ Solid make_solid(const CaseSpec& spec, std::string* content_id) {
 
 std::optional<DeviceRefusal> solid_device_refusal(const CaseSpec& spec) {
   const std::string cpu = " (or --backend cpu)";
-  if (spec.material.fracture)
-    return DeviceRefusal{"materials.fracture", "fracture with --backend cuda", "no fracture on the GPU" + cpu};
   if (spec.updated_lagrangian)
     return DeviceRefusal{"model.lagrangian", "updated with --backend cuda", "total on the GPU" + cpu};
   if (spec.particle_contact || (spec.bodies && spec.bodies->shapes.size() > 1))  // as configure_contact

@@ -3,6 +3,8 @@
 // the cut stencils up to date so that the forces of the same step already see the crack.
 #include "breccia/mps/solid.hpp"
 
+#include <algorithm>
+
 #include "breccia/common/error.hpp"
 
 namespace breccia::mps {
@@ -13,7 +15,7 @@ void Solid::set_fracture(const FractureLaw& law) {
   fracture_.emplace(law, bonds_, options_.spacing_m);
 }
 
-void Solid::apply_fracture() {
+FractureModel::State Solid::fracture_state() const {
   FractureModel::State state;
   state.displacement = {stencil_displacement(0).data(), stencil_displacement(1).data(), stencil_displacement(2).data()};
   state.volume_m3 = stencil_volume_m3_.data();
@@ -21,10 +23,18 @@ void Solid::apply_fracture() {
   state.matrices = matrices_.data();
   state.dimension = options_.dimension;
   state.time_s = time_s_;
+  return state;
+}
+
+std::vector<long long> Solid::apply_fracture() {
+  const FractureModel::State state = fracture_state();
+  std::vector<long long> all;
   std::vector<long long> changed = fracture_->detach_flagged(bonds_);
   refresh_cut_stencils(changed);
+  all.insert(all.end(), changed.begin(), changed.end());
   std::vector<long long> cut = fracture_->fail_and_cut(bonds_, state);
   refresh_cut_stencils(cut);
+  all.insert(all.end(), cut.begin(), cut.end());
   changed.insert(changed.end(), cut.begin(), cut.end());
   // Remnant stencils left by this step's cuts are detached now, before the forces use them;
   // detaching one may leave a neighbour a remnant in turn, so repeat on what changed.
@@ -35,7 +45,58 @@ void Solid::apply_fracture() {
     if (!any) break;
     changed = fracture_->detach_flagged(bonds_);
     refresh_cut_stencils(changed);
+    all.insert(all.end(), changed.begin(), changed.end());
   }
+  std::sort(all.begin(), all.end());
+  all.erase(std::unique(all.begin(), all.end()), all.end());
+  return all;
+}
+
+// Device path. An inverted particle that fracture takes as debris is left unchanged by the
+// stress phase, as on the CPU, and detached by the next apply_fracture; any other stops the
+// run with the CPU's message (the time before the substep, as compute_acceleration names it).
+void Solid::absorb_inverted_on_device(long long inverted) {
+  if (fracture_) {
+    std::vector<char> flags;
+    device_->inverted_flags(flags);
+    inverted = 0;
+    for (size_t i = 0; i < flags.size(); ++i)
+      if (flags[i] && !fracture_->absorb_inversion(static_cast<long long>(i), bonds_)) ++inverted;
+  }
+  if (inverted > 0) throw_inverted(inverted, time_s_);
+}
+
+// The cutting is host code (rare, irregular, in order of load). The device only says whether
+// some particle reached the strength; on those substeps (and when debris waits to be
+// detached) the state comes to the host, apply_fracture runs on it exactly as on the CPU,
+// and what it changed goes back. Other substeps move no data.
+void Solid::fracture_on_device() {
+  if (!fracture_->has_flagged() && !(device_->largest_separation_pa() >= fracture_->law().tensile_strength_pa)) {
+    separation_current_ = false;
+    return;
+  }
+  sync_host(false);
+  const std::vector<long long> changed = apply_fracture();
+  separation_current_ = true;
+  if (changed.empty()) return;
+  SolidCutState cut;
+  cut.bonds = &bonds_;
+  cut.moment_inverse = &moment_inverse_;
+  cut.full_stencil = &full_stencil_;
+  cut.gradient = &gradient_;
+  cut.f_inverse = &f_inverse_;
+  cut.stress = &stress_;
+  cut.matrices = &matrices_;
+  device_->upload_cut(cut, changed);
+}
+
+// The separation values the CPU would show: FractureModel::evaluate on the downloaded state of
+// the last stress phase (the motion phase changes neither stress nor force matrices).
+void Solid::sync_fracture() const {
+  if (!fracture_ || !device_ || separation_current_) return;
+  sync_host(false);
+  fracture_->evaluate(bonds_, fracture_state());
+  separation_current_ = true;
 }
 
 void Solid::refresh_cut_stencils(const std::vector<long long>& changed) {

@@ -196,6 +196,17 @@ struct SeparationInputs {
   int dimension = 2;
 };
 
+// First pass of the separation, per particle (separation_at then reads the neighbours'):
+// the bond-force matrices of sigma+ and sigma- and whether sigma+ is non-zero.
+BRECCIA_HD inline void separation_parts_at(long long i, const SymTensor* stress, const ForceMatrices* matrices,
+                                           int dimension, Mat3* tensile, Mat3* compressive, char* tensile_nonzero) {
+  Mat3 plus, minus;
+  split_tensile(stress[i], dimension, plus, minus);
+  tensile[i] = mul(plus, matrices[i].pressure);
+  compressive[i] = mul(minus, matrices[i].pressure);
+  tensile_nonzero[i] = plus(0, 0) + plus(1, 1) + plus(2, 2) > 0.0;  // trace of a PSD part
+}
+
 struct Separation {
   double stress_pa = 0.0;          // S_i = lambda_max / D(n_max); 0 when no bond pulls
   double normal[3] = {0, 0, 0};    // n_max (unit; zero when stress_pa is 0)
@@ -302,6 +313,14 @@ public:
   // (at most one per neighbourhood, most loaded first), cut their bonds in `bonds` (weight
   // set to 0 in both directions). Returns the particles whose stencil lost a bond (sorted).
   std::vector<long long> fail_and_cut(BondList& bonds, const State& state);
+  // The evaluation alone (separation_pa(), normal_of(); nothing is cut); returns the largest
+  // separation stress. fail_and_cut starts with it; Solid calls it on its own to bring the
+  // values up to date after steps taken on a device (the device only compares them with the
+  // strength, solid.hpp SolidStepDevice).
+  double evaluate(const BondList& bonds, const State& state);
+  // Whether absorb_inversion or absorb_remnant flagged particles that detach_flagged has not
+  // yet cut.
+  bool has_flagged() const { return flagged_ > 0; }
 
   // A particle that already lost bonds and whose remaining stencil folds (det F <= 0) is
   // debris at a crack face, not a failed run: it is flagged here (thread-safe per particle)
@@ -342,7 +361,7 @@ private:
   std::vector<int> initial_bonds_;
   std::vector<Mat3> tensile_, compressive_;
   std::vector<char> tensile_nonzero_, inverted_;
-  long long detached_ = 0, remnants_ = 0;
+  long long detached_ = 0, remnants_ = 0, flagged_ = 0;
   std::vector<double> separation_pa_, first_failure_time_s_;
   std::vector<std::array<double, 3>> normal_, first_normal_;
   std::vector<int> failures_;

@@ -72,11 +72,13 @@ struct RigidFloor {
 
 // Where Solid::step's substeps run instead of the OpenMP loops: a device with its own copy of
 // the state (the CUDA launcher, breccia/mps/cuda_solid.hpp). It runs the phases of
-// solid_phases.hpp in Solid's order; Solid keeps the clock, the substep count and the error
-// checks, and its host arrays become a cache, refreshed by download() only when read.
+// solid_phases.hpp in Solid's order; Solid keeps the clock, the substep count, the error
+// checks and the cutting of bonds by fracture, and its host arrays become a cache, refreshed
+// by download() only when read.
 // Supported: total Lagrangian stencils, plasticity, both pressure forms, frictionless rigid
-// planes, prescribed sets, constant external forces, gravity, damping, pre-cut bonds; the
-// rest is refused before a device is built (solid_device_refusal, solid_case.hpp).
+// planes, prescribed sets, constant external forces, gravity, damping, pre-cut bonds and
+// fracture; the rest is refused before a device is built (solid_device_refusal,
+// solid_case.hpp).
 struct SolidHostState {  // what download() refreshes (sized by the caller)
   std::array<std::vector<double>, 3>* u = nullptr;
   std::array<std::vector<double>, 3>* v = nullptr;
@@ -88,14 +90,36 @@ struct SolidHostState {  // what download() refreshes (sized by the caller)
   std::vector<ForceMatrices>* matrices = nullptr;
 };
 
+// What fracture changed on the host for the particles it names (upload_cut): their bond
+// weights (their CSR rows; a cut bond's two ends are both named) and stencil state.
+struct SolidCutState {
+  const BondList* bonds = nullptr;
+  const std::vector<Mat3>* moment_inverse = nullptr;
+  const std::vector<char>* full_stencil = nullptr;
+  const std::vector<Mat3>* gradient = nullptr;
+  const std::vector<Mat3>* f_inverse = nullptr;
+  const std::vector<SymTensor>* stress = nullptr;
+  const std::vector<ForceMatrices>* matrices = nullptr;
+};
+
 class SolidStepDevice {
 public:
   virtual ~SolidStepDevice() = default;
-  // One substep of length dt (phases 1-4, symplectic Euler), then the prescribed values at
-  // time_after_s. Queued: returns before the device has finished.
-  virtual void substep(double dt, double time_after_s) = 0;
-  // Particles found inverted (det F <= 0) by the substeps since the last call; waits for them.
+  // One substep in two halves, so that fracture can cut bonds between them as on the CPU:
+  // phase 1 (gradient, stress, force matrices), then phases 2-4, symplectic Euler over dt and
+  // the prescribed values at time_after_s. Queued: return before the device has finished.
+  virtual void stress_phase() = 0;
+  virtual void motion_phase(double dt, double time_after_s) = 0;
+  // Particles found inverted (det F <= 0) by the stress phases since the last call; waits.
   virtual long long inverted_particles() = 0;
+  // Which particles the last stress phase found inverted (1 each, sized N), for fracture's
+  // debris rule (FractureModel::absorb_inversion).
+  virtual void inverted_flags(std::vector<char>& flags) = 0;
+  // Fracture: the separation stress of every particle from the last stress phase
+  // (FractureModel::evaluate's arithmetic); returns the largest finite value (0 if none).
+  virtual double largest_separation_pa() = 0;
+  // After Solid has cut bonds on the host: copy the cut state of `particles` to the device.
+  virtual void upload_cut(const SolidCutState& host, const std::vector<long long>& particles) = 0;
   // min over intact bonds of squeezed_bond_length (Solid::update_substeps), capped at spacing.
   virtual double shortest_squeezed_bond_m(double window_s) = 0;
   // Bonds below kMinNeighbourDistanceRatio by the clumping measure (stability_checks.hpp).
@@ -123,7 +147,11 @@ public:
   double shear_face_stiffness_n_m() const;
   // Brittle fracture with the separation tensor (fracture.hpp); nullptr when not enabled.
   void set_fracture(const FractureLaw& law);
-  const FractureModel* fracture() const { return fracture_ ? &*fracture_ : nullptr; }
+  // On a device the separation values are brought up to date here when read (sync_fracture).
+  const FractureModel* fracture() const {
+    sync_fracture();
+    return fracture_ ? &*fracture_ : nullptr;
+  }
   // Pre-cut: gives every intact bond (i, j) with cut(i, j) weight 0, as fracture does (no
   // stress or hourglass force, out of the gradient, stencils refreshed; the pair becomes a
   // contact candidate). Returns the number of bonds cut, each pair once (solid_cut.cpp).
@@ -250,8 +278,16 @@ private:
   void sync_host(bool kinematics_only) const;
   double shortest_squeezed_bond_m() const;  // update_substeps' measure on the host arrays
   [[noreturn]] void throw_inverted(long long inverted, double time_s) const;
-  void apply_fracture();  // solid_fracture.cpp: fail, cut bonds, refresh the cut stencils
+  // solid_fracture.cpp: fail, cut bonds, refresh the cut stencils; returns the particles
+  // whose stencil changed (sorted).
+  std::vector<long long> apply_fracture();
   void refresh_cut_stencils(const std::vector<long long>& changed);
+  FractureModel::State fracture_state() const;
+  // Device path: debris rule for the inverted particles, then the host's cutting on the
+  // substeps where the device finds a particle at the strength.
+  void absorb_inverted_on_device(long long inverted);
+  void fracture_on_device();
+  void sync_fracture() const;  // separation values of the device's last stress phase
   void build_stencils(const std::vector<double>& position_m);  // bonds, L^-1, surface flags
   void rebuild_stencils_on_current_configuration();            // updated Lagrangian
   void update_substeps();  // substeps per step() from the shortest current bond
@@ -261,7 +297,9 @@ private:
   SolidLaw law_;
   SolidOptions options_;
   Contact contact_;
-  std::optional<FractureModel> fracture_;
+  // mutable: with a device, its separation values are a cache too (sync_fracture).
+  mutable std::optional<FractureModel> fracture_;
+  mutable bool separation_current_ = true;
   BondList bonds_;
   Normalisation norm_;
   // mutable: with a device attached, the state below is a cache of its state (sync_host).

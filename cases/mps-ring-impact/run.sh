@@ -5,6 +5,7 @@
 #   VARIANT=quick: spacing 0.5 mm (10 circles, 3,140 particles), 30 m/s, 300 us
 #   VARIANT=demo : spacing 0.5 mm, 15, 30 and 60 m/s (speed study)
 #   VARIANT=full : spacing 0.25 mm (20 circles, 12,560 particles), 30 m/s
+# BACKEND=cuda runs through breccia-solve on the GPU (not yet run on one); default cpu.
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 source "$HERE/../../scripts/case_env.sh"
@@ -29,7 +30,11 @@ for v in $SPEEDS; do
   sed -e "s/SPEED/$v/" -e "s/END_US/$END_US/" -e "s/EVERY/$EVERY/" -e "s#particles: particles.h5#particles: ../particles.h5#" \
       -e "s/hourglass: 0.1/hourglass: $HOURGLASS/" "$HERE/case.yaml" > "$OUT/$name/case.yaml"
   echo "== $name ($v m/s, $END_US us)"
-  "$BRECCIA_BIN/breccia-mps" "$OUT/$name/case.yaml" -o "$OUT/$name" --threads "$THREADS"
+  if [ "${BACKEND:-cpu}" = cpu ]; then
+    "$BRECCIA_BIN/breccia-mps" "$OUT/$name/case.yaml" -o "$OUT/$name" --threads "$THREADS"
+  else  # the stress formulation's CUDA launcher, fracture cut on the host (docs/cuda.md "MPS")
+    "$BRECCIA_BIN/breccia-solve" "$OUT/$name/case.yaml" -o "$OUT/$name" --threads "$THREADS" --backend "$BACKEND"
+  fi
   RUNS+=("$name")
 done
 "$PYTHON" "$HERE/plot_ring.py" "$OUT" "${RUNS[@]}"

@@ -17,6 +17,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "cpu_gpu_compare.hpp"
@@ -36,6 +37,7 @@ using namespace breccia::mps;
 
 namespace {
 
+constexpr const char* kFrictionalFloor = "stiffness_factor: 1, static_friction: 0.3, kinetic_friction: 0.2}";
 constexpr const char* kNoDevice = "no CUDA device: the CPU/GPU comparison needs an NVIDIA GPU and driver";
 
 // The Taylor bar of cases/mps-taylor-bar at 8 particles across, to `end`: 3D, von Mises with
@@ -123,7 +125,7 @@ public:
         stress_(s.stress_pa()),
         matrices_(s.force_matrices_of_particles()),
         full_stencil_(s.full_stencil()),
-        planes_(s.contact().half_spaces()),
+
         prescribed_(s.prescribed()) {
     for (int d = 0; d < 3; ++d) {
       u_[d] = s.displacement(d);
@@ -132,6 +134,14 @@ public:
       external_[d] = s.external_force_n(d);
       contact_[d].assign(n_, 0.0);
     }
+    for (const HalfSpace& h : s.contact().half_spaces()) planes_.push_back(plane_contact(h));
+    const std::vector<FrictionState>& springs = s.contact().obstacle_springs();
+    const size_t count = planes_.size() * n_;
+    springs_ = springs.size() >= count ? std::vector<FrictionState>(springs.begin(), springs.begin() + count)
+                                       : std::vector<FrictionState>(count);
+    dissipated_.assign(n_, 0.0);
+    spring_energy_.assign(n_, 0.0);
+    dissipated_before_j_ = s.contact().friction_dissipation_j();
     const BondsView b = bonds_.view();
     stress_in_.bonds = b;
     stress_in_.u = u();
@@ -170,17 +180,20 @@ public:
     const BondsView b = bonds_.view();
     if (repulsive_)
       for (long long i = 0; i < n_; ++i) floor_[i] = pressure_floor_at(i, b, full_stencil_.data(), pressure_.data());
-    if (!planes_.empty())
-      for (long long i = 0; i < n_; ++i) {
-        double x[3], sum[3] = {0.0, 0.0, 0.0};
-        for (int a = 0; a < 3; ++a) x[a] = position_[3 * i + a] + (a < dimension_ ? u_[a][i] : 0.0);
-        for (const HalfSpace& h : planes_) {
-          double f[3] = {0.0, 0.0, 0.0};
-          half_space_force_at(x, h.point_m.data(), h.normal.data(), h.law.normal_stiffness_n_m, f);
-          for (int a = 0; a < 3; ++a) sum[a] += f[a];
-        }
-        for (int a = 0; a < 3; ++a) contact_[a][i] = sum[a];
+    const long long planes = static_cast<long long>(planes_.size());
+    for (long long i = 0; i < n_ && planes > 0; ++i) {
+      double x[3], sum[3] = {0.0, 0.0, 0.0}, slip = 0.0, spring = 0.0;
+      for (int a = 0; a < 3; ++a) x[a] = position_[3 * i + a] + (a < dimension_ ? u_[a][i] : 0.0);
+      const double v[3] = {v_[0][i], v_[1][i], dimension_ == 3 ? v_[2][i] : 0.0};
+      for (long long p = 0; p < planes; ++p) {
+        double f[3] = {0.0, 0.0, 0.0};
+        half_space_contact_at(x, v, planes_[p], dt, springs_[p * n_ + i], f, &slip, &spring);
+        for (int a = 0; a < 3; ++a) sum[a] += f[a];
       }
+      for (int a = 0; a < 3; ++a) contact_[a][i] = sum[a];
+      dissipated_[i] += slip;
+      spring_energy_[i] = spring;
+    }
     for (long long i = 0; i < n_; ++i) solid_acceleration_at(i, accel_, a_[0].data(), a_[1].data(), a_[2].data());
     for (int d = 0; d < dimension_; ++d)
       for (long long i = 0; i < n_; ++i) symplectic_euler_at(u_[d][i], v_[d][i], a_[d][i], dt);
@@ -193,6 +206,13 @@ public:
     return k;
   }
   void inverted_flags(std::vector<char>& flags) override { flags = inverted_flag_; }
+  void friction_totals(double* spring_energy_j, double* dissipated_j) override {
+    *spring_energy_j = 0.0;
+    *dissipated_j = dissipated_before_j_;
+    if (planes_.empty()) return;
+    for (double e : spring_energy_) *spring_energy_j += e;
+    for (double d : dissipated_) *dissipated_j += d;
+  }
   // The two kernels of largest_separation_pa: every particle's parts, then the separation.
   double largest_separation_pa() override {
     std::vector<Mat3> tensile(n_), compressive(n_);
@@ -291,7 +311,10 @@ private:
   std::vector<SymTensor> stress_;
   std::vector<ForceMatrices> matrices_;
   std::vector<char> full_stencil_, inverted_flag_;
-  std::vector<HalfSpace> planes_;
+  std::vector<PlaneContact> planes_;
+  std::vector<FrictionState> springs_;
+  std::vector<double> dissipated_, spring_energy_;
+  double dissipated_before_j_ = 0.0;
   std::vector<PrescribedSet> prescribed_;
   std::array<std::vector<double>, 3> u_, v_, a_, external_, contact_;
   SolidStressInputs stress_in_{};
@@ -404,6 +427,37 @@ TEST(MpsSolidCuda, LauncherPhasesOnTheHostReproduceRepulsivePressureGravityDampi
   EXPECT_GT(cpu.plastic_fraction(), 0.0) << "the burst did not yield the plate: plasticity is not compared";
 }
 
+// The Taylor bar on a frictional floor (mu_s 0.3, mu_k 0.2): the face spreads outwards over
+// the floor, sticking and slipping, through the device's per-particle springs. State and
+// energies bit for bit; the dissipation is summed per particle on the device path and per
+// step on the CPU, so it agrees to rounding (1e-12 relative), not to the bit.
+TEST(MpsSolidCuda, LauncherPhasesOnTheHostReproduceTheCpuOnAFrictionalFloor) {
+  const CaseSpec spec = parse_case_text(replaced(taylor_case("20 us"), "stiffness_factor: 1}", kFrictionalFloor));
+  Solid cpu = make_solid(spec), dev = make_solid(spec);
+  dev.attach_device(std::make_unique<HostPhasesDevice>(dev));
+  const long long steps = steps_to_end(cpu, spec);
+  std::vector<double> cpu_dissipated, dev_dissipated;
+  Recorded cpu_run, dev_run;
+  for (auto [solid, run, dissipated] : {std::tuple{&cpu, &cpu_run, &cpu_dissipated}, std::tuple{&dev, &dev_run, &dev_dissipated}})
+    for (long long k = 0; k < steps; k += 10) {
+      const Recorded part = record_run(*solid, std::min<long long>(10, steps - k));
+      for (auto [to, from] : {std::pair{&run->kinetic, &part.kinetic}, std::pair{&run->stress_work, &part.stress_work},
+                              std::pair{&run->hourglass, &part.hourglass}, std::pair{&run->contact, &part.contact}})
+        to->insert(to->end(), from->begin(), from->end());
+      run->max_substeps = std::max(run->max_substeps, part.max_substeps);
+      dissipated->push_back(solid->friction_dissipation_j());
+    }
+  expect_identical(cpu, cpu_run, dev, dev_run);
+  ASSERT_EQ(dev_dissipated.size(), cpu_dissipated.size());
+  double worst = 0.0;
+  for (size_t k = 0; k < cpu_dissipated.size(); ++k)
+    worst = std::max(worst, std::fabs(dev_dissipated[k] - cpu_dissipated[k]) / std::max(cpu_dissipated.back(), 1e-300));
+  std::printf("  [mps solid] frictional floor: dissipated %.6e J by 20 us (device path within %.1e of it)\n",
+              cpu_dissipated.back(), worst);
+  EXPECT_GT(cpu_dissipated.back(), 1e-3 * cpu_run.kinetic.front()) << "the face did not slip: friction is not compared";
+  EXPECT_LE(worst, 1e-12);
+}
+
 // Fracture through the device path: the host cuts on the substeps where the device finds a
 // particle at the strength (and detaches debris the device found inverted), then copies the
 // cut stencils back. Bonds, failures, debris, state and energies must equal the CPU's.
@@ -484,6 +538,7 @@ TEST(MpsSolidCuda, DeviceThatMissesTheCutsDepartsFromTheCpu) {
     void upload_cut(const SolidCutState&, const std::vector<long long>&) override {}
     double shortest_squeezed_bond_m(double w) override { return inner_.shortest_squeezed_bond_m(w); }
     long long clumped_bonds() override { return inner_.clumped_bonds(); }
+    void friction_totals(double* e, double* d) override { inner_.friction_totals(e, d); }
     void download(const SolidHostState& h, bool k) override { inner_.download(h, k); }
     std::string description() const override { return "no upload"; }
 
@@ -538,9 +593,9 @@ TEST(MpsSolidCuda, FeaturesTheLauncherDoesNotRunAreRefusedNamingTheirKeys) {
   const std::string base = taylor_case("1 us");
   EXPECT_FALSE(solid_device_refusal(parse_case_text(base)).has_value()) << "the Taylor bar runs on the launcher";
   EXPECT_FALSE(solid_device_refusal(parse_case_text(ring_case("1 us"))).has_value()) << "fracture runs on it";
+  EXPECT_FALSE(solid_device_refusal(parse_case_text(replaced(base, "stiffness_factor: 1}", kFrictionalFloor))).has_value())
+      << "a frictional floor runs on it";
   const std::vector<std::array<std::string, 3>> cases = {
-      {"stiffness_factor: 1}", "stiffness_factor: 1, static_friction: 0.3, kinetic_friction: 0.2}",
-       "contact.floor.static_friction"},
       {"formulation: stress}", "formulation: stress, lagrangian: updated}", "model.lagrangian"},
       {"      - {name: bar, type: cylinder, center: [0, 0, 0], radius: 3.2 mm, length: 32.4 mm}",
        "      - {name: bar, type: cylinder, center: [0, 0, 0], radius: 3.2 mm, length: 32.4 mm}\n"
@@ -554,16 +609,16 @@ TEST(MpsSolidCuda, FeaturesTheLauncherDoesNotRunAreRefusedNamingTheirKeys) {
     EXPECT_NE(refusal->expected.find("--backend cpu"), std::string::npos) << refusal->expected;
   }
   // run_case: refused as bad input naming the key, nothing written; under auto, the CPU runs it.
-  const std::string file = write_case("friction", replaced(base, cases[0][0], cases[0][1]));
+  const std::string file = write_case("updated", replaced(base, cases[0][0], cases[0][1]));
   const std::string out = ::testing::TempDir() + "/mps_solid_cuda_refused";
   std::filesystem::remove_all(out);
   RunCaseOptions o;
   o.solid_device = make_cuda_solid_device;
   try {
     run_case(file, out, o);
-    FAIL() << "a frictional floor ran with the solid device";
+    FAIL() << "updated stencils ran with the solid device";
   } catch (const breccia::InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("contact.floor.static_friction"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("model.lagrangian"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(std::filesystem::exists(out + "/history.csv"));
   o.cpu_when_refused = true;
@@ -574,18 +629,18 @@ TEST(MpsSolidCuda, FeaturesTheLauncherDoesNotRunAreRefusedNamingTheirKeys) {
 }
 
 // A Solid built by hand (no case file) is guarded by attach_device itself.
-TEST(MpsSolidCuda, AttachingToASolidWithAFrictionalFloorIsARunError) {
+TEST(MpsSolidCuda, AttachingToASolidWithARigidPolygonIsARunError) {
   const CaseSpec spec = parse_case_text(plate_case());
   Solid s = make_solid(spec);
-  RigidFloor floor;
-  floor.static_friction = 0.3;
-  floor.kinetic_friction = 0.2;
-  s.set_floor(floor);
+  RigidPolygon block;
+  block.x_m = {0.0, 1e-3, 1e-3, 0.0};
+  block.y_m = {-2e-3, -2e-3, -1e-3, -1e-3};
+  s.contact().add_polygon(block);
   try {
     s.attach_device(std::make_unique<HostPhasesDevice>(s));
-    FAIL() << "a device was attached to a solid with a frictional floor";
+    FAIL() << "a device was attached to a solid with a rigid polygon";
   } catch (const breccia::RunError& e) {
-    EXPECT_NE(std::string(e.what()).find("friction"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("rigid polygons"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(s.on_device());
 }
@@ -608,26 +663,36 @@ TEST(MpsSolidCuda, DeviceWithoutAGpuFailsWithARunErrorNamingTheRemedy) {
 // missed force shows at 1e-3 or more within a few steps.
 TEST(MpsSolidCuda, TaylorBarOnTheGpuMatchesTheCpu) {
   if (!breccia::solver::cuda_device_available()) GTEST_SKIP() << kNoDevice;
-  const CaseSpec spec = parse_case_text(taylor_case("20 us"));
-  Solid cpu = make_solid(spec), gpu = make_solid(spec);
-  gpu.attach_device(make_cuda_solid_device(gpu));
-  const long long steps = steps_to_end(cpu, spec);
-  const Recorded cpu_run = record_run(cpu, steps), gpu_run = record_run(gpu, steps);
-  using breccia::cuda_test::field_difference;
-  double du = 0.0, dv = 0.0;
-  for (int a = 0; a < 3; ++a) {
-    du = std::max(du, field_difference(gpu.displacement(a), cpu.displacement(a)));
-    dv = std::max(dv, field_difference(gpu.velocity(a), cpu.velocity(a)));
+  for (const bool friction : {false, true}) {  // the frictionless floor, then mu_s 0.3, mu_k 0.2
+    const std::string text = friction ? replaced(taylor_case("20 us"), "stiffness_factor: 1}", kFrictionalFloor)
+                                      : taylor_case("20 us");
+    const CaseSpec spec = parse_case_text(text);
+    Solid cpu = make_solid(spec), gpu = make_solid(spec);
+    gpu.attach_device(make_cuda_solid_device(gpu));
+    const long long steps = steps_to_end(cpu, spec);
+    const Recorded cpu_run = record_run(cpu, steps), gpu_run = record_run(gpu, steps);
+    using breccia::cuda_test::field_difference;
+    double du = 0.0, dv = 0.0;
+    for (int a = 0; a < 3; ++a) {
+      du = std::max(du, field_difference(gpu.displacement(a), cpu.displacement(a)));
+      dv = std::max(dv, field_difference(gpu.velocity(a), cpu.velocity(a)));
+    }
+    const double dp = field_difference(gpu.eq_plastic_strain(), cpu.eq_plastic_strain());
+    const double dd = std::fabs(gpu.friction_dissipation_j() - cpu.friction_dissipation_j()) /
+                      std::max(cpu.friction_dissipation_j(), 1e-300);
+    std::printf("  [mps solid cuda] %s, %s floor: u %.3e, v %.3e, eq. plastic strain %.3e, dissipation %.3e after "
+                "%lld steps\n", gpu.backend_description().c_str(), friction ? "frictional" : "frictionless", du, dv,
+                dp, friction ? dd : 0.0, steps);
+    EXPECT_LE(du, 1e-9);
+    EXPECT_LE(dv, 1e-9);
+    EXPECT_LE(dp, 1e-9);
+    EXPECT_EQ(gpu_run.max_substeps, cpu_run.max_substeps);
+    EXPECT_LE(field_difference(gpu_run.stress_work, cpu_run.stress_work), 1e-9);
+    EXPECT_LE(field_difference(gpu_run.contact, cpu_run.contact), 1e-9);
+    if (friction) {
+      EXPECT_LE(dd, 1e-9);
+    }
   }
-  const double dp = field_difference(gpu.eq_plastic_strain(), cpu.eq_plastic_strain());
-  std::printf("  [mps solid cuda] %s: u %.3e, v %.3e, eq. plastic strain %.3e after %lld steps\n",
-              gpu.backend_description().c_str(), du, dv, dp, steps);
-  EXPECT_LE(du, 1e-9);
-  EXPECT_LE(dv, 1e-9);
-  EXPECT_LE(dp, 1e-9);
-  EXPECT_EQ(gpu_run.max_substeps, cpu_run.max_substeps);
-  EXPECT_LE(field_difference(gpu_run.stress_work, cpu_run.stress_work), 1e-9);
-  EXPECT_LE(field_difference(gpu_run.contact, cpu_run.contact), 1e-9);
 }
 
 // Fracture on the GPU: the same bonds cut at the same times. Cutting is a threshold decision,

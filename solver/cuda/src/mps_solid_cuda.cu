@@ -59,24 +59,30 @@ __global__ void pressure_floor_cuda(long long n, BondsView b, const char* full_s
   if (i < n) floor[i] = pressure_floor_at(i, b, full_stencil, pressure);
 }
 
-// Rigid planes, 7 values each: point (3), unit normal (3), normal stiffness. The sum over the
-// planes starts from zero for every particle, as Contact::compute_forces does.
-__global__ void half_spaces_cuda(long long n, int dimension, const double* position, VectorField u, int planes,
-                                 const double* plane, DeviceField contact) {
+// Rigid planes (PlaneContact each) with their friction springs, one per plane and particle
+// (plane-major, as Contact keeps them). The sum over the planes starts from zero for every
+// particle, as Contact::compute_forces does; each particle keeps its own running total of the
+// slip's dissipation and the energy of its springs now (friction_totals sums them).
+__global__ void half_spaces_cuda(long long n, int dimension, const double* position, VectorField u, VectorField v,
+                                 int planes, const PlaneContact* plane, double dt, FrictionState* springs,
+                                 double* dissipated, double* spring_energy, DeviceField contact) {
   const long long i = thread_index();
   if (i >= n) return;
   const double ui[3] = {u.x[i], u.y[i], u.z[i]};
   double x[3];
   for (int a = 0; a < 3; ++a) x[a] = position[3 * i + a] + (a < dimension ? ui[a] : 0.0);
-  double sum[3] = {0.0, 0.0, 0.0};
+  const double vi[3] = {v.x[i], v.y[i], dimension == 3 ? v.z[i] : 0.0};
+  double sum[3] = {0.0, 0.0, 0.0}, slip = 0.0, spring = 0.0;
   for (int p = 0; p < planes; ++p) {
     double f[3] = {0.0, 0.0, 0.0};
-    half_space_force_at(x, &plane[7 * p], &plane[7 * p + 3], plane[7 * p + 6], f);
+    half_space_contact_at(x, vi, plane[p], dt, springs[p * n + i], f, &slip, &spring);
     for (int a = 0; a < 3; ++a) sum[a] += f[a];
   }
   contact.x[i] = sum[0];
   contact.y[i] = sum[1];
   contact.z[i] = sum[2];
+  dissipated[i] += slip;
+  spring_energy[i] = spring;
 }
 
 __global__ void acceleration_cuda(long long n, SolidAccelerationInputs in, DeviceField a) {
@@ -135,6 +141,7 @@ public:
   void upload_cut(const SolidCutState& host, const std::vector<long long>& particles) override;
   double shortest_squeezed_bond_m(double window_s) override;
   long long clumped_bonds() override;
+  void friction_totals(double* spring_energy_j, double* dissipated_j) override;
   void download(const SolidHostState& host, bool kinematics_only) override;
   std::string description() const override { return "cuda (" + solver::cuda_device_description() + ")"; }
 
@@ -156,7 +163,11 @@ private:
   SolidAccelerationInputs accel_in_{};
 
   DeviceArray<double> u_[3], v_[3], a_[3], external_[3], contact_[3];
-  DeviceArray<double> position_, volume_, stencil_volume_, stress_work_, eq_plastic_, pressure_, pressure_floor_, plane_;
+  DeviceArray<double> position_, volume_, stencil_volume_, stress_work_, eq_plastic_, pressure_, pressure_floor_;
+  DeviceArray<PlaneContact> plane_;
+  DeviceArray<FrictionState> springs_;
+  DeviceArray<double> dissipated_, spring_energy_;
+  double dissipated_before_j_ = 0.0;  // by the solid before the device was built
   DeviceArray<Mat3> gradient_, f_inverse_, moment_inverse_;
   DeviceArray<SymTensor> stress_;
   DeviceArray<ForceMatrices> matrices_;
@@ -209,14 +220,20 @@ CudaSolidDevice::CudaSolidDevice(const Solid& solid) {
 
   bonds_ = bond_arrays_.upload(solid.bonds());
 
-  std::vector<double> planes;
-  for (const HalfSpace& h : solid.contact().half_spaces()) {
-    planes.insert(planes.end(), h.point_m.begin(), h.point_m.end());
-    planes.insert(planes.end(), h.normal.begin(), h.normal.end());
-    planes.push_back(h.law.normal_stiffness_n_m);
-  }
-  planes_ = static_cast<int>(solid.contact().half_spaces().size());
+  std::vector<PlaneContact> planes;
+  for (const HalfSpace& h : solid.contact().half_spaces()) planes.push_back(plane_contact(h));
+  planes_ = static_cast<int>(planes.size());
   plane_.upload(planes, "rigid planes");
+  // The springs carry on from the host's (Contact keeps the planes' first; empty before any step).
+  const std::vector<FrictionState>& host_springs = solid.contact().obstacle_springs();
+  const size_t springs = static_cast<size_t>(planes_) * n_;
+  springs_.upload(host_springs.size() >= springs
+                      ? std::vector<FrictionState>(host_springs.begin(), host_springs.begin() + springs)
+                      : std::vector<FrictionState>(springs),
+                  "friction springs");
+  dissipated_.upload(std::vector<double>(planes_ > 0 ? n_ : 0, 0.0), "friction dissipation");
+  spring_energy_.upload(std::vector<double>(planes_ > 0 ? n_ : 0, 0.0), "friction spring energy");
+  dissipated_before_j_ = solid.contact().friction_dissipation_j();
   counters_.upload(std::vector<unsigned long long>(4, 0), "counters");
 
   prescribed_ = solid.prescribed();
@@ -278,7 +295,8 @@ void CudaSolidDevice::motion_phase(double dt, double time_after_s) {
     after_launch("pressure_floor_at");
   }
   if (planes_ > 0) {
-    half_spaces_cuda<<<blocks, kBlock>>>(n_, dimension_, position_.get(), view(u_), planes_, plane_.get(), field(contact_));
+    half_spaces_cuda<<<blocks, kBlock>>>(n_, dimension_, position_.get(), view(u_), view(v_), planes_, plane_.get(), dt,
+                                         springs_.get(), dissipated_.get(), spring_energy_.get(), field(contact_));
     after_launch("half_space_force_at");
   }
   acceleration_cuda<<<blocks, kBlock>>>(n_, accel_in_, field(a_));
@@ -353,6 +371,18 @@ long long CudaSolidDevice::clumped_bonds() {
                                             counters_.get() + kClumped);
   after_launch("clumping_ratio");
   return take_counter(kClumped);
+}
+
+// Summed on the host in particle order (a few MB per call; read with the history rows).
+void CudaSolidDevice::friction_totals(double* spring_energy_j, double* dissipated_j) {
+  *spring_energy_j = 0.0;
+  *dissipated_j = dissipated_before_j_;
+  if (planes_ == 0) return;
+  std::vector<double> values;
+  spring_energy_.download(values, "friction spring energy");
+  for (double e : values) *spring_energy_j += e;
+  dissipated_.download(values, "friction dissipation");
+  for (double d : values) *dissipated_j += d;
 }
 
 void CudaSolidDevice::download(const SolidHostState& host, bool kinematics_only) {

@@ -272,24 +272,19 @@ void Contact::obstacle_forces(const ParticleStateView& s, double dt) {
   const long long n = s.count;
   const long long slots = static_cast<long long>(half_spaces_.size() + polygons_.size());
   if (friction_.size() != static_cast<size_t>(slots * n)) friction_.assign(slots * n, FrictionState{});
-  const double zero[3] = {0.0, 0.0, 0.0};
   auto current = [&](long long i, int a) {
     const double* u = a == 0 ? s.u.x : (a == 1 ? s.u.y : s.u.z);
     return s.position_m[3 * i + a] + ((a < s.dimension) ? u[i] : 0.0);
   };
   for (size_t h = 0; h < half_spaces_.size(); ++h) {
-    const HalfSpace& hs = half_spaces_[h];
+    const PlaneContact plane = plane_contact(half_spaces_[h]);
     for (long long i = 0; i < n; ++i) {
       const double x[3] = {current(i, 0), current(i, 1), current(i, 2)};
+      const double v[3] = {s.v.x[i], s.v.y[i], s.dimension == 3 ? s.v.z[i] : 0.0};
       double f[3] = {0.0, 0.0, 0.0};
-      // The normal penalty is the body the CUDA launcher runs too (solid_phases.hpp).
-      const double depth = half_space_force_at(x, hs.point_m.data(), hs.normal.data(), hs.law.normal_stiffness_n_m, f);
-      if (depth <= 0.0) {
-        if (!friction_.empty()) friction_[h * n + i] = FrictionState{};
+      // The body the CUDA launcher runs too (solid_phases.hpp).
+      if (half_space_contact_at(x, v, plane, dt, friction_[h * n + i], f, &dissipated_j_, &spring_energy_j_) <= 0.0)
         continue;
-      }
-      rigid_friction(i, static_cast<long long>(h), hs.law.normal_stiffness_n_m * depth, hs.normal.data(), zero,
-                     hs.law, s, dt, f);
       for (int a = 0; a < 3; ++a) force_n_[a][i] += f[a];
     }
   }

@@ -67,9 +67,6 @@ std::optional<DeviceRefusal> solid_device_refusal(const CaseSpec& spec) {
                          "with --backend cuda", "no particle contact on the GPU" + cpu};
   if (!spec.rigid_bodies.empty())
     return DeviceRefusal{"contact.rigid_bodies", "rigid polygons with --backend cuda", "none on the GPU" + cpu};
-  if (spec.floor && (spec.floor->friction.static_friction > 0.0 || spec.floor->friction.kinetic_friction > 0.0))
-    return DeviceRefusal{"contact.floor.static_friction", "a frictional floor with --backend cuda",
-                         "a frictionless floor on the GPU" + cpu};
   return std::nullopt;
 }
 

@@ -17,6 +17,7 @@
 
 #include "breccia/mps/contact_kernels.hpp"
 #include "breccia/mps/kernels.hpp"
+#include "breccia/mps/solid_phases.hpp"
 
 namespace breccia::mps {
 
@@ -55,6 +56,20 @@ struct HalfSpace {
   std::array<double, 3> normal{0.0, 1.0, 0.0};  // normalised by add_half_space
   RigidContactLaw law;
 };
+
+// The plane and its law as the per-particle body half_space_contact_at takes them.
+inline PlaneContact plane_contact(const HalfSpace& h) {
+  PlaneContact p;
+  for (int a = 0; a < 3; ++a) {
+    p.point[a] = h.point_m[a];
+    p.normal[a] = h.normal[a];
+  }
+  p.normal_stiffness = h.law.normal_stiffness_n_m;
+  p.tangential_stiffness = h.law.tangential_stiffness_n_m;
+  p.static_friction = h.law.static_friction;
+  p.kinetic_friction = h.law.kinetic_friction;
+  return p;
+}
 
 // A 2D rigid polygon: vertices in order (either orientation), closed implicitly. Particle
 // centres inside it are pushed out to the nearest boundary point. A free body moves under
@@ -107,6 +122,15 @@ public:
   // springs (as left by the last compute_forces()).
   double potential_energy_j(const ParticleStateView& s) const;
   double friction_dissipation_j() const { return dissipated_j_; }
+  // With the half-spaces' friction run on a device (Solid::attach_device): the totals it
+  // reports replace those compute_forces() would have left.
+  void set_friction_totals(double spring_energy_j, double dissipated_j) {
+    spring_energy_j_ = spring_energy_j;
+    dissipated_j_ = dissipated_j;
+  }
+  // The friction springs of the rigid obstacles as the last compute_forces() left them, one
+  // per particle and obstacle (half-spaces first, then polygons; empty before the first).
+  const std::vector<FrictionState>& obstacle_springs() const { return friction_; }
   double rigid_kinetic_energy_j() const;
   double rigid_gravity_energy_j(const std::array<double, 3>& gravity_m_s2) const;  // -m g . (c - c0)
   long long contact_pairs() const { return contact_pairs_; }

@@ -75,9 +75,9 @@ struct RigidFloor {
 // solid_phases.hpp in Solid's order; Solid keeps the clock, the substep count, the error
 // checks and the cutting of bonds by fracture, and its host arrays become a cache, refreshed
 // by download() only when read.
-// Supported: total Lagrangian stencils, plasticity, both pressure forms, frictionless rigid
-// planes, prescribed sets, constant external forces, gravity, damping, pre-cut bonds and
-// fracture; the rest is refused before a device is built (solid_device_refusal,
+// Supported: total Lagrangian stencils, plasticity, both pressure forms, rigid planes with
+// or without friction, prescribed sets, constant external forces, gravity, damping, pre-cut
+// bonds and fracture; the rest is refused before a device is built (solid_device_refusal,
 // solid_case.hpp).
 struct SolidHostState {  // what download() refreshes (sized by the caller)
   std::array<std::vector<double>, 3>* u = nullptr;
@@ -124,6 +124,11 @@ public:
   virtual double shortest_squeezed_bond_m(double window_s) = 0;
   // Bonds below kMinNeighbourDistanceRatio by the clumping measure (stability_checks.hpp).
   virtual long long clumped_bonds() = 0;
+  // Rigid planes with friction: the energy in the particles' tangential springs now, and the
+  // energy dissipated by slip since the device was built plus what the solid had dissipated
+  // before (Contact::friction_dissipation_j; summed per particle, so it differs from the
+  // CPU's running sum at rounding level).
+  virtual void friction_totals(double* spring_energy_j, double* dissipated_j) = 0;
   // u and v only (kinematics), or every field of SolidHostState.
   virtual void download(const SolidHostState& host, bool kinematics_only) = 0;
   virtual std::string description() const = 0;  // backend and device, for logs and summary.json
@@ -241,7 +246,10 @@ public:
   // Penalty energy of all contacts (floor, polygons, particle pairs) + friction springs.
   double contact_energy_j() const;
   double floor_energy_j() const { return contact_energy_j(); }  // the floor was the only contact once
-  double friction_dissipation_j() const { return contact_.friction_dissipation_j(); }
+  double friction_dissipation_j() const {
+    sync_friction();
+    return contact_.friction_dissipation_j();
+  }
   double gravity_energy_j() const;  // - m g . u (particles and free rigid bodies), zero at the start
   double plastic_fraction() const;  // share of particles with eq. plastic strain > 0
 
@@ -288,6 +296,7 @@ private:
   void absorb_inverted_on_device(long long inverted);
   void fracture_on_device();
   void sync_fracture() const;  // separation values of the device's last stress phase
+  void sync_friction() const;  // the device's friction totals into contact_
   void build_stencils(const std::vector<double>& position_m);  // bonds, L^-1, surface flags
   void rebuild_stencils_on_current_configuration();            // updated Lagrangian
   void update_substeps();  // substeps per step() from the shortest current bond
@@ -296,7 +305,9 @@ private:
   double density_kg_m3_ = 0.0;
   SolidLaw law_;
   SolidOptions options_;
-  Contact contact_;
+  // mutable: with a device, its friction totals are a cache of the device's (sync_friction).
+  mutable Contact contact_;
+  mutable bool friction_current_ = true;
   // mutable: with a device, its separation values are a cache too (sync_fracture).
   mutable std::optional<FractureModel> fracture_;
   mutable bool separation_current_ = true;

@@ -4,11 +4,12 @@
 // on the same data in the same order:
 //   1. stress_phase_at        gradient, stress update, force matrices (solid_kernels.hpp)
 //   2. pressure_floor_at      repulsive pressure only: the lowest pressure around i
-//   3. half_space_force_at    frictionless rigid planes (penalty, contact_kernels.hpp)
+//   3. half_space_contact_at  rigid planes: penalty (half_space_force_at) and Coulomb friction
 //   4. solid_acceleration_at  internal + external + contact force, gravity, damping
 // and the two measures taken every kClumpingCheckEvery steps:
 //   squeezed_bond_length      the substep count (Solid::update_substeps)
 //   clumping_ratio            the clumping detector (stability_checks.hpp)
+#include "breccia/mps/contact_kernels.hpp"
 #include "breccia/mps/solid_kernels.hpp"
 
 namespace breccia::mps {
@@ -86,6 +87,39 @@ BRECCIA_HD inline double half_space_force_at(const double x[3], const double poi
   const double normal_force = stiffness_n_m * -height;
   for (int a = 0; a < 3; ++a) f[a] += normal_force * normal[a];
   return -height;
+}
+
+// A rigid plane and its contact law as plain values (HalfSpace of contact.hpp, flattened
+// for the device).
+struct PlaneContact {
+  double point[3] = {0.0, 0.0, 0.0};
+  double normal[3] = {0.0, 1.0, 0.0};  // unit
+  double normal_stiffness = 0.0, tangential_stiffness = 0.0;
+  double static_friction = 0.0, kinetic_friction = 0.0;
+};
+
+// Phase 3 for one plane and a particle at current position x with velocity v (the plane is
+// at rest): the penalty (half_space_force_at), then, if the plane has friction, the
+// particle's tangential spring on it updated over dt (coulomb_tangential_force, with the
+// penalty's size as the normal force), adding the slip's dissipation to *dissipated_j and
+// the spring's energy to *spring_energy_j. A particle off the plane loses its spring.
+// Returns the depth (<= 0: no contact). Contact::obstacle_forces and the CUDA launcher run it.
+BRECCIA_HD inline double half_space_contact_at(const double x[3], const double v[3], const PlaneContact& plane,
+                                               double dt, FrictionState& spring, double f[3], double* dissipated_j,
+                                               double* spring_energy_j) {
+  const double depth = half_space_force_at(x, plane.point, plane.normal, plane.normal_stiffness, f);
+  if (depth <= 0.0) {
+    spring = FrictionState{};
+    return depth;
+  }
+  if (plane.static_friction > 0.0 || plane.kinetic_friction > 0.0) {
+    *dissipated_j += coulomb_tangential_force(spring, plane.normal, v, dt, plane.normal_stiffness * depth,
+                                              plane.tangential_stiffness, plane.static_friction,
+                                              plane.kinetic_friction, f);
+    const double* e = spring.s;
+    *spring_energy_j += 0.5 * plane.tangential_stiffness * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+  }
+  return depth;
 }
 
 struct SolidAccelerationInputs {

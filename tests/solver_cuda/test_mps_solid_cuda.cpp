@@ -101,6 +101,50 @@ output: {progress: false}
 )";
 }
 
+// The colliding rubber rings of cases/mps-rubber-rings at 2 mm (benchmarks.md section 10):
+// two bodies, frictionless particle contact with the given normal; they meet at ~0.2 ms.
+std::string rings_case(const std::string& normal, const std::string& end) {
+  return R"(
+specimen:
+  bodies:
+    dimension: 2
+    spacing: 2 mm
+    thickness: 1 mm
+    shapes:
+      - {name: left,  type: annulus, center: [-5 cm, 0], inner_radius: 3 cm, outer_radius: 4 cm, velocity: [50.268, 0]}
+      - {name: right, type: annulus, center: [5 cm, 0],  inner_radius: 3 cm, outer_radius: 4 cm, velocity: [-50.268, 0]}
+model: {type: mps, formulation: stress}
+materials:
+  - {name: rubber, density: 1010, lambda: 6.2563e8, mu: 1.6130e8}
+contact:
+  particles: {normal: )" + normal + R"(}
+time: {end: )" + end + R"(, safety: 0.3}
+output: {progress: false}
+)";
+}
+
+// Two 3D rubber cubes meeting face to face at 40 m/s (test_contact.cpp) with the distribution
+// normal, whose search reaches sqrt(2) contact distances: a face particle has up to five
+// partners.
+std::string cubes_case() {
+  return R"(
+specimen:
+  bodies:
+    dimension: 3
+    spacing: 1 mm
+    shapes:
+      - {name: a, type: box, box: [0, 0, 0, 6 mm, 6 mm, 6 mm], velocity: [20 m/s, 0, 0]}
+      - {name: b, type: box, box: [8 mm, 0, 0, 14 mm, 6 mm, 6 mm], velocity: [-20 m/s, 0, 0]}
+model: {type: mps, formulation: stress}
+materials:
+  - {name: rubber, density: 1000, youngs_modulus: 100 MPa, poisson_ratio: 0.3}
+contact:
+  particles: {normal: neighbour_distribution}
+time: {end: 0.1 ms}
+output: {progress: false}
+)";
+}
+
 // Launcher's phases on the host: the bodies the kernels of mps_solid_cuda.cu call, each over
 // all particles before the next, on this object's own copy of the state, in the order of
 // CudaSolidDevice::substep; the measures as its reduction kernels take them.
@@ -142,6 +186,9 @@ public:
     dissipated_.assign(n_, 0.0);
     spring_energy_.assign(n_, 0.0);
     dissipated_before_j_ = s.contact().friction_dissipation_j();
+    particle_contact_ = s.contact().particle_contact();
+    pair_params_ = s.contact().pair_params();
+    while (buckets_ < 2ull * static_cast<unsigned long long>(n_)) buckets_ *= 2;
     const BondsView b = bonds_.view();
     stress_in_.bonds = b;
     stress_in_.u = u();
@@ -159,7 +206,7 @@ public:
     accel_.forces.volume_m3 = stencil_volume_.data();
     for (int d = 0; d < 3; ++d) {
       accel_.external_n[d] = external_[d].data();
-      accel_.contact_n[d] = planes_.empty() ? nullptr : contact_[d].data();
+      accel_.contact_n[d] = planes_.empty() && !particle_contact_ ? nullptr : contact_[d].data();
       accel_.gravity_m_s2[d] = s.options().gravity_m_s2[d];
     }
     accel_.v = {v_[0].data(), v_[1].data(), v_[2].data()};
@@ -180,14 +227,17 @@ public:
     const BondsView b = bonds_.view();
     if (repulsive_)
       for (long long i = 0; i < n_; ++i) floor_[i] = pressure_floor_at(i, b, full_stencil_.data(), pressure_.data());
+    if (particle_contact_) particle_contact_forces();
     const long long planes = static_cast<long long>(planes_.size());
     for (long long i = 0; i < n_ && planes > 0; ++i) {
-      double x[3], sum[3] = {0.0, 0.0, 0.0}, slip = 0.0, spring = 0.0;
+      double x[3], slip = 0.0, spring = 0.0;
+      double sum[3] = {particle_contact_ ? contact_[0][i] : 0.0, particle_contact_ ? contact_[1][i] : 0.0,
+                       particle_contact_ ? contact_[2][i] : 0.0};
       for (int a = 0; a < 3; ++a) x[a] = position_[3 * i + a] + (a < dimension_ ? u_[a][i] : 0.0);
       const double v[3] = {v_[0][i], v_[1][i], dimension_ == 3 ? v_[2][i] : 0.0};
       for (long long p = 0; p < planes; ++p) {
         double f[3] = {0.0, 0.0, 0.0};
-        half_space_contact_at(x, v, planes_[p], dt, springs_[p * n_ + i], f, &slip, &spring);
+        if (half_space_contact_at(x, v, planes_[p], dt, springs_[p * n_ + i], f, &slip, &spring) <= 0.0) continue;
         for (int a = 0; a < 3; ++a) sum[a] += f[a];
       }
       for (int a = 0; a < 3; ++a) contact_[a][i] = sum[a];
@@ -206,6 +256,50 @@ public:
     return k;
   }
   void inverted_flags(std::vector<char>& flags) override { flags = inverted_flag_; }
+  long long contact_pairs() override { return pairs_; }
+  // The launcher's contact kernels in turn: cells and buckets, the scan, the placing (in
+  // reverse particle order here, standing for the GPU's arbitrary atomic order, which the
+  // sorted partners must make moot), surface directions, then each particle's gather.
+  void particle_contact_forces() {
+    const double reach = pair_search_radius(pair_params_);
+    std::vector<double> x(3 * n_);
+    std::vector<long long> cell(3 * n_);
+    std::vector<unsigned long long> bucket(n_);
+    std::vector<int> count(buckets_ + 1, 0), start(buckets_ + 1, 0), cursor(buckets_, 0), order(n_);
+    for (long long i = 0; i < n_; ++i) {
+      x[3 * i] = position_[3 * i] + u_[0][i];
+      x[3 * i + 1] = position_[3 * i + 1] + u_[1][i];
+      x[3 * i + 2] = position_[3 * i + 2] + (dimension_ == 3 ? u_[2][i] : 0.0);
+      grid_cell_of(&x[3 * i], reach, dimension_, &cell[3 * i]);
+      bucket[i] = grid_bucket(&cell[3 * i], buckets_);
+      ++count[bucket[i]];
+    }
+    for (unsigned long long k = 0; k < buckets_; ++k) start[k + 1] = start[k] + count[k];
+    for (long long i = n_ - 1; i >= 0; --i) order[start[bucket[i]] + cursor[bucket[i]]++] = static_cast<int>(i);
+    std::vector<double> surface;
+    if (pair_params_.distribution) {
+      surface.resize(3 * n_);
+      for (long long i = 0; i < n_; ++i) neighbour_distribution_direction(i, bonds_.view(), x.data(), &surface[3 * i]);
+    }
+    ContactGrid grid;
+    grid.cell_m = reach;
+    grid.buckets = buckets_;
+    grid.dimension = dimension_;
+    grid.cell = cell.data();
+    grid.start = start.data();
+    grid.order = order.data();
+    pairs_ = 0;
+    for (long long i = 0; i < n_; ++i) {
+      int partners[64];
+      const int found = contact_partners_at(i, grid, x.data(), bonds_.view(), reach, partners, 64);
+      if (found < 0) throw breccia::RunError("more than 64 contact partners");
+      double sum[3] = {0.0, 0.0, 0.0};
+      if (found > 0) particle_contact_force_at(i, partners, found, x.data(), surface.empty() ? nullptr : surface.data(),
+                                               pair_params_, sum, &pairs_);
+      for (int a = 0; a < 3; ++a) contact_[a][i] = sum[a];
+      most_partners = std::max(most_partners, found);
+    }
+  }
   void friction_totals(double* spring_energy_j, double* dissipated_j) override {
     *spring_energy_j = 0.0;
     *dissipated_j = dissipated_before_j_;
@@ -297,6 +391,7 @@ public:
   std::string description() const override { return "host emulation of the CUDA launcher"; }
 
   long long substeps_run = 0, downloads = 0, separation_evaluations = 0, uploaded_particles = 0, upload_calls = 0;
+  int most_partners = 0;
 
 private:
   VectorField u() const { return {u_[0].data(), u_[1].data(), u_[2].data()}; }
@@ -315,6 +410,10 @@ private:
   std::vector<FrictionState> springs_;
   std::vector<double> dissipated_, spring_energy_;
   double dissipated_before_j_ = 0.0;
+  bool particle_contact_ = false;
+  PairContactParams pair_params_{};
+  unsigned long long buckets_ = 1;
+  long long pairs_ = 0;
   std::vector<PrescribedSet> prescribed_;
   std::array<std::vector<double>, 3> u_, v_, a_, external_, contact_;
   SolidStressInputs stress_in_{};
@@ -458,6 +557,48 @@ TEST(MpsSolidCuda, LauncherPhasesOnTheHostReproduceTheCpuOnAFrictionalFloor) {
   EXPECT_LE(worst, 1e-12);
 }
 
+// Particle contact through the device path: the hashed grid and each particle's gather
+// (contact_grid.hpp) against Contact::pair_forces' pair list, for both normals. Fields and
+// energies bit for bit (the sums arrive in the same order), and the pair counts equal.
+TEST(MpsSolidCuda, LauncherPhasesOnTheHostReproduceTheCpuParticleContactBitForBit) {
+  // Two 3D cubes meeting face to face (test_contact.cpp) with the distribution normal, whose
+  // search reaches sqrt(2) contact distances, so that a face particle has up to five partners
+  // (with two, the order of the sum could not show), and the rings with the pair normal.
+  for (const auto& [normal, text] : {std::pair<std::string, std::string>{"neighbour_distribution (3D cubes)", cubes_case()},
+                                     std::pair<std::string, std::string>{"pair (2D rings)", rings_case("pair", "0.5 ms")}}) {
+    const CaseSpec spec = parse_case_text(text);
+    Solid cpu = make_solid(spec), dev = make_solid(spec);
+    auto device = std::make_unique<HostPhasesDevice>(dev);
+    HostPhasesDevice* host_device = device.get();
+    dev.attach_device(std::move(device));
+    const long long steps = steps_to_end(cpu, spec);
+    Recorded cpu_run, dev_run;
+    long long most_pairs = 0;
+    size_t pair_counts_differing = 0;
+    for (long long k = 0; k < steps; k += 10) {
+      const long long chunk = std::min<long long>(10, steps - k);
+      const Recorded c = record_run(cpu, chunk), d = record_run(dev, chunk);
+      for (auto [run, part] : {std::pair{&cpu_run, &c}, std::pair{&dev_run, &d}}) {
+        run->kinetic.insert(run->kinetic.end(), part->kinetic.begin(), part->kinetic.end());
+        run->stress_work.insert(run->stress_work.end(), part->stress_work.begin(), part->stress_work.end());
+        run->hourglass.insert(run->hourglass.end(), part->hourglass.begin(), part->hourglass.end());
+        run->contact.insert(run->contact.end(), part->contact.begin(), part->contact.end());
+        run->max_substeps = std::max(run->max_substeps, part->max_substeps);
+      }
+      most_pairs = std::max(most_pairs, cpu.contact().contact_pairs());
+      pair_counts_differing += dev.contact().contact_pairs() != cpu.contact().contact_pairs();
+    }
+    expect_identical(cpu, cpu_run, dev, dev_run);
+    EXPECT_EQ(pair_counts_differing, 0u) << normal;
+    EXPECT_GT(most_pairs, 10) << normal << ": the rings did not meet";
+    if (normal != "pair (2D rings)") {
+      EXPECT_GE(host_device->most_partners, 3) << "no particle had three partners: the summation order is not compared";
+    }
+    std::printf("  [mps solid] %s normal: %zu particles, %lld steps, up to %lld pairs in contact, at most %d "
+                "partners per particle\n", normal.c_str(), cpu.size(), steps, most_pairs, host_device->most_partners);
+  }
+}
+
 // Fracture through the device path: the host cuts on the substeps where the device finds a
 // particle at the strength (and detaches debris the device found inverted), then copies the
 // cut stencils back. Bonds, failures, debris, state and energies must equal the CPU's.
@@ -539,6 +680,7 @@ TEST(MpsSolidCuda, DeviceThatMissesTheCutsDepartsFromTheCpu) {
     double shortest_squeezed_bond_m(double w) override { return inner_.shortest_squeezed_bond_m(w); }
     long long clumped_bonds() override { return inner_.clumped_bonds(); }
     void friction_totals(double* e, double* d) override { inner_.friction_totals(e, d); }
+    long long contact_pairs() override { return inner_.contact_pairs(); }
     void download(const SolidHostState& h, bool k) override { inner_.download(h, k); }
     std::string description() const override { return "no upload"; }
 
@@ -593,14 +735,13 @@ TEST(MpsSolidCuda, FeaturesTheLauncherDoesNotRunAreRefusedNamingTheirKeys) {
   const std::string base = taylor_case("1 us");
   EXPECT_FALSE(solid_device_refusal(parse_case_text(base)).has_value()) << "the Taylor bar runs on the launcher";
   EXPECT_FALSE(solid_device_refusal(parse_case_text(ring_case("1 us"))).has_value()) << "fracture runs on it";
+  EXPECT_FALSE(solid_device_refusal(parse_case_text(rings_case("pair", "1 us"))).has_value()) << "two bodies run on it";
   EXPECT_FALSE(solid_device_refusal(parse_case_text(replaced(base, "stiffness_factor: 1}", kFrictionalFloor))).has_value())
       << "a frictional floor runs on it";
   const std::vector<std::array<std::string, 3>> cases = {
       {"formulation: stress}", "formulation: stress, lagrangian: updated}", "model.lagrangian"},
-      {"      - {name: bar, type: cylinder, center: [0, 0, 0], radius: 3.2 mm, length: 32.4 mm}",
-       "      - {name: bar, type: cylinder, center: [0, 0, 0], radius: 3.2 mm, length: 32.4 mm}\n"
-       "      - {name: anvil, type: cylinder, center: [20 mm, 0, 0], radius: 3.2 mm, length: 4 mm}",
-       "contact.particles"},
+      {"contact:\n", "contact:\n  particles: {static_friction: 0.3, kinetic_friction: 0.2}\n",
+       "contact.particles.static_friction"},
   };
   for (const auto& [from, to, key] : cases) {
     const auto refusal = solid_device_refusal(parse_case_text(replaced(base, from, to)));
@@ -717,6 +858,27 @@ TEST(MpsSolidCuda, RingFractureOnTheGpuMatchesTheCpu) {
   EXPECT_EQ(weights_differing, 0u);
   EXPECT_EQ(gpu.fracture()->failures(), cpu.fracture()->failures());
   EXPECT_LE(du, 1e-9);
+}
+
+// Particle contact on the GPU: the hashed grid, the placing in atomic order and the gather
+// against the CPU's pair list, to 1e-9 as above.
+TEST(MpsSolidCuda, ParticleContactOnTheGpuMatchesTheCpu) {
+  if (!breccia::solver::cuda_device_available()) GTEST_SKIP() << kNoDevice;
+  for (const std::string& text : {cubes_case(), rings_case("pair", "0.5 ms")}) {
+    const CaseSpec spec = parse_case_text(text);
+    Solid cpu = make_solid(spec), gpu = make_solid(spec);
+    gpu.attach_device(make_cuda_solid_device(gpu));
+    const long long steps = steps_to_end(cpu, spec);
+    const Recorded cpu_run = record_run(cpu, steps), gpu_run = record_run(gpu, steps);
+    using breccia::cuda_test::field_difference;
+    double du = 0.0;
+    for (int a = 0; a < 3; ++a) du = std::max(du, field_difference(gpu.displacement(a), cpu.displacement(a)));
+    std::printf("  [mps solid cuda] contact, %zu particles: u %.3e after %lld steps, %lld vs %lld pairs\n", cpu.size(), du,
+                steps, gpu.contact().contact_pairs(), cpu.contact().contact_pairs());
+    EXPECT_LE(du, 1e-9);
+    EXPECT_LE(field_difference(gpu_run.contact, cpu_run.contact), 1e-9);
+    EXPECT_EQ(gpu.contact().contact_pairs(), cpu.contact().contact_pairs());
+  }
 }
 
 TEST(MpsSolidCuda, RepulsivePlateOnTheGpuMatchesTheCpu) {

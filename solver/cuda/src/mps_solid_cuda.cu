@@ -4,6 +4,8 @@
 // that Solid makes every kClumpingCheckEvery steps (shortest squeezed bond, clumped bonds).
 // Compiled with --fmad=false (CMakeLists.txt), so each particle's arithmetic rounds as on the CPU.
 #include <cuda_runtime.h>
+#include <thrust/device_ptr.h>
+#include <thrust/scan.h>
 
 #include <cstdlib>
 #include <cstring>
@@ -11,6 +13,7 @@
 #include <vector>
 
 #include "breccia/common/error.hpp"
+#include "breccia/mps/contact_grid.hpp"
 #include "breccia/mps/cuda_solid.hpp"
 #include "breccia/mps/solid.hpp"
 #include "breccia/mps/solid_phases.hpp"
@@ -65,17 +68,19 @@ __global__ void pressure_floor_cuda(long long n, BondsView b, const char* full_s
 // slip's dissipation and the energy of its springs now (friction_totals sums them).
 __global__ void half_spaces_cuda(long long n, int dimension, const double* position, VectorField u, VectorField v,
                                  int planes, const PlaneContact* plane, double dt, FrictionState* springs,
-                                 double* dissipated, double* spring_energy, DeviceField contact) {
+                                 double* dissipated, double* spring_energy, bool onto_pairs, DeviceField contact) {
   const long long i = thread_index();
   if (i >= n) return;
   const double ui[3] = {u.x[i], u.y[i], u.z[i]};
   double x[3];
   for (int a = 0; a < 3; ++a) x[a] = position[3 * i + a] + (a < dimension ? ui[a] : 0.0);
   const double vi[3] = {v.x[i], v.y[i], dimension == 3 ? v.z[i] : 0.0};
-  double sum[3] = {0.0, 0.0, 0.0}, slip = 0.0, spring = 0.0;
+  // After the particle pairs' forces when there are any, as Contact::compute_forces adds them.
+  double sum[3] = {onto_pairs ? contact.x[i] : 0.0, onto_pairs ? contact.y[i] : 0.0, onto_pairs ? contact.z[i] : 0.0};
+  double slip = 0.0, spring = 0.0;
   for (int p = 0; p < planes; ++p) {
     double f[3] = {0.0, 0.0, 0.0};
-    half_space_contact_at(x, vi, plane[p], dt, springs[p * n + i], f, &slip, &spring);
+    if (half_space_contact_at(x, vi, plane[p], dt, springs[p * n + i], f, &slip, &spring) <= 0.0) continue;
     for (int a = 0; a < 3; ++a) sum[a] += f[a];
   }
   contact.x[i] = sum[0];
@@ -83,6 +88,53 @@ __global__ void half_spaces_cuda(long long n, int dimension, const double* posit
   contact.z[i] = sum[2];
   dissipated[i] += slip;
   spring_energy[i] = spring;
+}
+
+// Particle contact (contact_grid.hpp): current positions, cell and bucket per particle, counted
+// per bucket; after the scan each particle is placed in its bucket (the order within a bucket
+// does not matter: partners are sorted); surface directions for the distribution normal;
+// then each particle gathers its partners and sums its pair forces.
+__global__ void contact_cells_cuda(long long n, int dimension, const double* position, VectorField u, double cell_m,
+                                   unsigned long long buckets, double* x, long long* cell, unsigned long long* bucket,
+                                   int* count) {
+  const long long i = thread_index();
+  if (i >= n) return;
+  x[3 * i] = position[3 * i] + u.x[i];
+  x[3 * i + 1] = position[3 * i + 1] + u.y[i];
+  x[3 * i + 2] = position[3 * i + 2] + (dimension == 3 ? u.z[i] : 0.0);
+  grid_cell_of(&x[3 * i], cell_m, dimension, &cell[3 * i]);
+  bucket[i] = grid_bucket(&cell[3 * i], buckets);
+  atomicAdd(&count[bucket[i]], 1);
+}
+
+__global__ void contact_place_cuda(long long n, const unsigned long long* bucket, const int* start, int* cursor,
+                                   int* order) {
+  const long long i = thread_index();
+  if (i < n) order[start[bucket[i]] + atomicAdd(&cursor[bucket[i]], 1)] = static_cast<int>(i);
+}
+
+__global__ void surface_direction_cuda(long long n, BondsView b, const double* x, double* surface) {
+  const long long i = thread_index();
+  if (i < n) neighbour_distribution_direction(i, b, x, &surface[3 * i]);
+}
+
+constexpr int kContactPartners = 64;
+
+__global__ void particle_contact_cuda(long long n, ContactGrid grid, const double* x, BondsView b, double reach,
+                                      const double* surface, PairContactParams params, DeviceField contact,
+                                      unsigned long long* pairs, unsigned long long* overflow) {
+  const long long i = thread_index();
+  if (i >= n) return;
+  int partners[kContactPartners];
+  const int count = contact_partners_at(i, grid, x, b, reach, partners, kContactPartners);
+  if (count < 0) atomicAdd(overflow, 1ull);
+  double sum[3] = {0.0, 0.0, 0.0};
+  long long mine = 0;
+  if (count > 0) particle_contact_force_at(i, partners, count, x, surface, params, sum, &mine);
+  contact.x[i] = sum[0];
+  contact.y[i] = sum[1];
+  contact.z[i] = sum[2];
+  if (mine > 0) atomicAdd(pairs, static_cast<unsigned long long>(mine));
 }
 
 __global__ void acceleration_cuda(long long n, SolidAccelerationInputs in, DeviceField a) {
@@ -135,20 +187,29 @@ public:
   explicit CudaSolidDevice(const Solid& solid);
   void stress_phase() override;
   void motion_phase(double dt, double time_after_s) override;
-  long long inverted_particles() override { return take_counter(kInverted); }
+  long long inverted_particles() override {
+    if (particle_contact_ && take_counter(kOverflow) > 0)
+      throw RunError("mps solid: a particle found more than " + std::to_string(kContactPartners) +
+                     " contact partners on the GPU (particles crushed together; the CPU has no such limit): "
+                     "use --backend cpu");
+    return take_counter(kInverted);
+  }
   void inverted_flags(std::vector<char>& flags) override { inverted_flag_.download(flags, "inverted flags"); }
   double largest_separation_pa() override;
   void upload_cut(const SolidCutState& host, const std::vector<long long>& particles) override;
   double shortest_squeezed_bond_m(double window_s) override;
   long long clumped_bonds() override;
   void friction_totals(double* spring_energy_j, double* dissipated_j) override;
+  long long contact_pairs() override { return particle_contact_ ? read_counter(kPairs) : 0; }
   void download(const SolidHostState& host, bool kinematics_only) override;
   std::string description() const override { return "cuda (" + solver::cuda_device_description() + ")"; }
 
 private:
-  enum Counter { kInverted = 0, kClumped = 1, kShortest = 2, kSeparation = 3 };
+  enum Counter { kInverted = 0, kClumped = 1, kShortest = 2, kSeparation = 3, kPairs = 4, kOverflow = 5 };
+  void particle_contact_forces();
   void after_launch(const char* kernel) const { cuda::check_launch(kernel, sync_after_launch_); }
   long long take_counter(Counter c);  // waits, reads, resets
+  long long read_counter(Counter c);  // waits, reads
   DeviceField field(DeviceArray<double>* f) const { return {f[0].get(), f[1].get(), f[2].get()}; }
   VectorField view(const DeviceArray<double>* f) const { return {f[0].get(), f[1].get(), f[2].get()}; }
 
@@ -168,6 +229,14 @@ private:
   DeviceArray<FrictionState> springs_;
   DeviceArray<double> dissipated_, spring_energy_;
   double dissipated_before_j_ = 0.0;  // by the solid before the device was built
+  // Particle contact (contact_grid.hpp).
+  bool particle_contact_ = false;
+  PairContactParams pair_params_{};
+  unsigned long long buckets_ = 1;
+  DeviceArray<double> contact_x_, surface_;
+  DeviceArray<long long> cell_;
+  DeviceArray<unsigned long long> bucket_;
+  DeviceArray<int> bucket_count_, bucket_start_, bucket_cursor_, order_;
   DeviceArray<Mat3> gradient_, f_inverse_, moment_inverse_;
   DeviceArray<SymTensor> stress_;
   DeviceArray<ForceMatrices> matrices_;
@@ -234,7 +303,20 @@ CudaSolidDevice::CudaSolidDevice(const Solid& solid) {
   dissipated_.upload(std::vector<double>(planes_ > 0 ? n_ : 0, 0.0), "friction dissipation");
   spring_energy_.upload(std::vector<double>(planes_ > 0 ? n_ : 0, 0.0), "friction spring energy");
   dissipated_before_j_ = solid.contact().friction_dissipation_j();
-  counters_.upload(std::vector<unsigned long long>(4, 0), "counters");
+  counters_.upload(std::vector<unsigned long long>(6, 0), "counters");
+  particle_contact_ = solid.contact().particle_contact();
+  if (particle_contact_) {
+    pair_params_ = solid.contact().pair_params();
+    while (buckets_ < 2ull * static_cast<unsigned long long>(n_)) buckets_ *= 2;
+    contact_x_.allocate(3 * n_, "contact positions");
+    cell_.allocate(3 * n_, "contact cells");
+    bucket_.allocate(n_, "contact buckets");
+    bucket_count_.allocate(buckets_ + 1, "contact bucket counts");
+    bucket_start_.allocate(buckets_ + 1, "contact bucket offsets");
+    bucket_cursor_.allocate(buckets_, "contact bucket cursors");
+    order_.allocate(n_, "contact order");
+    if (pair_params_.distribution) surface_.allocate(3 * n_, "surface directions");
+  }
 
   prescribed_ = solid.prescribed();
   prescribed_particles_ = std::vector<DeviceArray<int>>(prescribed_.size());
@@ -258,7 +340,7 @@ CudaSolidDevice::CudaSolidDevice(const Solid& solid) {
   accel_in_.forces.volume_m3 = stencil_volume_.get();
   for (int d = 0; d < 3; ++d) {
     accel_in_.external_n[d] = external_[d].get();
-    accel_in_.contact_n[d] = planes_ > 0 ? contact_[d].get() : nullptr;
+    accel_in_.contact_n[d] = planes_ > 0 || particle_contact_ ? contact_[d].get() : nullptr;
     accel_in_.gravity_m_s2[d] = solid.options().gravity_m_s2[d];
   }
   accel_in_.v = view(v_);
@@ -294,9 +376,11 @@ void CudaSolidDevice::motion_phase(double dt, double time_after_s) {
     pressure_floor_cuda<<<blocks, kBlock>>>(n_, bonds_, full_stencil_.get(), pressure_.get(), pressure_floor_.get());
     after_launch("pressure_floor_at");
   }
+  if (particle_contact_) particle_contact_forces();
   if (planes_ > 0) {
     half_spaces_cuda<<<blocks, kBlock>>>(n_, dimension_, position_.get(), view(u_), view(v_), planes_, plane_.get(), dt,
-                                         springs_.get(), dissipated_.get(), spring_energy_.get(), field(contact_));
+                                         springs_.get(), dissipated_.get(), spring_energy_.get(), particle_contact_,
+                                         field(contact_));
     after_launch("half_space_force_at");
   }
   acceleration_cuda<<<blocks, kBlock>>>(n_, accel_in_, field(a_));
@@ -305,6 +389,38 @@ void CudaSolidDevice::motion_phase(double dt, double time_after_s) {
       <<<blocks, kBlock>>>(n_, dimension_, field(u_), field(v_), view(a_), 0.5 * dt, dt);
   after_launch("symplectic_euler_at");
   launch_prescribed(prescribed_, prescribed_particles_, time_after_s, field(u_), field(v_), sync_after_launch_);
+}
+
+void CudaSolidDevice::particle_contact_forces() {
+  const long long blocks = blocks_for(n_);
+  const double reach = pair_search_radius(pair_params_);
+  check(cudaMemset(bucket_count_.get(), 0, (buckets_ + 1) * sizeof(int)), "clearing contact buckets");
+  check(cudaMemset(bucket_cursor_.get(), 0, buckets_ * sizeof(int)), "clearing contact cursors");
+  check(cudaMemset(counters_.get() + kPairs, 0, sizeof(unsigned long long)), "clearing a counter");
+  contact_cells_cuda<<<blocks, kBlock>>>(n_, dimension_, position_.get(), view(u_), reach, buckets_, contact_x_.get(),
+                                         cell_.get(), bucket_.get(), bucket_count_.get());
+  after_launch("grid_cell_of");
+  // start[b] = sum of the counts before b (the extra last count is 0, so start[buckets] = n).
+  thrust::exclusive_scan(thrust::device_ptr<int>(bucket_count_.get()),
+                         thrust::device_ptr<int>(bucket_count_.get() + buckets_ + 1),
+                         thrust::device_ptr<int>(bucket_start_.get()));
+  after_launch("exclusive_scan of the contact buckets");
+  contact_place_cuda<<<blocks, kBlock>>>(n_, bucket_.get(), bucket_start_.get(), bucket_cursor_.get(), order_.get());
+  after_launch("contact_place");
+  if (pair_params_.distribution) {
+    surface_direction_cuda<<<blocks, kBlock>>>(n_, bonds_, contact_x_.get(), surface_.get());
+    after_launch("neighbour_distribution_direction");
+  }
+  ContactGrid grid;
+  grid.cell_m = reach;
+  grid.buckets = buckets_;
+  grid.dimension = dimension_;
+  grid.cell = cell_.get();
+  grid.start = bucket_start_.get();
+  grid.order = order_.get();
+  particle_contact_cuda<<<blocks, kBlock>>>(n_, grid, contact_x_.get(), bonds_, reach, surface_.get(), pair_params_,
+                                            field(contact_), counters_.get() + kPairs, counters_.get() + kOverflow);
+  after_launch("particle_contact_force_at");
 }
 
 double CudaSolidDevice::largest_separation_pa() {
@@ -337,6 +453,12 @@ void CudaSolidDevice::upload_cut(const SolidCutState& host, const std::vector<lo
     put(stress_.get(), *host.stress, i, 1, "uploading a cut stencil (stress)");
     put(matrices_.get(), *host.matrices, i, 1, "uploading a cut stencil (force matrices)");
   }
+}
+
+long long CudaSolidDevice::read_counter(Counter c) {
+  unsigned long long value = 0;
+  check(cudaMemcpy(&value, counters_.get() + c, sizeof value, cudaMemcpyDeviceToHost), "reading a counter");
+  return static_cast<long long>(value);
 }
 
 long long CudaSolidDevice::take_counter(Counter c) {

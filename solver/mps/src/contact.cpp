@@ -110,7 +110,7 @@ Contact::PairCandidates Contact::pair_candidates(const ParticleStateView& s) con
   const BondsView b = s.bonds;
   const bool distribution = particles_.normal == ContactNormal::NeighbourDistribution;
   // Planar face-face pairs reach one window sideways (contact_kernels.hpp).
-  const double d = distribution ? std::hypot(particles_.distance_m, window_m()) : particles_.distance_m;
+  const double d = pair_search_radius(pair_params());
   std::array<double, 3> lo{0, 0, 0}, cell{1, 1, 1};
   std::array<long long, 3> count{1, 1, 1};
   // At most ~4N cells, so a particle flung far away cannot make the grid huge (cells then
@@ -192,8 +192,9 @@ Contact::PairCandidates Contact::pair_candidates(const ParticleStateView& s) con
 
 PairContactGeometry Contact::pair_geometry(const PairCandidates& c, int i, int j) const {
   const double dx[3] = {c.x[3 * i] - c.x[3 * j], c.x[3 * i + 1] - c.x[3 * j + 1], c.x[3 * i + 2] - c.x[3 * j + 2]};
-  if (particles_.normal == ContactNormal::Pair) return pair_direction_geometry(dx, particles_.distance_m);
-  return distribution_normal_geometry(dx, &c.surface[3 * i], &c.surface[3 * j], particles_.distance_m, window_m());
+  const bool distribution = particles_.normal == ContactNormal::NeighbourDistribution;
+  return pair_contact_geometry(dx, distribution ? &c.surface[3 * i] : nullptr, distribution ? &c.surface[3 * j] : nullptr,
+                               pair_params());
 }
 
 double Contact::pair_energy_j(const ParticleStateView& s) const {

@@ -355,7 +355,8 @@ void Solid::attach_device(std::unique_ptr<SolidStepDevice> device) {
   // callers that build a Solid themselves).
   std::string missing;
   if (options_.updated_lagrangian) missing = "updated Lagrangian stencils";
-  else if (contact_.particle_contact()) missing = "contact between particles";
+  else if (contact_.particle_contact() && contact_.particle_settings().frictional())
+    missing = "friction between particles";
   else if (contact_.polygon_count() > 0) missing = "rigid polygons";
   if (!missing.empty()) throw RunError("mps solid: the CUDA launcher does not run " + missing + "; use --backend cpu");
   sync_host(false);
@@ -440,7 +441,7 @@ void Solid::sync_friction() const {
   if (!device_ || friction_current_) return;
   double spring = 0.0, dissipated = 0.0;
   device_->friction_totals(&spring, &dissipated);
-  contact_.set_friction_totals(spring, dissipated);
+  contact_.set_device_totals(spring, dissipated, device_->contact_pairs());
   friction_current_ = true;
 }
 

@@ -62,9 +62,10 @@ std::optional<DeviceRefusal> solid_device_refusal(const CaseSpec& spec) {
   const std::string cpu = " (or --backend cpu)";
   if (spec.updated_lagrangian)
     return DeviceRefusal{"model.lagrangian", "updated with --backend cuda", "total on the GPU" + cpu};
-  if (spec.particle_contact || (spec.bodies && spec.bodies->shapes.size() > 1))  // as configure_contact
-    return DeviceRefusal{"contact.particles", "contact between particles (given, or implied by two or more bodies) "
-                         "with --backend cuda", "no particle contact on the GPU" + cpu};
+  if (spec.particle_contact && (spec.particle_contact->friction.static_friction > 0.0 ||
+                                spec.particle_contact->friction.kinetic_friction > 0.0))
+    return DeviceRefusal{"contact.particles.static_friction", "friction between particles with --backend cuda",
+                         "frictionless particle contact on the GPU" + cpu};
   if (!spec.rigid_bodies.empty())
     return DeviceRefusal{"contact.rigid_bodies", "rigid polygons with --backend cuda", "none on the GPU" + cpu};
   return std::nullopt;

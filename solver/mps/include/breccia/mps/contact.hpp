@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "breccia/mps/contact_grid.hpp"
 #include "breccia/mps/contact_kernels.hpp"
 #include "breccia/mps/kernels.hpp"
 #include "breccia/mps/solid_phases.hpp"
@@ -105,6 +106,12 @@ class Contact {
 public:
   bool active() const { return particle_contact_on_ || !half_spaces_.empty() || !polygons_.empty(); }
   bool particle_contact() const { return particle_contact_on_; }
+  const ParticleContact& particle_settings() const { return particles_; }
+  // The pair law as the per-particle bodies of contact_grid.hpp take it.
+  PairContactParams pair_params() const {
+    return {particles_.distance_m, window_m(), particles_.stiffness_n_m,
+            particles_.normal == ContactNormal::NeighbourDistribution ? 1 : 0};
+  }
   void set_particle_contact(ParticleContact pc);
   void add_half_space(HalfSpace h);
   const std::vector<HalfSpace>& half_spaces() const { return half_spaces_; }
@@ -122,11 +129,12 @@ public:
   // springs (as left by the last compute_forces()).
   double potential_energy_j(const ParticleStateView& s) const;
   double friction_dissipation_j() const { return dissipated_j_; }
-  // With the half-spaces' friction run on a device (Solid::attach_device): the totals it
-  // reports replace those compute_forces() would have left.
-  void set_friction_totals(double spring_energy_j, double dissipated_j) {
+  // With the contact run on a device (Solid::attach_device): the totals it reports replace
+  // those compute_forces() would have left.
+  void set_device_totals(double spring_energy_j, double dissipated_j, long long contact_pairs) {
     spring_energy_j_ = spring_energy_j;
     dissipated_j_ = dissipated_j;
+    contact_pairs_ = contact_pairs;
   }
   // The friction springs of the rigid obstacles as the last compute_forces() left them, one
   // per particle and obstacle (half-spaces first, then polygons; empty before the first).

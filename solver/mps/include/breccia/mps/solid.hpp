@@ -76,8 +76,8 @@ struct RigidFloor {
 // checks and the cutting of bonds by fracture, and its host arrays become a cache, refreshed
 // by download() only when read.
 // Supported: total Lagrangian stencils, plasticity, both pressure forms, rigid planes with
-// or without friction, prescribed sets, constant external forces, gravity, damping, pre-cut
-// bonds and fracture; the rest is refused before a device is built (solid_device_refusal,
+// or without friction, frictionless contact between particles (either normal), prescribed
+// sets, constant external forces, gravity, damping, pre-cut bonds and fracture; the rest is refused before a device is built (solid_device_refusal,
 // solid_case.hpp).
 struct SolidHostState {  // what download() refreshes (sized by the caller)
   std::array<std::vector<double>, 3>* u = nullptr;
@@ -129,6 +129,8 @@ public:
   // before (Contact::friction_dissipation_j; summed per particle, so it differs from the
   // CPU's running sum at rounding level).
   virtual void friction_totals(double* spring_energy_j, double* dissipated_j) = 0;
+  // Particle pairs in contact at the last substep (Contact::contact_pairs).
+  virtual long long contact_pairs() = 0;
   // u and v only (kinematics), or every field of SolidHostState.
   virtual void download(const SolidHostState& host, bool kinematics_only) = 0;
   virtual std::string description() const = 0;  // backend and device, for logs and summary.json
@@ -144,8 +146,15 @@ public:
   void set_floor(const RigidFloor& floor);
   // Contact between unbonded particles and with rigid polygons (contact.hpp); stiffnesses in
   // N/m, e.g. factor * face_stiffness_n_m().
-  Contact& contact() { return contact_; }
-  const Contact& contact() const { return contact_; }
+  // On a device, with its totals (friction, pairs in contact: sync_friction).
+  Contact& contact() {
+    sync_friction();
+    return contact_;
+  }
+  const Contact& contact() const {
+    sync_friction();
+    return contact_;
+  }
   // Penalty stiffness of one particle layer: (lambda + 2 mu) A / spacing, and its shear
   // counterpart mu A / spacing (A: particle face area, spacing x thickness in 2D).
   double face_stiffness_n_m() const;
@@ -296,7 +305,7 @@ private:
   void absorb_inverted_on_device(long long inverted);
   void fracture_on_device();
   void sync_fracture() const;  // separation values of the device's last stress phase
-  void sync_friction() const;  // the device's friction totals into contact_
+  void sync_friction() const;  // the device's contact totals (friction, pairs) into contact_
   void build_stencils(const std::vector<double>& position_m);  // bonds, L^-1, surface flags
   void rebuild_stencils_on_current_configuration();            // updated Lagrangian
   void update_substeps();  // substeps per step() from the shortest current bond

@@ -1,0 +1,119 @@
+#pragma once
+// Particle contact of the stress solid as one thread per particle (the CUDA launcher,
+// mps_solid_cuda.cu, and its host emulation in the tests): a hashed cell grid on the current
+// positions, then each particle gathers its contact partners and sums the pair forces itself.
+// Contact::pair_forces (contact.cpp) visits each pair once instead (i < j, +f on i, -f on j);
+// the gather below reproduces its sums to the bit, because
+//   - the partners are the same set (unbonded, closer than the search radius), and
+//   - a particle's contributions arrive in ascending partner order in both: the CPU's pair
+//     list is sorted by (i, j), so particle p meets its pairs (a, p), a < p, before (p, b),
+//     and each pair's force is computed from (min, max) with the same arithmetic.
+// The grid is hashed (cell coordinates to a fixed number of buckets), so a particle flung far
+// away costs nothing; two cells in one bucket only add candidates, which the cell test drops.
+#include <cmath>
+
+#include "breccia/mps/contact_kernels.hpp"
+#include "breccia/mps/kernels.hpp"
+
+namespace breccia::mps {
+
+// The pair law of contact.particles (contact.hpp ParticleContact) as plain values.
+struct PairContactParams {
+  double distance_m = 0.0, window_m = 0.0, stiffness_n_m = 0.0;
+  int distribution = 0;  // 1: neighbour-distribution normal, 0: pair direction
+};
+
+// Geometry of the pair (i, j), i < j, dx = x_i - x_j; m_i, m_j the surface directions (used
+// with the distribution normal only).
+BRECCIA_HD inline PairContactGeometry pair_contact_geometry(const double dx[3], const double* m_i, const double* m_j,
+                                                            const PairContactParams& p) {
+  if (!p.distribution) return pair_direction_geometry(dx, p.distance_m);
+  return distribution_normal_geometry(dx, m_i, m_j, p.distance_m, p.window_m);
+}
+
+// Search radius: the contact distance, or with the distribution normal the planar pairs'
+// reach one window sideways (as Contact::pair_candidates).
+BRECCIA_HD inline double pair_search_radius(const PairContactParams& p) {
+  return p.distribution ? std::hypot(p.distance_m, p.window_m) : p.distance_m;
+}
+
+struct ContactGrid {
+  double cell_m = 0.0;            // cell edge (the search radius)
+  unsigned long long buckets = 1; // a power of two
+  int dimension = 2;
+  const long long* cell = nullptr;  // 3 per particle: its cell coordinates
+  const int* start = nullptr;       // buckets + 1 offsets into order
+  const int* order = nullptr;       // particle indices by bucket
+};
+
+BRECCIA_HD inline void grid_cell_of(const double x[3], double cell_m, int dimension, long long c[3]) {
+  for (int a = 0; a < 3; ++a) c[a] = a < dimension ? static_cast<long long>(std::floor(x[a] / cell_m)) : 0;
+}
+
+BRECCIA_HD inline unsigned long long grid_bucket(const long long c[3], unsigned long long buckets) {
+  const unsigned long long h = static_cast<unsigned long long>(c[0]) * 73856093ull ^
+                               static_cast<unsigned long long>(c[1]) * 19349663ull ^
+                               static_cast<unsigned long long>(c[2]) * 83492791ull;
+  return (h ^ (h >> 29)) & (buckets - 1);
+}
+
+// Particle p's contact partners: every j != p closer than `reach` (x: 3N current positions,
+// z = 0 in 2D) that p is not bonded to now (a bond of nonzero weight), in ascending order.
+// Returns their number, or -1 when more than `capacity` were found.
+BRECCIA_HD inline int contact_partners_at(long long p, const ContactGrid& g, const double* x, BondsView b, double reach,
+                                          int* partners, int capacity) {
+  const long long* cp = &g.cell[3 * p];
+  const int dz = g.dimension == 3 ? 1 : 0;
+  int count = 0;
+  for (long long oz = -dz; oz <= dz; ++oz)
+    for (long long oy = -1; oy <= 1; ++oy)
+      for (long long ox = -1; ox <= 1; ++ox) {
+        const long long c[3] = {cp[0] + ox, cp[1] + oy, cp[2] + oz};
+        const unsigned long long bucket = grid_bucket(c, g.buckets);
+        for (int q = g.start[bucket]; q < g.start[bucket + 1]; ++q) {
+          const int j = g.order[q];
+          const long long* cj = &g.cell[3 * j];
+          if (j == p || cj[0] != c[0] || cj[1] != c[1] || cj[2] != c[2]) continue;  // another cell in this bucket
+          const double dx[3] = {x[3 * p] - x[3 * j], x[3 * p + 1] - x[3 * j + 1], x[3 * p + 2] - x[3 * j + 2]};
+          if (dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2] >= reach * reach) continue;
+          bool bonded = false;
+          for (long long m = b.offset[p]; m < b.offset[p + 1] && !bonded; ++m)
+            bonded = b.neighbour[m] == j && b.weight[m] != 0.0;
+          if (bonded) continue;
+          if (count == capacity) return -1;
+          int k = count++;  // insertion in ascending order
+          while (k > 0 && partners[k - 1] > j) {
+            partners[k] = partners[k - 1];
+            --k;
+          }
+          partners[k] = j;
+        }
+      }
+  return count;
+}
+
+// The contact force on p from its partners (ascending), as Contact::pair_forces sums it:
+// each pair's force from (min, max), +f on the smaller index, -f on the larger, pairs out of
+// contact skipped. *pairs counts the pairs in contact that p is the smaller index of.
+BRECCIA_HD inline void particle_contact_force_at(long long p, const int* partners, int count, const double* x,
+                                                 const double* surface, const PairContactParams& params, double sum[3],
+                                                 long long* pairs) {
+  for (int k = 0; k < count; ++k) {
+    const long long q = partners[k];
+    const long long lo = p < q ? p : q, hi = p < q ? q : p;
+    const double dx[3] = {x[3 * lo] - x[3 * hi], x[3 * lo + 1] - x[3 * hi + 1], x[3 * lo + 2] - x[3 * hi + 2]};
+    const PairContactGeometry g = pair_contact_geometry(dx, surface ? &surface[3 * lo] : nullptr,
+                                                        surface ? &surface[3 * hi] : nullptr, params);
+    double f[3] = {0.0, 0.0, 0.0}, normal_force = 0.0;
+    pair_normal_force(g, params.stiffness_n_m, f, &normal_force);
+    if (normal_force <= 0.0) continue;
+    if (p == lo) {
+      ++*pairs;
+      for (int a = 0; a < 3; ++a) sum[a] += f[a];
+    } else {
+      for (int a = 0; a < 3; ++a) sum[a] -= f[a];
+    }
+  }
+}
+
+}  // namespace breccia::mps

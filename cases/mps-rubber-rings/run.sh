@@ -5,6 +5,7 @@
 #   VARIANT=quick: spacing 2 mm (5 circles through the wall, 1,100 particles, ~10 s)
 #   VARIANT=demo : 1 mm (10 circles, 4,400 particles, ~2-6 min on 2 shared cores)
 #   VARIANT=full : 0.5 mm (20 circles, 17,600 particles, ~30+ min)
+# BACKEND=cuda runs through breccia-solve on a GPU; default cpu.
 set -euo pipefail
 : "${BRECCIA_BIN:?path to the Breccia executables}" "${OUT:?output directory}"
 VARIANT=${VARIANT:-quick}
@@ -16,9 +17,11 @@ case "$VARIANT" in
   full)  SPACING=0.5; EVERY=800 ;;
   *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full)" >&2; exit 2 ;;
 esac
-if [ -x "$BRECCIA_BIN/breccia-mps" ]; then SOLVER=("$BRECCIA_BIN/breccia-mps")
-else SOLVER=("$BRECCIA_BIN/breccia-solve"); fi
 THREADS=${THREADS:-$(nproc)}
+if [ "${BACKEND:-cpu}" != cpu ]; then  # BACKEND=cuda|auto: the stress launcher (docs/cuda.md "MPS"), not yet run on a GPU
+  SOLVER=("$BRECCIA_BIN/breccia-solve" --backend "$BACKEND")
+elif [ -x "$BRECCIA_BIN/breccia-mps" ]; then SOLVER=("$BRECCIA_BIN/breccia-mps")
+else SOLVER=("$BRECCIA_BIN/breccia-solve"); fi
 mkdir -p "$OUT"
 deck="$OUT/rings_h${SPACING}mm.yaml"
 sed -e "s/spacing: 1 mm /spacing: $SPACING mm /" -e "s/every: 400/every: $EVERY/" "$HERE/case.yaml" > "$deck"

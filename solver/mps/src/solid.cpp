@@ -51,6 +51,17 @@ Solid::Solid(std::vector<double> position_m, std::vector<double> volume_m3, doub
   }
   cfl_dt_s_ = options_.safety * options_.spacing_m / p_wave_speed();
   dt_s_ = options_.dt_s ? *options_.dt_s : cfl_dt_s_;
+  // Four P-wave transits of the largest extent of the reference configuration (update_substeps).
+  double extent = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    double lo = 1e300, hi = -1e300;
+    for (size_t i = 0; i < n; ++i) {
+      lo = std::min(lo, position_m_[3 * i + a]);
+      hi = std::max(hi, position_m_[3 * i + a]);
+    }
+    if (n > 0) extent = std::max(extent, hi - lo);
+  }
+  substep_hold_steps_ = std::max<long long>(100, static_cast<long long>(std::ceil(4.0 * extent / (p_wave_speed() * dt_s_))));
 }
 
 // Bonds within re of each other in the given configuration, their moment matrices and the
@@ -165,7 +176,19 @@ void Solid::update_substeps() {
   const double stable_dt = kSubstepExcess * options_.safety * shortest / p_wave_speed();
   double wanted = std::ceil(dt_s_ / stable_dt - 1e-9);
   if (!(wanted >= 1.0)) wanted = 1.0;  // NaN from non-finite fields: the inversion check reports those
-  substeps_ = static_cast<int>(std::min(wanted, static_cast<double>(kMaxSubsteps)));
+  const int count = static_cast<int>(std::min(wanted, static_cast<double>(kMaxSubsteps)));
+  // Raised at once (stability), lowered only when no check has needed the higher count for
+  // four wave transits of the body. Changing the step of symplectic Euler changes the energy
+  // it conserves (its shadow energy depends on dt), and a count that follows a vibration up
+  // and down, split while the bonds are squeezed and whole while they are not, pumps energy
+  // into it every cycle: the rubber rings gained 10.7% over 6 ms that way, against 2.6% with
+  // no substeps (cases/mps-rubber-rings).
+  if (count >= substeps_) {
+    substeps_ = count;
+    last_needed_step_ = steps_;
+  } else if (steps_ - last_needed_step_ >= substep_hold_steps_) {
+    substeps_ = count;
+  }
 }
 
 std::vector<double> Solid::volume_ratio() const {

@@ -341,6 +341,9 @@ private:
   std::array<std::vector<double>, 3> u_at_rebuild_, u_stencil_;
   long long stencil_rebuilds_ = 0;
   int substeps_ = 1;  // per step(): keeps the step stable where bonds are squeezed
+  // The count is lowered only after substep_hold_steps_ steps in which no check needed it
+  // (update_substeps): last_needed_step_ is the last check that did.
+  long long substep_hold_steps_ = 0, last_needed_step_ = 0;
   double hourglass_released_j_ = 0.0;  // hourglass energy at rebuilds (dissipated)
   std::vector<PrescribedSet> prescribed_;
   double mean_volume_m3_ = 0.0;

@@ -534,6 +534,36 @@ TEST(MpsSolid, SubstepsFollowTheMostShortenedIntactBond) {
   }
 }
 
+// Once a step is split, it stays split until no check has needed the higher count for four
+// P-wave transits of the body (update_substeps): a count that followed a vibration up and
+// down pumped energy into the rubber rings (+10.7% over 6 ms; test_contact.cpp runs them).
+TEST(MpsSolid, SubstepCountIsLoweredOnlyAfterFourWaveTransitsWithoutNeed) {
+  const double h = 1e-3;
+  const auto pos = test::lattice(2, 9, 9, 1, h);
+  const long long n = static_cast<long long>(pos.size() / 3);
+  SolidOptions opt;
+  opt.dimension = 2;
+  opt.spacing_m = h;
+  Solid solid(pos, std::vector<double>(n, h * h), 1000, law_of({1e9, 0.3}), opt);
+  // 4 x 8 mm / (c_L x 0.3 mm / c_L) = 106.7 steps, rounded up.
+  EXPECT_EQ(solid.substep_hold_steps(), 107);
+  // One particle flying at 0.1 c_L towards its neighbour: within the 10-step window the bond
+  // would close by 0.3 of its length, so ceil(1 / (1.25 x 0.7)) = 2 substeps. Then everything
+  // is put back at rest (the strain of that one step, ~3%, leaves a tiny residual stress).
+  const long long moved = 4 + 9 * 4;
+  solid.velocity(0)[moved] = 0.1 * solid.p_wave_speed();
+  solid.step();
+  ASSERT_EQ(solid.substeps(), 2);
+  for (long long i = 0; i < n; ++i) solid.displacement(0)[i] = solid.velocity(0)[i] = 0.0;
+  while (solid.steps() < 110) {
+    solid.step();
+    EXPECT_EQ(solid.substeps(), 2) << "lowered at step " << solid.steps() << ", before the hold ran out";
+  }
+  solid.step();  // the check at step 110: 110 steps since the count was last needed
+  EXPECT_EQ(solid.substeps(), 1);
+  // Without the hold it would have been lowered at the first check after the release.
+}
+
 // An inverted particle (det F <= 0) stops the run with a RunError naming the cause, instead
 // of filling the fields with NaN.
 TEST(MpsSolid, InvertedParticleStopsTheRunWithAnError) {

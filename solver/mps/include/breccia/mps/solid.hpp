@@ -247,6 +247,7 @@ public:
   std::vector<double> volume_ratio() const;
   long long stencil_rebuilds() const { return stencil_rebuilds_; }
   int substeps() const { return substeps_; }  // substeps per step() (squeezed bonds; update_substeps())
+  long long substep_hold_steps() const { return substep_hold_steps_; }  // update_substeps()
 
   double kinetic_energy_j() const;  // particles and free rigid bodies
   // Stress work accumulated since the start (elastic energy + plastic dissipation).

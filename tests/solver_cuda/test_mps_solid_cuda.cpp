@@ -799,6 +799,26 @@ TEST(MpsSolidCuda, DeviceWithoutAGpuFailsWithARunErrorNamingTheRemedy) {
 
 // --- with a GPU: the launcher itself ------------------------------------------------------
 
+// The case on the CPU and on the GPU launcher, each run to its end with the energies recorded
+// every 10 steps; du: the largest difference of the displacements (field_difference).
+struct CpuGpuRuns {
+  Solid cpu, gpu;
+  long long steps = 0;
+  Recorded cpu_run, gpu_run;
+  double du = 0.0;
+};
+
+CpuGpuRuns run_cpu_and_gpu(const CaseSpec& spec) {
+  CpuGpuRuns r{make_solid(spec), make_solid(spec), 0, {}, {}, 0.0};
+  r.gpu.attach_device(make_cuda_solid_device(r.gpu));
+  r.steps = steps_to_end(r.cpu, spec);
+  r.cpu_run = record_run(r.cpu, r.steps);
+  r.gpu_run = record_run(r.gpu, r.steps);
+  for (int a = 0; a < 3; ++a)
+    r.du = std::max(r.du, breccia::cuda_test::field_difference(r.gpu.displacement(a), r.cpu.displacement(a)));
+  return r;
+}
+
 // 1e-9 relative, the contract; identical per-particle rounding makes the runs equal
 // to the last bit in practice (the host emulation above is exact). A wrong phase order or a
 // missed force shows at 1e-3 or more within a few steps.
@@ -807,17 +827,14 @@ TEST(MpsSolidCuda, TaylorBarOnTheGpuMatchesTheCpu) {
   for (const bool friction : {false, true}) {  // the frictionless floor, then mu_s 0.3, mu_k 0.2
     const std::string text = friction ? replaced(taylor_case("20 us"), "stiffness_factor: 1}", kFrictionalFloor)
                                       : taylor_case("20 us");
-    const CaseSpec spec = parse_case_text(text);
-    Solid cpu = make_solid(spec), gpu = make_solid(spec);
-    gpu.attach_device(make_cuda_solid_device(gpu));
-    const long long steps = steps_to_end(cpu, spec);
-    const Recorded cpu_run = record_run(cpu, steps), gpu_run = record_run(gpu, steps);
+    CpuGpuRuns r = run_cpu_and_gpu(parse_case_text(text));
+    const Solid &cpu = r.cpu, &gpu = r.gpu;
+    const Recorded &cpu_run = r.cpu_run, &gpu_run = r.gpu_run;
+    const long long steps = r.steps;
+    const double du = r.du;
     using breccia::cuda_test::field_difference;
-    double du = 0.0, dv = 0.0;
-    for (int a = 0; a < 3; ++a) {
-      du = std::max(du, field_difference(gpu.displacement(a), cpu.displacement(a)));
-      dv = std::max(dv, field_difference(gpu.velocity(a), cpu.velocity(a)));
-    }
+    double dv = 0.0;
+    for (int a = 0; a < 3; ++a) dv = std::max(dv, field_difference(gpu.velocity(a), cpu.velocity(a)));
     const double dp = field_difference(gpu.eq_plastic_strain(), cpu.eq_plastic_strain());
     const double dd = std::fabs(gpu.friction_dissipation_j() - cpu.friction_dissipation_j()) /
                       std::max(cpu.friction_dissipation_j(), 1e-300);
@@ -841,15 +858,9 @@ TEST(MpsSolidCuda, TaylorBarOnTheGpuMatchesTheCpu) {
 // must be identical and the fields agree to 1e-9 (as above) over 40 us.
 TEST(MpsSolidCuda, RingFractureOnTheGpuMatchesTheCpu) {
   if (!breccia::solver::cuda_device_available()) GTEST_SKIP() << kNoDevice;
-  const CaseSpec spec = parse_case_text(ring_case("40 us"));
-  Solid cpu = make_solid(spec), gpu = make_solid(spec);
-  gpu.attach_device(make_cuda_solid_device(gpu));
-  const long long steps = steps_to_end(cpu, spec);
-  record_run(cpu, steps);
-  record_run(gpu, steps);
-  using breccia::cuda_test::field_difference;
-  double du = 0.0;
-  for (int a = 0; a < 2; ++a) du = std::max(du, field_difference(gpu.displacement(a), cpu.displacement(a)));
+  CpuGpuRuns r = run_cpu_and_gpu(parse_case_text(ring_case("40 us")));
+  const Solid &cpu = r.cpu, &gpu = r.gpu;
+  const double du = r.du;
   size_t weights_differing = 0;
   for (size_t k = 0; k < cpu.bonds().weight.size(); ++k) weights_differing += gpu.bonds().weight[k] != cpu.bonds().weight[k];
   std::printf("  [mps solid cuda] ring fracture: u %.3e, %lld vs %lld failed, %zu bond weights differ\n", du,
@@ -865,33 +876,19 @@ TEST(MpsSolidCuda, RingFractureOnTheGpuMatchesTheCpu) {
 TEST(MpsSolidCuda, ParticleContactOnTheGpuMatchesTheCpu) {
   if (!breccia::solver::cuda_device_available()) GTEST_SKIP() << kNoDevice;
   for (const std::string& text : {cubes_case(), rings_case("pair", "0.5 ms")}) {
-    const CaseSpec spec = parse_case_text(text);
-    Solid cpu = make_solid(spec), gpu = make_solid(spec);
-    gpu.attach_device(make_cuda_solid_device(gpu));
-    const long long steps = steps_to_end(cpu, spec);
-    const Recorded cpu_run = record_run(cpu, steps), gpu_run = record_run(gpu, steps);
-    using breccia::cuda_test::field_difference;
-    double du = 0.0;
-    for (int a = 0; a < 3; ++a) du = std::max(du, field_difference(gpu.displacement(a), cpu.displacement(a)));
-    std::printf("  [mps solid cuda] contact, %zu particles: u %.3e after %lld steps, %lld vs %lld pairs\n", cpu.size(), du,
-                steps, gpu.contact().contact_pairs(), cpu.contact().contact_pairs());
-    EXPECT_LE(du, 1e-9);
-    EXPECT_LE(field_difference(gpu_run.contact, cpu_run.contact), 1e-9);
-    EXPECT_EQ(gpu.contact().contact_pairs(), cpu.contact().contact_pairs());
+    CpuGpuRuns r = run_cpu_and_gpu(parse_case_text(text));
+    std::printf("  [mps solid cuda] contact, %zu particles: u %.3e after %lld steps, %lld vs %lld pairs\n", r.cpu.size(),
+                r.du, r.steps, r.gpu.contact().contact_pairs(), r.cpu.contact().contact_pairs());
+    EXPECT_LE(r.du, 1e-9);
+    EXPECT_LE(breccia::cuda_test::field_difference(r.gpu_run.contact, r.cpu_run.contact), 1e-9);
+    EXPECT_EQ(r.gpu.contact().contact_pairs(), r.cpu.contact().contact_pairs());
   }
 }
 
 TEST(MpsSolidCuda, RepulsivePlateOnTheGpuMatchesTheCpu) {
   if (!breccia::solver::cuda_device_available()) GTEST_SKIP() << kNoDevice;
-  const CaseSpec spec = parse_case_text(plate_case());
-  Solid cpu = make_solid(spec), gpu = make_solid(spec);
-  gpu.attach_device(make_cuda_solid_device(gpu));
-  const long long steps = steps_to_end(cpu, spec);
-  const Recorded cpu_run = record_run(cpu, steps), gpu_run = record_run(gpu, steps);
-  using breccia::cuda_test::field_difference;
-  double du = 0.0;
-  for (int a = 0; a < 3; ++a) du = std::max(du, field_difference(gpu.displacement(a), cpu.displacement(a)));
-  std::printf("  [mps solid cuda] plate: u %.3e after %lld steps\n", du, steps);
-  EXPECT_LE(du, 1e-9);
-  EXPECT_LE(field_difference(gpu_run.hourglass, cpu_run.hourglass), 1e-9);
+  CpuGpuRuns r = run_cpu_and_gpu(parse_case_text(plate_case()));
+  std::printf("  [mps solid cuda] plate: u %.3e after %lld steps\n", r.du, r.steps);
+  EXPECT_LE(r.du, 1e-9);
+  EXPECT_LE(breccia::cuda_test::field_difference(r.gpu_run.hourglass, r.cpu_run.hourglass), 1e-9);
 }

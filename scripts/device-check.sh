@@ -212,7 +212,7 @@ run_tests() {  # run_tests NAME TIMEOUT [gtest args]
 wanted() { [ -z "${ONLY:-}" ] || [[ ",$ONLY," == *",$1,"* ]]; }
 if wanted tests; then
   run_tests test_mps_cuda 180
-  in_budget test_mps_solid_cuda && run_tests test_mps_solid_cuda 90
+  in_budget test_mps_solid_cuda && run_tests test_mps_solid_cuda 150
   in_budget test_solver_cuda && run_tests test_solver_cuda 240
   in_budget test_atlas_backends && run_tests test_atlas_backends 60
 fi

@@ -425,6 +425,13 @@ private:
 struct Recorded {
   std::vector<double> kinetic, stress_work, hourglass, contact;  // every 10 steps
   int max_substeps = 1;
+  // A later stretch of the same run (record_run in chunks, reading something between them).
+  void append(const Recorded& part) {
+    for (auto [to, from] : {std::pair{&kinetic, &part.kinetic}, std::pair{&stress_work, &part.stress_work},
+                            std::pair{&hourglass, &part.hourglass}, std::pair{&contact, &part.contact}})
+      to->insert(to->end(), from->begin(), from->end());
+    max_substeps = std::max(max_substeps, part.max_substeps);
+  }
 };
 
 Recorded record_run(Solid& s, long long steps) {
@@ -539,11 +546,7 @@ TEST(MpsSolidCuda, LauncherPhasesOnTheHostReproduceTheCpuOnAFrictionalFloor) {
   Recorded cpu_run, dev_run;
   for (auto [solid, run, dissipated] : {std::tuple{&cpu, &cpu_run, &cpu_dissipated}, std::tuple{&dev, &dev_run, &dev_dissipated}})
     for (long long k = 0; k < steps; k += 10) {
-      const Recorded part = record_run(*solid, std::min<long long>(10, steps - k));
-      for (auto [to, from] : {std::pair{&run->kinetic, &part.kinetic}, std::pair{&run->stress_work, &part.stress_work},
-                              std::pair{&run->hourglass, &part.hourglass}, std::pair{&run->contact, &part.contact}})
-        to->insert(to->end(), from->begin(), from->end());
-      run->max_substeps = std::max(run->max_substeps, part.max_substeps);
+      run->append(record_run(*solid, std::min<long long>(10, steps - k)));
       dissipated->push_back(solid->friction_dissipation_j());
     }
   expect_identical(cpu, cpu_run, dev, dev_run);
@@ -577,14 +580,8 @@ TEST(MpsSolidCuda, LauncherPhasesOnTheHostReproduceTheCpuParticleContactBitForBi
     size_t pair_counts_differing = 0;
     for (long long k = 0; k < steps; k += 10) {
       const long long chunk = std::min<long long>(10, steps - k);
-      const Recorded c = record_run(cpu, chunk), d = record_run(dev, chunk);
-      for (auto [run, part] : {std::pair{&cpu_run, &c}, std::pair{&dev_run, &d}}) {
-        run->kinetic.insert(run->kinetic.end(), part->kinetic.begin(), part->kinetic.end());
-        run->stress_work.insert(run->stress_work.end(), part->stress_work.begin(), part->stress_work.end());
-        run->hourglass.insert(run->hourglass.end(), part->hourglass.begin(), part->hourglass.end());
-        run->contact.insert(run->contact.end(), part->contact.begin(), part->contact.end());
-        run->max_substeps = std::max(run->max_substeps, part->max_substeps);
-      }
+      cpu_run.append(record_run(cpu, chunk));
+      dev_run.append(record_run(dev, chunk));
       most_pairs = std::max(most_pairs, cpu.contact().contact_pairs());
       pair_counts_differing += dev.contact().contact_pairs() != cpu.contact().contact_pairs();
     }

@@ -462,10 +462,9 @@ long long CudaSolidDevice::read_counter(Counter c) {
 }
 
 long long CudaSolidDevice::take_counter(Counter c) {
-  unsigned long long value = 0;
-  check(cudaMemcpy(&value, counters_.get() + c, sizeof value, cudaMemcpyDeviceToHost), "reading a counter");
-  check(cudaMemset(counters_.get() + c, 0, sizeof value), "clearing a counter");
-  return static_cast<long long>(value);
+  const long long value = read_counter(c);
+  check(cudaMemset(counters_.get() + c, 0, sizeof(unsigned long long)), "clearing a counter");
+  return value;
 }
 
 double CudaSolidDevice::shortest_squeezed_bond_m(double window_s) {

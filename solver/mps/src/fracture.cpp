@@ -25,7 +25,7 @@ FractureModel::FractureModel(const FractureLaw& law, const BondList& bonds, doub
   failures_.assign(n, 0);
 }
 
-double FractureModel::evaluate(const BondList& bonds, const State& s) {
+void FractureModel::evaluate(const BondList& bonds, const State& s) {
   const long long n = static_cast<long long>(bonds.particles());
   SeparationInputs in;
   in.bonds = bonds.view();
@@ -45,7 +45,6 @@ double FractureModel::evaluate(const BondList& bonds, const State& s) {
     separation_pa_[i] = sep.stress_pa;
     normal_[i] = {sep.normal[0], sep.normal[1], sep.normal[2]};
   }
-  return max_separation_pa();
 }
 
 std::vector<long long> FractureModel::fail_and_cut(BondList& bonds, const State& s) {

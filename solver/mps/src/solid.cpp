@@ -341,7 +341,7 @@ void Solid::step() {
       if (fracture_) fracture_on_device();  // cut bonds take no part in the forces below
       time_s_ += dt;
       device_->motion_phase(dt, time_s_);
-      kinematics_current_ = friction_current_ = false;
+      kinematics_current_ = contact_current_ = false;
       continue;
     }
     // Symplectic Euler (the paper's scheme): v^{k+1} = v^k + dt a(u^k), u^{k+1} = u^k + dt v^{k+1}.
@@ -384,7 +384,7 @@ void Solid::attach_device(std::unique_ptr<SolidStepDevice> device) {
   if (!missing.empty()) throw RunError("mps solid: the CUDA launcher does not run " + missing + "; use --backend cpu");
   sync_host(false);
   device_ = std::move(device);
-  kinematics_current_ = state_current_ = separation_current_ = friction_current_ = true;  // the device starts from the host's state
+  kinematics_current_ = state_current_ = separation_current_ = contact_current_ = true;  // the device starts from the host's state
 }
 
 std::string Solid::backend_description() const {
@@ -460,17 +460,17 @@ double Solid::hourglass_energy_j() const {
   return e;
 }
 
-void Solid::sync_friction() const {
-  if (!device_ || friction_current_) return;
+void Solid::sync_contact() const {
+  if (!device_ || contact_current_) return;
   double spring = 0.0, dissipated = 0.0;
   device_->friction_totals(&spring, &dissipated);
   contact_.set_device_totals(spring, dissipated, device_->contact_pairs());
-  friction_current_ = true;
+  contact_current_ = true;
 }
 
 double Solid::contact_energy_j() const {
   sync_host(true);
-  sync_friction();
+  sync_contact();
   return contact_.active() ? contact_.potential_energy_j(state_view()) : 0.0;
 }
 

@@ -313,11 +313,10 @@ public:
   // (at most one per neighbourhood, most loaded first), cut their bonds in `bonds` (weight
   // set to 0 in both directions). Returns the particles whose stencil lost a bond (sorted).
   std::vector<long long> fail_and_cut(BondList& bonds, const State& state);
-  // The evaluation alone (separation_pa(), normal_of(); nothing is cut); returns the largest
-  // separation stress. fail_and_cut starts with it; Solid calls it on its own to bring the
-  // values up to date after steps taken on a device (the device only compares them with the
-  // strength, solid.hpp SolidStepDevice).
-  double evaluate(const BondList& bonds, const State& state);
+  // The evaluation alone (separation_pa(), normal_of(); nothing is cut). fail_and_cut starts
+  // with it; Solid calls it on its own to bring the values up to date after steps taken on a
+  // device (the device only compares them with the strength, solid.hpp SolidStepDevice).
+  void evaluate(const BondList& bonds, const State& state);
   // Whether absorb_inversion or absorb_remnant flagged particles that detach_flagged has not
   // yet cut.
   bool has_flagged() const { return flagged_ > 0; }

@@ -77,8 +77,8 @@ struct RigidFloor {
 // by download() only when read.
 // Supported: total Lagrangian stencils, plasticity, both pressure forms, rigid planes with
 // or without friction, frictionless contact between particles (either normal), prescribed
-// sets, constant external forces, gravity, damping, pre-cut bonds and fracture; the rest is refused before a device is built (solid_device_refusal,
-// solid_case.hpp).
+// sets, constant external forces, gravity, damping, pre-cut bonds and fracture; the rest is
+// refused before a device is built (solid_device_refusal, solid_case.hpp).
 struct SolidHostState {  // what download() refreshes (sized by the caller)
   std::array<std::vector<double>, 3>* u = nullptr;
   std::array<std::vector<double>, 3>* v = nullptr;
@@ -146,13 +146,13 @@ public:
   void set_floor(const RigidFloor& floor);
   // Contact between unbonded particles and with rigid polygons (contact.hpp); stiffnesses in
   // N/m, e.g. factor * face_stiffness_n_m().
-  // On a device, with its totals (friction, pairs in contact: sync_friction).
+  // On a device, with its totals (friction, pairs in contact: sync_contact).
   Contact& contact() {
-    sync_friction();
+    sync_contact();
     return contact_;
   }
   const Contact& contact() const {
-    sync_friction();
+    sync_contact();
     return contact_;
   }
   // Penalty stiffness of one particle layer: (lambda + 2 mu) A / spacing, and its shear
@@ -257,7 +257,7 @@ public:
   double contact_energy_j() const;
   double floor_energy_j() const { return contact_energy_j(); }  // the floor was the only contact once
   double friction_dissipation_j() const {
-    sync_friction();
+    sync_contact();
     return contact_.friction_dissipation_j();
   }
   double gravity_energy_j() const;  // - m g . u (particles and free rigid bodies), zero at the start
@@ -306,7 +306,7 @@ private:
   void absorb_inverted_on_device(long long inverted);
   void fracture_on_device();
   void sync_fracture() const;  // separation values of the device's last stress phase
-  void sync_friction() const;  // the device's contact totals (friction, pairs) into contact_
+  void sync_contact() const;  // the device's contact totals (friction, pairs) into contact_
   void build_stencils(const std::vector<double>& position_m);  // bonds, L^-1, surface flags
   void rebuild_stencils_on_current_configuration();            // updated Lagrangian
   void update_substeps();  // substeps per step() from the shortest current bond
@@ -315,9 +315,10 @@ private:
   double density_kg_m3_ = 0.0;
   SolidLaw law_;
   SolidOptions options_;
-  // mutable: with a device, its friction totals are a cache of the device's (sync_friction).
+  // mutable: with a device, its totals (friction, pairs in contact) are a cache of the
+  // device's (sync_contact).
   mutable Contact contact_;
-  mutable bool friction_current_ = true;
+  mutable bool contact_current_ = true;
   // mutable: with a device, its separation values are a cache too (sync_fracture).
   mutable std::optional<FractureModel> fracture_;
   mutable bool separation_current_ = true;

@@ -124,7 +124,8 @@ CaseConfig parse_case_file(const std::string& path) {
   const Section model = root.section("model");
   model.allow_only({"type", "planar", "influence", "horizon", "horizon_factor", "variable_horizon",
                     "surface_correction", "fracture", "no_fail", "precision",
-                    "stabilisation"});
+                    "stabilisation", "partial_volume", "compressive_enhancement", "short_range_forces",
+                    "pmb_calibration"});
   c.model_name = model.choice("type", {"pmb", "lps", "mps", "correspondence"});
   c.model = c.model_name == "lps" ? PdModel::LPS : PdModel::PMB;
   if (c.model_name == "correspondence") c.model = PdModel::Correspondence;
@@ -148,6 +149,30 @@ CaseConfig parse_case_file(const std::string& path) {
                      "none for LPS (the energy correction is implemented for PMB; LPS's discrete weighted volume "
                      "and dilatation are its own correction, docs/theory.md)");
   c.fracture = model.boolean("fracture", true);
+  c.partial_volume = model.choice("partial_volume", {"sampled", "lammps"}, "sampled") == "lammps"
+                         ? PartialVolume::Lammps
+                         : PartialVolume::Sampled;
+  if (model.has("pmb_calibration")) {
+    if (c.model != PdModel::PMB)
+      throw InputError(path, "model.pmb_calibration", "given with type: " + c.model_name,
+                       "only with type: pmb (LPS and correspondence take K and mu through m, not a micromodulus)");
+    c.pmb_calibration = model.choice("pmb_calibration", {"discrete", "continuum"}) == "continuum"
+                            ? CaseConfig::PmbCalibration::Continuum
+                            : CaseConfig::PmbCalibration::Discrete;
+    if (c.pmb_calibration == CaseConfig::PmbCalibration::Continuum && c.surface_correction)
+      throw InputError(path, "model.pmb_calibration", "continuum with surface_correction: energy",
+                       "discrete (the energy correction is built on the discrete bulk calibration)");
+  }
+  c.compressive_enhancement = model.number("compressive_enhancement", Quantity::Dimensionless, 0.0);
+  if (c.compressive_enhancement < 0.0)
+    throw InputError(path, "model.compressive_enhancement", "value " + std::to_string(c.compressive_enhancement),
+                     "alpha >= 0 (Silling & Askari 2005 use 0.25; 0 keeps the critical stretch fixed)");
+  if (c.compressive_enhancement > 0.0 && c.model == PdModel::Correspondence)
+    throw InputError(path, "model.compressive_enhancement", "given with type: correspondence",
+                     "type: pmb or lps (the rule is implemented for bond and LPS forces)");
+  c.short_range_forces = model.boolean("short_range_forces", false);
+  if (c.short_range_forces && c.model == PdModel::Correspondence)
+    throw InputError(path, "model.short_range_forces", "true with type: correspondence", "type: pmb or lps");
   c.precision = model.choice("precision", {"float64", "float32"}, "float64") == "float32"
                     ? CaseConfig::Precision::Float32
                     : CaseConfig::Precision::Float64;

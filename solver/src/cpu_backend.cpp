@@ -26,10 +26,15 @@ void cpu_compute_forces(PdSystem& sys) {
   const PdView p = sys.view();
   if (sys.config.model == PdModel::LPS) for_each_particle(p.n, [&](int64_t i) { lps_dilatation_kernel(p, i); });
   for_each_particle(p.n, [&](int64_t i) { force_kernel(p, i); });
+  if (p.short_range_k) for_each_particle(p.n, [&](int64_t i) { short_range_kernel(p, i); });
   double released = 0.0;
 #pragma omp parallel for reduction(+ : released)
   for (int64_t i = 0; i < p.n; ++i) released += p.dissipated[i];
   sys.dissipated_energy += released;
+}
+
+void commit_min_stretch(PdSystem& sys) {
+  if (!sys.min_stretch.empty()) sys.min_stretch.swap(sys.min_stretch_next);
 }
 
 void compute_external(PdSystem& sys, double t) {
@@ -90,6 +95,7 @@ void cpu_step(PdSystem& sys) {
     float32_download(sys);
     return;
   }
+  commit_min_stretch(sys);
   const double dt = sys.dt, half = 0.5 * dt;
   PdView p = sys.view();
   // Work of external forces and reactions: trapezoid over the step.

@@ -46,6 +46,8 @@ void float32_enable(PdSystem& s) {
   convert(s.k_own, f.k_own);
   convert(s.k_dual, f.k_dual);
   convert(s.vol_own, f.vol_own);
+  convert(s.short_range_k, f.short_range_k);
+  convert(s.spacing, f.spacing);
   f.xi_len.resize(s.bond_count());
   const int64_t n = static_cast<int64_t>(s.n);
 #pragma omp parallel for schedule(static)
@@ -80,6 +82,15 @@ PdViewT<float> float32_view(PdSystem& s) {
   p.offsets = s.offsets.data(); p.neighbor = s.neighbor.data(); p.xi_len = f.xi_len.data();
   p.k_own = f.k_own.data(); p.k_dual = f.k_dual.data(); p.vol_own = f.vol_own.data();
   p.s0_own = s.s0_own.data(); p.s0_dual = s.s0_dual.data(); p.state = s.state.data();
+  if (s.min_stretch.size() == s.n && s.n) {  // shared with the double view: float in both
+    p.alpha = static_cast<float>(s.config.compressive_enhancement);
+    p.min_stretch = s.min_stretch.data();
+    p.min_stretch_next = s.min_stretch_next.data();
+  }
+  if (f.short_range_k.size() == s.n && s.n) {
+    p.short_range_k = f.short_range_k.data();
+    p.spacing = f.spacing.data();
+  }
   p.lps = s.lps.empty() ? nullptr : s.lps.data();
   p.weighted_volume = f.weighted_volume.data(); p.dilatation = f.dilatation.data();
   p.lps_a = f.lps_a.size() == s.n && s.n ? f.lps_a.data() : nullptr;
@@ -108,6 +119,7 @@ void float32_compute_forces(PdSystem& s) {
   const PdViewT<float> p = float32_view(s);
   if (s.config.model == PdModel::LPS) for_each_particle(p.n, [&](int64_t i) { lps_dilatation_kernel(p, i); });
   for_each_particle(p.n, [&](int64_t i) { force_kernel(p, i); });
+  if (p.short_range_k) for_each_particle(p.n, [&](int64_t i) { short_range_kernel(p, i); });
   double released = 0.0;
 #pragma omp parallel for reduction(+ : released)
   for (int64_t i = 0; i < p.n; ++i) released += p.dissipated[i];
@@ -115,6 +127,7 @@ void float32_compute_forces(PdSystem& s) {
 }
 
 void float32_step(PdSystem& s) {
+  commit_min_stretch(s);
   Float32State& f = s.f32;
   const double dt = s.dt, half = 0.5 * dt;
   const PdViewT<float> p = float32_view(s);

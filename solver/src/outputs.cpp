@@ -10,6 +10,7 @@
 #include "breccia/common/error.hpp"
 #include "breccia/common/output_file.hpp"
 #include "breccia/common/particle_file.hpp"
+#include "breccia/solver/load_kernels.hpp"
 
 namespace breccia::solver {
 namespace {
@@ -279,6 +280,7 @@ HistoryWriter::HistoryWriter(const PdSystem& s, const std::string& out_dir, bool
     file_ = std::fopen(path.c_str(), "w");
     if (!file_) throw RunError("cannot write " + path);
     std::fprintf(file_, "step,time_s,kinetic_J,strain_J,external_work_J,dissipated_J,total_J,max_damage,broken_bonds");
+    if (s.config.indenter.enabled) std::fprintf(file_, ",indenter_force_x_N,indenter_force_y_N,indenter_force_z_N");
     const char* comp[2][3] = {{"ux", "uy", "uz"}, {"vx", "vy", "vz"}};
     for (size_t p = 0; p < probes_.size(); ++p)
       for (int d = 0; d < 3; ++d)
@@ -297,6 +299,22 @@ void HistoryWriter::write(const PdSystem& s, const Energies& e) {
   std::fprintf(file_, "%lld,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%.6f,%lld", s.step, s.time, e.kinetic, e.strain,
                s.external_work, s.dissipated_energy, e.kinetic + e.strain + s.dissipated_energy - s.external_work,
                e.max_damage, e.broken_half_bonds / 2);
+  if (s.config.indenter.enabled) {
+    // The force the particles exert on the indenter at this step's position: minus the sum
+    // of what it exerts on them (LAMMPS fix indent's vector).
+    const IndenterSpec& ind = s.config.indenter;
+    double fx = 0.0, fy = 0.0, fz = 0.0;
+    const int64_t n = static_cast<int64_t>(s.n);
+#pragma omp parallel for reduction(+ : fx, fy, fz)
+    for (int64_t i = 0; i < n; ++i) {
+      double f[3];
+      indenter_force(s.x0.data(), s.u.data(), i, s.indenter_position, ind.radius, ind.stiffness, f);
+      fx -= f[0] * s.volume[i];
+      fy -= f[1] * s.volume[i];
+      fz -= f[2] * s.volume[i];
+    }
+    std::fprintf(file_, ",%.9e,%.9e,%.9e", fx, fy, fz);
+  }
   for (const auto& [i, kind] : probes_) {
     const std::vector<double>& src = kind ? s.v : s.u;
     for (int d = 0; d < 3; ++d) std::fprintf(file_, ",%.9e", src[3 * static_cast<size_t>(i) + d]);
@@ -325,6 +343,10 @@ void write_checkpoint(const PdSystem& s, const std::string& path) {
     f.write("/force", s.force, {n, 3});
     f.write("/body", s.body, {n, 3});
     f.write("/bond_state", s.state, {s.state.size()});
+    if (!s.min_stretch.empty()) {  // compressive enhancement: the s_min this step's pass read, and its own
+      f.write("/min_stretch_previous", std::vector<double>(s.min_stretch.begin(), s.min_stretch.end()), {s.n});
+      f.write("/min_stretch", std::vector<double>(s.min_stretch_next.begin(), s.min_stretch_next.end()), {s.n});
+    }
     std::vector<double> ind(s.indenter_position, s.indenter_position + 3);
     f.write("/indenter_position", ind, {3});
   }
@@ -353,6 +375,17 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
   s.force = f.read_doubles("/force");
   s.body = f.read_doubles("/body");
   s.state = f.read_uint8("/bond_state");
+  if (!s.min_stretch.empty()) {
+    if (!f.exists("/min_stretch_previous"))
+      throw InputError(path, "/min_stretch_previous", "missing (written without model.compressive_enhancement)",
+                       "a checkpoint of this case with the same fracture rule");
+    // The pass below recomputes the checkpointed step's forces with the s_min that step read
+    // and writes the step's own again (commit_min_stretch, pd_system.hpp).
+    const auto previous = f.read_doubles("/min_stretch_previous");
+    const auto own = f.read_doubles("/min_stretch");
+    s.min_stretch.assign(previous.begin(), previous.end());
+    s.min_stretch_next.assign(own.begin(), own.end());
+  }
   const auto ind = f.read_doubles("/indenter_position");
   for (int d = 0; d < 3; ++d) s.indenter_position[d] = ind[d];
   // Derived per-particle fields (damage, energy) at the restored state; no bond can break

@@ -134,6 +134,7 @@ long long relax_to_equilibrium(PdSystem& s, bool progress) {
   const auto start = std::chrono::steady_clock::now();
   auto last = start;
   for (long long it = 0; it < s.config.adr_max_steps; ++it) {
+    commit_min_stretch(s);
     cpu_compute_forces(s);
     double num = 0.0, den = 0.0, residual = 0.0;
     for (size_t k = 0; k < n3; ++k) {
@@ -226,7 +227,7 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
         break;
       }
       if (output_due) backend.download(s);
-      else if (!s.config.probes.empty()) backend.download_kinematics(s);
+      else if (!s.config.probes.empty() || s.config.indenter.enabled) backend.download_kinematics(s);
       if (history_due) history.write(s, e);
       if (output_due && results) results->write(s);
     }

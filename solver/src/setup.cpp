@@ -171,6 +171,15 @@ PdView PdSystem::view() {
   p.offsets = offsets.data(); p.neighbor = neighbor.data(); p.xi_len = xi_len.data();
   p.k_own = k_own.data(); p.k_dual = k_dual.data(); p.vol_own = vol_own.data();
   p.s0_own = s0_own.data(); p.s0_dual = s0_dual.data(); p.state = state.data();
+  if (min_stretch.size() == n && n) {
+    p.alpha = static_cast<float>(config.compressive_enhancement);
+    p.min_stretch = min_stretch.data();
+    p.min_stretch_next = min_stretch_next.data();
+  }
+  if (short_range_k.size() == n && n) {
+    p.short_range_k = short_range_k.data();
+    p.spacing = spacing.data();
+  }
   p.lps = lps.empty() ? nullptr : lps.data();
   p.weighted_volume = weighted_volume.data(); p.dilatation = dilatation.data();
   p.lps_a = lps_a.size() == n ? lps_a.data() : nullptr; p.lps_b = lps_b.size() == n ? lps_b.data() : nullptr;
@@ -291,8 +300,8 @@ PdSystem setup_system(const CaseConfig& config) {
         const int32_t j = fam.neighbors[k];
         const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1], s.x0[3 * j + 2] - s.x0[3 * i + 2]};
         const double xm[3] = {-xv[0], -xv[1], -xv[2]};
-        if (partial_volume_sampled(xv, s.horizon[i], s.half_cell[j], s.dimension) > 0 ||
-            partial_volume_sampled(xm, s.horizon[j], s.half_cell[i], s.dimension) > 0)
+        if (partial_volume(c.partial_volume, xv, s.horizon[i], s.half_cell[j], s.dimension) > 0 ||
+            partial_volume(c.partial_volume, xm, s.horizon[j], s.half_cell[i], s.dimension) > 0)
           ++keep_count[i];
       }
     for (size_t i = 0; i < n; ++i) s.offsets[i + 1] = s.offsets[i] + keep_count[i];
@@ -318,8 +327,8 @@ PdSystem setup_system(const CaseConfig& config) {
       const double xi = std::sqrt(r2);
       const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1], s.x0[3 * j + 2] - s.x0[3 * i + 2]};
       const double xm[3] = {-xv[0], -xv[1], -xv[2]};
-      const double beta_own = partial_volume_sampled(xv, s.horizon[i], s.half_cell[j], s.dimension);
-      const double beta_dual = partial_volume_sampled(xm, s.horizon[j], s.half_cell[i], s.dimension);
+      const double beta_own = partial_volume(c.partial_volume, xv, s.horizon[i], s.half_cell[j], s.dimension);
+      const double beta_dual = partial_volume(c.partial_volume, xm, s.horizon[j], s.half_cell[i], s.dimension);
       if (beta_own <= 0 && beta_dual <= 0) continue;
       const double w_own = beta_own > 0 ? influence(c.influence, xi / s.horizon[i]) * beta_own : 0.0;
       const double w_dual = beta_dual > 0 ? influence(c.influence, xi / s.horizon[j]) * beta_dual : 0.0;
@@ -569,7 +578,7 @@ PdSystem setup_system(const CaseConfig& config) {
             if (!a && !b && !e) continue;
             const double xv[3] = {a * h, b * h, e * h};
             const double len = std::sqrt(xv[0] * xv[0] + xv[1] * xv[1] + xv[2] * xv[2]);
-            const double beta = partial_volume_sampled(xv, delta, 0.5 * h, dims);
+            const double beta = partial_volume(c.partial_volume, xv, delta, 0.5 * h, dims);
             if (beta <= 0) continue;
             const double wb = 0.25 * c0 * influence(c.influence, len / delta) * beta * vol * len;
             w += wb;
@@ -579,6 +588,10 @@ PdSystem setup_system(const CaseConfig& config) {
       bulk_factor = 0.5 * d * d * dimensional_bulk_modulus(in) / w;
       // The particles' own sums are relative to this reference from here on.
     }
+    // model.pmb_calibration: continuum keeps the textbook c = 2 d^2 K / (integral of omega |xi|)
+    // as LAMMPS PERI does (its c is an input): the family's discrete bulk modulus then
+    // differs from K by the lattice sum (about -10% for LAMMPS's family at m = 3).
+    if (c.pmb_calibration == CaseConfig::PmbCalibration::Continuum) bulk_factor = 1.0;
     std::vector<double> axis_factor(3 * n, bulk_factor);
     if (c.surface_correction) {
       // Each material's bulk uniaxial energy per unit factor: uniaxial energy scales with
@@ -783,8 +796,27 @@ PdSystem setup_system(const CaseConfig& config) {
     }
     s.silling_askari_dt = dt_min;
   }
+  // Short-range forces: 15 c / delta per particle with the textbook PMB micromodulus of its
+  // material (LAMMPS uses it for LPS too), and the spacing that sets their reach.
+  if (c.short_range_forces) {
+    s.short_range_k.resize(n);
+    s.spacing.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      const double delta = s.horizon[i];
+      const ElasticInput& in = elastic[s.material[i]];
+      s.short_range_k[i] = 15.0 * pmb_micromodulus(in, Influence::Constant, delta) / delta;
+      s.spacing[i] = 2.0 * s.half_cell[i];
+    }
+  }
+  // The stable step is that of the bonds: the short-range forces act only under more than
+  // 10% compression, which a strain of 1e-9 never reaches (docs/theory.md).
   const double omega_max = estimate_max_frequency(s);
   s.stable_dt = 2.0 / omega_max;
+  // Compressive enhancement: no stretch seen before the first step (s_min = 0: s0 = s00).
+  if (c.compressive_enhancement > 0.0 && c.fracture) {
+    s.min_stretch.assign(n, 0.0f);
+    s.min_stretch_next.assign(n, 0.0f);
+  }
   if (c.quasi_static) {
     s.dt = 1.0;  // ADR uses a fictitious unit step with its own density
   } else if (c.dt) {

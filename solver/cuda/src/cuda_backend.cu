@@ -66,6 +66,12 @@ __global__ void force_cuda(PdViewT<Real> p) {
   if (i < p.n) force_kernel(p, i);
 }
 
+template <class Real>
+__global__ void short_range_cuda(PdViewT<Real> p) {
+  const int64_t i = thread_index();
+  if (i < p.n) short_range_kernel(p, i);
+}
+
 // Correspondence (correspondence_kernels.hpp): F, the stress and A_i for every particle,
 // then the forces, which read A_j of the neighbours.
 __global__ void correspondence_deformation_cuda(CorrespondenceView c) {
@@ -327,6 +333,11 @@ struct CudaSystem::Impl {
   DeviceArray<double> xi_len, k_own, k_dual, vol_own;
   DeviceArray<float> s0_own, s0_dual;
   DeviceArray<uint8_t> state;
+  // compressive enhancement: s_min read and written by a pass (swapped at each step's start,
+  // commit_min_stretch); short-range forces per particle (double and float copies)
+  DeviceArray<float> min_stretch, min_stretch_next;
+  DeviceArray<double> short_range_k, spacing;
+  DeviceArray<float> fshort_range_k, fspacing;
   // step scratch
   DeviceArray<double> u_before, f_before;
   // loads and constraints (index lists uploaded once)
@@ -410,6 +421,14 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   m.s0_own.upload(s.s0_own, "s0_own");
   m.s0_dual.upload(s.s0_dual, "s0_dual");
   m.state.upload(s.state, "state");
+  if (!s.min_stretch.empty()) {
+    m.min_stretch.upload(s.min_stretch, "min_stretch");
+    m.min_stretch_next.upload(s.min_stretch_next, "min_stretch_next");
+  }
+  if (!s.short_range_k.empty()) {
+    m.short_range_k.upload(s.short_range_k, "short_range_k");
+    m.spacing.upload(s.spacing, "spacing");
+  }
   if (s.config.model == PdModel::Correspondence) {
     m.corr_moduli.upload(s.corr_moduli, "correspondence moduli");
     m.corr_deformation.upload(s.corr_deformation, "correspondence F");
@@ -440,6 +459,10 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
     m.fk_own.upload(f.k_own, "float k_own");
     m.fk_dual.upload(f.k_dual, "float k_dual");
     m.fvol_own.upload(f.vol_own, "float vol_own");
+    if (!f.short_range_k.empty()) {
+      m.fshort_range_k.upload(f.short_range_k, "float short_range_k");
+      m.fspacing.upload(f.spacing, "float spacing");
+    }
     m.fu_before.allocate(3 * s.n, "float u_before");
   }
   m.f_before.allocate(3 * s.n, "f_before");
@@ -458,6 +481,12 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   p.offsets = m.offsets.get(); p.neighbor = m.neighbor.get(); p.xi_len = m.xi_len.get();
   p.k_own = m.k_own.get(); p.k_dual = m.k_dual.get(); p.vol_own = m.vol_own.get();
   p.s0_own = m.s0_own.get(); p.s0_dual = m.s0_dual.get(); p.state = m.state.get();
+  if (m.min_stretch.size() > 0) {
+    p.alpha = static_cast<float>(s.config.compressive_enhancement);
+    p.min_stretch = m.min_stretch.get();
+    p.min_stretch_next = m.min_stretch_next.get();
+  }
+  p.short_range_k = m.short_range_k.get(); p.spacing = m.spacing.get();
   p.lps = m.lps.get();
   p.weighted_volume = m.weighted_volume.get(); p.dilatation = m.dilatation.get();
   p.lps_a = m.lps_a.get(); p.lps_b = m.lps_b.get();
@@ -473,6 +502,8 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
     q.offsets = p.offsets; q.neighbor = p.neighbor; q.xi_len = m.fxi_len.get();
     q.k_own = m.fk_own.get(); q.k_dual = m.fk_dual.get(); q.vol_own = m.fvol_own.get();
     q.s0_own = p.s0_own; q.s0_dual = p.s0_dual; q.state = p.state; q.lps = p.lps;
+    q.alpha = p.alpha; q.min_stretch = p.min_stretch; q.min_stretch_next = p.min_stretch_next;
+    q.short_range_k = m.fshort_range_k.get(); q.spacing = m.fspacing.get();
     q.weighted_volume = m.fweighted_volume.get(); q.dilatation = m.fdilatation.get();
     q.lps_a = m.flps_a.get(); q.lps_b = m.flps_b.get();
     q.energy_density = p.energy_density; q.dissipated = p.dissipated; q.damage = p.damage; q.max_stretch = p.max_stretch;
@@ -579,6 +610,10 @@ void CudaSystem::Impl::compute_forces(const PdSystem& sys, PdViewT<Real> p) {
   }
   force_cuda<Real><<<grid, kBlock>>>(p);
   after_launch("force_kernel");
+  if (p.short_range_k) {
+    short_range_cuda<Real><<<grid, kBlock>>>(p);
+    after_launch("short_range_kernel");
+  }
 }
 
 void CudaSystem::compute_forces(PdSystem& sys) {
@@ -672,6 +707,11 @@ void CudaSystem::Impl::step(PdSystem& sys, const PdViewT<Real>& p, Real* u_befor
 
 void CudaSystem::step(PdSystem& sys) {
   Impl& m = *impl_;
+  if (m.min_stretch.size() > 0) {  // commit_min_stretch: the last pass's s_min is read from here on
+    m.min_stretch.swap(m.min_stretch_next);
+    m.view.min_stretch = m.fview.min_stretch = m.min_stretch.get();
+    m.view.min_stretch_next = m.fview.min_stretch_next = m.min_stretch_next.get();
+  }
   if (m.f32) m.step(sys, m.fview, m.fu_before.get());
   else m.step(sys, m.view, m.u_before.get());
 }
@@ -730,6 +770,8 @@ void CudaSystem::download(PdSystem& sys) {
   m.max_stretch.download(sys.max_stretch, "max_stretch");
   m.dilatation.download(sys.dilatation, "dilatation");
   m.state.download(sys.state, "state");
+  m.min_stretch.download(sys.min_stretch, "min_stretch");
+  m.min_stretch_next.download(sys.min_stretch_next, "min_stretch_next");
   std::vector<DeviceScalars> host;
   m.scalars.download(host, "energy sums");
   sys.external_work = host[0].external_work;

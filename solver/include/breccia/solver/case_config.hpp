@@ -104,6 +104,18 @@ struct CaseConfig {
   bool variable_horizon = false;    // per-particle horizon from local spacing
   bool surface_correction = false;  // energy method (Le & Bobaru 2018)
   bool fracture = true;
+  // Bond-family edge: Breccia's sampled partial volumes (default), or LAMMPS PERI's linear
+  // ramp over the last half spacing inside the horizon, nothing beyond it (docs/theory.md).
+  PartialVolume partial_volume = PartialVolume::Sampled;
+  // PMB micromodulus: discrete (scaled so that a complete family's bulk energy is the
+  // classical one, the default) or continuum (the textbook value as LAMMPS PERI takes it).
+  enum class PmbCalibration { Discrete, Continuum } pmb_calibration = PmbCalibration::Discrete;
+  // Silling & Askari (2005) compressive enhancement: a bond breaks at s0 - alpha s_min, s_min
+  // the smallest bond stretch of either end at the previous step (0: fixed s0).
+  double compressive_enhancement = 0.0;
+  // LAMMPS PERI's short-range repulsion between family members closer than
+  // min(0.9 |xi|, 1.35 spacing) (docs/theory.md, Short-range forces).
+  bool short_range_forces = false;
   // Working precision of the bond loop and the state it streams (docs/theory.md, Precision).
   enum class Precision { Float64, Float32 } precision = Precision::Float64;
   std::vector<std::string> no_fail_sets;

@@ -114,7 +114,7 @@ BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int
     const double len = std::sqrt(Y[0] * Y[0] + Y[1] * Y[1] + Y[2] * Y[2]);
     const double stretch = (len - p.xi_len[k]) / p.xi_len[k];
     if (p.fracture) {
-      const uint8_t after = break_bonds(p, k, stretch);
+      const uint8_t after = break_bonds(p, k, stretch, 0.0);
       if (after != st) {
         // Released: what the equivalent PMB half-bond holds at its critical stretch.
         if ((st & ~after) & kOwnIntact) {

@@ -27,19 +27,28 @@ BRECCIA_HD bool particle_attached(const int64_t* offsets, const uint8_t* state, 
   return false;
 }
 
-// Rigid sphere centred at c (LAMMPS fix indent): force density K (R - r)^2 pushing out of the
-// sphere, added to body[3i .. 3i+2].
-BRECCIA_HD void add_indenter_force(const double* x0, const double* u, int64_t i, const double c[3], double radius,
-                                   double stiffness, double* body) {
+// Rigid sphere centred at c (LAMMPS fix indent): force density K (R - r)^2 pushing particle i
+// out of the sphere, into f (zero outside it).
+BRECCIA_HD void indenter_force(const double* x0, const double* u, int64_t i, const double c[3], double radius,
+                               double stiffness, double f[3]) {
   double r[3], len2 = 0;
   for (int d = 0; d < 3; ++d) {
+    f[d] = 0.0;
     r[d] = x0[3 * i + d] + u[3 * i + d] - c[d];
     len2 += r[d] * r[d];
   }
   const double len = std::sqrt(len2);
   if (len >= radius || len <= 0) return;
   const double mag = stiffness * (radius - len) * (radius - len);
-  for (int d = 0; d < 3; ++d) body[3 * i + d] += mag * r[d] / len;
+  for (int d = 0; d < 3; ++d) f[d] = mag * r[d] / len;
+}
+
+// The same, added to body[3i .. 3i+2].
+BRECCIA_HD void add_indenter_force(const double* x0, const double* u, int64_t i, const double c[3], double radius,
+                                   double stiffness, double* body) {
+  double f[3];
+  indenter_force(x0, u, i, c, radius, stiffness, f);
+  for (int d = 0; d < 3; ++d) body[3 * i + d] += f[d];
 }
 
 // One prescribed component at this step. kind: 0 fixed, 1 velocity, 2 displacement

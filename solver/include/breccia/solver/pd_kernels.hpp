@@ -44,6 +44,17 @@ struct PdViewT {
   const float* s0_own = nullptr;   // critical stretch of each half-bond
   const float* s0_dual = nullptr;
   uint8_t* state = nullptr;        // kOwnIntact | kDualIntact
+  // Silling & Askari's compressive enhancement (model.compressive_enhancement): a bond breaks
+  // at s0 - alpha max(s_min_i, s_min_j), s_min the smallest stretch over a particle's intact
+  // bonds at the previous force pass (min_stretch, read) and at this one (min_stretch_next,
+  // written by the owner; the backend swaps the two after the pass). Null: fixed s0.
+  float alpha = 0.0f;
+  const float* min_stretch = nullptr;
+  float* min_stretch_next = nullptr;
+  // Short-range forces (model.short_range_forces; short_range_kernel): per particle
+  // 15 c / delta [N/m^7] and the particle spacing. Null: none.
+  const Real* short_range_k = nullptr;
+  const Real* spacing = nullptr;
   // LPS per particle
   const LpsCoefficients* lps = nullptr;
   const Real* weighted_volume = nullptr;  // m_i
@@ -103,6 +114,24 @@ BRECCIA_HD bool has_bond_vectors(const PdViewT<Real>& p) {
   return !std::is_same_v<Real, double> || p.x != nullptr;
 }
 
+// alpha max(s_min_i, s_min_j): what the compressive enhancement takes off the critical
+// stretch of bond (i, j) at this pass (Silling & Askari 2005, eq. 23; LAMMPS PairPeriPMB).
+// With alpha > 0 a compressed neighbourhood (s_min < 0) raises it; a wholly stretched one
+// lowers it.
+template <class Real>
+BRECCIA_HD Real stretch_shift(const PdViewT<Real>& p, int64_t i, int64_t j) {
+  if (!p.min_stretch) return Real(0);
+  const float a = p.min_stretch[i], b = p.min_stretch[j];
+  return static_cast<Real>(p.alpha * (a > b ? a : b));
+}
+
+// Record particle i's smallest stretch of this pass over the bonds intact when it began
+// (those that break in it included, as LAMMPS does); 0 for a particle without bonds.
+template <class Real>
+BRECCIA_HD void store_min_stretch(const PdViewT<Real>& p, int64_t i, double smin, bool any) {
+  if (p.min_stretch_next) p.min_stretch_next[i] = any ? static_cast<float>(smin) : 0.0f;
+}
+
 // LPS first pass: theta_i = d/m_i * sum_j omega beta |xi| e V_j over intact own bonds.
 template <class Real>
 BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
@@ -139,8 +168,9 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
   const Real a_i = p.lps_a[i], b_i = p.lps_b[i];
   const Real theta_i = p.dilatation[i], d = static_cast<Real>(p.lps[i].dilatation_factor);
   Real fx = Real(0), fy = Real(0), fz = Real(0);
-  double released = 0.0, dev_sum = 0.0, smax = 0.0;
+  double released = 0.0, dev_sum = 0.0, smax = 0.0, smin = 1e300;
   double intact_vol = 0.0, total_vol = 0.0;
+  bool any = false;
   const int64_t end = p.offsets[i + 1];
   for (int64_t k = p.offsets[i]; k < end; ++k) {
     if (p.diagnostics) total_vol += p.vol_own[k];
@@ -150,8 +180,13 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
     Real dx, dy, dz, len;
     const Real e = origin.to(p, j, xi, dx, dy, dz, len);
     const Real omega = p.k_own[k];
-    if (p.fracture && e > p.s0_own[k] * xi) {
-      const double dev = double(p.s0_own[k]) * xi - double(theta_i) * xi / d;  // at the critical extension
+    if (p.min_stretch_next) {
+      any = true;
+      if (double(e) / xi < smin) smin = double(e) / xi;
+    }
+    const Real s0 = p.s0_own[k] - stretch_shift(p, i, j);
+    if (p.fracture && e > s0 * xi) {
+      const double dev = double(s0) * xi - double(theta_i) * xi / d;  // at the critical extension
       released += 0.5 * b_i * omega * dev * dev * p.volume[j] * p.volume[i];
       p.state[k] = 0;
       continue;
@@ -172,6 +207,7 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
   p.force[3 * i + 1] = fy;
   p.force[3 * i + 2] = fz;
   p.dissipated[i] = released;
+  store_min_stretch(p, i, smin, any);
   if (p.diagnostics) {
     p.energy_density[i] = lps_bulk_energy(p.lps[i], double(theta_i)) + 0.5 * b_i * dev_sum;
     p.damage[i] = total_vol > 0.0 ? 1.0 - intact_vol / total_vol : 0.0;
@@ -192,10 +228,10 @@ BRECCIA_HD bool entry_broken(const PdViewT<Real>& p, int64_t k) {
 // Break the half-bonds of entry k whose stretch passed their critical value. Each entry is
 // written only by its owner i; (i,j) and (j,i) see the same stretch, so they agree.
 template <class Real>
-BRECCIA_HD uint8_t break_bonds(const PdViewT<Real>& p, int64_t k, SameReal<Real> stretch) {
+BRECCIA_HD uint8_t break_bonds(const PdViewT<Real>& p, int64_t k, SameReal<Real> stretch, SameReal<Real> shift) {
   uint8_t st = p.state[k];
-  if ((st & kOwnIntact) && stretch > p.s0_own[k]) st &= static_cast<uint8_t>(~kOwnIntact);
-  if ((st & kDualIntact) && stretch > p.s0_dual[k]) st &= static_cast<uint8_t>(~kDualIntact);
+  if ((st & kOwnIntact) && stretch > p.s0_own[k] - shift) st &= static_cast<uint8_t>(~kOwnIntact);
+  if ((st & kDualIntact) && stretch > p.s0_dual[k] - shift) st &= static_cast<uint8_t>(~kDualIntact);
   return st;
 }
 
@@ -205,7 +241,9 @@ BRECCIA_HD uint8_t break_bonds(const PdViewT<Real>& p, int64_t k, SameReal<Real>
 template <bool kDiagnostics, class Real>
 BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
   const BondOriginT<Real> origin(p, i);
+  // (The compressive enhancement takes the scalar loop below: it gathers s_min per bond.)
   if constexpr (BondOriginT<Real>::kRelative && !kDiagnostics) {
+  if (!p.min_stretch_next) {
     // Float between output steps: no branch and one division per bond, so the compiler can
     // run several bonds at once (SIMD); broken bonds are computed and masked. The extension
     // e = (2 xi + eta).eta / (|xi + eta| + |xi|) enters as num / den (BondOriginT).
@@ -259,9 +297,11 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
     p.dissipated[i] = released;
     return;
   }
+  }
   Real fx = Real(0), fy = Real(0), fz = Real(0);
-  double w = 0.0, released = 0.0, smax = 0.0;
+  double w = 0.0, released = 0.0, smax = 0.0, smin = 1e300;
   double intact_vol = 0.0, total_vol = 0.0;
+  bool any = false;
   const int64_t end = p.offsets[i + 1];
   for (int64_t k = p.offsets[i]; k < end; ++k) {
     if (kDiagnostics) total_vol += p.vol_own[k];
@@ -271,10 +311,15 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
     Real dx, dy, dz, len;
     const Real extension = origin.to(p, j, xi, dx, dy, dz, len);
     const Real k2 = Real(2) * p.k_own[k];  // own + dual halves
-    if (p.fracture && extension > p.s0_own[k] * xi) {
+    if (p.min_stretch_next) {
+      any = true;
+      if (double(extension) / xi < smin) smin = double(extension) / xi;
+    }
+    const Real s0_bond = p.s0_own[k] - stretch_shift(p, i, j);
+    if (p.fracture && extension > s0_bond * xi) {
       // Dissipated: what the bond holds at its critical stretch. It broke somewhere inside
       // this step, so its force never worked against the stretch beyond s0.
-      const double s0 = p.s0_own[k];
+      const double s0 = s0_bond;
       released += double(p.volume[i]) * 0.25 * k2 * s0 * s0 * xi;
       p.state[k] = 0;
       continue;
@@ -294,6 +339,7 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
   p.force[3 * i + 1] = fy;
   p.force[3 * i + 2] = fz;
   p.dissipated[i] = released;
+  store_min_stretch(p, i, smin, any);
   if (kDiagnostics) {
     p.energy_density[i] = w;
     p.damage[i] = total_vol > 0.0 ? 1.0 - intact_vol / total_vol : 0.0;
@@ -319,8 +365,9 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
     return;
   }
   Real fx = Real(0), fy = Real(0), fz = Real(0);
-  double w = 0.0, released = 0.0, smax = 0.0;
+  double w = 0.0, released = 0.0, smax = 0.0, smin = 1e300;
   double intact_vol = 0.0, total_vol = 0.0;
+  bool any = false;
   const bool lps = p.model == static_cast<int>(PdModel::LPS);
   Real m_i = Real(0), theta_i = Real(0);
   double dev_sum = 0.0;
@@ -336,22 +383,29 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
     const Real xi = p.xi_len[k];
     const BondGeometryT<Real> g = bond_geometry(p.x0, p.u, i, j, xi);
     if (g.stretch > smax) smax = g.stretch;
+    if (p.min_stretch_next) {
+      any = true;
+      if (double(g.stretch) < smin) smin = g.stretch;
+    }
     if (p.fracture) {
-      const uint8_t after = break_bonds(p, k, g.stretch);
+      const Real shift = stretch_shift(p, i, j);
+      const uint8_t after = break_bonds(p, k, g.stretch, shift);
       if (after != st) {
         // Energy the broken halves held (PMB pair potential; LPS deviatoric pair part).
         // What the broken halves hold at their critical stretch (see the symmetric kernel).
         const uint8_t lost = static_cast<uint8_t>(st & ~after);
         if (lps) {
-          const double e = double(p.s0_own[k]) * xi;
+          const double e = (double(p.s0_own[k]) - double(shift)) * xi;
           const double dev_i = e - double(theta_i) * xi / p.lps[i].dilatation_factor;
           if (lost & kOwnIntact)
             released += 0.5 * (p.lps[i].shear_term / m_i) * p.k_own[k] * dev_i * dev_i * p.volume[j] * p.volume[i];
         } else {
           if (lost & kOwnIntact)
-            released += p.volume[i] * pmb_energy_density<double>(p.k_own[k], 0.0, kOwnIntact, p.s0_own[k], xi);
+            released += p.volume[i] * pmb_energy_density<double>(p.k_own[k], 0.0, kOwnIntact,
+                                                                 double(p.s0_own[k]) - double(shift), xi);
           if (lost & kDualIntact)
-            released += p.volume[i] * pmb_energy_density<double>(0.0, p.k_dual[k], kDualIntact, p.s0_dual[k], xi);
+            released += p.volume[i] * pmb_energy_density<double>(0.0, p.k_dual[k], kDualIntact,
+                                                                 double(p.s0_dual[k]) - double(shift), xi);
         }
         st = after;
         p.state[k] = st;
@@ -382,6 +436,7 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
     fz += scalar * g.dz * inv_len;
   }
   if (lps) w = lps_bulk_energy(p.lps[i], double(theta_i)) + 0.5 * (p.lps[i].shear_term / m_i) * dev_sum;
+  store_min_stretch(p, i, smin, any);
   p.force[3 * i] = fx;
   p.force[3 * i + 1] = fy;
   p.force[3 * i + 2] = fz;
@@ -389,6 +444,48 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
   p.dissipated[i] = released;
   p.damage[i] = total_vol > 0.0 ? 1.0 - intact_vol / total_vol : 0.0;
   if (p.max_stretch) p.max_stretch[i] = smax;
+}
+
+// Short-range forces (model.short_range_forces): LAMMPS PERI's contact term (PairPeriPMB and
+// PairPeriLPS compute(), after Silling's EMU code; Parks et al. 2008). Two members of a
+// family, bonded or broken, whose distance r falls below d = min(0.9 |xi|, 1.35 l) repel
+// with the force density 15 c V_j (d - r) / delta on i, c = 18 K / (pi delta^4) the PMB
+// micromodulus; l is the lattice spacing (here the mean of the two particles' spacings) and
+// 15 c / delta is short_range_k, averaged over the pair so that the pair's forces are
+// equal and opposite. The pair's energy 1/2 k V_i V_j (d - r)^2 is shared between its ends.
+// Adds to force (after force_kernel) and to energy_density on diagnostic passes.
+template <class Real>
+BRECCIA_HD void short_range_kernel(const PdViewT<Real>& p, int64_t i) {
+  const bool gather = has_bond_vectors(p);
+  const BondOriginT<Real> origin = gather ? BondOriginT<Real>(p, i) : BondOriginT<Real>();
+  const Real k_i = p.short_range_k[i], l_i = p.spacing[i];
+  Real fx = Real(0), fy = Real(0), fz = Real(0);
+  double w = 0.0;
+  for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
+    const int64_t j = p.neighbor[k];
+    const Real xi = p.xi_len[k];
+    const Real lattice = Real(0.675) * (l_i + p.spacing[j]);  // 1.35 x the mean spacing
+    const Real reach = Real(0.9) * xi < lattice ? Real(0.9) * xi : lattice;
+    Real dx, dy, dz, len;
+    if (gather) {
+      origin.to(p, j, xi, dx, dy, dz, len);
+    } else {
+      const BondGeometryT<Real> g = bond_geometry(p.x0, p.u, i, j, xi);
+      dx = g.dx; dy = g.dy; dz = g.dz; len = g.length;
+    }
+    if (!(len < reach) || !(len > Real(0))) continue;
+    const Real stiffness = Real(0.5) * (k_i + p.short_range_k[j]) * p.volume[j];
+    const Real gap = reach - len;
+    const Real f = -stiffness * gap / len;  // along j - i: pushes i away from j
+    fx += f * dx;
+    fy += f * dy;
+    fz += f * dz;
+    if (p.diagnostics) w += 0.25 * double(stiffness) * double(gap) * double(gap);
+  }
+  p.force[3 * i] += fx;
+  p.force[3 * i + 1] += fy;
+  p.force[3 * i + 2] += fz;
+  if (p.diagnostics) p.energy_density[i] += w;
 }
 
 // a = (f_int + b) / rho, then the second half kick of velocity Verlet.

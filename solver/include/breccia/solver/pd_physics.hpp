@@ -62,6 +62,19 @@ inline double partial_volume_sampled(const double xi[3], double horizon, double 
   return static_cast<double>(inside) / total;
 }
 
+// How much of neighbour j's cell a family counts. Sampled: the quadrature above, families
+// reaching to the horizon plus a cell's half diagonal (Breccia's default). Lammps: LAMMPS
+// PERI's rule (FixPeriNeigh, PairPeriPMB; Parks et al. 2008): neighbours with |xi| <= delta
+// only, the ones in the last half cell (|xi| > delta - h) weighted by the same linear ramp
+// as partial_volume_fraction, which is 1/2 at |xi| = delta.
+enum class PartialVolume : int { Sampled = 0, Lammps = 1 };
+inline double partial_volume(PartialVolume kind, const double xi[3], double horizon, double half_cell_j,
+                             int dimension) {
+  if (kind == PartialVolume::Sampled) return partial_volume_sampled(xi, horizon, half_cell_j, dimension);
+  const double len = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
+  return len <= horizon ? partial_volume_fraction(len, horizon, half_cell_j) : 0.0;
+}
+
 // Bond stretch s = (|xi + eta| - |xi|) / |xi| and the deformed unit direction.
 template <class Real>
 struct BondGeometryT {

@@ -47,6 +47,11 @@ struct PdSystem {
   std::vector<double> xi_len, k_own, k_dual, vol_own;
   std::vector<float> s0_own, s0_dual;
   std::vector<uint8_t> state;
+  // model.compressive_enhancement: each particle's smallest bond stretch at the last force
+  // pass and the one being written (pd_kernels.hpp, stretch_shift); empty without it.
+  std::vector<float> min_stretch, min_stretch_next;
+  // model.short_range_forces: per particle 15 c / delta and spacing (short_range_kernel).
+  std::vector<double> short_range_k, spacing;
   std::vector<std::pair<int64_t, int64_t>> precrack_pairs;  // file indices, i < j
 
   // loads and constraints
@@ -92,6 +97,11 @@ PdSystem setup_system(const CaseConfig& config);
 void cpu_step(PdSystem& sys);
 // Internal forces (and LPS dilatation) at the current displacement; fills energy/damage.
 void cpu_compute_forces(PdSystem& sys);
+// What every step (and ADR iteration) starts with: the compressive enhancement's minimum
+// stretches of the last step's force pass become the ones this step's pass reads (a swap).
+// Not done per force pass: a pass repeated at the same configuration (a restart, an
+// interruption) must read what the step's own pass read, and so break nothing new.
+void commit_min_stretch(PdSystem& sys);
 // External force density at time t (pressure, traction, body force, indenter).
 void compute_external(PdSystem& sys, double t);
 // Impose prescribed displacement/velocity at time t on constrained components.

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "breccia/common/error.hpp"
@@ -37,6 +38,10 @@ public:
   }
   ~DeviceArray() {
     if (ptr_) cudaFree(ptr_);
+  }
+  void swap(DeviceArray& other) noexcept {
+    std::swap(ptr_, other.ptr_);
+    std::swap(count_, other.count_);
   }
   void allocate(size_t count, const char* name) {  // replaces any earlier allocation
     if (ptr_) cudaFree(ptr_);

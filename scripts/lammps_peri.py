@@ -66,7 +66,10 @@ create_atoms 1 region target
 def elastic_constants(model):
     """E and nu that give Breccia the examples' K (and G for LPS)."""
     if model == "pmb":
-        return 3.0 * K_BULK * (1.0 - 2.0 * 0.25), 0.25  # bond-based: nu = 1/4
+        # The K whose textbook micromodulus 18 K / (pi delta^4) is the input file's c exactly
+        # (c = 1.6863e22 is 18 x 14.9 GPa / (pi delta^4) rounded to 5 digits).
+        k_pmb = C_PMB * math.pi * DELTA ** 4 / 18.0
+        return 3.0 * k_pmb * (1.0 - 2.0 * 0.25), 0.25  # bond-based: nu = 1/4
     G = K_BULK
     return 9.0 * K_BULK * G / (3.0 * K_BULK + G), (3.0 * K_BULK - 2.0 * G) / (2.0 * (3.0 * K_BULK + G))
 
@@ -184,6 +187,7 @@ def breccia_run(solve, out, model, rule, variant, threads):
     if variant == "matched":
         mdl["partial_volume"] = "lammps"
         mdl["short_range_forces"] = True
+        mdl["break_check"] = "after_force"
         if model == "pmb":
             mdl["pmb_calibration"] = "continuum"
     case = {

@@ -116,6 +116,16 @@ int main(int argc, char** argv) {
 #endif
     }
     const solver::CaseConfig config = solver::parse_case_file(case_file);
+    // The contact search of the short-range forces (contact_cells.hpp) is built on the host;
+    // the CUDA backend does not run it yet.
+    if (opt.backend == "cuda" && config.short_range_forces) {
+      if (backend == "cuda")
+        throw InputError(case_file, "model.short_range_forces", "true with --backend cuda",
+                         "--backend cpu or auto (the CUDA backend has no contact search yet)");
+      if (opt.progress) std::fprintf(stderr, "note: --backend auto: model.short_range_forces runs on the CPU\n");
+      opt.backend = "cpu";
+      opt.backend_loop = nullptr;
+    }
     const solver::RunResult r = solver::run_case(config, opt);
     if (r.status == "unstable" || r.status == "not_converged") {
       std::fprintf(stderr, "error: %s\n", r.message.c_str());

@@ -125,7 +125,7 @@ CaseConfig parse_case_file(const std::string& path) {
   model.allow_only({"type", "planar", "influence", "horizon", "horizon_factor", "variable_horizon",
                     "surface_correction", "fracture", "no_fail", "precision",
                     "stabilisation", "partial_volume", "compressive_enhancement", "short_range_forces",
-                    "pmb_calibration"});
+                    "pmb_calibration", "break_check"});
   c.model_name = model.choice("type", {"pmb", "lps", "mps", "correspondence"});
   c.model = c.model_name == "lps" ? PdModel::LPS : PdModel::PMB;
   if (c.model_name == "correspondence") c.model = PdModel::Correspondence;
@@ -171,6 +171,9 @@ CaseConfig parse_case_file(const std::string& path) {
     throw InputError(path, "model.compressive_enhancement", "given with type: correspondence",
                      "type: pmb or lps (the rule is implemented for bond and LPS forces)");
   c.short_range_forces = model.boolean("short_range_forces", false);
+  c.break_after_force = model.choice("break_check", {"before_force", "after_force"}, "before_force") == "after_force";
+  if (c.break_after_force && c.model == PdModel::Correspondence)
+    throw InputError(path, "model.break_check", "after_force with type: correspondence", "before_force, or type: pmb or lps");
   if (c.short_range_forces && c.model == PdModel::Correspondence)
     throw InputError(path, "model.short_range_forces", "true with type: correspondence", "type: pmb or lps");
   c.precision = model.choice("precision", {"float64", "float32"}, "float64") == "float32"

@@ -26,11 +26,28 @@ void cpu_compute_forces(PdSystem& sys) {
   const PdView p = sys.view();
   if (sys.config.model == PdModel::LPS) for_each_particle(p.n, [&](int64_t i) { lps_dilatation_kernel(p, i); });
   for_each_particle(p.n, [&](int64_t i) { force_kernel(p, i); });
-  if (p.short_range_k) for_each_particle(p.n, [&](int64_t i) { short_range_kernel(p, i); });
+  if (p.short_range_k) short_range_forces(sys, p, sys.x.data());
   double released = 0.0;
 #pragma omp parallel for reduction(+ : released)
   for (int64_t i = 0; i < p.n; ++i) released += p.dissipated[i];
   sys.dissipated_energy += released;
+}
+
+namespace {
+template <class Real>
+void short_range_passes(PdSystem& sys, const PdViewT<Real>& p, const double* x_now) {
+  for_each_particle(p.n, [&](int64_t i) { short_range_kernel(p, i); });
+  sys.contact_cells.build(x_now, p.n, sys.contact_cell_edge);
+  const ContactCellsView g = sys.contact_cells.view();
+  for_each_particle(p.n, [&](int64_t i) { short_range_contact_kernel(p, g, i); });
+}
+}  // namespace
+
+void short_range_forces(PdSystem& sys, const PdViewT<double>& p, const double* x_now) {
+  short_range_passes(sys, p, x_now);
+}
+void short_range_forces(PdSystem& sys, const PdViewT<float>& p, const double* x_now) {
+  short_range_passes(sys, p, x_now);
 }
 
 void commit_min_stretch(PdSystem& sys) {

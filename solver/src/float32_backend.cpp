@@ -87,6 +87,7 @@ PdViewT<float> float32_view(PdSystem& s) {
     p.min_stretch = s.min_stretch.data();
     p.min_stretch_next = s.min_stretch_next.data();
   }
+  p.break_after_force = s.config.break_after_force;
   if (f.short_range_k.size() == s.n && s.n) {
     p.short_range_k = f.short_range_k.data();
     p.spacing = f.spacing.data();
@@ -119,7 +120,15 @@ void float32_compute_forces(PdSystem& s) {
   const PdViewT<float> p = float32_view(s);
   if (s.config.model == PdModel::LPS) for_each_particle(p.n, [&](int64_t i) { lps_dilatation_kernel(p, i); });
   for_each_particle(p.n, [&](int64_t i) { force_kernel(p, i); });
-  if (p.short_range_k) for_each_particle(p.n, [&](int64_t i) { short_range_kernel(p, i); });
+  if (p.short_range_k) {
+    // The grid wants absolute positions: the float state's, in double.
+    s.x.resize(3 * s.n);
+    const int64_t n3 = static_cast<int64_t>(3 * s.n);
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < n3; ++k)
+      s.x[k] = s.f32.origin[k % 3] + double(s.f32.x0[k]) + double(s.f32.u[k]);
+    short_range_forces(s, p, s.x.data());
+  }
   double released = 0.0;
 #pragma omp parallel for reduction(+ : released)
   for (int64_t i = 0; i < p.n; ++i) released += p.dissipated[i];

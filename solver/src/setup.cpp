@@ -176,6 +176,7 @@ PdView PdSystem::view() {
     p.min_stretch = min_stretch.data();
     p.min_stretch_next = min_stretch_next.data();
   }
+  p.break_after_force = config.break_after_force;
   if (short_range_k.size() == n && n) {
     p.short_range_k = short_range_k.data();
     p.spacing = spacing.data();
@@ -806,6 +807,7 @@ PdSystem setup_system(const CaseConfig& config) {
       const ElasticInput& in = elastic[s.material[i]];
       s.short_range_k[i] = 15.0 * pmb_micromodulus(in, Influence::Constant, delta) / delta;
       s.spacing[i] = 2.0 * s.half_cell[i];
+      s.contact_cell_edge = std::max(s.contact_cell_edge, 1.35 * s.spacing[i]);
     }
   }
   // The stable step is that of the bonds: the short-range forces act only under more than

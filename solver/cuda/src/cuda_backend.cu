@@ -487,6 +487,7 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
     p.min_stretch_next = m.min_stretch_next.get();
   }
   p.short_range_k = m.short_range_k.get(); p.spacing = m.spacing.get();
+  p.break_after_force = s.config.break_after_force;
   p.lps = m.lps.get();
   p.weighted_volume = m.weighted_volume.get(); p.dilatation = m.dilatation.get();
   p.lps_a = m.lps_a.get(); p.lps_b = m.lps_b.get();
@@ -503,6 +504,7 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
     q.k_own = m.fk_own.get(); q.k_dual = m.fk_dual.get(); q.vol_own = m.fvol_own.get();
     q.s0_own = p.s0_own; q.s0_dual = p.s0_dual; q.state = p.state; q.lps = p.lps;
     q.alpha = p.alpha; q.min_stretch = p.min_stretch; q.min_stretch_next = p.min_stretch_next;
+    q.break_after_force = p.break_after_force;
     q.short_range_k = m.fshort_range_k.get(); q.spacing = m.fspacing.get();
     q.weighted_volume = m.fweighted_volume.get(); q.dilatation = m.fdilatation.get();
     q.lps_a = m.flps_a.get(); q.lps_b = m.flps_b.get();

@@ -116,6 +116,9 @@ struct CaseConfig {
   // LAMMPS PERI's short-range repulsion between family members closer than
   // min(0.9 |xi|, 1.35 spacing) (docs/theory.md, Short-range forces).
   bool short_range_forces = false;
+  // When a bond found past its critical stretch stops pushing: at once (before_force, the
+  // default) or after this pass (after_force, LAMMPS PERI's order; docs/lammps-peri.md).
+  bool break_after_force = false;
   // Working precision of the bond loop and the state it streams (docs/theory.md, Precision).
   enum class Precision { Float64, Float32 } precision = Precision::Float64;
   std::vector<std::string> no_fail_sets;

@@ -51,6 +51,9 @@ struct PdViewT {
   float alpha = 0.0f;
   const float* min_stretch = nullptr;
   float* min_stretch_next = nullptr;
+  // model.break_check: after_force (LAMMPS PERI's order) lets a bond that breaks in this pass
+  // carry its force once more; before_force (default) drops it from this pass on.
+  bool break_after_force = false;
   // Short-range forces (model.short_range_forces; short_range_kernel): per particle
   // 15 c / delta [N/m^7] and the particle spacing. Null: none.
   const Real* short_range_k = nullptr;
@@ -185,18 +188,20 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
       if (double(e) / xi < smin) smin = double(e) / xi;
     }
     const Real s0 = p.s0_own[k] - stretch_shift(p, i, j);
+    bool breaking = false;
     if (p.fracture && e > s0 * xi) {
       const double dev = double(s0) * xi - double(theta_i) * xi / d;  // at the critical extension
       released += 0.5 * b_i * omega * dev * dev * p.volume[j] * p.volume[i];
       p.state[k] = 0;
-      continue;
+      if (!p.break_after_force) continue;
+      breaking = true;
     }
     const Real t = omega * ((a_i + p.lps_a[j]) * xi + (b_i + p.lps_b[j]) * e);
     const Real f = t * p.volume[j] / len;
     fx += f * dx;
     fy += f * dy;
     fz += f * dz;
-    if (p.diagnostics) {
+    if (p.diagnostics && !breaking) {
       const double dev = double(e) - double(theta_i) * xi / d;
       dev_sum += omega * dev * dev * p.volume[j];
       intact_vol += p.vol_own[k];
@@ -252,7 +257,7 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
     Real fx = Real(0), fy = Real(0), fz = Real(0), released = Real(0);
     int breaking = 0;
     const Real vol_i = p.volume[i];
-    const bool fracture = p.fracture;
+    const bool fracture = p.fracture, after_force = p.break_after_force;
     const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
 #if !defined(__CUDACC__)
 #pragma omp simd reduction(+ : fx, fy, fz, released, breaking)
@@ -270,7 +275,7 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
       const Real s0 = p.s0_own[k];
       const bool intact = p.state[k] != 0;
       const bool breaks = fracture && intact && num > s0 * xi * den;
-      const Real f = (intact && !breaks) ? k2 * num / (xi * len * den) : Real(0);
+      const Real f = (intact && (!breaks || after_force)) ? k2 * num / (xi * len * den) : Real(0);
       released += breaks ? vol_i * Real(0.25) * k2 * s0 * s0 * xi : Real(0);
       breaking += breaks ? 1 : 0;
       fx += f * dx;
@@ -322,6 +327,12 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
       const double s0 = s0_bond;
       released += double(p.volume[i]) * 0.25 * k2 * s0 * s0 * xi;
       p.state[k] = 0;
+      if (p.break_after_force) {
+        const Real f = k2 * extension / (xi * len);
+        fx += f * dx;
+        fy += f * dy;
+        fz += f * dz;
+      }
       continue;
     }
     const Real f = k2 * extension / (xi * len);  // c s / |xi + eta|
@@ -379,6 +390,7 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
     total_vol += p.vol_own[k];
     uint8_t st = p.state[k];
     if (!st) continue;
+    const uint8_t state_before = st;
     const int64_t j = p.neighbor[k];
     const Real xi = p.xi_len[k];
     const BondGeometryT<Real> g = bond_geometry(p.x0, p.u, i, j, xi);
@@ -412,22 +424,27 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
       }
     }
     if (st & kOwnIntact) intact_vol += p.vol_own[k];
-    if (!st) continue;
+    // The halves that push this pass: those intact now, or with break_after_force those
+    // intact when it began (the energy of the ones that broke is in `released`).
+    const uint8_t active = p.break_after_force ? state_before : st;
+    if (!active) continue;
     Real scalar;  // force density along the deformed bond direction
     if (lps) {
       const Real e = g.extension;
       const int64_t jj = j;
       Real t = Real(0);
-      if (st & kOwnIntact) {
+      if (active & kOwnIntact) {
         t += lps_force_state(p.lps[i], m_i, theta_i, p.k_own[k], xi, e);
-        const double dev = double(e) - double(theta_i) * xi / p.lps[i].dilatation_factor;
-        dev_sum += p.k_own[k] * dev * dev * p.volume[j];
+        if (st & kOwnIntact) {
+          const double dev = double(e) - double(theta_i) * xi / p.lps[i].dilatation_factor;
+          dev_sum += p.k_own[k] * dev * dev * p.volume[j];
+        }
       }
-      if (st & kDualIntact)
+      if (active & kDualIntact)
         t += lps_force_state(p.lps[jj], p.weighted_volume[jj], p.dilatation[jj], p.k_dual[k], xi, e);
       scalar = t * p.volume[j];
     } else {
-      scalar = pmb_force_scalar(p.k_own[k], p.k_dual[k], st, g.stretch);
+      scalar = pmb_force_scalar(p.k_own[k], p.k_dual[k], active, g.stretch);
       w += pmb_energy_density<double>(p.k_own[k], p.k_dual[k], st, g.stretch, xi);
     }
     const Real inv_len = Real(1) / g.length;

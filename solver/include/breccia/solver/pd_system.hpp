@@ -8,6 +8,7 @@
 
 #include "breccia/common/particle_file.hpp"
 #include "breccia/solver/case_config.hpp"
+#include "breccia/solver/contact_cells.hpp"
 #include "breccia/solver/float32_state.hpp"
 #include "breccia/solver/pd_kernels.hpp"
 
@@ -52,6 +53,8 @@ struct PdSystem {
   std::vector<float> min_stretch, min_stretch_next;
   // model.short_range_forces: per particle 15 c / delta and spacing (short_range_kernel).
   std::vector<double> short_range_k, spacing;
+  ContactCells contact_cells;      // scratch: the pairs outside the families (contact_cells.hpp)
+  double contact_cell_edge = 0.0;  // 1.35 x the largest spacing
   std::vector<std::pair<int64_t, int64_t>> precrack_pairs;  // file indices, i < j
 
   // loads and constraints
@@ -102,6 +105,10 @@ void cpu_compute_forces(PdSystem& sys);
 // Not done per force pass: a pass repeated at the same configuration (a restart, an
 // interruption) must read what the step's own pass read, and so break nothing new.
 void commit_min_stretch(PdSystem& sys);
+// Short-range forces after the bond pass (model.short_range_forces): family pairs, then the
+// pairs a cell grid on the current positions finds (x_now: 3N, double).
+void short_range_forces(PdSystem& sys, const PdViewT<double>& p, const double* x_now);
+void short_range_forces(PdSystem& sys, const PdViewT<float>& p, const double* x_now);
 // External force density at time t (pressure, traction, body force, indenter).
 void compute_external(PdSystem& sys, double t);
 // Impose prescribed displacement/velocity at time t on constrained components.

@@ -51,6 +51,20 @@ IND_K, IND_R, IND_Y0, IND_V = 1e17, 0.0015, 0.00155, -100.0
 
 RULES = {"elastic": (1.0e3, 0.0), "fixed": (S00, 0.0), "silling-askari": (S00, ALPHA)}
 
+# LAMMPS's modelling choices as Breccia options (docs/lammps-peri.md):
+#   family       - model.partial_volume: lammps (|xi| <= delta, LAMMPS's ramp), and for PMB
+#                  model.pmb_calibration: continuum (c as given, no discrete bulk calibration)
+#   short-range  - model.short_range_forces: true
+#   after-force  - model.break_check: after_force (a breaking bond pushes once more)
+FEATURES = ("family", "short-range", "after-force")
+VARIANTS = {
+    "breccia": (),                                   # Breccia's defaults
+    "matched": FEATURES,                             # every LAMMPS choice
+    "no-family": ("short-range", "after-force"),     # matched less one choice at a time
+    "no-short-range": ("family", "after-force"),
+    "before-force": ("family", "short-range"),
+}
+
 LAMMPS_HEAD = """units si
 boundary s s s
 atom_style peri
@@ -125,9 +139,10 @@ def last_dump_frame(path):
     return rows[np.argsort(rows[:, 0])]
 
 
-def lammps_run(lmp, out, model, rule):
+def lammps_run(lmp, out, model, rule, refine=1):
     s00, alpha = RULES[rule]
-    name = f"lammps-{model}-{rule}"
+    name = f"lammps-{model}-{rule}" + (f"-dt{refine}" if refine > 1 else "")
+    steps = STEPS * refine
     coeff = (f"{C_PMB} {DELTA} {s00} {alpha}" if model == "pmb" else f"{K_BULK} {K_BULK} {DELTA} {s00} {alpha}")
     text = LAMMPS_HEAD + f"""pair_style peri/{model}
 pair_coeff * * {coeff}
@@ -143,13 +158,13 @@ compute 1 all damage/atom
 variable d5 atom "c_1 > 0.5"
 compute dmg all reduce ave c_1
 compute d5 all reduce ave v_d5
-timestep {DT}
-thermo 10
+timestep {DT / refine}
+thermo {10 * refine}
 thermo_style custom step ke f_2[2] c_dmg c_d5
 thermo_modify norm no
-dump 1 all custom {STEPS} {name}.dump id x y z c_1
+dump 1 all custom {steps} {name}.dump id x y z c_1
 dump_modify 1 sort id
-run {STEPS}
+run {steps}
 """
     with open(os.path.join(out, f"{name}.in"), "w") as f:
         f.write(text)
@@ -168,7 +183,7 @@ run {STEPS}
             step = int(w[0])
             # LAMMPS PERI's masses are densities and its forces force densities: KE and the
             # indenter's force become J and N with the particle volume.
-            hist.append((step * DT, float(w[1]) * VOLUME, float(w[2]) * VOLUME))
+            hist.append((step * DT / refine, float(w[1]) * VOLUME, float(w[2]) * VOLUME))
         if line.startswith("Loop time"):
             wall = float(line.split()[3])
     final = last_dump_frame(os.path.join(out, f"{name}.dump"))
@@ -176,20 +191,23 @@ run {STEPS}
             "history": np.array(hist), "wall_s": wall}
 
 
-def breccia_run(solve, out, model, rule, variant, threads):
+def breccia_run(solve, out, model, rule, variant, threads, refine=1):
     s00, alpha = RULES[rule]
     E, nu = elastic_constants(model)
-    name = f"breccia-{model}-{rule}-{variant}"
+    name = f"breccia-{model}-{rule}-{variant}" + (f"-dt{refine}" if refine > 1 else "")
+    features = VARIANTS[variant]
     mdl = {"type": model, "horizon": f"{DELTA} m", "influence": "constant" if model == "pmb" else "inverse",
            "fracture": rule != "elastic"}
     if alpha:
         mdl["compressive_enhancement"] = alpha
-    if variant == "matched":
+    if "family" in features:
         mdl["partial_volume"] = "lammps"
-        mdl["short_range_forces"] = True
-        mdl["break_check"] = "after_force"
         if model == "pmb":
             mdl["pmb_calibration"] = "continuum"
+    if "short-range" in features:
+        mdl["short_range_forces"] = True
+    if "after-force" in features:
+        mdl["break_check"] = "after_force"
     case = {
         "name": name,
         "specimen": {"particles": "particles.h5"},
@@ -198,8 +216,9 @@ def breccia_run(solve, out, model, rule, variant, threads):
                        "fracture_energy": fracture_energy(model, s00) if rule != "elastic" else 0.0}],
         "indenter": {"radius": IND_R, "center": [0.0, IND_Y0, 0.0], "velocity": [0.0, IND_V, 0.0],
                      "stiffness": IND_K},
-        "time": {"dt": DT, "steps": STEPS, "check_stability": False},
-        "output": {"every": STEPS, "history_every": 10, "fields": ["displacement", "velocity", "damage"]},
+        "time": {"dt": DT / refine, "steps": STEPS * refine, "check_stability": False},
+        "output": {"every": STEPS * refine, "history_every": 10 * refine,
+                   "fields": ["displacement", "velocity", "damage"]},
     }
     with open(os.path.join(out, f"{name}.yaml"), "w") as f:
         json.dump(case, f, indent=1)  # JSON is YAML
@@ -241,7 +260,9 @@ def main():
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--models", nargs="+", default=["pmb", "lps"])
     ap.add_argument("--rules", nargs="+", default=list(RULES))
-    ap.add_argument("--variants", nargs="+", default=["breccia", "matched"])
+    ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+    ap.add_argument("--dt-study", action="store_true",
+                    help="also run the fixed rule at dt/2 and dt/4 (LAMMPS, matched, before-force): dt_study.csv")
     args = ap.parse_args()
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
@@ -278,13 +299,43 @@ def main():
                     f"{100 * r['max_ke_difference_vs_lammps']:.1f}% | {r['wall_s']:.2f} |\n")
     print(open(os.path.join(out, "comparison.md")).read())
     plots(results, pos, out)
+    if args.dt_study:
+        dt_study(args, out, solve)
+
+
+def dt_study(args, out, solve):
+    """Does the break order's effect vanish with the time step? The fixed rule at dt, dt/2,
+    dt/4 in LAMMPS and in Breccia with both orders (every other LAMMPS choice matched)."""
+    rows = []
+    for model in args.models:
+        for refine in (1, 2, 4):
+            runs = [lammps_run(args.lmp, out, model, "fixed", refine)]
+            for variant in ("matched", "before-force"):
+                print(f"lammps-peri: dt study {model} dt/{refine}: Breccia {variant}", flush=True)
+                runs.append(breccia_run(solve, out, model, "fixed", variant, args.threads, refine))
+            for r in runs:
+                rows.append({"model": model, "dt_s": DT / refine, "code": r["code"], "variant": r["variant"],
+                             "mean_damage": float(np.mean(r["damage"])),
+                             "fraction_above_0.5": float(np.mean(r["damage"] > 0.5)), "wall_s": r["wall_s"]})
+    with open(os.path.join(out, "dt_study.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    with open(os.path.join(out, "dt_study.md"), "w") as f:
+        f.write("| model | dt (us) | code | variant | mean damage | fraction > 0.5 | wall (s) |\n|---|---|---|---|---|---|---|\n")
+        for r in rows:
+            f.write(f"| {r['model']} | {r['dt_s'] * 1e6:.3g} | {r['code']} | {r['variant']} | {r['mean_damage']:.4f} | "
+                    f"{r['fraction_above_0.5']:.4f} | {r['wall_s']:.2f} |\n")
+    print(open(os.path.join(out, "dt_study.md")).read())
 
 
 def plots(results, pos, out):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    styles = {"lammps": ("k", "-"), "breccia": ("tab:blue", "--"), "matched": ("tab:red", ":")}
+    styles = {"lammps": ("k", "-"), "breccia": ("tab:blue", "--"), "matched": ("tab:red", ":"),
+              "no-family": ("tab:green", "-."), "no-short-range": ("tab:orange", "-."),
+              "before-force": ("tab:purple", "-.")}
     for model in sorted({r["model"] for r in results}):
         rules = [x for x in RULES if any(r["model"] == model and r["rule"] == x for r in results)]
         fig, axes = plt.subplots(3, len(rules), figsize=(5 * len(rules), 11), squeeze=False)

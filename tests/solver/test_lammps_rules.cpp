@@ -1,0 +1,319 @@
+// The modelling choices of LAMMPS PERI offered as options (docs/lammps-peri.md): its family
+// edge, its continuum micromodulus, its short-range forces, its break order, and the
+// Silling-Askari compressive enhancement. Each is checked against a reference derived here
+// independently (lattice sums, the documented formula, energy gradients), not against the code.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <numbers>
+
+#include "breccia/common/error.hpp"
+#include "breccia/solver/outputs.hpp"
+#include "breccia/solver/run.hpp"
+#include "helpers.hpp"
+
+using namespace breccia::solver;
+using namespace breccia::solver::testing;
+
+namespace {
+
+// LAMMPS's example lattice: 0.5 mm simple cubic, horizon 1.5001 mm (examples/peri).
+constexpr double kSpacing = 0.0005, kHorizon = 0.0015001;
+
+std::string cube_deck(const std::string& model_extra, int cells = 9, const std::string& material_extra = "") {
+  const double side = cells * kSpacing;
+  return "specimen: {lattice: {dimension: 3, box: [0, 0, 0, " + std::to_string(side) + ", " + std::to_string(side) +
+         ", " + std::to_string(side) + "], spacing: 0.5 mm}}\n"
+         "model: {type: pmb, horizon: 1.5001 mm" + model_extra + "}\n"
+         "materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25" + material_extra + "}]\n"
+         "time: {steps: 1}\n";
+}
+
+// LAMMPS's weight of a neighbour at |xi| (FixPeriNeigh / PairPeriPMB vfrac_scale): 1 inside
+// delta - lc/2, (delta + lc/2 - |xi|) / lc up to delta, and not a neighbour beyond it.
+double lammps_weight(double len) {
+  const double half = 0.5 * kSpacing;
+  if (len > kHorizon) return 0.0;
+  if (std::fabs(len - kHorizon) <= half) return (kHorizon + half - len) / (2.0 * half);
+  return 1.0;
+}
+
+int64_t centre_particle(const PdSystem& s, int cells) {
+  const double c = (cells / 2 + 0.5) * kSpacing;  // lattice cell centres at (k + 1/2) dx
+  return nearest(s, c, c, c);
+}
+
+}  // namespace
+
+TEST(LammpsFamily, IsTheLatticePointsWithinTheHorizonWithLammpsWeights) {
+  PdSystem s = system_from_yaml("lammps_family", cube_deck(", partial_volume: lammps, fracture: false"));
+  const int64_t i = centre_particle(s, 9);
+  // Lattice points with 0 < |n| <= 3.0002 (n integer): 122 (LAMMPS's family of an interior atom).
+  int expected = 0;
+  for (int a = -4; a <= 4; ++a)
+    for (int b = -4; b <= 4; ++b)
+      for (int c = -4; c <= 4; ++c)
+        if ((a || b || c) && std::sqrt(double(a * a + b * b + c * c)) * kSpacing <= kHorizon) ++expected;
+  ASSERT_EQ(expected, 122);
+  EXPECT_EQ(s.offsets[i + 1] - s.offsets[i], expected);
+  const double cell = kSpacing * kSpacing * kSpacing;
+  for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k)
+    EXPECT_NEAR(s.vol_own[k] / cell, lammps_weight(s.xi_len[k]), 1e-12) << "bond of length " << s.xi_len[k];
+  // Breccia's own edge reaches a cell's half diagonal beyond delta: more neighbours.
+  PdSystem sampled = system_from_yaml("sampled_family", cube_deck(", fracture: false"));
+  const int64_t j = centre_particle(sampled, 9);
+  EXPECT_GT(sampled.offsets[j + 1] - sampled.offsets[j], expected);
+}
+
+TEST(LammpsFamily, ContinuumMicromodulusGivesTheLatticeSumsBulkModulus) {
+  // With c = 18 K / (pi delta^4) as given (LAMMPS), an interior particle's energy under an
+  // isotropic strain e is sum_j 1/4 c w_j V |xi_j| e^2 (w_j LAMMPS's weight), which the
+  // lattice sum below evaluates: about 0.900 of the classical 9/2 K e^2 at m = 3.
+  const double E = 22.35e9, K = E / (3.0 * (1.0 - 2.0 * 0.25));
+  const double c = 18.0 * K / (std::numbers::pi * std::pow(kHorizon, 4));
+  const double cell = kSpacing * kSpacing * kSpacing;
+  double lattice_sum = 0.0;
+  for (int a = -4; a <= 4; ++a)
+    for (int b = -4; b <= 4; ++b)
+      for (int d = -4; d <= 4; ++d) {
+        if (!(a || b || d)) continue;
+        const double len = std::sqrt(double(a * a + b * b + d * d)) * kSpacing;
+        lattice_sum += 0.25 * c * lammps_weight(len) * cell * len;
+      }
+  const double ratio = lattice_sum / (4.5 * K);
+  EXPECT_NEAR(ratio, 0.9001, 5e-4);  // the value quoted in docs/lammps-peri.md
+  const double e = 1e-6;
+  const double eps[9] = {e, 0, 0, 0, e, 0, 0, 0, e};
+  for (const char* calibration : {"continuum", "discrete"}) {
+    PdSystem s = system_from_yaml(std::string("calibration_") + calibration,
+                                  cube_deck(std::string(", partial_volume: lammps, fracture: false, pmb_calibration: ") +
+                                            calibration));
+    impose_affine(s, eps);
+    cpu_compute_forces(s);
+    const int64_t i = centre_particle(s, 9);
+    const double classical = 4.5 * K * e * e;
+    // Stretches of an affine field are exact to O(e^2): 1e-5 relative.
+    const double expected = std::string(calibration) == "continuum" ? ratio : 1.0;
+    EXPECT_NEAR(s.energy_density[i] / classical, expected, 1e-5) << calibration;
+  }
+}
+
+TEST(ShortRangeForces, AreTheGradientOfTheirEnergyAndCancelInPairs) {
+  // Squeeze one particle towards its +x neighbour by 30% of the spacing: its pairs with
+  // (1,0,0) and the four (1,+-1,0), (1,0,+-1) neighbours come inside min(0.9 |xi|, 1.35 dx).
+  PdSystem s = system_from_yaml("short_range", cube_deck(", fracture: false, short_range_forces: true"));
+  PdSystem plain = system_from_yaml("short_range_off", cube_deck(", fracture: false"));
+  const int64_t i = centre_particle(s, 9);
+  s.u[3 * i] = plain.u[3 * i] = 0.3 * kSpacing;
+  cpu_compute_forces(s);
+  cpu_compute_forces(plain);
+  // The documented law, summed here over every particle: 15 c V (d - r) / delta along j -> i.
+  const double K = 22.35e9 / 1.5;
+  const double c = 18.0 * K / (std::numbers::pi * std::pow(kHorizon, 4));
+  double expected[3] = {0, 0, 0};
+  int pairs = 0;
+  for (size_t j = 0; j < s.n; ++j) {
+    if (static_cast<int64_t>(j) == i) continue;
+    double xi = 0, r = 0, dx[3];
+    for (int a = 0; a < 3; ++a) {
+      xi += std::pow(s.x0[3 * j + a] - s.x0[3 * i + a], 2);
+      dx[a] = s.x0[3 * j + a] + s.u[3 * j + a] - s.x0[3 * i + a] - s.u[3 * i + a];
+      r += dx[a] * dx[a];
+    }
+    xi = std::sqrt(xi);
+    r = std::sqrt(r);
+    const double d = std::min(0.9 * xi, 1.35 * kSpacing);
+    if (r >= d) continue;
+    ++pairs;
+    for (int a = 0; a < 3; ++a) expected[a] -= 15.0 * c * kSpacing * kSpacing * kSpacing * (d - r) / kHorizon * dx[a] / r;
+  }
+  EXPECT_EQ(pairs, 5);
+  for (int a = 0; a < 3; ++a)
+    EXPECT_NEAR(s.force[3 * i + a] - plain.force[3 * i + a], expected[a], 1e-9 * std::fabs(expected[0])) << a;
+  // Newton's third law over the body (the pair forces use the pair's mean constant).
+  for (int a = 0; a < 3; ++a) {
+    double total = 0.0;
+    for (size_t j = 0; j < s.n; ++j) total += s.force[3 * j + a] * s.volume[j];
+    EXPECT_NEAR(total, 0.0, 1e-9 * std::fabs(expected[0]) * s.volume[i]) << a;
+  }
+  // The force is minus the gradient of the energy (bond and short-range parts together):
+  // central difference of the body's energy in u_x of particle i.
+  auto energy = [&](double ux) {
+    s.u[3 * i] = ux;
+    cpu_compute_forces(s);
+    double w = 0.0;
+    for (size_t j = 0; j < s.n; ++j) w += s.energy_density[j] * s.volume[j];
+    return w;
+  };
+  const double h = 1e-4 * kSpacing, u0 = 0.3 * kSpacing;
+  const double gradient = (energy(u0 + h) - energy(u0 - h)) / (2.0 * h);
+  energy(u0);
+  EXPECT_NEAR(-gradient, s.force[3 * i] * s.volume[i], 1e-4 * std::fabs(s.force[3 * i] * s.volume[i]));
+}
+
+TEST(ShortRangeForces, ReachParticlesOutsideTheFamily) {
+  // A particle carried far across the body (a fragment meeting another) feels the particle it
+  // lands next to although they were never in one family; without the option it does not.
+  for (bool on : {true, false}) {
+    PdSystem s = system_from_yaml(on ? "contact_on" : "contact_off",
+                                  cube_deck(std::string(", fracture: false") + (on ? ", short_range_forces: true" : ""), 12));
+    const int64_t i = nearest(s, 0.25e-3, 3.25e-3, 3.25e-3), j = nearest(s, 5.25e-3, 3.25e-3, 3.25e-3);
+    ASSERT_GT(s.xi_len[s.offsets[i]], 0.0);
+    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) ASSERT_NE(s.neighbor[k], j) << "j must be outside i's family";
+    // Cut i free of its family's forces: every bond broken; then place it 0.5 dx from j.
+    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) s.state[k] = 0;
+    s.u[3 * i] = (5.25e-3 - 0.3 * kSpacing) - 0.25e-3;  // 0.3 dx before j, 0.2 dx off its row
+    s.u[3 * i + 1] = 0.2 * kSpacing;
+    cpu_compute_forces(s);
+    // Expected: the documented law summed here over every particle within 1.35 dx of i's new
+    // place (none of them in i's family; its members stayed 4 mm behind).
+    const double K = 22.35e9 / 1.5;
+    const double c = 18.0 * K / (std::numbers::pi * std::pow(kHorizon, 4));
+    double expected[3] = {0, 0, 0};
+    int partners = 0;
+    for (size_t q = 0; q < s.n; ++q) {
+      if (static_cast<int64_t>(q) == i) continue;
+      double dx[3], r = 0;
+      for (int a = 0; a < 3; ++a) {
+        dx[a] = s.x0[3 * q + a] + s.u[3 * q + a] - s.x0[3 * i + a] - s.u[3 * i + a];
+        r += dx[a] * dx[a];
+      }
+      r = std::sqrt(r);
+      if (r >= 1.35 * kSpacing) continue;
+      ++partners;
+      for (int a = 0; a < 3; ++a)
+        expected[a] -= 15.0 * c * kSpacing * kSpacing * kSpacing * (1.35 * kSpacing - r) / kHorizon * dx[a] / r;
+    }
+    ASSERT_GE(partners, 1);
+    const double scale = std::hypot(expected[0], expected[1], expected[2]);
+    for (int a = 0; a < 3; ++a) {
+      if (on) EXPECT_NEAR(s.force[3 * i + a], expected[a], 1e-9 * scale) << a;
+      else EXPECT_EQ(s.force[3 * i + a], 0.0) << a;
+    }
+    if (on) EXPECT_LT(expected[0], 0.0);  // pushed back, away from j (nearer than the plane behind)
+  }
+}
+
+TEST(CompressiveEnhancement, BreaksBondsAtS0MinusAlphaTimesTheLastStepsSmallestStretch) {
+  // Silling & Askari (2005): s0 = s00 - alpha s_min, s_min from the previous step. Squeeze the
+  // body along y by 0.4% (s_min = -0.004 everywhere: the y bonds), commit that step, then add
+  // a stretch along x of 0.1%: with alpha = 0.25 a bond breaks above 5e-4 + 0.25 x 0.004 =
+  // 1.5e-3, and none does; with alpha = 0 every bond stretched past 5e-4 breaks. The count
+  // expected is taken from the exact stretches of the affine field.
+  const double s00 = 5e-4, e1 = 1e-3, e2 = -4e-3;
+  const double delta = kHorizon, K = 22.35e9 / 1.5;
+  const double c = 18.0 * K / (std::numbers::pi * std::pow(delta, 4));
+  const double G0 = std::numbers::pi * c * s00 * s00 * std::pow(delta, 5) / 10.0;  // s0 = s00 (docs/lammps-peri.md)
+  for (double alpha : {0.25, 0.0}) {
+    const std::string extra = ", fracture_energy: " + std::to_string(G0);
+    PdSystem s = system_from_yaml("alpha_" + std::to_string(alpha),
+                                  cube_deck(", partial_volume: lammps, compressive_enhancement: " + std::to_string(alpha), 9,
+                                            extra));
+    ASSERT_NEAR(s.s0_own[0], s00, 1e-6 * s00);
+    const double squeeze[9] = {0, 0, 0, 0, e2, 0, 0, 0, 0};
+    impose_affine(s, squeeze);
+    commit_min_stretch(s);
+    cpu_compute_forces(s);  // no bond stretched: nothing breaks, s_min = e2 recorded
+    ASSERT_EQ(measure(s).broken_half_bonds, 0);
+    const double both[9] = {e1, 0, 0, 0, e2, 0, 0, 0, 0};
+    impose_affine(s, both);
+    commit_min_stretch(s);
+    cpu_compute_forces(s);
+    long long expected = 0;
+    for (size_t i = 0; i < s.n; ++i)
+      for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
+        const int64_t j = s.neighbor[k];
+        double len = 0;
+        for (int a = 0; a < 3; ++a) {
+          double d = s.x0[3 * j + a] - s.x0[3 * i + a];
+          d *= 1.0 + (a == 0 ? e1 : a == 1 ? e2 : 0.0);
+          len += d * d;
+        }
+        const double stretch = std::sqrt(len) / s.xi_len[k] - 1.0;
+        if (stretch > s00 - alpha * e2) ++expected;  // every particle has a y bond: s_min = e2
+      }
+    long long broken = 0;
+    for (uint8_t st : s.state) broken += st == 0;
+    EXPECT_EQ(broken, expected) << "alpha " << alpha;
+    if (alpha > 0) EXPECT_EQ(broken, 0);
+    else EXPECT_GT(broken, 0);
+  }
+}
+
+TEST(BreakCheck, AfterForceLetsABreakingBondPushOnceMore) {
+  // One pass at a uniform 0.1% stretch along x (past s0 = 5e-4 for the x bonds): both orders
+  // break the same bonds; before_force drops their pull from the pass, after_force keeps it.
+  const double s00 = 5e-4, K = 22.35e9 / 1.5;
+  const double c = 18.0 * K / (std::numbers::pi * std::pow(kHorizon, 4));
+  const double G0 = std::numbers::pi * c * s00 * s00 * std::pow(kHorizon, 5) / 10.0;
+  const std::string extra = ", fracture_energy: " + std::to_string(G0);
+  PdSystem before = system_from_yaml("break_before", cube_deck(", partial_volume: lammps", 9, extra));
+  PdSystem after = system_from_yaml("break_after", cube_deck(", partial_volume: lammps, break_check: after_force", 9, extra));
+  PdSystem intact = system_from_yaml("break_none", cube_deck(", partial_volume: lammps, fracture: false", 9, extra));
+  const double eps[9] = {1e-3, 0, 0, 0, 0, 0, 0, 0, 0};
+  for (PdSystem* s : {&before, &after, &intact}) {
+    impose_affine(*s, eps);
+    cpu_compute_forces(*s);
+  }
+  EXPECT_EQ(before.state, after.state);
+  EXPECT_GT(measure(before).broken_half_bonds, 0);
+  EXPECT_EQ(before.dissipated_energy, after.dissipated_energy);
+  // A surface particle at x = max: the unbroken body pulls it back (-x); after_force gives
+  // exactly the unbroken body's force this pass, before_force a smaller one.
+  const int64_t i = nearest(before, 4.25e-3, 2.25e-3, 2.25e-3);
+  EXPECT_EQ(after.force[3 * i], intact.force[3 * i]);
+  EXPECT_LT(intact.force[3 * i], 0.0);
+  EXPECT_GT(before.force[3 * i], intact.force[3 * i]);
+}
+
+TEST(CompressiveEnhancement, RestartWithTheLammpsOptionsIsBitIdentical) {
+  // The glass plate of the restart test with every option of this file on: s_min and the
+  // short-range contact must come back from the checkpoint exactly.
+  std::string deck = kPrecrackedGlassPlateDeck;
+  const std::string model = "model: {type: pmb, planar: plane_stress, horizon_factor: 3.015";
+  ASSERT_NE(deck.find(model), std::string::npos);
+  deck.replace(deck.find(model), model.size(),
+               model + ", compressive_enhancement: 0.25, short_range_forces: true, break_check: after_force");
+  const CaseConfig config =
+      parse_case_file(write_case("alpha_restart", deck + "time: {steps: 400}\noutput: {every: 100, history_every: 20}\n"));
+  RunOptions o;
+  o.progress = false;
+  PdSystem straight = setup_system(config);
+  o.out_dir = process_temp_dir() + "/alpha_straight";
+  run_system(straight, o);
+  ASSERT_GT(measure(straight).broken_half_bonds, 0) << "the case should break bonds";
+  PdSystem first = setup_system(config);
+  o.out_dir = process_temp_dir() + "/alpha_split";
+  o.steps = 170;
+  run_system(first, o);
+  PdSystem second = setup_system(config);
+  read_checkpoint(second, o.out_dir + "/checkpoint.h5");
+  o.restart_file = o.out_dir + "/checkpoint.h5";
+  o.steps = 230;
+  run_system(second, o);
+  ASSERT_EQ(second.step, straight.step);
+  EXPECT_EQ(0, std::memcmp(second.u.data(), straight.u.data(), straight.u.size() * sizeof(double)));
+  EXPECT_EQ(0, std::memcmp(second.v.data(), straight.v.data(), straight.v.size() * sizeof(double)));
+  EXPECT_EQ(second.state, straight.state);
+  EXPECT_EQ(second.min_stretch, straight.min_stretch);
+}
+
+TEST(LammpsOptions, BadValuesNameTheKey) {
+  auto error_of = [](const std::string& extra, const std::string& type = "pmb") {
+    std::string deck = cube_deck(extra);
+    if (type != "pmb") deck.replace(deck.find("type: pmb"), 9, "type: " + type);
+    try {
+      parse_case_file(write_case("bad_lammps_option", deck));
+    } catch (const breccia::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error_of(", compressive_enhancement: -0.1").find("model.compressive_enhancement"), std::string::npos);
+  EXPECT_NE(error_of(", partial_volume: half").find("model.partial_volume"), std::string::npos);
+  EXPECT_NE(error_of(", pmb_calibration: continuum", "lps").find("model.pmb_calibration"), std::string::npos);
+  EXPECT_NE(error_of(", break_check: later").find("model.break_check"), std::string::npos);
+  EXPECT_NE(error_of(", short_range_forces: true", "correspondence").find("model.short_range_forces"),
+            std::string::npos);
+}

@@ -9,7 +9,7 @@ PYTHON   ?= /usr/bin/python3
 QUICK    ?=
 export PYTHON
 
-.PHONY: all deps configure build test demo bench clean help
+.PHONY: all deps configure build test demo bench clean help lammps-peri
 
 all: build
 
@@ -38,6 +38,13 @@ case-%: build
 
 bench: build
 	bash scripts/bench.sh $(BUILD)
+
+# make lammps-peri: LAMMPS PERI's own projectile examples run in LAMMPS and in Breccia with
+# each of LAMMPS's modelling choices on and off, plus a time-step study
+# -> runs/lammps-peri/comparison.md, dt_study.md, pmb.png, lps.png (docs/lammps-peri.md).
+.PHONY: lammps-peri
+lammps-peri: build
+	bash scripts/lammps_peri.sh $(BUILD) --dt-study
 
 clean:
 	rm -rf $(BUILD)

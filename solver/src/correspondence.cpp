@@ -40,21 +40,6 @@ CorrespondenceView correspondence_view(PdSystem& s) {
   return v;
 }
 
-void cpu_correspondence_forces(PdSystem& s) {
-  // Current positions once per force pass, as cpu_compute_forces does for PMB and LPS.
-  if (s.x.size() != s.x0.size()) s.x.resize(s.x0.size());
-  const int64_t n3 = static_cast<int64_t>(s.x0.size());
-#pragma omp parallel for schedule(static)
-  for (int64_t k = 0; k < n3; ++k) s.x[k] = s.x0[k] + s.u[k];
-  const CorrespondenceView v = correspondence_view(s);
-  for_each_particle(v.p.n, [&](int64_t i) { correspondence_deformation_kernel(v, i); });
-  for_each_particle(v.p.n, [&](int64_t i) { correspondence_force_kernel(v, i); });
-  double released = 0.0;
-#pragma omp parallel for reduction(+ : released)
-  for (int64_t i = 0; i < v.p.n; ++i) released += v.p.dissipated[i];
-  s.dissipated_energy += released;
-}
-
 double nonaffine_energy(const PdSystem& s) {
   double sum = 0.0;
   const int64_t n = static_cast<int64_t>(s.n);

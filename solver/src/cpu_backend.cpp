@@ -1,14 +1,30 @@
-// The OpenMP backend: launches the kernels of pd_kernels.hpp over all particles, plus the
-// host-side pieces of a step (loads, constraints, energies).
+// The OpenMP backend: the step of step.hpp on the host's double arrays through OpenMpExec,
+// plus the host-side pieces outside a step (energies, the stable-step estimate).
 #include <cmath>
 #include <random>
 
 #include "breccia/solver/correspondence.hpp"
+#include "breccia/solver/exec_openmp.hpp"
 #include "breccia/solver/forall.hpp"
 #include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_system.hpp"
 
 namespace breccia::solver {
+
+StepArrays<double> cpu_step_arrays(PdSystem& s) {
+  if (s.x.size() != s.x0.size()) s.x.resize(s.x0.size());  // before view(): it points at x when sized
+  StepArrays<double> a;
+  a.p = s.view();
+  a.d = a.p;
+  a.x = s.x.data();
+  s.u_before.resize(3 * s.n);  // kept between steps: the step allocates nothing of size N
+  s.f_before.resize(3 * s.n);
+  a.u_before = s.u_before.data();
+  a.f_before = s.f_before.data();
+  fill_load_sets(s, a);
+  if (s.config.model == PdModel::Correspondence) a.corr = correspondence_view(s);
+  return a;
+}
 
 void cpu_compute_forces(PdSystem& sys) {
   if (sys.f32.active) {  // model.precision: float32 — callers hold their state in double
@@ -17,77 +33,33 @@ void cpu_compute_forces(PdSystem& sys) {
     float32_download(sys);
     return;
   }
-  if (sys.config.model == PdModel::Correspondence) return cpu_correspondence_forces(sys);  // correspondence.cpp
-  // Current positions once per force pass: the bond loop then gathers one array.
-  if (sys.x.size() != sys.x0.size()) sys.x.resize(sys.x0.size());
-  const int64_t n3 = static_cast<int64_t>(sys.x0.size());
-#pragma omp parallel for schedule(static)
-  for (int64_t k = 0; k < n3; ++k) sys.x[k] = sys.x0[k] + sys.u[k];
-  const PdView p = sys.view();
-  if (sys.config.model == PdModel::LPS) for_each_particle(p.n, [&](int64_t i) { lps_dilatation_kernel(p, i); });
-  for_each_particle(p.n, [&](int64_t i) { force_kernel(p, i); });
-  if (p.short_range_k) short_range_forces(sys, p, sys.x.data());
-  double released = 0.0;
-#pragma omp parallel for reduction(+ : released)
-  for (int64_t i = 0; i < p.n; ++i) released += p.dissipated[i];
-  sys.dissipated_energy += released;
+  OpenMpExec exec(sys);
+  const StepArrays<double> a = cpu_step_arrays(sys);
+  pd_force_pass(exec, a, true);
 }
 
 namespace {
 template <class Real>
-void short_range_passes(PdSystem& sys, const PdViewT<Real>& p, const double* x_now) {
-  for_each_particle(p.n, [&](int64_t i) { short_range_kernel(p, i); });
+void contact_pass(PdSystem& sys, const PdViewT<Real>& p, const double* x_now) {
   sys.contact_cells.build(x_now, p.n, sys.contact_cell_edge);
   const ContactCellsView g = sys.contact_cells.view();
   for_each_particle(p.n, [&](int64_t i) { short_range_contact_kernel(p, g, i); });
 }
 }  // namespace
 
-void short_range_forces(PdSystem& sys, const PdViewT<double>& p, const double* x_now) {
-  short_range_passes(sys, p, x_now);
-}
-void short_range_forces(PdSystem& sys, const PdViewT<float>& p, const double* x_now) {
-  short_range_passes(sys, p, x_now);
-}
+void short_range_contact(PdSystem& sys, const PdViewT<double>& p, const double* x_now) { contact_pass(sys, p, x_now); }
+void short_range_contact(PdSystem& sys, const PdViewT<float>& p, const double* x_now) { contact_pass(sys, p, x_now); }
 
 void commit_min_stretch(PdSystem& sys) {
   if (!sys.min_stretch.empty()) sys.min_stretch.swap(sys.min_stretch_next);
 }
 
 void compute_external(PdSystem& sys, double t) {
-  std::fill(sys.body.begin(), sys.body.end(), 0.0);
-  for (const auto& sl : sys.surface_loads) {
-    const LoadSpec& ls = *sl.spec;
-    const double h = ls.history.at(t);
-    for (const auto& f : sl.facets) {
-      if (!particle_attached(sys.offsets.data(), sys.state.data(), f.particle)) continue;
-      double force[3];
-      facet_force(ls.kind == LoadSpec::Kind::Pressure, h, f.area, f.normal, ls.vector.data(), force);
-      for (int d = 0; d < 3; ++d) sys.body[3 * f.particle + d] += force[d] / sys.volume[f.particle];
-    }
-  }
-  for (const auto& bl : sys.body_loads) {
-    const double h = bl.spec->history.at(t);
-    auto add = [&](int64_t i) {
-      for (int d = 0; d < 3; ++d) sys.body[3 * i + d] += sys.density[i] * h * bl.spec->vector[d];
-    };
-    if (bl.particles.empty())
-      for (size_t i = 0; i < sys.n; ++i) add(static_cast<int64_t>(i));
-    else
-      for (auto i : bl.particles) add(i);
-  }
-  const IndenterSpec& ind = sys.config.indenter;
-  if (ind.enabled) {
-    double c[3];
-    for (int d = 0; d < 3; ++d) c[d] = ind.center[d] + ind.velocity[d] * t;
-    for (int d = 0; d < 3; ++d) sys.indenter_position[d] = c[d];
-    const double* x0 = sys.x0.data();
-    const double* u = sys.u.data();
-    double* body = sys.body.data();
-#pragma omp parallel for
-    for (int64_t i = 0; i < static_cast<int64_t>(sys.n); ++i)
-      add_indenter_force(x0, u, i, c, ind.radius, ind.stiffness, body);
-  }
+  // Callers outside the step may have edited surface_loads (tests do): group them afresh.
+  sys.facets = group_facets_by_particle(sys);
+  OpenMpExec exec(sys);
+  const StepArrays<double> a = cpu_step_arrays(sys);
+  pd_external(exec, a, sys, t);
 }
 
 void apply_constraints(PdSystem& sys, double t, double dt) {
@@ -112,33 +84,9 @@ void cpu_step(PdSystem& sys) {
     float32_download(sys);
     return;
   }
-  commit_min_stretch(sys);
-  const double dt = sys.dt, half = 0.5 * dt;
-  PdView p = sys.view();
-  // Work of external forces and reactions: trapezoid over the step.
-  std::vector<double> u_before(sys.u);
-  std::vector<double> f_before(3 * sys.n);
-  for (size_t k = 0; k < 3 * sys.n; ++k) {
-    const size_t i = k / 3;
-    const bool constrained = sys.fixed_dof[i] & (1u << (k % 3));
-    f_before[k] = sys.volume[i] * (constrained ? -sys.force[k] : sys.body[k]);
-  }
-  for_each_particle(p.n, [&](int64_t i) { kick_drift_kernel(p, i, half, dt); });
-  sys.time += dt;
-  apply_constraints(sys, sys.time, dt);
-  compute_external(sys, sys.time);
-  cpu_compute_forces(sys);
-  for_each_particle(p.n, [&](int64_t i) { acceleration_kernel(p, i, half); });
-  double work = 0.0;
-#pragma omp parallel for reduction(+ : work)
-  for (int64_t k = 0; k < static_cast<int64_t>(3 * sys.n); ++k) {
-    const size_t i = static_cast<size_t>(k) / 3;
-    const bool constrained = sys.fixed_dof[i] & (1u << (k % 3));
-    const double f_after = sys.volume[i] * (constrained ? -sys.force[k] : sys.body[k]);
-    work += 0.5 * (f_before[k] + f_after) * (sys.u[k] - u_before[k]);
-  }
-  sys.external_work += work;
-  ++sys.step;
+  OpenMpExec exec(sys);
+  StepArrays<double> a = cpu_step_arrays(sys);
+  pd_step(exec, a, sys);
 }
 
 Energies measure(const PdSystem& sys) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "breccia/solver/exec_openmp.hpp"
 #include "breccia/solver/float32_state.hpp"
 #include "breccia/solver/forall.hpp"
 #include "breccia/solver/load_kernels.hpp"
@@ -116,76 +117,29 @@ void float32_download(PdSystem& s) {
   convert(s.f32.dilatation, s.dilatation);
 }
 
+StepArrays<float> float32_step_arrays(PdSystem& s) {
+  Float32State& f = s.f32;
+  StepArrays<float> a;
+  a.p = float32_view(s);
+  a.d = s.view();  // the double mirror: loads are evaluated on it (float32_state.hpp)
+  f.u_before.resize(3 * s.n);
+  f.f_before.resize(3 * s.n);
+  a.u_before = f.u_before.data();
+  a.f_before = f.f_before.data();
+  fill_load_sets(s, a);
+  return a;
+}
+
 void float32_compute_forces(PdSystem& s) {
-  const PdViewT<float> p = float32_view(s);
-  if (s.config.model == PdModel::LPS) for_each_particle(p.n, [&](int64_t i) { lps_dilatation_kernel(p, i); });
-  for_each_particle(p.n, [&](int64_t i) { force_kernel(p, i); });
-  if (p.short_range_k) {
-    // The grid wants absolute positions: the float state's, in double.
-    s.x.resize(3 * s.n);
-    const int64_t n3 = static_cast<int64_t>(3 * s.n);
-#pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < n3; ++k)
-      s.x[k] = s.f32.origin[k % 3] + double(s.f32.x0[k]) + double(s.f32.u[k]);
-    short_range_forces(s, p, s.x.data());
-  }
-  double released = 0.0;
-#pragma omp parallel for reduction(+ : released)
-  for (int64_t i = 0; i < p.n; ++i) released += p.dissipated[i];
-  s.dissipated_energy += released;
+  OpenMpExec exec(s);
+  const StepArrays<float> a = float32_step_arrays(s);
+  pd_force_pass(exec, a, true);
 }
 
 void float32_step(PdSystem& s) {
-  commit_min_stretch(s);
-  Float32State& f = s.f32;
-  const double dt = s.dt, half = 0.5 * dt;
-  const PdViewT<float> p = float32_view(s);
-  const int64_t n3 = static_cast<int64_t>(3 * s.n);
-  // Work of external forces and reactions: trapezoid over the step, summed in double.
-  f.u_before.resize(n3);
-  f.f_before.resize(n3);
-#pragma omp parallel for schedule(static)
-  for (int64_t k = 0; k < n3; ++k) {
-    const int64_t i = k / 3;
-    const bool constrained = s.fixed_dof[i] & (1u << (k % 3));
-    f.u_before[k] = f.u[k];
-    f.f_before[k] = double(f.volume[i]) * (constrained ? -double(f.force[k]) : double(f.body[k]));
-  }
-  for_each_particle(p.n, [&](int64_t i) { kick_drift_kernel(p, i, half, dt); });
-  s.time += dt;
-  // Constraints: the ramped values in double (host, once per step), imposed on the float state.
-  for (const auto& con : s.constraints) {
-    const BoundarySpec& b = *con.spec;
-    double velocity[3], target[3];
-    prescribed_values(b, s.time, dt, velocity, target);
-    const int kind = static_cast<int>(b.kind);
-    for (auto i : con.particles)
-      for (int d = 0; d < 3; ++d) {
-        if (!b.components[d]) continue;
-        const int64_t k = 3 * static_cast<int64_t>(i) + d;
-        double u = f.u[k], v = f.v[k];
-        constrain_component(kind, velocity[d], target[d], dt, u, v);
-        f.u[k] = static_cast<float>(u);
-        f.v[k] = static_cast<float>(v);
-      }
-  }
-  if (f.loads_vary) {
-    if (s.config.indenter.enabled) convert(f.u, s.u);  // the indenter reads the double displacement
-    compute_external(s, s.time);
-    convert(s.body, f.body);
-  }
-  float32_compute_forces(s);
-  for_each_particle(p.n, [&](int64_t i) { acceleration_kernel(p, i, half); });
-  double work = 0.0;
-#pragma omp parallel for reduction(+ : work)
-  for (int64_t k = 0; k < n3; ++k) {
-    const int64_t i = k / 3;
-    const bool constrained = s.fixed_dof[i] & (1u << (k % 3));
-    const double f_after = double(f.volume[i]) * (constrained ? -double(f.force[k]) : double(f.body[k]));
-    work += 0.5 * (f.f_before[k] + f_after) * (double(f.u[k]) - double(f.u_before[k]));
-  }
-  s.external_work += work;
-  ++s.step;
+  OpenMpExec exec(s);
+  StepArrays<float> a = float32_step_arrays(s);
+  pd_step(exec, a, s);
 }
 
 namespace {

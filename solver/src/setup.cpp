@@ -15,6 +15,7 @@
 #include "breccia/solver/family_check.hpp"
 #include "breccia/solver/graded_check.hpp"
 #include "breccia/solver/pd_system.hpp"
+#include "breccia/solver/step.hpp"
 #include "surface_cut.hpp"
 
 namespace breccia::solver {
@@ -159,6 +160,36 @@ double median(std::vector<double> v) {
 }
 
 }  // namespace
+
+// The surface loads' facets grouped by particle (CSR); a stable sort keeps compute_external's
+// (load, facet) order within a particle, so every backend sums a particle's loads alike.
+FacetLayout group_facets_by_particle(const PdSystem& s) {
+  struct Entry {
+    int32_t particle, load;
+    const PressureFacet* facet;
+  };
+  std::vector<Entry> entries;
+  FacetLayout out;
+  for (size_t l = 0; l < s.surface_loads.size(); ++l) {
+    const auto& sl = s.surface_loads[l];
+    out.is_pressure.push_back(sl.spec->kind == LoadSpec::Kind::Pressure);
+    out.vectors.insert(out.vectors.end(), sl.spec->vector.begin(), sl.spec->vector.end());
+    for (const auto& f : sl.facets) entries.push_back({f.particle, static_cast<int32_t>(l), &f});
+  }
+  std::stable_sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) { return x.particle < y.particle; });
+  out.offsets.push_back(0);
+  for (size_t e = 0; e < entries.size(); ++e) {
+    if (e == 0 || entries[e].particle != entries[e - 1].particle) {
+      if (e > 0) out.offsets.push_back(static_cast<int64_t>(e));
+      out.particle.push_back(entries[e].particle);
+    }
+    out.load.push_back(entries[e].load);
+    out.area.push_back(entries[e].facet->area);
+    out.normal.insert(out.normal.end(), entries[e].facet->normal, entries[e].facet->normal + 3);
+  }
+  if (!entries.empty()) out.offsets.push_back(static_cast<int64_t>(entries.size()));
+  return out;
+}
 
 PdView PdSystem::view() {
   PdView p;
@@ -717,6 +748,10 @@ PdSystem setup_system(const CaseConfig& config) {
                            {sf.normal[3 * f], sf.normal[3 * f + 1], sf.normal[3 * f + 2]}});
     s.surface_loads.push_back(std::move(sl));
   }
+  if (s.surface_loads.size() > static_cast<size_t>(kMaxSurfaceLoads))
+    throw InputError(c.file, "loads", std::to_string(s.surface_loads.size()) + " pressure/traction loads",
+                     "at most " + std::to_string(kMaxSurfaceLoads) + " (their histories travel with each step)");
+  s.facets = group_facets_by_particle(s);
 
   // Constraints.
   s.fixed_dof.assign(n, 0);

@@ -10,7 +10,9 @@
 #include <unistd.h>
 
 #include "breccia/solver/case_config.hpp"
+#include "breccia/solver/outputs.hpp"
 #include "breccia/solver/pd_system.hpp"
+#include "breccia/solver/run.hpp"
 
 namespace breccia::solver::testing {
 
@@ -83,6 +85,28 @@ inline void impose_affine(PdSystem& s, const double eps[9]) {
       for (int b = 0; b < 3; ++b) v += eps[3 * a + b] * s.x0[3 * i + b];
       s.u[3 * i + a] = v;
     }
+}
+
+// Runs `config` straight through, and again stopped after `first_steps` and continued from
+// its checkpoint; returns both final systems (the callers compare them bit for bit).
+struct SplitRuns {
+  PdSystem straight, restarted;
+};
+inline SplitRuns straight_and_restarted(const CaseConfig& config, const std::string& name, long long first_steps) {
+  RunOptions o;
+  o.progress = false;
+  SplitRuns r{setup_system(config), setup_system(config)};
+  o.out_dir = process_temp_dir() + "/" + name + "_straight";
+  run_system(r.straight, o);
+  PdSystem first = setup_system(config);
+  o.out_dir = process_temp_dir() + "/" + name + "_split";
+  o.steps = first_steps;
+  run_system(first, o);
+  read_checkpoint(r.restarted, o.out_dir + "/checkpoint.h5");
+  o.restart_file = o.out_dir + "/checkpoint.h5";
+  o.steps = r.straight.step - first_steps;
+  run_system(r.restarted, o);
+  return r;
 }
 
 }  // namespace breccia::solver::testing

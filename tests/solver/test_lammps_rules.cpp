@@ -1,12 +1,16 @@
 // The modelling choices of LAMMPS PERI offered as options (docs/lammps-peri.md): its family
 // edge, its continuum micromodulus, its short-range forces, its break order, and the
-// Silling-Askari compressive enhancement. Each is checked against a reference derived here
+// Silling-Askari compressive enhancement; and the fast and general kernel paths against each
+// other. Each is checked against a reference derived here
 // independently (lattice sums, the documented formula, energy gradients), not against the code.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <numbers>
+#include <tuple>
 
 #include "breccia/common/error.hpp"
 #include "breccia/solver/outputs.hpp"
@@ -37,6 +41,32 @@ double lammps_weight(double len) {
   if (len > kHorizon) return 0.0;
   if (std::fabs(len - kHorizon) <= half) return (kHorizon + half - len) / (2.0 * half);
   return 1.0;
+}
+
+// The documented law summed here over every other particle: 15 c V (d - r) / delta along
+// j -> i with d = min(0.9 |xi|, 1.35 dx), c = 18 K / (pi delta^4) (K of the decks below).
+// `pairs` receives how many pairs were inside their reach.
+std::array<double, 3> expected_short_range(const PdSystem& s, int64_t i, int& pairs) {
+  const double K = 22.35e9 / 1.5;
+  const double c = 18.0 * K / (std::numbers::pi * std::pow(kHorizon, 4));
+  std::array<double, 3> expected{0, 0, 0};
+  pairs = 0;
+  for (size_t j = 0; j < s.n; ++j) {
+    if (static_cast<int64_t>(j) == i) continue;
+    double xi = 0, r = 0, dx[3];
+    for (int a = 0; a < 3; ++a) {
+      xi += std::pow(s.x0[3 * j + a] - s.x0[3 * i + a], 2);
+      dx[a] = s.x0[3 * j + a] + s.u[3 * j + a] - s.x0[3 * i + a] - s.u[3 * i + a];
+      r += dx[a] * dx[a];
+    }
+    xi = std::sqrt(xi);
+    r = std::sqrt(r);
+    const double d = std::min(0.9 * xi, 1.35 * kSpacing);
+    if (r >= d) continue;
+    ++pairs;
+    for (int a = 0; a < 3; ++a) expected[a] -= 15.0 * c * kSpacing * kSpacing * kSpacing * (d - r) / kHorizon * dx[a] / r;
+  }
+  return expected;
 }
 
 int64_t centre_particle(const PdSystem& s, int cells) {
@@ -108,26 +138,8 @@ TEST(ShortRangeForces, AreTheGradientOfTheirEnergyAndCancelInPairs) {
   s.u[3 * i] = plain.u[3 * i] = 0.3 * kSpacing;
   cpu_compute_forces(s);
   cpu_compute_forces(plain);
-  // The documented law, summed here over every particle: 15 c V (d - r) / delta along j -> i.
-  const double K = 22.35e9 / 1.5;
-  const double c = 18.0 * K / (std::numbers::pi * std::pow(kHorizon, 4));
-  double expected[3] = {0, 0, 0};
   int pairs = 0;
-  for (size_t j = 0; j < s.n; ++j) {
-    if (static_cast<int64_t>(j) == i) continue;
-    double xi = 0, r = 0, dx[3];
-    for (int a = 0; a < 3; ++a) {
-      xi += std::pow(s.x0[3 * j + a] - s.x0[3 * i + a], 2);
-      dx[a] = s.x0[3 * j + a] + s.u[3 * j + a] - s.x0[3 * i + a] - s.u[3 * i + a];
-      r += dx[a] * dx[a];
-    }
-    xi = std::sqrt(xi);
-    r = std::sqrt(r);
-    const double d = std::min(0.9 * xi, 1.35 * kSpacing);
-    if (r >= d) continue;
-    ++pairs;
-    for (int a = 0; a < 3; ++a) expected[a] -= 15.0 * c * kSpacing * kSpacing * kSpacing * (d - r) / kHorizon * dx[a] / r;
-  }
+  const std::array<double, 3> expected = expected_short_range(s, i, pairs);
   EXPECT_EQ(pairs, 5);
   for (int a = 0; a < 3; ++a)
     EXPECT_NEAR(s.force[3 * i + a] - plain.force[3 * i + a], expected[a], 1e-9 * std::fabs(expected[0])) << a;
@@ -166,25 +178,10 @@ TEST(ShortRangeForces, ReachParticlesOutsideTheFamily) {
     s.u[3 * i] = (5.25e-3 - 0.3 * kSpacing) - 0.25e-3;  // 0.3 dx before j, 0.2 dx off its row
     s.u[3 * i + 1] = 0.2 * kSpacing;
     cpu_compute_forces(s);
-    // Expected: the documented law summed here over every particle within 1.35 dx of i's new
-    // place (none of them in i's family; its members stayed 4 mm behind).
-    const double K = 22.35e9 / 1.5;
-    const double c = 18.0 * K / (std::numbers::pi * std::pow(kHorizon, 4));
-    double expected[3] = {0, 0, 0};
+    // Expected: the documented law over every particle near i's new place (none of them in
+    // i's family; its members stayed 4 mm behind).
     int partners = 0;
-    for (size_t q = 0; q < s.n; ++q) {
-      if (static_cast<int64_t>(q) == i) continue;
-      double dx[3], r = 0;
-      for (int a = 0; a < 3; ++a) {
-        dx[a] = s.x0[3 * q + a] + s.u[3 * q + a] - s.x0[3 * i + a] - s.u[3 * i + a];
-        r += dx[a] * dx[a];
-      }
-      r = std::sqrt(r);
-      if (r >= 1.35 * kSpacing) continue;
-      ++partners;
-      for (int a = 0; a < 3; ++a)
-        expected[a] -= 15.0 * c * kSpacing * kSpacing * kSpacing * (1.35 * kSpacing - r) / kHorizon * dx[a] / r;
-    }
+    const std::array<double, 3> expected = expected_short_range(s, i, partners);
     ASSERT_GE(partners, 1);
     const double scale = std::hypot(expected[0], expected[1], expected[2]);
     for (int a = 0; a < 3; ++a) {
@@ -284,21 +281,8 @@ TEST(CompressiveEnhancementRestart, WithTheLammpsOptionsIsBitIdentical) {
                model + ", compressive_enhancement: 0.25, short_range_forces: true, break_check: after_force");
   const CaseConfig config =
       parse_case_file(write_case("alpha_restart", deck + "time: {steps: 400}\noutput: {every: 100, history_every: 20}\n"));
-  RunOptions o;
-  o.progress = false;
-  PdSystem straight = setup_system(config);
-  o.out_dir = process_temp_dir() + "/alpha_straight";
-  run_system(straight, o);
+  auto [straight, second] = straight_and_restarted(config, "alpha_restart", 170);
   ASSERT_GT(measure(straight).broken_half_bonds, 0) << "the case should break bonds";
-  PdSystem first = setup_system(config);
-  o.out_dir = process_temp_dir() + "/alpha_split";
-  o.steps = 170;
-  run_system(first, o);
-  PdSystem second = setup_system(config);
-  read_checkpoint(second, o.out_dir + "/checkpoint.h5");
-  o.restart_file = o.out_dir + "/checkpoint.h5";
-  o.steps = 230;
-  run_system(second, o);
   ASSERT_EQ(second.step, straight.step);
   EXPECT_EQ(0, std::memcmp(second.u.data(), straight.u.data(), straight.u.size() * sizeof(double)));
   EXPECT_EQ(0, std::memcmp(second.v.data(), straight.v.data(), straight.v.size() * sizeof(double)));
@@ -324,3 +308,58 @@ TEST(LammpsOptions, BadValuesNameTheKey) {
   EXPECT_NE(error_of(", short_range_forces: true", "correspondence").find("model.short_range_forces"),
             std::string::npos);
 }
+
+// The fast kernels (one constant horizon: pmb_symmetric_force_kernel, lps_symmetric_force_
+// kernel, the float SIMD loop) and the general force_kernel compute the same forces, breaks
+// and diagnostics by different arithmetic; here on the CPU, from one random displacement
+// that breaks some bonds. Tolerances: double round-off over ~120 bonds (1e-12 of the largest
+// force), float's (2e-5); the breaks are identical (no stretch lies within rounding of s0 in
+// this field, checked by the equal counts).
+class FastAndGeneralPaths : public ::testing::TestWithParam<std::tuple<const char*, const char*>> {};
+
+TEST_P(FastAndGeneralPaths, AgreeOnForcesBreaksAndDiagnostics) {
+  const auto [model, precision] = GetParam();
+  const std::string deck =
+      "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.004, 0.004], spacing: 0.5 mm}}\n"
+      "model: {type: " + std::string(model) + ", horizon_factor: 3.015, precision: " + precision + "}\n"
+      "materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, fracture_energy: 2}]\n"
+      "time: {steps: 1}\n";
+  PdSystem fast = system_from_yaml(std::string("fast_") + model + precision, deck);
+  PdSystem general = system_from_yaml(std::string("general_") + model + precision, deck);
+  ASSERT_TRUE(fast.symmetric_halves);
+  general.symmetric_halves = false;  // the same system through force_kernel's general loop
+  uint64_t z = 12345;
+  auto uniform = [&z] {  // splitmix64: a fixed field, any platform
+    z += 0x9E3779B97F4A7C15ull;
+    uint64_t x = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return double((x ^ (x >> 31)) >> 11) / 9007199254740992.0 - 0.5;
+  };
+  for (size_t k = 0; k < 3 * fast.n; ++k) fast.u[k] = general.u[k] = 2e-3 * 0.5e-3 * uniform();  // strains ~4e-3
+  for (bool diagnostics : {false, true}) {
+    fast.diagnostics = general.diagnostics = diagnostics;
+    cpu_compute_forces(fast);
+    cpu_compute_forces(general);
+  }
+  long long broken_fast = 0, broken_general = 0;
+  for (size_t k = 0; k < fast.state.size(); ++k) {
+    broken_fast += fast.state[k] == 0;
+    broken_general += general.state[k] != (kOwnIntact | kDualIntact);
+  }
+  ASSERT_GT(broken_fast, 0) << "the field should break some bonds";
+  EXPECT_EQ(broken_fast, broken_general);
+  double fmax = 0.0;
+  for (double f : general.force) fmax = std::max(fmax, std::fabs(f));
+  const double tol = std::string(precision) == "float32" ? 2e-5 : 1e-12;
+  for (size_t k = 0; k < fast.force.size(); ++k) ASSERT_NEAR(fast.force[k], general.force[k], tol * fmax) << k;
+  double wmax = 0.0;
+  for (double w : general.energy_density) wmax = std::max(wmax, std::fabs(w));
+  for (size_t i = 0; i < fast.n; ++i) {
+    ASSERT_NEAR(fast.energy_density[i], general.energy_density[i], tol * wmax) << i;
+    ASSERT_NEAR(fast.damage[i], general.damage[i], 1e-12) << i;
+  }
+  EXPECT_NEAR(fast.dissipated_energy, general.dissipated_energy, tol * 10 * general.dissipated_energy);
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, FastAndGeneralPaths,
+                         ::testing::Combine(::testing::Values("pmb", "lps"), ::testing::Values("float64", "float32")));

@@ -72,22 +72,8 @@ TEST(Restart, HalfRunsWithACheckpointEqualOneStraightRunBitForBit) {
   const std::string case_file =
       write_case("restart", kPrecrackedGlassPlateDeck + "time: {steps: 400}\noutput: {every: 100, history_every: 20}\n");
   const CaseConfig config = parse_case_file(case_file);
-  RunOptions o;
-  o.progress = false;
-  PdSystem straight = setup_system(config);
-  o.out_dir = breccia::solver::testing::process_temp_dir() + "/restart_straight";
-  run_system(straight, o);
+  auto [straight, second] = straight_and_restarted(config, "restart", 200);
   ASSERT_GT(measure(straight).broken_half_bonds, 0) << "the case should break bonds";
-
-  PdSystem first = setup_system(config);
-  o.out_dir = breccia::solver::testing::process_temp_dir() + "/restart_split";
-  o.steps = 200;
-  run_system(first, o);
-  PdSystem second = setup_system(config);
-  read_checkpoint(second, o.out_dir + "/checkpoint.h5");
-  o.restart_file = o.out_dir + "/checkpoint.h5";
-  o.steps = 200;
-  run_system(second, o);
   ASSERT_EQ(second.step, straight.step);
   EXPECT_EQ(0, std::memcmp(second.u.data(), straight.u.data(), straight.u.size() * sizeof(double)));
   EXPECT_EQ(0, std::memcmp(second.v.data(), straight.v.data(), straight.v.size() * sizeof(double)));

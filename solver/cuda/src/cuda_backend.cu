@@ -21,13 +21,13 @@
 #include "breccia/solver/float32_state.hpp"
 #include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_kernels.hpp"
+#include "breccia/solver/step.hpp"
 
 namespace breccia::solver {
 namespace {
 
 constexpr int kBlock = 256;
 constexpr int kMaxReduceBlocks = 1024;  // partial sums per reduction: fixed, so results are reproducible
-constexpr int kMaxSurfaceLoads = 64;    // load histories travel as one kernel parameter
 
 using cuda::check;
 using cuda::check_launch;
@@ -41,145 +41,12 @@ int64_t blocks_for(int64_t n) { return (n + kBlock - 1) / kBlock; }
 
 __device__ int64_t thread_index() { return static_cast<int64_t>(blockIdx.x) * blockDim.x + threadIdx.x; }
 
-// Kernels over PdViewT<Real>: double, or float for model.precision: float32 (float32_state.hpp).
-template <class Real>
-__global__ void kick_drift_cuda(PdViewT<Real> p, double half_dt, double dt) {
+// Every phase of the step is a functor of step.hpp (BRECCIA_HD): one kernel launches any of
+// them over [0, n), one thread per index.
+template <class F>
+__global__ void forall_cuda(int64_t n, F f) {
   const int64_t i = thread_index();
-  if (i < p.n) kick_drift_kernel(p, i, half_dt, dt);
-}
-
-// Current positions once per force pass, as cpu_compute_forces keeps them.
-__global__ void current_positions_cuda(int64_t n3, const double* x0, const double* u, double* x) {
-  const int64_t k = thread_index();
-  if (k < n3) x[k] = x0[k] + u[k];
-}
-
-template <class Real>
-__global__ void lps_dilatation_cuda(PdViewT<Real> p) {
-  const int64_t i = thread_index();
-  if (i < p.n) lps_dilatation_kernel(p, i);
-}
-
-template <class Real>
-__global__ void force_cuda(PdViewT<Real> p) {
-  const int64_t i = thread_index();
-  if (i < p.n) force_kernel(p, i);
-}
-
-template <class Real>
-__global__ void short_range_cuda(PdViewT<Real> p) {
-  const int64_t i = thread_index();
-  if (i < p.n) short_range_kernel(p, i);
-}
-
-// Correspondence (correspondence_kernels.hpp): F, the stress and A_i for every particle,
-// then the forces, which read A_j of the neighbours.
-__global__ void correspondence_deformation_cuda(CorrespondenceView c) {
-  const int64_t i = thread_index();
-  if (i < c.p.n) correspondence_deformation_kernel(c, i);
-}
-
-__global__ void correspondence_force_cuda(CorrespondenceView c) {
-  const int64_t i = thread_index();
-  if (i < c.p.n) correspondence_force_kernel(c, i);
-}
-
-template <class Real>
-__global__ void acceleration_cuda(PdViewT<Real> p, double half_dt) {
-  const int64_t i = thread_index();
-  if (i < p.n) acceleration_kernel(p, i, half_dt);
-}
-
-// Force times displacement before the step, for the trapezoidal work of loads and reactions
-// (in double for float runs too, as float32_step sums it).
-template <class Real>
-__global__ void work_before_cuda(PdViewT<Real> p, Real* u_before, double* f_before) {
-  const int64_t k = thread_index();
-  if (k >= 3 * p.n) return;
-  const int64_t i = k / 3;
-  const bool constrained = p.fixed_dof[i] & (1u << (k % 3));
-  f_before[k] = double(p.volume[i]) * (constrained ? -double(p.force[k]) : double(p.body[k]));
-  u_before[k] = p.u[k];
-}
-
-// Float <-> double copies of a float run's state (float32_upload / float32_download).
-template <class From, class To>
-__global__ void convert_cuda(int64_t count, const From* from, To* to) {
-  const int64_t k = thread_index();
-  if (k < count) to[k] = static_cast<To>(from[k]);
-}
-
-// Prescribed components of one constraint at this step; the ramps are evaluated on the host.
-struct ConstraintStep {
-  int kind;            // BoundarySpec::Kind
-  unsigned components; // bit d: component d prescribed
-  double velocity[3];  // Velocity: v at this step
-  double target[3];    // Displacement: u at this step
-  double dt;
-};
-
-// The ramped values are imposed in double and rounded to Real, as float32_step does.
-template <class Real>
-__global__ void constraint_cuda(int64_t count, const int32_t* particles, ConstraintStep c, Real* u, Real* v) {
-  const int64_t q = thread_index();
-  if (q >= count) return;
-  const int64_t i = particles[q];
-  for (int d = 0; d < 3; ++d)
-    if (c.components & (1u << d)) {
-      double uk = u[3 * i + d], vk = v[3 * i + d];
-      constrain_component(c.kind, c.velocity[d], c.target[d], c.dt, uk, vk);
-      u[3 * i + d] = static_cast<Real>(uk);
-      v[3 * i + d] = static_cast<Real>(vk);
-    }
-}
-
-struct LoadHistories {
-  double value[kMaxSurfaceLoads];  // history of each surface load at this step
-};
-
-// Facets grouped by particle (CSR), kept in the CPU's (load, facet) order within a particle,
-// so each particle's body force is summed in the same order as compute_external.
-struct FacetView {
-  int64_t particle_count;
-  const int32_t* particle;
-  const int64_t* offsets;
-  const int32_t* load;
-  const double* area;
-  const double* normal;          // 3 per facet
-  const uint8_t* load_is_pressure;
-  const double* load_vector;     // 3 per load
-};
-
-__global__ void surface_load_cuda(FacetView f, LoadHistories h, const double* volume, const int64_t* bond_offsets,
-                                  const uint8_t* bond_state, double* body) {
-  const int64_t q = thread_index();
-  if (q >= f.particle_count) return;
-  const int64_t i = f.particle[q];
-  if (!particle_attached(bond_offsets, bond_state, i)) return;
-  for (int64_t e = f.offsets[q]; e < f.offsets[q + 1]; ++e) {
-    const int l = f.load[e];
-    double force[3];
-    facet_force(f.load_is_pressure[l], h.value[l], f.area[e], &f.normal[3 * e], &f.load_vector[3 * l], force);
-    for (int d = 0; d < 3; ++d) body[3 * i + d] += force[d] / volume[i];
-  }
-}
-
-// particles == nullptr: every particle.
-__global__ void body_load_cuda(int64_t count, const int32_t* particles, double history, double gx, double gy,
-                               double gz, const double* density, double* body) {
-  const int64_t q = thread_index();
-  if (q >= count) return;
-  const int64_t i = particles ? particles[q] : q;
-  const double g[3] = {gx, gy, gz};
-  for (int d = 0; d < 3; ++d) body[3 * i + d] += density[i] * history * g[d];
-}
-
-__global__ void indenter_cuda(PdView p, double cx, double cy, double cz, double radius, double stiffness,
-                              double* body) {
-  const int64_t i = thread_index();
-  if (i >= p.n) return;
-  const double c[3] = {cx, cy, cz};
-  add_indenter_force(p.x0, p.u, i, c, radius, stiffness, body);
+  if (i < n) f(i);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -217,12 +84,8 @@ __global__ void reduce_final_cuda(int count, const typename Load::Value* partial
   if (threadIdx.x == 0) finish(shared[0]);
 }
 
-// Plain aggregates (no member initialisers): they live in __shared__ arrays.
-struct StepSums {
-  double released;  // energy of the bonds broken this step [J]
-  double work;      // work of external forces and reactions over the step [J]
-};
-
+// Plain aggregates (no member initialisers): they live in __shared__ arrays (StepSums too,
+// step.hpp).
 struct MeasureSums {
   double kinetic, strain, max_damage;
   long long broken_half_bonds;
@@ -234,40 +97,6 @@ struct DeviceScalars {
   double external_work;
   double dissipated_energy;
   MeasureSums measured;
-};
-
-template <class Real>
-struct StepLoad {
-  using Value = StepSums;
-  PdViewT<Real> p;
-  const Real* u_before;
-  const double* f_before;
-  __device__ static Value identity() { return {0.0, 0.0}; }
-  __device__ static Value combine(Value a, Value b) { return {a.released + b.released, a.work + b.work}; }
-  // k runs over 3N components; the first N also carry the particles' released energy.
-  __device__ Value operator()(int64_t k) const {
-    const int64_t i = k / 3;
-    const bool constrained = p.fixed_dof[i] & (1u << (k % 3));
-    const double f_after = double(p.volume[i]) * (constrained ? -double(p.force[k]) : double(p.body[k]));
-    return {k < p.n ? p.dissipated[k] : 0.0, 0.5 * (f_before[k] + f_after) * (double(p.u[k]) - double(u_before[k]))};
-  }
-};
-
-// Released energy alone, for a force pass outside a step.
-struct ReleasedLoad {
-  using Value = StepSums;
-  const double* dissipated;
-  __device__ static Value identity() { return {0.0, 0.0}; }
-  __device__ static Value combine(Value a, Value b) { return {a.released + b.released, a.work + b.work}; }
-  __device__ Value operator()(int64_t i) const { return {dissipated[i], 0.0}; }
-};
-
-struct StepFinish {
-  DeviceScalars* scalars;
-  __device__ void operator()(StepSums s) const {
-    scalars->dissipated_energy += s.released;
-    scalars->external_work += s.work;
-  }
 };
 
 struct MeasureLoad {
@@ -367,20 +196,85 @@ struct CudaSystem::Impl {
   FacetView facets{};
   bool sync_after_launch = false;  // BRECCIA_CUDA_SYNC=1: attribute asynchronous faults to their kernel
 
+  // The step's arrays (step.hpp) over the device copies, double and float; built once.
+  StepArrays<double> arrays;
+  StepArrays<float> farrays;
+
   void after_launch(const char* kernel) const { check_launch(kernel, sync_after_launch); }
-  template <class Real>
-  void compute_forces(const PdSystem& sys, PdViewT<Real> p);
-  template <class Real>
-  void step(PdSystem& sys, const PdViewT<Real>& p, Real* u_before_of_step);
-  void compute_external(PdSystem& sys, double t);
+  template <class F>
+  void for_each(int64_t n, const F& f, const char* name) {
+    if (n == 0) return;  // a grid of zero blocks is a launch error
+    forall_cuda<F><<<blocks_for(n), kBlock>>>(n, f);
+    after_launch(name);
+  }
   template <class From, class To>
   void convert(int64_t count, const From* from, To* to, const char* what) {
-    if (count == 0) return;
-    convert_cuda<From, To><<<blocks_for(count), kBlock>>>(count, from, to);
-    after_launch(what);
+    for_each(count, Convert<From, To>{from, to}, what);
+  }
+  // The run loop turns diagnostics off between output steps; every launch reads the flag.
+  void sync_flags(const PdSystem& sys) {
+    for (PdView* p : {&view, &arrays.p, &arrays.d, &farrays.d, &arrays.corr.p}) {
+      p->diagnostics = sys.diagnostics;
+      p->symmetric_halves = sys.symmetric_halves;
+    }
+    for (PdViewT<float>* q : {&fview, &farrays.p}) {
+      q->diagnostics = sys.diagnostics;
+      q->symmetric_halves = sys.symmetric_halves;
+    }
   }
   void float_kinematics_to_double();  // fu, fv -> u, v (a float run's measure and probes)
 };
+
+namespace {
+
+template <class Load, class Finish>
+void reduce(int64_t n, const Load& load, typename Load::Value* partial, Finish finish, const char* name,
+            bool synchronize) {
+  const int grid = static_cast<int>(std::clamp<int64_t>(blocks_for(n), 1, kMaxReduceBlocks));
+  reduce_partial_cuda<Load><<<grid, kBlock>>>(n, load, partial);
+  check_launch(name, synchronize);
+  reduce_final_cuda<Load, Finish><<<1, kBlock>>>(grid, partial, finish);
+  check_launch(name, synchronize);
+}
+
+// The CUDA execution space of step.hpp: launches on the device copies; sums stay on the
+// device (the energy accumulators of DeviceScalars) until a measure reads them.
+class CudaExec {
+public:
+  explicit CudaExec(CudaSystem::Impl& m) : m_(m) {}
+  template <class F>
+  void for_each(int64_t n, const F& f, const char* name) const { m_.for_each(n, f, name); }
+  template <class Load, class Finish>
+  void reduce(int64_t n, const Load& load, const Finish& finish, const char* name) const {
+    static_assert(std::is_same_v<typename Load::Value, StepSums>, "the step's reductions sum StepSums");
+    solver::reduce(n, load, m_.step_partial.get(), finish, name, m_.sync_after_launch);
+  }
+  // commit_min_stretch: the device buffers trade places; every view follows.
+  template <class Real>
+  void commit_min_stretch(StepArrays<Real>& a) const {
+    if (m_.min_stretch.size() == 0) return;
+    m_.min_stretch.swap(m_.min_stretch_next);
+    for (PdView* p : {&m_.view, &m_.arrays.p, &m_.arrays.d, &m_.farrays.d}) {
+      p->min_stretch = m_.min_stretch.get();
+      p->min_stretch_next = m_.min_stretch_next.get();
+    }
+    for (PdViewT<float>* q : {&m_.fview, &m_.farrays.p}) {
+      q->min_stretch = m_.min_stretch.get();
+      q->min_stretch_next = m_.min_stretch_next.get();
+    }
+    a.p.min_stretch = m_.min_stretch.get();
+    a.p.min_stretch_next = m_.min_stretch_next.get();
+  }
+  template <class Real>
+  void contact(const StepArrays<Real>&) const {
+    throw RunError("CUDA backend: model.short_range_forces needs the contact search of the CPU; use --backend cpu");
+  }
+
+private:
+  CudaSystem::Impl& m_;
+};
+
+}  // namespace
 
 CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   if (!cuda_device_available())
@@ -511,46 +405,17 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
     q.energy_density = p.energy_density; q.dissipated = p.dissipated; q.damage = p.damage; q.max_stretch = p.max_stretch;
   }
 
-  // Surface-load facets regrouped by particle; a stable sort keeps compute_external's order.
-  if (s.surface_loads.size() > static_cast<size_t>(kMaxSurfaceLoads))
-    throw RunError("CUDA backend: " + std::to_string(s.surface_loads.size()) + " pressure/traction loads, at most " +
-                   std::to_string(kMaxSurfaceLoads) + " supported; use --backend cpu");
-  struct Entry {
-    int32_t particle, load;
-    const PressureFacet* facet;
-  };
-  std::vector<Entry> entries;
-  std::vector<uint8_t> is_pressure;
-  std::vector<double> vectors;
-  for (size_t l = 0; l < s.surface_loads.size(); ++l) {
-    const auto& sl = s.surface_loads[l];
-    is_pressure.push_back(sl.spec->kind == LoadSpec::Kind::Pressure);
-    vectors.insert(vectors.end(), sl.spec->vector.begin(), sl.spec->vector.end());
-    for (const auto& f : sl.facets) entries.push_back({f.particle, static_cast<int32_t>(l), &f});
-  }
-  std::stable_sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) { return x.particle < y.particle; });
-  std::vector<int32_t> particle, load;
-  std::vector<int64_t> offsets{0};
-  std::vector<double> area, normal;
-  for (size_t e = 0; e < entries.size(); ++e) {
-    if (e == 0 || entries[e].particle != entries[e - 1].particle) {
-      if (e > 0) offsets.push_back(static_cast<int64_t>(e));
-      particle.push_back(entries[e].particle);
-    }
-    load.push_back(entries[e].load);
-    area.push_back(entries[e].facet->area);
-    normal.insert(normal.end(), entries[e].facet->normal, entries[e].facet->normal + 3);
-  }
-  if (!entries.empty()) offsets.push_back(static_cast<int64_t>(entries.size()));
-  m.facet_particle.upload(particle, "facet particles");
-  m.facet_offsets.upload(offsets, "facet offsets");
-  m.facet_load.upload(load, "facet loads");
-  m.facet_area.upload(area, "facet areas");
-  m.facet_normal.upload(normal, "facet normals");
-  m.load_is_pressure.upload(is_pressure, "load kinds");
-  m.load_vector.upload(vectors, "load vectors");
-  m.facets = {static_cast<int64_t>(particle.size()), m.facet_particle.get(), m.facet_offsets.get(), m.facet_load.get(),
-              m.facet_area.get(), m.facet_normal.get(), m.load_is_pressure.get(), m.load_vector.get()};
+  // Surface-load facets grouped by particle (set-up's FacetLayout, the CPU's order).
+  m.facet_particle.upload(s.facets.particle, "facet particles");
+  m.facet_offsets.upload(s.facets.offsets, "facet offsets");
+  m.facet_load.upload(s.facets.load, "facet loads");
+  m.facet_area.upload(s.facets.area, "facet areas");
+  m.facet_normal.upload(s.facets.normal, "facet normals");
+  m.load_is_pressure.upload(s.facets.is_pressure, "load kinds");
+  m.load_vector.upload(s.facets.vectors, "load vectors");
+  m.facets = {static_cast<int64_t>(s.facets.particle.size()), m.facet_particle.get(), m.facet_offsets.get(),
+              m.facet_load.get(), m.facet_area.get(), m.facet_normal.get(), m.load_is_pressure.get(),
+              m.load_vector.get()};
 
   m.body_load_particles = std::vector<DeviceArray<int32_t>>(s.body_loads.size());
   for (size_t b = 0; b < s.body_loads.size(); ++b) m.body_load_particles[b].upload(s.body_loads[b].particles, "body-load set");
@@ -561,161 +426,62 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   m.measure_partial.allocate(kMaxReduceBlocks, "measure partial sums");
   const std::vector<DeviceScalars> scalars{{s.external_work, s.dissipated_energy, {0.0, 0.0, 0.0, 0, -1}}};
   m.scalars.upload(scalars, "energy accumulators");
+
+  // The step's arrays: the same StepArrays the CPU builds, over device memory.
+  auto fill = [&](auto& a) {
+    a.d = m.view;
+    a.x = m.x.get();
+    a.f_before = m.f_before.get();
+    a.facets = m.facets;
+    for (size_t c = 0; c < s.constraints.size(); ++c)
+      a.constraint_sets.push_back({static_cast<int64_t>(m.constraint_particles[c].size()), m.constraint_particles[c].get()});
+    for (size_t b = 0; b < s.body_loads.size(); ++b)
+      a.body_load_sets.push_back(s.body_loads[b].particles.empty()
+                                     ? SetView{static_cast<int64_t>(s.n), nullptr}
+                                     : SetView{static_cast<int64_t>(m.body_load_particles[b].size()),
+                                               m.body_load_particles[b].get()});
+    a.loads_vary = m.loads_vary;
+    a.external_work = &m.scalars.get()->external_work;
+    a.dissipated_energy = &m.scalars.get()->dissipated_energy;
+  };
+  m.loads_vary = !s.surface_loads.empty() || !s.body_loads.empty() || s.config.indenter.enabled;
+  fill(m.arrays);
+  m.arrays.p = m.view;
+  m.arrays.u_before = m.u_before.get();
+  if (s.config.model == PdModel::Correspondence) {
+    m.arrays.corr.p = m.view;
+    m.arrays.corr.dimension = m.dimension;
+    m.arrays.corr.moduli = m.corr_moduli.get();
+    m.arrays.corr.deformation = m.corr_deformation.get();
+    m.arrays.corr.force_tensor = m.corr_force_tensor.get();
+    m.arrays.corr.nonaffine = m.corr_nonaffine.get();
+  }
+  if (m.f32) {
+    fill(m.farrays);
+    m.farrays.p = m.fview;
+    m.farrays.u_before = m.fu_before.get();
+  }
 }
 
 CudaSystem::~CudaSystem() = default;
 
-namespace {
-
-template <class Load, class Finish>
-void reduce(int64_t n, const Load& load, typename Load::Value* partial, Finish finish, const char* name,
-            bool synchronize) {
-  const int grid = static_cast<int>(std::clamp<int64_t>(blocks_for(n), 1, kMaxReduceBlocks));
-  reduce_partial_cuda<Load><<<grid, kBlock>>>(n, load, partial);
-  check_launch(name, synchronize);
-  reduce_final_cuda<Load, Finish><<<1, kBlock>>>(grid, partial, finish);
-  check_launch(name, synchronize);
-}
-
-}  // namespace
-
-// cpu_compute_forces (float: float32_compute_forces) on the device, less the sum of the
-// released energy (the caller adds it).
-template <class Real>
-void CudaSystem::Impl::compute_forces(const PdSystem& sys, PdViewT<Real> p) {
-  // The run loop turns diagnostics off between output steps; the later launches of the step
-  // (acceleration, reductions) read the members.
-  view.diagnostics = fview.diagnostics = p.diagnostics = sys.diagnostics;
-  view.symmetric_halves = fview.symmetric_halves = p.symmetric_halves = sys.symmetric_halves;
-  const int64_t grid = blocks_for(p.n);
-  if constexpr (std::is_same_v<Real, double>) {  // float never forms x0 + u (float32_state.hpp)
-    current_positions_cuda<<<blocks_for(3 * p.n), kBlock>>>(3 * p.n, p.x0, p.u, x.get());
-    after_launch("current_positions");
-    if (p.model == static_cast<int>(PdModel::Correspondence)) {  // cpu_correspondence_forces
-      CorrespondenceView c;
-      c.p = p;
-      c.dimension = dimension;
-      c.moduli = corr_moduli.get();
-      c.deformation = corr_deformation.get();
-      c.force_tensor = corr_force_tensor.get();
-      c.nonaffine = corr_nonaffine.get();
-      correspondence_deformation_cuda<<<grid, kBlock>>>(c);
-      after_launch("correspondence_deformation_kernel");
-      correspondence_force_cuda<<<grid, kBlock>>>(c);
-      after_launch("correspondence_force_kernel");
-      return;
-    }
-  }
-  if (p.model == static_cast<int>(PdModel::LPS)) {
-    lps_dilatation_cuda<Real><<<grid, kBlock>>>(p);
-    after_launch("lps_dilatation_kernel");
-  }
-  force_cuda<Real><<<grid, kBlock>>>(p);
-  after_launch("force_kernel");
-  if (p.short_range_k) {
-    short_range_cuda<Real><<<grid, kBlock>>>(p);
-    after_launch("short_range_kernel");
-  }
-}
-
+// cpu_compute_forces / float32_compute_forces on the device: the force pass of step.hpp.
 void CudaSystem::compute_forces(PdSystem& sys) {
   Impl& m = *impl_;
   if (m.view.n == 0) return;
-  if (m.f32) m.compute_forces(sys, m.fview);
-  else m.compute_forces(sys, m.view);
-  reduce(m.view.n, ReleasedLoad{m.view.dissipated}, m.step_partial.get(), StepFinish{m.scalars.get()},
-         "released energy reduction", m.sync_after_launch);
+  m.sync_flags(sys);
+  CudaExec exec(m);
+  if (m.f32) pd_force_pass(exec, m.farrays, true);
+  else pd_force_pass(exec, m.arrays, true);
 }
 
-// External force density (compute_external) on the double arrays, float runs included (as
-// float32_step evaluates its loads in double and rounds them once).
-void CudaSystem::Impl::compute_external(PdSystem& sys, double t) {
-  const PdView& p = view;
-  const int64_t n = p.n;
-  check(cudaMemsetAsync(body.get(), 0, 3 * n * sizeof(double)), "clearing body forces");
-  if (facets.particle_count > 0) {
-    LoadHistories h{};
-    for (size_t l = 0; l < sys.surface_loads.size(); ++l) h.value[l] = sys.surface_loads[l].spec->history.at(t);
-    surface_load_cuda<<<blocks_for(facets.particle_count), kBlock>>>(facets, h, p.volume, p.offsets, p.state,
-                                                                       body.get());
-    after_launch("surface_load");
-  }
-  for (size_t b = 0; b < sys.body_loads.size(); ++b) {
-    const auto& bl = sys.body_loads[b];
-    const double h = bl.spec->history.at(t);
-    const auto& set = body_load_particles[b];
-    const int64_t count = bl.particles.empty() ? n : static_cast<int64_t>(set.size());
-    body_load_cuda<<<blocks_for(count), kBlock>>>(count, set.get(), h, bl.spec->vector[0], bl.spec->vector[1],
-                                                  bl.spec->vector[2], p.density, body.get());
-    after_launch("body_load");
-  }
-  const IndenterSpec& ind = sys.config.indenter;
-  if (ind.enabled) {
-    double c[3];
-    for (int d = 0; d < 3; ++d) c[d] = ind.center[d] + ind.velocity[d] * t;
-    for (int d = 0; d < 3; ++d) sys.indenter_position[d] = c[d];
-    indenter_cuda<<<blocks_for(n), kBlock>>>(p, c[0], c[1], c[2], ind.radius, ind.stiffness, body.get());
-    after_launch("indenter");
-  }
-}
-
-// cpu_step (float: float32_step): the same phases in the same order.
-template <class Real>
-void CudaSystem::Impl::step(PdSystem& sys, const PdViewT<Real>& p, Real* u_before_of_step) {
-  constexpr bool single = std::is_same_v<Real, float>;
-  const double dt = sys.dt, half = 0.5 * dt;
-  const int64_t n = p.n;
-  if (n == 0) {  // nothing to launch (a grid of zero blocks is a launch error)
-    sys.time += dt;
-    ++sys.step;
-    return;
-  }
-  const int64_t grid = blocks_for(n), grid3 = blocks_for(3 * n);
-
-  work_before_cuda<Real><<<grid3, kBlock>>>(p, u_before_of_step, f_before.get());
-  after_launch("work_before");
-  kick_drift_cuda<Real><<<grid, kBlock>>>(p, half, dt);
-  after_launch("kick_drift_kernel");
-  sys.time += dt;
-  const double t = sys.time;
-
-  // Constraints (apply_constraints): one launch per boundary, in the case's order.
-  for (size_t c = 0; c < sys.constraints.size(); ++c) {
-    const BoundarySpec& b = *sys.constraints[c].spec;
-    ConstraintStep cs{static_cast<int>(b.kind), 0u, {0, 0, 0}, {0, 0, 0}, dt};
-    for (int d = 0; d < 3; ++d)
-      if (b.components[d]) cs.components |= 1u << d;
-    prescribed_values(b, t, dt, cs.velocity, cs.target);
-    const auto& set = constraint_particles[c];
-    if (set.size() == 0) continue;
-    constraint_cuda<Real><<<blocks_for(set.size()), kBlock>>>(set.size(), set.get(), cs, p.u, p.v);
-    after_launch("constraint");
-  }
-
-  if (!single || loads_vary) {
-    // The indenter reads the double displacement (float32_step converts it first).
-    if (single && sys.config.indenter.enabled) convert(3 * n, fu.get(), u.get(), "float u to double");
-    compute_external(sys, t);
-    if (single) convert(3 * n, body.get(), fbody.get(), "body force to float");
-  }
-
-  compute_forces(sys, p);
-  acceleration_cuda<Real><<<grid, kBlock>>>(p, half);
-  after_launch("acceleration_kernel");
-  reduce(3 * n, StepLoad<Real>{p, u_before_of_step, f_before.get()}, step_partial.get(), StepFinish{scalars.get()},
-         "step energy reduction", sync_after_launch);
-  ++sys.step;
-}
-
+// cpu_step / float32_step on the device: the step of step.hpp.
 void CudaSystem::step(PdSystem& sys) {
   Impl& m = *impl_;
-  if (m.min_stretch.size() > 0) {  // commit_min_stretch: the last pass's s_min is read from here on
-    m.min_stretch.swap(m.min_stretch_next);
-    m.view.min_stretch = m.fview.min_stretch = m.min_stretch.get();
-    m.view.min_stretch_next = m.fview.min_stretch_next = m.min_stretch_next.get();
-  }
-  if (m.f32) m.step(sys, m.fview, m.fu_before.get());
-  else m.step(sys, m.view, m.u_before.get());
+  m.sync_flags(sys);
+  CudaExec exec(m);
+  if (m.f32) pd_step(exec, m.farrays, sys);
+  else pd_step(exec, m.arrays, sys);
 }
 
 void CudaSystem::Impl::float_kinematics_to_double() {

@@ -50,7 +50,7 @@ template <class Real>
 BRECCIA_HD void short_range_contact_kernel(const PdViewT<Real>& p, const ContactCellsView& g, int64_t i) {
   const BondOriginT<Real> origin(p, i);
   const int64_t* ci = &g.cell_of[3 * i];
-  const Real k_i = p.short_range_k[i], l_i = p.spacing[i];
+  const Real l_i = p.spacing[i];
   Real fx = Real(0), fy = Real(0), fz = Real(0);
   double w = 0.0;
   for (int64_t oz = -1; oz <= 1; ++oz)
@@ -66,13 +66,7 @@ BRECCIA_HD void short_range_contact_kernel(const PdViewT<Real>& p, const Contact
           origin.to(p, j, Real(0), dx, dy, dz, len);
           const Real reach = Real(0.675) * (l_i + p.spacing[j]);
           if (!(len < reach) || !(len > Real(0)) || family_member(p, i, j)) continue;
-          const Real stiffness = Real(0.5) * (k_i + p.short_range_k[j]) * p.volume[j];
-          const Real gap = reach - len;
-          const Real f = -stiffness * gap / len;
-          fx += f * dx;
-          fy += f * dy;
-          fz += f * dz;
-          if (p.diagnostics) w += 0.25 * double(stiffness) * double(gap) * double(gap);
+          add_short_range_pair(p, i, j, reach, dx, dy, dz, len, fx, fy, fz, w);
         }
       }
   p.force[3 * i] += fx;

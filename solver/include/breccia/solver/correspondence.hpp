@@ -14,10 +14,8 @@ namespace breccia::solver {
 // Fills the moduli and the per-particle tensors; `elastic` is indexed by material.
 void setup_correspondence(PdSystem& s, const std::vector<ElasticInput>& elastic);
 
+// The two passes' view of the host state (the step of step.hpp launches them).
 CorrespondenceView correspondence_view(PdSystem& s);
-
-// Both passes over all particles; adds the energy released by breaking to dissipated_energy.
-void cpu_correspondence_forces(PdSystem& s);
 
 // sum_i V_i (h/2) sum_j w |Y - F_i xi|^2 V_j [J]: the energy the particles' non-affine
 // motion would hold under a unit penalty (filled on diagnostics steps).

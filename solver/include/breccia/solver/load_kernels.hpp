@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include "breccia/solver/case_config.hpp"
 #include "breccia/solver/hd.hpp"
@@ -73,6 +74,38 @@ BRECCIA_HD void constrain_component(int kind, double velocity, double target, do
 
 // The ramped values of one boundary at time t of a step of size dt (host side, once per
 // step): the velocity a Velocity boundary imposes, the displacement a Displacement one does.
+// Surface-load facets grouped by particle (CSR), kept in compute_external's (load, facet)
+// order within a particle, so each particle's body force is summed in one fixed order.
+struct FacetView {
+  int64_t particle_count = 0;
+  const int32_t* particle = nullptr;
+  const int64_t* offsets = nullptr;
+  const int32_t* load = nullptr;
+  const double* area = nullptr;
+  const double* normal = nullptr;           // 3 per facet
+  const uint8_t* load_is_pressure = nullptr;
+  const double* load_vector = nullptr;      // 3 per load
+};
+
+// The host arrays behind a FacetView (built once at set-up from PdSystem::surface_loads,
+// group_facets_by_particle; the CUDA backend uploads them).
+struct FacetLayout {
+  std::vector<int32_t> particle, load;
+  std::vector<int64_t> offsets;
+  std::vector<double> area, normal, vectors;
+  std::vector<uint8_t> is_pressure;
+  FacetView view() const {
+    return {static_cast<int64_t>(particle.size()), particle.data(), offsets.data(), load.data(),
+            area.data(),    normal.data(),                         is_pressure.data(), vectors.data()};
+  }
+};
+
+// A particle set (a constraint's or a body load's): `particles` null with count n: all.
+struct SetView {
+  int64_t count = 0;
+  const int32_t* particles = nullptr;
+};
+
 inline void prescribed_values(const BoundarySpec& b, double t, double dt, double velocity[3], double target[3]) {
   for (int d = 0; d < 3; ++d) {
     velocity[d] = target[d] = 0.0;

@@ -471,11 +471,26 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
 // 15 c / delta is short_range_k, averaged over the pair so that the pair's forces are
 // equal and opposite. The pair's energy 1/2 k V_i V_j (d - r)^2 is shared between its ends.
 // Adds to force (after force_kernel) and to energy_density on diagnostic passes.
+//
+// One pair (i, j) at deformed vector d = x_j - x_i of length len inside its reach: adds the
+// push on i to (fx, fy, fz) and i's half of the pair energy to w (both kernels below).
+template <class Real>
+BRECCIA_HD void add_short_range_pair(const PdViewT<Real>& p, int64_t i, int64_t j, Real reach, Real dx, Real dy,
+                                     Real dz, Real len, Real& fx, Real& fy, Real& fz, double& w) {
+  const Real stiffness = Real(0.5) * (p.short_range_k[i] + p.short_range_k[j]) * p.volume[j];
+  const Real gap = reach - len;
+  const Real f = -stiffness * gap / len;  // along j - i: pushes i away from j
+  fx += f * dx;
+  fy += f * dy;
+  fz += f * dz;
+  if (p.diagnostics) w += 0.25 * double(stiffness) * double(gap) * double(gap);
+}
+
 template <class Real>
 BRECCIA_HD void short_range_kernel(const PdViewT<Real>& p, int64_t i) {
   const bool gather = has_bond_vectors(p);
   const BondOriginT<Real> origin = gather ? BondOriginT<Real>(p, i) : BondOriginT<Real>();
-  const Real k_i = p.short_range_k[i], l_i = p.spacing[i];
+  const Real l_i = p.spacing[i];
   Real fx = Real(0), fy = Real(0), fz = Real(0);
   double w = 0.0;
   for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
@@ -491,13 +506,7 @@ BRECCIA_HD void short_range_kernel(const PdViewT<Real>& p, int64_t i) {
       dx = g.dx; dy = g.dy; dz = g.dz; len = g.length;
     }
     if (!(len < reach) || !(len > Real(0))) continue;
-    const Real stiffness = Real(0.5) * (k_i + p.short_range_k[j]) * p.volume[j];
-    const Real gap = reach - len;
-    const Real f = -stiffness * gap / len;  // along j - i: pushes i away from j
-    fx += f * dx;
-    fy += f * dy;
-    fz += f * dz;
-    if (p.diagnostics) w += 0.25 * double(stiffness) * double(gap) * double(gap);
+    add_short_range_pair(p, i, j, reach, dx, dy, dz, len, fx, fy, fz, w);
   }
   p.force[3 * i] += fx;
   p.force[3 * i + 1] += fy;

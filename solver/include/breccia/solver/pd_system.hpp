@@ -10,6 +10,7 @@
 #include "breccia/solver/case_config.hpp"
 #include "breccia/solver/contact_cells.hpp"
 #include "breccia/solver/float32_state.hpp"
+#include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_kernels.hpp"
 
 namespace breccia::solver {
@@ -54,6 +55,7 @@ struct PdSystem {
   // model.short_range_forces: per particle 15 c / delta and spacing (short_range_kernel).
   std::vector<double> short_range_k, spacing;
   ContactCells contact_cells;      // scratch: the pairs outside the families (contact_cells.hpp)
+  std::vector<double> u_before, f_before;  // scratch of the step's work trapezoid (step.hpp)
   double contact_cell_edge = 0.0;  // 1.35 x the largest spacing
   std::vector<std::pair<int64_t, int64_t>> precrack_pairs;  // file indices, i < j
 
@@ -63,6 +65,7 @@ struct PdSystem {
     std::vector<PressureFacet> facets;
   };
   std::vector<SurfaceLoad> surface_loads;
+  FacetLayout facets;  // the surface loads' facets grouped by particle (what the step reads)
   struct BodyLoad {
     const LoadSpec* spec;
     std::vector<int32_t> particles;  // internal; empty = all
@@ -95,6 +98,8 @@ struct PdSystem {
 // Build everything from a case file: particles (file or lattice), families, coefficients,
 // pre-cracks, loads, constraints, initial conditions, stable step. Throws InputError.
 PdSystem setup_system(const CaseConfig& config);
+// The surface loads' facets grouped by particle (setup_system keeps them in PdSystem::facets).
+FacetLayout group_facets_by_particle(const PdSystem& s);
 
 // One velocity-Verlet step of size sys.dt on the CPU (OpenMP).
 void cpu_step(PdSystem& sys);
@@ -105,10 +110,11 @@ void cpu_compute_forces(PdSystem& sys);
 // Not done per force pass: a pass repeated at the same configuration (a restart, an
 // interruption) must read what the step's own pass read, and so break nothing new.
 void commit_min_stretch(PdSystem& sys);
-// Short-range forces after the bond pass (model.short_range_forces): family pairs, then the
-// pairs a cell grid on the current positions finds (x_now: 3N, double).
-void short_range_forces(PdSystem& sys, const PdViewT<double>& p, const double* x_now);
-void short_range_forces(PdSystem& sys, const PdViewT<float>& p, const double* x_now);
+// The short-range forces between particles outside each other's family (model.
+// short_range_forces; the family pairs are short_range_kernel's): the pairs a cell grid on
+// the current positions finds (x_now: 3N, double). Host only.
+void short_range_contact(PdSystem& sys, const PdViewT<double>& p, const double* x_now);
+void short_range_contact(PdSystem& sys, const PdViewT<float>& p, const double* x_now);
 // External force density at time t (pressure, traction, body force, indenter).
 void compute_external(PdSystem& sys, double t);
 // Impose prescribed displacement/velocity at time t on constrained components.

@@ -44,8 +44,9 @@ public:
   // Copy only u and v (history probes need nothing more).
   void download_kinematics(PdSystem& sys);
 
+  struct Impl;  // defined in cuda_backend.cu only (named there by its execution space)
+
 private:
-  struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 

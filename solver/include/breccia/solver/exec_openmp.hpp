@@ -1,0 +1,96 @@
+#pragma once
+// The CPU's execution space for the step of step.hpp: loops over particles on OpenMP threads
+// (static schedule), sums combined per thread and then in thread order (reproducible for a
+// given thread count), and the host-side pieces a step needs from the PdSystem (its s_min
+// buffers, the cell grid of the short-range contact).
+#include <omp.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <type_traits>
+
+#include "breccia/solver/pd_system.hpp"
+#include "breccia/solver/step.hpp"
+
+namespace breccia::solver {
+
+class OpenMpExec {
+public:
+  explicit OpenMpExec(PdSystem& sys) : sys_(sys) {}
+
+  template <class F>
+  void for_each(int64_t n, const F& f, const char* /*name*/) const {
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < n; ++i) f(i);
+  }
+
+  template <class Load, class Finish>
+  void reduce(int64_t n, const Load& load, const Finish& finish, const char* /*name*/) const {
+    using Value = typename Load::Value;
+    constexpr int kMaxThreads = 512;
+    Value partial[kMaxThreads];
+    const int threads = std::min(omp_get_max_threads(), kMaxThreads);
+    for (int t = 0; t < threads; ++t) partial[t] = Load::identity();
+#pragma omp parallel num_threads(threads)
+    {
+      Value acc = Load::identity();
+#pragma omp for schedule(static)
+      for (int64_t i = 0; i < n; ++i) acc = Load::combine(acc, load(i));
+      partial[omp_get_thread_num()] = acc;
+    }
+    Value total = Load::identity();
+    for (int t = 0; t < threads; ++t) total = Load::combine(total, partial[t]);
+    finish(total);
+  }
+
+  // commit_min_stretch (pd_system.hpp) on the PdSystem's buffers; the step's views follow.
+  template <class Real>
+  void commit_min_stretch(StepArrays<Real>& a) const {
+    if (sys_.min_stretch.empty()) return;
+    solver::commit_min_stretch(sys_);
+    a.p.min_stretch = a.d.min_stretch = sys_.min_stretch.data();
+    a.p.min_stretch_next = a.d.min_stretch_next = sys_.min_stretch_next.data();
+  }
+
+  // Short-range forces between particles outside each other's family (contact_cells.hpp),
+  // on a cell grid of the current positions in double.
+  template <class Real>
+  void contact(const StepArrays<Real>& a) const {
+    const double* x = a.x;
+    if constexpr (!std::is_same_v<Real, double>) {
+      // Float keeps positions relative to the body's centre: the grid wants them absolute.
+      sys_.x.resize(3 * sys_.n);
+      const int64_t n3 = static_cast<int64_t>(3 * sys_.n);
+      const Float32State& f = sys_.f32;
+#pragma omp parallel for schedule(static)
+      for (int64_t k = 0; k < n3; ++k) sys_.x[k] = f.origin[k % 3] + double(f.x0[k]) + double(f.u[k]);
+      x = sys_.x.data();
+    }
+    short_range_contact(sys_, a.p, x);
+  }
+
+private:
+  PdSystem& sys_;
+};
+
+// The loads' and constraints' index lists of the host's PdSystem as the step reads them.
+template <class Real>
+void fill_load_sets(const PdSystem& s, StepArrays<Real>& a) {
+  a.facets = s.facets.view();
+  a.constraint_sets.clear();
+  for (const auto& c : s.constraints) a.constraint_sets.push_back({static_cast<int64_t>(c.particles.size()), c.particles.data()});
+  a.body_load_sets.clear();
+  for (const auto& b : s.body_loads)
+    a.body_load_sets.push_back(b.particles.empty() ? SetView{static_cast<int64_t>(s.n), nullptr}
+                                                   : SetView{static_cast<int64_t>(b.particles.size()), b.particles.data()});
+  a.loads_vary = !s.surface_loads.empty() || !s.body_loads.empty() || s.config.indenter.enabled;
+  a.external_work = const_cast<double*>(&s.external_work);
+  a.dissipated_energy = const_cast<double*>(&s.dissipated_energy);
+}
+
+// The step's arrays over the host's state: double (cpu_backend.cpp) and float
+// (float32_backend.cpp, the float state of float32_state.hpp with the double mirror as `d`).
+StepArrays<double> cpu_step_arrays(PdSystem& s);
+StepArrays<float> float32_step_arrays(PdSystem& s);
+
+}  // namespace breccia::solver

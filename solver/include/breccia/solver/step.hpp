@@ -1,0 +1,344 @@
+#pragma once
+// One velocity-Verlet step of the PD solver, written once for every backend: the CPU in
+// double and in float (model.precision: float32) and the CUDA backend in both. The step is a
+// template over the working precision `Real` and over an execution space `Exec` that decides
+// only how a loop over particles runs and where a sum is kept:
+//
+//   exec.for_each(n, functor, name)          functor(i) for i in [0, n)
+//   exec.reduce(n, load, finish, name)        finish(combine of load(i) over i), e.g. into
+//                                             energy accumulators in host or device memory
+//   exec.commit_min_stretch(arrays)           swap the compressive enhancement's s_min buffers
+//   exec.contact(arrays)                      short-range forces between particles that are
+//                                             not family members (a cell grid of the current
+//                                             positions; the CPU builds it, CUDA refuses)
+//
+// (OpenMpExec in exec_openmp.hpp, CudaExec in solver/cuda/src/cuda_backend.cu.) Every
+// per-particle phase is a functor over raw pointers calling the BRECCIA_HD kernels of
+// pd_kernels.hpp / load_kernels.hpp, so the arithmetic is the same on every backend and the
+// order of the phases is fixed here. This is where a halo exchange between ranks will go
+// (after the drift, and for LPS and correspondence between their two passes) and the one
+// place where global sums are taken (`reduce`).
+#include <cstdint>
+#include <type_traits>
+#include <vector>
+
+#include "breccia/solver/correspondence_kernels.hpp"
+#include "breccia/solver/load_kernels.hpp"
+#include "breccia/solver/pd_kernels.hpp"
+#include "breccia/solver/pd_system.hpp"
+
+namespace breccia::solver {
+
+inline constexpr int kMaxSurfaceLoads = 64;  // load histories travel by value (one kernel parameter)
+
+struct LoadHistories {
+  double value[kMaxSurfaceLoads];  // history of each surface load at this step
+};
+
+// Prescribed components of one constraint at this step; the ramps are evaluated on the host.
+struct ConstraintStep {
+  int kind;            // BoundarySpec::Kind
+  unsigned components; // bit d: component d prescribed
+  double velocity[3];  // Velocity: v at this step
+  double target[3];    // Displacement: u at this step
+  double dt;
+};
+
+// ---------------------------------------------------------------------------------------
+// The phases, as functors (callable on host and device).
+
+template <class Real>
+struct KickDrift {
+  PdViewT<Real> p;
+  double half_dt, dt;
+  BRECCIA_HD void operator()(int64_t i) const { kick_drift_kernel(p, i, half_dt, dt); }
+};
+
+// Force times displacement before the step, for the trapezoidal work of loads and reactions
+// (in double for float runs too). k runs over 3N components.
+template <class Real>
+struct WorkBefore {
+  PdViewT<Real> p;
+  Real* u_before;
+  double* f_before;
+  BRECCIA_HD void operator()(int64_t k) const {
+    const int64_t i = k / 3;
+    const bool constrained = p.fixed_dof[i] & (1u << (k % 3));
+    u_before[k] = p.u[k];
+    f_before[k] = double(p.volume[i]) * (constrained ? -double(p.force[k]) : double(p.body[k]));
+  }
+};
+
+// The ramped values are imposed in double and rounded to Real.
+template <class Real>
+struct Constrain {
+  SetView set;
+  ConstraintStep c;
+  Real* u;
+  Real* v;
+  BRECCIA_HD void operator()(int64_t q) const {
+    const int64_t i = set.particles[q];
+    for (int d = 0; d < 3; ++d)
+      if (c.components & (1u << d)) {
+        double uk = u[3 * i + d], vk = v[3 * i + d];
+        constrain_component(c.kind, c.velocity[d], c.target[d], c.dt, uk, vk);
+        u[3 * i + d] = static_cast<Real>(uk);
+        v[3 * i + d] = static_cast<Real>(vk);
+      }
+  }
+};
+
+struct ClearArray {
+  double* a;
+  BRECCIA_HD void operator()(int64_t k) const { a[k] = 0.0; }
+};
+
+struct SurfaceLoads {
+  FacetView f;
+  LoadHistories h;
+  const double* volume;
+  const int64_t* bond_offsets;
+  const uint8_t* bond_state;
+  double* body;
+  BRECCIA_HD void operator()(int64_t q) const {
+    const int64_t i = f.particle[q];
+    if (!particle_attached(bond_offsets, bond_state, i)) return;
+    for (int64_t e = f.offsets[q]; e < f.offsets[q + 1]; ++e) {
+      const int l = f.load[e];
+      double force[3];
+      facet_force(f.load_is_pressure[l], h.value[l], f.area[e], &f.normal[3 * e], &f.load_vector[3 * l], force);
+      for (int d = 0; d < 3; ++d) body[3 * i + d] += force[d] / volume[i];
+    }
+  }
+};
+
+struct BodyLoad {
+  SetView set;
+  double history, g[3];
+  const double* density;
+  double* body;
+  BRECCIA_HD void operator()(int64_t q) const {
+    const int64_t i = set.particles ? set.particles[q] : q;
+    for (int d = 0; d < 3; ++d) body[3 * i + d] += density[i] * history * g[d];
+  }
+};
+
+struct Indenter {
+  const double* x0;
+  const double* u;
+  double c[3], radius, stiffness;
+  double* body;
+  BRECCIA_HD void operator()(int64_t i) const { add_indenter_force(x0, u, i, c, radius, stiffness, body); }
+};
+
+template <class From, class To>
+struct Convert {
+  const From* from;
+  To* to;
+  BRECCIA_HD void operator()(int64_t k) const { to[k] = static_cast<To>(from[k]); }
+};
+
+struct CurrentPositions {
+  const double* x0;
+  const double* u;
+  double* x;
+  BRECCIA_HD void operator()(int64_t k) const { x[k] = x0[k] + u[k]; }
+};
+
+template <class Real>
+struct Dilatation {
+  PdViewT<Real> p;
+  BRECCIA_HD void operator()(int64_t i) const { lps_dilatation_kernel(p, i); }
+};
+
+template <class Real>
+struct BondForces {
+  PdViewT<Real> p;
+  BRECCIA_HD void operator()(int64_t i) const { force_kernel(p, i); }
+};
+
+template <class Real>
+struct FamilyShortRange {
+  PdViewT<Real> p;
+  BRECCIA_HD void operator()(int64_t i) const { short_range_kernel(p, i); }
+};
+
+struct CorrespondenceDeformation {
+  CorrespondenceView c;
+  BRECCIA_HD void operator()(int64_t i) const { correspondence_deformation_kernel(c, i); }
+};
+
+struct CorrespondenceForces {
+  CorrespondenceView c;
+  BRECCIA_HD void operator()(int64_t i) const { correspondence_force_kernel(c, i); }
+};
+
+template <class Real>
+struct Acceleration {
+  PdViewT<Real> p;
+  double half_dt;
+  BRECCIA_HD void operator()(int64_t i) const { acceleration_kernel(p, i, half_dt); }
+};
+
+// ---------------------------------------------------------------------------------------
+// Reductions: a load per index, an associative combine, and a finish that adds the total to
+// accumulators wherever the backend keeps them.
+
+struct StepSums {
+  double released;  // energy of the bonds broken this step [J]
+  double work;      // work of external forces and reactions over the step [J]
+};
+
+template <class Real>
+struct StepLoad {
+  using Value = StepSums;
+  PdViewT<Real> p;
+  const Real* u_before;
+  const double* f_before;
+  BRECCIA_HD static Value identity() { return {0.0, 0.0}; }
+  BRECCIA_HD static Value combine(Value a, Value b) { return {a.released + b.released, a.work + b.work}; }
+  // k runs over 3N components; the first N also carry the particles' released energy.
+  BRECCIA_HD Value operator()(int64_t k) const {
+    const int64_t i = k / 3;
+    const bool constrained = p.fixed_dof[i] & (1u << (k % 3));
+    const double f_after = double(p.volume[i]) * (constrained ? -double(p.force[k]) : double(p.body[k]));
+    return {k < p.n ? p.dissipated[k] : 0.0, 0.5 * (f_before[k] + f_after) * (double(p.u[k]) - double(u_before[k]))};
+  }
+};
+
+// Released energy alone, for a force pass outside a step.
+struct ReleasedLoad {
+  using Value = StepSums;
+  const double* dissipated;
+  BRECCIA_HD static Value identity() { return {0.0, 0.0}; }
+  BRECCIA_HD static Value combine(Value a, Value b) { return {a.released + b.released, a.work + b.work}; }
+  BRECCIA_HD Value operator()(int64_t i) const { return {dissipated[i], 0.0}; }
+};
+
+struct StepFinish {
+  double* external_work;
+  double* dissipated_energy;
+  BRECCIA_HD void operator()(StepSums s) const {
+    *dissipated_energy += s.released;
+    *external_work += s.work;
+  }
+};
+
+// ---------------------------------------------------------------------------------------
+// Everything one step touches, as raw pointers into the backend's memory. `p` is the working
+// precision; `d` holds the double arrays the loads are evaluated on (for a double run the
+// same arrays as `p`; for a float run the double mirror that float32_state.hpp describes).
+template <class Real>
+struct StepArrays {
+  PdViewT<Real> p;
+  PdView d;
+  double* x = nullptr;        // current positions, double runs
+  Real* u_before = nullptr;   // 3N scratch
+  double* f_before = nullptr; // 3N scratch
+  FacetView facets;
+  std::vector<SetView> constraint_sets;  // one per PdSystem::constraints entry
+  std::vector<SetView> body_load_sets;   // one per PdSystem::body_loads entry
+  bool loads_vary = true;                // false: no load at all, the body force stays zero
+  CorrespondenceView corr{};             // correspondence model: moduli, F, A, non-affine energy
+  double* external_work = nullptr;       // accumulators (StepFinish)
+  double* dissipated_energy = nullptr;
+};
+
+// External force density at time t on the double arrays (float runs included: their loads
+// are evaluated in double and rounded once, docs/theory.md Precision).
+template <class Exec, class Real>
+void pd_external(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t) {
+  const PdView& d = a.d;
+  const int64_t n = d.n;
+  exec.for_each(3 * n, ClearArray{const_cast<double*>(d.body)}, "clear body forces");
+  double* body = const_cast<double*>(d.body);
+  if (a.facets.particle_count > 0) {
+    LoadHistories h{};
+    for (size_t l = 0; l < sys.surface_loads.size(); ++l) h.value[l] = sys.surface_loads[l].spec->history.at(t);
+    exec.for_each(a.facets.particle_count, SurfaceLoads{a.facets, h, d.volume, d.offsets, d.state, body},
+                  "surface_load");
+  }
+  for (size_t b = 0; b < sys.body_loads.size(); ++b) {
+    const LoadSpec& spec = *sys.body_loads[b].spec;
+    const SetView set = a.body_load_sets[b];
+    exec.for_each(set.particles ? set.count : n,
+                  BodyLoad{set, spec.history.at(t), {spec.vector[0], spec.vector[1], spec.vector[2]}, d.density, body},
+                  "body_load");
+  }
+  const IndenterSpec& ind = sys.config.indenter;
+  if (ind.enabled) {
+    Indenter f{d.x0, d.u, {0, 0, 0}, ind.radius, ind.stiffness, body};
+    for (int k = 0; k < 3; ++k) f.c[k] = sys.indenter_position[k] = ind.center[k] + ind.velocity[k] * t;
+    exec.for_each(n, f, "indenter");
+  }
+}
+
+// Internal forces at the current displacement: bond forces (LPS: dilatation first;
+// correspondence: its two passes), then the short-range forces. Released energy summed into
+// the accumulators when `sum_released` (a step sums it with the work instead).
+template <class Exec, class Real>
+void pd_force_pass(Exec& exec, const StepArrays<Real>& a, bool sum_released) {
+  const PdViewT<Real>& p = a.p;
+  const int64_t n = p.n;
+  if constexpr (std::is_same_v<Real, double>) {  // float never forms x0 + u (float32_state.hpp)
+    exec.for_each(3 * n, CurrentPositions{p.x0, p.u, a.x}, "current_positions");
+    if (p.model == static_cast<int>(PdModel::Correspondence)) {
+      exec.for_each(n, CorrespondenceDeformation{a.corr}, "correspondence_deformation_kernel");
+      exec.for_each(n, CorrespondenceForces{a.corr}, "correspondence_force_kernel");
+    }
+  }
+  if (p.model != static_cast<int>(PdModel::Correspondence)) {
+    if (p.model == static_cast<int>(PdModel::LPS)) exec.for_each(n, Dilatation<Real>{p}, "lps_dilatation_kernel");
+    exec.for_each(n, BondForces<Real>{p}, "force_kernel");
+    if (p.short_range_k) {
+      exec.for_each(n, FamilyShortRange<Real>{p}, "short_range_kernel");
+      exec.contact(a);
+    }
+  }
+  if (sum_released)
+    exec.reduce(n, ReleasedLoad{p.dissipated}, StepFinish{a.external_work, a.dissipated_energy},
+                "released energy reduction");
+}
+
+// One velocity-Verlet step of size sys.dt: the phases of every backend, in this order.
+template <class Exec, class Real>
+void pd_step(Exec& exec, StepArrays<Real>& a, PdSystem& sys) {
+  constexpr bool single = std::is_same_v<Real, float>;
+  const double dt = sys.dt, half = 0.5 * dt;
+  const int64_t n = a.p.n;
+  exec.commit_min_stretch(a);  // the last step's s_min is what this step's pass reads
+  if (n == 0) {  // nothing to launch (a grid of zero blocks is a launch error)
+    sys.time += dt;
+    ++sys.step;
+    return;
+  }
+  exec.for_each(3 * n, WorkBefore<Real>{a.p, a.u_before, a.f_before}, "work_before");
+  exec.for_each(n, KickDrift<Real>{a.p, half, dt}, "kick_drift_kernel");
+  sys.time += dt;
+  const double t = sys.time;
+  // Constraints: one pass per boundary, in the case's order.
+  for (size_t c = 0; c < sys.constraints.size(); ++c) {
+    const BoundarySpec& b = *sys.constraints[c].spec;
+    ConstraintStep cs{static_cast<int>(b.kind), 0u, {0, 0, 0}, {0, 0, 0}, dt};
+    for (int d = 0; d < 3; ++d)
+      if (b.components[d]) cs.components |= 1u << d;
+    prescribed_values(b, t, dt, cs.velocity, cs.target);
+    const SetView set = a.constraint_sets[c];
+    if (set.count == 0) continue;
+    exec.for_each(set.count, Constrain<Real>{set, cs, a.p.u, a.p.v}, "constraint");
+  }
+  if (a.loads_vary) {
+    // The indenter reads the double displacement: a float run copies it first.
+    if (single && sys.config.indenter.enabled)
+      exec.for_each(3 * n, Convert<Real, double>{a.p.u, const_cast<double*>(a.d.u)}, "float u to double");
+    pd_external(exec, a, sys, t);
+    if (single) exec.for_each(3 * n, Convert<double, Real>{a.d.body, const_cast<Real*>(a.p.body)}, "body force to float");
+  }
+  pd_force_pass(exec, a, false);
+  exec.for_each(n, Acceleration<Real>{a.p, half}, "acceleration_kernel");
+  exec.reduce(3 * n, StepLoad<Real>{a.p, a.u_before, a.f_before}, StepFinish{a.external_work, a.dissipated_energy},
+              "step energy reduction");
+  ++sys.step;
+}
+
+}  // namespace breccia::solver

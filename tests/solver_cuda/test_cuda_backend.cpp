@@ -276,6 +276,29 @@ TEST(CudaBackend, LpsCrackBreaksTheSameBondsAsOnTheCpu) {
   expect_same_cracks(r, "LPS");
 }
 
+// LAMMPS's fracture rules (docs/lammps-peri.md) on the device: the compressive enhancement's
+// s_min buffers swapped per step, and the after-force break order, in double and float32.
+std::string with_lammps_rules(std::string yaml, const std::string& model_line, bool float32) {
+  const size_t at = yaml.find(model_line);
+  yaml.replace(at, model_line.size(),
+               model_line + ", compressive_enhancement: 0.25, break_check: after_force" +
+                   (float32 ? ", precision: float32" : ""));
+  return yaml;
+}
+
+TEST(CudaBackend, CompressiveEnhancementCracksMatchTheCpuInBothPrecisions) {
+  if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
+  for (bool float32 : {false, true}) {
+    const Pair pmb = run_both(float32 ? "alpha_pmb_f32" : "alpha_pmb",
+                              with_lammps_rules(kPmbPlateFracture, "horizon_factor: 3.015", float32));
+    expect_same_cracks(pmb, float32 ? "PMB alpha float32" : "PMB alpha");
+    const Pair lps = run_both(float32 ? "alpha_lps_f32" : "alpha_lps",
+                              with_lammps_rules(kLpsPlateFracture, "horizon_factor: 3.015", float32));
+    expect_same_cracks(lps, float32 ? "LPS alpha float32" : "LPS alpha");
+    EXPECT_EQ(lps.gpu.min_stretch.size(), lps.cpu.min_stretch.size());
+  }
+}
+
 TEST(CudaBackend, RunLoopWritesTheSameHistoryAsTheCpuLoop) {
   if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
   // The fracture case with a velocity probe: history rows need a u/v download between outputs.

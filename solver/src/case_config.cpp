@@ -199,7 +199,7 @@ CaseConfig parse_case_file(const std::string& path) {
                      "float64 (the correspondence kernels exist in double precision only)");
 
   for (const Section& m : root.list("materials")) {
-    m.allow_only({"name", "density", "youngs_modulus", "poisson_ratio", "fracture_energy", "weibull"});
+    m.allow_only({"name", "density", "youngs_modulus", "poisson_ratio", "fracture_energy", "tensile_strength", "weibull"});
     MaterialSpec ms;
     ms.name = m.text("name", "default");
     ms.density = m.positive("density", Quantity::Density);
@@ -210,6 +210,12 @@ CaseConfig parse_case_file(const std::string& path) {
     ms.fracture_energy = m.number("fracture_energy", Quantity::FractureEnergy, 0.0);
     if (ms.fracture_energy < 0)
       throw InputError(path, m.field("fracture_energy"), "negative value", "G0 >= 0 (0: unbreakable)");
+    if (m.has("tensile_strength")) {
+      ms.tensile_strength = m.positive("tensile_strength", Quantity::Pressure);
+      if (!(ms.fracture_energy > 0))
+        throw InputError(path, m.field("tensile_strength"), "given without a fracture_energy",
+                         "fracture_energy > 0 too (the softening law takes both: strength and G0)");
+    }
     if (auto w = m.optional_section("weibull")) {
       w->allow_only({"modulus", "seed"});
       ms.weibull_modulus = w->positive("modulus", Quantity::Dimensionless);
@@ -219,6 +225,20 @@ CaseConfig parse_case_file(const std::string& path) {
   }
   if (c.materials.empty())
     throw InputError(path, "materials", "missing or empty", "a list with at least one material");
+  for (size_t k = 0; k < c.materials.size(); ++k) {
+    if (!(c.materials[k].tensile_strength > 0)) continue;
+    c.softening = true;
+    const std::string field = "materials[" + std::to_string(k) + "].tensile_strength";
+    if (c.model == PdModel::Correspondence)
+      throw InputError(path, field, "given with type: correspondence", "type: pmb or lps (softening bonds)");
+    if (c.variable_horizon)
+      throw InputError(path, field, "given with variable_horizon: true",
+                       "one horizon (the softening law keeps one damage per bond entry; dual horizon's halves "
+                       "would need two)");
+    if (c.compressive_enhancement > 0)
+      throw InputError(path, field, "given with model.compressive_enhancement",
+                       "one of the two (the enhancement shifts a brittle bond's critical stretch)");
+  }
 
   for (const Section& p : root.list("precracks")) {
     p.allow_only({"type", "from", "to", "points", "surface"});

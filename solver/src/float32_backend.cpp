@@ -89,6 +89,10 @@ PdViewT<float> float32_view(PdSystem& s) {
     p.min_stretch_next = s.min_stretch_next.data();
   }
   p.break_after_force = s.config.break_after_force;
+  if (!s.bond_damage.empty()) {  // float in both views: shared
+    p.s_onset = s.s_onset.data();
+    p.bond_damage = s.bond_damage.data();
+  }
   if (f.short_range_k.size() == s.n && s.n) {
     p.short_range_k = f.short_range_k.data();
     p.spacing = f.spacing.data();

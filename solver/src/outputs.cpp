@@ -343,6 +343,7 @@ void write_checkpoint(const PdSystem& s, const std::string& path) {
     f.write("/force", s.force, {n, 3});
     f.write("/body", s.body, {n, 3});
     f.write("/bond_state", s.state, {s.state.size()});
+    if (!s.bond_damage.empty()) f.write("/bond_damage", std::vector<double>(s.bond_damage.begin(), s.bond_damage.end()), {s.bond_damage.size()});
     if (!s.min_stretch.empty()) {  // compressive enhancement: the s_min this step's pass read, and its own
       f.write("/min_stretch_previous", std::vector<double>(s.min_stretch.begin(), s.min_stretch.end()), {s.n});
       f.write("/min_stretch", std::vector<double>(s.min_stretch_next.begin(), s.min_stretch_next.end()), {s.n});
@@ -375,6 +376,13 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
   s.force = f.read_doubles("/force");
   s.body = f.read_doubles("/body");
   s.state = f.read_uint8("/bond_state");
+  if (!s.bond_damage.empty()) {  // softening bonds: partial damage is state
+    if (!f.exists("/bond_damage"))
+      throw InputError(path, "/bond_damage", "missing (written without materials[].tensile_strength)",
+                       "a checkpoint of this case with the same materials");
+    const auto damage = f.read_doubles("/bond_damage");
+    s.bond_damage.assign(damage.begin(), damage.end());
+  }
   if (!s.min_stretch.empty()) {
     if (!f.exists("/min_stretch_previous"))
       throw InputError(path, "/min_stretch_previous", "missing (written without model.compressive_enhancement)",

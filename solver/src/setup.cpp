@@ -161,6 +161,44 @@ double median(std::vector<double> v) {
 
 }  // namespace
 
+// Softening bonds: s0 so far is each bond's brittle critical stretch s_G from its G0; the
+// bilinear law keeps G0 with s_u = s_G^2 / s_t (pd_physics.hpp), which needs s_G >= s_t, i.e.
+// a horizon below delta s_G^2 / s_t^2 (s_G^2 falls as 1/delta). Checked per material on its
+// mean values; a bond whose Weibull draw falls below breaks brittle at its onset.
+static void convert_to_softening(PdSystem& s, const std::vector<ElasticInput>& elastic) {
+  const CaseConfig& c = s.config;
+  for (size_t m = 0; m < c.materials.size(); ++m) {
+    const MaterialSpec& ms = c.materials[m];
+    if (!(ms.tensile_strength > 0) || !c.fracture) continue;
+    const double delta = *std::max_element(s.horizon.begin(), s.horizon.end());
+    const bool lps = c.model == PdModel::LPS;
+    const double s_g = lps ? lps_critical_stretch(elastic[m], c.influence, delta, ms.fracture_energy)
+                           : pmb_critical_stretch(elastic[m], c.influence, delta, ms.fracture_energy);
+    const double E = ms.youngs_modulus /
+                     (s.dimension == 2 && c.planar == Planar::PlaneStrain ? 1.0 - ms.poisson_ratio * ms.poisson_ratio : 1.0);
+    const double s_t = ms.tensile_strength / E;
+    if (s_g < s_t) {
+      char largest[64];
+      std::snprintf(largest, sizeof largest, "%.4g", delta * (s_g / s_t) * (s_g / s_t));
+      throw InputError(c.file, "materials[" + std::to_string(m) + "].tensile_strength",
+                       "material '" + ms.name + "': the horizon " + std::to_string(delta) +
+                           " m is too large to represent both its strength and its fracture energy (the bond "
+                           "would dissipate more than G0 before it softens)",
+                       std::string("a horizon of at most ") + largest +
+                           " m (it scales as E G0 / sigma_t^2), or a lower tensile_strength");
+    }
+  }
+  const int64_t nb = static_cast<int64_t>(s.s0_own.size());
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < nb; ++k) {
+    const float onset = s.s_onset[k];
+    if (!(onset < FLT_MAX) || !(s.s0_own[k] < FLT_MAX)) continue;  // brittle material or unbreakable bond
+    const double s_g = s.s0_own[k];
+    const float ultimate = static_cast<float>(std::max(s_g * s_g / onset, double(onset)));
+    s.s0_own[k] = s.s0_dual[k] = ultimate;
+  }
+}
+
 // The surface loads' facets grouped by particle (CSR); a stable sort keeps compute_external's
 // (load, facet) order within a particle, so every backend sums a particle's loads alike.
 FacetLayout group_facets_by_particle(const PdSystem& s) {
@@ -208,6 +246,10 @@ PdView PdSystem::view() {
     p.min_stretch_next = min_stretch_next.data();
   }
   p.break_after_force = config.break_after_force;
+  if (!bond_damage.empty()) {
+    p.s_onset = s_onset.data();
+    p.bond_damage = bond_damage.data();
+  }
   if (short_range_k.size() == n && n) {
     p.short_range_k = short_range_k.data();
     p.spacing = spacing.data();
@@ -347,6 +389,10 @@ PdSystem setup_system(const CaseConfig& config) {
   s.s0_own.resize(nb);
   s.s0_dual.resize(nb);
   s.state.assign(nb, kOwnIntact | kDualIntact);
+  if (c.softening) {
+    s.s_onset.assign(nb, FLT_MAX);
+    s.bond_damage.assign(nb, 0.0f);
+  }
   // Correspondence shares LPS's bond data: weights w = omega beta, no modulus per bond, LPS critical stretch.
   const bool lps = c.model == PdModel::LPS || c.model == PdModel::Correspondence;
 #pragma omp parallel for schedule(dynamic, 256)
@@ -398,6 +444,14 @@ PdSystem setup_system(const CaseConfig& config) {
       };
       s.s0_own[out] = s0(s.horizon[i]);
       s.s0_dual[out] = s0(s.horizon[j]);
+      if (c.softening) {
+        // Onset stretch sigma_t / E' of the weaker material (E' = E/(1 - nu^2) in plane strain),
+        // scattered with the same Weibull draw as G0; s0 becomes the ultimate stretch below.
+        const double E = wm.youngs_modulus / (s.dimension == 2 && c.planar == Planar::PlaneStrain
+                                                   ? 1.0 - wm.poisson_ratio * wm.poisson_ratio : 1.0);
+        const double strength = wm.fracture_energy > 0 ? wm.tensile_strength * G0 / wm.fracture_energy : 0.0;
+        s.s_onset[out] = strength > 0 ? static_cast<float>(strength / E) : FLT_MAX;
+      }
       ++out;
     }
   }
@@ -730,6 +784,8 @@ PdSystem setup_system(const CaseConfig& config) {
       }
     std::sort(s.precrack_pairs.begin(), s.precrack_pairs.end());
   }
+
+  if (c.softening) convert_to_softening(s, elastic);
 
   // Loads.
   for (size_t l = 0; l < c.loads.size(); ++l) {

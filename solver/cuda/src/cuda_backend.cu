@@ -165,6 +165,7 @@ struct CudaSystem::Impl {
   // compressive enhancement: s_min read and written by a pass (swapped at each step's start,
   // commit_min_stretch); short-range forces per particle (double and float copies)
   DeviceArray<float> min_stretch, min_stretch_next;
+  DeviceArray<float> s_onset, bond_damage;  // softening bonds (pd_kernels.hpp)
   DeviceArray<double> short_range_k, spacing;
   DeviceArray<float> fshort_range_k, fspacing;
   // step scratch
@@ -319,6 +320,10 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
     m.min_stretch.upload(s.min_stretch, "min_stretch");
     m.min_stretch_next.upload(s.min_stretch_next, "min_stretch_next");
   }
+  if (!s.bond_damage.empty()) {
+    m.s_onset.upload(s.s_onset, "s_onset");
+    m.bond_damage.upload(s.bond_damage, "bond_damage");
+  }
   if (!s.short_range_k.empty()) {
     m.short_range_k.upload(s.short_range_k, "short_range_k");
     m.spacing.upload(s.spacing, "spacing");
@@ -382,6 +387,8 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   }
   p.short_range_k = m.short_range_k.get(); p.spacing = m.spacing.get();
   p.break_after_force = s.config.break_after_force;
+  p.s_onset = m.s_onset.get();
+  p.bond_damage = m.bond_damage.get();
   p.lps = m.lps.get();
   p.weighted_volume = m.weighted_volume.get(); p.dilatation = m.dilatation.get();
   p.lps_a = m.lps_a.get(); p.lps_b = m.lps_b.get();
@@ -399,6 +406,8 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
     q.s0_own = p.s0_own; q.s0_dual = p.s0_dual; q.state = p.state; q.lps = p.lps;
     q.alpha = p.alpha; q.min_stretch = p.min_stretch; q.min_stretch_next = p.min_stretch_next;
     q.break_after_force = p.break_after_force;
+    q.s_onset = p.s_onset;
+    q.bond_damage = p.bond_damage;
     q.short_range_k = m.fshort_range_k.get(); q.spacing = m.fspacing.get();
     q.weighted_volume = m.fweighted_volume.get(); q.dilatation = m.fdilatation.get();
     q.lps_a = m.flps_a.get(); q.lps_b = m.flps_b.get();
@@ -538,6 +547,7 @@ void CudaSystem::download(PdSystem& sys) {
   m.max_stretch.download(sys.max_stretch, "max_stretch");
   m.dilatation.download(sys.dilatation, "dilatation");
   m.state.download(sys.state, "state");
+  m.bond_damage.download(sys.bond_damage, "bond_damage");
   m.min_stretch.download(sys.min_stretch, "min_stretch");
   m.min_stretch_next.download(sys.min_stretch_next, "min_stretch_next");
   std::vector<DeviceScalars> host;

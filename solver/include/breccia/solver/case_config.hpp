@@ -26,6 +26,7 @@ struct MaterialSpec {
   double youngs_modulus = 0.0;
   double poisson_ratio = 0.25;
   double fracture_energy = 0.0;  // 0: unbreakable
+  double tensile_strength = 0.0; // > 0: bilinear softening bonds with this strength (0: brittle)
   double weibull_modulus = 0.0;  // 0: no scatter
   long long weibull_seed = 1;
 };
@@ -119,6 +120,7 @@ struct CaseConfig {
   // When a bond found past its critical stretch stops pushing: at once (before_force, the
   // default) or after this pass (after_force, LAMMPS PERI's order; docs/lammps-peri.md).
   bool break_after_force = false;
+  bool softening = false;  // some material has a tensile_strength (bilinear softening bonds)
   // Working precision of the bond loop and the state it streams (docs/theory.md, Precision).
   enum class Precision { Float64, Float32 } precision = Precision::Float64;
   std::vector<std::string> no_fail_sets;

@@ -51,6 +51,10 @@ struct PdViewT {
   float alpha = 0.0f;
   const float* min_stretch = nullptr;
   float* min_stretch_next = nullptr;
+  // Softening bonds (pd_physics.hpp softening_damage): per entry the onset stretch (s0_own is
+  // then the ultimate one) and the damage, written by the entry's owner. Null: brittle.
+  const float* s_onset = nullptr;
+  float* bond_damage = nullptr;
   // model.break_check: after_force (LAMMPS PERI's order) lets a bond that breaks in this pass
   // carry its force once more; before_force (default) drops it from this pass on.
   bool break_after_force = false;
@@ -135,6 +139,23 @@ BRECCIA_HD void store_min_stretch(const PdViewT<Real>& p, int64_t i, double smin
   if (p.min_stretch_next) p.min_stretch_next[i] = any ? static_cast<float>(smin) : 0.0f;
 }
 
+// One softening bond entry at stretch s this pass (p.bond_damage set): the damage it reaches
+// (never below what it had), stored unless fracture is off, and the energy that dissipated,
+// `unit` x (D(d) - D(d_old)) with unit the entry's energy per unit stretch squared (a PMB
+// half-bond: V_i k2 |xi| / 4). Returns d; d = 1 means broken (the caller clears the state).
+template <class Real>
+BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double unit, double& released) {
+  const double d_old = p.bond_damage[k];
+  if (!p.fracture) return d_old;
+  const double onset = p.s_onset[k], ultimate = p.s0_own[k];
+  double d = softening_damage<double>(s, onset, ultimate);
+  if (!(onset < 3.0e38)) d = 0.0;  // a brittle or unbreakable pair in a softening case
+  if (d <= d_old) return d_old;
+  released += unit * (softening_dissipation(d, onset, ultimate) - softening_dissipation(d_old, onset, ultimate));
+  p.bond_damage[k] = static_cast<float>(d);
+  return d;
+}
+
 // LPS first pass: theta_i = d/m_i * sum_j omega beta |xi| e V_j over intact own bonds.
 template <class Real>
 BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
@@ -151,7 +172,8 @@ BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
     } else {
       extension = bond_geometry(p.x0, p.u, i, j, p.xi_len[k]).extension;
     }
-    sum += p.k_own[k] * p.xi_len[k] * extension * p.volume[j];
+    const Real weight = p.bond_damage ? Real(1) - static_cast<Real>(p.bond_damage[k]) : Real(1);
+    sum += weight * p.k_own[k] * p.xi_len[k] * extension * p.volume[j];
   }
   const Real theta = static_cast<Real>(p.lps[i].dilatation_factor) * sum / p.weighted_volume[i];
   p.dilatation[i] = theta;
@@ -186,6 +208,27 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
     if (p.min_stretch_next) {
       any = true;
       if (double(e) / xi < smin) smin = double(e) / xi;
+    }
+    if (p.bond_damage && p.s_onset[k] < 3.0e38f) {  // softening bond: force scaled by (1 - d)
+      const double dmg = soften(p, k, double(e) / xi, 0.5 * double(b_i) * omega * double(p.volume[j]) * p.volume[i] * double(xi) * xi,
+                              released);
+      if (dmg >= 1.0) {
+        p.state[k] = 0;
+        continue;
+      }
+      const Real keep = static_cast<Real>(1.0 - dmg);
+      const Real t = keep * omega * ((a_i + p.lps_a[j]) * xi + (b_i + p.lps_b[j]) * e);
+      const Real f = t * p.volume[j] / len;
+      fx += f * dx;
+      fy += f * dy;
+      fz += f * dz;
+      if (p.diagnostics) {
+        const double dev = double(e) - double(theta_i) * xi / d;
+        dev_sum += double(keep) * omega * dev * dev * p.volume[j];
+        intact_vol += double(keep) * p.vol_own[k];
+        if (double(e) / xi > smax) smax = double(e) / xi;
+      }
+      continue;
     }
     const Real s0 = p.s0_own[k] - stretch_shift(p, i, j);
     bool breaking = false;
@@ -248,7 +291,7 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
   const BondOriginT<Real> origin(p, i);
   // (The compressive enhancement takes the scalar loop below: it gathers s_min per bond.)
   if constexpr (BondOriginT<Real>::kRelative && !kDiagnostics) {
-  if (!p.min_stretch_next) {
+  if (!p.min_stretch_next && !p.bond_damage) {
     // Float between output steps: no branch and one division per bond, so the compiler can
     // run several bonds at once (SIMD); broken bonds are computed and masked. The extension
     // e = (2 xi + eta).eta / (|xi + eta| + |xi|) enters as num / den (BondOriginT).
@@ -319,6 +362,24 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
     if (p.min_stretch_next) {
       any = true;
       if (double(extension) / xi < smin) smin = double(extension) / xi;
+    }
+    if (p.bond_damage && p.s_onset[k] < 3.0e38f) {  // softening bond: force scaled by (1 - d)
+      const double stretch = double(extension) / xi;
+      const double dmg = soften(p, k, stretch, 0.25 * double(p.volume[i]) * double(k2) * xi, released);
+      if (dmg >= 1.0) {
+        p.state[k] = 0;
+        continue;
+      }
+      const Real f = static_cast<Real>(1.0 - dmg) * k2 * extension / (xi * len);
+      fx += f * dx;
+      fy += f * dy;
+      fz += f * dz;
+      if (kDiagnostics) {
+        w += (1.0 - dmg) * 0.25 * double(k2) * stretch * stretch * xi;
+        intact_vol += (1.0 - dmg) * p.vol_own[k];
+        if (stretch > smax) smax = stretch;
+      }
+      continue;
     }
     const Real s0_bond = p.s0_own[k] - stretch_shift(p, i, j);
     if (p.fracture && extension > s0_bond * xi) {
@@ -399,7 +460,16 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
       any = true;
       if (double(g.stretch) < smin) smin = g.stretch;
     }
-    if (p.fracture) {
+    double keep = 1.0;  // softening: the share of the bond's force left, 1 - d
+    if (p.bond_damage && p.s_onset[k] < 3.0e38f) {
+      const double unit = lps ? 0.5 * (p.lps[i].shear_term / m_i) * p.k_own[k] * double(p.volume[j]) * p.volume[i] * double(xi) * xi
+                              : 0.25 * double(p.volume[i]) * (double(p.k_own[k]) + double(p.k_dual[k])) * xi;
+      keep = 1.0 - soften(p, k, double(g.stretch), unit, released);
+      if (keep <= 0.0) {
+        p.state[k] = 0;
+        continue;
+      }
+    } else if (p.fracture) {
       const Real shift = stretch_shift(p, i, j);
       const uint8_t after = break_bonds(p, k, g.stretch, shift);
       if (after != st) {
@@ -423,7 +493,7 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
         p.state[k] = st;
       }
     }
-    if (st & kOwnIntact) intact_vol += p.vol_own[k];
+    if (st & kOwnIntact) intact_vol += keep * p.vol_own[k];
     // The halves that push this pass: those intact now, or with break_after_force those
     // intact when it began (the energy of the ones that broke is in `released`).
     const uint8_t active = p.break_after_force ? state_before : st;
@@ -437,15 +507,15 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
         t += lps_force_state(p.lps[i], m_i, theta_i, p.k_own[k], xi, e);
         if (st & kOwnIntact) {
           const double dev = double(e) - double(theta_i) * xi / p.lps[i].dilatation_factor;
-          dev_sum += p.k_own[k] * dev * dev * p.volume[j];
+          dev_sum += keep * p.k_own[k] * dev * dev * p.volume[j];
         }
       }
       if (active & kDualIntact)
         t += lps_force_state(p.lps[jj], p.weighted_volume[jj], p.dilatation[jj], p.k_dual[k], xi, e);
-      scalar = t * p.volume[j];
+      scalar = static_cast<Real>(keep) * t * p.volume[j];
     } else {
-      scalar = pmb_force_scalar(p.k_own[k], p.k_dual[k], active, g.stretch);
-      w += pmb_energy_density<double>(p.k_own[k], p.k_dual[k], st, g.stretch, xi);
+      scalar = static_cast<Real>(keep) * pmb_force_scalar(p.k_own[k], p.k_dual[k], active, g.stretch);
+      w += keep * pmb_energy_density<double>(p.k_own[k], p.k_dual[k], st, g.stretch, xi);
     }
     const Real inv_len = Real(1) / g.length;
     fx += scalar * g.dx * inv_len;

@@ -164,6 +164,33 @@ BRECCIA_HD double lps_bulk_energy(const LpsCoefficients& c, double theta) {
 // Velocity Verlet half kick + drift for one particle component.
 BRECCIA_HD void verlet_kick(double* v, const double* a, double half_dt, int64_t k) { v[k] += half_dt * a[k]; }
 
+// Bilinear softening bond (materials[].tensile_strength; docs/theory.md "Quasi-brittle
+// bonds"): the bond force is linear in the stretch up to the onset s_t = sigma_t / E, then
+// falls linearly to zero at the ultimate stretch s_u, where the bond breaks. In damage form
+// f = (1 - d) c s with d = 1 - (s_t / s) (s_u - s) / (s_u - s_t) on the loading path; d
+// never decreases, and a bond unloads along its secant (to the origin). The area under the
+// law is c s_t s_u / 2, against c s0^2 / 2 of a brittle bond: s_u = s0^2 / s_t gives the same
+// fracture energy G0 whatever the horizon, while s_t alone sets the strength.
+template <class Real>
+BRECCIA_HD Real softening_damage(Real s, SameReal<Real> onset, SameReal<Real> ultimate) {
+  if (s <= onset) return Real(0);
+  if (s >= ultimate) return Real(1);
+  return Real(1) - (onset / s) * (ultimate - s) / (ultimate - onset);
+}
+
+// Energy a softening bond has dissipated on reaching damage d along its loading path, in
+// units of its energy factor U (a PMB half-bond's energy is U s^2 at stretch s, intact): the
+// work done on it up to the stretch s(d) where the law reaches d, less the energy it still
+// stores, (1 - d) s(d)^2. 0 at d = 0, s_t s_u at d = 1 (the triangle). Used as
+// released = U (D(d_new) - D(d_old)), exact for any step size along the law.
+BRECCIA_HD double softening_dissipation(double d, double onset, double ultimate) {
+  if (d <= 0.0) return 0.0;
+  if (d >= 1.0 || ultimate <= onset) return onset * ultimate;
+  const double s = onset * ultimate / ((1.0 - d) * (ultimate - onset) + onset);
+  const double work = onset * onset + 2.0 * onset / (ultimate - onset) * (ultimate * (s - onset) - 0.5 * (s * s - onset * onset));
+  return work - (1.0 - d) * s * s;
+}
+
 // Borehole pressure (seed 001, eq. 12): P0 (e^-at - e^-bt) / (e^-a t0 - e^-b t0), with a and b
 // from the rise time t0 and the ratio r = b/a: t0 = ln(r) / (b - a).
 BRECCIA_HD double double_exponential_pressure(double peak, double rise_time, double ratio, double t) {

@@ -52,6 +52,9 @@ struct PdSystem {
   // model.compressive_enhancement: each particle's smallest bond stretch at the last force
   // pass and the one being written (pd_kernels.hpp, stretch_shift); empty without it.
   std::vector<float> min_stretch, min_stretch_next;
+  // Softening bonds (materials[].tensile_strength): each entry's onset stretch s_t (s0_own and
+  // s0_dual then hold the ultimate stretch s_u) and its damage d in [0, 1]; empty without.
+  std::vector<float> s_onset, bond_damage;
   // model.short_range_forces: per particle 15 c / delta and spacing (short_range_kernel).
   std::vector<double> short_range_k, spacing;
   ContactCells contact_cells;      // scratch: the pairs outside the families (contact_cells.hpp)

@@ -1,0 +1,130 @@
+// Quasi-brittle (bilinear softening) bonds: materials[].tensile_strength beside
+// fracture_energy (pd_physics.hpp softening_damage; docs/theory.md "Quasi-brittle bonds").
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "breccia/common/error.hpp"
+#include "helpers.hpp"
+
+using namespace breccia::solver;
+using namespace breccia::solver::testing;
+
+TEST(SofteningLaw, DissipatesTheAreaUnderTheLawAlongAnyPathOfSteps) {
+  // D(d) is the work done along the law less the energy stored: 0 intact, s_t s_u broken, and
+  // the sum of its increments does not depend on how the stretch got there.
+  const double st = 1e-4, su = 1.1e-3;
+  EXPECT_EQ(softening_dissipation(0.0, st, su), 0.0);
+  EXPECT_NEAR(softening_dissipation(1.0, st, su), st * su, 1e-20);
+  // Quadrature of the force law f(s) = (1 - d(s)) s (energy units U s^2: work 2 int f ds).
+  const int n = 200000;
+  double work = 0.0, s_prev = 0.0;
+  for (int k = 1; k <= n; ++k) {
+    const double s = su * k / n;
+    const double f0 = (1.0 - softening_damage<double>(s_prev, st, su)) * s_prev;
+    const double f1 = (1.0 - softening_damage<double>(s, st, su)) * s;
+    work += (f0 + f1) * (s - s_prev);  // 2 x trapezoid
+    s_prev = s;
+    const double d = softening_damage<double>(s, st, su);
+    const double stored = (1.0 - d) * s * s;
+    ASSERT_NEAR(softening_dissipation(d, st, su), work - stored, 1e-6 * st * su) << s;
+  }
+  EXPECT_NEAR(work, st * su, 1e-6 * st * su);
+}
+
+namespace {
+
+std::string block_deck(const char* model, const std::string& strength) {
+  const double half = 7e-3;  // 14 spacings: interior families away from the faces
+  const std::string box = "[" + std::to_string(-half) + ", " + std::to_string(-half) + ", " + std::to_string(-half) +
+                          ", " + std::to_string(half) + ", " + std::to_string(half) + ", " + std::to_string(half) + "]";
+  return "specimen: {lattice: {dimension: 3, box: " + box + ", spacing: 1 mm}}\n"
+         "model: {type: " + std::string(model) + ", horizon_factor: 3.015}\n"
+         "materials: [{name: m, density: 1000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 100" +
+         strength + "}]\ntime: {steps: 1}\n";
+}
+
+}  // namespace
+
+// Open the block along x = 0 by a rigid jump raised in 300 increments, far past every crossing
+// bond's ultimate stretch: the energy the softening bonds dissipate on the way equals what the
+// brittle bonds of the same G0 hold at their critical stretch (the FractureEnergy tests hold
+// that to G0 per area within 2%). Tolerance 1e-4: float storage of the damage between
+// increments; the law's own integral is exact (SofteningLaw above).
+class SofteningFractureEnergy : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(SofteningFractureEnergy, EqualsTheBrittleBondsEnergyWhateverTheStrength) {
+  const char* model = GetParam();
+  PdSystem brittle = system_from_yaml(std::string("brittle_") + model, block_deck(model, ""));
+  double reference = 0.0;  // sum over crossing entries of what the brittle bond releases
+  for (size_t i = 0; i < brittle.n; ++i)
+    for (int64_t k = brittle.offsets[i]; k < brittle.offsets[i + 1]; ++k) {
+      const int32_t j = brittle.neighbor[k];
+      if ((brittle.x0[3 * i] < 0) == (brittle.x0[3 * j] < 0)) continue;
+      const double e = brittle.s0_own[k] * brittle.xi_len[k];
+      reference += std::string(model) == "pmb"
+                       ? brittle.volume[i] * pmb_energy_density(brittle.k_own[k], brittle.k_dual[k], 3, brittle.s0_own[k],
+                                                                brittle.xi_len[k])
+                       : 0.5 * brittle.lps[i].shear_term / brittle.weighted_volume[i] * brittle.k_own[k] * e * e *
+                             brittle.volume[j] * brittle.volume[i];
+    }
+  for (const char* strength : {", tensile_strength: 2 MPa", ", tensile_strength: 8 MPa"}) {
+    PdSystem s = system_from_yaml(std::string("soft_") + model, block_deck(model, strength));
+    ASSERT_FALSE(s.bond_damage.empty());
+    const double jump = 0.2e-3;
+    for (int step = 1; step <= 300; ++step) {
+      for (size_t i = 0; i < s.n; ++i) s.u[3 * i] = (s.x0[3 * i] < 0 ? -0.5 : 0.5) * jump * step / 300;
+      cpu_compute_forces(s);
+    }
+    long long crossing = 0, broken = 0;
+    for (size_t i = 0; i < s.n; ++i)
+      for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
+        if ((s.x0[3 * i] < 0) == (s.x0[3 * s.neighbor[k]] < 0)) {
+          ASSERT_EQ(s.bond_damage[k], 0.0f) << "a bond that does not cross the plane stays intact";
+          continue;
+        }
+        ++crossing;
+        broken += s.state[k] == 0;
+      }
+    ASSERT_EQ(broken, crossing) << "every crossing bond must have failed";
+    std::printf("softening %s%s: dissipated / brittle energy = %.6f\n", model, strength,
+                s.dissipated_energy / reference);
+    EXPECT_NEAR(s.dissipated_energy / reference, 1.0, 1e-4) << strength;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, SofteningFractureEnergy, ::testing::Values("pmb", "lps"));
+
+TEST(Softening, HorizonTooLargeForStrengthAndToughnessIsRefusedWithTheLargestThatWorks) {
+  // s_G = sqrt(5 G0 / (9 K delta)) = 1.66e-3 at delta 3.015 mm (K = 6.67 GPa); a strength of
+  // 30 MPa asks s_t = 3e-3 > s_G: refused, naming the material and the key; the largest
+  // horizon is delta (s_G / s_t)^2 = 0.926 mm.
+  try {
+    system_from_yaml("soft_too_strong", block_deck("pmb", ", tensile_strength: 30 MPa"));
+    FAIL() << "expected an InputError";
+  } catch (const breccia::InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("materials[0].tensile_strength"), std::string::npos) << m;
+    EXPECT_NE(m.find("'m'"), std::string::npos) << m;
+    EXPECT_NE(m.find("at most 0.0009259"), std::string::npos) << m;
+  }
+}
+
+TEST(Softening, RestartWithPartiallyDamagedBondsIsBitIdentical) {
+  std::string deck = kPrecrackedGlassPlateDeck;
+  const std::string g0 = "fracture_energy: 3.8";
+  // s_t = 8 MPa / 72 GPa = 1.1e-4, s_u = s_G^2 / s_t = 4.4e-4 (s_G 2.2e-4 at delta 1.5 mm).
+  deck.replace(deck.find(g0), g0.size(), g0 + ", tensile_strength: 8 MPa");
+  const CaseConfig config =
+      parse_case_file(write_case("soft_restart", deck + "time: {steps: 400}\noutput: {every: 100, history_every: 20}\n"));
+  auto [straight, second] = straight_and_restarted(config, "soft_restart", 190);
+  int partial = 0;
+  for (float d : straight.bond_damage) partial += d > 0.0f && d < 1.0f;
+  ASSERT_GT(partial, 0) << "the case should leave bonds in softening";
+  ASSERT_EQ(second.step, straight.step);
+  EXPECT_EQ(0, std::memcmp(second.u.data(), straight.u.data(), straight.u.size() * sizeof(double)));
+  EXPECT_EQ(second.state, straight.state);
+  EXPECT_EQ(second.bond_damage, straight.bond_damage);
+}

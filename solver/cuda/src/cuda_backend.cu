@@ -286,7 +286,12 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   m.sync_after_launch = sync && std::string(sync) == "1";
 
   m.x0.upload(s.x0, "x0");
-  m.x.allocate(s.x0.size(), "x");  // filled before every force pass
+  {  // current positions: refreshed by every force pass, but a download before the first one
+     // (an output right after a restart) must not read uninitialised memory
+    std::vector<double> x(s.x0.size());
+    for (size_t k = 0; k < x.size(); ++k) x[k] = s.x0[k] + s.u[k];
+    m.x.upload(x, "x");
+  }
   m.u.upload(s.u, "u");
   m.v.upload(s.v, "v");
   m.a.upload(s.a, "a");

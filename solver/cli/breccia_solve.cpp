@@ -1,11 +1,15 @@
 // breccia-solve: run a peridynamics (or MPS) case.
 //   breccia-solve CASE.yaml [-o DIR] [--threads N] [--restart FILE] [--steps N] [--backend cpu|cuda|auto] [--quiet]
+//   breccia-solve CASE.yaml --decomposition 2,4,...   (set up, print the domain decomposition's figures, exit)
 #include <cstdio>
+#include <algorithm>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/yaml_input.hpp"
+#include "breccia/solver/partition.hpp"
 #include "breccia/solver/run.hpp"
 #ifdef BRECCIA_WITH_MPS
 #include "breccia/mps/run_case.hpp"
@@ -23,7 +27,8 @@ namespace {
 void usage() {
   std::fprintf(stderr,
                "usage: breccia-solve CASE.yaml [-o DIR] [--threads N] [--restart FILE] [--steps N]\n"
-               "                     [--backend cpu|cuda|auto] [--quiet]\n");
+               "                     [--backend cpu|cuda|auto] [--quiet]\n"
+               "       breccia-solve CASE.yaml --decomposition P1,P2,...  (decomposition figures per rank count)\n");
 }
 
 bool gpu_available() {
@@ -41,6 +46,7 @@ int main(int argc, char** argv) {
   std::string case_file;
   solver::RunOptions opt;
   std::string backend = "auto";
+  std::string decomposition;  // rank counts: print the decomposition's figures instead of running
   for (int k = 1; k < argc; ++k) {
     const std::string a = argv[k];
     auto value = [&](const char* name) -> std::string {
@@ -57,6 +63,7 @@ int main(int argc, char** argv) {
       else if (a == "--steps") opt.steps = std::stoll(value("--steps"));
       else if (a == "--backend") backend = value("--backend");
       else if (a == "--quiet") opt.progress = false;
+      else if (a == "--decomposition") decomposition = value("--decomposition");
       else if (a == "-h" || a == "--help") { usage(); return 0; }
       else if (!a.empty() && a[0] == '-') { std::fprintf(stderr, "error: unknown option %s\n", a.c_str()); usage(); return kExitBadInput; }
       else case_file = a;
@@ -116,6 +123,37 @@ int main(int argc, char** argv) {
 #endif
     }
     const solver::CaseConfig config = solver::parse_case_file(case_file);
+    if (!decomposition.empty()) {
+      // The partition of the distributed runs (partition.hpp) on this case's families: load
+      // balance, ghosts and halo bytes per rank count, without launching any process.
+      solver::PdSystem s = solver::setup_system(config);
+      const double bytes_per_ghost = config.model == solver::PdModel::PMB ? 24.0 : 48.0;
+      std::printf("# %s: %zu particles, %zu bond entries, %s; halo bytes at %g B per ghost per step\n", case_file.c_str(),
+                  s.n, s.bond_count(), config.model_name.c_str(), bytes_per_ghost);
+      std::printf("ranks,owned_min,owned_max,bonds_max_over_mean,ghosts_per_owned_mean,ghosts_per_owned_max,"
+                  "halo_bytes_mean,halo_bytes_max,neighbour_ranks_max\n");
+      size_t at = 0;
+      while (at <= decomposition.size()) {
+        const size_t comma = std::min(decomposition.find(',', at), decomposition.size());
+        const std::string item = decomposition.substr(at, comma - at);
+        size_t used = 0;
+        const int ranks = std::stoi(item, &used);
+        if (used != item.size() || ranks < 1)
+          throw InputError("--decomposition", "", "'" + item + "'", "comma-separated rank counts >= 1");
+        solver::Partition p;
+        try {
+          p = solver::MortonRangePartitioner().partition(s.offsets, ranks);
+        } catch (const std::invalid_argument& e) {
+          throw InputError(case_file, "--decomposition", e.what(), "at most one rank per particle");
+        }
+        const auto st = solver::decomposition_stats(p, s.offsets, s.neighbor, bytes_per_ghost);
+        std::printf("%d,%lld,%lld,%.4f,%.4f,%.4f,%.0f,%.0f,%d\n", ranks, static_cast<long long>(st.min_owned),
+                    static_cast<long long>(st.max_owned), st.max_over_mean_bonds, st.mean_ghost_ratio,
+                    st.max_ghost_ratio, st.mean_halo_bytes, st.max_halo_bytes, st.max_neighbour_ranks);
+        at = comma + 1;
+      }
+      return 0;
+    }
     // The contact search of the short-range forces (contact_cells.hpp) is built on the host;
     // the CUDA backend does not run it yet.
     if (opt.backend == "cuda" && config.short_range_forces) {

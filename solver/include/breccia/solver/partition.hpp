@@ -1,0 +1,81 @@
+#pragma once
+// Domain decomposition of the PD solver (the distributed-runs work, docs/parallel.md when it
+// lands): which rank owns which particles, and which particles of other ranks each rank must
+// receive (ghosts) and send every step. PD particles never migrate, so ownership is fixed in
+// the reference configuration, and the ghosts are exactly the off-rank bond partners of the
+// CSR families: no geometric halo width to guess, so dual horizon and graded meshes are exact.
+//
+// Particles are held in Morton order (setup.cpp), so contiguous ranges of that order are
+// compact in space. `MortonRangePartitioner` cuts it into ranges of equal work (bond entries
+// plus a per-particle share); other partitioners (RCB, a graph partitioner) fit the same
+// interface.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace breccia::solver {
+
+// Rank r owns the internal indices [begin[r], begin[r + 1]).
+struct Partition {
+  std::vector<int64_t> begin;  // ranks + 1 offsets, non-decreasing, begin[0] = 0, begin[ranks] = n
+  int ranks() const { return static_cast<int>(begin.size()) - 1; }
+  int64_t owned(int r) const { return begin[r + 1] - begin[r]; }
+  int owner(int64_t i) const;  // binary search
+};
+
+class Partitioner {
+public:
+  virtual ~Partitioner() = default;
+  virtual std::string name() const = 0;
+  // offsets: the CSR row offsets (n + 1) of the bond families in internal order.
+  virtual Partition partition(const std::vector<int64_t>& offsets, int ranks) const = 0;
+};
+
+// Contiguous ranges of the internal (Morton) order with equal work: each particle weighs its
+// family size plus `particle_weight` bond entries' worth of per-particle work (kick, drift,
+// loads, outputs), so a graded mesh with very unequal families still balances the bond loop.
+class MortonRangePartitioner final : public Partitioner {
+public:
+  explicit MortonRangePartitioner(double particle_weight = 4.0) : particle_weight_(particle_weight) {}
+  std::string name() const override { return "morton-ranges"; }
+  Partition partition(const std::vector<int64_t>& offsets, int ranks) const override;
+
+private:
+  double particle_weight_;
+};
+
+// What one rank exchanges each step. Ghosts are sorted by internal index; since ranks own
+// contiguous ranges, the ghosts from one source rank are one contiguous run of `ghosts`.
+struct Halo {
+  int rank = 0;
+  std::vector<int32_t> ghosts;                    // off-rank particles this rank's families read
+  std::vector<int> recv_ranks;                    // source ranks, ascending
+  std::vector<int64_t> recv_begin;                // recv_ranks.size() + 1 offsets into ghosts
+  std::vector<int> send_ranks;                    // destination ranks, ascending
+  std::vector<std::vector<int32_t>> send_lists;   // per destination: owned particles it reads, ascending
+};
+
+// The halo of `rank`: ghosts from its own rows, sends from the rows of the other ranks that
+// reach into it (the families are symmetric: j in i's family iff i in j's, so the sends are
+// also read off this rank's rows).
+Halo build_halo(const Partition& part, int rank, const std::vector<int64_t>& offsets,
+                const std::vector<int32_t>& neighbor);
+
+// Figures of a decomposition for docs/performance.md: load balance of the bond loop, ghosts
+// per owned particle, bytes exchanged per step.
+struct DecompositionStats {
+  int ranks = 0;
+  int64_t min_owned = 0, max_owned = 0;
+  double max_over_mean_bonds = 0.0;   // load imbalance of the bond loop (1 = perfect)
+  double mean_ghost_ratio = 0.0;      // ghosts / owned, mean over ranks
+  double max_ghost_ratio = 0.0;
+  double max_halo_bytes = 0.0;        // per step, largest rank, received
+  double mean_halo_bytes = 0.0;
+  int max_neighbour_ranks = 0;        // most ranks one rank exchanges with
+};
+// bytes_per_ghost: what one ghost carries per step (PMB: displacement, 24 B; LPS adds the
+// dilatation and the fast path's two factors between its passes, 24 B more).
+DecompositionStats decomposition_stats(const Partition& part, const std::vector<int64_t>& offsets,
+                                       const std::vector<int32_t>& neighbor, double bytes_per_ghost);
+
+}  // namespace breccia::solver

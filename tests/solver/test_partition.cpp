@@ -1,0 +1,126 @@
+// Domain decomposition (partition.hpp): ownership by weighted Morton ranges, and halos that
+// are exactly the off-rank bond partners of the serial CSR. Checked against brute force.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <set>
+#include <stdexcept>
+
+#include "breccia/solver/partition.hpp"
+#include "helpers.hpp"
+
+using namespace breccia::solver;
+using namespace breccia::solver::testing;
+
+namespace {
+
+PdSystem lattice(const std::string& name, const std::string& model_extra = "") {
+  return system_from_yaml(name, "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.012, 0.012, 0.012], spacing: 1 mm}}\n"
+                                "model: {type: pmb, horizon_factor: 3.015" + model_extra + "}\n"
+                                "materials: [{name: m, density: 1000, youngs_modulus: 1 GPa, poisson_ratio: 0.25}]\n"
+                                "time: {steps: 1}\n");
+}
+
+// The halo of rank r by brute force: every off-rank partner of an owned particle's row.
+std::set<int32_t> brute_ghosts(const PdSystem& s, const Partition& p, int r) {
+  std::set<int32_t> g;
+  for (int64_t i = p.begin[r]; i < p.begin[r + 1]; ++i)
+    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k)
+      if (p.owner(s.neighbor[k]) != r) g.insert(s.neighbor[k]);
+  return g;
+}
+
+}  // namespace
+
+TEST(Partition, GhostsAreTheOffRankPartnersAndSendsMatchTheReceivers) {
+  const PdSystem s = lattice("partition_lattice");  // 1,728 particles, families cut by the faces
+  for (int ranks : {1, 2, 3, 4, 7}) {
+    const Partition p = MortonRangePartitioner().partition(s.offsets, ranks);
+    ASSERT_EQ(p.ranks(), ranks);
+    std::vector<Halo> halos;
+    for (int r = 0; r < ranks; ++r) halos.push_back(build_halo(p, r, s.offsets, s.neighbor));
+    for (int r = 0; r < ranks; ++r) {
+      const std::set<int32_t> expected = brute_ghosts(s, p, r);
+      EXPECT_EQ(std::vector<int32_t>(expected.begin(), expected.end()), halos[r].ghosts) << ranks << " ranks, rank " << r;
+      // What r receives from q is exactly what q sends to r.
+      for (size_t a = 0; a < halos[r].recv_ranks.size(); ++a) {
+        const int q = halos[r].recv_ranks[a];
+        const std::vector<int32_t> received(halos[r].ghosts.begin() + halos[r].recv_begin[a],
+                                            halos[r].ghosts.begin() + halos[r].recv_begin[a + 1]);
+        const auto& sq = halos[q].send_ranks;
+        const auto at = std::find(sq.begin(), sq.end(), r);
+        ASSERT_NE(at, sq.end()) << "rank " << q << " must send to " << r;
+        EXPECT_EQ(halos[q].send_lists[at - sq.begin()], received);
+        for (int32_t g : received) EXPECT_EQ(p.owner(g), q);
+      }
+    }
+    if (ranks == 1) EXPECT_TRUE(halos[0].ghosts.empty());
+  }
+}
+
+TEST(Partition, WeightedRangesBalanceTheBondLoop) {
+  // Equal work (entries + 4 per particle) per range; on 1,728 particles the granularity of
+  // one particle (~100 entries of ~25,000 per rank at 8 ranks) bounds the imbalance near 1.
+  const PdSystem s = lattice("partition_balance");
+  for (int ranks : {2, 4, 8}) {
+    const DecompositionStats st = decomposition_stats(MortonRangePartitioner().partition(s.offsets, ranks), s.offsets,
+                                                      s.neighbor, 24.0);
+    EXPECT_LE(st.max_over_mean_bonds, 1.05) << ranks;
+    EXPECT_GT(st.mean_ghost_ratio, 0.0);
+  }
+}
+
+TEST(Partition, AnEmptyRankHasNothingToExchange) {
+  const PdSystem s = lattice("partition_empty");
+  const int64_t n = static_cast<int64_t>(s.n);
+  Partition p;
+  p.begin = {0, 0, n / 2, n};  // rank 0 owns nothing
+  EXPECT_EQ(p.owner(0), 1);
+  EXPECT_EQ(p.owner(n - 1), 2);
+  const Halo empty = build_halo(p, 0, s.offsets, s.neighbor);
+  EXPECT_TRUE(empty.ghosts.empty());
+  EXPECT_TRUE(empty.send_ranks.empty());
+  for (int r : {1, 2}) {
+    const Halo h = build_halo(p, r, s.offsets, s.neighbor);
+    EXPECT_EQ(std::count(h.recv_ranks.begin(), h.recv_ranks.end(), 0), 0);
+    EXPECT_EQ(std::count(h.send_ranks.begin(), h.send_ranks.end(), 0), 0);
+  }
+}
+
+TEST(Partition, AFamilySpanningThreeRanksIsFedByAllOfThem) {
+  const PdSystem s = lattice("partition_span");
+  const int ranks = 8;
+  const Partition p = MortonRangePartitioner().partition(s.offsets, ranks);
+  int64_t found = -1;
+  std::set<int> owners;
+  for (size_t i = 0; i < s.n && found < 0; ++i) {
+    std::set<int> o;
+    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) o.insert(p.owner(s.neighbor[k]));
+    o.erase(p.owner(static_cast<int64_t>(i)));
+    if (o.size() >= 2) {  // its own rank and two or more others
+      found = static_cast<int64_t>(i);
+      owners = o;
+    }
+  }
+  ASSERT_GE(found, 0) << "8 ranks of a 12^3 lattice must have a family over three ranks";
+  const int r = p.owner(found);
+  const Halo h = build_halo(p, r, s.offsets, s.neighbor);
+  for (int q : owners) {
+    EXPECT_NE(std::find(h.recv_ranks.begin(), h.recv_ranks.end(), q), h.recv_ranks.end()) << q;
+    EXPECT_NE(std::find(h.send_ranks.begin(), h.send_ranks.end(), q), h.send_ranks.end()) << q;
+  }
+  for (int64_t k = s.offsets[found]; k < s.offsets[found + 1]; ++k) {
+    const int32_t j = s.neighbor[k];
+    if (p.owner(j) != r) EXPECT_TRUE(std::binary_search(h.ghosts.begin(), h.ghosts.end(), j)) << j;
+  }
+}
+
+TEST(Partition, MoreRanksThanParticlesIsRefusedNamingBoth) {
+  const std::vector<int64_t> offsets{0, 1, 2};  // two particles
+  try {
+    MortonRangePartitioner().partition(offsets, 3);
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("3 ranks for 2 particles"), std::string::npos) << e.what();
+  }
+}

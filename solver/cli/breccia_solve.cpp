@@ -31,6 +31,14 @@ void usage() {
                "       breccia-solve CASE.yaml --decomposition P1,P2,...  (decomposition figures per rank count)\n");
 }
 
+// A whole number and nothing else: std::stoll alone takes "4x" as 4.
+long long whole_number(const std::string& text) {
+  size_t used = 0;
+  const long long v = std::stoll(text, &used);
+  if (used != text.size()) throw std::invalid_argument(text);
+  return v;
+}
+
 bool gpu_available() {
 #ifdef BRECCIA_WITH_CUDA
   return breccia::solver::cuda_device_available();
@@ -58,9 +66,9 @@ int main(int argc, char** argv) {
     };
     try {
       if (a == "-o" || a == "--output") opt.out_dir = value("-o");
-      else if (a == "--threads") opt.threads = std::stoi(value("--threads"));
+      else if (a == "--threads") opt.threads = static_cast<int>(whole_number(value("--threads")));
       else if (a == "--restart") opt.restart_file = value("--restart");
-      else if (a == "--steps") opt.steps = std::stoll(value("--steps"));
+      else if (a == "--steps") opt.steps = whole_number(value("--steps"));
       else if (a == "--backend") backend = value("--backend");
       else if (a == "--quiet") opt.progress = false;
       else if (a == "--decomposition") decomposition = value("--decomposition");

@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "breccia/common/error.hpp"
 #include "breccia/common/output_file.hpp"
 #include "breccia/solver/correspondence.hpp"
@@ -29,43 +31,57 @@ std::string fmt(double v) {
 }
 
 void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, double setup_s) {
-  std::ostringstream j;
   const double bytes_per_particle =
       (s.bond_count() * (sizeof(int32_t) + 4 * sizeof(double) + 2 * sizeof(float) + 1) +
        s.n * (13 * sizeof(double) + 2 * sizeof(int32_t) + 1)) / std::max<double>(1.0, s.n);
-  j << "{\n"
-    << "  \"case\": \"" << s.config.name << "\",\n"
-    << "  \"status\": \"" << r.status << "\",\n"
-    << "  \"message\": \"" << r.message << "\",\n"
-    << "  \"model\": \"" << s.config.model_name << "\",\n"
-    << "  \"backend\": \"" << o.backend << "\",\n"
-    << "  \"precision\": \"" << (s.f32.active ? "float32" : "float64") << "\",\n"
-    << "  \"threads\": " << omp_get_max_threads() << ",\n"
-    << "  \"dimension\": " << s.dimension << ",\n"
-    << "  \"particles\": " << s.n << ",\n"
-    << "  \"bonds\": " << s.bond_count() << ",\n"
-    << "  \"mean_family_size\": " << fmt(static_cast<double>(s.bond_count()) / std::max<size_t>(1, s.n)) << ",\n"
-    << "  \"bytes_per_particle\": " << fmt(bytes_per_particle) << ",\n"
-    << "  \"steps\": " << s.step << ",\n"
-    << "  \"steps_this_run\": " << r.steps << ",\n"
-    << "  \"time_s\": " << fmt(s.time) << ",\n"
-    << "  \"dt_s\": " << fmt(s.dt) << ",\n"
-    << "  \"stable_dt_s\": " << fmt(s.stable_dt) << ",\n"
-    << "  \"silling_askari_dt_s\": " << fmt(s.silling_askari_dt) << ",\n"
-    << "  \"setup_wall_s\": " << fmt(setup_s) << ",\n"
-    << "  \"wall_s\": " << fmt(r.wall_s) << ",\n"
-    << "  \"bond_updates_per_s\": " << fmt(r.bond_updates_per_s) << ",\n"
-    << "  \"loop_cpu_s\": " << fmt(r.cpu_s) << ",\n"
-    << "  \"bond_updates_per_cpu_s\": " << fmt(r.cpu_s > 0 ? s.bond_count() * static_cast<double>(r.steps) / r.cpu_s : 0.0) << ",\n"
-    << "  \"bond_updates_note\": \"bond entries (each bond counted once from each end) x steps / wall time of the time loop\",\n"
-    << "  \"kinetic_J\": " << fmt(r.final_energies.kinetic) << ",\n"
-    << "  \"strain_J\": " << fmt(r.final_energies.strain) << ",\n"
-    << "  \"external_work_J\": " << fmt(s.external_work) << ",\n"
-    << "  \"dissipated_J\": " << fmt(s.dissipated_energy) << ",\n"
-    << "  \"max_damage\": " << fmt(r.final_energies.max_damage) << ",\n"
-    << "  \"broken_bonds\": " << r.final_energies.broken_half_bonds / 2 << "\n"
-    << "}\n";
-  write_text_file(o.out_dir + "/summary.json", j.str());
+  // nlohmann::json escapes the strings (a message may quote a path); a value that is not
+  // finite (a run stopped for blowing up) is written as null and named in non_finite, so
+  // the file stays JSON that any strict parser reads.
+  nlohmann::ordered_json j;
+  std::vector<std::string> non_finite;
+  auto number = [&](const char* key, double v) {
+    if (std::isfinite(v)) {
+      j[key] = v;
+    } else {
+      j[key] = nullptr;
+      non_finite.push_back(key);
+    }
+  };
+  j["case"] = s.config.name;
+  j["status"] = r.status;
+  j["message"] = r.message;
+  j["model"] = s.config.model_name;
+  j["backend"] = o.backend;
+  j["precision"] = s.f32.active ? "float32" : "float64";
+  j["threads"] = omp_get_max_threads();
+  j["dimension"] = s.dimension;
+  j["particles"] = s.n;
+  j["bonds"] = s.bond_count();
+  number("mean_family_size", static_cast<double>(s.bond_count()) / std::max<size_t>(1, s.n));
+  number("bytes_per_particle", bytes_per_particle);
+  j["steps"] = s.step;
+  j["steps_this_run"] = r.steps;
+  number("time_s", s.time);
+  number("dt_s", s.dt);
+  number("stable_dt_s", s.stable_dt);
+  number("silling_askari_dt_s", s.silling_askari_dt);
+  number("setup_wall_s", setup_s);
+  number("wall_s", r.wall_s);
+  number("bond_updates_per_s", r.bond_updates_per_s);
+  number("loop_cpu_s", r.cpu_s);
+  number("bond_updates_per_cpu_s", r.cpu_s > 0 ? s.bond_count() * static_cast<double>(r.steps) / r.cpu_s : 0.0);
+  j["bond_updates_note"] = "bond entries (each bond counted once from each end) x steps / wall time of the time loop";
+  number("kinetic_J", r.final_energies.kinetic);
+  number("strain_J", r.final_energies.strain);
+  number("external_work_J", s.external_work);
+  number("dissipated_J", s.dissipated_energy);
+  number("max_damage", r.final_energies.max_damage);
+  j["broken_bonds"] = r.final_energies.broken_half_bonds / 2;
+  j["non_finite"] = non_finite;
+  if (!non_finite.empty())
+    j["non_finite_note"] = "these values were not finite when the run stopped (status " + r.status +
+                           "): written as null; the last good values are in history.csv";
+  write_text_file(o.out_dir + "/summary.json", j.dump(2) + "\n");
 }
 
 }  // namespace

@@ -154,6 +154,13 @@ std::vector<int32_t> internal_particles(const PdSystem& s, const std::vector<int
   return out;
 }
 
+// 6 significant digits: std::to_string prints a 2e-7 s step as "0.000000".
+std::string short_number(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.6g", v);
+  return b;
+}
+
 double median(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
   return v[v.size() / 2];
@@ -915,7 +922,7 @@ PdSystem setup_system(const CaseConfig& config) {
   } else if (c.dt) {
     if (c.check_stability && *c.dt > s.stable_dt)
       throw InputError(c.file, "time.dt",
-                       "dt = " + std::to_string(*c.dt) + " s exceeds the stable step " + std::to_string(s.stable_dt) + " s",
+                       "dt = " + short_number(*c.dt) + " s exceeds the stable step " + short_number(s.stable_dt) + " s",
                        "dt <= 2/omega_max (leave dt out to use safety x stable step)");
     s.dt = *c.dt;
   } else {

@@ -1,6 +1,7 @@
 // breccia-solve turns bad input into one clear message and exit code 2.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <csignal>
 #include <filesystem>
@@ -11,6 +12,8 @@
 #include <fstream>
 #include <string>
 #include "helpers.hpp"
+
+#include <nlohmann/json.hpp>
 
 namespace {
 
@@ -61,6 +64,27 @@ TEST(SolverCli, NegativeModulusIsRejected) {
 
 TEST(SolverCli, TimeStepAboveStableIsRejected) {
   expect_bad_input(run_solver(kBase + kMaterial + "time: {steps: 5, dt: 1 ms}\n", "big_dt"), {"time.dt", "stable"});
+  // Both steps in significant digits (std::to_string printed the 0.84 us stable step as
+  // 0.000001 s, and smaller ones as 0.000000 s).
+  const Outcome o = run_solver(kBase + kMaterial + "time: {steps: 5, dt: 1 us}\n", "small_big_dt");
+  expect_bad_input(o, {"dt = 1e-06 s exceeds the stable step 8.4"});
+  EXPECT_EQ(o.output.find("0.000000"), std::string::npos) << o.output;
+}
+
+TEST(SolverCli, MalformedNumbersOnTheCommandLineAreRejected) {
+  const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_threads";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/case.yaml") << kBase + kMaterial + kTime;
+  for (const char* bad : {"--threads 4x", "--steps 10s", "--threads two"}) {
+    const std::string cmd = std::string(BRECCIA_SOLVE_EXE) + " " + dir + "/case.yaml -o " + dir + "/out --quiet " + bad + " 2>&1";
+    FILE* p = popen(cmd.c_str(), "r");
+    std::string out;
+    std::array<char, 512> buf{};
+    while (fgets(buf.data(), buf.size(), p)) out += buf.data();
+    const int status = pclose(p);
+    EXPECT_EQ(WEXITSTATUS(status), 2) << bad << ": " << out;
+    EXPECT_NE(out.find("is not a number"), std::string::npos) << bad << ": " << out;
+  }
 }
 
 TEST(SolverCli, HorizonSmallerThanSpacingIsRejected) {
@@ -117,4 +141,28 @@ TEST(SolverCli, CtrlCWritesACheckpointAndExitsWith130) {
   std::ifstream summary(dir + "/out/summary.json");
   const std::string text((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("\"status\": \"interrupted\""), std::string::npos) << text;
+}
+
+TEST(SolverCli, SummaryOfARunStoppedForNonFiniteValuesIsStrictJson) {
+  // A step five times the stable one, checked only after 2,000 steps: by then the state has
+  // overflowed. summary.json must still parse with a strict parser (NaN is not JSON): the
+  // non-finite energies are null and named in non_finite.
+  const Outcome o = run_solver(
+      "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.006, 0.006], spacing: 1 mm}}\n"
+      "model: {type: pmb, fracture: false}\n"
+      "materials: [{name: m, density: 1000, youngs_modulus: 1 GPa, poisson_ratio: 0.25}]\n"
+      "initial: [{type: radial_velocity, center: [0, 0, 0], strain_rate: 10}]\n"
+      "time: {steps: 2000, dt: 1e-5, check_stability: false}\n"
+      "output: {every: 100000, history_every: 2000, results: false}\n",
+      "non_finite");
+  EXPECT_EQ(o.exit_code, 3) << o.output;
+  std::ifstream in(breccia::solver::testing::process_temp_dir() + "/cli_non_finite/out/summary.json");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  nlohmann::json j;
+  ASSERT_NO_THROW(j = nlohmann::json::parse(text)) << text;  // rejects NaN and Infinity tokens
+  EXPECT_EQ(j["status"], "unstable");
+  EXPECT_TRUE(j["kinetic_J"].is_null());
+  const auto& named = j["non_finite"];
+  EXPECT_NE(std::find(named.begin(), named.end(), "kinetic_J"), named.end()) << text;
+  EXPECT_TRUE(j["particles"].is_number());
 }

@@ -1,0 +1,112 @@
+// The step of step.hpp driven by an execution space that launches every loop in reverse
+// order and sums in blocks, as a GPU's threads may run and its reductions do: the state it
+// produces must equal the OpenMP backend's bit for bit (each index of a phase is
+// independent of the others' order: no phase reads what another index of the same phase
+// writes), and the energy sums must agree to round-off. This is what the CUDA backend's
+// agreement rests on, checked here without a GPU.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "breccia/solver/exec_openmp.hpp"
+#include "breccia/solver/step.hpp"
+#include "helpers.hpp"
+
+using namespace breccia::solver;
+using namespace breccia::solver::testing;
+
+namespace {
+
+class ReverseBlockExec {
+public:
+  explicit ReverseBlockExec(PdSystem& sys) : host_(sys) {}
+  template <class F>
+  void for_each(int64_t n, const F& f, const char*) const {
+    for (int64_t i = n - 1; i >= 0; --i) f(i);
+  }
+  // Partial sums over grid-stride blocks of 256, folded in block order (the device's pattern).
+  template <class Load, class Finish>
+  void reduce(int64_t n, const Load& load, const Finish& finish, const char*) const {
+    using Value = typename Load::Value;
+    constexpr int64_t kBlocks = 7, kThreads = 256;
+    Value total = Load::identity();
+    for (int64_t b = 0; b < kBlocks; ++b) {
+      Value block = Load::identity();
+      for (int64_t t = 0; t < kThreads; ++t)
+        for (int64_t k = b * kThreads + t; k < n; k += kBlocks * kThreads) block = Load::combine(block, load(k));
+      total = Load::combine(total, block);
+    }
+    finish(total);
+  }
+  template <class Real>
+  void commit_min_stretch(StepArrays<Real>& a) const { host_.commit_min_stretch(a); }
+  template <class Real>
+  void contact(const StepArrays<Real>& a) const { host_.contact(a); }
+
+private:
+  OpenMpExec host_;
+};
+
+void expect_same_state(const PdSystem& a, const PdSystem& b, bool energies_exact) {
+  ASSERT_EQ(a.step, b.step);
+  EXPECT_EQ(0, std::memcmp(a.u.data(), b.u.data(), a.u.size() * sizeof(double)));
+  EXPECT_EQ(0, std::memcmp(a.v.data(), b.v.data(), a.v.size() * sizeof(double)));
+  EXPECT_EQ(a.state, b.state);
+  EXPECT_EQ(a.bond_damage, b.bond_damage);
+  const double scale = std::max(std::fabs(a.external_work), 1e-30);
+  EXPECT_NEAR(a.external_work, b.external_work, energies_exact ? 0.0 : 1e-12 * scale);
+  EXPECT_NEAR(a.dissipated_energy, b.dissipated_energy, 1e-12 * std::max(a.dissipated_energy, 1e-30));
+}
+
+void run_both(const std::string& name, const std::string& deck, int steps) {
+  PdSystem cpu = system_from_yaml(name + "_cpu", deck);
+  PdSystem emulated = system_from_yaml(name + "_emulated", deck);
+  for (int k = 0; k < steps; ++k) cpu_step(cpu);
+  for (int k = 0; k < steps; ++k) {
+    ReverseBlockExec exec(emulated);
+    if (emulated.f32.active) {
+      float32_upload(emulated);
+      StepArrays<float> a = float32_step_arrays(emulated);
+      pd_step(exec, a, emulated);
+      float32_download(emulated);
+    } else {
+      StepArrays<double> a = cpu_step_arrays(emulated);
+      pd_step(exec, a, emulated);
+    }
+  }
+  ASSERT_GT(measure(cpu).broken_half_bonds, 0) << name << ": the case should break bonds";
+  expect_same_state(cpu, emulated, false);
+}
+
+// A notched plate pulled by tractions, constrained on three sides by every boundary kind,
+// with a body force: loads, constraints, breaking, in both models and precisions.
+std::string plate(const char* model, const char* extra_model, const char* extra_material) {
+  return std::string("specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.01], spacing: 0.5 mm, thickness: 1 mm}}\n") +
+         "model: {type: " + model + ", planar: plane_strain, horizon_factor: 3.015" + extra_model + "}\n"
+         "materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.25, fracture_energy: 3.8" +
+         extra_material + ", weibull: {modulus: 5, seed: 3}}]\n"
+         "precracks: [{type: segment, from: [0, 0.005], to: [0.008, 0.005]}]\n"
+         "loads:\n"
+         "  - {type: traction, surface: ymax, value: [0, 12 MPa, 0], history: {type: ramp, value: 1, ramp_time: 20 us}}\n"
+         "  - {type: body_force, value: [0, -1e5, 0]}\n"
+         "boundary:\n"
+         "  - {type: fixed, set: ymin}\n"
+         "  - {type: velocity, set: xmin, value: [-0.2, 0, 0], components: [x], ramp_time: 1 us}\n"
+         "  - {type: displacement, set: xmax, value: [1e-6, 0, 0], components: [x], ramp_time: 3 us}\n"
+         "time: {steps: 1}\n";
+}
+
+}  // namespace
+
+TEST(StepEmulation, PmbDoubleReproducesTheOpenMpStepBitForBit) { run_both("emu_pmb", plate("pmb", "", ""), 400); }
+
+TEST(StepEmulation, LpsDoubleReproducesTheOpenMpStepBitForBit) { run_both("emu_lps", plate("lps", "", ""), 400); }
+
+TEST(StepEmulation, Float32AndTheLammpsRulesReproduceTheOpenMpStepBitForBit) {
+  run_both("emu_pmb_f32", plate("pmb", ", precision: float32", ""), 400);
+  run_both("emu_lps_alpha", plate("lps", ", compressive_enhancement: 0.25, break_check: after_force", ""), 400);
+}
+
+TEST(StepEmulation, SofteningBondsReproduceTheOpenMpStepBitForBit) {
+  run_both("emu_soft", plate("pmb", "", ", tensile_strength: 8 MPa"), 400);
+}

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <map>
 
 #include "breccia/common/error.hpp"
 
@@ -14,6 +15,27 @@ Section::Section(YAML::Node node, std::string file, std::string path)
                      "is not a mapping of keys to values", "a YAML map");
 }
 
+namespace {
+// yaml-cpp keeps a repeated key as a second entry and answers lookups with the first, so a
+// second `model:` block would be dropped without a word: refuse it, naming both lines.
+void reject_duplicate_keys(const YAML::Node& node, const std::string& file, const std::string& path) {
+  if (node.IsMap()) {
+    std::map<std::string, int> seen;  // key -> line (1-based)
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      const std::string key = it->first.Scalar();
+      const int line = it->first.Mark().line + 1;
+      const std::string field = path.empty() ? key : path + "." + key;
+      if (auto [at, inserted] = seen.emplace(key, line); !inserted)
+        throw InputError(file, field, "given twice, on lines " + std::to_string(at->second) + " and " + std::to_string(line),
+                         "each key once (merge the two)");
+      reject_duplicate_keys(it->second, file, field);
+    }
+  } else if (node.IsSequence()) {
+    for (size_t k = 0; k < node.size(); ++k) reject_duplicate_keys(node[k], file, path + "[" + std::to_string(k) + "]");
+  }
+}
+}  // namespace
+
 Section Section::load_file(const std::string& file) {
   if (!std::filesystem::exists(file))
     throw InputError(file, "", "file does not exist", "a readable YAML file");
@@ -25,6 +47,7 @@ Section Section::load_file(const std::string& file) {
                      "YAML syntax error: " + e.msg, "valid YAML");
   }
   if (!root.IsMap()) throw InputError(file, "(top level)", "is not a YAML map", "a map of sections");
+  reject_duplicate_keys(root, file, "");
   return Section(root, file, "");
 }
 

@@ -53,3 +53,27 @@ TEST(YamlInput, SyntaxErrorNamesTheLine) {
     EXPECT_NE(std::string(e.what()).find("line"), std::string::npos);
   }
 }
+
+TEST(YamlInput, DuplicateKeysAreRejectedWithBothLines) {
+  // yaml-cpp keeps the first of two equal keys: a second `model:` block would be dropped.
+  const std::string path = ::testing::TempDir() + "/duplicate_key.yaml";
+  std::ofstream(path) << "name: x\nmodel: {type: pmb}\ntime: {steps: 1}\nmodel: {type: lps}\n";
+  try {
+    Section::load_file(path);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("model"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("lines 2 and 4"), std::string::npos) << msg;
+  }
+  // Nested maps and maps inside lists too, named by their path.
+  std::ofstream(path) << "materials:\n  - {name: a, density: 1}\n  - name: b\n    density: 1\n    density: 2\n";
+  try {
+    Section::load_file(path);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("materials[1].density"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("lines 4 and 5"), std::string::npos) << msg;
+  }
+}

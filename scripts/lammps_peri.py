@@ -299,20 +299,13 @@ def main():
             "final_kinetic_J": float(r["history"][-1, 1]),
             "max_ke_difference_vs_lammps": 0.0 if r is ref else ke_mismatch(ref["history"], r["history"]),
             "wall_s": r["wall_s"]})
-    with open(os.path.join(out, "comparison.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    with open(os.path.join(out, "comparison.md"), "w") as f:
-        f.write("| model | rule | code | variant | mean damage | fraction > 0.5 | mean damage, LAMMPS's measure | "
-                "fraction > 0.5, LAMMPS's measure | final KE (J) | max KE diff vs LAMMPS | wall (s) |\n")
-        f.write("|---|---|---|---|---|---|---|---|---|---|---|\n")
-        for r in rows:
-            f.write(f"| {r['model']} | {r['rule']} | {r['code']} | {r['variant']} | {r['mean_damage']:.4f} | "
-                    f"{r['fraction_above_0.5']:.4f} | {r['mean_damage_lammps_measure']:.4f} | "
-                    f"{r['fraction_above_0.5_lammps_measure']:.4f} | {r['final_kinetic_J']:.4g} | "
-                    f"{100 * r['max_ke_difference_vs_lammps']:.1f}% | {r['wall_s']:.2f} |\n")
-    print(open(os.path.join(out, "comparison.md")).read())
+    write_tables(out, "comparison", rows, [
+        ("model", "model", "{}"), ("rule", "rule", "{}"), ("code", "code", "{}"), ("variant", "variant", "{}"),
+        ("mean damage", "mean_damage", "{:.4f}"), ("fraction > 0.5", "fraction_above_0.5", "{:.4f}"),
+        ("mean damage, LAMMPS's measure", "mean_damage_lammps_measure", "{:.4f}"),
+        ("fraction > 0.5, LAMMPS's measure", "fraction_above_0.5_lammps_measure", "{:.4f}"),
+        ("final KE (J)", "final_kinetic_J", "{:.4g}"), ("max KE diff vs LAMMPS", "max_ke_difference_vs_lammps", "{:.1%}"),
+        ("wall (s)", "wall_s", "{:.2f}")])
     plots(results, pos, out)
     if args.dt_study:
         dt_study(args, out, solve)
@@ -332,17 +325,25 @@ def dt_study(args, out, solve):
                 rows.append({"model": model, "dt_s": DT / refine, "code": r["code"], "variant": r["variant"],
                              "mean_damage": float(np.mean(r["damage_count"])),
                              "fraction_above_0.5": float(np.mean(r["damage_count"] > 0.5)), "wall_s": r["wall_s"]})
-    with open(os.path.join(out, "dt_study.csv"), "w", newline="") as f:
+    for r in rows:
+        r["dt_us"] = r["dt_s"] * 1e6
+    write_tables(out, "dt_study", rows, [
+        ("model", "model", "{}"), ("dt (us)", "dt_us", "{:.3g}"), ("code", "code", "{}"), ("variant", "variant", "{}"),
+        ("mean damage (LAMMPS's measure)", "mean_damage", "{:.4f}"), ("fraction > 0.5", "fraction_above_0.5", "{:.4f}"),
+        ("wall (s)", "wall_s", "{:.2f}")])
+
+
+def write_tables(out, name, rows, columns):
+    """OUT/NAME.csv (every field) and OUT/NAME.md (the columns: (title, key, format)), printed."""
+    with open(os.path.join(out, f"{name}.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
-    with open(os.path.join(out, "dt_study.md"), "w") as f:
-        f.write("| model | dt (us) | code | variant | mean damage (LAMMPS's measure) | fraction > 0.5 | wall (s) |\n"
-                "|---|---|---|---|---|---|---|\n")
-        for r in rows:
-            f.write(f"| {r['model']} | {r['dt_s'] * 1e6:.3g} | {r['code']} | {r['variant']} | {r['mean_damage']:.4f} | "
-                    f"{r['fraction_above_0.5']:.4f} | {r['wall_s']:.2f} |\n")
-    print(open(os.path.join(out, "dt_study.md")).read())
+    lines = ["| " + " | ".join(t for t, _, _ in columns) + " |", "|" + "---|" * len(columns)]
+    lines += ["| " + " | ".join(fmt.format(r[key]) for _, key, fmt in columns) + " |" for r in rows]
+    with open(os.path.join(out, f"{name}.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    print("\n".join(lines))
 
 
 def plots(results, pos, out):

@@ -66,6 +66,9 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   number("stable_dt_s", s.stable_dt);
   number("silling_askari_dt_s", s.silling_askari_dt);
   number("setup_wall_s", setup_s);
+  nlohmann::ordered_json phases;  // where the set-up's time went (setup_system)
+  for (const auto& [name, seconds] : s.setup_phases) phases[name] = seconds;
+  j["setup_phases_s"] = phases;
   number("wall_s", r.wall_s);
   number("bond_updates_per_s", r.bond_updates_per_s);
   number("loop_cpu_s", r.cpu_s);
@@ -336,6 +339,13 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
                  s.stable_dt,
                  s.silling_askari_dt > 0 ? (fmt(s.silling_askari_dt) + " s").c_str() : "n/a for LPS", s.dt,
                  config.safety, setup_s);
+    std::string phases;
+    for (const auto& [name, seconds] : s.setup_phases) {
+      char item[96];
+      std::snprintf(item, sizeof item, "%s%s %.2f s", phases.empty() ? "" : ", ", name.c_str(), seconds);
+      phases += item;
+    }
+    std::fprintf(stderr, "  set-up phases: %s\n", phases.c_str());
   }
   RunResult r = run_system(s, o);
   write_summary(s, o, r, setup_s);

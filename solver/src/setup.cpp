@@ -2,6 +2,7 @@
 // loads, constraints, initial state and the stable time step.
 #include <algorithm>
 #include <cfloat>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -281,7 +282,15 @@ PdSystem setup_system(const CaseConfig& config) {
   PdSystem s;
   s.config = config;
   const CaseConfig& c = s.config;
+  // Each phase's wall time, for the profile in summary.json and the progress line.
+  auto last = std::chrono::steady_clock::now();
+  auto phase = [&](const char* name) {
+    const auto now = std::chrono::steady_clock::now();
+    s.setup_phases.emplace_back(name, std::chrono::duration<double>(now - last).count());
+    last = now;
+  };
   s.particles = c.lattice ? lattice_model(*c.lattice) : read_particle_file(c.particles_path);
+  phase("particles");
   const ParticleModel& pm = s.particles;
   s.dimension = pm.dimension;
   s.thickness = pm.dimension == 2 ? pm.thickness_m : 1.0;
@@ -353,10 +362,12 @@ PdSystem setup_system(const CaseConfig& config) {
     std::fill(s.horizon.begin(), s.horizon.end(), c.horizon_factor * median(spacing));
   }
 
+  phase("morton order and horizons");
   // Families and per-bond coefficients.
   std::vector<double> pad(n);  // a neighbour's cell corner may reach into the horizon
   for (size_t k = 0; k < n; ++k) pad[k] = s.half_cell[k] * std::sqrt(static_cast<double>(s.dimension));
   Families fam = build_families(s.x0, s.horizon, pad);
+  phase("families");
   std::vector<ElasticInput> elastic;
   for (const auto& m : c.materials) elastic.push_back(elastic_input(s, m));
   auto micromodulus = [&](int mat, double delta) { return pmb_micromodulus(elastic[mat], c.influence, delta); };
@@ -549,6 +560,7 @@ PdSystem setup_system(const CaseConfig& config) {
       }
   }
 
+  phase("bond coefficients");
   // LPS weighted volume m_i and coefficients.
   s.weighted_volume.assign(n, 1.0);
   s.dilatation.assign(n, 0.0);
@@ -615,6 +627,7 @@ PdSystem setup_system(const CaseConfig& config) {
     }
   }
 
+  phase("lps weighted volume");
   // Discrete calibration (PMB). The bulk factor makes the energy of a particle with a
   // complete family under isotropic expansion equal the classical value for the bonds it
   // actually has (lattice sums and partial volumes included): the micro-modulus derived for
@@ -752,6 +765,7 @@ PdSystem setup_system(const CaseConfig& config) {
       }
   }
 
+  phase("pmb calibration");
   // Pre-cracks: remove every bond that crosses one.
   if (!c.precracks.empty()) {
     std::vector<std::unique_ptr<SurfaceCut>> surfaces(c.precracks.size());
@@ -793,6 +807,7 @@ PdSystem setup_system(const CaseConfig& config) {
   }
 
   if (c.softening) convert_to_softening(s, elastic);
+  phase("pre-cracks");
 
   // Loads.
   for (size_t l = 0; l < c.loads.size(); ++l) {
@@ -831,6 +846,7 @@ PdSystem setup_system(const CaseConfig& config) {
   if (s.dimension == 2)
     for (auto& f : s.fixed_dof) f |= 4u;
 
+  phase("loads and constraints");
   // State arrays and initial conditions.
   s.u.assign(3 * n, 0.0);
   s.v.assign(3 * n, 0.0);
@@ -884,6 +900,7 @@ PdSystem setup_system(const CaseConfig& config) {
   if (c.check_stability) require_resolved_families(s);
 
   if (c.model == PdModel::Correspondence) setup_correspondence(s, elastic);  // correspondence.cpp
+  phase("state and start-up checks");
 
   // Stable time step: sharp estimate by power iteration; Silling & Askari (2005) for reference.
   if (!lps) {
@@ -928,8 +945,12 @@ PdSystem setup_system(const CaseConfig& config) {
   } else {
     s.dt = c.safety * s.stable_dt;
   }
+  phase("stable step");
   // Float state last: everything above (calibration, stable step) is computed in double.
-  if (c.precision == CaseConfig::Precision::Float32) float32_enable(s);
+  if (c.precision == CaseConfig::Precision::Float32) {
+    float32_enable(s);
+    phase("float32 state");
+  }
   return s;
 }
 

@@ -165,4 +165,12 @@ TEST(SolverCli, SummaryOfARunStoppedForNonFiniteValuesIsStrictJson) {
   const auto& named = j["non_finite"];
   EXPECT_NE(std::find(named.begin(), named.end(), "kinetic_J"), named.end()) << text;
   EXPECT_TRUE(j["particles"].is_number());
+  // The set-up's profile, phase by phase (their sum is the set-up's wall time, less the
+  // checkpoint read of a restart).
+  double phases = 0.0;
+  for (const char* name : {"particles", "families", "bond coefficients", "stable step"}) {
+    ASSERT_TRUE(j["setup_phases_s"].contains(name)) << name << ": " << text;
+    phases += j["setup_phases_s"][name].get<double>();
+  }
+  EXPECT_LE(phases, j["setup_wall_s"].get<double>() * 1.01 + 1e-3);
 }

@@ -91,6 +91,8 @@ struct PdSystem {
   double indenter_position[3] = {0, 0, 0};
   bool symmetric_halves = false;  // one constant horizon (set-up decides)
   bool diagnostics = true;        // compute damage/energy in the next force pass
+  // Wall time of each set-up phase, in order (setup_system; summary.json, progress line).
+  std::vector<std::pair<std::string, double>> setup_phases;
   Float32State f32;               // model.precision: float32 (float32_state.hpp); inactive otherwise
 
   PdView view();

@@ -153,6 +153,7 @@ double estimate_max_frequency(PdSystem& sys, int iterations) {
       x[k] = (sys.dimension == 2 && k % 3 == 2) ? 0.0 : y;
     }
     lambda = rayleigh;
+    sys.stable_step_passes = it + 1;
   }
   sys.u = u_saved;
   sys.state = state_saved;

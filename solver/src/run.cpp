@@ -69,6 +69,7 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   nlohmann::ordered_json phases;  // where the set-up's time went (setup_system)
   for (const auto& [name, seconds] : s.setup_phases) phases[name] = seconds;
   j["setup_phases_s"] = phases;
+  j["stable_step_force_passes"] = s.stable_step_passes;
   number("wall_s", r.wall_s);
   number("bond_updates_per_s", r.bond_updates_per_s);
   number("loop_cpu_s", r.cpu_s);
@@ -345,7 +346,7 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
       std::snprintf(item, sizeof item, "%s%s %.2f s", phases.empty() ? "" : ", ", name.c_str(), seconds);
       phases += item;
     }
-    std::fprintf(stderr, "  set-up phases: %s\n", phases.c_str());
+    std::fprintf(stderr, "  set-up phases: %s (stable step: %d force passes)\n", phases.c_str(), s.stable_step_passes);
   }
   RunResult r = run_system(s, o);
   write_summary(s, o, r, setup_s);

@@ -392,8 +392,8 @@ PdSystem setup_system(const CaseConfig& config) {
         const int32_t j = fam.neighbors[k];
         const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1], s.x0[3 * j + 2] - s.x0[3 * i + 2]};
         const double xm[3] = {-xv[0], -xv[1], -xv[2]};
-        if (partial_volume(c.partial_volume, xv, s.horizon[i], s.half_cell[j], s.dimension) > 0 ||
-            partial_volume(c.partial_volume, xm, s.horizon[j], s.half_cell[i], s.dimension) > 0)
+        if (partial_volume_positive(c.partial_volume, xv, s.horizon[i], s.half_cell[j], s.dimension) ||
+            partial_volume_positive(c.partial_volume, xm, s.horizon[j], s.half_cell[i], s.dimension))
           ++keep_count[i];
       }
     for (size_t i = 0; i < n; ++i) s.offsets[i + 1] = s.offsets[i] + keep_count[i];

@@ -363,3 +363,31 @@ TEST_P(FastAndGeneralPaths, AgreeOnForcesBreaksAndDiagnostics) {
 
 INSTANTIATE_TEST_SUITE_P(Models, FastAndGeneralPaths,
                          ::testing::Combine(::testing::Values("pmb", "lps"), ::testing::Values("float64", "float32")));
+
+TEST(PartialVolume, PositiveTestEqualsTheQuadratureWithoutRunningIt) {
+  // The families' counting pass asks only "beta > 0"; its shortcut must agree with the
+  // quadrature exactly, edge cases included (points on the sphere, 2D and 3D).
+  uint64_t z = 7;
+  auto uniform = [&z] {
+    z += 0x9E3779B97F4A7C15ull;
+    uint64_t x = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return double((x ^ (x >> 31)) >> 11) / 9007199254740992.0;
+  };
+  int positive = 0, checked = 0;
+  for (int dimension : {2, 3})
+    for (int k = 0; k < 200000; ++k) {
+      const double h = 0.3 + uniform(), delta = 3.0;
+      double xi[3] = {(uniform() - 0.5) * 9.0, (uniform() - 0.5) * 9.0, dimension == 3 ? (uniform() - 0.5) * 9.0 : 0.0};
+      if (k % 7 == 0) {  // on a lattice: sample points land exactly on the horizon
+        for (int a = 0; a < dimension; ++a) xi[a] = std::round(xi[a] * 2.0) / 2.0;
+      }
+      const bool quadrature = partial_volume_sampled(xi, delta, k % 7 == 0 ? 0.5 : h, dimension) > 0.0;
+      ASSERT_EQ(partial_volume_sampled_positive(xi, delta, k % 7 == 0 ? 0.5 : h, dimension), quadrature)
+          << xi[0] << " " << xi[1] << " " << xi[2] << " h " << h;
+      positive += quadrature;
+      ++checked;
+    }
+  EXPECT_GT(positive, checked / 10);
+  EXPECT_LT(positive, checked);
+}

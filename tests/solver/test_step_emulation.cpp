@@ -6,6 +6,7 @@
 // agreement rests on, checked here without a GPU.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 
 #include "breccia/solver/exec_openmp.hpp"

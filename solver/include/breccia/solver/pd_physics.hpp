@@ -62,12 +62,49 @@ inline double partial_volume_sampled(const double xi[3], double horizon, double 
   return static_cast<double>(inside) / total;
 }
 
+// partial_volume_sampled(...) > 0 without the quadrature: some sample point lies inside iff
+// the one nearest the centre does, and on the sample grid that point takes the coordinate
+// nearest zero on each axis; its squared distance is summed in the quadrature's own order,
+// so the answer is the quadrature's exactly (floating-point sums are monotonic).
+inline bool partial_volume_sampled_positive(const double xi[3], double horizon, double half_cell_j, int dimension) {
+  const double reach = half_cell_j * (dimension == 3 ? 1.7320508075688772 : 1.4142135623730951);
+  const double len = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
+  if (len + reach <= horizon) return true;
+  if (len - reach >= horizon) return false;
+  constexpr int n = 6;
+  const double h = 2.0 * half_cell_j / n;
+  double nearest[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    if (axis == 2 && dimension != 3) {
+      nearest[axis] = xi[2];
+      continue;
+    }
+    double best = 0.0, best2 = 1e300;
+    for (int a = 0; a < n; ++a) {
+      const double p = xi[axis] - half_cell_j + (a + 0.5) * h;
+      if (p * p < best2) {
+        best2 = p * p;
+        best = p;
+      }
+    }
+    nearest[axis] = best;
+  }
+  return nearest[0] * nearest[0] + nearest[1] * nearest[1] + nearest[2] * nearest[2] <= horizon * horizon;
+}
+
 // How much of neighbour j's cell a family counts. Sampled: the quadrature above, families
 // reaching to the horizon plus a cell's half diagonal (Breccia's default). Lammps: LAMMPS
 // PERI's rule (FixPeriNeigh, PairPeriPMB; Parks et al. 2008): neighbours with |xi| <= delta
 // only, the ones in the last half cell (|xi| > delta - h) weighted by the same linear ramp
 // as partial_volume_fraction, which is 1/2 at |xi| = delta.
 enum class PartialVolume : int { Sampled = 0, Lammps = 1 };
+inline bool partial_volume_positive(PartialVolume kind, const double xi[3], double horizon, double half_cell_j,
+                                    int dimension) {
+  if (kind == PartialVolume::Sampled) return partial_volume_sampled_positive(xi, horizon, half_cell_j, dimension);
+  const double len = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
+  return len <= horizon && partial_volume_fraction(len, horizon, half_cell_j) > 0.0;
+}
+
 inline double partial_volume(PartialVolume kind, const double xi[3], double horizon, double half_cell_j,
                              int dimension) {
   if (kind == PartialVolume::Sampled) return partial_volume_sampled(xi, horizon, half_cell_j, dimension);

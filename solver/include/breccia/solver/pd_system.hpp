@@ -86,6 +86,7 @@ struct PdSystem {
   double dt = 0.0;
   double stable_dt = 0.0;         // 2 / omega_max from power iteration (sharp)
   double silling_askari_dt = 0.0; // Silling & Askari 2005 bound (PMB), for reference
+  int stable_step_passes = 0;     // force passes the stable-step estimate took
   double external_work = 0.0;
   double dissipated_energy = 0.0;
   double indenter_position[3] = {0, 0, 0};

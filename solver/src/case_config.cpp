@@ -1,6 +1,7 @@
 #include "breccia/solver/case_config.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -94,7 +95,7 @@ double HistorySpec::at(double t) const {
 
 CaseConfig parse_case_file(const std::string& path) {
   const Section root = Section::load_file(path);
-  root.allow_only({"name", "specimen", "model", "materials", "precracks", "loads", "boundary", "initial",
+  root.allow_only({"name", "specimen", "model", "materials", "sets", "precracks", "loads", "boundary", "initial",
                    "indenter", "time", "output", "description"});
   CaseConfig c;
   c.file = path;
@@ -238,6 +239,66 @@ CaseConfig parse_case_file(const std::string& path) {
     if (c.compressive_enhancement > 0)
       throw InputError(path, field, "given with model.compressive_enhancement",
                        "one of the two (the enhancement shifts a brittle bond's critical stretch)");
+  }
+
+  {
+    size_t k = 0;
+    for (const Section& r : root.list("sets")) {
+      const std::string field = "sets[" + std::to_string(k++) + "]";
+      r.allow_only({"name", "box", "sphere", "cylinder", "half_space", "union", "intersection", "difference"});
+      RegionSetSpec rs;
+      rs.field = field;
+      rs.name = r.text("name");
+      if (rs.name.empty() || rs.name.find('/') != std::string::npos)
+        throw InputError(path, field + ".name", "'" + rs.name + "'", "a non-empty name without '/'");
+      int shapes = 0;
+      for (const char* key : {"box", "sphere", "cylinder", "half_space", "union", "intersection", "difference"})
+        shapes += r.has(key);
+      if (shapes != 1)
+        throw InputError(path, field, std::to_string(shapes) + " definitions",
+                         "exactly one of box, sphere, cylinder, half_space, union, intersection, difference");
+      if (r.has("box")) {
+        rs.kind = RegionSetSpec::Kind::Box;
+        rs.box = r.numbers("box", Quantity::Length);
+        if (rs.box.size() != 4 && rs.box.size() != 6)
+          throw InputError(path, r.field("box"), std::to_string(rs.box.size()) + " numbers",
+                           "[x0, y0, x1, y1] (2D) or [x0, y0, z0, x1, y1, z1] (3D)");
+      } else if (r.has("sphere")) {
+        const Section sp = r.section("sphere");
+        sp.allow_only({"center", "radius"});
+        rs.kind = RegionSetSpec::Kind::Sphere;
+        rs.center = sp.vec3("center", Quantity::Length);
+        rs.radius = sp.positive("radius", Quantity::Length);
+      } else if (r.has("cylinder")) {
+        const Section cy = r.section("cylinder");
+        cy.allow_only({"center", "axis", "radius", "length"});
+        rs.kind = RegionSetSpec::Kind::Cylinder;
+        rs.center = cy.vec3("center", Quantity::Length);
+        rs.axis = cy.has("axis") ? cy.vec3("axis", Quantity::Dimensionless) : Vec3{0, 0, 1};
+        rs.radius = cy.positive("radius", Quantity::Length);
+        rs.length = cy.has("length") ? cy.positive("length", Quantity::Length) : 0.0;
+        const double a = std::sqrt(rs.axis[0] * rs.axis[0] + rs.axis[1] * rs.axis[1] + rs.axis[2] * rs.axis[2]);
+        if (!(a > 0)) throw InputError(path, cy.field("axis"), "a zero vector", "a direction, e.g. [0, 0, 1]");
+        for (double& v : rs.axis) v /= a;
+      } else if (r.has("half_space")) {
+        const Section hs = r.section("half_space");
+        hs.allow_only({"point", "normal"});
+        rs.kind = RegionSetSpec::Kind::HalfSpace;
+        rs.point = hs.vec3("point", Quantity::Length);
+        rs.normal = hs.vec3("normal", Quantity::Dimensionless);
+        if (!(std::fabs(rs.normal[0]) + std::fabs(rs.normal[1]) + std::fabs(rs.normal[2]) > 0))
+          throw InputError(path, hs.field("normal"), "a zero vector", "the direction the kept side faces");
+      } else {
+        const char* key = r.has("union") ? "union" : r.has("intersection") ? "intersection" : "difference";
+        rs.kind = r.has("union") ? RegionSetSpec::Kind::Union
+                  : r.has("intersection") ? RegionSetSpec::Kind::Intersection
+                                          : RegionSetSpec::Kind::Difference;
+        rs.operands = r.texts(key);
+        if (rs.operands.size() < 2)
+          throw InputError(path, r.field(key), std::to_string(rs.operands.size()) + " set names", "two or more set names");
+      }
+      c.sets.push_back(std::move(rs));
+    }
   }
 
   for (const Section& p : root.list("precracks")) {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <numeric>
@@ -134,7 +135,7 @@ const ParticleSet& require_set(const PdSystem& s, const std::string& name, const
   std::vector<std::string> names;
   for (const auto& ps : s.particles.sets) names.push_back(ps.name);
   throw InputError(s.config.file, field, "no particle set named '" + name + "'",
-                   "one of the sets in the particle file: " + list_names(names));
+                   "one of the sets of the particle file or of the case's sets: " + list_names(names));
 }
 
 const SurfaceFacets& require_surface(const PdSystem& s, const std::string& name, const std::string& field) {
@@ -204,6 +205,84 @@ static void convert_to_softening(PdSystem& s, const std::vector<ElasticInput>& e
     const double s_g = s.s0_own[k];
     const float ultimate = static_cast<float>(std::max(s_g * s_g / onset, double(onset)));
     s.s0_own[k] = s.s0_dual[k] = ultimate;
+  }
+}
+
+// The case's own sets (sets:), in order, added to the particle model's, so that every key
+// that takes a set name takes them. Regions test the reference positions (boundaries
+// included); an operand is a set of the particle file or one defined earlier in the list.
+static void add_case_sets(ParticleModel& pm, const CaseConfig& c) {
+  const int64_t n = static_cast<int64_t>(pm.size());
+  const double* x = pm.position_m.data();
+  for (const RegionSetSpec& r : c.sets) {
+    if (pm.find_set(r.name))
+      throw InputError(c.file, r.field + ".name", "'" + r.name + "': a set of this name exists already",
+                       "a name not used by the particle file or an earlier set");
+    ParticleSet out;
+    out.name = r.name;
+    auto operand = [&](const std::string& name) -> const std::vector<int64_t>& {
+      if (const ParticleSet* set = pm.find_set(name)) return set->indices;
+      std::vector<std::string> names;
+      for (const auto& ps : pm.sets) names.push_back(ps.name);
+      throw InputError(c.file, r.field, "no set named '" + name + "' defined before it",
+                       "one of: " + list_names(names));
+    };
+    auto inside = [&](int64_t i) {
+      const double* p = &x[3 * i];
+      switch (r.kind) {
+        case RegionSetSpec::Kind::Box: {
+          const int d = r.box.size() == 6 ? 3 : 2;
+          for (int a = 0; a < d; ++a)
+            if (p[a] < r.box[a] || p[a] > r.box[d + a]) return false;
+          return true;
+        }
+        case RegionSetSpec::Kind::Sphere: {
+          double d2 = 0.0;
+          for (int a = 0; a < 3; ++a) d2 += (p[a] - r.center[a]) * (p[a] - r.center[a]);
+          return d2 <= r.radius * r.radius;
+        }
+        case RegionSetSpec::Kind::Cylinder: {
+          double rel[3], t = 0.0;
+          for (int a = 0; a < 3; ++a) {
+            rel[a] = p[a] - r.center[a];
+            t += rel[a] * r.axis[a];
+          }
+          double d2 = 0.0;
+          for (int a = 0; a < 3; ++a) d2 += (rel[a] - t * r.axis[a]) * (rel[a] - t * r.axis[a]);
+          return d2 <= r.radius * r.radius && (r.length <= 0.0 || std::fabs(t) <= 0.5 * r.length);
+        }
+        case RegionSetSpec::Kind::HalfSpace: {
+          double side = 0.0;
+          for (int a = 0; a < 3; ++a) side += (p[a] - r.point[a]) * r.normal[a];
+          return side >= 0.0;
+        }
+        default:
+          return false;
+      }
+    };
+    switch (r.kind) {
+      case RegionSetSpec::Kind::Union:
+      case RegionSetSpec::Kind::Intersection:
+      case RegionSetSpec::Kind::Difference: {
+        out.indices = operand(r.operands[0]);
+        for (size_t k = 1; k < r.operands.size(); ++k) {
+          const std::vector<int64_t>& b = operand(r.operands[k]);
+          std::vector<int64_t> next;
+          if (r.kind == RegionSetSpec::Kind::Union)
+            std::set_union(out.indices.begin(), out.indices.end(), b.begin(), b.end(), std::back_inserter(next));
+          else if (r.kind == RegionSetSpec::Kind::Intersection)
+            std::set_intersection(out.indices.begin(), out.indices.end(), b.begin(), b.end(), std::back_inserter(next));
+          else
+            std::set_difference(out.indices.begin(), out.indices.end(), b.begin(), b.end(), std::back_inserter(next));
+          out.indices.swap(next);
+        }
+        break;
+      }
+      default:
+        for (int64_t i = 0; i < n; ++i)
+          if (inside(i)) out.indices.push_back(i);
+    }
+    pm.sets.push_back(std::move(out));
   }
 }
 
@@ -290,6 +369,7 @@ PdSystem setup_system(const CaseConfig& config) {
     last = now;
   };
   s.particles = c.lattice ? lattice_model(*c.lattice) : read_particle_file(c.particles_path);
+  add_case_sets(s.particles, c);
   phase("particles");
   const ParticleModel& pm = s.particles;
   s.dimension = pm.dimension;

@@ -74,6 +74,21 @@ struct PrecrackSpec {
   std::string surface;       // Surface: a named facet group of the particle file
 };
 
+// A particle set defined in the case (sets:), by a region of the reference configuration or
+// by set algebra over sets defined before it (in the particle file or earlier in the list).
+struct RegionSetSpec {
+  enum class Kind { Box, Sphere, Cylinder, HalfSpace, Union, Intersection, Difference } kind = Kind::Box;
+  std::string name;
+  std::string field;               // "sets[k]", for messages
+  std::vector<double> box;         // x0 y0 [z0] x1 y1 [z1]
+  Vec3 center{0, 0, 0};            // sphere, cylinder
+  Vec3 axis{0, 0, 1};              // cylinder
+  double radius = 0.0;             // sphere, cylinder
+  double length = 0.0;             // cylinder: 0 = unbounded along the axis
+  Vec3 point{0, 0, 0}, normal{0, 0, 1};  // half-space: (x - point) . normal >= 0
+  std::vector<std::string> operands;     // union, intersection, difference (first minus the rest)
+};
+
 struct IndenterSpec {
   bool enabled = false;
   double radius = 0.0;
@@ -129,6 +144,7 @@ struct CaseConfig {
   double stabilisation_coefficient = 1.0;
   std::vector<MaterialSpec> materials;
   std::vector<PrecrackSpec> precracks;
+  std::vector<RegionSetSpec> sets;  // case-defined particle sets (evaluated first in set-up)
   std::vector<LoadSpec> loads;
   std::vector<BoundarySpec> boundaries;
   std::vector<InitialSpec> initial;

@@ -1,5 +1,7 @@
 #include "breccia/common/units.hpp"
 
+#include <cstdio>
+
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -95,6 +97,12 @@ double parse_quantity(const std::string& text, Quantity q, const std::string& fi
   }
   throw InputError(file, field, "unit '" + unit + "' is not a unit of " + std::string(quantity_name(q)),
                    "one of: " + accepted_units(q) + (unit.empty() ? "" : ", or a plain number in SI"));
+}
+
+std::string short_number(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.6g", v);
+  return b;
 }
 
 }  // namespace breccia

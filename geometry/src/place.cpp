@@ -10,6 +10,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/progress.hpp"
+#include "breccia/common/units.hpp"
 #include "predicates.hpp"
 
 namespace breccia::geometry {
@@ -19,12 +20,6 @@ constexpr int kGmshLine2 = 1;
 constexpr int kGmshTriangle3 = 2;
 constexpr int kGmshTetrahedron4 = 4;
 constexpr long long kProgressEvery = 1 << 16;
-
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
 
 const char* dim_word(int dim) {
   static const char* words[] = {"point", "curve", "surface", "volume"};
@@ -78,7 +73,7 @@ int mesh_dimension(const GmshMesh& mesh) {
   if (max_abs_z > 1e-9 * std::max(extent, 1e-300))  // round-off of a planar mesher
     throw InputError(mesh.path, "elements",
                      "no volume elements (only surface elements, not all in the plane z = 0; max |z| = " +
-                         num(max_abs_z) + " m)",
+                         short_number(max_abs_z) + " m)",
                      "4-node tetrahedra (mesh the volume, e.g. gmsh -3, and put it in a Physical Volume: "
                      "gmsh saves only elements of physical groups) or a 2D mesh in z = 0");
   return 2;
@@ -191,7 +186,7 @@ void measure_cells(const Cells& cells, const std::string& path, double thickness
                                   : "zero-area (degenerate) triangle";
       throw InputError(path, "element " + std::to_string(cells.element_tag[c]) + " (" + dim_word(cells.dim) +
                                  " entity " + std::to_string(cells.entity[c]) + ")",
-                       std::string(what) + ", signed " + (npc == 4 ? "volume " : "area ") + num(measure) +
+                       std::string(what) + ", signed " + (npc == 4 ? "volume " : "area ") + short_number(measure) +
                            (npc == 4 ? " m^3" : " m^2"),
                        npc == 4 ? "positively oriented tetrahedra with nonzero volume"
                                 : "triangles with nonzero area");
@@ -494,7 +489,7 @@ ParticleModel particles_from_mesh(const GmshMesh& mesh, const PlaceOptions& opti
                        "--thickness T for a 2D mesh: particle volume = triangle area x T");
     thickness_m = *options.thickness_m;
     if (!(thickness_m > 0) || !std::isfinite(thickness_m))
-      throw InputError(mesh.path, "--thickness", "value " + num(thickness_m), "a positive length in metres");
+      throw InputError(mesh.path, "--thickness", "value " + short_number(thickness_m), "a positive length in metres");
   } else if (options.thickness_m && log) {
     std::fprintf(log, "warning: --thickness is ignored for a 3D mesh\n");
   }

@@ -15,6 +15,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/output_file.hpp"
+#include "breccia/common/units.hpp"
 #include "breccia/solver/correspondence.hpp"
 #include "breccia/solver/outputs.hpp"
 
@@ -23,12 +24,6 @@ namespace {
 
 std::atomic<bool> g_interrupted{false};
 void on_sigint(int) { g_interrupted = true; }
-
-std::string fmt(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.6g", v);
-  return b;
-}
 
 void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, double setup_s) {
   const double bytes_per_particle =
@@ -338,7 +333,7 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
                  config.name.c_str(), config.model_name.c_str(), s.dimension, s.n, s.bond_count(),
                  static_cast<double>(s.bond_count()) / std::max<size_t>(1, s.n), s.horizon.empty() ? 0.0 : s.horizon[0],
                  s.stable_dt,
-                 s.silling_askari_dt > 0 ? (fmt(s.silling_askari_dt) + " s").c_str() : "n/a for LPS", s.dt,
+                 s.silling_askari_dt > 0 ? (short_number(s.silling_askari_dt) + " s").c_str() : "n/a for LPS", s.dt,
                  config.safety, setup_s);
     std::string phases;
     for (const auto& [name, seconds] : s.setup_phases) {

@@ -19,4 +19,8 @@ std::string accepted_units(Quantity q);
 double parse_quantity(const std::string& text, Quantity q, const std::string& file,
                       const std::string& field);
 
+// A number for a message, in 6 significant digits ("%.6g"): std::to_string's fixed 6
+// decimals print a 2e-7 s step as "0.000000".
+std::string short_number(double v);
+
 }  // namespace breccia

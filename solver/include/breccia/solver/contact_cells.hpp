@@ -4,30 +4,24 @@
 // pair of its neighbour list, so fragments that meet repel). A hashed cell grid on the current
 // positions, rebuilt every force pass (a counting sort, O(N)); each particle gathers its own
 // partners, so the kernel writes only its own force (no atomics, any thread count gives the
-// same sums: partners are visited in a fixed cell order, then ascending within a cell).
-// Hashing makes a particle flung far away cost nothing; two cells sharing a bucket only add
-// candidates, which the cell test drops.
+// same sums: partners are visited in a fixed cell order, then ascending within a cell). The
+// cell and bucket arithmetic is the hashed grid's (common/hashed_grid.hpp), shared with MPS.
 #include <cmath>
 #include <cstdint>
 #include <vector>
 
+#include "breccia/common/hashed_grid.hpp"
 #include "breccia/solver/pd_kernels.hpp"
 
 namespace breccia::solver {
 
 struct ContactCellsView {
-  double cell = 0.0;          // cell edge [m]: the largest reach
-  uint64_t buckets = 1;       // a power of two
-  const int64_t* cell_of = nullptr;  // 3 per particle: its cell coordinates
-  const int64_t* start = nullptr;    // buckets + 1 offsets into order
-  const int32_t* order = nullptr;    // particle indices by bucket, ascending within one
+  double cell = 0.0;                    // cell edge [m]: the largest reach
+  unsigned long long buckets = 1;       // a power of two
+  const long long* cell_of = nullptr;   // 3 per particle: its cell coordinates
+  const int64_t* start = nullptr;       // buckets + 1 offsets into order
+  const int32_t* order = nullptr;       // particle indices by bucket, ascending within one
 };
-
-BRECCIA_HD uint64_t contact_bucket(int64_t cx, int64_t cy, int64_t cz, uint64_t buckets) {
-  const uint64_t h = static_cast<uint64_t>(cx) * 73856093ull ^ static_cast<uint64_t>(cy) * 19349663ull ^
-                     static_cast<uint64_t>(cz) * 83492791ull;
-  return (h ^ (h >> 29)) & (buckets - 1);
-}
 
 // Is j in i's family? CSR rows are sorted ascending (family.cpp), so a binary search.
 template <class Real>
@@ -49,19 +43,19 @@ BRECCIA_HD bool family_member(const PdViewT<Real>& p, int64_t i, int64_t j) {
 template <class Real>
 BRECCIA_HD void short_range_contact_kernel(const PdViewT<Real>& p, const ContactCellsView& g, int64_t i) {
   const BondOriginT<Real> origin(p, i);
-  const int64_t* ci = &g.cell_of[3 * i];
+  const long long* ci = &g.cell_of[3 * i];
   const Real l_i = p.spacing[i];
   Real fx = Real(0), fy = Real(0), fz = Real(0);
   double w = 0.0;
-  for (int64_t oz = -1; oz <= 1; ++oz)
-    for (int64_t oy = -1; oy <= 1; ++oy)
-      for (int64_t ox = -1; ox <= 1; ++ox) {
-        const int64_t cx = ci[0] + ox, cy = ci[1] + oy, cz = ci[2] + oz;
-        const uint64_t b = contact_bucket(cx, cy, cz, g.buckets);
+  for (long long oz = -1; oz <= 1; ++oz)
+    for (long long oy = -1; oy <= 1; ++oy)
+      for (long long ox = -1; ox <= 1; ++ox) {
+        const long long c[3] = {ci[0] + ox, ci[1] + oy, ci[2] + oz};
+        const unsigned long long b = grid_bucket(c, g.buckets);
         for (int64_t q = g.start[b]; q < g.start[b + 1]; ++q) {
           const int64_t j = g.order[q];
-          const int64_t* cj = &g.cell_of[3 * j];
-          if (j == i || cj[0] != cx || cj[1] != cy || cj[2] != cz) continue;
+          const long long* cj = &g.cell_of[3 * j];
+          if (j == i || cj[0] != c[0] || cj[1] != c[1] || cj[2] != c[2]) continue;
           Real dx, dy, dz, len;
           origin.to(p, j, Real(0), dx, dy, dz, len);
           const Real reach = Real(0.675) * (l_i + p.spacing[j]);
@@ -78,24 +72,25 @@ BRECCIA_HD void short_range_contact_kernel(const PdViewT<Real>& p, const Contact
 // The grid's storage, built on the host from double positions.
 struct ContactCells {
   double cell = 0.0;
-  uint64_t buckets = 1;
-  std::vector<int64_t> cell_of, start;
+  unsigned long long buckets = 1;
+  std::vector<long long> cell_of;
+  std::vector<int64_t> start;
   std::vector<int32_t> order;
 
   // x: 3N current positions; cell: the largest reach.
   void build(const double* x, int64_t n, double cell_edge) {
     cell = cell_edge;
     buckets = 1;
-    while (buckets < static_cast<uint64_t>(2 * n)) buckets <<= 1;
+    while (buckets < static_cast<unsigned long long>(2 * n)) buckets <<= 1;
     cell_of.resize(3 * static_cast<size_t>(n));
-    std::vector<uint64_t> bucket(static_cast<size_t>(n));
+    std::vector<unsigned long long> bucket(static_cast<size_t>(n));
     for (int64_t i = 0; i < n; ++i) {
-      for (int a = 0; a < 3; ++a) cell_of[3 * i + a] = static_cast<int64_t>(std::floor(x[3 * i + a] / cell));
-      bucket[i] = contact_bucket(cell_of[3 * i], cell_of[3 * i + 1], cell_of[3 * i + 2], buckets);
+      grid_cell_of(&x[3 * i], cell, 3, &cell_of[3 * i]);  // 2D: z = 0, cell 0
+      bucket[i] = grid_bucket(&cell_of[3 * i], buckets);
     }
     start.assign(buckets + 1, 0);
     for (int64_t i = 0; i < n; ++i) ++start[bucket[i] + 1];
-    for (uint64_t b = 0; b < buckets; ++b) start[b + 1] += start[b];
+    for (unsigned long long b = 0; b < buckets; ++b) start[b + 1] += start[b];
     order.resize(static_cast<size_t>(n));
     std::vector<int64_t> fill(start.begin(), start.end() - 1);
     for (int64_t i = 0; i < n; ++i) order[fill[bucket[i]]++] = static_cast<int32_t>(i);

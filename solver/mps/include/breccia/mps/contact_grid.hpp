@@ -12,6 +12,7 @@
 // away costs nothing; two cells in one bucket only add candidates, which the cell test drops.
 #include <cmath>
 
+#include "breccia/common/hashed_grid.hpp"
 #include "breccia/mps/contact_kernels.hpp"
 #include "breccia/mps/kernels.hpp"
 
@@ -46,16 +47,8 @@ struct ContactGrid {
   const int* order = nullptr;       // particle indices by bucket
 };
 
-BRECCIA_HD inline void grid_cell_of(const double x[3], double cell_m, int dimension, long long c[3]) {
-  for (int a = 0; a < 3; ++a) c[a] = a < dimension ? static_cast<long long>(std::floor(x[a] / cell_m)) : 0;
-}
-
-BRECCIA_HD inline unsigned long long grid_bucket(const long long c[3], unsigned long long buckets) {
-  const unsigned long long h = static_cast<unsigned long long>(c[0]) * 73856093ull ^
-                               static_cast<unsigned long long>(c[1]) * 19349663ull ^
-                               static_cast<unsigned long long>(c[2]) * 83492791ull;
-  return (h ^ (h >> 29)) & (buckets - 1);
-}
+using breccia::grid_bucket;   // common/include/breccia/common/hashed_grid.hpp
+using breccia::grid_cell_of;
 
 // Particle p's contact partners: every j != p closer than `reach` (x: 3N current positions,
 // z = 0 in 2D) that p is not bonded to now (a bond of nonzero weight), in ascending order.

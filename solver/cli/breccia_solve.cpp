@@ -144,18 +144,22 @@ int main(int argc, char** argv) {
       while (at <= decomposition.size()) {
         const size_t comma = std::min(decomposition.find(',', at), decomposition.size());
         const std::string item = decomposition.substr(at, comma - at);
-        size_t used = 0;
-        const int ranks = std::stoi(item, &used);
-        if (used != item.size() || ranks < 1)
+        long long ranks = 0;
+        try {
+          ranks = whole_number(item);
+        } catch (const std::exception&) {
+          ranks = 0;
+        }
+        if (ranks < 1 || ranks > (1 << 30))
           throw InputError("--decomposition", "", "'" + item + "'", "comma-separated rank counts >= 1");
         solver::Partition p;
         try {
-          p = solver::MortonRangePartitioner().partition(s.offsets, ranks);
+          p = solver::MortonRangePartitioner().partition(s.offsets, static_cast<int>(ranks));
         } catch (const std::invalid_argument& e) {
           throw InputError(case_file, "--decomposition", e.what(), "at most one rank per particle");
         }
         const auto st = solver::decomposition_stats(p, s.offsets, s.neighbor, bytes_per_ghost);
-        std::printf("%d,%lld,%lld,%.4f,%.4f,%.4f,%.0f,%.0f,%d\n", ranks, static_cast<long long>(st.min_owned),
+        std::printf("%lld,%lld,%lld,%.4f,%.4f,%.4f,%.0f,%.0f,%d\n", ranks, static_cast<long long>(st.min_owned),
                     static_cast<long long>(st.max_owned), st.max_over_mean_bonds, st.mean_ghost_ratio,
                     st.max_ghost_ratio, st.mean_halo_bytes, st.max_halo_bytes, st.max_neighbour_ranks);
         at = comma + 1;

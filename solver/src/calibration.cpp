@@ -84,6 +84,13 @@ double lps_critical_stretch(const ElasticInput& in, Influence kind, double delta
   return std::sqrt(G0 * pi * influence_moment(kind, 3) / (8.0 * mu * delta * influence_moment(kind, 4)));
 }
 
+double softening_onset_stretch(const ElasticInput& in, double tensile_strength) {
+  const double nu = in.poisson_ratio;
+  const double E = in.dimension == 2 && in.planar == Planar::PlaneStrain ? in.youngs_modulus / (1.0 - nu * nu)
+                                                                          : in.youngs_modulus;
+  return tensile_strength / E;
+}
+
 LpsCoefficients lps_coefficients(const ElasticInput& in) {
   const double Kd = dimensional_bulk_modulus(in), mu = shear_modulus(in);
   if (in.dimension == 3) return {3.0, 3.0 * Kd, 15.0 * mu};

@@ -63,18 +63,9 @@ void compute_external(PdSystem& sys, double t) {
 }
 
 void apply_constraints(PdSystem& sys, double t, double dt) {
-  for (const auto& con : sys.constraints) {
-    const BoundarySpec& b = *con.spec;
-    double velocity[3], target[3];
-    prescribed_values(b, t, dt, velocity, target);
-    const int kind = static_cast<int>(b.kind);
-    for (auto i : con.particles)
-      for (int d = 0; d < 3; ++d) {
-        if (!b.components[d]) continue;
-        const int64_t k = 3 * static_cast<int64_t>(i) + d;
-        constrain_component(kind, velocity[d], target[d], dt, sys.u[k], sys.v[k]);
-      }
-  }
+  OpenMpExec exec(sys);
+  const StepArrays<double> a = cpu_step_arrays(sys);
+  pd_constraints(exec, a, sys, t, dt);
 }
 
 void cpu_step(PdSystem& sys) {

@@ -62,7 +62,6 @@ void float32_enable(PdSystem& s) {
       }
       f.xi_len[k] = static_cast<float>(std::sqrt(len2));
     }
-  f.loads_vary = !s.surface_loads.empty() || !s.body_loads.empty() || s.config.indenter.enabled;
   f.active = true;
   float32_upload(s);
   convert(s.force, f.force);

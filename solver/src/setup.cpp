@@ -11,6 +11,7 @@
 #include <numeric>
 
 #include "breccia/common/error.hpp"
+#include "breccia/common/units.hpp"
 #include "breccia/solver/calibration.hpp"
 #include "breccia/solver/correspondence.hpp"
 #include "breccia/solver/family.hpp"
@@ -156,13 +157,6 @@ std::vector<int32_t> internal_particles(const PdSystem& s, const std::vector<int
   return out;
 }
 
-// 6 significant digits: std::to_string prints a 2e-7 s step as "0.000000".
-std::string short_number(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.6g", v);
-  return b;
-}
-
 double median(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
   return v[v.size() / 2];
@@ -176,16 +170,14 @@ double median(std::vector<double> v) {
 // mean values; a bond whose Weibull draw falls below breaks brittle at its onset.
 static void convert_to_softening(PdSystem& s, const std::vector<ElasticInput>& elastic) {
   const CaseConfig& c = s.config;
+  const double delta = *std::max_element(s.horizon.begin(), s.horizon.end());
+  const bool lps = c.model == PdModel::LPS;
   for (size_t m = 0; m < c.materials.size(); ++m) {
     const MaterialSpec& ms = c.materials[m];
     if (!(ms.tensile_strength > 0) || !c.fracture) continue;
-    const double delta = *std::max_element(s.horizon.begin(), s.horizon.end());
-    const bool lps = c.model == PdModel::LPS;
     const double s_g = lps ? lps_critical_stretch(elastic[m], c.influence, delta, ms.fracture_energy)
                            : pmb_critical_stretch(elastic[m], c.influence, delta, ms.fracture_energy);
-    const double E = ms.youngs_modulus /
-                     (s.dimension == 2 && c.planar == Planar::PlaneStrain ? 1.0 - ms.poisson_ratio * ms.poisson_ratio : 1.0);
-    const double s_t = ms.tensile_strength / E;
+    const double s_t = softening_onset_stretch(elastic[m], ms.tensile_strength);
     if (s_g < s_t) {
       char largest[64];
       std::snprintf(largest, sizeof largest, "%.4g", delta * (s_g / s_t) * (s_g / s_t));
@@ -543,12 +535,10 @@ PdSystem setup_system(const CaseConfig& config) {
       s.s0_own[out] = s0(s.horizon[i]);
       s.s0_dual[out] = s0(s.horizon[j]);
       if (c.softening) {
-        // Onset stretch sigma_t / E' of the weaker material (E' = E/(1 - nu^2) in plane strain),
-        // scattered with the same Weibull draw as G0; s0 becomes the ultimate stretch below.
-        const double E = wm.youngs_modulus / (s.dimension == 2 && c.planar == Planar::PlaneStrain
-                                                   ? 1.0 - wm.poisson_ratio * wm.poisson_ratio : 1.0);
+        // Onset stretch of the weaker material, scattered with the same Weibull draw as G0;
+        // s0 becomes the ultimate stretch in convert_to_softening.
         const double strength = wm.fracture_energy > 0 ? wm.tensile_strength * G0 / wm.fracture_energy : 0.0;
-        s.s_onset[out] = strength > 0 ? static_cast<float>(strength / E) : FLT_MAX;
+        s.s_onset[out] = strength > 0 ? static_cast<float>(softening_onset_stretch(elastic[weak], strength)) : FLT_MAX;
       }
       ++out;
     }

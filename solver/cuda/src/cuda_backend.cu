@@ -185,7 +185,6 @@ struct CudaSystem::Impl {
   // the double arrays above keep what a float run keeps in double (loads, constraints'
   // ramps, diagnostics, every reduction) and receive u and v before a measure or download.
   bool f32 = false;
-  bool loads_vary = true;  // false: no load at all, the body force stays as uploaded
   DeviceArray<float> fx0, fu, fv, fa, fforce, fbody, fvolume, fdensity, fweighted_volume, fdilatation, flps_a, flps_b;
   DeviceArray<float> fxi_len, fk_own, fk_dual, fvol_own, fu_before;
   PdViewT<float> fview;
@@ -197,9 +196,15 @@ struct CudaSystem::Impl {
   FacetView facets{};
   bool sync_after_launch = false;  // BRECCIA_CUDA_SYNC=1: attribute asynchronous faults to their kernel
 
-  // The step's arrays (step.hpp) over the device copies, double and float; built once.
+  // The step's arrays (step.hpp) over the device copies, double and float; built once, their
+  // views copies of `view` and `fview` (refresh_step_views keeps them so).
   StepArrays<double> arrays;
   StepArrays<float> farrays;
+  void refresh_step_views() {
+    arrays.p = arrays.d = farrays.d = view;
+    arrays.corr.p = view;
+    farrays.p = fview;
+  }
 
   void after_launch(const char* kernel) const { check_launch(kernel, sync_after_launch); }
   template <class F>
@@ -214,14 +219,9 @@ struct CudaSystem::Impl {
   }
   // The run loop turns diagnostics off between output steps; every launch reads the flag.
   void sync_flags(const PdSystem& sys) {
-    for (PdView* p : {&view, &arrays.p, &arrays.d, &farrays.d, &arrays.corr.p}) {
-      p->diagnostics = sys.diagnostics;
-      p->symmetric_halves = sys.symmetric_halves;
-    }
-    for (PdViewT<float>* q : {&fview, &farrays.p}) {
-      q->diagnostics = sys.diagnostics;
-      q->symmetric_halves = sys.symmetric_halves;
-    }
+    view.diagnostics = fview.diagnostics = sys.diagnostics;
+    view.symmetric_halves = fview.symmetric_halves = sys.symmetric_halves;
+    refresh_step_views();
   }
   void float_kinematics_to_double();  // fu, fv -> u, v (a float run's measure and probes)
 };
@@ -250,21 +250,15 @@ public:
     static_assert(std::is_same_v<typename Load::Value, StepSums>, "the step's reductions sum StepSums");
     solver::reduce(n, load, m_.step_partial.get(), finish, name, m_.sync_after_launch);
   }
-  // commit_min_stretch: the device buffers trade places; every view follows.
+  // commit_min_stretch: the device buffers trade places; every view follows (`a` is one of
+  // the Impl's step arrays, refreshed with the others).
   template <class Real>
-  void commit_min_stretch(StepArrays<Real>& a) const {
+  void commit_min_stretch(StepArrays<Real>&) const {
     if (m_.min_stretch.size() == 0) return;
     m_.min_stretch.swap(m_.min_stretch_next);
-    for (PdView* p : {&m_.view, &m_.arrays.p, &m_.arrays.d, &m_.farrays.d}) {
-      p->min_stretch = m_.min_stretch.get();
-      p->min_stretch_next = m_.min_stretch_next.get();
-    }
-    for (PdViewT<float>* q : {&m_.fview, &m_.farrays.p}) {
-      q->min_stretch = m_.min_stretch.get();
-      q->min_stretch_next = m_.min_stretch_next.get();
-    }
-    a.p.min_stretch = m_.min_stretch.get();
-    a.p.min_stretch_next = m_.min_stretch_next.get();
+    m_.view.min_stretch = m_.fview.min_stretch = m_.min_stretch.get();
+    m_.view.min_stretch_next = m_.fview.min_stretch_next = m_.min_stretch_next.get();
+    m_.refresh_step_views();
   }
   template <class Real>
   void contact(const StepArrays<Real>&) const {
@@ -344,7 +338,6 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   if (s.f32.active) {
     const Float32State& f = s.f32;
     m.f32 = true;
-    m.loads_vary = f.loads_vary;
     m.fx0.upload(f.x0, "float x0");
     m.fu.upload(f.u, "float u");
     m.fv.upload(f.v, "float v");
@@ -443,7 +436,6 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
 
   // The step's arrays: the same StepArrays the CPU builds, over device memory.
   auto fill = [&](auto& a) {
-    a.d = m.view;
     a.x = m.x.get();
     a.f_before = m.f_before.get();
     a.facets = m.facets;
@@ -454,16 +446,12 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
                                      ? SetView{static_cast<int64_t>(s.n), nullptr}
                                      : SetView{static_cast<int64_t>(m.body_load_particles[b].size()),
                                                m.body_load_particles[b].get()});
-    a.loads_vary = m.loads_vary;
     a.external_work = &m.scalars.get()->external_work;
     a.dissipated_energy = &m.scalars.get()->dissipated_energy;
   };
-  m.loads_vary = !s.surface_loads.empty() || !s.body_loads.empty() || s.config.indenter.enabled;
   fill(m.arrays);
-  m.arrays.p = m.view;
   m.arrays.u_before = m.u_before.get();
   if (s.config.model == PdModel::Correspondence) {
-    m.arrays.corr.p = m.view;
     m.arrays.corr.dimension = m.dimension;
     m.arrays.corr.moduli = m.corr_moduli.get();
     m.arrays.corr.deformation = m.corr_deformation.get();
@@ -472,9 +460,9 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   }
   if (m.f32) {
     fill(m.farrays);
-    m.farrays.p = m.fview;
     m.farrays.u_before = m.fu_before.get();
   }
+  m.refresh_step_views();
 }
 
 CudaSystem::~CudaSystem() = default;

@@ -31,6 +31,10 @@ double pmb_critical_stretch(const ElasticInput& in, Influence kind, double horiz
 // LPS critical stretch: the deviatoric pair energy of the crossing bonds equals G0
 // (the dilatation term is not a pair energy; docs/theory.md states the approximation).
 double lps_critical_stretch(const ElasticInput& in, Influence kind, double horizon, double fracture_energy);
+// Softening bonds (docs/theory.md "Quasi-brittle bonds"): the stretch at which a bond starts
+// to soften, the uniaxial-stress strain at the tensile strength, sigma_t / E' (E' = E, in
+// plane strain E / (1 - nu^2)).
+double softening_onset_stretch(const ElasticInput& in, double tensile_strength);
 LpsCoefficients lps_coefficients(const ElasticInput& in);
 
 // Classical strain energy density for a small strain tensor eps (3x3 row-major, plane

@@ -31,7 +31,6 @@ struct Float32State {
   std::vector<float> lps_a, lps_b;                                    // N (LPS fast path)
   std::vector<float> xi_len, k_own, k_dual, vol_own;                  // per bond entry
   std::vector<float> short_range_k, spacing;                          // N (short-range forces)
-  bool loads_vary = true;        // false: no load at all, the body force stays zero
   std::vector<float> u_before;   // scratch for the external-work trapezoid
   std::vector<double> f_before;
 };

@@ -1,6 +1,7 @@
 #pragma once
 // Per-particle kernels over raw views: the loop bodies both backends run. A backend only
 // decides how `for i in [0, n)` is launched (OpenMP here, CUDA in solver/cuda/).
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <type_traits>
@@ -46,8 +47,9 @@ struct PdViewT {
   uint8_t* state = nullptr;        // kOwnIntact | kDualIntact
   // Silling & Askari's compressive enhancement (model.compressive_enhancement): a bond breaks
   // at s0 - alpha max(s_min_i, s_min_j), s_min the smallest stretch over a particle's intact
-  // bonds at the previous force pass (min_stretch, read) and at this one (min_stretch_next,
-  // written by the owner; the backend swaps the two after the pass). Null: fixed s0.
+  // bonds at the previous step's force pass (min_stretch, read) and at this one
+  // (min_stretch_next, written by the owner; each step begins by swapping the two,
+  // commit_min_stretch). Null: fixed s0.
   float alpha = 0.0f;
   const float* min_stretch = nullptr;
   float* min_stretch_next = nullptr;
@@ -139,7 +141,14 @@ BRECCIA_HD void store_min_stretch(const PdViewT<Real>& p, int64_t i, double smin
   if (p.min_stretch_next) p.min_stretch_next[i] = any ? static_cast<float>(smin) : 0.0f;
 }
 
-// One softening bond entry at stretch s this pass (p.bond_damage set): the damage it reaches
+// Does entry k follow the softening law? Only in a softening case, and not a pair of a brittle
+// material or an unbreakable one (their onset is FLT_MAX, set-up's convert_to_softening).
+template <class Real>
+BRECCIA_HD bool softens(const PdViewT<Real>& p, int64_t k) {
+  return p.bond_damage && p.s_onset[k] < FLT_MAX;
+}
+
+// One softening bond entry at stretch s this pass (softens(p, k)): the damage it reaches
 // (never below what it had), stored unless fracture is off, and the energy that dissipated,
 // `unit` x (D(d) - D(d_old)) with unit the entry's energy per unit stretch squared (a PMB
 // half-bond: V_i k2 |xi| / 4). Returns d; d = 1 means broken (the caller clears the state).
@@ -148,8 +157,7 @@ BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double uni
   const double d_old = p.bond_damage[k];
   if (!p.fracture) return d_old;
   const double onset = p.s_onset[k], ultimate = p.s0_own[k];
-  double d = softening_damage<double>(s, onset, ultimate);
-  if (!(onset < 3.0e38)) d = 0.0;  // a brittle or unbreakable pair in a softening case
+  const double d = softening_damage<double>(s, onset, ultimate);
   if (d <= d_old) return d_old;
   released += unit * (softening_dissipation(d, onset, ultimate) - softening_dissipation(d_old, onset, ultimate));
   p.bond_damage[k] = static_cast<float>(d);
@@ -209,45 +217,36 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
       any = true;
       if (double(e) / xi < smin) smin = double(e) / xi;
     }
-    if (p.bond_damage && p.s_onset[k] < 3.0e38f) {  // softening bond: force scaled by (1 - d)
+    // keep: the share of the bond's force left (softening: 1 - d; brittle: 1 while intact).
+    Real keep = Real(1);
+    bool breaking = false;
+    if (softens(p, k)) {
       const double dmg = soften(p, k, double(e) / xi, 0.5 * double(b_i) * omega * double(p.volume[j]) * p.volume[i] * double(xi) * xi,
-                              released);
+                                released);
       if (dmg >= 1.0) {
         p.state[k] = 0;
         continue;
       }
-      const Real keep = static_cast<Real>(1.0 - dmg);
-      const Real t = keep * omega * ((a_i + p.lps_a[j]) * xi + (b_i + p.lps_b[j]) * e);
-      const Real f = t * p.volume[j] / len;
-      fx += f * dx;
-      fy += f * dy;
-      fz += f * dz;
-      if (p.diagnostics) {
-        const double dev = double(e) - double(theta_i) * xi / d;
-        dev_sum += double(keep) * omega * dev * dev * p.volume[j];
-        intact_vol += double(keep) * p.vol_own[k];
-        if (double(e) / xi > smax) smax = double(e) / xi;
+      keep = static_cast<Real>(1.0 - dmg);
+    } else {
+      const Real s0 = p.s0_own[k] - stretch_shift(p, i, j);
+      if (p.fracture && e > s0 * xi) {
+        const double dev = double(s0) * xi - double(theta_i) * xi / d;  // at the critical extension
+        released += 0.5 * b_i * omega * dev * dev * p.volume[j] * p.volume[i];
+        p.state[k] = 0;
+        if (!p.break_after_force) continue;
+        breaking = true;
       }
-      continue;
     }
-    const Real s0 = p.s0_own[k] - stretch_shift(p, i, j);
-    bool breaking = false;
-    if (p.fracture && e > s0 * xi) {
-      const double dev = double(s0) * xi - double(theta_i) * xi / d;  // at the critical extension
-      released += 0.5 * b_i * omega * dev * dev * p.volume[j] * p.volume[i];
-      p.state[k] = 0;
-      if (!p.break_after_force) continue;
-      breaking = true;
-    }
-    const Real t = omega * ((a_i + p.lps_a[j]) * xi + (b_i + p.lps_b[j]) * e);
+    const Real t = keep * omega * ((a_i + p.lps_a[j]) * xi + (b_i + p.lps_b[j]) * e);
     const Real f = t * p.volume[j] / len;
     fx += f * dx;
     fy += f * dy;
     fz += f * dz;
     if (p.diagnostics && !breaking) {
       const double dev = double(e) - double(theta_i) * xi / d;
-      dev_sum += omega * dev * dev * p.volume[j];
-      intact_vol += p.vol_own[k];
+      dev_sum += double(keep) * omega * dev * dev * p.volume[j];
+      intact_vol += double(keep) * p.vol_own[k];
       if (double(e) / xi > smax) smax = double(e) / xi;
     }
   }
@@ -289,62 +288,63 @@ BRECCIA_HD uint8_t break_bonds(const PdViewT<Real>& p, int64_t k, SameReal<Real>
 template <bool kDiagnostics, class Real>
 BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
   const BondOriginT<Real> origin(p, i);
-  // (The compressive enhancement takes the scalar loop below: it gathers s_min per bond.)
+  // (The compressive enhancement and softening bonds take the scalar loop below: they read and
+  // write per-bond and per-particle state the masked SIMD loop does not carry.)
   if constexpr (BondOriginT<Real>::kRelative && !kDiagnostics) {
-  if (!p.min_stretch_next && !p.bond_damage) {
-    // Float between output steps: no branch and one division per bond, so the compiler can
-    // run several bonds at once (SIMD); broken bonds are computed and masked. The extension
-    // e = (2 xi + eta).eta / (|xi + eta| + |xi|) enters as num / den (BondOriginT).
-    const Real* x0 = p.x0;
-    const Real* u = p.u;
-    Real fx = Real(0), fy = Real(0), fz = Real(0), released = Real(0);
-    int breaking = 0;
-    const Real vol_i = p.volume[i];
-    const bool fracture = p.fracture, after_force = p.break_after_force;
-    const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
+    if (!p.min_stretch_next && !p.bond_damage) {
+      // Float between output steps: no branch and one division per bond, so the compiler can
+      // run several bonds at once (SIMD); broken bonds are computed and masked. The extension
+      // e = (2 xi + eta).eta / (|xi + eta| + |xi|) enters as num / den (BondOriginT).
+      const Real* x0 = p.x0;
+      const Real* u = p.u;
+      Real fx = Real(0), fy = Real(0), fz = Real(0), released = Real(0);
+      int breaking = 0;
+      const Real vol_i = p.volume[i];
+      const bool fracture = p.fracture, after_force = p.break_after_force;
+      const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
 #if !defined(__CUDACC__)
 #pragma omp simd reduction(+ : fx, fy, fz, released, breaking)
 #endif
-    for (int64_t k = begin; k < end; ++k) {
-      const int64_t j = p.neighbor[k];
-      const Real ax = x0[3 * j] - origin.px, ay = x0[3 * j + 1] - origin.py, az = x0[3 * j + 2] - origin.pz;
-      const Real bx = u[3 * j] - origin.ux, by = u[3 * j + 1] - origin.uy, bz = u[3 * j + 2] - origin.uz;
-      const Real dx = ax + bx, dy = ay + by, dz = az + bz;
-      const Real len = std::sqrt(dx * dx + dy * dy + dz * dz);
-      const Real xi = p.xi_len[k];
-      const Real den = len + xi;
-      const Real num = bx * (ax + dx) + by * (ay + dy) + bz * (az + dz);
-      const Real k2 = Real(2) * p.k_own[k];
-      const Real s0 = p.s0_own[k];
-      const bool intact = p.state[k] != 0;
-      const bool breaks = fracture && intact && num > s0 * xi * den;
-      const Real f = (intact && (!breaks || after_force)) ? k2 * num / (xi * len * den) : Real(0);
-      released += breaks ? vol_i * Real(0.25) * k2 * s0 * s0 * xi : Real(0);
-      breaking += breaks ? 1 : 0;
-      fx += f * dx;
-      fy += f * dy;
-      fz += f * dz;
-    }
-    // Rare: mark the bonds that broke by a second pass of the same arithmetic, so that the
-    // loop above never writes the bond state and stays a pure reduction.
-    if (breaking)
       for (int64_t k = begin; k < end; ++k) {
-        if (!p.state[k]) continue;
         const int64_t j = p.neighbor[k];
         const Real ax = x0[3 * j] - origin.px, ay = x0[3 * j + 1] - origin.py, az = x0[3 * j + 2] - origin.pz;
         const Real bx = u[3 * j] - origin.ux, by = u[3 * j + 1] - origin.uy, bz = u[3 * j + 2] - origin.uz;
         const Real dx = ax + bx, dy = ay + by, dz = az + bz;
         const Real len = std::sqrt(dx * dx + dy * dy + dz * dz);
         const Real xi = p.xi_len[k];
+        const Real den = len + xi;
         const Real num = bx * (ax + dx) + by * (ay + dy) + bz * (az + dz);
-        if (num > p.s0_own[k] * xi * (len + xi)) p.state[k] = 0;
+        const Real k2 = Real(2) * p.k_own[k];
+        const Real s0 = p.s0_own[k];
+        const bool intact = p.state[k] != 0;
+        const bool breaks = fracture && intact && num > s0 * xi * den;
+        const Real f = (intact && (!breaks || after_force)) ? k2 * num / (xi * len * den) : Real(0);
+        released += breaks ? vol_i * Real(0.25) * k2 * s0 * s0 * xi : Real(0);
+        breaking += breaks ? 1 : 0;
+        fx += f * dx;
+        fy += f * dy;
+        fz += f * dz;
       }
-    p.force[3 * i] = fx;
-    p.force[3 * i + 1] = fy;
-    p.force[3 * i + 2] = fz;
-    p.dissipated[i] = released;
-    return;
-  }
+      // Rare: mark the bonds that broke by a second pass of the same arithmetic, so that the
+      // loop above never writes the bond state and stays a pure reduction.
+      if (breaking)
+        for (int64_t k = begin; k < end; ++k) {
+          if (!p.state[k]) continue;
+          const int64_t j = p.neighbor[k];
+          const Real ax = x0[3 * j] - origin.px, ay = x0[3 * j + 1] - origin.py, az = x0[3 * j + 2] - origin.pz;
+          const Real bx = u[3 * j] - origin.ux, by = u[3 * j + 1] - origin.uy, bz = u[3 * j + 2] - origin.uz;
+          const Real dx = ax + bx, dy = ay + by, dz = az + bz;
+          const Real len = std::sqrt(dx * dx + dy * dy + dz * dz);
+          const Real xi = p.xi_len[k];
+          const Real num = bx * (ax + dx) + by * (ay + dy) + bz * (az + dz);
+          if (num > p.s0_own[k] * xi * (len + xi)) p.state[k] = 0;
+        }
+      p.force[3 * i] = fx;
+      p.force[3 * i + 1] = fy;
+      p.force[3 * i + 2] = fz;
+      p.dissipated[i] = released;
+      return;
+    }
   }
   Real fx = Real(0), fy = Real(0), fz = Real(0);
   double w = 0.0, released = 0.0, smax = 0.0, smin = 1e300;
@@ -363,47 +363,36 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
       any = true;
       if (double(extension) / xi < smin) smin = double(extension) / xi;
     }
-    if (p.bond_damage && p.s_onset[k] < 3.0e38f) {  // softening bond: force scaled by (1 - d)
-      const double stretch = double(extension) / xi;
-      const double dmg = soften(p, k, stretch, 0.25 * double(p.volume[i]) * double(k2) * xi, released);
+    // share: the part of the bond's force left (softening: 1 - d; brittle: 1 while intact).
+    double share = 1.0;
+    bool breaking = false;
+    if (softens(p, k)) {
+      const double dmg = soften(p, k, double(extension) / xi, 0.25 * double(p.volume[i]) * double(k2) * xi, released);
       if (dmg >= 1.0) {
         p.state[k] = 0;
         continue;
       }
-      const Real f = static_cast<Real>(1.0 - dmg) * k2 * extension / (xi * len);
-      fx += f * dx;
-      fy += f * dy;
-      fz += f * dz;
-      if (kDiagnostics) {
-        w += (1.0 - dmg) * 0.25 * double(k2) * stretch * stretch * xi;
-        intact_vol += (1.0 - dmg) * p.vol_own[k];
-        if (stretch > smax) smax = stretch;
+      share = 1.0 - dmg;
+    } else {
+      const Real s0_bond = p.s0_own[k] - stretch_shift(p, i, j);
+      if (p.fracture && extension > s0_bond * xi) {
+        // Dissipated: what the bond holds at its critical stretch. It broke somewhere inside
+        // this step, so its force never worked against the stretch beyond s0.
+        const double s0 = s0_bond;
+        released += double(p.volume[i]) * 0.25 * k2 * s0 * s0 * xi;
+        p.state[k] = 0;
+        if (!p.break_after_force) continue;
+        breaking = true;
       }
-      continue;
     }
-    const Real s0_bond = p.s0_own[k] - stretch_shift(p, i, j);
-    if (p.fracture && extension > s0_bond * xi) {
-      // Dissipated: what the bond holds at its critical stretch. It broke somewhere inside
-      // this step, so its force never worked against the stretch beyond s0.
-      const double s0 = s0_bond;
-      released += double(p.volume[i]) * 0.25 * k2 * s0 * s0 * xi;
-      p.state[k] = 0;
-      if (p.break_after_force) {
-        const Real f = k2 * extension / (xi * len);
-        fx += f * dx;
-        fy += f * dy;
-        fz += f * dz;
-      }
-      continue;
-    }
-    const Real f = k2 * extension / (xi * len);  // c s / |xi + eta|
+    const Real f = static_cast<Real>(share) * k2 * extension / (xi * len);  // (1 - d) c s / |xi + eta|
     fx += f * dx;
     fy += f * dy;
     fz += f * dz;
-    if (kDiagnostics) {
+    if (kDiagnostics && !breaking) {
       const double stretch = double(extension) / xi;
-      w += 0.25 * k2 * stretch * stretch * xi;
-      intact_vol += p.vol_own[k];
+      w += share * 0.25 * k2 * stretch * stretch * xi;
+      intact_vol += share * p.vol_own[k];
       if (stretch > smax) smax = stretch;
     }
   }
@@ -461,7 +450,7 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
       if (double(g.stretch) < smin) smin = g.stretch;
     }
     double keep = 1.0;  // softening: the share of the bond's force left, 1 - d
-    if (p.bond_damage && p.s_onset[k] < 3.0e38f) {
+    if (softens(p, k)) {
       const double unit = lps ? 0.5 * (p.lps[i].shear_term / m_i) * p.k_own[k] * double(p.volume[j]) * p.volume[i] * double(xi) * xi
                               : 0.25 * double(p.volume[i]) * (double(p.k_own[k]) + double(p.k_dual[k])) * xi;
       keep = 1.0 - soften(p, k, double(g.stretch), unit, released);

@@ -98,6 +98,8 @@ struct PdSystem {
 
   PdView view();
   size_t bond_count() const { return neighbor.size(); }
+  // Any load at all? Without one the body force stays zero and a step skips the loads.
+  bool loads_vary() const { return !surface_loads.empty() || !body_loads.empty() || config.indenter.enabled; }
   double total_mass() const;
 };
 

@@ -238,7 +238,6 @@ struct StepArrays {
   FacetView facets;
   std::vector<SetView> constraint_sets;  // one per PdSystem::constraints entry
   std::vector<SetView> body_load_sets;   // one per PdSystem::body_loads entry
-  bool loads_vary = true;                // false: no load at all, the body force stays zero
   CorrespondenceView corr{};             // correspondence model: moduli, F, A, non-affine energy
   double* external_work = nullptr;       // accumulators (StepFinish)
   double* dissipated_energy = nullptr;
@@ -270,6 +269,22 @@ void pd_external(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t)
     Indenter f{d.x0, d.u, {0, 0, 0}, ind.radius, ind.stiffness, body};
     for (int k = 0; k < 3; ++k) f.c[k] = sys.indenter_position[k] = ind.center[k] + ind.velocity[k] * t;
     exec.for_each(n, f, "indenter");
+  }
+}
+
+// Prescribed components at time t: one pass per boundary, in the case's order (a particle
+// in two boundaries takes the later one's value), the ramps evaluated here on the host.
+template <class Exec, class Real>
+void pd_constraints(Exec& exec, const StepArrays<Real>& a, const PdSystem& sys, double t, double dt) {
+  for (size_t c = 0; c < sys.constraints.size(); ++c) {
+    const BoundarySpec& b = *sys.constraints[c].spec;
+    ConstraintStep cs{static_cast<int>(b.kind), 0u, {0, 0, 0}, {0, 0, 0}, dt};
+    for (int d = 0; d < 3; ++d)
+      if (b.components[d]) cs.components |= 1u << d;
+    prescribed_values(b, t, dt, cs.velocity, cs.target);
+    const SetView set = a.constraint_sets[c];
+    if (set.count == 0) continue;
+    exec.for_each(set.count, Constrain<Real>{set, cs, a.p.u, a.p.v}, "constraint");
   }
 }
 
@@ -316,18 +331,8 @@ void pd_step(Exec& exec, StepArrays<Real>& a, PdSystem& sys) {
   exec.for_each(n, KickDrift<Real>{a.p, half, dt}, "kick_drift_kernel");
   sys.time += dt;
   const double t = sys.time;
-  // Constraints: one pass per boundary, in the case's order.
-  for (size_t c = 0; c < sys.constraints.size(); ++c) {
-    const BoundarySpec& b = *sys.constraints[c].spec;
-    ConstraintStep cs{static_cast<int>(b.kind), 0u, {0, 0, 0}, {0, 0, 0}, dt};
-    for (int d = 0; d < 3; ++d)
-      if (b.components[d]) cs.components |= 1u << d;
-    prescribed_values(b, t, dt, cs.velocity, cs.target);
-    const SetView set = a.constraint_sets[c];
-    if (set.count == 0) continue;
-    exec.for_each(set.count, Constrain<Real>{set, cs, a.p.u, a.p.v}, "constraint");
-  }
-  if (a.loads_vary) {
+  pd_constraints(exec, a, sys, t, dt);
+  if (sys.loads_vary()) {
     // The indenter reads the double displacement: a float run copies it first.
     if (single && sys.config.indenter.enabled)
       exec.for_each(3 * n, Convert<Real, double>{a.p.u, const_cast<double*>(a.d.u)}, "float u to double");

@@ -5,6 +5,8 @@
 #   VARIANT=quick|test: 8 mm long, one rate, 170 us (the run of tests/postproc/test_energy_real_run.cpp)
 #   VARIANT=full|demo : 12 mm long, two opening rates, to 300 us / 560 us
 # RATES (optional): space-separated "rate_m_s:end" pairs (rate per arm) overriding the defaults.
+# STRENGTH (optional, e.g. "30 MPa"): the glass's tensile_strength, so that its bonds soften
+#   (docs/theory.md "Quasi-brittle bonds") instead of breaking at the critical stretch.
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
@@ -25,7 +27,7 @@ for r in $RATES; do  # rate_m_s:end
   name="v${rate}"
   mkdir -p "$OUT/$name"
   sed -e "s#particles: particles.h5#particles: ../particles.h5#" -e "s/PRECRACK_TO/0.002037/" \
-      -e "s/RATE/$rate/g" -e "s/END/${end/us/ us}/" -e "s/EVERY/$EVERY/" -e "s/HISTORY/100/" \
+      -e "s/RATE/$rate/g" -e "s/fracture_energy: 3.8}/fracture_energy: 3.8${STRENGTH:+, tensile_strength: $STRENGTH}}/" -e "s/END/${end/us/ us}/" -e "s/EVERY/$EVERY/" -e "s/HISTORY/100/" \
       "$HERE/case.yaml" > "$OUT/$name/case.yaml"
   echo "== $name"
   "$BRECCIA_BIN/breccia-solve" "$OUT/$name/case.yaml" -o "$OUT/$name" --threads "$THREADS" --quiet

@@ -3,6 +3,8 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <vector>
+#include <algorithm>
 
 namespace breccia::solver {
 
@@ -89,6 +91,88 @@ double softening_onset_stretch(const ElasticInput& in, double tensile_strength) 
   const double E = in.dimension == 2 && in.planar == Planar::PlaneStrain ? in.youngs_modulus / (1.0 - nu * nu)
                                                                           : in.youngs_modulus;
   return tensile_strength / E;
+}
+
+// The model at one material point under homogeneous strain diag(ex, el, el) (2D: ex, el),
+// written with the family's angular average <.> (the radial parts of the sums cancel for any
+// influence function): PMB g(n) = d^2 K_d (1 - D(n)) s(n); LPS g(n) = (1 - D(n)) (a theta +
+// b s(n)), theta = d <(1 - D) s>, a = bulk_term - shear_term / d, b = shear_term; the stress is
+// <g(n) n (x) n>. s(n) = ex n_x^2 + el (1 - n_x^2). Uniaxial stress: el solves sigma_yy = 0,
+// which is linear in el once the damage is fixed, so each strain step iterates (el, damage) to
+// a fixed point, the damage never decreasing along the path.
+double homogeneous_tension_peak(const ElasticInput& in, PdModel model, double onset, double ultimate) {
+  const int d = in.dimension;
+  const bool lps = model != PdModel::PMB;
+  const LpsCoefficients lc = lps_coefficients(in);
+  const double pmb_scale = d * d * dimensional_bulk_modulus(in);
+  // Directions: 3D uniform in n_x = cos(angle) on [0, 1] (the azimuth averages out: the
+  // lateral stress is half of <g (1 - n_x^2)>); 2D uniform in the angle on [0, pi/2].
+  const int nq = 720;
+  std::vector<double> cx2(nq), dmg(nq, 0.0), trial(nq);
+  for (int q = 0; q < nq; ++q) {
+    const double t = (q + 0.5) / nq;
+    const double c = d == 3 ? t : std::cos(0.5 * std::numbers::pi * t);
+    cx2[q] = c * c;
+  }
+  const double lateral_share = d == 3 ? 0.5 : 1.0;
+  // Stresses for strain (ex, el) and damage D: returns sigma_xx, sets sigma_yy.
+  auto stress = [&](double ex, double el, const std::vector<double>& D, double& syy) {
+    double theta = 0.0;
+    if (lps) {
+      for (int q = 0; q < nq; ++q) theta += (1.0 - D[q]) * (ex * cx2[q] + el * (1.0 - cx2[q]));
+      theta *= lc.dilatation_factor / nq;
+    }
+    double sxx = 0.0;
+    syy = 0.0;
+    for (int q = 0; q < nq; ++q) {
+      const double s = ex * cx2[q] + el * (1.0 - cx2[q]);
+      const double g = (1.0 - D[q]) * (lps ? (lc.bulk_term - lc.shear_term / lc.dilatation_factor) * theta +
+                                                 lc.shear_term * s
+                                           : pmb_scale * s);
+      sxx += g * cx2[q];
+      syy += g * (1.0 - cx2[q]);
+    }
+    syy *= lateral_share / nq;
+    return sxx / nq;
+  };
+  double el = 0.0, peak = 0.0;
+  const double step = onset / 400.0;
+  for (double ex = onset; ex < 4.0 * ultimate + onset; ex += step) {
+    for (int it = 0; it < 100; ++it) {
+      for (int q = 0; q < nq; ++q)
+        trial[q] = std::max(dmg[q], softening_damage<double>(ex * cx2[q] + el * (1.0 - cx2[q]), onset, ultimate));
+      double s0y, s1y;
+      stress(ex, 0.0, trial, s0y);
+      stress(ex, onset, trial, s1y);
+      const double next = -s0y * onset / (s1y - s0y);
+      const bool settled = std::fabs(next - el) <= 1e-12 * ex;
+      el = next;
+      if (settled) break;
+    }
+    for (int q = 0; q < nq; ++q)
+      dmg[q] = std::max(dmg[q], softening_damage<double>(ex * cx2[q] + el * (1.0 - cx2[q]), onset, ultimate));
+    double syy;
+    const double sxx = stress(ex, el, dmg, syy);
+    if (sxx < peak) break;  // the first maximum: where a bar starts to localise
+    peak = sxx;
+  }
+  return peak;
+}
+
+double calibrated_onset_stretch(const ElasticInput& in, PdModel model, double tensile_strength, double brittle_stretch) {
+  // Fixed point of s_t = sigma_t / Phi(s_G^2 / s_t^2), Phi(r) the homogeneous peak per unit
+  // onset at ultimate / onset = r (homogeneous_tension_peak is linear in the onset). Phi grows
+  // slowly with r (|d ln Phi / d ln s_t| < 0.3), so the iteration contracts.
+  double onset = softening_onset_stretch(in, tensile_strength);
+  for (int it = 0; it < 60; ++it) {
+    if (brittle_stretch < onset) return onset;  // no room for softening: the caller refuses it
+    const double ratio = (brittle_stretch / onset) * (brittle_stretch / onset);
+    const double next = tensile_strength / (homogeneous_tension_peak(in, model, 1.0, ratio));
+    const bool settled = std::fabs(next - onset) <= 1e-7 * onset;
+    onset = next;
+    if (settled) break;
+  }
+  return onset;
 }
 
 LpsCoefficients lps_coefficients(const ElasticInput& in) {

@@ -164,20 +164,22 @@ double median(std::vector<double> v) {
 
 }  // namespace
 
-// Softening bonds: s0 so far is each bond's brittle critical stretch s_G from its G0; the
-// bilinear law keeps G0 with s_u = s_G^2 / s_t (pd_physics.hpp), which needs s_G >= s_t, i.e.
-// a horizon below delta s_G^2 / s_t^2 (s_G^2 falls as 1/delta). Checked per material on its
-// mean values; a bond whose Weibull draw falls below breaks brittle at its onset.
-static void convert_to_softening(PdSystem& s, const std::vector<ElasticInput>& elastic) {
+// Softening bonds: the onset stretch per unit tensile strength of each material, calibrated so
+// that the material's homogeneous uniaxial peak stress is its tensile strength
+// (calibrated_onset_stretch; docs/theory.md "Quasi-brittle bonds"), with s_G the brittle
+// critical stretch of its mean G0 at the horizon. 0 for a material without a strength.
+static std::vector<double> softening_onset_per_strength(const PdSystem& s, const std::vector<ElasticInput>& elastic) {
   const CaseConfig& c = s.config;
+  std::vector<double> out(c.materials.size(), 0.0);
+  if (!c.softening || !c.fracture) return out;
   const double delta = *std::max_element(s.horizon.begin(), s.horizon.end());
   const bool lps = c.model == PdModel::LPS;
   for (size_t m = 0; m < c.materials.size(); ++m) {
     const MaterialSpec& ms = c.materials[m];
-    if (!(ms.tensile_strength > 0) || !c.fracture) continue;
+    if (!(ms.tensile_strength > 0) || !(ms.fracture_energy > 0)) continue;
     const double s_g = lps ? lps_critical_stretch(elastic[m], c.influence, delta, ms.fracture_energy)
                            : pmb_critical_stretch(elastic[m], c.influence, delta, ms.fracture_energy);
-    const double s_t = softening_onset_stretch(elastic[m], ms.tensile_strength);
+    const double s_t = calibrated_onset_stretch(elastic[m], c.model, ms.tensile_strength, s_g);
     if (s_g < s_t) {
       char largest[64];
       std::snprintf(largest, sizeof largest, "%.4g", delta * (s_g / s_t) * (s_g / s_t));
@@ -188,7 +190,15 @@ static void convert_to_softening(PdSystem& s, const std::vector<ElasticInput>& e
                        std::string("a horizon of at most ") + largest +
                            " m (it scales as E G0 / sigma_t^2), or a lower tensile_strength");
     }
+    out[m] = s_t / ms.tensile_strength;
   }
+  return out;
+}
+
+// s0 so far is each bond's brittle critical stretch s_G from its G0; the bilinear law keeps G0
+// with s_u = s_G^2 / s_t (pd_physics.hpp), which needs s_G >= s_t (checked per material on its
+// mean values above); a bond whose Weibull draw falls below breaks brittle at its onset.
+static void convert_to_softening(PdSystem& s) {
   const int64_t nb = static_cast<int64_t>(s.s0_own.size());
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < nb; ++k) {
@@ -450,6 +460,7 @@ PdSystem setup_system(const CaseConfig& config) {
     const double a = micromodulus(mi, delta), b = micromodulus(mj, delta);
     return 2.0 * a * b / (a + b);
   };
+  const std::vector<double> onset_per_strength = softening_onset_per_strength(s, elastic);
   std::vector<uint8_t> no_fail(n, 0);
   for (size_t k = 0; k < c.no_fail_sets.size(); ++k)
     for (auto f : require_set(s, c.no_fail_sets[k], "model.no_fail[" + std::to_string(k) + "]").indices)
@@ -538,7 +549,7 @@ PdSystem setup_system(const CaseConfig& config) {
         // Onset stretch of the weaker material, scattered with the same Weibull draw as G0;
         // s0 becomes the ultimate stretch in convert_to_softening.
         const double strength = wm.fracture_energy > 0 ? wm.tensile_strength * G0 / wm.fracture_energy : 0.0;
-        s.s_onset[out] = strength > 0 ? static_cast<float>(softening_onset_stretch(elastic[weak], strength)) : FLT_MAX;
+        s.s_onset[out] = strength > 0 ? static_cast<float>(onset_per_strength[weak] * strength) : FLT_MAX;
       }
       ++out;
     }
@@ -876,7 +887,7 @@ PdSystem setup_system(const CaseConfig& config) {
     std::sort(s.precrack_pairs.begin(), s.precrack_pairs.end());
   }
 
-  if (c.softening) convert_to_softening(s, elastic);
+  if (c.softening) convert_to_softening(s);
   phase("pre-cracks");
 
   // Loads.

@@ -4,6 +4,9 @@
 
 #include <cmath>
 #include <cstring>
+#include <cstdlib>
+#include <vector>
+#include <algorithm>
 #include <string>
 
 #include "breccia/common/error.hpp"
@@ -130,46 +133,87 @@ TEST(Softening, RestartWithPartiallyDamagedBondsIsBitIdentical) {
 }
 
 namespace {
-// Peak nominal stress of a bar pulled at both ends (x only, lateral faces free) at 0.1 m/s
-// over 30 mm (strain rate 3.3 /s: ~20 wave transits to the peak), from the force the
-// pulled end's particles carry.
-double bar_peak_stress(const char* model, int dimension, double dx, const char* strength) {
-  const std::string box = dimension == 3 ? "[0, 0, 0, 0.03, 0.006, 0.006]" : "[0, 0, 0.03, 0.006]";
+// Peak nominal stress of a bar 30 mm long, 6 mm wide (3D: square), pulled at both ends at
+// 0.05 m/s each (strain rate 3.3 /s; the peak comes after 150-250 us, 20-30 wave transits).
+// The grips are the end zones two horizons deep (x prescribed, lateral motion free): every
+// cross-section of the gauge is crossed by a complete set of bonds, and the bonds the surface
+// correction stiffens at the end faces do not reach the gauge (with grips one horizon deep the
+// gauge's first horizon next to the grip localises at 0.86 sigma_t). The stress is the force on
+// one grip's particles over the section.
+struct BarRun {
+  double peak = 0.0, peak_time = 0.0;
+  size_t particles = 0;
+};
+BarRun bar_peak_stress(const char* model, int dimension, double dx, const char* strength, bool surface_correction) {
+  const double length = 0.03, width = 0.006, grip = 2.05 * 3.015 * dx;
   const bool pmb2d = dimension == 2 && std::string(model) == "pmb";
+  auto num = [](double v) { return std::to_string(v); };
+  const std::string box = dimension == 3 ? "[0, 0, 0, " + num(length) + ", " + num(width) + ", " + num(width) + "]"
+                                         : "[0, 0, " + num(length) + ", " + num(width) + "]";
+  auto grip_box = [&](double x0, double x1) {
+    return dimension == 3 ? "[" + num(x0) + ", -1, -1, " + num(x1) + ", 1, 1]" : "[" + num(x0) + ", -1, " + num(x1) + ", 1]";
+  };
   const std::string deck =
-      "specimen: {lattice: {dimension: " + std::to_string(dimension) + ", box: " + box +
-      ", spacing: " + std::to_string(dx) + ", thickness: 0.001}}\n"
-      "model: {type: " + model + ", horizon_factor: 3.015" + (dimension == 2 ? ", planar: plane_stress" : "") + "}\n"
+      "specimen: {lattice: {dimension: " + std::to_string(dimension) + ", box: " + box + ", spacing: " + num(dx) +
+      ", thickness: 0.001}}\n"
+      "model: {type: " + model + ", horizon_factor: 3.015" + (dimension == 2 ? ", planar: plane_stress" : "") +
+      (surface_correction ? ", surface_correction: energy" : "") + "}\n"
       "materials: [{name: c, density: 2400, youngs_modulus: 30 GPa, poisson_ratio: " +
       (pmb2d ? "0.3333333333333333" : "0.25") + ", fracture_energy: 100, tensile_strength: " + strength + "}]\n"
-      "boundary: [{type: velocity, set: xmin, value: [-0.05, 0, 0], components: [x], ramp_time: 20 us},\n"
-      "           {type: velocity, set: xmax, value: [0.05, 0, 0], components: [x], ramp_time: 20 us}]\n"
+      "sets: [{name: grip_lo, box: " + grip_box(-1, grip) + "}, {name: grip_hi, box: " + grip_box(length - grip, 1) + "}]\n"
+      "boundary: [{type: velocity, set: grip_lo, value: [-0.05, 0, 0], components: [x], ramp_time: 20 us},\n"
+      "           {type: velocity, set: grip_hi, value: [0.05, 0, 0], components: [x], ramp_time: 20 us}]\n"
       "time: {end: 300 us}\n";
   PdSystem s = system_from_yaml(std::string("bar_") + model, deck);
   const auto& pulled = s.constraints[1].particles;
-  const double area = dimension == 3 ? 0.006 * 0.006 : 0.006 * 0.001;
+  const double area = dimension == 3 ? width * width : width * 0.001;
   const long long steps = static_cast<long long>(std::ceil(300e-6 / s.dt));
-  double peak = 0.0, peak_t = 0.0;
+  BarRun run;
+  run.particles = s.n;
   for (long long k = 0; k < steps; ++k) {
     cpu_step(s);
     double f = 0.0;
     for (auto i : pulled) f += s.volume[i] * s.force[3 * i];
-    if (-f / area > peak) {
-      peak = -f / area;
-      peak_t = s.time;
+    if (-f / area > run.peak) {
+      run.peak = -f / area;
+      run.peak_time = s.time;
     }
   }
-  std::printf("bar %s %dD dx %g sigma_t %s: peak %.4g MPa at %.1f us (%zu particles)\n", model, dimension, dx, strength,
-              peak / 1e6, peak_t * 1e6, s.n);
-  return peak;
+  std::printf("bar %s %dD dx %g sigma_t %s%s: peak %.4g MPa at %.1f us (%zu particles)\n", model, dimension, dx,
+              strength, surface_correction ? " surface-corrected" : "", run.peak / 1e6, run.peak_time * 1e6, s.n);
+  return run;
 }
 }  // namespace
+
+// Issue "Quasi-brittle bonds": the bar's peak stress within 5% of tensile_strength at two
+// horizons that differ by 2x, 3D and 2D. The onset is calibrated on the homogeneous peak
+// (calibrated_onset_stretch), so the strength is the material's at any horizon; the bar's
+// lateral faces need the surface correction (without it the skin near the faces is softer and
+// the section carries 0.76-0.97 of sigma_t, rising with resolution: docs/theory.md). Measured
+// 1.010 and 1.000 (3D, dx 1 and 0.5 mm), 1.013 and 1.017 (2D plane stress, 0.5 and 0.25 mm).
+TEST(SofteningBar, PmbPeakStressIsTheTensileStrengthAtTwoHorizons3D) {
+  for (double dx : {1e-3, 0.5e-3}) {
+    const BarRun run = bar_peak_stress("pmb", 3, dx, "3 MPa", true);
+    EXPECT_NEAR(run.peak / 3e6, 1.0, 0.05) << "dx " << dx;
+    EXPECT_LT(run.peak_time, 290e-6) << "the peak must be reached before the run ends";
+  }
+}
+
+TEST(SofteningBar, PmbPeakStressIsTheTensileStrengthAtTwoHorizons2D) {
+  for (double dx : {0.5e-3, 0.25e-3}) {
+    const BarRun run = bar_peak_stress("pmb", 2, dx, "3 MPa", true);
+    EXPECT_NEAR(run.peak / 3e6, 1.0, 0.05) << "dx " << dx;
+    EXPECT_LT(run.peak_time, 290e-6) << "the peak must be reached before the run ends";
+  }
+}
 
 // A measurement, not a check (docs/theory.md, "Quasi-brittle bonds", where its numbers are):
 // run with --gtest_filter='SofteningBarMeasurement.*' --gtest_also_run_disabled_tests.
 TEST(SofteningBarMeasurement, DISABLED_PrintsPeakStresses) {
-  bar_peak_stress("pmb", 3, 1e-3, "3 MPa");
-  bar_peak_stress("pmb", 3, 0.5e-3, "3 MPa");
-  bar_peak_stress("lps", 3, 1e-3, "3 MPa");
-  bar_peak_stress("pmb", 2, 0.5e-3, "3 MPa");
+  for (double dx : {1e-3, 0.5e-3}) bar_peak_stress("pmb", 3, dx, "3 MPa", false);
+  for (double dx : {0.5e-3, 0.25e-3}) bar_peak_stress("pmb", 2, dx, "3 MPa", false);
+  bar_peak_stress("lps", 3, 1e-3, "3 MPa", false);
+  bar_peak_stress("lps", 3, 0.5e-3, "3 MPa", false);
+  bar_peak_stress("lps", 2, 0.5e-3, "3 MPa", false);
+  bar_peak_stress("lps", 2, 0.25e-3, "3 MPa", false);
 }

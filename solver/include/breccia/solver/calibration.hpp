@@ -35,6 +35,16 @@ double lps_critical_stretch(const ElasticInput& in, Influence kind, double horiz
 // to soften, the uniaxial-stress strain at the tensile strength, sigma_t / E' (E' = E, in
 // plane strain E / (1 - nu^2)).
 double softening_onset_stretch(const ElasticInput& in, double tensile_strength);
+// Peak uniaxial-stress of the model (PMB, or LPS for LPS and correspondence) at one material
+// point strained homogeneously, its bonds following the bilinear law from `onset` to
+// `ultimate`: the first maximum of sigma_xx as the strain grows (bonds of other orientations
+// still load while the aligned ones soften, so it exceeds E' x onset). Continuum angular
+// quadrature; linear in onset at a fixed ultimate / onset.
+double homogeneous_tension_peak(const ElasticInput& in, PdModel model, double onset, double ultimate);
+// The onset stretch whose homogeneous peak (above) is the tensile strength, the ultimate
+// stretch being brittle_stretch^2 / onset (G0 kept): the law's calibration. Returns the
+// uncalibrated sigma_t / E' when brittle_stretch is below it (the horizon is too large).
+double calibrated_onset_stretch(const ElasticInput& in, PdModel model, double tensile_strength, double brittle_stretch);
 LpsCoefficients lps_coefficients(const ElasticInput& in);
 
 // Classical strain energy density for a small strain tensor eps (3x3 row-major, plane

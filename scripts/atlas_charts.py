@@ -40,6 +40,10 @@ PROBLEMS = {
     "kalthoff_winkler": ("Kalthoff-Winkler crack angle",
                          "2D plane strain, cases/kalthoff-winkler set-up, lattice, m = 3; "
                          "error = |angle - 70 deg| / 70 deg (Kalthoff & Winkler 1988)"),
+    "softening_strength": ("Quasi-brittle strength (softening bonds)",
+                           "2D plane-stress bar 30 x 6 mm, E 30 GPa, G0 100 J/m2, tensile_strength 3 MPa, pulled "
+                           "at 0.05 m/s per end by grips two horizons deep (PMB with the energy surface correction, "
+                           "LPS without: it has none); error = |peak nominal stress / tensile_strength - 1|"),
     "mps_wave_speed": ("MPS wave speed (stress solid)",
                        "MPS stress formulation (solver/mps Solid), 2D strip 100 x 10 mm in uniaxial strain (every "
                        "particle held in y), fundamental free-free mode, rock E 50 GPa, nu 0.25; error = "

@@ -24,29 +24,38 @@ import numpy as np  # noqa: E402
 
 E, RHO, K_IC = 72e9, 2440.0, 0.75e6
 C_BAR = math.sqrt(E / RHO)
-RADIUS, WIDTH = 0.02, 0.0005
+WIDTH = 0.0005
 
 
 def grady_size(rate):
     return (math.sqrt(24.0) * K_IC / (RHO * C_BAR * rate)) ** (2.0 / 3.0)
 
 
-def zmr_size(rate, horizon):
-    """Zhou, Molinari & Ramesh (2005), cohesive ring [R, normalisation to be checked]:
-    s = L0 * 4.5 / (1 + 4.5 (rate/rate0)^(2/3)), L0 = E G0 / sigma_c^2, rate0 = sigma_c c / (E L0).
-    For PD, sigma_c = E s0 with the plane-stress s0 = sqrt(4 pi G0 / (9 E delta)), so
-    L0 = 9 delta / (4 pi): the PD material length is tied to the horizon."""
+def zmr_size(rate, horizon, strength=None):
+    """Zhou, Molinari & Ramesh (2006, Appl Phys Lett 88:261918), cohesive fragmentation:
+    s = L0 * 4.5 / (1 + 4.5 e^(2/3)), L0 = E G0 / sigma_t^2, e = rate / e0,
+    e0 = c sigma_t^3 / (E^2 G0) (= sigma_t c / (E L0)). With softening bonds sigma_t is the
+    material's tensile_strength. Without one (critical-stretch bonds), sigma_t = E s0 with the
+    plane-stress s0 = sqrt(4 pi G0 / (9 E delta)), so L0 = 9 delta / (4 pi): the PD material
+    length is then tied to the horizon."""
     g0 = K_IC ** 2 / E
-    s0 = math.sqrt(4.0 * math.pi * g0 / (9.0 * E * horizon))
-    length = g0 / (E * s0 * s0)
-    rate0 = s0 * C_BAR / length
+    sigma = strength if strength else E * math.sqrt(4.0 * math.pi * g0 / (9.0 * E * horizon))
+    length = E * g0 / sigma ** 2
+    rate0 = C_BAR * sigma ** 3 / (E ** 2 * g0)
     return length * 4.5 / (1.0 + 4.5 * (rate / rate0) ** (2.0 / 3.0))
+
+
+def zmr_e(rate, strength):
+    g0 = K_IC ** 2 / E
+    return rate / (C_BAR * strength ** 3 / (E ** 2 * g0))
 
 
 def analyse(out, name):
     run = os.path.join(out, name)
     text = open(os.path.join(run, "case.yaml")).read()
     rate = float(re.search(r"strain_rate:\s*([0-9.eE+-]+)", text).group(1))
+    m = re.search(r"tensile_strength:\s*([0-9.eE+-]+)\s*MPa", text)
+    strength = float(m.group(1)) * 1e6 if m else None
     with h5py.File(os.path.join(run, "results.h5"), "r") as f:
         x = f["particles/position"][:, :2]
         thickness = float(f.attrs["thickness_m"])
@@ -54,7 +63,9 @@ def analyse(out, name):
         u = f["output"][last]["displacement"][:, :2]
         horizon = float(np.median(f["particles/horizon"][:]))
         t_end = float(f["output"][last].attrs["time_s"])
-    across = len(np.unique(np.round(np.hypot(x[:, 0], x[:, 1]), 9)))
+    radii = np.hypot(x[:, 0], x[:, 1])
+    across = len(np.unique(np.round(radii, 9)))
+    radius = float(radii.mean())
     fr = np.genfromtxt(os.path.join(run, "post", "fragments.csv"), delimiter=",", names=True)
     fr = np.atleast_1d(fr)
     count = fr["particle_count"]
@@ -68,10 +79,14 @@ def analyse(out, name):
            "fragments_all": int(len(count)), "fragments_kept": int(kept.sum()),
            "dust_mass_fraction": float(1.0 - fr["mass_kg"][kept].sum() / fr["mass_kg"].sum()),
            "horizon_m": horizon, "grady_size_m": grady_size(rate),
-           "zhou_molinari_ramesh_size_m": zmr_size(rate, horizon)}
+           "tensile_strength_Pa": strength, "ring_radius_m": radius,
+           "zhou_molinari_ramesh_size_m": zmr_size(rate, horizon, strength),
+           "circumference_over_all_fragments_m": float(2 * math.pi * radius / len(count))}
+    if strength:
+        res["zmr_e"] = zmr_e(rate, strength)
     if kept.any():
         res["mean_size_m"] = float(arc[kept].mean())
-        res["circumference_over_count_m"] = float(2 * math.pi * RADIUS / kept.sum())
+        res["circumference_over_count_m"] = float(2 * math.pi * radius / kept.sum())
         res["size_over_grady"] = res["mean_size_m"] / res["grady_size_m"]
     return res, (x, u)
 

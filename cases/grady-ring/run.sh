@@ -3,6 +3,9 @@
 #   VARIANT=quick|demo: dx = 0.1 mm  (6,285 particles), rates 5e2 ... 1e4 /s
 #   VARIANT=full      : dx = 0.05 mm (25,130 particles), rates 5e2 ... 2e4 /s
 #   VARIANT=test      : dx = 0.1 mm, rates 1e3 and 1e4 /s (the CTest regression run)
+#   VARIANT=zmr | zmr-fine | zmr-finest: softening bonds, tensile_strength 18 MPa (STRENGTH_MPA),
+#     dx = 0.1 | 0.05 | 0.025 mm, ring radius 50 mm, at e = rate / e0 = 0.1, 0.3, 1, 3, 10 (Zhou, Molinari &
+#     Ramesh 2006; README.md "Softening bonds against Zhou, Molinari & Ramesh")
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
@@ -11,10 +14,22 @@ case "$VARIANT" in
   quick|demo) DX=0.0001;  RATES=${RATES:-"5e2 1e3 2e3 5e3 1e4"} ;;
   full)       DX=0.00005; RATES=${RATES:-"5e2 1e3 2e3 5e3 1e4 2e4"} ;;
   test)       DX=0.0001;  RATES="1e3 1e4" ;;
-  *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full|test)" >&2; exit 2 ;;
+  zmr|zmr-fine|zmr-finest)
+    case "$VARIANT" in zmr) DX=0.0001 ;; zmr-fine) DX=0.00005 ;; *) DX=0.000025 ;; esac
+    # A radius of ~30 cohesive lengths: the ring's kinetic energy is then (e R / L0)^2 >= 9
+    # times the strain energy at the strength even at e = 0.1, so the rate holds until it breaks.
+    RADIUS=0.05
+    STRENGTH_MPA=${STRENGTH_MPA:-18}
+    # e0 = c sigma_t^3 / (E^2 G0), c = sqrt(E / rho): the glass of case.yaml.
+    RATES=${RATES:-$("$PYTHON" -c "
+import math
+E, rho, G0, st = 72e9, 2440.0, 7.8125, $STRENGTH_MPA * 1e6
+e0 = math.sqrt(E / rho) * st**3 / (E**2 * G0)
+print(' '.join('%.4g' % (e * e0) for e in (0.1, 0.3, 1, 3, 10)))")} ;;
+  *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full|test|zmr|zmr-fine|zmr-finest)" >&2; exit 2 ;;
 esac
 mkdir -p "$OUT"
-"$PYTHON" "$HERE/specimen.py" "$OUT/particles.h5" --radius 0.02 --width 0.0005 --spacing "$DX" --thickness 0.001
+"$PYTHON" "$HERE/specimen.py" "$OUT/particles.h5" --radius "${RADIUS:-0.02}" --width 0.0005 --spacing "$DX" --thickness 0.001
 RUNS=()
 for r in $RATES; do
   name="rate_$r"
@@ -22,7 +37,12 @@ for r in $RATES; do
   # End time: 4 us (several crack-spacing wave transits) after the mean failure strain
   # (~7e-4 at dx 0.1 mm) is reached, counted three times over for the scatter.
   end_us=$("$PYTHON" -c "print(round(4 + 3 * 7e-4 / $r * 1e6, 2))")
-  sed -e "s/RATE/$r/" -e "s/END_US/$end_us/" -e "s#particles: particles.h5#particles: ../particles.h5#" \
+  # Softening: 20 us (many release-wave transits of the largest fragment) after 6 times the
+  # time to reach the strength's strain.
+  [ -z "${STRENGTH_MPA:-}" ] || end_us=$("$PYTHON" -c "print(round(20 + 6 * $STRENGTH_MPA * 1e6 / 72e9 / $r * 1e6, 2))")
+  strength=()
+  [ -z "${STRENGTH_MPA:-}" ] || strength=(-e "s/fracture_energy: 7.8125 /fracture_energy: 7.8125\n    tensile_strength: $STRENGTH_MPA MPa /")
+  sed -e "s/RATE/$r/" -e "s/END_US/$end_us/" "${strength[@]}" -e "s#particles: particles.h5#particles: ../particles.h5#" \
       "$HERE/case.yaml" > "$OUT/$name/case.yaml"
   echo "== $name (end $end_us us)"
   "$BRECCIA_BIN/breccia-solve" "$OUT/$name/case.yaml" -o "$OUT/$name" --threads "$THREADS" --quiet

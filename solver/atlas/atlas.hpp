@@ -97,6 +97,7 @@ void wave_speed_bar(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& 
 void static_calibration(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& sink);  // strain + fracture energy
 void quasi_static_bar(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& sink);
 void kalthoff_winkler(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& sink);
+void softening_strength(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& sink);
 
 // Stability map: docs/atlas/stability.csv, one row per run.
 inline constexpr const char* kStabilityHeader =

@@ -3,7 +3,7 @@
 //
 //   breccia-atlas [--quick] [--csv docs/atlas/atlas.csv] [--stability-csv docs/atlas/stability.csv]
 //                 [--problems wave_speed_bar,strain_energy,fracture_energy,quasi_static_bar,kalthoff_winkler,
-//                             mps_wave_speed,thick_cylinder,thick_cylinder_hill]
+//                             softening_strength,mps_wave_speed,thick_cylinder,thick_cylinder_hill]
 //                 [--models pmb,lps] [--kinds lattice,tet] [--m 2,3,4,5] [--backends cpu,cuda] [--no-stability] [--only-stability]
 //                 [--stability-studies pd,graded,mps] [--gradings 1.5,2,3] [--append] [--threads N] [--work DIR] [--mesh-exe PATH] [--place-exe PATH]
 //
@@ -34,7 +34,7 @@ const char* kUsage =
     "                     [--stability-studies pd,graded,mps] (default: all; stability_graded.csv, stability_mps.csv beside the stability CSV)\n"
     "                     [--gradings 1.5,2,3] (grading ratios of the graded study; default 1,1.5,2,3,4,6, --quick 2,4)\n"
     "                     [--threads N] [--work DIR] [--mesh-exe PATH] [--place-exe PATH]\n"
-    "problems: wave_speed_bar strain_energy fracture_energy quasi_static_bar kalthoff_winkler\n"
+    "problems: wave_speed_bar strain_energy fracture_energy quasi_static_bar kalthoff_winkler softening_strength\n"
     "          mps_wave_speed thick_cylinder thick_cylinder_hill (MPS stress solid)\n";
 
 std::vector<std::string> split(const std::string& s) {
@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
   try {
     SweepPlan plan;
     plan.problems = {"wave_speed_bar", "strain_energy", "fracture_energy", "quasi_static_bar", "kalthoff_winkler",
-                     "mps_wave_speed", "thick_cylinder", "thick_cylinder_hill"};
+                     "softening_strength", "mps_wave_speed", "thick_cylinder", "thick_cylinder_hill"};
     plan.models = {"pmb", "lps"};
     plan.kinds = {"lattice", "tet"};
     std::string csv = "docs/atlas/atlas.csv", stability_csv = "docs/atlas/stability.csv";
@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
     }
     require_known(plan.problems,
                   {"wave_speed_bar", "strain_energy", "fracture_energy", "quasi_static_bar", "kalthoff_winkler",
-                   "mps_wave_speed", "thick_cylinder", "thick_cylinder_hill"},
+                   "softening_strength", "mps_wave_speed", "thick_cylinder", "thick_cylinder_hill"},
                   "--problems");
     require_known(plan.models, {"pmb", "lps", "correspondence"}, "--models");
     require_known(stability_studies, {"pd", "graded", "mps"}, "--stability-studies");
@@ -160,6 +160,7 @@ int main(int argc, char** argv) {
       static_calibration(plan, maker, sink);
       if (has("quasi_static_bar")) quasi_static_bar(plan, maker, sink);
       if (has("kalthoff_winkler")) kalthoff_winkler(plan, maker, sink);
+      if (has("softening_strength")) softening_strength(plan, maker, sink);
       mps_problems(plan, sink);  // the MPS stress solid (mps_atlas.cpp)
     }
     if (stability) {

@@ -119,4 +119,36 @@ std::string write_graded_strip(const std::string& path, double L, double W, doub
   return path;
 }
 
+PeakStress pulled_bar_peak_stress(solver::PdSystem& s, size_t grip, double area_m2, double end_s) {
+  const auto& pulled = s.constraints.at(grip).particles;
+  const long long steps = static_cast<long long>(std::ceil(end_s / s.dt));
+  PeakStress peak;
+  for (long long k = 0; k < steps; ++k) {
+    solver::cpu_step(s);
+    double f = 0.0;
+    for (auto i : pulled) f += s.volume[i] * s.force[3 * i];
+    const double stress = std::fabs(f) / area_m2;
+    if (stress > peak.stress_pa) peak = {stress, s.time};
+  }
+  return peak;
+}
+
+std::string softening_bar_case_text(int dimension, double grip_depth_m, double poisson_ratio,
+                                    const std::string& tensile_strength) {
+  auto num = [](double v) { return std::to_string(v); };
+  const double L = SofteningBar::length_m;
+  auto grip_box = [&](double x0, double x1) {
+    return dimension == 3 ? "[" + num(x0) + ", -1, -1, " + num(x1) + ", 1, 1]" : "[" + num(x0) + ", -1, " + num(x1) + ", 1]";
+  };
+  char nu[32];
+  std::snprintf(nu, sizeof nu, "%.16g", poisson_ratio);
+  return "materials: [{name: c, density: 2400, youngs_modulus: 30 GPa, poisson_ratio: " + std::string(nu) +
+         ", fracture_energy: 100, tensile_strength: " + tensile_strength + "}]\n"
+         "sets: [{name: grip_lo, box: " + grip_box(-1, grip_depth_m) + "}, {name: grip_hi, box: " +
+         grip_box(L - grip_depth_m, 1) + "}]\n"
+         "boundary: [{type: velocity, set: grip_lo, value: [-0.05, 0, 0], components: [x], ramp_time: 20 us},\n"
+         "           {type: velocity, set: grip_hi, value: [0.05, 0, 0], components: [x], ramp_time: 20 us}]\n"
+         "time: {end: 300 us}\n";
+}
+
 }  // namespace breccia::atlas

@@ -28,6 +28,24 @@ double fundamental_mode_speed_error(solver::PdSystem& s, double length_m, double
 double bar_end_displacement_error(solver::PdSystem& s, double traction_pa, double youngs_modulus_pa,
                                   long long* iterations = nullptr);
 
+// Peak nominal stress of a bar pulled by a velocity constraint (the grip): the force on the
+// grip's particles (`s.constraints[grip]`) over `area_m2`, the maximum over explicit CPU steps
+// until `end_s`. The quasi-brittle test and the atlas's softening_strength rows share it.
+struct PeakStress {
+  double stress_pa = 0.0, time_s = 0.0;
+};
+PeakStress pulled_bar_peak_stress(solver::PdSystem& s, size_t grip, double area_m2, double end_s);
+
+// The quasi-brittle bar: 30 mm long along x, 6 mm wide (3D: square section), concrete-like
+// (E 30 GPa, rho 2400, G0 100 J/m2, sigma_t given), pulled at 0.05 m/s at each end for 300 us
+// by grips `grip_depth_m` deep (x prescribed, lateral motion free; constraint 1 is the x-max
+// grip). Returns the case text after `specimen:` and `model:`.
+struct SofteningBar {
+  static constexpr double length_m = 0.03, width_m = 0.006, thickness_m = 0.001, end_s = 300e-6;
+};
+std::string softening_bar_case_text(int dimension, double grip_depth_m, double poisson_ratio,
+                                    const std::string& tensile_strength);
+
 // A right-going P pulse in uniaxial strain (the caller holds y) along a strip whose
 // resolution changes at x = interface_x: Gaussian u = A exp(-(x - x0)^2 / 2 w^2) moving
 // at c_p, run until its centre is four widths past the change. Returns the share of the

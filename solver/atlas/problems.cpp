@@ -295,6 +295,42 @@ void quasi_static_bar(const SweepPlan& plan, SpecimenMaker& maker, const RowSink
 }
 
 // ---------------------------------------------------------------------------------------
+// Quasi-brittle strength: a 2D plane stress bar 30 x 6 mm of softening bonds (E 30 GPa, G0
+// 100 J/m2, sigma_t 3 MPa) pulled by grips two horizons deep (softening_bar_case_text); error
+// = |peak nominal stress / sigma_t - 1| (the law is calibrated so that a homogeneous material
+// point peaks at sigma_t: docs/theory.md "Quasi-brittle bonds"). CPU only: the measure reads
+// the grip's force every step.
+void softening_strength(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& sink) {
+  const double L = SofteningBar::length_m, W = SofteningBar::width_m, sigma_t = 3e6;
+  const std::vector<double> spacings = plan.quick ? std::vector<double>{0.5e-3}
+                                                  : std::vector<double>{1e-3, 0.5e-3, 0.25e-3};
+  const double lo[3] = {0, 0, 0}, hi[3] = {L, W, 0};
+  for (const auto& kind : plan.kinds)
+    for (double dx : spacings)
+      for (const auto& model : plan.models)
+        for (double m : plan.m_values) {
+          const Settings st{model, kind, m, dx, "float64", "cpu"};
+          guarded("softening_strength", st, [&] {
+            const auto t0 = std::chrono::steady_clock::now();
+            const double nu = model == "pmb" ? 1.0 / 3.0 : 0.25;
+            PdSystem s = system_from_yaml(maker.work_dir, "softening_strength",
+                                          maker.specimen_yaml(st, 2, lo, hi, SofteningBar::thickness_m) +
+                                              model_yaml(st, "plane_stress", true) +
+                                              softening_bar_case_text(2, 2.05 * horizon_factor(m) * dx, nu, "3 MPa"));
+            const PeakStress peak = pulled_bar_peak_stress(s, 1, W * SofteningBar::thickness_m, SofteningBar::end_s);
+            AtlasRow r = row_of("softening_strength", st, s, plan.threads);
+            r.steps = s.step;
+            r.wall_s = seconds_since(t0);
+            r.error = std::fabs(peak.stress_pa / sigma_t - 1.0);
+            r.error_measure = model == "pmb"
+                                  ? "|peak stress / tensile_strength - 1|; 2D plane stress bar 30x6 mm, surface correction"
+                                  : "|peak stress / tensile_strength - 1|; 2D plane stress bar 30x6 mm (LPS: no surface correction)";
+            sink(r);
+          });
+        }
+}
+
+// ---------------------------------------------------------------------------------------
 // Kalthoff-Winkler edge-on impact (cases/kalthoff-winkler: same plate, notches, material
 // and 16 m/s impact), 2D plane strain, lattice only. The crack angle is measured as
 // cases/kalthoff-winkler/report.py does; error = |angle - 70 deg| / 70 deg (Kalthoff &

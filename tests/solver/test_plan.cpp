@@ -407,6 +407,10 @@ time: {integrator: adr}
 materials: [{name: r, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25, fracture_energy: 50}]
 time: {steps: 1}
 )")).problem, "fracture_energy");
+  EXPECT_EQ(classify_problem(case_from_yaml("cls_soft", head + R"(
+materials: [{name: r, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25, fracture_energy: 50, tensile_strength: 3 MPa}]
+time: {steps: 1}
+)")).problem, "softening_strength");
   EXPECT_EQ(classify_problem(case_from_yaml("cls_wave", head + R"(
 materials: [{name: r, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25}]
 time: {steps: 1}

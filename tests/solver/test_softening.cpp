@@ -11,6 +11,7 @@
 
 #include "breccia/common/error.hpp"
 #include "helpers.hpp"
+#include "measures.hpp"
 
 using namespace breccia::solver;
 using namespace breccia::solver::testing;
@@ -140,47 +141,25 @@ namespace {
 // correction stiffens at the end faces do not reach the gauge (with grips one horizon deep the
 // gauge's first horizon next to the grip localises at 0.86 sigma_t). The stress is the force on
 // one grip's particles over the section.
-struct BarRun {
-  double peak = 0.0, peak_time = 0.0;
-  size_t particles = 0;
-};
-BarRun bar_peak_stress(const char* model, int dimension, double dx, const char* strength, bool surface_correction) {
-  const double length = 0.03, width = 0.006, grip = 2.05 * 3.015 * dx;
+breccia::atlas::PeakStress bar_peak_stress(const char* model, int dimension, double dx, const char* strength,
+                                           bool surface_correction) {
+  using breccia::atlas::SofteningBar;
+  const double L = SofteningBar::length_m, W = SofteningBar::width_m;
   const bool pmb2d = dimension == 2 && std::string(model) == "pmb";
   auto num = [](double v) { return std::to_string(v); };
-  const std::string box = dimension == 3 ? "[0, 0, 0, " + num(length) + ", " + num(width) + ", " + num(width) + "]"
-                                         : "[0, 0, " + num(length) + ", " + num(width) + "]";
-  auto grip_box = [&](double x0, double x1) {
-    return dimension == 3 ? "[" + num(x0) + ", -1, -1, " + num(x1) + ", 1, 1]" : "[" + num(x0) + ", -1, " + num(x1) + ", 1]";
-  };
+  const std::string box = dimension == 3 ? "[0, 0, 0, " + num(L) + ", " + num(W) + ", " + num(W) + "]"
+                                         : "[0, 0, " + num(L) + ", " + num(W) + "]";
   const std::string deck =
       "specimen: {lattice: {dimension: " + std::to_string(dimension) + ", box: " + box + ", spacing: " + num(dx) +
-      ", thickness: 0.001}}\n"
+      ", thickness: " + num(SofteningBar::thickness_m) + "}}\n"
       "model: {type: " + model + ", horizon_factor: 3.015" + (dimension == 2 ? ", planar: plane_stress" : "") +
-      (surface_correction ? ", surface_correction: energy" : "") + "}\n"
-      "materials: [{name: c, density: 2400, youngs_modulus: 30 GPa, poisson_ratio: " +
-      (pmb2d ? "0.3333333333333333" : "0.25") + ", fracture_energy: 100, tensile_strength: " + strength + "}]\n"
-      "sets: [{name: grip_lo, box: " + grip_box(-1, grip) + "}, {name: grip_hi, box: " + grip_box(length - grip, 1) + "}]\n"
-      "boundary: [{type: velocity, set: grip_lo, value: [-0.05, 0, 0], components: [x], ramp_time: 20 us},\n"
-      "           {type: velocity, set: grip_hi, value: [0.05, 0, 0], components: [x], ramp_time: 20 us}]\n"
-      "time: {end: 300 us}\n";
+      (surface_correction ? ", surface_correction: energy" : "") + "}\n" +
+      breccia::atlas::softening_bar_case_text(dimension, 2.05 * 3.015 * dx, pmb2d ? 1.0 / 3.0 : 0.25, strength);
   PdSystem s = system_from_yaml(std::string("bar_") + model, deck);
-  const auto& pulled = s.constraints[1].particles;
-  const double area = dimension == 3 ? width * width : width * 0.001;
-  const long long steps = static_cast<long long>(std::ceil(300e-6 / s.dt));
-  BarRun run;
-  run.particles = s.n;
-  for (long long k = 0; k < steps; ++k) {
-    cpu_step(s);
-    double f = 0.0;
-    for (auto i : pulled) f += s.volume[i] * s.force[3 * i];
-    if (-f / area > run.peak) {
-      run.peak = -f / area;
-      run.peak_time = s.time;
-    }
-  }
+  const double area = dimension == 3 ? W * W : W * SofteningBar::thickness_m;
+  const breccia::atlas::PeakStress run = breccia::atlas::pulled_bar_peak_stress(s, 1, area, SofteningBar::end_s);
   std::printf("bar %s %dD dx %g sigma_t %s%s: peak %.4g MPa at %.1f us (%zu particles)\n", model, dimension, dx,
-              strength, surface_correction ? " surface-corrected" : "", run.peak / 1e6, run.peak_time * 1e6, s.n);
+              strength, surface_correction ? " surface-corrected" : "", run.stress_pa / 1e6, run.time_s * 1e6, s.n);
   return run;
 }
 }  // namespace
@@ -193,17 +172,17 @@ BarRun bar_peak_stress(const char* model, int dimension, double dx, const char* 
 // 1.010 and 1.000 (3D, dx 1 and 0.5 mm), 1.013 and 1.017 (2D plane stress, 0.5 and 0.25 mm).
 TEST(SofteningBar, PmbPeakStressIsTheTensileStrengthAtTwoHorizons3D) {
   for (double dx : {1e-3, 0.5e-3}) {
-    const BarRun run = bar_peak_stress("pmb", 3, dx, "3 MPa", true);
-    EXPECT_NEAR(run.peak / 3e6, 1.0, 0.05) << "dx " << dx;
-    EXPECT_LT(run.peak_time, 290e-6) << "the peak must be reached before the run ends";
+    const auto run = bar_peak_stress("pmb", 3, dx, "3 MPa", true);
+    EXPECT_NEAR(run.stress_pa / 3e6, 1.0, 0.05) << "dx " << dx;
+    EXPECT_LT(run.time_s, 290e-6) << "the peak must be reached before the run ends";
   }
 }
 
 TEST(SofteningBar, PmbPeakStressIsTheTensileStrengthAtTwoHorizons2D) {
   for (double dx : {0.5e-3, 0.25e-3}) {
-    const BarRun run = bar_peak_stress("pmb", 2, dx, "3 MPa", true);
-    EXPECT_NEAR(run.peak / 3e6, 1.0, 0.05) << "dx " << dx;
-    EXPECT_LT(run.peak_time, 290e-6) << "the peak must be reached before the run ends";
+    const auto run = bar_peak_stress("pmb", 2, dx, "3 MPa", true);
+    EXPECT_NEAR(run.stress_pa / 3e6, 1.0, 0.05) << "dx " << dx;
+    EXPECT_LT(run.time_s, 290e-6) << "the peak must be reached before the run ends";
   }
 }
 

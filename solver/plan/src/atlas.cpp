@@ -169,6 +169,14 @@ ProblemClass classify_problem(const solver::CaseConfig& c) {
     return {"quasi_static_bar",
             "time.integrator is adr (static equilibrium): the atlas's static problem with a known answer is the "
             "quasi-static bar (strain against sigma/E)"};
+  const bool softens = c.fracture && std::any_of(c.materials.begin(), c.materials.end(), [](const auto& m) {
+    return m.fracture_energy > 0 && m.tensile_strength > 0;
+  });
+  if (softens)
+    return {"softening_strength",
+            "bonds soften from a tensile strength (quasi-brittle law): the error that decides where and when the body "
+            "cracks is in the strength it reaches, which the atlas measures as the peak stress of a pulled bar against "
+            "tensile_strength (fracture_energy rows: the energy, which the law keeps by construction)"};
   const bool breaks = c.fracture && std::any_of(c.materials.begin(), c.materials.end(),
                                                 [](const auto& m) { return m.fracture_energy > 0; });
   if (breaks)

@@ -203,8 +203,10 @@ double bytes_per_particle(int dimension, PdModel model) {
 }
 
 // Per bond entry: neighbor (int32); xi_len k_own k_dual vol_own (4 doubles); s0_own
-// s0_dual (2 floats); state (1 byte).
-double bytes_per_bond() { return sizeof(int32_t) + 4 * sizeof(double) + 2 * sizeof(float) + sizeof(uint8_t); }
+// s0_dual (2 floats); state (1 byte); softening bonds add s_onset and bond_damage (2 floats).
+double bytes_per_bond(bool softening) {
+  return sizeof(int32_t) + 4 * sizeof(double) + (softening ? 4 : 2) * sizeof(float) + sizeof(uint8_t);
+}
 
 CostEstimate estimate_cost(const CaseConfig& c, const Throughputs& rates, const CostOptions& o) {
   if (c.model_name == "mps")
@@ -292,7 +294,7 @@ CostEstimate estimate_cost(const CaseConfig& c, const Throughputs& rates, const 
   // Memory: the run's arrays; set-up also holds the padded families and a few per-particle
   // temporaries (spacing, pad, counts, calibration sums: about 12 doubles).
   const PdModel model = c.model;
-  e.run_bytes = e.particles * bytes_per_particle(e.dimension, model) + e.bonds * bytes_per_bond();
+  e.run_bytes = e.particles * bytes_per_particle(e.dimension, model) + e.bonds * bytes_per_bond(c.softening && c.fracture);
   e.setup_bytes = e.run_bytes + padded * sizeof(int32_t) + e.particles * (sizeof(int64_t) + 12 * sizeof(double));
 
   // Seconds: bond-updates over the measured per-core rate of the model and precision times

@@ -117,7 +117,7 @@ long long lattice_bond_count(const std::array<long long, 3>& particles_per_axis,
 
 // Bytes the PdSystem holds per particle and per bond entry (pd_system.hpp, as allocated).
 double bytes_per_particle(int dimension, solver::PdModel model);
-double bytes_per_bond();
+double bytes_per_bond(bool softening = false);  // softening: + s_onset, bond_damage
 
 // ---- atlas ------------------------------------------------------------------------------
 

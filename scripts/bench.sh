@@ -5,6 +5,9 @@
 # float64 only, with its default penalty stabilisation); LAMMPS=0 skips the LAMMPS rows.
 # bond-updates = particles x mean family size x steps (each bond counted once from each
 # end) / wall time of the time loop. Usage: scripts/bench.sh BUILD_DIR [N=41] [STEPS=100]
+# MODELS may also name pmb-softening and lps-softening: the same lattice with
+# tensile_strength (softening bonds; every bond below its onset, as most bonds of a fracture
+# run are), to cost the softening law against the critical-stretch one.
 set -euo pipefail
 BUILD=${1:-build}; N=${2:-41}; STEPS=${3:-100}
 BIN="$(cd "$BUILD" && pwd)/bin"
@@ -26,11 +29,13 @@ for model in ${MODELS:-pmb lps correspondence}; do
 for prec in ${PRECISIONS:-float64 float32}; do
   # The correspondence kernels exist in double precision only (case_config.cpp refuses float32).
   if [ "$model" = correspondence ] && [ "$prec" != float64 ]; then continue; fi
+  type=${model%-softening}; strength=""
+  [ "$type" = "$model" ] || strength=", tensile_strength: 1 GPa"
   cat > "$OUT/$model-$prec.yaml" <<YAML
 name: bench-$model-$prec
 specimen: {lattice: {dimension: 3, box: [0, 0, 0, $L, $L, $L], spacing: $DX}}
-model: {type: $model, horizon_factor: 3.015, precision: $prec}
-materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, fracture_energy: 1e6}]
+model: {type: $type, horizon_factor: 3.015, precision: $prec}
+materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, fracture_energy: 1e6$strength}]
 initial: [{type: radial_velocity, center: [0, 0, 0], strain_rate: 10}]
 time: {steps: $STEPS}
 output: {every: 1000000, history_every: 1000000, results: false}

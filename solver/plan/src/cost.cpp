@@ -302,11 +302,19 @@ CostEstimate estimate_cost(const CaseConfig& c, const Throughputs& rates, const 
   const bool f32 = c.precision == CaseConfig::Precision::Float32;
   const LoopRate* measured = f32 ? rates.find(model, e.threads, "float32") : nullptr;
   const LoopRate& r = measured ? *measured : rates.rate(model, e.threads);
-  const double rate = r.bond_updates_per_core_s * e.threads;
   e.rate_source = r.source + (r.threads != e.threads ? " (measured at " + std::to_string(r.threads) +
                                                            " thread(s); per-core rate assumed to hold)"
                                                      : "");
   if (f32 && !measured) e.rate_source += " (float64 rate: no float32 rate measured for " + r.model + ")";
+  // Softening bonds read two more floats per entry and evaluate the law's branch.
+  double softening_factor = 1.0;
+  if (c.softening && c.fracture)
+    for (const auto& f : rates.softening)
+      if (f.model == model_key(model)) {
+        softening_factor = f.time_factor;
+        e.rate_source += "; softening bonds x" + fmt_rate(f.time_factor) + " time (" + f.source + ")";
+      }
+  const double rate = r.bond_updates_per_core_s * e.threads / softening_factor;
   e.setup_source = "power iteration (" + std::to_string(rates.power_iterations) + " force passes) at that rate + " +
                    "other set-up work at " + fmt_rate(rates.setup_bonds_per_core_s) + " bond entries per core-second (" +
                    rates.setup_source + ")";

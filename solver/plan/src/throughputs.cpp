@@ -63,7 +63,7 @@ std::string default_throughputs_path() {
 
 Throughputs load_throughputs(const std::string& path) {
   const Section root = Section::load_file(path);
-  root.allow_only({"loop", "setup", "adr", "gpu"});
+  root.allow_only({"loop", "setup", "adr", "gpu", "softening"});
   Throughputs t;
   t.file = path;
   for (const Section& l : root.list("loop")) {
@@ -77,6 +77,12 @@ Throughputs load_throughputs(const std::string& path) {
     t.loop.push_back(r);
   }
   if (t.loop.empty()) throw InputError(path, "loop", "no entries", "measured loop throughputs per model");
+  if (root.node()["softening"])
+    for (const Section& l : root.list("softening")) {
+      l.allow_only({"model", "time_factor", "source"});
+      t.softening.push_back({l.choice("model", {"pmb", "lps"}), l.positive("time_factor", Quantity::Dimensionless),
+                             l.text("source", path)});
+    }
   const Section setup = root.section("setup");
   setup.allow_only({"bonds_per_core_s", "source", "power_iterations"});
   t.setup_bonds_per_core_s = setup.positive("bonds_per_core_s", Quantity::Dimensionless);

@@ -33,6 +33,15 @@ struct Throughputs {
   // ADR iterations ~ adr_iterations_per_cell x (cells along the longest side) x log10(1/tol).
   double adr_iterations_per_cell_decade = 0.0;
   std::string adr_source;
+  // Time per bond entry of softening bonds (materials[].tensile_strength) over the
+  // critical-stretch law's, per model key (pmb | lps), float64; a model without one is costed
+  // at the critical-stretch rate.
+  struct SofteningCost {
+    std::string model;
+    double time_factor = 1.0;
+    std::string source;
+  };
+  std::vector<SofteningCost> softening;
   std::optional<double> gpu_bond_updates_per_s;  // none measured yet
   std::string gpu_source;
   std::string file;

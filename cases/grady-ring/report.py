@@ -115,8 +115,10 @@ def main(argv):
     have = [r for r in runs if "mean_size_m" in r]
     ax.loglog([r["strain_rate_per_s"] for r in have], [r["mean_size_m"] * 1e3 for r in have], "o",
               label="Breccia PD, mean arc of kept fragments")
-    ax.loglog(rates, [zmr_size(q, runs[0]["horizon_m"]) * 1e3 for q in rates], "k--", lw=1,
-              label="Zhou-Molinari-Ramesh 2005 with PD's L0 = 9 delta/(4 pi) [R]")
+    strength = runs[0]["tensile_strength_Pa"]
+    ax.loglog(rates, [zmr_size(q, runs[0]["horizon_m"], strength) * 1e3 for q in rates], "k--", lw=1,
+              label=(f"Zhou-Molinari-Ramesh 2006, sigma_t {strength / 1e6:g} MPa" if strength else
+                     "Zhou-Molinari-Ramesh 2006 with PD's L0 = 9 delta/(4 pi)"))
     if "fitted_exponent" in report:
         ax.set_title(f"fitted exponent {report['fitted_exponent']:.2f} (Grady -0.67)", fontsize=9)
     ax.axhline(2 * 3.015 * (WIDTH / runs[0]["particles_across_width"]) * 1e3,

@@ -18,16 +18,20 @@ mkdir -p "$OUT"
 # Two runs: G0 = 200 J/m2 as specified (textbook critical stretch), and G0 = 200/pi J/m2,
 # which gives the critical stretch of seed 001's formula (it carries an extra 1/sqrt(pi),
 # benchmarks.md section 0.6): a labelled sensitivity run, not a calibration.
+# A third run, softening: G0 = 200 J/m2 and the granite's tensile strength (STRENGTH, default
+# 12 MPa) through softening bonds (docs/theory.md "Quasi-brittle bonds"; README.md).
 RUNS=()
-for run in ${GRANITE_RUNS:-g0_200 seed_s0}; do
+for run in ${GRANITE_RUNS:-g0_200 seed_s0 softening}; do
+  strength=""
   case "$run" in
     g0_200)  G0=200 ;;
     seed_s0) G0=63.66198 ;;
+    softening) G0=200; strength="${STRENGTH:-12 MPa}" ;;
     *) echo "run.sh: unknown run '$run'" >&2; exit 2 ;;
   esac
   mkdir -p "$OUT/$run"
   sed -e "s#particles: particles.h5#particles: ../particles.h5#" -e "s/every: EVERY/every: $EVERY/" \
-      -e "s/fracture_energy: G0 /fracture_energy: $G0 /" \
+      -e "s/fracture_energy: G0 /fracture_energy: $G0${strength:+\n    tensile_strength: $strength} /" \
       -e "s/  end: 50 us /  end: ${END:-50 us} /" "$HERE/case.yaml" > "$OUT/$run/case.yaml"
   echo "== $run (G0 $G0 J/m2)"
   "$BRECCIA_BIN/breccia-solve" "$OUT/$run/case.yaml" -o "$OUT/$run" --threads "$THREADS" --quiet

@@ -29,7 +29,7 @@ const UnitTable& table(Quantity q) {
       {Quantity::Energy, {{"J", 1.0}, {"kJ", 1e3}, {"MJ", 1e6}}},
       {Quantity::FractureEnergy, {{"J/m2", 1.0}, {"N/m", 1.0}, {"kJ/m2", 1e3}, {"N/mm", 1e3}}},
       {Quantity::Velocity, {{"m/s", 1.0}, {"mm/s", 1e-3}, {"km/s", 1e3}}},
-      {Quantity::Acceleration, {{"m/s2", 1.0}}},
+      {Quantity::Acceleration, {{"m/s2", 1.0}, {"g", 9.80665}}},  // g: standard gravity
       {Quantity::Force, {{"N", 1.0}, {"kN", 1e3}, {"MN", 1e6}}},
       {Quantity::Mass, {{"kg", 1.0}, {"g", 1e-3}}},
       {Quantity::StrainRate, {{"1/s", 1.0}, {"/s", 1.0}}},

@@ -17,6 +17,20 @@ std::string resolve(const std::string& dir, const std::string& p) {
   return (std::filesystem::path(dir) / p).lexically_normal().string();
 }
 
+std::array<bool, 3> parse_components(const Section& s) {
+  if (!s.has("components")) return {true, true, true};
+  std::array<bool, 3> c{false, false, false};
+  for (const auto& name : s.texts("components")) {
+    if (name == "x") c[0] = true;
+    else if (name == "y") c[1] = true;
+    else if (name == "z") c[2] = true;
+    else throw InputError(s.file(), s.field("components"), "'" + name + "'", "a list of x, y, z");
+  }
+  return c;
+}
+
+}  // namespace
+
 HistorySpec parse_history(const Section& s, Quantity q, const std::string& dir) {
   s.allow_only({"type", "value", "peak", "ramp_time", "rise_time", "ratio", "file"});
   HistorySpec h;
@@ -61,20 +75,6 @@ HistorySpec parse_history(const Section& s, Quantity q, const std::string& dir) 
   }
   return h;
 }
-
-std::array<bool, 3> parse_components(const Section& s) {
-  if (!s.has("components")) return {true, true, true};
-  std::array<bool, 3> c{false, false, false};
-  for (const auto& name : s.texts("components")) {
-    if (name == "x") c[0] = true;
-    else if (name == "y") c[1] = true;
-    else if (name == "z") c[2] = true;
-    else throw InputError(s.file(), s.field("components"), "'" + name + "'", "a list of x, y, z");
-  }
-  return c;
-}
-
-}  // namespace
 
 double HistorySpec::at(double t) const {
   switch (kind) {

@@ -307,7 +307,7 @@ CaseSpec parse_root(const Section& root) {
   }
   if (auto contact = root.optional_section("contact"); contact && contact->has("floor")) {
     const Section f = contact->section("floor");
-    std::vector<std::string> floor_keys{"point", "normal", "stiffness_factor"};
+    std::vector<std::string> floor_keys{"point", "normal", "stiffness_factor", "motion"};
     for (const auto& k : friction_keys()) floor_keys.push_back(k);
     f.allow_only(floor_keys);
     FloorSpec fs;
@@ -316,6 +316,7 @@ CaseSpec parse_root(const Section& root) {
     fs.normal = f.has("normal") ? f.vec3("normal", Quantity::Dimensionless) : std::array<double, 3>{0.0, 1.0, 0.0};
     if (!(std::hypot(fs.normal[0], fs.normal[1], fs.normal[2]) > 0)) fail(f, "normal", "a zero vector", "a nonzero normal");
     fs.stiffness_factor = f.positive("stiffness_factor", Quantity::Dimensionless, 1.0);
+    if (f.has("motion")) fs.motion = parse_motion(f.section("motion"));
     c.floor = fs;
   }
 

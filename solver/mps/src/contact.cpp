@@ -44,7 +44,11 @@ void Contact::set_particle_contact(ParticleContact pc) {
 void Contact::add_half_space(HalfSpace h) {
   const double len = std::sqrt(h.normal[0] * h.normal[0] + h.normal[1] * h.normal[1] + h.normal[2] * h.normal[2]);
   for (double& c : h.normal) c /= len;
+  h.offset_m = h.velocity_m_s = {0.0, 0.0, 0.0};
+  if (h.motion && h.motion->quantity == PrescribedMotion::Quantity::Velocity)
+    for (int a = 0; a < 3; ++a) h.velocity_m_s[a] = h.motion->direction[a] * h.motion->history.at(0.0);
   half_spaces_.push_back(h);
+  plane_reaction_n_.assign(half_spaces_.size(), {0.0, 0.0, 0.0});
   friction_.clear();
 }
 
@@ -61,6 +65,9 @@ void Contact::add_polygon(RigidPolygon p) {
     b.vx = p.velocity_m_s[0];
     b.vy = p.velocity_m_s[1];
     b.omega = p.angular_velocity_rad_s;
+  } else if (p.motion && p.motion->quantity == PrescribedMotion::Quantity::Velocity) {
+    b.vx = p.motion->direction[0] * p.motion->history.at(0.0);
+    b.vy = p.motion->direction[1] * p.motion->history.at(0.0);
   }
   polygons_.push_back(std::move(p));
   body_.push_back(std::move(b));
@@ -277,8 +284,10 @@ void Contact::obstacle_forces(const ParticleStateView& s, double dt) {
     const double* u = a == 0 ? s.u.x : (a == 1 ? s.u.y : s.u.z);
     return s.position_m[3 * i + a] + ((a < s.dimension) ? u[i] : 0.0);
   };
+  plane_reaction_n_.assign(half_spaces_.size(), {0.0, 0.0, 0.0});
   for (size_t h = 0; h < half_spaces_.size(); ++h) {
     const PlaneContact plane = plane_contact(half_spaces_[h]);
+    std::array<double, 3>& reaction = plane_reaction_n_[h];
     for (long long i = 0; i < n; ++i) {
       const double x[3] = {current(i, 0), current(i, 1), current(i, 2)};
       const double v[3] = {s.v.x[i], s.v.y[i], s.dimension == 3 ? s.v.z[i] : 0.0};
@@ -286,7 +295,10 @@ void Contact::obstacle_forces(const ParticleStateView& s, double dt) {
       // The body the CUDA launcher runs too (solid_phases.hpp).
       if (half_space_contact_at(x, v, plane, dt, friction_[h * n + i], f, &dissipated_j_, &spring_energy_j_) <= 0.0)
         continue;
-      for (int a = 0; a < 3; ++a) force_n_[a][i] += f[a];
+      for (int a = 0; a < 3; ++a) {
+        force_n_[a][i] += f[a];
+        reaction[a] -= f[a];
+      }
     }
   }
   std::vector<double> vx, vy;
@@ -390,10 +402,11 @@ void Contact::free_bodies_on_half_spaces(double dt) {
     polygon_vertices(p, vx, vy);
     for (size_t h = 0; h < half_spaces_.size(); ++h) {
       const HalfSpace& hs = half_spaces_[h];
+      const PlaneContact plane = plane_contact(hs);
       for (size_t m = 0; m < vx.size(); ++m) {
         FrictionState& st = vertex_friction_[h * vertices + first + m];
-        const double height = (vx[m] - hs.point_m[0]) * hs.normal[0] + (vy[m] - hs.point_m[1]) * hs.normal[1] -
-                              hs.point_m[2] * hs.normal[2];
+        const double height = (vx[m] - plane.point[0]) * hs.normal[0] + (vy[m] - plane.point[1]) * hs.normal[1] -
+                              plane.point[2] * hs.normal[2];
         if (height >= 0.0) {
           st = FrictionState{};
           continue;
@@ -401,7 +414,9 @@ void Contact::free_bodies_on_half_spaces(double dt) {
         const double normal_force = -hs.law.normal_stiffness_n_m * height;
         double f[3] = {normal_force * hs.normal[0], normal_force * hs.normal[1], normal_force * hs.normal[2]};
         if (hs.law.frictional()) {
-          const double v_vertex[3] = {b.vx - b.omega * (vy[m] - b.cy), b.vy + b.omega * (vx[m] - b.cx), 0.0};
+          // Relative to the plane (which may be moving: ground motion).
+          const double v_vertex[3] = {b.vx - b.omega * (vy[m] - b.cy) - plane.velocity[0],
+                                      b.vy + b.omega * (vx[m] - b.cx) - plane.velocity[1], -plane.velocity[2]};
           dissipated_j_ += coulomb_tangential_force(st, hs.normal.data(), v_vertex, dt, normal_force,
                                                     hs.law.tangential_stiffness_n_m, hs.law.static_friction,
                                                     hs.law.kinetic_friction, f);
@@ -411,6 +426,7 @@ void Contact::free_bodies_on_half_spaces(double dt) {
         b.fx += f[0];
         b.fy += f[1];
         b.torque += (vx[m] - b.cx) * f[1] - (vy[m] - b.cy) * f[0];
+        for (int a = 0; a < 3; ++a) plane_reaction_n_[h][a] -= f[a];
       }
     }
   }
@@ -425,7 +441,7 @@ double Contact::obstacle_penalty_energy_j(const ParticleStateView& s) const {
   for (const HalfSpace& hs : half_spaces_)
     for (long long i = 0; i < s.count; ++i) {
       double height = 0.0;
-      for (int a = 0; a < 3; ++a) height += (current(i, a) - hs.point_m[a]) * hs.normal[a];
+      for (int a = 0; a < 3; ++a) height += (current(i, a) - hs.point_m[a] - hs.offset_m[a]) * hs.normal[a];
       if (height < 0.0) e += 0.5 * hs.law.normal_stiffness_n_m * height * height;
     }
   std::vector<double> vx, vy;
@@ -440,8 +456,9 @@ double Contact::obstacle_penalty_energy_j(const ParticleStateView& s) const {
     if (polygons_[p].fixed) continue;
     for (const HalfSpace& hs : half_spaces_)  // free bodies' vertices on the planes
       for (size_t m = 0; m < vx.size(); ++m) {
-        const double height = (vx[m] - hs.point_m[0]) * hs.normal[0] + (vy[m] - hs.point_m[1]) * hs.normal[1] -
-                              hs.point_m[2] * hs.normal[2];
+        const PlaneContact plane = plane_contact(hs);
+        const double height = (vx[m] - plane.point[0]) * hs.normal[0] + (vy[m] - plane.point[1]) * hs.normal[1] -
+                              plane.point[2] * hs.normal[2];
         if (height < 0.0) e += 0.5 * hs.law.normal_stiffness_n_m * height * height;
       }
   }
@@ -460,6 +477,67 @@ void Contact::advance_rigid_bodies(double dt, const std::array<double, 3>& g) {
     b.cx += dt * b.vx;
     b.cy += dt * b.vy;
     b.angle += dt * b.omega;
+  }
+}
+
+namespace {
+// Velocity and displacement increment of a prescribed motion over [t, t + dt], the same
+// symplectic Euler step the solid takes (v += dt a, then x += dt v); a displacement history
+// is followed exactly, its velocity the step's mean.
+void advance_motion(const PrescribedMotion& m, double t, double dt, double offset_along, double& velocity_along,
+                    double& step_along) {
+  switch (m.quantity) {
+    case PrescribedMotion::Quantity::Acceleration:
+      velocity_along += dt * m.history.at(t);
+      step_along = dt * velocity_along;
+      break;
+    case PrescribedMotion::Quantity::Velocity:
+      velocity_along = m.history.at(t + dt);
+      step_along = dt * velocity_along;
+      break;
+    case PrescribedMotion::Quantity::Displacement:
+      step_along = m.history.at(t + dt) - offset_along;
+      velocity_along = step_along / dt;
+      break;
+  }
+}
+double along(const std::array<double, 3>& v, const std::array<double, 3>& d) { return v[0] * d[0] + v[1] * d[1] + v[2] * d[2]; }
+}  // namespace
+
+bool Contact::moving_obstacles() const {
+  for (const auto& h : half_spaces_)
+    if (h.motion) return true;
+  for (const auto& p : polygons_)
+    if (p.motion) return true;
+  return false;
+}
+
+void Contact::advance_obstacles(double t, double dt) {
+  for (size_t h = 0; h < half_spaces_.size(); ++h) {
+    HalfSpace& hs = half_spaces_[h];
+    if (!hs.motion) continue;
+    const auto& d = hs.motion->direction;
+    double v = along(hs.velocity_m_s, d), step = 0.0;
+    advance_motion(*hs.motion, t, dt, along(hs.offset_m, d), v, step);
+    for (int a = 0; a < 3; ++a) {
+      // The ground pushes the bodies with minus the reaction, over the step it moved.
+      ground_work_j_ -= plane_reaction_n_[h][a] * step * d[a];
+      hs.offset_m[a] += step * d[a];
+      hs.velocity_m_s[a] = v * d[a];
+    }
+  }
+  for (size_t p = 0; p < polygons_.size(); ++p) {
+    const RigidPolygon& poly = polygons_[p];
+    if (!poly.fixed || !poly.motion) continue;
+    BodyState& b = body_[p];
+    const auto& d = poly.motion->direction;
+    double v = b.vx * d[0] + b.vy * d[1], step = 0.0;
+    advance_motion(*poly.motion, t, dt, (b.cx - b.cx0) * d[0] + (b.cy - b.cy0) * d[1], v, step);
+    ground_work_j_ -= (b.fx * d[0] + b.fy * d[1]) * step;
+    b.cx += step * d[0];
+    b.cy += step * d[1];
+    b.vx = v * d[0];
+    b.vy = v * d[1];
   }
 }
 

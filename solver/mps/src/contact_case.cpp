@@ -44,6 +44,7 @@ void configure_contact(const CaseSpec& spec, const std::vector<int>& body_id, So
     p.law.tangential_stiffness_n_m = r.friction.tangential_stiffness_factor * solid.shear_face_stiffness_n_m();
     p.law.static_friction = r.friction.static_friction;
     p.law.kinetic_friction = r.friction.kinetic_friction;
+    p.motion = r.motion;
     long long inside = 0;
     for (size_t i = 0; i < n; ++i) {
       double normal[2];

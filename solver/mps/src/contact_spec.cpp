@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include "breccia/common/error.hpp"
@@ -129,8 +130,38 @@ ParticleContactSpec parse_particle_contact(const Section& s) {
   return p;
 }
 
+PrescribedMotion parse_motion(const Section& s) {
+  s.allow_only({"quantity", "direction", "history", "unit"});
+  PrescribedMotion m;
+  const std::string q = s.choice("quantity", {"acceleration", "velocity", "displacement"});
+  m.quantity = q == "acceleration" ? PrescribedMotion::Quantity::Acceleration
+               : q == "velocity"   ? PrescribedMotion::Quantity::Velocity
+                                   : PrescribedMotion::Quantity::Displacement;
+  if (s.has("direction")) m.direction = s.vec3("direction", Quantity::Dimensionless);
+  const double len = std::hypot(m.direction[0], m.direction[1], m.direction[2]);
+  if (!(len > 0)) fail(s, "direction", "a zero vector", "a nonzero direction [x, y, z]");
+  for (double& c : m.direction) c /= len;
+  if (!s.has("history")) fail(s, "history", "missing", "a history {type: constant | ramp | double_exponential | table, ...}");
+  const Quantity unit = m.quantity == PrescribedMotion::Quantity::Acceleration ? Quantity::Acceleration
+                        : m.quantity == PrescribedMotion::Quantity::Velocity   ? Quantity::Velocity
+                                                                               : Quantity::Length;
+  const std::string dir = std::filesystem::path(s.file()).parent_path().string();
+  m.history = solver::parse_history(s.section("history"), unit, dir);
+  if (s.has("unit")) {
+    // A table (or numbers) in g: the usual form of an accelerogram.
+    const std::string u = s.choice("unit", {"g", "m/s2"});
+    if (m.quantity != PrescribedMotion::Quantity::Acceleration)
+      fail(s, "unit", "'" + u + "' for quantity: " + q, "unit only with quantity: acceleration");
+    const double scale = u == "g" ? 9.80665 : 1.0;
+    m.history.value *= scale;
+    for (double& v : m.history.table_value) v *= scale;
+  }
+  return m;
+}
+
 RigidBodySpec parse_rigid_body(const Section& s, size_t index, int dimension) {
-  std::vector<std::string> keys{"name", "vertices", "fixed", "density", "velocity", "angular_velocity", "stiffness_factor"};
+  std::vector<std::string> keys{"name", "vertices", "fixed", "density", "velocity", "angular_velocity", "stiffness_factor",
+                                "motion"};
   for (const auto& k : friction_keys()) keys.push_back(k);
   s.allow_only(keys);
   RigidBodySpec r;
@@ -177,6 +208,13 @@ RigidBodySpec parse_rigid_body(const Section& s, size_t index, int dimension) {
   if (!(std::fabs(area2) > 1e-12 * extent * extent))
     fail(s, "vertices", "zero area (collinear vertices): a degenerate polygon", "vertices enclosing an area");
   r.fixed = s.boolean("fixed", true);
+  if (s.has("motion")) {
+    if (!r.fixed)
+      fail(s, "motion", "given for a free body (fixed: false)",
+           "fixed: true: a prescribed motion (ground motion) drives a fixed body; a free body moves under its "
+           "contacts and gravity");
+    r.motion = parse_motion(s.section("motion"));
+  }
   if (r.fixed) {
     for (const char* key : {"density", "velocity", "angular_velocity"})
       if (s.has(key)) fail(s, key, "given for a fixed body", "fixed: false for a free rigid body");

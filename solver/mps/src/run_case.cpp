@@ -122,6 +122,12 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
     const std::string& name = sim.contact().polygon(k).name;
     history << "," << name << "_x_m," << name << "_y_m," << name << "_angle_rad";
   }
+  // Ground motion: where the floor is (its offset along the motion's direction) and, with the
+  // energy columns, the work the moving obstacles have put in.
+  const bool floor_moves = spec.floor && spec.floor->motion;
+  if (floor_moves) history << ",floor_displacement_m,floor_velocity_m_s";
+  const bool ground = sim.contact().moving_obstacles();
+  if (spec.energy && ground) history << ",ground_work_J";
   history << "\n";
   auto record = [&]() {
     history << fmt(sim.time_s());
@@ -138,6 +144,13 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
       const auto c = sim.contact().polygon_centroid_m(k);
       history << "," << fmt(c[0]) << "," << fmt(c[1]) << "," << fmt(sim.contact().polygon_angle_rad(k));
     }
+    if (floor_moves) {
+      const HalfSpace& h = sim.contact().half_spaces().front();
+      const auto& d = h.motion->direction;
+      history << "," << fmt(h.offset_m[0] * d[0] + h.offset_m[1] * d[1] + h.offset_m[2] * d[2]) << ","
+              << fmt(h.velocity_m_s[0] * d[0] + h.velocity_m_s[1] * d[1] + h.velocity_m_s[2] * d[2]);
+    }
+    if (spec.energy && ground) history << "," << fmt(sim.contact().ground_work_j());
     history << "\n";
   };
   int max_substeps = 1;  // squeezed bonds split a step (Solid::substeps); summary.json says how far

@@ -227,6 +227,7 @@ void Solid::set_floor(const RigidFloor& floor) {
   h.law.tangential_stiffness_n_m = floor.tangential_stiffness_factor * shear_face_stiffness_n_m();
   h.law.static_friction = floor.static_friction;
   h.law.kinetic_friction = floor.kinetic_friction;
+  h.motion = floor.motion;
   contact_.add_half_space(h);
 }
 
@@ -348,6 +349,7 @@ void Solid::step() {
     compute_acceleration(dt);
     symplectic_euler_update(u_, v_, a_, options_.dimension, dt);
     contact_.advance_rigid_bodies(dt, options_.gravity_m_s2);  // same step, reactions of the forces above
+    contact_.advance_obstacles(time_s_, dt);                   // ground motion, the same step
     time_s_ += dt;
     apply_prescribed(time_s_);
   }
@@ -381,6 +383,7 @@ void Solid::attach_device(std::unique_ptr<SolidStepDevice> device) {
   else if (contact_.particle_contact() && contact_.particle_settings().frictional())
     missing = "friction between particles";
   else if (contact_.polygon_count() > 0) missing = "rigid polygons";
+  else if (contact_.moving_obstacles()) missing = "a moving floor (ground motion)";
   if (!missing.empty()) throw RunError("mps solid: the CUDA launcher does not run " + missing + "; use --backend cpu");
   sync_host(false);
   device_ = std::move(device);

@@ -39,7 +39,7 @@ Solid make_solid(const CaseSpec& spec, std::string* content_id) {
   if (spec.floor) {
     const FloorSpec& fl = *spec.floor;
     solid.set_floor({fl.point_m, fl.normal, fl.stiffness_factor, fl.friction.static_friction,
-                     fl.friction.kinetic_friction, fl.friction.tangential_stiffness_factor});
+                     fl.friction.kinetic_friction, fl.friction.tangential_stiffness_factor, fl.motion});
   }
   const size_t n = solid.size();
   for (int a = 0; a < solid.dimension(); ++a)
@@ -68,6 +68,8 @@ std::optional<DeviceRefusal> solid_device_refusal(const CaseSpec& spec) {
                          "frictionless particle contact on the GPU" + cpu};
   if (!spec.rigid_bodies.empty())
     return DeviceRefusal{"contact.rigid_bodies", "rigid polygons with --backend cuda", "none on the GPU" + cpu};
+  if (spec.floor && spec.floor->motion)
+    return DeviceRefusal{"contact.floor.motion", "a moving floor with --backend cuda", "a fixed floor on the GPU" + cpu};
   return std::nullopt;
 }
 

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "breccia/solver/history.hpp"
 #include "breccia/solver/pd_physics.hpp"
 
 namespace breccia::solver {
@@ -29,18 +30,6 @@ struct MaterialSpec {
   double tensile_strength = 0.0; // > 0: bilinear softening bonds with this strength (0: brittle)
   double weibull_modulus = 0.0;  // 0: no scatter
   long long weibull_seed = 1;
-};
-
-// A time history multiplying a load: constant, ramp, double exponential (seed 001 eq. 12),
-// or a CSV table (time_s, value) interpolated linearly and held after its end.
-struct HistorySpec {
-  enum class Kind { Constant, Ramp, DoubleExponential, Table } kind = Kind::Constant;
-  double value = 1.0;        // Constant: value; Ramp: final value; DoubleExp: peak
-  double ramp_time = 0.0;    // Ramp
-  double rise_time = 0.0;    // DoubleExponential: t0
-  double ratio = 0.0;        // DoubleExponential: beta/alpha
-  std::vector<double> table_time, table_value;
-  double at(double t) const;
 };
 
 struct LoadSpec {

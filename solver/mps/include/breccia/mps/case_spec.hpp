@@ -35,6 +35,7 @@ struct FloorSpec {
   std::array<double, 3> normal{0.0, 1.0, 0.0};
   double stiffness_factor = 1.0;
   FrictionSpec friction;  // none by default
+  std::optional<PrescribedMotion> motion;  // ground motion (contact_spec.hpp)
 };
 
 struct LatticeSpec {

@@ -12,8 +12,11 @@
 // The solid calls compute_forces() once per step before its force loop, adds force(a)[i],
 // and advance_rigid_bodies() after its own update (the same symplectic Euler step).
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "breccia/mps/contact_spec.hpp"
 
 #include "breccia/mps/contact_grid.hpp"
 #include "breccia/mps/contact_kernels.hpp"
@@ -56,14 +59,18 @@ struct HalfSpace {
   std::array<double, 3> point_m{0.0, 0.0, 0.0};
   std::array<double, 3> normal{0.0, 1.0, 0.0};  // normalised by add_half_space
   RigidContactLaw law;
+  std::optional<PrescribedMotion> motion;
+  // Where the motion has taken it (Contact keeps these): offset of point_m and velocity.
+  std::array<double, 3> offset_m{0.0, 0.0, 0.0}, velocity_m_s{0.0, 0.0, 0.0};
 };
 
 // The plane and its law as the per-particle body half_space_contact_at takes them.
 inline PlaneContact plane_contact(const HalfSpace& h) {
   PlaneContact p;
   for (int a = 0; a < 3; ++a) {
-    p.point[a] = h.point_m[a];
+    p.point[a] = h.point_m[a] + h.offset_m[a];
     p.normal[a] = h.normal[a];
+    p.velocity[a] = h.velocity_m_s[a];
   }
   p.normal_stiffness = h.law.normal_stiffness_n_m;
   p.tangential_stiffness = h.law.tangential_stiffness_n_m;
@@ -83,6 +90,7 @@ struct RigidPolygon {
   std::array<double, 2> velocity_m_s{0.0, 0.0};
   double angular_velocity_rad_s = 0.0;
   RigidContactLaw law;
+  std::optional<PrescribedMotion> motion;  // fixed bodies only: ground motion (translation)
 };
 
 // Area, centroid and polar second moment of area about the centroid of a simple polygon.
@@ -124,6 +132,12 @@ public:
   // Symplectic Euler step of the free rigid bodies under the reactions of the last
   // compute_forces() and gravity: v += dt a, then x += dt v.
   void advance_rigid_bodies(double dt, const std::array<double, 3>& gravity_m_s2);
+  // Moves the obstacles with a prescribed motion from time t to t + dt (after
+  // advance_rigid_bodies, the same step) and books the work their reactions of the last
+  // compute_forces() do: ground_work_j(), the energy the moving ground puts in.
+  void advance_obstacles(double t, double dt);
+  bool moving_obstacles() const;
+  double ground_work_j() const { return ground_work_j_; }
 
   // Penalty energy of all contacts in the state s, plus the energy stored in the friction
   // springs (as left by the last compute_forces()).
@@ -202,6 +216,10 @@ private:
   std::vector<FrictionState> pair_friction_;
   double spring_energy_j_ = 0.0, dissipated_j_ = 0.0;
   long long contact_pairs_ = 0;
+  // Reaction on each half-space (the force the particles and free bodies' vertices push it
+  // with) from the last compute_forces(), and the work the moving obstacles have done.
+  std::vector<std::array<double, 3>> plane_reaction_n_;
+  double ground_work_j_ = 0.0;
 };
 
 }  // namespace breccia::mps

@@ -4,8 +4,11 @@
 // (contact between unbonded particles) and contact.rigid_bodies (2D polygons, fixed or
 // free, with Coulomb friction). Plain structs, SI after parsing (contact_spec.cpp).
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "breccia/solver/history.hpp"
 
 namespace breccia {
 class Section;
@@ -48,6 +51,17 @@ struct ParticleContactSpec {
   FrictionSpec friction;          // between the particles (default none)
 };
 
+// Prescribed motion of a rigid obstacle (ground motion: the floor or a fixed polygon): it
+// translates along `direction` with the history as its displacement, velocity or
+// acceleration (SI), starting at rest at its given position (a velocity history: at h(0)).
+// Contact::advance_obstacles integrates it with the solid's own step.
+struct PrescribedMotion {
+  enum class Quantity { Displacement, Velocity, Acceleration };
+  Quantity quantity = Quantity::Acceleration;
+  std::array<double, 3> direction{1.0, 0.0, 0.0};  // unit
+  solver::HistorySpec history;
+};
+
 // A 2D rigid polygon (contact.hpp, RigidPolygon).
 struct RigidBodySpec {
   std::string name;
@@ -58,12 +72,17 @@ struct RigidBodySpec {
   double angular_velocity_rad_s = 0.0;
   double stiffness_factor = 1.0;  // penalty k = factor (lambda + 2 mu) A / spacing
   FrictionSpec friction;
+  std::optional<PrescribedMotion> motion;  // fixed bodies only
 };
 
 // Parsers (throw InputError naming the file and field).
 BodiesSpec parse_bodies(const Section& s);
 ParticleContactSpec parse_particle_contact(const Section& s);
 RigidBodySpec parse_rigid_body(const Section& s, size_t index, int dimension);
+// motion: {quantity: acceleration | velocity | displacement, direction: [x, y, z],
+// history: {type: constant | ramp | double_exponential | table, ...}, unit: g (a table of
+// accelerations in g)}; a table file is resolved against the case file's folder.
+PrescribedMotion parse_motion(const Section& s);
 // Reads static_friction, kinetic_friction, tangential_stiffness_factor from s.
 FrictionSpec parse_friction(const Section& s);
 // Keys parse_friction reads (for allow_only lists).

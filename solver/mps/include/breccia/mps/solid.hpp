@@ -68,6 +68,7 @@ struct RigidFloor {
   double stiffness_factor = 1.0;
   double static_friction = 0.0, kinetic_friction = 0.0;
   double tangential_stiffness_factor = 1.0;
+  std::optional<PrescribedMotion> motion;  // ground motion
 };
 
 // Where Solid::step's substeps run instead of the OpenMP loops: a device with its own copy of

@@ -96,10 +96,11 @@ struct PlaneContact {
   double normal[3] = {0.0, 1.0, 0.0};  // unit
   double normal_stiffness = 0.0, tangential_stiffness = 0.0;
   double static_friction = 0.0, kinetic_friction = 0.0;
+  double velocity[3] = {0.0, 0.0, 0.0};  // of the plane (ground motion); friction acts on the relative velocity
 };
 
-// Phase 3 for one plane and a particle at current position x with velocity v (the plane is
-// at rest): the penalty (half_space_force_at), then, if the plane has friction, the
+// Phase 3 for one plane and a particle at current position x with velocity v (the plane moves
+// at plane.velocity): the penalty (half_space_force_at), then, if the plane has friction, the
 // particle's tangential spring on it updated over dt (coulomb_tangential_force, with the
 // penalty's size as the normal force), adding the slip's dissipation to *dissipated_j and
 // the spring's energy to *spring_energy_j. A particle off the plane loses its spring.
@@ -113,7 +114,8 @@ BRECCIA_HD inline double half_space_contact_at(const double x[3], const double v
     return depth;
   }
   if (plane.static_friction > 0.0 || plane.kinetic_friction > 0.0) {
-    *dissipated_j += coulomb_tangential_force(spring, plane.normal, v, dt, plane.normal_stiffness * depth,
+    const double v_rel[3] = {v[0] - plane.velocity[0], v[1] - plane.velocity[1], v[2] - plane.velocity[2]};
+    *dissipated_j += coulomb_tangential_force(spring, plane.normal, v_rel, dt, plane.normal_stiffness * depth,
                                               plane.tangential_stiffness, plane.static_friction,
                                               plane.kinetic_friction, f);
     const double* e = spring.s;

@@ -1,0 +1,55 @@
+"""Synthetic horizontal accelerogram for cases/mps-cask-seismic (the Kobe 1995 record the
+thesis used is not in our sources; any CSV in the same format can replace it).
+
+    record.py OUT.csv [--pga 0.7] [--duration 8] [--dt 0.005] [--seed 1995]
+
+Generation, seeded so that it repeats: Gaussian white noise at dt, band-passed to 0.5-8 Hz
+(its Fourier components outside the band set to zero: no phase shift), shaped by a trapezoidal
+envelope (rise 1 s, strong motion to 40% of the duration, linear decay to the end; Amin &
+Ang's form of a nonstationary record), its mean velocity removed by a baseline correction
+(a least-squares straight line fitted to the integrated velocity, differentiated back into
+the acceleration) so that the ground ends near rest, scaled to the peak ground acceleration
+`pga` (in g). Writes `time_s,acceleration_g` rows.
+"""
+import argparse
+
+import numpy as np
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("out")
+    ap.add_argument("--pga", type=float, default=0.7)
+    ap.add_argument("--duration", type=float, default=8.0)
+    ap.add_argument("--dt", type=float, default=0.005)
+    ap.add_argument("--seed", type=int, default=1995)
+    a = ap.parse_args()
+    n = int(round(a.duration / a.dt)) + 1
+    t = np.arange(n) * a.dt
+    rng = np.random.default_rng(a.seed)
+    noise = rng.standard_normal(n)
+    spectrum = np.fft.rfft(noise)
+    f = np.fft.rfftfreq(n, a.dt)
+    spectrum[(f < 0.5) | (f > 8.0)] = 0.0
+    acc = np.fft.irfft(spectrum, n)
+    rise, strong = 1.0, 0.4 * a.duration
+    env = np.where(t < rise, t / rise, np.where(t < strong, 1.0, np.maximum(0.0, (a.duration - t) / (a.duration - strong))))
+    acc *= env
+    # Baseline: remove the straight line that fits the velocity best.
+    vel = np.concatenate([[0.0], np.cumsum(0.5 * (acc[1:] + acc[:-1]) * a.dt)])
+    slope, _ = np.polyfit(t, vel, 1)
+    acc -= slope
+    acc[0] = 0.0
+    acc *= a.pga / np.max(np.abs(acc))
+    with open(a.out, "w") as f:
+        f.write("time_s,acceleration_g\n")
+        for ti, ai in zip(t, acc):
+            f.write(f"{ti:.6f},{ai:.6f}\n")
+    vel = np.concatenate([[0.0], np.cumsum(0.5 * (acc[1:] + acc[:-1]) * a.dt)]) * 9.80665
+    disp = np.concatenate([[0.0], np.cumsum(0.5 * (vel[1:] + vel[:-1]) * a.dt)])
+    print(f"{a.out}: {n} rows, {a.duration} s, pga {a.pga} g, peak ground velocity {np.max(np.abs(vel)):.3f} m/s, "
+          f"end velocity {vel[-1]:.4f} m/s, end displacement {disp[-1]:.3f} m")
+
+
+if __name__ == "__main__":
+    main()

@@ -18,10 +18,10 @@ mkdir -p "$OUT"
 # Two runs: G0 = 200 J/m2 as specified (textbook critical stretch), and G0 = 200/pi J/m2,
 # which gives the critical stretch of seed 001's formula (it carries an extra 1/sqrt(pi),
 # benchmarks.md section 0.6): a labelled sensitivity run, not a calibration.
-# A third run, softening: G0 = 200 J/m2 and the granite's tensile strength (STRENGTH, default
+# A third run on request (GRANITE_RUNS=softening): G0 = 200 J/m2 and a tensile strength (STRENGTH, default
 # 12 MPa) through softening bonds (docs/theory.md "Quasi-brittle bonds"; README.md).
 RUNS=()
-for run in ${GRANITE_RUNS:-g0_200 seed_s0 softening}; do
+for run in ${GRANITE_RUNS:-g0_200 seed_s0}; do
   strength=""
   case "$run" in
     g0_200)  G0=200 ;;

@@ -17,7 +17,7 @@ esac
 mkdir -p "$OUT"
 if [ -z "${RECORD:-}" ]; then
   RECORD="$OUT/record.csv"
-  "$PYTHON" "$HERE/record.py" "$RECORD" --pga 0.7 --duration "$DURATION" --seed 1995
+  "$PYTHON" "$HERE/record.py" "$RECORD" --pga "${PGA:-0.9}" --duration "$DURATION" --seed 1995
 fi
 RECORD="$(cd "$(dirname "$RECORD")" && pwd)/$(basename "$RECORD")"
 RUNS=()

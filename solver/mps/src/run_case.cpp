@@ -126,6 +126,9 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
   // energy columns, the work the moving obstacles have put in.
   const bool floor_moves = spec.floor && spec.floor->motion;
   if (floor_moves) history << ",floor_displacement_m,floor_velocity_m_s";
+  // The floor's reaction along its normal: the impact force (computed on the host only).
+  const bool floor_force = spec.floor && !device;
+  if (floor_force) history << ",floor_force_N";
   const bool ground = sim.contact().moving_obstacles();
   if (spec.energy && ground) history << ",ground_work_J";
   history << "\n";
@@ -149,6 +152,11 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
       const auto& d = h.motion->direction;
       history << "," << fmt(h.offset_m[0] * d[0] + h.offset_m[1] * d[1] + h.offset_m[2] * d[2]) << ","
               << fmt(h.velocity_m_s[0] * d[0] + h.velocity_m_s[1] * d[1] + h.velocity_m_s[2] * d[2]);
+    }
+    if (floor_force) {
+      const HalfSpace& h = sim.contact().half_spaces().front();
+      const auto& r = sim.contact().plane_reaction_n(0);
+      history << "," << fmt(-(r[0] * h.normal[0] + r[1] * h.normal[1] + r[2] * h.normal[2]));
     }
     if (spec.energy && ground) history << "," << fmt(sim.contact().ground_work_j());
     history << "\n";

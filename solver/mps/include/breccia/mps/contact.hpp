@@ -138,6 +138,9 @@ public:
   void advance_obstacles(double t, double dt);
   bool moving_obstacles() const;
   double ground_work_j() const { return ground_work_j_; }
+  // Force the bodies pushed half-space h with at the last compute_forces() (N; host runs
+  // only: a device computes the plane contact itself and leaves this at zero).
+  const std::array<double, 3>& plane_reaction_n(size_t h) const { return plane_reaction_n_[h]; }
 
   // Penalty energy of all contacts in the state s, plus the energy stored in the friction
   // springs (as left by the last compute_forces()).

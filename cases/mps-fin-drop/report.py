@@ -1,0 +1,131 @@
+"""Report of cases/mps-fin-drop: the fin's plastic hinges, plastic strain maps, the impact
+force and the energy balance at each inclination.
+
+    report.py OUT RUN [RUN ...]
+
+Hinges: along the fin (the particles of set `fin`, stations = rows of the reference lattice
+from the root at the ring's surface to the tip), the largest equivalent plastic strain across
+the fin's thickness at each station at the end of the run; a hinge is a local maximum of that
+profile above half the fin's largest strain and at least HINGE_MIN_STRAIN, separated from the
+next by at least two fin thicknesses (a hinge spreads over about one thickness). The ring's
+wall at the root counts as station 0 (the largest strain of the ring within one fin thickness
+of the root). Energy: kinetic + stress work (elastic + plastic) + hourglass + contact +
+gravity against the initial kinetic energy (history.csv). Writes OUT/report.json,
+OUT/fin_drop_plastic.png (deformed shapes coloured by plastic strain), OUT/fin_drop_profiles.png
+(plastic strain along the fin) and OUT/fin_drop_force.png (floor force against time).
+"""
+import csv
+import json
+import math
+import os
+import re
+import sys
+
+import h5py
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+HINGE_MIN_STRAIN = 0.02
+
+
+def analyse(out, name):
+    run = os.path.join(out, name)
+    angle = float(re.search(r"angle([0-9.]+)", name).group(1))
+    text = open(os.path.join(run, "case.yaml")).read()
+    particles = os.path.normpath(os.path.join(run, re.search(r"particles:\s*(\S+)", text).group(1)))
+    with h5py.File(particles, "r") as f:
+        fin = f["sets/fin"][:]
+    with h5py.File(os.path.join(run, "results.h5"), "r") as f:
+        x0 = f["particles/position"][:, :2]
+        last = f["output"][sorted(f["output"].keys())[-1]]
+        u = last["displacement"][:, :2]
+        ep = last["eq_plastic_strain"][:]
+        t_end = float(last.attrs["time_s"])
+    dx = float(np.min(np.diff(np.unique(np.round(x0[fin, 1], 9)))))
+    thickness = (np.max(x0[fin, 0]) - np.min(x0[fin, 0])) + dx
+    rows = np.unique(np.round(x0[fin, 1], 9))[::-1]  # from the root (highest y) to the tip
+    root_y = rows[0] + dx / 2
+    profile = np.array([ep[fin[np.abs(x0[fin, 1] - y) < 1e-9]].max() for y in rows])
+    station = root_y - rows  # distance from the root
+    ring_root = np.nonzero((np.abs(x0[:, 0]) < thickness) & (x0[:, 1] > root_y) & (x0[:, 1] < root_y + thickness))[0]
+    prof = np.concatenate([[ep[ring_root].max() if len(ring_root) else 0.0], profile])
+    pos = np.concatenate([[0.0], station])
+    peak = prof.max()
+    floor_strain = max(0.5 * peak, HINGE_MIN_STRAIN, 1.5 * float(np.median(prof)))
+    hinges = []
+    for k in range(len(prof)):
+        lo, hi = prof[k - 1] if k > 0 else -1.0, prof[k + 1] if k + 1 < len(prof) else -1.0
+        if prof[k] >= lo and prof[k] >= hi and prof[k] >= floor_strain:
+            if hinges and pos[k] - hinges[-1][0] < 2 * thickness:
+                if prof[k] > hinges[-1][1]:
+                    hinges[-1] = (pos[k], prof[k])
+                continue
+            hinges.append((pos[k], prof[k]))
+    hist = list(csv.DictReader(open(os.path.join(run, "history.csv"))))
+    col = lambda k: np.array([float(h[k]) for h in hist])  # noqa: E731
+    t = col("time_s")
+    parts = ["kinetic_energy_J", "stress_work_J", "hourglass_energy_J", "contact_energy_J", "gravity_energy_J"]
+    total = sum(col(k) for k in parts)
+    e0 = float(col("kinetic_energy_J")[0])
+    force = col("floor_force_N") if "floor_force_N" in hist[0] else None
+    res = {"run": name, "angle_deg": angle, "spacing_m": dx, "end_time_s": t_end,
+           "fin_thickness_m": thickness, "hinge_count": len(hinges),
+           "hinges_m_from_root": [round(float(p), 4) for p, _ in hinges],
+           "hinge_strains": [round(float(s), 4) for _, s in hinges],
+           "max_fin_plastic_strain": float(peak),
+           "initial_kinetic_J": e0, "energy_error_max_over_initial": float(np.max(np.abs(total - total[0])) / e0),
+           "plastic_and_elastic_work_end_J": float(col("stress_work_J")[-1]),
+           "peak_floor_force_N_per_m": float(force.max()) if force is not None else None}
+    return res, (x0, u, ep, pos, prof, t, force)
+
+
+def main(argv):
+    out, names = argv[1], argv[2:]
+    runs, data = [], []
+    for n in names:
+        r, d = analyse(out, n)
+        runs.append(r)
+        data.append(d)
+        print(f"{n}: {r['hinge_count']} hinge(s) at {r['hinges_m_from_root']} m from the root "
+              f"(strains {r['hinge_strains']}), energy error {r['energy_error_max_over_initial']:.2%}"
+              + (f", peak floor force {r['peak_floor_force_N_per_m'] / 1e6:.2f} MN/m" if r["peak_floor_force_N_per_m"] else ""))
+    json.dump({"case": "mps-fin-drop", "runs": runs}, open(os.path.join(out, "report.json"), "w"), indent=1)
+    fig, axs = plt.subplots(1, len(runs), figsize=(3.6 * len(runs), 4.2), squeeze=False)
+    for ax, r, (x0, u, ep, *_rest) in zip(axs[0], runs, data):
+        cur = x0 + u
+        near = cur[:, 1] < np.min(cur[:, 1]) + 0.3
+        sc = ax.scatter(cur[near, 0], cur[near, 1], c=ep[near], s=2, cmap="inferno", vmin=0, vmax=max(0.05, ep.max()))
+        ax.set_aspect("equal")
+        ax.set_title(f"{r['angle_deg']:g} deg: {r['hinge_count']} hinge(s)", fontsize=9)
+        ax.set_xlabel("x (m, cask frame)")
+        fig.colorbar(sc, ax=ax, shrink=0.7, label="eq. plastic strain")
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "fin_drop_plastic.png"), dpi=110)
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for r, (_x0, _u, _ep, pos, prof, *_rest) in zip(runs, data):
+        ax.plot(pos * 1e3, prof, "o-", ms=3, label=f"{r['angle_deg']:g} deg")
+        for h in r["hinges_m_from_root"]:
+            ax.axvline(h * 1e3, color=ax.lines[-1].get_color(), ls=":", lw=0.8)
+    ax.set_xlabel("distance from the fin's root (mm; 0 = ring wall)")
+    ax.set_ylabel("largest plastic strain across the fin")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "fin_drop_profiles.png"), dpi=110)
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for r, (*_rest, t, force) in zip(runs, data):
+        if force is not None:
+            ax.plot(t * 1e3, force / 1e6, lw=0.8, label=f"{r['angle_deg']:g} deg")
+    ax.set_xlabel("time (ms)")
+    ax.set_ylabel("floor force (MN per m of cask)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "fin_drop_force.png"), dpi=110)
+
+
+if __name__ == "__main__":
+    main(sys.argv)

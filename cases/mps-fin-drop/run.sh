@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Fin drop at several inclinations (README.md): plastic strain maps, the hinges of the fin,
+# the impact force and the energy balance.
+#   VARIANT=quick|demo: spacing 5 mm (fin 4 particles thick), angles 0 10 20 40
+#   VARIANT=full      : spacing 5 mm and 2.5 mm
+# ANGLES (optional): the inclinations in degrees. Environment: BRECCIA_BIN, OUT, PYTHON, THREADS.
+set -euo pipefail
+HERE="$(cd "$(dirname "$0")" && pwd)"
+source "$HERE/../../scripts/case_env.sh"
+case "$VARIANT" in
+  quick|demo|test) SPACINGS="0.005" ;;
+  full)            SPACINGS="0.005 0.0025" ;;
+  *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full)" >&2; exit 2 ;;
+esac
+ANGLES=${ANGLES:-"0 10 20 40"}
+END=${END:-0.015}
+mkdir -p "$OUT"
+RUNS=()
+for dx in $SPACINGS; do
+  "$PYTHON" "$HERE/specimen.py" "$OUT/particles_$dx.h5" --spacing "$dx"
+  for angle in $ANGLES; do
+    name="dx${dx}_angle${angle}"
+    mkdir -p "$OUT/$name"
+    # Target normal n = (sin a, cos a): the fin's axis (0, 1) makes the angle a with it; the
+    # plane 1 mm below the lowest particle centre along n.
+    IFS='|' read -r normal point velocity gravity < <("$PYTHON" -c "
+import math, h5py, numpy as np
+a = math.radians($angle)
+n = np.array([math.sin(a), math.cos(a)])
+x = h5py.File('$OUT/particles_$dx.h5', 'r')['particles/position'][:, :2]
+q = (np.min(x @ n) - 1e-3) * n
+f = lambda v: '[' + ', '.join(f'{c:.9g}' for c in v) + ']'
+print('|'.join([f(n), f(q), f(-13.3 * n), f(-9.81 * n)]))")
+    every=$("$PYTHON" -c "print(max(1, round($END / (0.3 * $dx / 5900) / 6)))")
+    sed -e "s#particles: particles.h5#particles: ../particles_$dx.h5#" -e "s/NORMAL/$normal/" -e "s/POINT/$point/" \
+        -e "s/VELOCITY/$velocity/" -e "s/GRAVITY/$gravity/" -e "s/END/$END/" -e "s/EVERY/$every/" \
+        "$HERE/case.yaml" > "$OUT/$name/case.yaml"
+    echo "== $name"
+    "$BRECCIA_BIN/breccia-mps" "$OUT/$name/case.yaml" -o "$OUT/$name" --threads "$THREADS" 2>&1 | tail -1
+    RUNS+=("$name")
+  done
+done
+"$PYTHON" "$HERE/report.py" "$OUT" "${RUNS[@]}"
+echo "report: $OUT/report.json; pictures: $OUT/*.png"

@@ -9,6 +9,7 @@ PACKAGES=(
   libhdf5-dev                 # particles.h5 / results.h5
   libyaml-cpp-dev             # case and specimen files
   nlohmann-json3-dev          # JSON outputs (summary.json): non-finite values as null, strings escaped
+  libmuparser-dev             # fields by expression in case files (initial velocity, displacement)
   libvtk9-dev                 # postproc: VTU/VTP output, contouring
   libgtest-dev                # tests
   python3-meshio python3-h5py python3-numpy python3-matplotlib python3-yaml  # converters, charts

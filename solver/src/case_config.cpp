@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "breccia/common/error.hpp"
+#include "breccia/common/expression.hpp"
 #include "breccia/common/yaml_input.hpp"
 
 namespace breccia::solver {
@@ -367,13 +368,25 @@ CaseConfig parse_case_file(const std::string& path) {
   }
 
   for (const Section& s : root.list("initial")) {
-    s.allow_only({"type", "set", "value", "center", "strain_rate", "cylindrical"});
+    s.allow_only({"type", "set", "value", "expression", "center", "strain_rate", "cylindrical"});
     InitialSpec is;
-    const std::string type = s.choice("type", {"velocity", "radial_velocity"});
+    const std::string type = s.choice("type", {"velocity", "displacement", "radial_velocity"});
     is.set = s.text("set", "");
-    if (type == "velocity") {
-      is.kind = InitialSpec::Kind::Velocity;
-      is.value = s.vec3("value", Quantity::Velocity);
+    if (type == "velocity" || type == "displacement") {
+      is.kind = type == "velocity" ? InitialSpec::Kind::Velocity : InitialSpec::Kind::Displacement;
+      if (s.has("value") == s.has("expression"))
+        throw InputError(s.file(), s.field("value"), s.has("value") ? "both value and expression" : "neither",
+                         "value: [vx, vy, vz] or expression: ['...', '...', '...'] (in x, y, z; SI)");
+      if (s.has("value")) {
+        is.value = s.vec3("value", type == "velocity" ? Quantity::Velocity : Quantity::Length);
+      } else {
+        is.expression = s.texts("expression");
+        if (is.expression.size() < 2 || is.expression.size() > 3)
+          throw InputError(s.file(), s.field("expression"), std::to_string(is.expression.size()) + " entries",
+                           "one expression per component: [ex, ey] (2D) or [ex, ey, ez]");
+        for (size_t k = 0; k < is.expression.size(); ++k)
+          Expression(is.expression[k], {"x", "y", "z"}, s.file(), s.field("expression") + "[" + std::to_string(k) + "]");
+      }
     } else {
       is.kind = InitialSpec::Kind::RadialVelocity;
       is.center = s.vec3("center", Quantity::Length);

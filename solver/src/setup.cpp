@@ -11,6 +11,7 @@
 #include <numeric>
 
 #include "breccia/common/error.hpp"
+#include "breccia/common/expression.hpp"
 #include "breccia/common/units.hpp"
 #include "breccia/solver/calibration.hpp"
 #include "breccia/solver/correspondence.hpp"
@@ -947,10 +948,22 @@ PdSystem setup_system(const CaseConfig& config) {
     } else {
       who = internal_particles(s, require_set(s, is.set, "initial[" + std::to_string(q) + "].set").indices);
     }
+    if (!is.expression.empty()) {
+      // Fields by expression, evaluated once per particle at its reference position.
+      double* target = is.kind == InitialSpec::Kind::Velocity ? s.v.data() : s.u.data();
+      const std::string key = "initial[" + std::to_string(q) + "].expression";
+      for (size_t d = 0; d < is.expression.size() && d < static_cast<size_t>(s.dimension); ++d) {
+        const Expression e(is.expression[d], {"x", "y", "z"}, c.file, key + "[" + std::to_string(d) + "]");
+        for (auto i : who) target[3 * i + d] = e({s.x0[3 * i], s.x0[3 * i + 1], s.x0[3 * i + 2]});
+      }
+      continue;
+    }
     for (auto i : who)
       for (int d = 0; d < s.dimension; ++d) {
         if (is.kind == InitialSpec::Kind::Velocity) {
           s.v[3 * i + d] = is.value[d];
+        } else if (is.kind == InitialSpec::Kind::Displacement) {
+          s.u[3 * i + d] = is.value[d];
         } else {
           const bool radial = !(is.cylindrical && d == 2);
           s.v[3 * i + d] = radial ? is.strain_rate * (s.x0[3 * i + d] - is.center[d]) : 0.0;

@@ -49,9 +49,12 @@ struct BoundarySpec {
 };
 
 struct InitialSpec {
-  enum class Kind { Velocity, RadialVelocity } kind = Kind::Velocity;
+  enum class Kind { Velocity, RadialVelocity, Displacement } kind = Kind::Velocity;
   std::string set;  // empty = all particles
   Vec3 value{0, 0, 0};
+  // Velocity, Displacement: per component an expression in x, y, z (reference position, m;
+  // SI result), instead of `value` when not empty (checked at parse, common/expression.hpp).
+  std::vector<std::string> expression;
   Vec3 center{0, 0, 0};
   double strain_rate = 0.0;  // RadialVelocity: v = rate * (x - center) (in-plane in 2D)
   bool cylindrical = false;  // RadialVelocity about the z axis through center

@@ -1,0 +1,54 @@
+#include "breccia/common/expression.hpp"
+
+#include <muParser.h>
+
+#include <cmath>
+
+#include "breccia/common/error.hpp"
+
+namespace breccia {
+
+struct Expression::Impl {
+  mu::Parser parser;
+  std::vector<double> slots;
+};
+
+Expression::Expression(const std::string& text, const std::vector<std::string>& variables, const std::string& file,
+                       const std::string& field)
+    : impl_(std::make_unique<Impl>()), text_(text), file_(file), field_(field) {
+  std::string names;
+  for (const auto& v : variables) names += (names.empty() ? "" : ", ") + v;
+  impl_->slots.assign(variables.size(), 0.0);
+  try {
+    for (size_t k = 0; k < variables.size(); ++k) impl_->parser.DefineVar(variables[k], &impl_->slots[k]);
+    impl_->parser.SetExpr(text);
+    impl_->parser.Eval();  // parses now: syntax errors and unknown names surface here
+  } catch (const mu::Parser::exception_type& e) {
+    throw InputError(file, field,
+                     "'" + text + "': " + e.GetMsg() + " (at position " + std::to_string(e.GetPos() + 1) + ")",
+                     "an expression in " + names + " (SI units), e.g. '100 * (z / 0.05 - 1)'");
+  }
+}
+
+Expression::~Expression() = default;
+Expression::Expression(Expression&&) noexcept = default;
+Expression& Expression::operator=(Expression&&) noexcept = default;
+
+double Expression::operator()(const std::vector<double>& values) const {
+  for (size_t k = 0; k < impl_->slots.size() && k < values.size(); ++k) impl_->slots[k] = values[k];
+  double v;
+  try {
+    v = impl_->parser.Eval();
+  } catch (const mu::Parser::exception_type& e) {
+    throw InputError(file_, field_, "'" + text_ + "': " + e.GetMsg(), "an expression that evaluates everywhere");
+  }
+  if (!std::isfinite(v)) {
+    std::string at;
+    for (double x : values) at += (at.empty() ? "" : ", ") + std::to_string(x);
+    throw InputError(file_, field_, "'" + text_ + "' is not finite at (" + at + ")",
+                     "an expression finite at every particle (a division by zero?)");
+  }
+  return v;
+}
+
+}  // namespace breccia

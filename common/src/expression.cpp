@@ -3,6 +3,7 @@
 #include <muParser.h>
 
 #include <cmath>
+#include <regex>
 
 #include "breccia/common/error.hpp"
 
@@ -24,8 +25,10 @@ Expression::Expression(const std::string& text, const std::vector<std::string>& 
     impl_->parser.SetExpr(text);
     impl_->parser.Eval();  // parses now: syntax errors and unknown names surface here
   } catch (const mu::Parser::exception_type& e) {
+    // muparser counts from 0 and says so in some messages only: one position, from 1.
+    const std::string msg = std::regex_replace(e.GetMsg(), std::regex(" (found )?at position [0-9]+\\.?"), "");
     throw InputError(file, field,
-                     "'" + text + "': " + e.GetMsg() + " (at position " + std::to_string(e.GetPos() + 1) + ")",
+                     "'" + text + "': " + msg + " (at position " + std::to_string(e.GetPos() + 1) + ", counting from 1)",
                      "an expression in " + names + " (SI units), e.g. '100 * (z / 0.05 - 1)'");
   }
 }

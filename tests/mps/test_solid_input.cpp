@@ -131,7 +131,10 @@ TEST(MpsSolidCli, StressCaseWritesStressAndPlasticStrainSnapshots) {
   std::ifstream hist(dir / "out" / "history.csv");
   std::string header;
   std::getline(hist, header);
-  EXPECT_EQ(header, "time_s,plastic_fraction,kinetic_energy_J,stress_work_J,hourglass_energy_J,contact_energy_J,gravity_energy_J");
+  // With a floor: its reaction (the impact force) closes the row.
+  EXPECT_EQ(header,
+            "time_s,plastic_fraction,kinetic_energy_J,stress_work_J,hourglass_energy_J,contact_energy_J,gravity_energy_J,"
+            "floor_force_N");
   std::ifstream js(dir / "out" / "summary.json");
   std::ostringstream summary;
   summary << js.rdbuf();

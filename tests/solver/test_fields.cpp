@@ -35,13 +35,13 @@ std::string error_of(const std::string& name, const std::string& yaml) {
 }  // namespace
 
 TEST(ExpressionFields, FragmentingCylinderVelocityFieldIsSetAtEveryParticle) {
-  PdSystem s = system_from_yaml("fields_tube", kTube + R"(initial:
+  PdSystem s = system_from_yaml("fields_tube", kTube + R"yaml(initial:
   - type: velocity
     expression:
       - "(200 - 50 * (z / 0.05 - 1)^2) * x / sqrt(x^2 + y^2)"
       - "(200 - 50 * (z / 0.05 - 1)^2) * y / sqrt(x^2 + y^2)"
       - "100 * (z / 0.05 - 1)"
-)");
+)yaml");
   ASSERT_GT(s.n, 500u);
   for (size_t i = 0; i < s.n; ++i) {
     const double x = s.x0[3 * i], y = s.x0[3 * i + 1], z = s.x0[3 * i + 2];
@@ -53,14 +53,14 @@ TEST(ExpressionFields, FragmentingCylinderVelocityFieldIsSetAtEveryParticle) {
 }
 
 TEST(ExpressionFields, DisplacementByExpressionOnACaseSetIn2D) {
-  PdSystem s = system_from_yaml("fields_plate", R"(specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.01], spacing: 1 mm}}
+  PdSystem s = system_from_yaml("fields_plate", R"yaml(specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.01], spacing: 1 mm}}
 model: {type: pmb, horizon_factor: 3.015, planar: plane_stress}
 materials: [{name: m, density: 1000, youngs_modulus: 1 GPa, poisson_ratio: 0.3333333333333333}]
 sets: [{name: right, box: [0.01, -1, 1, 1]}]
 initial:
   - {type: displacement, set: right, expression: ["1e-6 * sin(_pi * x / 0.02)", "2e-7 * x * y / 0.0002"]}
 time: {steps: 1}
-)");
+)yaml");
   int moved = 0;
   for (size_t i = 0; i < s.n; ++i) {
     const double x = s.x0[3 * i], y = s.x0[3 * i + 1];

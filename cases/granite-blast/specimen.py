@@ -34,15 +34,16 @@ def annulus(outer, inner, dx):
     return np.column_stack([X[keep], Y[keep]]), r[keep]
 
 
-def write(path, xy, dx, thickness, sets, surfaces, source):
+def write(path, xy, dx, thickness, sets, surfaces, source, dimension=2):
+    """xy: (n, 2) positions in 2D (volume dx^2 thickness), or (n, 3) with dimension=3 (dx^3)."""
     n = len(xy)
     pos = np.zeros((n, 3))
-    pos[:, :2] = xy
-    vol = np.full(n, dx * dx * thickness)
+    pos[:, : xy.shape[1]] = xy
+    vol = np.full(n, dx * dx * (thickness if dimension == 2 else dx))
     with h5py.File(path + ".partial", "w") as f:
         f.attrs["format"] = np.bytes_("breccia-particles")
         f.attrs["format_version"] = np.int64(1)
-        f.attrs["dimension"] = np.int64(2)
+        f.attrs["dimension"] = np.int64(dimension)
         f.attrs["thickness_m"] = float(thickness)
         f.attrs["units"] = np.bytes_("SI (m, m3, kg, s)")
         f.attrs["source"] = np.bytes_(source)

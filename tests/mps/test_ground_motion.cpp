@@ -19,6 +19,8 @@
 #include "breccia/common/error.hpp"
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/contact.hpp"
+#include "breccia/mps/solid.hpp"
+#include "breccia/mps/solid_case.hpp"
 
 using namespace breccia::mps;
 
@@ -166,6 +168,98 @@ TEST(MpsGroundMotion, GroundWorkEqualsTheCarriedBlocksKineticEnergy) {
   std::printf("ground work %.6g J, block kinetic %.6g J, friction dissipated %.3g J\n", c.ground_work_j(), ke,
               c.friction_dissipation_j());
   EXPECT_NEAR(c.ground_work_j() / ke, 1.0, 0.005);
+}
+
+namespace {
+
+// An MPS elastic block (plane strain, E 50 MPa, nu 0.25, 1000 kg/m3: soft, so the step is
+// long) on a frictional floor with gravity: brought to rest by mass damping until 0.3 s
+// (model.damping_until), then the floor's acceleration ramps from 0.35 s at rate 2 m/s^3
+// (a table history). Particle centres of the bottom row start on the floor plane.
+struct ElasticBlockRun {
+  double slide_acceleration = -1.0, rock_acceleration = -1.0;
+};
+
+ElasticBlockRun elastic_block_on_ramping_floor(int columns, int rows, double mu, double end_s, bool stop_at_slide) {
+  const double dx = 0.02, start = 0.35, rate = 2.0;
+  const std::string csv = ::testing::TempDir() + "/ramp_" + std::to_string(columns) + ".csv";
+  std::ofstream(csv) << "time_s,acceleration\n0,0\n" << start << ",0\n" << start + 20.0 << "," << 20.0 * rate << "\n";
+  char box[160];
+  std::snprintf(box, sizeof box, "[0, %g, %g, %g]", -dx / 2, columns * dx, rows * dx - dx / 2);
+  const std::string yaml = std::string(R"(specimen:
+  lattice: {dimension: 2, box: )") + box + R"(, spacing: 0.02, thickness: 1}
+model: {type: mps, formulation: stress, gravity: [0, -9.81], damping: 30, damping_until: 0.3 s}
+materials: [{name: soft, density: 1000, youngs_modulus: 50 MPa, poisson_ratio: 0.25}]
+contact:
+  floor: {point: [0, 0], static_friction: )" + std::to_string(mu) + ", kinetic_friction: " + std::to_string(mu) +
+                           R"(,
+          motion: {quantity: acceleration, direction: [1, 0], history: {type: table, file: )" + csv + R"(}}}
+time: {end: 10 s}
+output: {progress: false}
+)";
+  Solid sim = make_solid(parse_case_text(yaml, "block.yaml"));
+  const size_t n = sim.size();
+  // The bottom row: the particles the floor carries.
+  std::vector<size_t> bottom;
+  const auto& x0 = sim.position_m();
+  double y_min = x0[1];
+  for (size_t i = 0; i < n; ++i) y_min = std::min(y_min, x0[3 * i + 1]);
+  for (size_t i = 0; i < n; ++i)
+    if (x0[3 * i + 1] < y_min + 1e-9) bottom.push_back(i);
+  ElasticBlockRun r;
+  while (sim.time_s() < end_s) {
+    sim.step();
+    const double t = sim.time_s();
+    if (t < start) continue;
+    const double a_floor = rate * (t - start);
+    double v_mean = 0.0;
+    const auto& vx = sim.velocity(0);
+    for (size_t i = 0; i < n; ++i) v_mean += vx[i] / n;
+    const HalfSpace& floor = sim.contact().half_spaces().front();
+    if (r.slide_acceleration < 0 && std::fabs(v_mean - floor.velocity_m_s[0]) > 1e-3) r.slide_acceleration = a_floor;
+    // Rocking: the block turns as a body (its mean angular velocity about the centroid,
+    // sum r x v / sum r^2, past 0.01 rad/s; before, it only leans on its elastic base).
+    const auto& ux = sim.displacement(0);
+    const auto& uy = sim.displacement(1);
+    const auto& vy = sim.velocity(1);
+    double cx = 0.0, cy = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+      cx += (x0[3 * i] + ux[i]) / n;
+      cy += (x0[3 * i + 1] + uy[i]) / n;
+    }
+    double moment = 0.0, inertia = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+      const double rx = x0[3 * i] + ux[i] - cx, ry = x0[3 * i + 1] + uy[i] - cy;
+      moment += rx * vy[i] - ry * vx[i];
+      inertia += rx * rx + ry * ry;
+    }
+    if (r.rock_acceleration < 0 && std::fabs(moment / inertia) > 0.01) r.rock_acceleration = a_floor;
+    if (r.rock_acceleration > 0 || (stop_at_slide && r.slide_acceleration > 0)) break;
+  }
+  return r;
+}
+
+}  // namespace
+
+// The issue's thresholds for an MPS elastic block: 20 x 10 particles (b/h 2 > mu_s 0.3)
+// slides at mu_s g within 3%; 6 x 21 with mu_s 0.8 starts to rock at g b/h within 5%, b/h the
+// corner particle's lever (2.5 spacings from the centre line) over the centre of mass's height
+// (10 spacings): the floor acts on particle centres. Rocking: the block turns as a body; the
+// far corner lifts much earlier (at 0.46 g b/h here), because a base of six penalty springs
+// lets the pressure shift across it before it tips.
+TEST(MpsGroundMotion, ElasticBlockSlidesAtMuStaticG) {
+  const ElasticBlockRun r = elastic_block_on_ramping_floor(20, 10, 0.3, 3.0, true);
+  std::printf("elastic block, mu_s 0.3: slides at %.4f m/s2 = %.4f mu_s g\n", r.slide_acceleration,
+              r.slide_acceleration / (0.3 * kG));
+  EXPECT_NEAR(r.slide_acceleration / (0.3 * kG), 1.0, 0.03);
+}
+
+TEST(MpsGroundMotion, SlenderElasticBlockRocksAtHousnersThreshold) {
+  const ElasticBlockRun r = elastic_block_on_ramping_floor(6, 21, 0.8, 3.0, false);
+  const double housner = kG * 5.0 / 20.0;  // lever (6 - 1)/2 over (21 - 1)/2 spacings
+  std::printf("elastic block 6 x 21: rocks at %.4f m/s2 = %.4f g b/h (its mean velocity left the floor's at %.4f)\n", r.rock_acceleration,
+              r.rock_acceleration / housner, r.slide_acceleration);
+  EXPECT_NEAR(r.rock_acceleration / housner, 1.0, 0.05);
 }
 
 // Bad input: a motion on a free body, a table whose times do not increase.

@@ -232,13 +232,14 @@ CaseSpec parse_root(const Section& root) {
 
   const Section model = root.section("model");
   model.allow_only({"type", "re_over_spacing", "equation", "integrator", "formulation", "hourglass", "pressure_force",
-                    "damping", "gravity", "lagrangian", "stencil_update_strain"});
+                    "damping", "damping_until", "gravity", "lagrangian", "stencil_update_strain"});
   model.choice("type", {"mps"});
   c.formulation = model.choice("formulation", {"displacement", "stress"}, "displacement") == "stress"
                       ? Formulation::Stress
                       : Formulation::Displacement;
   const bool stress = c.formulation == Formulation::Stress;
-  for (const char* key : {"hourglass", "pressure_force", "damping", "gravity", "lagrangian", "stencil_update_strain"})
+  for (const char* key :
+       {"hourglass", "pressure_force", "damping", "damping_until", "gravity", "lagrangian", "stencil_update_strain"})
     if (!stress && model.has(key)) fail(model, key, "given for the displacement formulation", "formulation: stress");
   if (!stress && c.bodies)
     fail(spec, "bodies", "several bodies in the displacement formulation (it has no contact)", "model.formulation: stress");
@@ -255,6 +256,12 @@ CaseSpec parse_root(const Section& root) {
     fail(model, "stencil_update_strain", "given with total Lagrangian stencils", "lagrangian: updated");
   c.damping_per_s = model.number("damping", Quantity::Frequency, 0.0);
   if (!(c.damping_per_s >= 0)) fail(model, "damping", std::to_string(c.damping_per_s), "a damping rate >= 0 (1/s)");
+  if (model.has("damping_until")) {
+    // Damping for a settling phase only (a body brought to rest under gravity before the
+    // ground moves: mass damping acts on absolute velocities, so it must end by then).
+    if (!model.has("damping")) fail(model, "damping_until", "given without damping", "damping: RATE as well");
+    c.damping_until_s = model.positive("damping_until", Quantity::Time);
+  }
   if (model.has("gravity")) c.gravity_m_s2 = model.vec3("gravity", Quantity::Acceleration);
   c.re_over_spacing = model.positive("re_over_spacing", Quantity::Dimensionless, 2.1);
   if (c.re_over_spacing < 1.01 || c.re_over_spacing > 5.0)

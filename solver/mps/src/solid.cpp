@@ -321,7 +321,7 @@ void Solid::compute_acceleration(double dt) {
   in.v = {v_[0].data(), v_[1].data(), v_[2].data()};
   in.volume_m3 = volume_m3_.data();
   in.density_kg_m3 = density_kg_m3_;
-  in.damping_per_s = options_.damping_per_s;
+  in.damping_per_s = time_s_ < options_.damping_until_s ? options_.damping_per_s : 0.0;
   in.dimension = dim;
 #pragma omp parallel for schedule(static) if (n > kSolidParallelMin)
   for (long long i = 0; i < n; ++i) solid_acceleration_at(i, in, a_[0].data(), a_[1].data(), a_[2].data());
@@ -384,6 +384,7 @@ void Solid::attach_device(std::unique_ptr<SolidStepDevice> device) {
     missing = "friction between particles";
   else if (contact_.polygon_count() > 0) missing = "rigid polygons";
   else if (contact_.moving_obstacles()) missing = "a moving floor (ground motion)";
+  else if (std::isfinite(options_.damping_until_s)) missing = "a settling phase (model.damping_until)";
   if (!missing.empty()) throw RunError("mps solid: the CUDA launcher does not run " + missing + "; use --backend cpu");
   sync_host(false);
   device_ = std::move(device);

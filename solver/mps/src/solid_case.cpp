@@ -28,6 +28,7 @@ Solid make_solid(const CaseSpec& spec, std::string* content_id) {
   opt.updated_lagrangian = spec.updated_lagrangian;
   opt.stencil_update_strain = spec.stencil_update_strain;
   opt.damping_per_s = spec.damping_per_s;
+  if (spec.damping_until_s) opt.damping_until_s = *spec.damping_until_s;
   opt.pressure = spec.repulsive_pressure ? PressureForce::Repulsive : PressureForce::Conservative;
   opt.safety = spec.safety;
   opt.dt_s = spec.dt_s;
@@ -68,6 +69,8 @@ std::optional<DeviceRefusal> solid_device_refusal(const CaseSpec& spec) {
                          "frictionless particle contact on the GPU" + cpu};
   if (!spec.rigid_bodies.empty())
     return DeviceRefusal{"contact.rigid_bodies", "rigid polygons with --backend cuda", "none on the GPU" + cpu};
+  if (spec.damping_until_s)
+    return DeviceRefusal{"model.damping_until", "a settling phase with --backend cuda", "damping for the whole run on the GPU" + cpu};
   if (spec.floor && spec.floor->motion)
     return DeviceRefusal{"contact.floor.motion", "a moving floor with --backend cuda", "a fixed floor on the GPU" + cpu};
   return std::nullopt;

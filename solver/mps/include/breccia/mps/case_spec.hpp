@@ -116,6 +116,7 @@ struct CaseSpec {
   bool updated_lagrangian = false; // lagrangian: updated (stencils rebuilt on the current configuration) | total
   double stencil_update_strain = 0.1;  // rebuild when some |H| (since the last rebuild) exceeds this
   double damping_per_s = 0.0;      // mass-proportional damping (quasi-static runs)
+  std::optional<double> damping_until_s;  // damping only while t < this (a settling phase)
   std::array<double, 3> gravity_m_s2{0.0, 0.0, 0.0};
   std::optional<FloorSpec> floor;
   std::optional<ParticleContactSpec> particle_contact;  // contact.particles (implied by >= 2 bodies)

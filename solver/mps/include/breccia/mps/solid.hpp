@@ -12,6 +12,7 @@
 //   4. v += dt a, u += dt v (symplectic Euler), prescribed displacements
 #include <array>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -34,6 +35,7 @@ struct SolidOptions {
   double re_over_spacing = 2.1;
   double hourglass = 0.1;          // alpha: hourglass stiffness relative to the shear modulus
   double damping_per_s = 0.0;      // mass-proportional damping a -= damping v (quasi-static runs)
+  double damping_until_s = std::numeric_limits<double>::infinity();  // damping while t < this
   PressureForce pressure = PressureForce::Conservative;
   double safety = 0.3;             // dt = safety * spacing / c_L
   // Split step() into substeps where bonds are squeezed (Solid::update_substeps). false: the

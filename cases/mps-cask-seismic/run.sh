@@ -3,6 +3,7 @@
 # without a gap between canister and container, under a synthetic accelerogram (record.py).
 #   VARIANT=quick|demo: canister spacing 0.2 m, gaps 0 and 50 mm, 6 s record
 #   VARIANT=full      : spacings 0.2 and 0.1 m (the convergence of the peak tilt), both gaps
+# SPACINGS, GAPS (optional): override the lists (e.g. SPACINGS=0.05 GAPS=0.05).
 # RECORD=path.csv (optional): any time_s,acceleration_g record instead of the synthetic one.
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
@@ -10,8 +11,8 @@ HERE="$(cd "$(dirname "$0")" && pwd)"
 source "$HERE/../../scripts/case_env.sh"
 DURATION=${DURATION:-6}
 case "$VARIANT" in
-  quick|demo|test) SPACINGS="0.2" ;;
-  full)            SPACINGS="0.2 0.1" ;;
+  quick|demo|test) SPACINGS=${SPACINGS:-"0.2"} ;;
+  full)            SPACINGS=${SPACINGS:-"0.2 0.1"} ;;
   *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full)" >&2; exit 2 ;;
 esac
 mkdir -p "$OUT"
@@ -22,7 +23,7 @@ fi
 RECORD="$(cd "$(dirname "$RECORD")" && pwd)/$(basename "$RECORD")"
 RUNS=()
 for dx in $SPACINGS; do
-  for gap in 0 0.05; do
+  for gap in ${GAPS:-0 0.05}; do
     name="dx${dx}_gap${gap}"
     mkdir -p "$OUT/$name"
     # Canister particle centres from just above the cavity floor (y = 0.5 m), 4.8 m high, `gap`

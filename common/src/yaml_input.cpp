@@ -36,6 +36,79 @@ void reject_duplicate_keys(const YAML::Node& node, const std::string& file, cons
 }
 }  // namespace
 
+namespace {
+struct Overrides {
+  std::string file;  // canonical path
+  std::vector<std::string> assignments;
+};
+Overrides& registered_overrides() {
+  static Overrides o;
+  return o;
+}
+
+std::string canonical_or_same(const std::string& file) {
+  std::error_code ec;
+  const auto p = std::filesystem::weakly_canonical(file, ec);
+  return ec ? file : p.string();
+}
+
+// KEY=VALUE into root: KEY's parts are map keys and [index] list entries.
+void apply_override(YAML::Node& root, const std::string& assignment, const std::string& file) {
+  const size_t eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw InputError("--set", assignment, "not KEY=VALUE", "--set time.end=\"100 us\" (a field path, '=', a value)");
+  const std::string key = assignment.substr(0, eq), text = assignment.substr(eq + 1);
+  YAML::Node value;
+  try {
+    value = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError("--set", key, "value '" + text + "': " + e.msg, "a YAML value (a number, text, or [a, b, c])");
+  }
+  // Walk the path; yaml-cpp nodes are handles, so `node = node[k]` would rebind, not assign:
+  // collect the handles and assign at the end.
+  std::vector<YAML::Node> chain{root};
+  std::string done;
+  size_t pos = 0;
+  while (pos < key.size()) {
+    if (key[pos] == '.') {
+      ++pos;
+      continue;
+    }
+    YAML::Node at = chain.back();
+    if (key[pos] == '[') {
+      const size_t close = key.find(']', pos);
+      if (close == std::string::npos) throw InputError("--set", key, "an unclosed '['", "KEY[INDEX] with a whole number");
+      const std::string digits = key.substr(pos + 1, close - pos - 1);
+      if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos)
+        throw InputError("--set", key, "index '" + digits + "'", "a whole number in [ ]");
+      const size_t index = std::stoul(digits);
+      if (!at.IsSequence() || index >= at.size())
+        throw InputError(file, "--set " + key,
+                         "'" + (done.empty() ? std::string("(top level)") : done) + "' has no entry [" + digits + "]" +
+                             (at.IsSequence() ? " (it has " + std::to_string(at.size()) + ")" : " (it is not a list)"),
+                         "an existing list entry");
+      chain.push_back(at[index]);
+      done += "[" + digits + "]";
+      pos = close + 1;
+    } else {
+      const size_t end = key.find_first_of(".[", pos);
+      const std::string name = key.substr(pos, end == std::string::npos ? std::string::npos : end - pos);
+      if (at.IsDefined() && !at.IsNull() && !at.IsMap())
+        throw InputError(file, "--set " + key, "'" + done + "' is not a map of keys", "a path through maps and lists");
+      chain.push_back(at[name]);
+      done += (done.empty() ? "" : ".") + name;
+      pos = end == std::string::npos ? key.size() : end;
+    }
+  }
+  if (chain.size() < 2) throw InputError("--set", assignment, "no key before '='", "KEY=VALUE");
+  chain.back() = value;
+}
+}  // namespace
+
+void Section::set_overrides(const std::string& file, std::vector<std::string> assignments) {
+  registered_overrides() = {canonical_or_same(file), std::move(assignments)};
+}
+
 Section Section::load_file(const std::string& file) {
   if (!std::filesystem::exists(file))
     throw InputError(file, "", "file does not exist", "a readable YAML file");
@@ -48,6 +121,9 @@ Section Section::load_file(const std::string& file) {
   }
   if (!root.IsMap()) throw InputError(file, "(top level)", "is not a YAML map", "a map of sections");
   reject_duplicate_keys(root, file, "");
+  const Overrides& o = registered_overrides();
+  if (!o.assignments.empty() && o.file == canonical_or_same(file))
+    for (const auto& a : o.assignments) apply_override(root, a, file);
   return Section(root, file, "");
 }
 

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/yaml_input.hpp"
@@ -27,7 +28,9 @@ namespace {
 void usage() {
   std::fprintf(stderr,
                "usage: breccia-solve CASE.yaml [-o DIR] [--threads N] [--restart FILE] [--steps N]\n"
-               "                     [--backend cpu|cuda|auto] [--quiet]\n"
+               "                     [--backend cpu|cuda|auto] [--quiet] [--set KEY=VALUE ...]\n"
+               "       --set time.end=\"100 us\" --set loads[0].history.peak=\"4 MPa\": override a value of the\n"
+               "             case file (repeatable; KEY as error messages name fields; VALUE as YAML)\n"
                "       breccia-solve CASE.yaml --decomposition P1,P2,...  (decomposition figures per rank count)\n");
 }
 
@@ -55,6 +58,7 @@ int main(int argc, char** argv) {
   solver::RunOptions opt;
   std::string backend = "auto";
   std::string decomposition;  // rank counts: print the decomposition's figures instead of running
+  std::vector<std::string> overrides;  // --set KEY=VALUE
   for (int k = 1; k < argc; ++k) {
     const std::string a = argv[k];
     auto value = [&](const char* name) -> std::string {
@@ -72,6 +76,7 @@ int main(int argc, char** argv) {
       else if (a == "--backend") backend = value("--backend");
       else if (a == "--quiet") opt.progress = false;
       else if (a == "--decomposition") decomposition = value("--decomposition");
+      else if (a == "--set") overrides.push_back(value("--set"));
       else if (a == "-h" || a == "--help") { usage(); return 0; }
       else if (!a.empty() && a[0] == '-') { std::fprintf(stderr, "error: unknown option %s\n", a.c_str()); usage(); return kExitBadInput; }
       else case_file = a;
@@ -105,6 +110,7 @@ int main(int argc, char** argv) {
   if (opt.backend == "cuda") opt.backend_loop = solver::cuda_time_loop;
 #endif
   try {
+    if (!overrides.empty()) Section::set_overrides(case_file, overrides);
     // The model decides the solver: PD here, MPS in its own library.
     const Section root = Section::load_file(case_file);
     if (root.has("model") && root.section("model").text("type", "") == "mps") {

@@ -22,13 +22,13 @@ struct Outcome {
   std::string output;
 };
 
-Outcome run_solver(const std::string& case_yaml, const std::string& name) {
+Outcome run_solver(const std::string& case_yaml, const std::string& name, const std::string& extra = "") {
   const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_" + name;
   std::string mk = "mkdir -p " + dir;
   if (std::system(mk.c_str()) != 0) return {-1, ""};
   const std::string file = dir + "/case.yaml";
   std::ofstream(file) << case_yaml;
-  const std::string cmd = std::string(BRECCIA_SOLVE_EXE) + " " + file + " -o " + dir + "/out --quiet 2>&1";
+  const std::string cmd = std::string(BRECCIA_SOLVE_EXE) + " " + file + " -o " + dir + "/out --quiet " + extra + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   std::string out;
   std::array<char, 512> buf{};
@@ -85,6 +85,35 @@ TEST(SolverCli, MalformedNumbersOnTheCommandLineAreRejected) {
     EXPECT_EQ(WEXITSTATUS(status), 2) << bad << ": " << out;
     EXPECT_NE(out.find("is not a number"), std::string::npos) << bad << ": " << out;
   }
+}
+
+// --set KEY=VALUE overrides a value of the case file for this run (the variants of a case
+// without editing it): the step count, a material's modulus, an initial velocity (its
+// kinetic energy 0.5 m v^2 checks that the list value arrived), in the history's first row.
+TEST(SolverCli, SetOverridesValuesOfTheCaseFile) {
+  const std::string yaml = kBase + kMaterial + "initial: [{type: velocity, value: [1, 0, 0]}]\n" + kTime +
+                           "output: {every: 1000, history_every: 1}\n";
+  const Outcome o = run_solver(yaml, "set_ok",
+                               "--set time.steps=3 --set 'materials[0].youngs_modulus=20 GPa' --set 'initial[0].value=[0, 2, 0]'");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_set_ok/out";
+  std::ifstream js(dir + "/summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(js);
+  EXPECT_EQ(summary["steps_this_run"].get<long long>(), 3);
+  std::ifstream hist(dir + "/history.csv");
+  std::string header, first;
+  std::getline(hist, header);
+  std::getline(hist, first);
+  // 100 particles of 1 mm^2 x 1 mm at 2000 kg/m3 = 2e-4 kg, at 2 m/s: 4e-4 J.
+  const double kinetic = std::stod(first.substr(first.find(',', first.find(',') + 1) + 1));
+  EXPECT_NEAR(kinetic, 4e-4, 1e-9) << header << "\n" << first;
+}
+
+TEST(SolverCli, SetWithAMissingEntryOrNoValueIsBadInput) {
+  const std::string yaml = kBase + kMaterial + kTime;
+  expect_bad_input(run_solver(yaml, "set_index", "--set 'materials[3].density=1'"), {"materials[3]", "has no entry [3]", "(it has 1)"});
+  expect_bad_input(run_solver(yaml, "set_novalue", "--set time.steps"), {"--set", "KEY=VALUE"});
+  expect_bad_input(run_solver(yaml, "set_unknown", "--set time.stpes=3"), {"time.stpes", "unknown key"});
 }
 
 TEST(SolverCli, HorizonSmallerThanSpacingIsRejected) {

@@ -18,7 +18,14 @@ public:
   Section(YAML::Node node, std::string file, std::string path);
 
   // Load a YAML file; throws InputError for a missing file or a syntax error (with line).
+  // Overrides registered for the file (set_overrides) are applied before anything reads it.
   static Section load_file(const std::string& file);
+  // Command-line overrides of one file's values (`breccia-solve CASE --set KEY=VALUE`, the
+  // documented way to run a case's variants): KEY a path as error messages name fields,
+  // `time.end`, `loads[0].history.peak`; VALUE read as YAML (`4 MPa`, `[0, 1, 0]`). Missing
+  // map keys are created (the case's own validation then checks them); a list index must
+  // exist. Applied, in order, every time this process loads that file.
+  static void set_overrides(const std::string& file, std::vector<std::string> assignments);
 
   const std::string& file() const { return file_; }
   const std::string& path() const { return path_; }

@@ -8,16 +8,20 @@ set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 source "$HERE/../../scripts/case_env.sh"
 case "$VARIANT" in
-  quick|demo|test) SPACINGS="0.005" ;;
-  full)            SPACINGS="0.005 0.0025" ;;
+  quick|demo|test) SPACINGS=${SPACINGS:-"0.005"} ;;
+  full)            SPACINGS=${SPACINGS:-"0.005 0.0025"} ;;
   *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full)" >&2; exit 2 ;;
 esac
 ANGLES=${ANGLES:-"0 10 20 40"}
+# FIN="LENGTH THICKNESS" (m, optional): another fin, e.g. FIN="0.2 0.015" with a spacing of
+# a quarter of its thickness (SPACINGS=0.00375).
+read -r FIN_LENGTH FIN_THICKNESS <<< "${FIN:-0.15 0.02}"
 END=${END:-0.015}
 mkdir -p "$OUT"
 RUNS=()
 for dx in $SPACINGS; do
-  "$PYTHON" "$HERE/specimen.py" "$OUT/particles_$dx.h5" --spacing "$dx"
+  "$PYTHON" "$HERE/specimen.py" "$OUT/particles_$dx.h5" --spacing "$dx" --fin-length "$FIN_LENGTH" \
+    --fin-thickness "$FIN_THICKNESS"
   for angle in $ANGLES; do
     name="dx${dx}_angle${angle}"
     mkdir -p "$OUT/$name"

@@ -917,7 +917,19 @@ PdSystem setup_system(const CaseConfig& config) {
   s.fixed_dof.assign(n, 0);
   for (size_t b = 0; b < c.boundaries.size(); ++b) {
     const BoundarySpec& bs = c.boundaries[b];
-    PdSystem::Constraint con{&bs, internal_particles(s, require_set(s, bs.set, "boundary[" + std::to_string(b) + "].set").indices)};
+    const auto& listed = require_set(s, bs.set, "boundary[" + std::to_string(b) + "].set").indices;
+    PdSystem::Constraint con{&bs, internal_particles(s, listed)};
+    // Each listed particle is written by its own thread of the constraint kernels (a
+    // read-modify-write on the GPU): a particle listed twice would race with itself.
+    {
+      std::vector<int64_t> sorted(listed);
+      std::sort(sorted.begin(), sorted.end());
+      const auto twice = std::adjacent_find(sorted.begin(), sorted.end());
+      if (twice != sorted.end())
+        throw InputError(c.file, "boundary[" + std::to_string(b) + "].set",
+                         "set '" + bs.set + "' lists particle " + std::to_string(*twice) + " more than once",
+                         "each particle once in a boundary's set (fix the particle file's set)");
+    }
     uint8_t mask = 0;
     for (int d = 0; d < 3; ++d)
       if (bs.components[d]) mask |= static_cast<uint8_t>(1u << d);

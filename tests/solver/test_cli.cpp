@@ -12,6 +12,7 @@
 #include <fstream>
 #include <string>
 #include "helpers.hpp"
+#include "breccia/common/particle_file.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -202,4 +203,33 @@ TEST(SolverCli, SummaryOfARunStoppedForNonFiniteValuesIsStrictJson) {
     phases += j["setup_phases_s"][name].get<double>();
   }
   EXPECT_LE(phases, j["setup_wall_s"].get<double>() * 1.01 + 1e-3);
+}
+
+// A boundary whose set lists a particle twice would race on the GPU (each listed particle is
+// written by its own thread): refused at set-up, naming the boundary, the set and the particle.
+TEST(SolverCli, BoundarySetListingAParticleTwiceIsRejected) {
+  const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_dup_set";
+  std::filesystem::create_directories(dir);
+  breccia::ParticleModel m;
+  m.dimension = 2;
+  m.thickness_m = 1e-3;
+  for (int j = 0; j < 6; ++j)
+    for (int i = 0; i < 6; ++i) {
+      m.position_m.insert(m.position_m.end(), {(i + 0.5) * 1e-3, (j + 0.5) * 1e-3, 0.0});
+      m.volume_m3.push_back(1e-9);
+      m.spacing_m.push_back(1e-3);
+      m.material_id.push_back(0);
+    }
+  m.sets = {breccia::ParticleSet{"edge", {0, 1, 2, 1}}};
+  m.source = "test_cli duplicate set";
+  breccia::write_particle_file(dir + "/particles.h5", m);
+  std::ofstream(dir + "/case.yaml") << "specimen: {particles: particles.h5}\nmodel: {type: pmb, planar: plane_strain}\n" +
+                                           kMaterial + kTime + "boundary: [{type: fixed, set: edge}]\n";
+  const std::string cmd = std::string(BRECCIA_SOLVE_EXE) + " " + dir + "/case.yaml -o " + dir + "/out --quiet 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 512> buf{};
+  while (fgets(buf.data(), buf.size(), p)) out += buf.data();
+  const int status = pclose(p);
+  expect_bad_input({WEXITSTATUS(status), out}, {"boundary[0].set", "'edge'", "particle 1 more than once"});
 }

@@ -3,14 +3,18 @@ force and the energy balance at each inclination.
 
     report.py OUT RUN [RUN ...]
 
-Hinges: along the fin (the particles of set `fin`, stations = rows of the reference lattice
+Shape: the fin's centre line at the end (each station's mean current position), its curvature
+(the turning of the line between stations, smoothed over one fin thickness), and its bends:
+local maxima of |curvature| above 30% of the largest and 1 /m, at least two thicknesses
+apart; two bends of opposite sign are the S-shape of a double hinge, one bend a single hinge.
+Plastic hinges: along the fin (the particles of set `fin`, stations = rows of the reference lattice
 from the root at the ring's surface to the tip), the largest equivalent plastic strain across
 the fin's thickness at each station at the end of the run; a hinge is a local maximum of that
 profile above half the fin's largest strain and at least HINGE_MIN_STRAIN, separated from the
 next by at least two fin thicknesses (a hinge spreads over about one thickness). The ring's
 wall at the root counts as station 0 (the largest strain of the ring within one fin thickness
 of the root). Energy: kinetic + stress work (elastic + plastic) + hourglass + contact +
-gravity against the initial kinetic energy (history.csv). Writes OUT/report.json,
+gravity + friction dissipation against the initial kinetic energy (history.csv). Writes OUT/report.json,
 OUT/fin_drop_plastic.png (deformed shapes coloured by plastic strain), OUT/fin_drop_profiles.png
 (plastic strain along the fin) and OUT/fin_drop_force.png (floor force against time).
 """
@@ -53,6 +57,29 @@ def analyse(out, name):
     ring_root = np.nonzero((np.abs(x0[:, 0]) < thickness) & (x0[:, 1] > root_y) & (x0[:, 1] < root_y + thickness))[0]
     prof = np.concatenate([[ep[ring_root].max() if len(ring_root) else 0.0], profile])
     pos = np.concatenate([[0.0], station])
+    # The fin's bent shape: each station's mean current position; its curvature from the
+    # turning of the centre line between neighbouring stations, smoothed over one thickness.
+    cur = x0 + u
+    centre = np.array([cur[fin[np.abs(x0[fin, 1] - y) < 1e-9]].mean(axis=0) for y in rows])
+    seg = np.diff(centre, axis=0)
+    ang = np.unwrap(np.arctan2(seg[:, 1], seg[:, 0]))
+    kappa = np.diff(ang) / dx  # 1/m, at the interior stations
+    width = max(1, int(round(thickness / dx)))
+    kappa = np.convolve(kappa, np.ones(width) / width, mode="same")
+    kpos = station[1:-1]
+    kmax = float(np.max(np.abs(kappa))) if len(kappa) else 0.0
+    bends = []  # (position, curvature): local maxima of |kappa| above 30% of the largest
+    for k in range(len(kappa)):
+        a = abs(kappa[k])
+        if a < 0.3 * kmax or a < 1.0:
+            continue
+        if (k > 0 and abs(kappa[k - 1]) > a) or (k + 1 < len(kappa) and abs(kappa[k + 1]) > a):
+            continue
+        if bends and kpos[k] - bends[-1][0] < 2 * thickness:
+            if a > abs(bends[-1][1]):
+                bends[-1] = (kpos[k], kappa[k])
+            continue
+        bends.append((kpos[k], kappa[k]))
     peak = prof.max()
     floor_strain = max(0.5 * peak, HINGE_MIN_STRAIN, 1.5 * float(np.median(prof)))
     hinges = []
@@ -67,12 +94,19 @@ def analyse(out, name):
     hist = list(csv.DictReader(open(os.path.join(run, "history.csv"))))
     col = lambda k: np.array([float(h[k]) for h in hist])  # noqa: E731
     t = col("time_s")
-    parts = ["kinetic_energy_J", "stress_work_J", "hourglass_energy_J", "contact_energy_J", "gravity_energy_J"]
-    total = sum(col(k) for k in parts)
+    parts = ["kinetic_energy_J", "stress_work_J", "hourglass_energy_J", "contact_energy_J", "gravity_energy_J",
+             "friction_dissipation_J"]
+    total = sum(col(k) for k in parts if k in hist[0])
     e0 = float(col("kinetic_energy_J")[0])
     force = col("floor_force_N") if "floor_force_N" in hist[0] else None
     res = {"run": name, "angle_deg": angle, "spacing_m": dx, "end_time_s": t_end,
-           "fin_thickness_m": thickness, "hinge_count": len(hinges),
+           "fin_thickness_m": thickness,
+           "bend_count": len(bends), "bends_m_from_root": [round(float(p), 4) for p, _ in bends],
+           "bend_curvatures_per_m": [round(float(c), 2) for _, c in bends],
+           "shape": ("straight (crushed)" if not bends else "single bend" if len(bends) == 1
+                     else "S-shape (double bend)" if len(bends) == 2 and bends[0][1] * bends[1][1] < 0
+                     else f"{len(bends)} bends"),
+           "hinge_count": len(hinges),
            "hinges_m_from_root": [round(float(p), 4) for p, _ in hinges],
            "hinge_strains": [round(float(s), 4) for _, s in hinges],
            "max_fin_plastic_strain": float(peak),
@@ -89,7 +123,8 @@ def main(argv):
         r, d = analyse(out, n)
         runs.append(r)
         data.append(d)
-        print(f"{n}: {r['hinge_count']} hinge(s) at {r['hinges_m_from_root']} m from the root "
+        print(f"{n}: {r['shape']}: bends at {r['bends_m_from_root']} m from the root (curvature "
+              f"{r['bend_curvatures_per_m']} 1/m); plastic hinges {r['hinge_count']} at {r['hinges_m_from_root']} m "
               f"(strains {r['hinge_strains']}), energy error {r['energy_error_max_over_initial']:.2%}"
               + (f", peak floor force {r['peak_floor_force_N_per_m'] / 1e6:.2f} MN/m" if r["peak_floor_force_N_per_m"] else ""))
     json.dump({"case": "mps-fin-drop", "runs": runs}, open(os.path.join(out, "report.json"), "w"), indent=1)
@@ -99,7 +134,7 @@ def main(argv):
         near = cur[:, 1] < np.min(cur[:, 1]) + 0.3
         sc = ax.scatter(cur[near, 0], cur[near, 1], c=ep[near], s=2, cmap="inferno", vmin=0, vmax=max(0.05, ep.max()))
         ax.set_aspect("equal")
-        ax.set_title(f"{r['angle_deg']:g} deg: {r['hinge_count']} hinge(s)", fontsize=9)
+        ax.set_title(f"{r['angle_deg']:g} deg: {r['shape']}", fontsize=9)
         ax.set_xlabel("x (m, cask frame)")
         fig.colorbar(sc, ax=ax, shrink=0.7, label="eq. plastic strain")
     fig.tight_layout()

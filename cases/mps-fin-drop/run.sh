@@ -16,6 +16,7 @@ ANGLES=${ANGLES:-"0 10 20 40"}
 # FIN="LENGTH THICKNESS" (m, optional): another fin, e.g. FIN="0.2 0.015" with a spacing of
 # a quarter of its thickness (SPACINGS=0.00375).
 read -r FIN_LENGTH FIN_THICKNESS <<< "${FIN:-0.15 0.02}"
+MU=${MU:-0}   # friction between the fin and the target (0: frictionless)
 END=${END:-0.015}
 mkdir -p "$OUT"
 RUNS=()
@@ -37,7 +38,7 @@ f = lambda v: '[' + ', '.join(f'{c:.9g}' for c in v) + ']'
 print('|'.join([f(n), f(q), f(-13.3 * n), f(-9.81 * n)]))")
     every=$("$PYTHON" -c "print(max(1, round($END / (0.3 * $dx / 5900) / 6)))")
     sed -e "s#particles: particles.h5#particles: ../particles_$dx.h5#" -e "s/NORMAL/$normal/" -e "s/POINT/$point/" \
-        -e "s/VELOCITY/$velocity/" -e "s/GRAVITY/$gravity/" -e "s/END/$END/" -e "s/EVERY/$every/" \
+        -e "s/VELOCITY/$velocity/" -e "s/GRAVITY/$gravity/" -e "s/END/$END/" -e "s/EVERY/$every/" -e "s/MU/$MU/g" \
         "$HERE/case.yaml" > "$OUT/$name/case.yaml"
     echo "== $name"
     "$BRECCIA_BIN/breccia-mps" "$OUT/$name/case.yaml" -o "$OUT/$name" --threads "$THREADS" 2>&1 | tail -1

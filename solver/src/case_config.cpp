@@ -219,9 +219,18 @@ CaseConfig parse_case_file(const std::string& path) {
                          "fracture_energy > 0 too (the softening law takes both: strength and G0)");
     }
     if (auto w = m.optional_section("weibull")) {
-      w->allow_only({"modulus", "seed"});
+      w->allow_only({"modulus", "seed", "scales"});
       ms.weibull_modulus = w->positive("modulus", Quantity::Dimensionless);
       ms.weibull_seed = w->integer("seed", 1);
+      if (w->has("scales")) {
+        const std::string what = w->choice("scales", {"both", "fracture_energy", "tensile_strength"});
+        if (what != "fracture_energy" && !(ms.tensile_strength > 0))
+          throw InputError(path, w->field("scales"), "'" + what + "' for a material without a tensile_strength",
+                           "fracture_energy (the only value a critical-stretch material has), or a tensile_strength");
+        ms.weibull_scales = what == "both"              ? MaterialSpec::WeibullScales::Both
+                            : what == "fracture_energy" ? MaterialSpec::WeibullScales::FractureEnergy
+                                                        : MaterialSpec::WeibullScales::TensileStrength;
+      }
     }
     c.materials.push_back(ms);
   }

@@ -531,12 +531,17 @@ PdSystem setup_system(const CaseConfig& config) {
                            ? s.material[i] : s.material[j];
       const MaterialSpec& wm = c.materials[weak];
       double G0 = wm.fracture_energy;
+      double strength_draw = wm.fracture_energy;  // the strength scales as this over the mean G0
       if (G0 > 0 && wm.weibull_modulus > 0) {
         const double U = bond_uniform(static_cast<uint64_t>(s.original_index[i]),
                                       static_cast<uint64_t>(s.original_index[j]),
                                       static_cast<uint64_t>(wm.weibull_seed));
+        // The draw of G0 (mean G0); weibull.scales says what it scatters (both by default, the
+        // strength by the same ratio to the mean).
         const double scale = G0 / std::tgamma(1.0 + 1.0 / wm.weibull_modulus);
-        G0 = scale * std::pow(-std::log(U), 1.0 / wm.weibull_modulus);
+        const double drawn = scale * std::pow(-std::log(U), 1.0 / wm.weibull_modulus);
+        if (wm.weibull_scales != MaterialSpec::WeibullScales::FractureEnergy) strength_draw = drawn;
+        if (wm.weibull_scales != MaterialSpec::WeibullScales::TensileStrength) G0 = drawn;
       }
       auto s0 = [&](double delta) {
         if (!c.fracture || G0 <= 0 || no_fail[i] || no_fail[j]) return FLT_MAX;
@@ -547,9 +552,9 @@ PdSystem setup_system(const CaseConfig& config) {
       s.s0_own[out] = s0(s.horizon[i]);
       s.s0_dual[out] = s0(s.horizon[j]);
       if (c.softening) {
-        // Onset stretch of the weaker material, scattered with the same Weibull draw as G0;
+        // Onset stretch of the weaker material, scattered as weibull.scales says;
         // s0 becomes the ultimate stretch in convert_to_softening.
-        const double strength = wm.fracture_energy > 0 ? wm.tensile_strength * G0 / wm.fracture_energy : 0.0;
+        const double strength = wm.fracture_energy > 0 ? wm.tensile_strength * strength_draw / wm.fracture_energy : 0.0;
         s.s_onset[out] = strength > 0 ? static_cast<float>(onset_per_strength[weak] * strength) : FLT_MAX;
       }
       ++out;

@@ -2,6 +2,7 @@
 // fracture_energy (pd_physics.hpp softening_damage; docs/theory.md "Quasi-brittle bonds").
 #include <gtest/gtest.h>
 
+#include <cfloat>
 #include <cmath>
 #include <cstring>
 #include <cstdlib>
@@ -100,6 +101,52 @@ TEST_P(SofteningFractureEnergy, EqualsTheBrittleBondsEnergyWhateverTheStrength) 
 }
 
 INSTANTIATE_TEST_SUITE_P(Models, SofteningFractureEnergy, ::testing::Values("pmb", "lps"));
+
+// weibull.scales: the draw scatters G0 and the strength together (default), or one of them.
+// Per bond, the onset carries the strength (s_t proportional to it) and onset x ultimate is
+// s_G^2, proportional to G0 (s_u = s_G^2 / s_t). So: `tensile_strength` varies the onset and
+// keeps onset x ultimate; `fracture_energy` keeps the onset and varies the product; `both`
+// varies both in proportion. Relative spreads compared at 1e-5 (float storage).
+TEST(Softening, WeibullScatterGoesWhereScalesSays) {
+  auto spread = [](const PdSystem& s, auto&& value) {
+    double lo = 1e300, hi = -1e300;
+    for (size_t k = 0; k < s.s_onset.size(); ++k) {
+      if (!(s.s_onset[k] < FLT_MAX) || !(s.s0_own[k] < FLT_MAX)) continue;
+      const double v = value(k);
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+    return hi / lo - 1.0;
+  };
+  const std::string w = ", tensile_strength: 4 MPa, weibull: {modulus: 10, seed: 7";
+  for (const char* scales : {"both", "fracture_energy", "tensile_strength"}) {
+    PdSystem s = system_from_yaml(std::string("soft_weibull_") + scales,
+                                  block_deck("pmb", w + ", scales: " + scales + "}"));
+    const double onset = spread(s, [&](size_t k) { return double(s.s_onset[k]); });
+    const double product = spread(s, [&](size_t k) { return double(s.s_onset[k]) * s.s0_own[k]; });
+    const double ratio = spread(s, [&](size_t k) { return double(s.s_onset[k]) / (double(s.s_onset[k]) * s.s0_own[k]); });
+    std::printf("weibull scales %s: spreads onset %.3g, onset x ultimate %.3g, their ratio %.3g\n", scales, onset, product,
+                ratio);
+    const std::string what = scales;
+    if (what == "tensile_strength") {
+      EXPECT_GT(onset, 0.1);
+      EXPECT_LT(product, 1e-5);
+    } else if (what == "fracture_energy") {
+      EXPECT_LT(onset, 1e-5);
+      EXPECT_GT(product, 0.1);
+    } else {
+      EXPECT_GT(onset, 0.1);
+      EXPECT_LT(ratio, 1e-5);
+    }
+  }
+  // Scattering a strength the material does not have is refused.
+  try {
+    system_from_yaml("soft_weibull_bad", block_deck("pmb", ", weibull: {modulus: 10, scales: tensile_strength}"));
+    FAIL() << "expected an InputError";
+  } catch (const breccia::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("weibull.scales"), std::string::npos) << e.what();
+  }
+}
 
 TEST(Softening, HorizonTooLargeForStrengthAndToughnessIsRefusedWithTheLargestThatWorks) {
   // s_G = sqrt(5 G0 / (9 K delta)) = 1.66e-3 at delta 3.015 mm (K = 6.67 GPa); a strength of

@@ -199,13 +199,7 @@ output: {progress: false}
 )";
   Solid sim = make_solid(parse_case_text(yaml, "block.yaml"));
   const size_t n = sim.size();
-  // The bottom row: the particles the floor carries.
-  std::vector<size_t> bottom;
   const auto& x0 = sim.position_m();
-  double y_min = x0[1];
-  for (size_t i = 0; i < n; ++i) y_min = std::min(y_min, x0[3 * i + 1]);
-  for (size_t i = 0; i < n; ++i)
-    if (x0[3 * i + 1] < y_min + 1e-9) bottom.push_back(i);
   ElasticBlockRun r;
   while (sim.time_s() < end_s) {
     sim.step();

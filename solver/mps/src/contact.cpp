@@ -454,13 +454,14 @@ double Contact::obstacle_penalty_energy_j(const ParticleStateView& s) const {
       e += 0.5 * polygons_[p].law.normal_stiffness_n_m * depth * depth;
     }
     if (polygons_[p].fixed) continue;
-    for (const HalfSpace& hs : half_spaces_)  // free bodies' vertices on the planes
+    for (const HalfSpace& hs : half_spaces_) {  // free bodies' vertices on the planes
+      const PlaneContact plane = plane_contact(hs);
       for (size_t m = 0; m < vx.size(); ++m) {
-        const PlaneContact plane = plane_contact(hs);
         const double height = (vx[m] - plane.point[0]) * hs.normal[0] + (vy[m] - plane.point[1]) * hs.normal[1] -
                               plane.point[2] * hs.normal[2];
         if (height < 0.0) e += 0.5 * hs.law.normal_stiffness_n_m * height * height;
       }
+    }
   }
   if (polygons_.size() > 1) e += polygon_pairs(nullptr);
   return e;

@@ -99,6 +99,17 @@ struct BondOriginT {
     if (kRelative) { ux = p.u[3 * i]; uy = p.u[3 * i + 1]; uz = p.u[3 * i + 2]; }
     else { ux = uy = uz = Real(0); }
   }
+  // The SIMD path's form (kRelative only): returns num = eta.(xi + (xi + eta)), the extension
+  // times (len + |xi|), with no division; dx, dy, dz and len as to(). Both of that path's
+  // passes call it, so the bond it breaks is the bond it masked.
+  BRECCIA_HD Real extension_numerator(const Real* x0, const Real* u, int64_t j, Real& dx, Real& dy, Real& dz,
+                                      Real& len) const {
+    const Real ax = x0[3 * j] - px, ay = x0[3 * j + 1] - py, az = x0[3 * j + 2] - pz;
+    const Real bx = u[3 * j] - ux, by = u[3 * j + 1] - uy, bz = u[3 * j + 2] - uz;
+    dx = ax + bx; dy = ay + by; dz = az + bz;
+    len = std::sqrt(dx * dx + dy * dy + dz * dz);
+    return bx * (ax + dx) + by * (ay + dy) + bz * (az + dz);
+  }
   // Returns the extension; dx, dy, dz and len receive the deformed vector and its length.
   BRECCIA_HD Real to(const PdViewT<Real>& p, int64_t j, Real xi_len, Real& dx, Real& dy, Real& dz,
                      Real& len) const {
@@ -306,14 +317,10 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
 #pragma omp simd reduction(+ : fx, fy, fz, released, breaking)
 #endif
       for (int64_t k = begin; k < end; ++k) {
-        const int64_t j = p.neighbor[k];
-        const Real ax = x0[3 * j] - origin.px, ay = x0[3 * j + 1] - origin.py, az = x0[3 * j + 2] - origin.pz;
-        const Real bx = u[3 * j] - origin.ux, by = u[3 * j + 1] - origin.uy, bz = u[3 * j + 2] - origin.uz;
-        const Real dx = ax + bx, dy = ay + by, dz = az + bz;
-        const Real len = std::sqrt(dx * dx + dy * dy + dz * dz);
+        Real dx, dy, dz, len;
+        const Real num = origin.extension_numerator(x0, u, p.neighbor[k], dx, dy, dz, len);
         const Real xi = p.xi_len[k];
         const Real den = len + xi;
-        const Real num = bx * (ax + dx) + by * (ay + dy) + bz * (az + dz);
         const Real k2 = Real(2) * p.k_own[k];
         const Real s0 = p.s0_own[k];
         const bool intact = p.state[k] != 0;
@@ -330,13 +337,9 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
       if (breaking)
         for (int64_t k = begin; k < end; ++k) {
           if (!p.state[k]) continue;
-          const int64_t j = p.neighbor[k];
-          const Real ax = x0[3 * j] - origin.px, ay = x0[3 * j + 1] - origin.py, az = x0[3 * j + 2] - origin.pz;
-          const Real bx = u[3 * j] - origin.ux, by = u[3 * j + 1] - origin.uy, bz = u[3 * j + 2] - origin.uz;
-          const Real dx = ax + bx, dy = ay + by, dz = az + bz;
-          const Real len = std::sqrt(dx * dx + dy * dy + dz * dz);
+          Real dx, dy, dz, len;
+          const Real num = origin.extension_numerator(x0, u, p.neighbor[k], dx, dy, dz, len);
           const Real xi = p.xi_len[k];
-          const Real num = bx * (ax + dx) + by * (ay + dy) + bz * (az + dz);
           if (num > p.s0_own[k] * xi * (len + xi)) p.state[k] = 0;
         }
       p.force[3 * i] = fx;

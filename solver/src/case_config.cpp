@@ -336,10 +336,45 @@ CaseConfig parse_case_file(const std::string& path) {
   }
 
   for (const Section& l : root.list("loads")) {
-    l.allow_only({"type", "surface", "set", "value", "history"});
+    const std::string type = l.choice("type", {"pressure", "traction", "body_force", "gas"});
+    if (type == "gas")
+      l.allow_only({"type", "surface", "history", "gamma_high", "gamma_low", "switch_pressure", "stemming",
+                    "vent_surfaces", "front_speed", "crack_entry", "gas_density", "vent_area", "ambient_pressure",
+                    "cavity_volume"});
+    else
+      l.allow_only({"type", "surface", "set", "value", "history"});
     LoadSpec ls;
-    const std::string type = l.choice("type", {"pressure", "traction", "body_force"});
-    if (type == "pressure") {
+    if (type == "gas") {
+      ls.kind = LoadSpec::Kind::Gas;
+      ls.surface = l.text("surface");
+      ls.history = parse_history(l.section("history"), Quantity::Pressure, c.directory);
+      GasSpec& g = ls.gas;
+      g.gamma_high = l.number("gamma_high", Quantity::Dimensionless, g.gamma_high);
+      g.gamma_low = l.number("gamma_low", Quantity::Dimensionless, g.gamma_low);
+      for (const auto& [key, gamma] : {std::pair{"gamma_high", g.gamma_high}, std::pair{"gamma_low", g.gamma_low}})
+        if (!(gamma > 1.0))
+          throw InputError(path, l.field(key), short_number(gamma), "a ratio of specific heats above 1");
+      g.switch_pressure = l.positive("switch_pressure", Quantity::Pressure, g.switch_pressure);
+      g.stemming_open = l.choice("stemming", {"closed", "open"}, "closed") == "open";
+      if (l.has("vent_surfaces")) g.vent_surfaces = l.texts("vent_surfaces");
+      g.crack_entry = l.boolean("crack_entry", true);
+      if (l.has("front_speed") && l.text("front_speed") != "escape")
+        g.front_speed = l.positive("front_speed", Quantity::Velocity);
+      if (l.has("gas_density")) g.density = l.positive("gas_density", Quantity::Density);
+      if (l.has("vent_area")) g.vent_area = l.positive("vent_area", Quantity::Area);
+      g.ambient_pressure = l.number("ambient_pressure", Quantity::Pressure, g.ambient_pressure);
+      if (g.ambient_pressure < 0)
+        throw InputError(path, l.field("ambient_pressure"), short_number(g.ambient_pressure) + " Pa", "0 or more");
+      if (l.has("cavity_volume")) g.cavity_volume = l.positive("cavity_volume", Quantity::Volume);
+      const bool can_vent = g.stemming_open || !g.vent_surfaces.empty();
+      if ((can_vent || (g.crack_entry && g.front_speed == 0.0)) && g.density == 0.0)
+        throw InputError(path, l.field("gas_density"), "missing",
+                         "the gas density in the reference cavity (kg/m3: the charge's mass over the hole's "
+                         "volume), needed for the outflow once the gas vents and for the front's escape speed");
+      if (!g.crack_entry && !g.vent_surfaces.empty())
+        throw InputError(path, l.field("vent_surfaces"), "given with crack_entry: false",
+                         "no vent surfaces (the gas reaches them only through cracks)");
+    } else if (type == "pressure") {
       ls.kind = LoadSpec::Kind::Pressure;
       ls.surface = l.text("surface");
       ls.history = parse_history(l.section("history"), Quantity::Pressure, c.directory);

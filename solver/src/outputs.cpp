@@ -281,6 +281,9 @@ HistoryWriter::HistoryWriter(const PdSystem& s, const std::string& out_dir, bool
     if (!file_) throw RunError("cannot write " + path);
     std::fprintf(file_, "step,time_s,kinetic_J,strain_J,external_work_J,dissipated_J,total_J,max_damage,broken_bonds");
     if (s.config.indenter.enabled) std::fprintf(file_, ",indenter_force_x_N,indenter_force_y_N,indenter_force_z_N");
+    if (s.gas.active)
+      std::fprintf(file_, ",gas_pressure_Pa,cavity_volume_m3,crack_gas_volume_m3,gas_work_J,gas_mass_fraction,"
+                          "gas_vented,gas_wetted_particles");
     const char* comp[2][3] = {{"ux", "uy", "uz"}, {"vx", "vy", "vz"}};
     for (size_t p = 0; p < probes_.size(); ++p)
       for (int d = 0; d < 3; ++d)
@@ -314,6 +317,13 @@ void HistoryWriter::write(const PdSystem& s, const Energies& e) {
       fz -= f[2] * s.volume[i];
     }
     std::fprintf(file_, ",%.9e,%.9e,%.9e", fx, fy, fz);
+  }
+  if (s.gas.active) {
+    const GasState& g = s.gas;
+    long long wetted = 0;
+    for (double t : g.arrival) wetted += t < 1e300;
+    std::fprintf(file_, ",%.9e,%.9e,%.9e,%.9e,%.9e,%d,%lld", g.pressure, g.volume, g.crack_volume, g.work,
+                 g.mass_fraction, g.vented ? 1 : 0, wetted);
   }
   for (const auto& [i, kind] : probes_) {
     const std::vector<double>& src = kind ? s.v : s.u;
@@ -350,6 +360,14 @@ void write_checkpoint(const PdSystem& s, const std::string& path) {
     }
     std::vector<double> ind(s.indenter_position, s.indenter_position + 3);
     f.write("/indenter_position", ind, {3});
+    if (s.gas.active) {  // the gas's state: its scalars, the frozen wall shares, the front
+      const GasState& g = s.gas;
+      const std::vector<double> scalars{g.volume,       g.wall_volume, g.crack_volume, g.pressure, g.pressure_abs,
+                                        g.mass_fraction, g.work,        g.vented ? 1.0 : 0.0, g.vent_time};
+      f.write("/gas/scalars", scalars, {scalars.size()});
+      f.write("/gas/wall_dv", g.wall_dv, {g.wall_dv.size()});
+      if (g.crack_entry) f.write("/gas/arrival", g.arrival, {g.arrival.size()});
+    }
   }
   out.commit();
 }
@@ -396,6 +414,22 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
   }
   const auto ind = f.read_doubles("/indenter_position");
   for (int d = 0; d < 3; ++d) s.indenter_position[d] = ind[d];
+  if (s.gas.active) {
+    GasState& g = s.gas;
+    if (!f.exists("/gas/scalars"))
+      throw InputError(path, "/gas/scalars", "missing (written without a gas load)", "a checkpoint of this case");
+    const auto sc = f.read_doubles("/gas/scalars");
+    const auto wall = f.read_doubles("/gas/wall_dv");
+    if (sc.size() != 9 || wall.size() != g.wall_dv.size())
+      throw InputError(path, "/gas", "gas state of another cavity", "a checkpoint of this case");
+    g.volume = sc[0], g.wall_volume = sc[1], g.crack_volume = sc[2], g.pressure = sc[3], g.pressure_abs = sc[4];
+    g.mass_fraction = sc[5], g.work = sc[6], g.vented = sc[7] != 0.0, g.vent_time = sc[8];
+    g.wall_dv = wall;
+    if (g.crack_entry) {
+      g.arrival = f.read_doubles("/gas/arrival");
+      g.arrival_next = g.arrival;
+    }
+  }
   // Derived per-particle fields (damage, energy) at the restored state; no bond can break
   // here because the stretches are those already checked at the checkpointed step.
   const double dissipated = s.dissipated_energy;

@@ -150,6 +150,7 @@ long long relax_to_equilibrium(PdSystem& s, bool progress) {
   auto last = start;
   for (long long it = 0; it < s.config.adr_max_steps; ++it) {
     commit_min_stretch(s);
+    if (s.gas.active && it > 0) compute_external(s, 0.0);  // the gas follows the cavity's volume
     cpu_compute_forces(s);
     double num = 0.0, den = 0.0, residual = 0.0;
     for (size_t k = 0; k < n3; ++k) {

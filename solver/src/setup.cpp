@@ -300,7 +300,7 @@ FacetLayout group_facets_by_particle(const PdSystem& s) {
   FacetLayout out;
   for (size_t l = 0; l < s.surface_loads.size(); ++l) {
     const auto& sl = s.surface_loads[l];
-    out.is_pressure.push_back(sl.spec->kind == LoadSpec::Kind::Pressure);
+    out.is_pressure.push_back(sl.spec->kind == LoadSpec::Kind::Pressure || sl.spec->kind == LoadSpec::Kind::Gas);
     out.vectors.insert(out.vectors.end(), sl.spec->vector.begin(), sl.spec->vector.end());
     for (const auto& f : sl.facets) entries.push_back({f.particle, static_cast<int32_t>(l), &f});
   }
@@ -917,6 +917,12 @@ PdSystem setup_system(const CaseConfig& config) {
     throw InputError(c.file, "loads", std::to_string(s.surface_loads.size()) + " pressure/traction loads",
                      "at most " + std::to_string(kMaxSurfaceLoads) + " (their histories travel with each step)");
   s.facets = group_facets_by_particle(s);
+  for (size_t l = 0, surface = 0; l < c.loads.size(); ++l) {
+    if (c.loads[l].kind == LoadSpec::Kind::BodyForce) continue;
+    if (c.loads[l].kind == LoadSpec::Kind::Gas)
+      setup_gas(s, static_cast<int>(surface), "loads[" + std::to_string(l) + "]");
+    ++surface;
+  }
 
   // Constraints.
   s.fixed_dof.assign(n, 0);

@@ -43,6 +43,14 @@ public:
   void commit_min_stretch(StepArrays<Real>& a) const { host_.commit_min_stretch(a); }
   template <class Real>
   void contact(const StepArrays<Real>& a) const { host_.contact(a); }
+  template <class Real>
+  void gas(const StepArrays<Real>& a, PdSystem& sys, double t, double dt) const {
+    gas_update(*this, a.d, a.facets, sys.gas, t, dt);
+  }
+  template <class Real>
+  void gas_crack_forces(const StepArrays<Real>& a, PdSystem& sys) const {
+    breccia::solver::gas_crack_forces(*this, a.d, sys.gas, const_cast<double*>(a.d.body));
+  }
 
 private:
   OpenMpExec host_;

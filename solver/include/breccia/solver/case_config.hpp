@@ -35,12 +35,28 @@ struct MaterialSpec {
   enum class WeibullScales { Both, FractureEnergy, TensileStrength } weibull_scales = WeibullScales::Both;
 };
 
+// Explosive gas in a cavity (loads[].type: gas; gas.hpp, docs/case-format.md).
+struct GasSpec {
+  double gamma_high = 3.0, gamma_low = 1.3;
+  double switch_pressure = 0.1e9;      // Pa, where the isentrope changes gamma
+  bool stemming_open = false;          // mouth open: the gas vents from the start
+  std::vector<std::string> vent_surfaces;  // the front reaching one of these vents the gas
+  double front_speed = 0.0;            // m/s along open bonds; 0: escape speed 2c/(gamma-1)
+  bool crack_entry = true;             // the gas enters cracks (false: stays in the hole)
+  double density = 0.0;                // gas density in the reference cavity [kg/m3]
+  double vent_area = 0.0;              // m2; 0: the mouth's area
+  double ambient_pressure = 101325.0;  // Pa
+  double cavity_volume = 0.0;          // m3; 0: from the surface's facets
+};
+
 struct LoadSpec {
-  enum class Kind { Pressure, Traction, BodyForce } kind = Kind::Pressure;
-  std::string surface;  // Pressure, Traction
+  enum class Kind { Pressure, Traction, BodyForce, Gas } kind = Kind::Pressure;
+  std::string surface;  // Pressure, Traction, Gas
   std::string set;      // BodyForce: empty = all
   Vec3 vector{0, 0, 0}; // Traction [Pa] or body acceleration [m/s2]
-  HistorySpec history;  // Pressure: the pressure itself; others: a multiplier (default 1)
+  HistorySpec history;  // Pressure: the pressure itself; Gas: the closed-cavity gauge pressure
+                        // at the reference volume; others: a multiplier (default 1)
+  GasSpec gas;
 };
 
 struct BoundarySpec {

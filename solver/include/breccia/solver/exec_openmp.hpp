@@ -69,6 +69,16 @@ public:
     short_range_contact(sys_, a.p, x);
   }
 
+  // The gas load (gas.hpp) on the double arrays.
+  template <class Real>
+  void gas(const StepArrays<Real>& a, PdSystem& sys, double t, double dt) const {
+    gas_update(*this, a.d, a.facets, sys.gas, t, dt);
+  }
+  template <class Real>
+  void gas_crack_forces(const StepArrays<Real>& a, PdSystem& sys) const {
+    solver::gas_crack_forces(*this, a.d, sys.gas, const_cast<double*>(a.d.body));
+  }
+
 private:
   PdSystem& sys_;
 };

@@ -10,6 +10,7 @@
 #include "breccia/solver/case_config.hpp"
 #include "breccia/solver/contact_cells.hpp"
 #include "breccia/solver/float32_state.hpp"
+#include "breccia/solver/gas.hpp"
 #include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_kernels.hpp"
 
@@ -79,6 +80,7 @@ struct PdSystem {
     std::vector<int32_t> particles;  // internal
   };
   std::vector<Constraint> constraints;
+  GasState gas;  // loads[].type: gas (gas.hpp); inactive without one
 
   // time and energy bookkeeping
   long long step = 0;
@@ -106,6 +108,9 @@ struct PdSystem {
 // Build everything from a case file: particles (file or lattice), families, coefficients,
 // pre-cracks, loads, constraints, initial conditions, stable step. Throws InputError.
 PdSystem setup_system(const CaseConfig& config);
+// The gas load surface_loads[load_index] (gas.hpp): reference volume, vents, crack factors.
+// Called once the facets are grouped. Throws InputError naming `field`.
+void setup_gas(PdSystem& s, int load_index, const std::string& field);
 // The surface loads' facets grouped by particle (setup_system keeps them in PdSystem::facets).
 FacetLayout group_facets_by_particle(const PdSystem& s);
 

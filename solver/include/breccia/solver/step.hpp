@@ -11,6 +11,8 @@
 //   exec.contact(arrays)                      short-range forces between particles that are
 //                                             not family members (a cell grid of the current
 //                                             positions; the CPU builds it, CUDA refuses)
+//   exec.gas(arrays, sys, t, dt)              the gas load's volume, front and pressure at t
+//   exec.gas_crack_forces(arrays, sys)        (gas.hpp; the CPU runs them, CUDA refuses)
 //
 // (OpenMpExec in exec_openmp.hpp, CudaExec in solver/cuda/src/cuda_backend.cu.) Every
 // per-particle phase is a functor over raw pointers calling the BRECCIA_HD kernels of
@@ -245,18 +247,24 @@ struct StepArrays {
 
 // External force density at time t on the double arrays (float runs included: their loads
 // are evaluated in double and rounded once, docs/theory.md Precision).
+// A gas load's pressure follows the displacement at t (gas.hpp); `dt` is the step that led
+// to t (0 outside a step: the gas keeps its mass).
 template <class Exec, class Real>
-void pd_external(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t) {
+void pd_external(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t, double dt = 0.0) {
   const PdView& d = a.d;
   const int64_t n = d.n;
+  if (sys.gas.active) exec.gas(a, sys, t, dt);
   exec.for_each(3 * n, ClearArray{const_cast<double*>(d.body)}, "clear body forces");
   double* body = const_cast<double*>(d.body);
   if (a.facets.particle_count > 0) {
     LoadHistories h{};
-    for (size_t l = 0; l < sys.surface_loads.size(); ++l) h.value[l] = sys.surface_loads[l].spec->history.at(t);
+    for (size_t l = 0; l < sys.surface_loads.size(); ++l)
+      h.value[l] = sys.gas.active && static_cast<int>(l) == sys.gas.load ? sys.gas.pressure
+                                                                          : sys.surface_loads[l].spec->history.at(t);
     exec.for_each(a.facets.particle_count, SurfaceLoads{a.facets, h, d.volume, d.offsets, d.state, body},
                   "surface_load");
   }
+  if (sys.gas.active) exec.gas_crack_forces(a, sys);
   for (size_t b = 0; b < sys.body_loads.size(); ++b) {
     const LoadSpec& spec = *sys.body_loads[b].spec;
     const SetView set = a.body_load_sets[b];
@@ -333,10 +341,10 @@ void pd_step(Exec& exec, StepArrays<Real>& a, PdSystem& sys) {
   const double t = sys.time;
   pd_constraints(exec, a, sys, t, dt);
   if (sys.loads_vary()) {
-    // The indenter reads the double displacement: a float run copies it first.
-    if (single && sys.config.indenter.enabled)
+    // The indenter and the gas read the double displacement: a float run copies it first.
+    if (single && (sys.config.indenter.enabled || sys.gas.active))
       exec.for_each(3 * n, Convert<Real, double>{a.p.u, const_cast<double*>(a.d.u)}, "float u to double");
-    pd_external(exec, a, sys, t);
+    pd_external(exec, a, sys, t, dt);
     if (single) exec.for_each(3 * n, Convert<double, Real>{a.d.body, const_cast<Real*>(a.p.body)}, "body force to float");
   }
   pd_force_pass(exec, a, false);

@@ -1,0 +1,170 @@
+// The gas load's host side (gas.hpp): its set-up from the case and the particle file, and
+// the per-step update of its scalars (volume -> outflow -> pressure -> work).
+#include "breccia/solver/gas.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "breccia/common/error.hpp"
+#include "breccia/common/units.hpp"
+#include "breccia/solver/pd_system.hpp"
+
+namespace breccia::solver {
+
+double GasState::front_speed() const {
+  if (fixed_front_speed > 0.0) return fixed_front_speed;
+  // A gas expanding into an empty channel cannot move faster than its escape speed
+  // 2 c / (gamma - 1) (the centred rarefaction of a gas released into vacuum).
+  const double rho = reference_density * mass_fraction * reference_volume / std::max(volume, 1e-30);
+  const double gamma = gas_local_gamma(pressure_abs, law);
+  if (rho <= 0.0 || pressure_abs <= 0.0) return 1e-30;
+  return 2.0 * std::sqrt(gamma * pressure_abs / rho) / (gamma - 1.0);
+}
+
+void GasState::advance(double wall, double crack, double vents, double t, double dt) {
+  if (!vented && vents > 0.0) {
+    vented = true;
+    vent_time = t;
+  }
+  // A cavity cannot close up: keep a sliver of V0 (only a crushed, inverted wall gets here).
+  const double v_now = std::max(reference_volume + wall + crack, 1e-6 * reference_volume);
+  // Outflow over the step, explicit at the last state (its time scale V / (Gamma A c) is
+  // hundreds of steps for a charge hole).
+  if (vented && dt > 0.0 && pressure_abs > ambient && mass_fraction > 0.0) {
+    const double gamma = gas_local_gamma(pressure_abs, law);
+    const double rho = reference_density * mass_fraction * reference_volume / volume;
+    const double mdot = choked_flow_factor(gamma) * vent_area * std::sqrt(gamma * pressure_abs * rho);
+    mass_fraction = std::max(0.0, mass_fraction - dt * mdot / (reference_density * reference_volume));
+  }
+  const double p_ref = ambient + spec->history.at(t);
+  double p = gas_isentrope_pressure(p_ref, mass_fraction * reference_volume / v_now, law);
+  if (vented) p = std::max(p, ambient);  // air fills a vented cavity
+  const double gauge = std::max(0.0, p - ambient);
+  work += 0.5 * (pressure + gauge) * (v_now - volume);
+  volume = v_now;
+  wall_volume = wall;
+  crack_volume = crack;
+  pressure = gauge;
+  pressure_abs = p;
+}
+
+namespace {
+
+// Height along m_hat of the mouth's plane: the highest facet vertex of the surface, found in
+// the cells that own the facets (the facet's vertices are the cell's nodes on its plane).
+double mouth_height(const ParticleModel& pm, const SurfaceFacets& sf, const double m_hat[3], bool& found) {
+  found = false;
+  double best = -std::numeric_limits<double>::infinity();
+  const int per_cell = pm.nodes_per_cell;
+  if (per_cell == 0 || pm.mesh_cells.empty()) return best;
+  for (size_t f = 0; f < sf.size(); ++f) {
+    const int64_t cell = sf.particle[f];
+    const double scale = std::sqrt(sf.area_m2[f]);
+    for (int a = 0; a < per_cell; ++a) {
+      const double* x = &pm.mesh_nodes_m[3 * pm.mesh_cells[per_cell * cell + a]];
+      double off = 0.0, h = 0.0;
+      for (int d = 0; d < 3; ++d) {
+        off += sf.normal[3 * f + d] * (x[d] - sf.centroid_m[3 * f + d]);
+        h += m_hat[d] * x[d];
+      }
+      if (std::fabs(off) > 1e-6 * scale) continue;  // the cell's node off the facet
+      best = std::max(best, h);
+      found = true;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+void setup_gas(PdSystem& s, int load_index, const std::string& field) {
+  const CaseConfig& c = s.config;
+  GasState& g = s.gas;
+  if (g.active)
+    throw InputError(c.file, field + ".type", "a second gas load", "one gas load per case (one charge hole)");
+  const LoadSpec& ls = *s.surface_loads[load_index].spec;
+  const GasSpec& spec = ls.gas;
+  const SurfaceFacets& sf = *s.particles.find_surface(ls.surface);
+  g.active = true;
+  g.load = load_index;
+  g.spec = &ls;
+  g.law = {spec.gamma_high, spec.gamma_low, spec.switch_pressure};
+  g.reference_density = spec.density;
+  g.ambient = spec.ambient_pressure;
+  g.fixed_front_speed = spec.front_speed;
+  g.crack_entry = spec.crack_entry;
+  const int dim = s.dimension;
+
+  // Reference volume by the divergence theorem over the wall, closed by the mouth's plane:
+  // V0 = (1/d) [ -sum A n.c + |M| h_mouth ], M = sum A n (the mouth's area vector, zero for a
+  // closed cavity), n outward from the body. Exact for a faceted wall and a planar mouth.
+  double m[3] = {0, 0, 0}, moment = 0.0, total_area = 0.0;
+  for (size_t f = 0; f < sf.size(); ++f) {
+    total_area += sf.area_m2[f];
+    for (int d = 0; d < 3; ++d) {
+      m[d] += sf.area_m2[f] * sf.normal[3 * f + d];
+      moment += sf.area_m2[f] * sf.normal[3 * f + d] * sf.centroid_m[3 * f + d];
+    }
+  }
+  const double mouth_area = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+  const bool open_surface = mouth_area > 1e-6 * total_area;
+  if (spec.cavity_volume > 0.0) {
+    g.reference_volume = spec.cavity_volume;
+  } else {
+    double v0 = -moment / dim;
+    if (open_surface) {
+      const double m_hat[3] = {m[0] / mouth_area, m[1] / mouth_area, m[2] / mouth_area};
+      bool found = false;
+      const double h = mouth_height(s.particles, sf, m_hat, found);
+      if (!found)
+        throw InputError(c.file, field + ".cavity_volume", "missing, and surface '" + ls.surface +
+                         "' is open (a hole's mouth) in a particle file without its mesh",
+                         "the cavity's volume in m3 (the mouth's plane cannot be found without the mesh)");
+      v0 += mouth_area * h / dim;
+    }
+    if (!(v0 > 0.0))
+      throw InputError(c.file, field + ".surface", "facets of '" + ls.surface + "' enclose a volume of " +
+                       short_number(v0) + " m3", "the wall of a cavity (normals pointing into it), or give cavity_volume");
+    g.reference_volume = v0;
+  }
+  g.vent_area = spec.vent_area > 0.0 ? spec.vent_area : open_surface ? mouth_area : 0.0;
+  const bool can_vent = spec.stemming_open || !spec.vent_surfaces.empty();
+  if (can_vent && !(g.vent_area > 0.0))
+    throw InputError(c.file, field + ".vent_area", "missing, and the cavity has no mouth to take it from",
+                     "the area through which the gas escapes once it vents (m2)");
+
+  const size_t n = s.n;
+  g.vent_face.assign(n, 0);
+  for (size_t v = 0; v < spec.vent_surfaces.size(); ++v) {
+    const SurfaceFacets* vent = s.particles.find_surface(spec.vent_surfaces[v]);
+    if (!vent)
+      throw InputError(c.file, field + ".vent_surfaces[" + std::to_string(v) + "]",
+                       "'" + spec.vent_surfaces[v] + "' is not a surface of the particle file",
+                       "the name of a boundary surface group");
+    for (int64_t p : vent->particle) g.vent_face[s.internal_index[p]] = 1;
+  }
+  // Crack-face area factor kappa_i = 2 d / sum_j V_j |xi| (gas.hpp).
+  g.kappa.assign(n, 0.0);
+  for (size_t i = 0; i < n; ++i) {
+    double mi = 0.0;
+    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) mi += s.volume[s.neighbor[k]] * s.xi_len[k];
+    g.kappa[i] = mi > 0.0 ? 2.0 * dim / mi : 0.0;
+  }
+  if (g.crack_entry) {
+    g.arrival.assign(n, std::numeric_limits<double>::infinity());
+    for (int64_t p : sf.particle) g.arrival[s.internal_index[p]] = 0.0;  // the wall is wetted
+    g.arrival_next = g.arrival;
+  }
+  g.wall_dv.assign(s.facets.particle.size(), 0.0);
+  g.vented = spec.stemming_open;
+  g.vent_time = spec.stemming_open ? 0.0 : -1.0;
+  g.volume = g.reference_volume;
+  g.mass_fraction = 1.0;
+  g.pressure_abs = g.ambient;
+  g.pressure = 0.0;
+  g.advance(0.0, 0.0, 0.0, s.time, 0.0);  // the state at the start, no work yet
+  g.work = 0.0;
+}
+
+}  // namespace breccia::solver

@@ -1,23 +1,56 @@
 #!/usr/bin/env bash
-# Concrete block with a charge hole, end to end: spec -> mesh -> particles -> PD -> post.
-# Environment (scripts/run_case.sh): BRECCIA_BIN, OUT, VARIANT (quick|demo|full), PYTHON.
+# Concrete block with a charge hole, end to end: spec -> mesh -> particles -> PD -> post -> measures.
+# Environment (scripts/run_case.sh): BRECCIA_BIN, OUT, VARIANT (quick|demo|mid|full), PYTHON.
+# PEAKS="1000 300 100" (MPa): the pressure study instead of one run: the same case with the
+# closed-cavity peak pressure scaled, one run each, a row each in $OUT/study.csv.
 set -euo pipefail
+HERE="$(cd "$(dirname "$0")" && pwd)"
+PYTHON=${PYTHON:-/usr/bin/python3}
 case "$VARIANT" in
   quick) SPEC=specimen-quick.yaml; END="150 us" ;;
-  demo)  SPEC=specimen-demo.yaml;  END="250 us" ;;
-  full)  SPEC=specimen.yaml;       END="700 us" ;;
-  *) echo "run.sh: unknown VARIANT '$VARIANT' (quick, demo or full)" >&2; exit 2 ;;
+  demo)  SPEC=specimen-demo.yaml;  END="1000 us" ;;
+  mid)   SPEC=specimen-mid.yaml;   END="1000 us" ;;
+  full)  SPEC=specimen.yaml;       END="1000 us" ;;
+  *) echo "run.sh: unknown VARIANT '$VARIANT' (quick, demo, mid or full)" >&2; exit 2 ;;
 esac
 mkdir -p "$OUT"
 echo "== 1/4 mesh ($SPEC)"
-"$BRECCIA_BIN/breccia-mesh" "$SPEC" -o "$OUT/specimen.msh" --threads 1
+"$BRECCIA_BIN/breccia-mesh" "$HERE/$SPEC" -o "$OUT/specimen.msh" --threads 1
 echo "== 2/4 particles"
 "$BRECCIA_BIN/breccia-place" "$OUT/specimen.msh" -o "$OUT/particles.h5" --require-groups concrete,charge_hole
 if [ ! -x "$BRECCIA_BIN/breccia-solve" ]; then echo "(solver not built: stopping after particles)"; exit 0; fi
-echo "== 3/4 solve (end time $END)"
-sed "s/^  end: .*/  end: $END/" case.yaml > "$OUT/case.yaml"
-"$BRECCIA_BIN/breccia-solve" "$OUT/case.yaml" -o "$OUT/run"
-if [ ! -x "$BRECCIA_BIN/breccia-post" ]; then echo "(postproc not built: stopping after solve)"; exit 0; fi
-echo "== 4/4 post-process"
-"$BRECCIA_BIN/breccia-post" "$OUT/run" --particles "$OUT/particles.h5"
-echo "results: $OUT/run (results.xdmf for ParaView), post-processing: $OUT/run/post"
+
+# One run: case.yaml with the end time and the peak (MPa; empty: as written) in folder $1.
+one_run() {
+  local dir="$1" peak="${2:-}"
+  mkdir -p "$dir"
+  sed -e "s/^  end: .*/  end: $END/" -e "s#particles: particles.h5#particles: $OUT/particles.h5#" \
+      ${peak:+-e "s/peak: 1 GPa/peak: $peak MPa/"} "$HERE/case.yaml" > "$dir/case.yaml"
+  echo "== 3/4 solve (end time $END${peak:+, closed-cavity peak $peak MPa})"
+  "$BRECCIA_BIN/breccia-solve" "$dir/case.yaml" -o "$dir"
+  if [ ! -x "$BRECCIA_BIN/breccia-post" ]; then echo "(postproc not built: stopping after solve)"; return 0; fi
+  echo "== 4/4 post-process"
+  "$BRECCIA_BIN/breccia-post" "$dir" --particles "$OUT/particles.h5"
+  if [ "$VARIANT" != quick ]; then  # the issue's measures (large pieces, debris, radial cracks)
+    "$PYTHON" "$HERE/measures.py" "$dir" "$OUT/particles.h5" --label "$VARIANT${peak:+ $peak MPa}" --json "$dir/measures.json"
+  fi
+}
+
+if [ -n "${PEAKS:-}" ]; then
+  for p in $PEAKS; do one_run "$OUT/peak_$p" "$p"; done
+  "$PYTHON" - "$OUT" $PEAKS <<'PY'
+import json, sys
+out, peaks = sys.argv[1], sys.argv[2:]
+keys = ["large_pieces", "large_mass_share", "largest_share", "debris_share_under_1g", "radial_cracks_ring",
+        "side_face_damaged_share", "fragments"]
+with open(f"{out}/study.csv", "w") as f:
+    f.write("peak_MPa," + ",".join(keys) + "\n")
+    for p in peaks:
+        m = json.load(open(f"{out}/peak_{p}/measures.json"))
+        f.write(p + "," + ",".join(str(m[k]) for k in keys) + "\n")
+print(open(f"{out}/study.csv").read())
+PY
+else
+  one_run "$OUT/run"
+  echo "results: $OUT/run (results.xdmf for ParaView), post-processing: $OUT/run/post"
+fi

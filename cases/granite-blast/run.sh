@@ -20,6 +20,8 @@ mkdir -p "$OUT"
 # benchmarks.md section 0.6): a labelled sensitivity run, not a calibration.
 # A third run on request (GRANITE_RUNS=softening): G0 = 200 J/m2 and a tensile strength (STRENGTH, default
 # 12 MPa) through softening bonds (docs/theory.md "Quasi-brittle bonds"; README.md).
+# GRANITE_RUNS=gas: G0 = 200 J/m2 with the borehole history as a gas load's closed-cavity pressure
+# (docs/theory.md "Borehole gas"; README.md).
 RUNS=()
 for run in ${GRANITE_RUNS:-g0_200 seed_s0}; do
   strength=""
@@ -27,12 +29,24 @@ for run in ${GRANITE_RUNS:-g0_200 seed_s0}; do
     g0_200)  G0=200 ;;
     seed_s0) G0=63.66198 ;;
     softening) G0=200; strength="${STRENGTH:-12 MPa}" ;;
+    gas)     G0=200 ;;
     *) echo "run.sh: unknown run '$run'" >&2; exit 2 ;;
   esac
   mkdir -p "$OUT/$run"
   sed -e "s#particles: particles.h5#particles: ../particles.h5#" -e "s/every: EVERY/every: $EVERY/" \
       -e "s/fracture_energy: G0 /fracture_energy: $G0${strength:+\n    tensile_strength: $strength} /" \
       -e "s/  end: 50 us /  end: ${END:-50 us} /" "$HERE/case.yaml" > "$OUT/$run/case.yaml"
+  if [ "$run" = gas ]; then  # the same history as the closed-cavity pressure of a gas load (README.md)
+    "$PYTHON" - "$OUT/$run/case.yaml" <<'PY'
+import sys
+path = sys.argv[1]
+s = open(path).read()
+s = s.replace("  - type: pressure\n    surface: hole\n", "  - type: gas\n    surface: hole\n"
+              "    gamma_high: 3\n    gamma_low: 1.3\n    switch_pressure: 0.1 GPa\n"
+              "    vent_surfaces: [outer]\n    gas_density: 1000 kg/m3\n    vent_area: 2 mm2\n")
+open(path, "w").write(s)
+PY
+  fi
   echo "== $run (G0 $G0 J/m2)"
   "$BRECCIA_BIN/breccia-solve" "$OUT/$run/case.yaml" -o "$OUT/$run" --threads "$THREADS" --quiet
   "$BRECCIA_BIN/breccia-post" "$OUT/$run" --cracks --fragments --energy --quiet > "$OUT/$run/post.log"

@@ -77,7 +77,16 @@ def main():
     dx = a.spacing
     xy, r = annulus(a.outer, a.inner, dx)
     sets = {"outer": np.nonzero(r > a.outer - dx)[0]}
-    surfaces = {}
+    # The rim as a surface too (a vent surface of the gas load): equal shares of the
+    # circumference along the outward radial direction.
+    rim = sets["outer"]
+    nrm_out = xy[rim] / r[rim, None]
+    surfaces = {"outer": {
+        "area": np.full(len(rim), 2 * math.pi * a.outer * a.thickness / len(rim)),
+        "normal": np.column_stack([nrm_out, np.zeros(len(rim))]),
+        "centroid": np.column_stack([nrm_out * a.outer, np.zeros(len(rim))]),
+        "particle": rim.astype(np.int64),
+    }}
     if a.inner > 0:
         wall = np.nonzero(r < a.inner + dx)[0]
         sets[a.inner_surface] = wall

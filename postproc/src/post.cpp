@@ -125,6 +125,8 @@ public:
     load_history();
     if (opt_.energy && history_ && energy_available_) energy();
     if (opt_.probes && history_) probes();
+    if (opt_.energy && history_ && history_->find("gas_pressure_Pa") && opt_.plots)  // a gas load (solver gas.hpp)
+      plot("plot_gas.py", "--history " + shell_quote(history_->path.string()), "gas.png");
     write_json();
     return summary_;
   }

@@ -242,10 +242,6 @@ CaseConfig parse_case_file(const std::string& path) {
     const std::string field = "materials[" + std::to_string(k) + "].tensile_strength";
     if (c.model == PdModel::Correspondence)
       throw InputError(path, field, "given with type: correspondence", "type: pmb or lps (softening bonds)");
-    if (c.variable_horizon)
-      throw InputError(path, field, "given with variable_horizon: true",
-                       "one horizon (the softening law keeps one damage per bond entry; dual horizon's halves "
-                       "would need two)");
     if (c.compressive_enhancement > 0)
       throw InputError(path, field, "given with model.compressive_enhancement",
                        "one of the two (the enhancement shifts a brittle bond's critical stretch)");

@@ -22,7 +22,7 @@ double GasState::front_speed() const {
   return 2.0 * std::sqrt(gamma * pressure_abs / rho) / (gamma - 1.0);
 }
 
-void GasState::advance(double wall, double crack, double vents, double t, double dt) {
+void GasState::advance(double wall, double crack, double crack_before, double vents, double t, double dt) {
   if (!vented && vents > 0.0) {
     vented = true;
     vent_time = t;
@@ -41,7 +41,9 @@ void GasState::advance(double wall, double crack, double vents, double t, double
   double p = gas_isentrope_pressure(p_ref, mass_fraction * reference_volume / v_now, law);
   if (vented) p = std::max(p, ambient);  // air fills a vented cavity
   const double gauge = std::max(0.0, p - ambient);
-  work += 0.5 * (pressure + gauge) * (v_now - volume);
+  // Work on the solid: the volume the motion made, without the crack the front just reached.
+  const double v_moved = std::max(reference_volume + wall + crack_before, 1e-6 * reference_volume);
+  work += 0.5 * (pressure + gauge) * (v_moved - volume);
   volume = v_now;
   wall_volume = wall;
   crack_volume = crack;
@@ -163,7 +165,7 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
   g.mass_fraction = 1.0;
   g.pressure_abs = g.ambient;
   g.pressure = 0.0;
-  g.advance(0.0, 0.0, 0.0, s.time, 0.0);  // the state at the start, no work yet
+  g.advance(0.0, 0.0, 0.0, 0.0, s.time, 0.0);  // the state at the start, no work yet
   g.work = 0.0;
 }
 

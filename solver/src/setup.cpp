@@ -199,13 +199,20 @@ static std::vector<double> softening_onset_per_strength(const PdSystem& s, const
 // s0 so far is each bond's brittle critical stretch s_G from its G0; the bilinear law keeps G0
 // with s_u = s_G^2 / s_t (pd_physics.hpp), which needs s_G >= s_t (checked per material on its
 // mean values above); a bond whose Weibull draw falls below breaks brittle at its onset.
+// Dual horizon: the two halves of an entry have the s_G of their own horizons, but one damage
+// per entry drives both, and (i, j) and (j, i) must soften alike: s_G^2 is the mean of the two
+// halves' (exact where the horizons agree; on a graded mesh neighbours' differ by a few %).
 static void convert_to_softening(PdSystem& s) {
   const int64_t nb = static_cast<int64_t>(s.s0_own.size());
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < nb; ++k) {
     const float onset = s.s_onset[k];
     if (!(onset < FLT_MAX) || !(s.s0_own[k] < FLT_MAX)) continue;  // brittle material or unbreakable bond
-    const double s_g = s.s0_own[k];
+    double s_g = s.s0_own[k];
+    if (s.s0_dual[k] < FLT_MAX && s.vol_own[k] > 0 && s.k_dual[k] > 0)
+      s_g = std::sqrt(0.5 * (s_g * s_g + double(s.s0_dual[k]) * s.s0_dual[k]));
+    else if (!(s.vol_own[k] > 0) && s.s0_dual[k] < FLT_MAX)
+      s_g = s.s0_dual[k];
     const float ultimate = static_cast<float>(std::max(s_g * s_g / onset, double(onset)));
     s.s0_own[k] = s.s0_dual[k] = ultimate;
   }

@@ -17,6 +17,7 @@
 // m_i = sum_j V_j |xi|, d the dimension: for a straight crack opened by delta in a continuum
 // this sum is exactly (crack area) x delta (docs/theory.md). The gas force on particle i is
 // p dV/dy_i, so the gas work is the integral of p dV and the energy balance closes.
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -81,6 +82,7 @@ struct GasView {
 };
 
 BRECCIA_HD bool gas_wetted(const GasView& g, int64_t i) { return g.arrival[i] < 1e300; }
+BRECCIA_HD bool gas_wetted_next(const GasView& g, int64_t i) { return g.arrival_next[i] < 1e300; }
 
 // Wall volume change of facet particle q: while the particle is attached its share follows
 // its displacement; when it loses its last bond it leaves the wall and its share is frozen
@@ -102,24 +104,48 @@ struct GasWallVolume {
   }
 };
 
+// *a = min(*a, value), atomically. A minimum does not depend on the order of the updates, so
+// the result is the same on any number of threads.
+BRECCIA_HD void atomic_min(double* a, double value) {
+#if defined(__CUDA_ARCH__)
+  auto* bits = reinterpret_cast<unsigned long long*>(a);
+  unsigned long long old = *bits;
+  while (value < __longlong_as_double(old)) {
+    const unsigned long long seen = atomicCAS(bits, old, __double_as_longlong(value));
+    if (seen == old) break;
+    old = seen;
+  }
+#else
+  std::atomic_ref<double> ref(*a);
+  double current = ref.load(std::memory_order_relaxed);
+  while (value < current && !ref.compare_exchange_weak(current, value, std::memory_order_relaxed)) {
+  }
+#endif
+}
+
 // The gas front: a dry particle is reached when an open entry joins it to a wetted one and
 // the gas has had time to run the entry's length at `speed` (one entry per step at most).
+// Pushed from the wetted particles (few, in a case that does not pulverise) rather than
+// pulled by every dry one: arrival_next starts as a copy of arrival (GasFrontCopy), and each
+// wetted particle lowers its dry partners' arrival times.
+struct GasFrontCopy {
+  GasView g;
+  BRECCIA_HD void operator()(int64_t i) const { g.arrival_next[i] = g.arrival[i]; }
+};
+
 struct GasFront {
   PdView p;
   GasView g;
   double t, speed;
   BRECCIA_HD void operator()(int64_t i) const {
-    if (gas_wetted(g, i)) {
-      g.arrival_next[i] = g.arrival[i];
-      return;
-    }
-    double best = std::numeric_limits<double>::infinity();
+    if (!gas_wetted(g, i)) return;
     for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
+      if (!gas_entry_open(p, k)) continue;
       const int32_t j = p.neighbor[k];
-      if (!gas_wetted(g, j) || !gas_entry_open(p, k)) continue;
-      best = std::fmin(best, g.arrival[j] + p.xi_len[k] / speed);
+      if (gas_wetted(g, j)) continue;
+      const double reached = g.arrival[i] + p.xi_len[k] / speed;
+      if (reached <= t) atomic_min(&g.arrival_next[j], reached);
     }
-    g.arrival_next[i] = best <= t ? best : std::numeric_limits<double>::infinity();
   }
 };
 
@@ -142,37 +168,48 @@ BRECCIA_HD double gas_entry_opening(const PdView& p, int64_t i, int64_t k, doubl
 }
 
 struct GasSums {
-  double volume;  // m3
-  double vents;   // crack-wetted particles on a vent surface
+  double volume;         // m3
+  double volume_before;  // m3, of the cracks the gas filled before this step's front moved
+  double vents;          // crack-wetted particles on a vent surface
 };
 
 // Sum of the wall shares.
 struct GasWallSum {
   using Value = GasSums;
   const double* wall_dv;
-  BRECCIA_HD static Value identity() { return {0.0, 0.0}; }
-  BRECCIA_HD static Value combine(Value a, Value b) { return {a.volume + b.volume, a.vents + b.vents}; }
-  BRECCIA_HD Value operator()(int64_t q) const { return {wall_dv[q], 0.0}; }
+  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0}; }
+  BRECCIA_HD static Value combine(Value a, Value b) {
+    return {a.volume + b.volume, a.volume_before + b.volume_before, a.vents + b.vents};
+  }
+  BRECCIA_HD Value operator()(int64_t q) const { return {wall_dv[q], wall_dv[q], 0.0}; }
 };
 
-// Crack volume the gas fills (each pair seen from both ends, hence the half) and whether the
-// front stands on a vent surface. A wall particle (arrival 0) on a vent surface does not vent:
-// the gas has to get there through a crack.
+// Crack volume the gas fills (each pair seen from both ends, hence the half) with the front
+// this step has reached (arrival_next) and with the one before it (arrival): the difference is
+// crack the gas has just spread into, a free expansion that does no work on the solid. And
+// whether the front stands on a vent surface: a wall particle (arrival 0) on a vent surface
+// does not vent; the gas has to get there through a crack.
 struct GasCrackSum {
   using Value = GasSums;
   PdView p;
   GasView g;
-  BRECCIA_HD static Value identity() { return {0.0, 0.0}; }
-  BRECCIA_HD static Value combine(Value a, Value b) { return {a.volume + b.volume, a.vents + b.vents}; }
+  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0}; }
+  BRECCIA_HD static Value combine(Value a, Value b) {
+    return {a.volume + b.volume, a.volume_before + b.volume_before, a.vents + b.vents};
+  }
   BRECCIA_HD Value operator()(int64_t i) const {
-    if (!gas_wetted(g, i)) return identity();
-    Value v{0.0, g.vent_face[i] && g.arrival[i] > 0.0 ? 1.0 : 0.0};
+    if (!gas_wetted_next(g, i)) return identity();
+    const bool before_i = gas_wetted(g, i);
+    Value v{0.0, 0.0, g.vent_face[i] && g.arrival_next[i] > 0.0 ? 1.0 : 0.0};
     for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
       const int32_t j = p.neighbor[k];
-      if (!gas_wetted(g, j) || !gas_entry_open(p, k)) continue;
+      if (!gas_wetted_next(g, j) || !gas_entry_open(p, k)) continue;
       double dir[3];
       const double e = gas_entry_opening(p, i, k, dir);
-      if (e > 0.0) v.volume += 0.5 * (g.kappa[i] + g.kappa[j]) * p.volume[i] * p.volume[j] * e * 0.5;
+      if (!(e > 0.0)) continue;
+      const double share = 0.5 * (g.kappa[i] + g.kappa[j]) * p.volume[i] * p.volume[j] * e * 0.5;
+      v.volume += share;
+      if (before_i && gas_wetted(g, j)) v.volume_before += share;
     }
     return v;
   }
@@ -242,23 +279,25 @@ struct GasState {
   // expanding into an empty channel, 2 c / (gamma - 1) with c = sqrt(gamma p / rho).
   double front_speed() const;
   // One update of the scalars from the summed wall and crack volumes at time t (dt: the
-  // step, 0 outside one: no outflow).
-  void advance(double wall, double crack, double vents, double t, double dt);
+  // step, 0 outside one: no outflow). crack_before: the cracks filled before the front's
+  // move this step, at the current positions (the work counts only the motion's dV).
+  void advance(double wall, double crack, double crack_before, double vents, double t, double dt);
 };
 
 // The gas at time t on the double arrays `d` (after the drift): front, volume, pressure.
 template <class Exec>
 void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, double t, double dt) {
   GasView g = gas.view();
+  exec.for_each(f.particle_count, GasWallVolume{f, g, d.u, d.offsets, d.state}, "gas_wall_volume");
+  GasSums wall{0.0, 0.0, 0.0}, crack{0.0, 0.0, 0.0};
+  exec.reduce(f.particle_count, GasWallSum{g.wall_dv}, GasSumsInto{&wall}, "gas wall volume");
   if (g.arrival) {
+    exec.for_each(d.n, GasFrontCopy{g}, "gas_front_copy");
     exec.for_each(d.n, GasFront{d, g, t, gas.front_speed()}, "gas_front");
+    exec.reduce(d.n, GasCrackSum{d, g}, GasSumsInto{&crack}, "gas crack volume");
     exec.for_each(d.n, GasFrontCommit{g}, "gas_front_commit");
   }
-  exec.for_each(f.particle_count, GasWallVolume{f, g, d.u, d.offsets, d.state}, "gas_wall_volume");
-  GasSums wall{0.0, 0.0}, crack{0.0, 0.0};
-  exec.reduce(f.particle_count, GasWallSum{g.wall_dv}, GasSumsInto{&wall}, "gas wall volume");
-  if (g.arrival) exec.reduce(d.n, GasCrackSum{d, g}, GasSumsInto{&crack}, "gas crack volume");
-  gas.advance(wall.volume, crack.volume, crack.vents, t, dt);
+  gas.advance(wall.volume, crack.volume, crack.volume_before, crack.vents, t, dt);
 }
 
 // The gas's pressure on the crack faces it fills, added to `body` (after the surface loads).

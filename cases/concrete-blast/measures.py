@@ -1,0 +1,79 @@
+#!/usr/bin/python3
+"""The issue's measures of a concrete-blast run (after breccia-post): large pieces (each more
+than 2% of the block's mass) and their share of the mass, fine debris (fragments under 1 g),
+radial cracks counted on a ring around the hole, and damage on the side faces.
+
+Usage: measures.py RUN_DIR PARTICLES_H5 [--label TEXT] [--json OUT]
+Radial cracks: particles in the ring 40-80 mm from the hole axis and 20-130 mm below the top
+face are binned by angle (72 bins of 5 degrees); a crack is a run of consecutive bins whose mean
+damage exceeds 0.5 between bins below it. A ring damaged all round counts as 'all' (no
+distinct crack: crushed).
+"""
+import argparse
+import csv
+import json
+import math
+
+import h5py
+import numpy as np
+
+HOLE_AXIS = (0.15, 0.15)   # m, the specimen's hole axis (specimen*.yaml)
+TOP = 0.30                 # m, the top face
+SIZE = 0.30                # m, the cube's edge
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("run")
+    ap.add_argument("particles")
+    ap.add_argument("--label", default="")
+    ap.add_argument("--json")
+    a = ap.parse_args()
+    masses = []
+    with open(f"{a.run}/post/fragments.csv") as f:
+        for r in csv.DictReader(f):
+            masses.append(float(r["mass_kg"]))
+    masses = np.array(masses)
+    total = masses.sum()
+    large = masses[masses > 0.02 * total]
+    debris = masses[masses < 1e-3]
+    with h5py.File(a.particles) as p:
+        x = p["particles/position"][:]
+    with h5py.File(f"{a.run}/results.h5") as r:
+        last = sorted(r["output"].keys())[-1]
+        damage = r[f"output/{last}/damage"][:]
+        time_s = float(r[f"output/{last}"].attrs.get("time_s", float("nan")))
+    dx, dy = x[:, 0] - HOLE_AXIS[0], x[:, 1] - HOLE_AXIS[1]
+    rad = np.hypot(dx, dy)
+    depth = TOP - x[:, 2]
+    ring = (rad > 0.04) & (rad < 0.08) & (depth > 0.02) & (depth < 0.13)
+    ang = (np.degrees(np.arctan2(dy[ring], dx[ring])) + 360.0) % 360.0
+    bins = np.minimum((ang / 5.0).astype(int), 71)
+    mean = np.array([damage[ring][bins == b].mean() if np.any(bins == b) else 0.0 for b in range(72)])
+    cracked = mean > 0.5
+    if cracked.all():
+        radial = "all"
+    else:
+        start = int(np.argmin(cracked))  # an undamaged bin: count rises from there round the ring
+        c = np.roll(cracked, -start)
+        radial = int(np.sum(c[1:] & ~c[:-1]) + (1 if c[0] else 0))
+    side = (np.minimum.reduce([x[:, 0], SIZE - x[:, 0], x[:, 1], SIZE - x[:, 1]]) < 0.01)
+    out = {
+        "label": a.label,
+        "time_s": time_s,
+        "fragments": int(len(masses)),
+        "large_pieces": int(len(large)),
+        "large_mass_share": float(large.sum() / total),
+        "largest_share": float(masses.max() / total),
+        "debris_share_under_1g": float(debris.sum() / total),
+        "radial_cracks_ring": radial,
+        "side_face_damaged_share": float(np.mean(damage[side] > 0.5)),
+    }
+    print(", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}" for k, v in out.items()))
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump(out, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()

@@ -30,8 +30,9 @@ def main():
     ax1.set_ylabel("gas pressure (gauge) [MPa]")
     ax1.grid(alpha=0.3)
     ax2.plot(t, v, lw=1.2, label="cavity (hole + cracks)")
-    ax2.plot(t, vc, lw=1.0, ls="--", label="in cracks")
-    ax2.set_ylabel("volume [cm³]")
+    ax2.plot(t, np.where(vc > 0, vc, np.nan), lw=1.0, ls="--", label="in cracks")
+    ax2.set_yscale("log")  # the cracks can hold orders of magnitude more than the hole
+    ax2.set_ylabel("volume [cm³] (log scale)")
     ax2.set_xlabel("time [µs]")
     ax2.grid(alpha=0.3)
     if vented.any():

@@ -40,7 +40,12 @@ void GasState::advance(double wall, double crack, double crack_before, double ve
   const double p_ref = ambient + spec->history.at(t);
   double p = gas_isentrope_pressure(p_ref, mass_fraction * reference_volume / v_now, law);
   if (vented) p = std::max(p, ambient);  // air fills a vented cavity
-  const double gauge = std::max(0.0, p - ambient);
+  double gauge = std::max(0.0, p - ambient);
+  peak_pressure = std::max(peak_pressure, gauge);
+  if (vented && gauge < 1e-3 * peak_pressure) {  // spent: from now on it pushes no more
+    spent = true;
+    gauge = 0.0;
+  }
   // Work on the solid: the volume the motion made, without the crack the front just reached.
   const double v_moved = std::max(reference_volume + wall + crack_before, 1e-6 * reference_volume);
   work += 0.5 * (pressure + gauge) * (v_moved - volume);
@@ -157,6 +162,8 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
     g.arrival.assign(n, std::numeric_limits<double>::infinity());
     for (int64_t p : sf.particle) g.arrival[s.internal_index[p]] = 0.0;  // the wall is wetted
     g.arrival_next = g.arrival;
+    g.push.assign(3 * n, 0.0);
+    g.front_done.assign(n, 0);
   }
   g.wall_dv.assign(s.facets.particle.size(), 0.0);
   g.vented = spec.stemming_open;

@@ -363,7 +363,8 @@ void write_checkpoint(const PdSystem& s, const std::string& path) {
     if (s.gas.active) {  // the gas's state: its scalars, the frozen wall shares, the front
       const GasState& g = s.gas;
       const std::vector<double> scalars{g.volume,       g.wall_volume, g.crack_volume, g.pressure, g.pressure_abs,
-                                        g.mass_fraction, g.work,        g.vented ? 1.0 : 0.0, g.vent_time};
+                                        g.mass_fraction, g.work,        g.vented ? 1.0 : 0.0, g.vent_time,
+                                        g.peak_pressure, g.spent ? 1.0 : 0.0};
       f.write("/gas/scalars", scalars, {scalars.size()});
       f.write("/gas/wall_dv", g.wall_dv, {g.wall_dv.size()});
       if (g.crack_entry) f.write("/gas/arrival", g.arrival, {g.arrival.size()});
@@ -420,10 +421,11 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
       throw InputError(path, "/gas/scalars", "missing (written without a gas load)", "a checkpoint of this case");
     const auto sc = f.read_doubles("/gas/scalars");
     const auto wall = f.read_doubles("/gas/wall_dv");
-    if (sc.size() != 9 || wall.size() != g.wall_dv.size())
+    if (sc.size() != 11 || wall.size() != g.wall_dv.size())
       throw InputError(path, "/gas", "gas state of another cavity", "a checkpoint of this case");
     g.volume = sc[0], g.wall_volume = sc[1], g.crack_volume = sc[2], g.pressure = sc[3], g.pressure_abs = sc[4];
     g.mass_fraction = sc[5], g.work = sc[6], g.vented = sc[7] != 0.0, g.vent_time = sc[8];
+    g.peak_pressure = sc[9], g.spent = sc[10] != 0.0;
     g.wall_dv = wall;
     if (g.crack_entry) {
       g.arrival = f.read_doubles("/gas/arrival");

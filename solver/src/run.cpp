@@ -75,6 +75,14 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   number("external_work_J", s.external_work);
   number("dissipated_J", s.dissipated_energy);
   number("max_damage", r.final_energies.max_damage);
+  if (s.gas.active) {  // a gas load: its state at the end and what its passes cost
+    number("gas_pressure_Pa", s.gas.pressure);
+    number("gas_cavity_volume_m3", s.gas.volume);
+    number("gas_work_J", s.gas.work);
+    j["gas_vented"] = s.gas.vented;
+    number("gas_wall_s", s.gas.wall_s);
+    number("gas_share_of_loop", r.wall_s > 0 ? s.gas.wall_s / r.wall_s : 0.0);
+  }
   j["broken_bonds"] = r.final_energies.broken_half_bonds / 2;
   j["non_finite"] = non_finite;
   if (!non_finite.empty())

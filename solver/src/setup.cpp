@@ -178,9 +178,21 @@ static std::vector<double> softening_onset_per_strength(const PdSystem& s, const
   for (size_t m = 0; m < c.materials.size(); ++m) {
     const MaterialSpec& ms = c.materials[m];
     if (!(ms.tensile_strength > 0) || !(ms.fracture_energy > 0)) continue;
-    const double s_g = lps ? lps_critical_stretch(elastic[m], c.influence, delta, ms.fracture_energy)
-                           : pmb_critical_stretch(elastic[m], c.influence, delta, ms.fracture_energy);
-    const double s_t = calibrated_onset_stretch(elastic[m], c.model, ms.tensile_strength, s_g);
+    const auto brittle_at = [&](double h) {
+      return lps ? lps_critical_stretch(elastic[m], c.influence, h, ms.fracture_energy)
+                 : pmb_critical_stretch(elastic[m], c.influence, h, ms.fracture_energy);
+    };
+    double s_g = brittle_at(delta);
+    double s_t = calibrated_onset_stretch(elastic[m], c.model, ms.tensile_strength, s_g);
+    if (s_g < s_t && c.variable_horizon) {
+      // A graded mesh whose coarsest horizon is too large for the strength: calibrate at the
+      // median horizon; bonds of the coarse region whose s_G falls below the onset break
+      // brittle at the onset (convert_to_softening), dissipating c s_t^2 / 2 >= c s_G^2 / 2.
+      std::vector<double> h(s.horizon);
+      std::nth_element(h.begin(), h.begin() + h.size() / 2, h.end());
+      s_g = brittle_at(h[h.size() / 2]);
+      s_t = calibrated_onset_stretch(elastic[m], c.model, ms.tensile_strength, s_g);
+    }
     if (s_g < s_t) {
       char largest[64];
       std::snprintf(largest, sizeof largest, "%.4g", delta * (s_g / s_t) * (s_g / s_t));

@@ -79,6 +79,8 @@ struct GasView {
   double* arrival_next = nullptr;  // the front pass writes here, then copies back
   const double* kappa = nullptr;   // per particle: 2 d / sum_j V_j |xi|
   const uint8_t* vent_face = nullptr;  // per particle: owns a facet of a vent surface
+  double* push = nullptr;          // 3 per particle: dV_crack/dy_i / V_i (the crack force is -p push)
+  uint8_t* front_done = nullptr;   // per particle: wetted, and every partner is too (stops pushing)
 };
 
 BRECCIA_HD bool gas_wetted(const GasView& g, int64_t i) { return g.arrival[i] < 1e300; }
@@ -133,19 +135,24 @@ struct GasFrontCopy {
   BRECCIA_HD void operator()(int64_t i) const { g.arrival_next[i] = g.arrival[i]; }
 };
 
+// A wetted particle all of whose partners are wetted has nothing left to push (wetting is
+// for good): it is marked once and skipped from then on.
 struct GasFront {
   PdView p;
   GasView g;
   double t, speed;
   BRECCIA_HD void operator()(int64_t i) const {
-    if (!gas_wetted(g, i)) return;
+    if (!gas_wetted(g, i) || g.front_done[i]) return;
+    bool dry_partner = false;
     for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
-      if (!gas_entry_open(p, k)) continue;
       const int32_t j = p.neighbor[k];
       if (gas_wetted(g, j)) continue;
+      dry_partner = true;
+      if (!gas_entry_open(p, k)) continue;
       const double reached = g.arrival[i] + p.xi_len[k] / speed;
       if (reached <= t) atomic_min(&g.arrival_next[j], reached);
     }
+    if (!dry_partner) g.front_done[i] = 1;
   }
 };
 
@@ -188,7 +195,9 @@ struct GasWallSum {
 // this step has reached (arrival_next) and with the one before it (arrival): the difference is
 // crack the gas has just spread into, a free expansion that does no work on the solid. And
 // whether the front stands on a vent surface: a wall particle (arrival 0) on a vent surface
-// does not vent; the gas has to get there through a crack.
+// does not vent; the gas has to get there through a crack. The same loop keeps each
+// particle's dV_crack/dy_i (push), so that the crack forces need no second pass over the
+// entries once the pressure is known.
 struct GasCrackSum {
   using Value = GasSums;
   PdView p;
@@ -201,16 +210,20 @@ struct GasCrackSum {
     if (!gas_wetted_next(g, i)) return identity();
     const bool before_i = gas_wetted(g, i);
     Value v{0.0, 0.0, g.vent_face[i] && g.arrival_next[i] > 0.0 ? 1.0 : 0.0};
+    double push[3] = {0.0, 0.0, 0.0};
     for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
       const int32_t j = p.neighbor[k];
       if (!gas_wetted_next(g, j) || !gas_entry_open(p, k)) continue;
       double dir[3];
       const double e = gas_entry_opening(p, i, k, dir);
       if (!(e > 0.0)) continue;
-      const double share = 0.5 * (g.kappa[i] + g.kappa[j]) * p.volume[i] * p.volume[j] * e * 0.5;
+      const double a_over_vi = 0.5 * (g.kappa[i] + g.kappa[j]) * p.volume[j];
+      const double share = a_over_vi * p.volume[i] * e * 0.5;
       v.volume += share;
       if (before_i && gas_wetted(g, j)) v.volume_before += share;
+      for (int d = 0; d < 3; ++d) push[d] += a_over_vi * dir[d];
     }
+    for (int d = 0; d < 3; ++d) g.push[3 * i + d] = push[d];
     return v;
   }
 };
@@ -221,24 +234,14 @@ struct GasSumsInto {
 };
 
 // Gas pressure on the faces of the cracks it fills: -p a_k e_hat on i for each open wetted
-// entry (the derivative of p V_crack), as a force density.
+// entry (the derivative of p V_crack), as a force density: -p push_i (GasCrackSum).
 struct GasCrackPressure {
-  PdView p;
   GasView g;
   double pressure;
   double* body;
   BRECCIA_HD void operator()(int64_t i) const {
     if (!gas_wetted(g, i)) return;
-    double f[3] = {0.0, 0.0, 0.0};
-    for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
-      const int32_t j = p.neighbor[k];
-      if (!gas_wetted(g, j) || !gas_entry_open(p, k)) continue;
-      double dir[3];
-      if (gas_entry_opening(p, i, k, dir) <= 0.0) continue;
-      const double a_over_vi = 0.5 * (g.kappa[i] + g.kappa[j]) * p.volume[j];
-      for (int d = 0; d < 3; ++d) f[d] -= pressure * a_over_vi * dir[d];
-    }
-    for (int d = 0; d < 3; ++d) body[3 * i + d] += f[d];
+    for (int d = 0; d < 3; ++d) body[3 * i + d] -= pressure * g.push[3 * i + d];
   }
 };
 
@@ -254,8 +257,8 @@ struct GasState {
   double ambient = 0.0;           // [Pa]
   double fixed_front_speed = 0.0; // [m/s]; 0: the escape speed 2 c / (gamma - 1)
   bool crack_entry = false;
-  std::vector<double> wall_dv, arrival, arrival_next, kappa;
-  std::vector<uint8_t> vent_face;
+  std::vector<double> wall_dv, arrival, arrival_next, kappa, push;
+  std::vector<uint8_t> vent_face, front_done;
   // evolving state (checkpointed with the particles')
   double volume = 0.0, wall_volume = 0.0, crack_volume = 0.0;
   double pressure = 0.0;          // gauge pressure applied [Pa]
@@ -264,6 +267,11 @@ struct GasState {
   double work = 0.0;              // integral of p dV [J]
   bool vented = false;
   double vent_time = -1.0;
+  double peak_pressure = 0.0;     // largest gauge pressure so far [Pa]
+  // Vented and down to 0.1% of its peak: the gas has done its work; its passes stop and it
+  // pushes no more (a pulverised block would otherwise pay a bond pass per step for nothing).
+  bool spent = false;
+  double wall_s = 0.0;            // wall time spent in the gas's passes (not checkpointed)
 
   GasView view() {
     GasView v;
@@ -273,6 +281,8 @@ struct GasState {
     v.arrival_next = crack_entry ? arrival_next.data() : nullptr;
     v.kappa = kappa.data();
     v.vent_face = vent_face.data();
+    v.push = push.data();
+    v.front_done = front_done.data();
     return v;
   }
   // Speed of the gas front along open bonds now: the fixed one, or the speed of a gas
@@ -287,6 +297,7 @@ struct GasState {
 // The gas at time t on the double arrays `d` (after the drift): front, volume, pressure.
 template <class Exec>
 void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, double t, double dt) {
+  if (gas.spent) return;
   GasView g = gas.view();
   exec.for_each(f.particle_count, GasWallVolume{f, g, d.u, d.offsets, d.state}, "gas_wall_volume");
   GasSums wall{0.0, 0.0, 0.0}, crack{0.0, 0.0, 0.0};
@@ -304,7 +315,7 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
 template <class Exec>
 void gas_crack_forces(Exec& exec, const PdView& d, GasState& gas, double* body) {
   if (!gas.crack_entry || gas.pressure <= 0.0) return;
-  exec.for_each(d.n, GasCrackPressure{d, gas.view(), gas.pressure, body}, "gas_crack_pressure");
+  exec.for_each(d.n, GasCrackPressure{gas.view(), gas.pressure, body}, "gas_crack_pressure");
 }
 
 }  // namespace breccia::solver

@@ -4,8 +4,8 @@
 
 Runs ROOT/cases/CASE/run.sh with VARIANT=test, OUT=DIR (the whole CLI chain: specimen,
 breccia-solve, breccia-post, the case's report.py), then checks DIR/report.json. Every
-band below carries its reason; the published numbers are in shared/spec/benchmarks.md
-and in each case's README.md. Exit 0: pass; 1: a check failed; 2: the chain failed.
+band below carries its reason; the published numbers, with their sources, are in each
+case's README.md and docs/benchmarks.md. Exit 0: pass; 1: a check failed; 2: the chain failed.
 """
 import argparse
 import json

@@ -12,6 +12,8 @@ PACKAGES=(
   libmuparser-dev             # fields by expression in case files (initial velocity, displacement)
   libvtk9-dev                 # postproc: VTU/VTP output, contouring
   libgtest-dev                # tests
+  openmpi-bin libopenmpi-dev  # distributed runs: mpirun -np N breccia-solve (docs/parallel.md)
+  libhdf5-openmpi-dev         # parallel HDF5, for collective writes of one results file
   python3-meshio python3-h5py python3-numpy python3-matplotlib python3-yaml  # converters, charts
 )
 missing=()

@@ -2,6 +2,7 @@
 //   breccia-solve CASE.yaml [-o DIR] [--threads N] [--restart FILE] [--steps N] [--backend cpu|cuda|auto] [--quiet]
 //   breccia-solve CASE.yaml --decomposition 2,4,...   (set up, print the domain decomposition's figures, exit)
 #include <cstdio>
+#include <filesystem>
 #include <algorithm>
 #include <cstring>
 #include <stdexcept>
@@ -18,6 +19,9 @@
 #ifdef BRECCIA_WITH_CUDA
 #include "breccia/solver/cuda_backend.hpp"
 #endif
+#ifdef BRECCIA_WITH_MPI
+#include "breccia/solver/mpi_backend.hpp"
+#endif
 #ifdef BRECCIA_WITH_MPS_CUDA
 #include "breccia/mps/cuda_simulation.hpp"
 #include "breccia/mps/cuda_solid.hpp"
@@ -31,7 +35,8 @@ void usage() {
                "                     [--backend cpu|cuda|auto] [--quiet] [--set KEY=VALUE ...]\n"
                "       --set time.end=\"100 us\" --set loads[0].history.peak=\"4 MPa\": override a value of the\n"
                "             case file (repeatable; KEY as error messages name fields; VALUE as YAML)\n"
-               "       breccia-solve CASE.yaml --decomposition P1,P2,...  (decomposition figures per rank count)\n");
+               "       breccia-solve CASE.yaml --decomposition P1,P2,...  (decomposition figures per rank count)\n"
+               "       mpirun -np P breccia-solve CASE.yaml ...  (a distributed run: docs/parallel.md)\n");
 }
 
 // A whole number and nothing else: std::stoll alone takes "4x" as 4.
@@ -41,6 +46,8 @@ long long whole_number(const std::string& text) {
   if (used != text.size()) throw std::invalid_argument(text);
   return v;
 }
+
+struct MissingValue {};  // an option without its value (already reported)
 
 bool gpu_available() {
 #ifdef BRECCIA_WITH_CUDA
@@ -54,6 +61,16 @@ bool gpu_available() {
 
 int main(int argc, char** argv) {
   using namespace breccia;
+#ifdef BRECCIA_WITH_MPI
+  // Under mpirun (and only then) MPI is initialised; ranks other than 0 stay silent, so a
+  // message appears once, and a failure on one rank stops all (MpiSession::fatal).
+  solver::MpiSession mpi(argc, argv);
+  mpi.quiet_other_ranks();
+  const int ranks = mpi.size(), rank = mpi.rank();
+#else
+  const int ranks = 1, rank = 0;
+#endif
+  const bool distributed = ranks > 1;
   std::string case_file;
   solver::RunOptions opt;
   std::string backend = "auto";
@@ -64,7 +81,7 @@ int main(int argc, char** argv) {
     auto value = [&](const char* name) -> std::string {
       if (k + 1 >= argc) {
         std::fprintf(stderr, "error: %s needs a value\n", name);
-        std::exit(kExitBadInput);
+        throw MissingValue{};
       }
       return argv[++k];
     };
@@ -80,6 +97,8 @@ int main(int argc, char** argv) {
       else if (a == "-h" || a == "--help") { usage(); return 0; }
       else if (!a.empty() && a[0] == '-') { std::fprintf(stderr, "error: unknown option %s\n", a.c_str()); usage(); return kExitBadInput; }
       else case_file = a;
+    } catch (const MissingValue&) {
+      return kExitBadInput;
     } catch (const std::exception&) {
       std::fprintf(stderr, "error: option %s: '%s' is not a number\n", a.c_str(), argv[k]);
       return kExitBadInput;
@@ -101,6 +120,12 @@ int main(int argc, char** argv) {
                          "; use --backend cpu or auto\n");
     return kExitBadInput;
   }
+  if (distributed && backend == "cuda") {
+    std::fprintf(stderr, "error: --backend cuda under mpirun: not yet (a distributed run steps on the CPU, "
+                         "docs/parallel.md); use --backend cpu\n");
+    return kExitBadInput;
+  }
+  if (distributed) backend = "cpu";
   opt.backend = (backend == "cuda" || (backend == "auto" && gpu_available())) ? "cuda" : "cpu";
   if (backend == "auto" && opt.progress)
     std::fprintf(stderr, "note: --backend auto: %s\n",
@@ -114,6 +139,9 @@ int main(int argc, char** argv) {
     // The model decides the solver: PD here, MPS in its own library.
     const Section root = Section::load_file(case_file);
     if (root.has("model") && root.section("model").text("type", "") == "mps") {
+      if (distributed)
+        throw InputError(case_file, "model.type", "mps under mpirun -np " + std::to_string(ranks),
+                         "one process (MPS particles move between ranks: not distributed, docs/parallel.md)");
 #ifdef BRECCIA_WITH_MPS
       mps::RunCaseOptions mps_options;
       mps_options.threads = opt.threads;
@@ -138,6 +166,7 @@ int main(int argc, char** argv) {
     }
     const solver::CaseConfig config = solver::parse_case_file(case_file);
     if (!decomposition.empty()) {
+      if (rank != 0) return 0;  // figures, not a run: one process prints them
       // The partition of the distributed runs (partition.hpp) on this case's families: load
       // balance, ghosts and halo bytes per rank count, without launching any process.
       solver::PdSystem s = solver::setup_system(config);
@@ -182,6 +211,33 @@ int main(int argc, char** argv) {
       opt.backend = "cpu";
       opt.backend_loop = nullptr;
     }
+    if (distributed) {
+#ifdef BRECCIA_WITH_MPI
+      if (config.quasi_static)
+        throw InputError(case_file, "time.quasi_static", "true under mpirun -np " + std::to_string(ranks),
+                         "one process (dynamic relaxation is not distributed yet, docs/parallel.md)");
+      opt.root = rank == 0;
+      opt.ranks = ranks;
+      opt.progress = opt.progress && rank == 0;
+      opt.backend_loop = solver::mpi_time_loop;
+      // Only rank 0 writes: make sure it can before the others set up and wait for it.
+      std::string why;
+      if (rank == 0) {
+        std::error_code ec;
+        std::filesystem::create_directories(opt.out_dir, ec);
+        const std::string probe = opt.out_dir + "/.breccia-write-probe";
+        if (std::FILE* f = ec ? nullptr : std::fopen(probe.c_str(), "w")) {
+          std::fclose(f);
+          std::remove(probe.c_str());
+        } else {
+          why = ec ? ec.message() : "cannot create a file there";
+        }
+      }
+      if (!solver::mpi_all_agree(why.empty()))
+        throw InputError("-o", opt.out_dir, "not writable" + (why.empty() ? std::string() : " (" + why + ")"),
+                         "a folder this user can write");
+#endif
+    }
     const solver::RunResult r = solver::run_case(config, opt);
     if (r.status == "unstable" || r.status == "not_converged") {
       std::fprintf(stderr, "error: %s\n", r.message.c_str());
@@ -199,7 +255,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitBadInput;
   } catch (const RunError& e) {
+#ifdef BRECCIA_WITH_MPI
+    if (distributed) mpi.fatal(e.what(), kExitRunFailed);  // may be this rank's alone
+#endif
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitRunFailed;
+  } catch (const std::exception& e) {
+#ifdef BRECCIA_WITH_MPI
+    if (distributed) mpi.fatal(e.what(), kExitRunFailed);
+#endif
+    throw;
   }
 }

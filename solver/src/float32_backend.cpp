@@ -23,21 +23,28 @@ void convert(const std::vector<From>& from, std::vector<To>& to) {
 
 }  // namespace
 
-void float32_enable(PdSystem& s) {
+void float32_enable(PdSystem& s, const double* origin) {
   Float32State& f = s.f32;
   // Coordinates relative to the bounding box centre: float resolves 6e-8 of |x0 - origin|,
   // which perturbs the reference geometry by that much but not the stretch (xi_len below is
-  // measured on the same float positions, so an undeformed bond has zero stretch).
+  // measured on the same float positions, so an undeformed bond has zero stretch). A rank of
+  // a distributed run takes the whole body's origin, so its float coordinates are the serial
+  // run's. x0 may hold more particles than s.n (a rank's ghosts): all are converted.
+  const size_t held = s.x0.size() / 3;
   for (int d = 0; d < 3; ++d) {
+    if (origin) {
+      f.origin[d] = origin[d];
+      continue;
+    }
     double lo = 1e300, hi = -1e300;
-    for (size_t i = 0; i < s.n; ++i) {
+    for (size_t i = 0; i < held; ++i) {
       lo = std::min(lo, s.x0[3 * i + d]);
       hi = std::max(hi, s.x0[3 * i + d]);
     }
-    f.origin[d] = s.n ? 0.5 * (lo + hi) : 0.0;
+    f.origin[d] = held ? 0.5 * (lo + hi) : 0.0;
   }
-  f.x0.resize(3 * s.n);
-  for (size_t k = 0; k < 3 * s.n; ++k) f.x0[k] = static_cast<float>(s.x0[k] - f.origin[k % 3]);
+  f.x0.resize(3 * held);
+  for (size_t k = 0; k < 3 * held; ++k) f.x0[k] = static_cast<float>(s.x0[k] - f.origin[k % 3]);
   convert(s.volume, f.volume);
   convert(s.density, f.density);
   convert(s.weighted_volume, f.weighted_volume);
@@ -82,7 +89,7 @@ PdViewT<float> float32_view(PdSystem& s) {
   p.offsets = s.offsets.data(); p.neighbor = s.neighbor.data(); p.xi_len = f.xi_len.data();
   p.k_own = f.k_own.data(); p.k_dual = f.k_dual.data(); p.vol_own = f.vol_own.data();
   p.s0_own = s.s0_own.data(); p.s0_dual = s.s0_dual.data(); p.state = s.state.data();
-  if (s.min_stretch.size() == s.n && s.n) {  // shared with the double view: float in both
+  if (!s.min_stretch.empty() && s.n) {  // shared with the double view: float in both
     p.alpha = static_cast<float>(s.config.compressive_enhancement);
     p.min_stretch = s.min_stretch.data();
     p.min_stretch_next = s.min_stretch_next.data();
@@ -92,14 +99,14 @@ PdViewT<float> float32_view(PdSystem& s) {
     p.s_onset = s.s_onset.data();
     p.bond_damage = s.bond_damage.data();
   }
-  if (f.short_range_k.size() == s.n && s.n) {
+  if (!f.short_range_k.empty() && s.n) {
     p.short_range_k = f.short_range_k.data();
     p.spacing = f.spacing.data();
   }
   p.lps = s.lps.empty() ? nullptr : s.lps.data();
   p.weighted_volume = f.weighted_volume.data(); p.dilatation = f.dilatation.data();
-  p.lps_a = f.lps_a.size() == s.n && s.n ? f.lps_a.data() : nullptr;
-  p.lps_b = f.lps_b.size() == s.n && s.n ? f.lps_b.data() : nullptr;
+  p.lps_a = !f.lps_a.empty() && s.n ? f.lps_a.data() : nullptr;
+  p.lps_b = !f.lps_b.empty() && s.n ? f.lps_b.data() : nullptr;
   p.energy_density = s.energy_density.data(); p.dissipated = s.dissipated.data();
   p.damage = s.damage.data(); p.max_stretch = s.max_stretch.empty() ? nullptr : s.max_stretch.data();
   return p;

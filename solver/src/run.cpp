@@ -49,6 +49,7 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   j["backend"] = o.backend;
   j["precision"] = s.f32.active ? "float32" : "float64";
   j["threads"] = omp_get_max_threads();
+  j["ranks"] = o.ranks;
   j["dimension"] = s.dimension;
   j["particles"] = s.n;
   j["bonds"] = s.bond_count();
@@ -216,14 +217,15 @@ long long total_steps_of(const PdSystem& s, const RunOptions& o) {
 }  // namespace
 
 RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, ResultsWriter* results,
-                        HistoryWriter& history) {
+                        HistoryWriter* history) {
   RunResult r;
   const bool restart = !o.restart_file.empty();
+  const bool root = o.root;  // writes and judges; the others follow its decisions (backend.any)
   const long long total_steps = total_steps_of(s, o);
   Energies e = backend.measure(s);
   double supplied = e.kinetic + e.strain;  // the scale against which blow-up is judged
   if (!restart) {
-    history.write(s, e);  // host and backend agree before the first step
+    if (root) history->write(s, e);  // host and backend agree before the first step
     if (results) results->write(s);
   }
   const long long first_step = s.step;
@@ -244,31 +246,33 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
       e = backend.measure(s);
       supplied = std::max(supplied, std::fabs(s.external_work) + s.dissipated_energy);
       supplied = std::max(supplied, 1e-300);
-      if (!instability_message(s, e, supplied).empty()) {
+      if (backend.any(root && !instability_message(s, e, supplied).empty())) {
         backend.download(s);  // the message names the fastest particle: it needs velocities
         r.status = "unstable";
-        r.message = instability_message(s, e, supplied);
+        if (root) r.message = instability_message(s, e, supplied);
         break;
       }
       if (output_due) backend.download(s);
       else if (!s.config.probes.empty() || s.config.indenter.enabled) backend.download_kinematics(s);
-      if (history_due) history.write(s, e);
+      if (history_due && root) history->write(s, e);
       if (output_due && results) results->write(s);
     }
     if (s.config.checkpoint_every > 0 && s.step % s.config.checkpoint_every == 0) {
       backend.download(s);
-      write_checkpoint(s, o.out_dir + "/checkpoint.h5");
+      if (root) write_checkpoint(s, o.out_dir + "/checkpoint.h5");
     }
-    if (g_interrupted) {
+    if (backend.any(g_interrupted)) {
       r.status = "interrupted";
       r.message = "interrupted by the user at step " + std::to_string(s.step) + "; continue with --restart " +
                   o.out_dir + "/checkpoint.h5";
       backend.compute_forces(s);  // diagnostics at this step (no bond can break again here)
       e = backend.measure(s);
       backend.download(s);
-      history.write(s, e);
-      if (results) results->write(s);
-      write_checkpoint(s, o.out_dir + "/checkpoint.h5");
+      if (root) {
+        history->write(s, e);
+        if (results) results->write(s);
+        write_checkpoint(s, o.out_dir + "/checkpoint.h5");
+      }
       break;
     }
     if (o.progress) {
@@ -288,7 +292,7 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
   if (r.status == "completed") {
     r.final_energies = backend.measure(s);
     backend.download(s);
-    write_checkpoint(s, o.out_dir + "/checkpoint.h5");
+    if (root) write_checkpoint(s, o.out_dir + "/checkpoint.h5");
   } else {
     r.final_energies = e;
   }
@@ -300,10 +304,14 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
   // Ctrl-C from here on ends the run cleanly (checkpoint, outputs, exit 130).
   g_interrupted = false;
   auto previous = std::signal(SIGINT, on_sigint);
-  std::filesystem::create_directories(o.out_dir);
+  // Only the root writes (the other ranks of a distributed run hold no gathered state).
   std::unique_ptr<ResultsWriter> results;
-  if (s.config.write_results) results = std::make_unique<ResultsWriter>(s, o.out_dir, restart);
-  HistoryWriter history(s, o.out_dir, restart);
+  std::unique_ptr<HistoryWriter> history;
+  if (o.root) {
+    std::filesystem::create_directories(o.out_dir);
+    if (s.config.write_results) results = std::make_unique<ResultsWriter>(s, o.out_dir, restart);
+    history = std::make_unique<HistoryWriter>(s, o.out_dir, restart);
+  }
   RunResult r;
   if (s.config.quasi_static) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -313,16 +321,16 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
     r.status = iters < 0 ? "not_converged" : "converged";
     r.final_energies = measure(s);
     if (iters < 0) r.message = "ADR did not reach the tolerance within time.adr_max_steps";
-    history.write(s, r.final_energies);
+    history->write(s, r.final_energies);
     if (results) results->write(s);
   } else if (o.backend_loop) {
-    r = o.backend_loop(s, o, results.get(), history);
+    r = o.backend_loop(s, o, results.get(), history.get());
   } else if (s.f32.active) {
     const std::unique_ptr<StepBackend> cpu32 = make_float32_backend(s);
-    r = run_time_loop(s, o, *cpu32, results.get(), history);
+    r = run_time_loop(s, o, *cpu32, results.get(), history.get());
   } else {
     CpuBackend cpu;
-    r = run_time_loop(s, o, cpu, results.get(), history);
+    r = run_time_loop(s, o, cpu, results.get(), history.get());
   }
   std::signal(SIGINT, previous);
   return r;
@@ -353,7 +361,7 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
     std::fprintf(stderr, "  set-up phases: %s (stable step: %d force passes)\n", phases.c_str(), s.stable_step_passes);
   }
   RunResult r = run_system(s, o);
-  write_summary(s, o, r, setup_s);
+  if (o.root) write_summary(s, o, r, setup_s);
   return r;
 }
 

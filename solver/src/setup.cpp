@@ -349,7 +349,7 @@ PdView PdSystem::view() {
   p.offsets = offsets.data(); p.neighbor = neighbor.data(); p.xi_len = xi_len.data();
   p.k_own = k_own.data(); p.k_dual = k_dual.data(); p.vol_own = vol_own.data();
   p.s0_own = s0_own.data(); p.s0_dual = s0_dual.data(); p.state = state.data();
-  if (min_stretch.size() == n && n) {
+  if (!min_stretch.empty() && n) {
     p.alpha = static_cast<float>(config.compressive_enhancement);
     p.min_stretch = min_stretch.data();
     p.min_stretch_next = min_stretch_next.data();
@@ -359,13 +359,13 @@ PdView PdSystem::view() {
     p.s_onset = s_onset.data();
     p.bond_damage = bond_damage.data();
   }
-  if (short_range_k.size() == n && n) {
+  if (!short_range_k.empty() && n) {
     p.short_range_k = short_range_k.data();
     p.spacing = spacing.data();
   }
   p.lps = lps.empty() ? nullptr : lps.data();
   p.weighted_volume = weighted_volume.data(); p.dilatation = dilatation.data();
-  p.lps_a = lps_a.size() == n ? lps_a.data() : nullptr; p.lps_b = lps_b.size() == n ? lps_b.data() : nullptr;
+  p.lps_a = !lps_a.empty() ? lps_a.data() : nullptr; p.lps_b = !lps_b.empty() ? lps_b.data() : nullptr;
   p.energy_density = energy_density.data(); p.dissipated = dissipated.data();
   p.damage = damage.data(); p.max_stretch = max_stretch.data();
   p.diagnostics = diagnostics;

@@ -32,7 +32,7 @@ private:
 
 }  // namespace
 
-RunResult cuda_time_loop(PdSystem& s, const RunOptions& o, ResultsWriter* results, HistoryWriter& history) {
+RunResult cuda_time_loop(PdSystem& s, const RunOptions& o, ResultsWriter* results, HistoryWriter* history) {
   CudaStepBackend backend(s);
   if (o.progress) std::fprintf(stderr, "  CUDA device: %s\n", cuda_device_description().c_str());
   return run_time_loop(s, o, backend, results, history);

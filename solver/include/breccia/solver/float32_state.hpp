@@ -37,7 +37,8 @@ struct Float32State {
 
 // Build the float state from the double one (after set-up: the stable step is estimated in
 // double, since its power iteration uses strains of 1e-9, below float's resolution).
-void float32_enable(PdSystem& sys);
+// `origin`: the point float coordinates are relative to (default: the bounding box centre).
+void float32_enable(PdSystem& sys, const double* origin = nullptr);
 PdViewT<float> float32_view(PdSystem& sys);
 // Double -> float: displacement, velocity, acceleration, external force density.
 void float32_upload(PdSystem& sys);

@@ -21,9 +21,13 @@ struct RunOptions {
   std::optional<long long> steps;       // override the number of steps
   bool progress = true;
   std::string backend = "cpu";
+  // This process writes the files and prints (false on the ranks other than 0 of a
+  // distributed run, solver/mpi/: rank 0 holds the gathered state).
+  bool root = true;
+  int ranks = 1;  // processes of the run (summary.json)
   // A backend's dynamic loop (the CUDA backend sets it; it runs run_time_loop with its own
   // StepBackend); empty: the CPU backend.
-  std::function<RunResult(PdSystem&, const RunOptions&, ResultsWriter*, HistoryWriter&)> backend_loop;
+  std::function<RunResult(PdSystem&, const RunOptions&, ResultsWriter*, HistoryWriter*)> backend_loop;
 };
 
 struct RunResult {
@@ -46,12 +50,16 @@ public:
   virtual void compute_forces(PdSystem& s) = 0;  // refresh forces and diagnostics in place
   virtual void download(PdSystem&) {}            // whole state to the host (outputs, checkpoint)
   virtual void download_kinematics(PdSystem&) {} // u and v only (probes)
+  // A decision every process must take together (stop on Ctrl-C, on a blow-up): true if it
+  // is true on any of them. One process: the flag itself.
+  virtual bool any(bool flag) { return flag; }
 };
 
 // The dynamic time loop shared by every backend: outputs, history, checkpoints, progress,
-// instability detection and Ctrl-C. Writers must exist (run_system creates them).
+// instability detection and Ctrl-C. On the root (o.root) the history writer must exist
+// (run_system creates it); other ranks pass null writers and write nothing.
 RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, ResultsWriter* results,
-                        HistoryWriter& history);
+                        HistoryWriter* history);
 
 // Throws InputError for bad input; returns status "unstable" (and writes its message into
 // summary.json) when the run blows up, keeping the last good output.

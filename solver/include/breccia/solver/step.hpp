@@ -13,16 +13,20 @@
 //                                             positions; the CPU builds it, CUDA refuses)
 //   exec.gas(arrays, sys, t, dt)              the gas load's volume, front and pressure at t
 //   exec.gas_crack_forces(arrays, sys)        (gas.hpp; the CPU runs them, CUDA refuses)
+//   exec.exchange(arrays, field)              optional: a distributed run's halo exchange
+//                                             (solver/mpi/; rank_system.hpp)
 //
 // (OpenMpExec in exec_openmp.hpp, CudaExec in solver/cuda/src/cuda_backend.cu.) Every
 // per-particle phase is a functor over raw pointers calling the BRECCIA_HD kernels of
 // pd_kernels.hpp / load_kernels.hpp, so the arithmetic is the same on every backend and the
-// order of the phases is fixed here. This is where a halo exchange between ranks will go
-// (after the drift, and for LPS and correspondence between their two passes) and the one
-// place where global sums are taken (`reduce`).
+// order of the phases is fixed here, with the one place where global sums are taken
+// (`reduce`) and the points where a distributed run exchanges its halo (`exchange_halo`:
+// the displacement before a force pass, the LPS and correspondence fields between their
+// two passes, the minimum stretches when they are committed).
 #include <chrono>
 #include <cstdint>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "breccia/solver/correspondence_kernels.hpp"
@@ -228,6 +232,13 @@ struct StepFinish {
 };
 
 // ---------------------------------------------------------------------------------------
+// What a distributed run's ranks exchange (rank_system.hpp): the ghosts' values of
+enum class HaloField : int {
+  Displacement,    // u, before a force pass reads the partners' positions
+  Lps,             // dilatation and the fast path's factors, between LPS's two passes
+  Correspondence,  // the force tensor sigma K^-1 - G h F, between correspondence's passes
+};
+
 // Everything one step touches, as raw pointers into the backend's memory. `p` is the working
 // precision; `d` holds the double arrays the loads are evaluated on (for a double run the
 // same arrays as `p`; for a float run the double mirror that float32_state.hpp describes).
@@ -244,7 +255,23 @@ struct StepArrays {
   CorrespondenceView corr{};             // correspondence model: moduli, F, A, non-affine energy
   double* external_work = nullptr;       // accumulators (StepFinish)
   double* dissipated_energy = nullptr;
+  // A distributed run's ghosts: held after the p.n owned particles, their values arrive by
+  // exchange_halo (never computed here). Zero on one process.
+  int64_t ghosts = 0;
 };
+
+// exec.exchange(a, field) where the execution space has one (a distributed run's); nothing
+// otherwise. Detected at compile time (C++17: nvcc compiles this header too).
+template <class Exec, class A, class = void>
+struct HasExchange : std::false_type {};
+template <class Exec, class A>
+struct HasExchange<Exec, A, std::void_t<decltype(std::declval<Exec&>().exchange(std::declval<const A&>(), HaloField{}))>>
+    : std::true_type {};
+
+template <class Exec, class Real>
+void exchange_halo(Exec& exec, const StepArrays<Real>& a, HaloField field) {
+  if constexpr (HasExchange<Exec, StepArrays<Real>>::value) exec.exchange(a, field);
+}
 
 // External force density at time t on the double arrays (float runs included: their loads
 // are evaluated in double and rounded once, docs/theory.md Precision).
@@ -312,15 +339,20 @@ template <class Exec, class Real>
 void pd_force_pass(Exec& exec, const StepArrays<Real>& a, bool sum_released) {
   const PdViewT<Real>& p = a.p;
   const int64_t n = p.n;
+  exchange_halo(exec, a, HaloField::Displacement);
   if constexpr (std::is_same_v<Real, double>) {  // float never forms x0 + u (float32_state.hpp)
-    exec.for_each(3 * n, CurrentPositions{p.x0, p.u, a.x}, "current_positions");
+    exec.for_each(3 * (n + a.ghosts), CurrentPositions{p.x0, p.u, a.x}, "current_positions");
     if (p.model == static_cast<int>(PdModel::Correspondence)) {
       exec.for_each(n, CorrespondenceDeformation{a.corr}, "correspondence_deformation_kernel");
+      exchange_halo(exec, a, HaloField::Correspondence);
       exec.for_each(n, CorrespondenceForces{a.corr}, "correspondence_force_kernel");
     }
   }
   if (p.model != static_cast<int>(PdModel::Correspondence)) {
-    if (p.model == static_cast<int>(PdModel::LPS)) exec.for_each(n, Dilatation<Real>{p}, "lps_dilatation_kernel");
+    if (p.model == static_cast<int>(PdModel::LPS)) {
+      exec.for_each(n, Dilatation<Real>{p}, "lps_dilatation_kernel");
+      exchange_halo(exec, a, HaloField::Lps);
+    }
     exec.for_each(n, BondForces<Real>{p}, "force_kernel");
     if (p.short_range_k) {
       exec.for_each(n, FamilyShortRange<Real>{p}, "short_range_kernel");

@@ -58,6 +58,6 @@ RunResult run_system_cuda(PdSystem& sys, const RunOptions& options);
 // float32_upload), for callers that drive the steps themselves (breccia-atlas).
 std::unique_ptr<StepBackend> make_cuda_step_backend(PdSystem& sys);
 // The dynamic loop on the GPU, for RunOptions::backend_loop (run_system calls it).
-RunResult cuda_time_loop(PdSystem& sys, const RunOptions& options, ResultsWriter* results, HistoryWriter& history);
+RunResult cuda_time_loop(PdSystem& sys, const RunOptions& options, ResultsWriter* results, HistoryWriter* history);
 
 }  // namespace breccia::solver

@@ -1,0 +1,47 @@
+#pragma once
+// One rank's share of a distributed PD run (docs/parallel.md): the particles it owns (a
+// contiguous range of the internal Morton order, partition.hpp) followed by its ghosts (the
+// off-rank partners its families read, in ascending internal order), as a PdSystem of its
+// own. The step of step.hpp runs on it unchanged: loops cover the n owned particles, the
+// bond loops read partners through local indices, and the ghosts' displacement (and the
+// LPS / correspondence fields between their passes, and the compressive enhancement's
+// minimum stretches) arrive by halo exchange instead of being computed. Every per-particle
+// value an owned particle computes is therefore the serial run's, bit for bit.
+//
+// No MPI here: the layout and the restriction are plain data, so they are tested without it
+// (tests/solver/test_partition.cpp); the exchange itself is in solver/mpi/.
+#include <cstdint>
+#include <vector>
+
+#include "breccia/solver/partition.hpp"
+#include "breccia/solver/pd_system.hpp"
+
+namespace breccia::solver {
+
+struct RankLayout {
+  Partition part;
+  Halo halo;
+  int rank = 0;
+  int64_t begin() const { return part.begin[rank]; }
+  int64_t owned() const { return part.owned(rank); }
+  int64_t ghosts() const { return static_cast<int64_t>(halo.ghosts.size()); }
+  // The local index of global internal index j (owned or ghost); -1 if neither.
+  int64_t local_index(int64_t j) const;
+};
+
+// The Morton-range partition of `global`'s families into `ranks` and the halo of `rank`.
+// Throws InputError when there are more ranks than particles.
+RankLayout rank_layout(const PdSystem& global, int ranks, int rank);
+
+// The rank's PdSystem: owned particles then ghosts for every per-particle array, the owned
+// rows of the bond families with partners renumbered to local indices, the constraints'
+// and loads' particles restricted to the owned ones (in the same order, so a particle's
+// facets are summed as in the serial run), and the float state when the run is float32
+// (with the global body's origin, so the float coordinates are the serial run's).
+// Load specs still point into `global.config`: the global system must outlive it.
+PdSystem restrict_to_rank(const PdSystem& global, const RankLayout& layout);
+
+// What a distributed run cannot do yet, as the case key that asks for it (empty: nothing).
+std::string distributed_unsupported(const PdSystem& global);
+
+}  // namespace breccia::solver

@@ -1,0 +1,56 @@
+#pragma once
+// Distributed runs (docs/parallel.md): `mpirun -np P breccia-solve CASE.yaml`. Each rank
+// steps its own share of the particles (rank_system.hpp) with the step of step.hpp, through
+// an execution space that adds the halo exchanges; the time loop (run.hpp) is the one every
+// backend uses, with rank 0 gathering the state when a file is written.
+#include <mpi.h>
+
+#include <memory>
+#include <string>
+
+#include "breccia/solver/run.hpp"
+
+namespace breccia::solver {
+
+// True when this process was started by an MPI launcher (mpirun, srun): only then is MPI
+// initialised, so `breccia-solve` run directly behaves as a build without MPI.
+bool launched_by_mpi();
+
+// MPI_Init_thread on construction (when launched_by_mpi()), MPI_Finalize on destruction.
+class MpiSession {
+public:
+  MpiSession(int& argc, char**& argv);
+  ~MpiSession();
+  MpiSession(const MpiSession&) = delete;
+  MpiSession& operator=(const MpiSession&) = delete;
+  bool active() const { return active_; }
+  int rank() const { return rank_; }
+  int size() const { return size_; }
+  // Ranks other than 0 write nothing to stderr (one message per run, not one per rank)
+  // until fatal() needs to say why this rank stops the others.
+  void quiet_other_ranks();
+  // A failure on this rank alone: its message (with the rank), then every rank stops.
+  [[noreturn]] void fatal(const std::string& message, int exit_code);
+
+private:
+  bool active_ = false;
+  int rank_ = 0, size_ = 1;
+};
+
+// Prints `message` (naming the rank when there are several) on this rank's real stderr and
+// stops every rank with `exit_code` (MPI_Abort); without MPI initialised, exits.
+[[noreturn]] void mpi_abort_all(const std::string& message, int exit_code);
+// True on every rank when `ok` is true on all of them (a collective check point).
+bool mpi_all_agree(bool ok);
+
+// The time loop's backend for rank `rank` of `comm`: builds the rank's system from the
+// (replicated) global one and keeps it between steps; measure() sums over ranks,
+// download() gathers the owned ranges into the global system on rank 0.
+// Throws InputError for a case it cannot distribute (naming the key).
+std::unique_ptr<StepBackend> make_mpi_backend(PdSystem& global, MPI_Comm comm);
+
+// RunOptions::backend_loop for a distributed run.
+RunResult mpi_time_loop(PdSystem& global, const RunOptions& options, ResultsWriter* results,
+                        HistoryWriter* history);
+
+}  // namespace breccia::solver

@@ -1,0 +1,378 @@
+// Distributed runs: the halo exchange, the execution space that calls it from the step, and
+// the time loop's backend (mpi_backend.hpp; docs/parallel.md).
+#include "breccia/solver/mpi_backend.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <initializer_list>
+#include <vector>
+
+#include "breccia/common/error.hpp"
+#include "breccia/solver/exec_openmp.hpp"
+#include "breccia/solver/float32_state.hpp"
+#include "breccia/solver/rank_system.hpp"
+#include "breccia/solver/step.hpp"
+
+namespace breccia::solver {
+
+namespace {
+int g_saved_stderr = -1;  // a quiet rank's real stderr, for the message that stops the run
+}  // namespace
+
+bool launched_by_mpi() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"})
+    if (std::getenv(name)) return true;
+  return false;
+}
+
+MpiSession::MpiSession(int& argc, char**& argv) {
+  if (!launched_by_mpi()) return;
+  int provided = 0;
+  // Threads inside a rank run OpenMP loops; only the main thread calls MPI.
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+  MPI_Comm_size(MPI_COMM_WORLD, &size_);
+  active_ = true;
+}
+
+MpiSession::~MpiSession() {
+  if (active_) MPI_Finalize();
+}
+
+void MpiSession::quiet_other_ranks() {
+  if (!active_ || rank_ == 0 || g_saved_stderr >= 0) return;
+  std::fflush(stderr);
+  g_saved_stderr = dup(STDERR_FILENO);
+  const int devnull = open("/dev/null", O_WRONLY);
+  if (devnull >= 0) {
+    dup2(devnull, STDERR_FILENO);
+    close(devnull);
+  }
+}
+
+void MpiSession::fatal(const std::string& message, int exit_code) { mpi_abort_all(message, exit_code); }
+
+void mpi_abort_all(const std::string& message, int exit_code) {
+  int initialised = 0, rank = 0, size = 1;
+  MPI_Initialized(&initialised);
+  if (initialised) {
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+  }
+  std::fflush(stderr);
+  if (g_saved_stderr >= 0) dup2(g_saved_stderr, STDERR_FILENO);
+  if (size > 1) std::fprintf(stderr, "error (rank %d of %d): %s\n", rank, size, message.c_str());
+  else std::fprintf(stderr, "error: %s\n", message.c_str());
+  std::fflush(stderr);
+  if (initialised) MPI_Abort(MPI_COMM_WORLD, exit_code);  // stops every rank: none is left waiting
+  std::exit(exit_code);
+}
+
+bool mpi_all_agree(bool ok) {
+  int mine = ok ? 1 : 0, all = 0;
+  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  return all != 0;
+}
+
+namespace {
+
+// One array a halo exchange carries: `bytes` per particle at `data` (local indices).
+struct HaloArray {
+  void* data;
+  size_t bytes;
+};
+
+// The exchange of ghost values with the neighbouring ranks. The ghosts from one source rank
+// are one contiguous run of the rank's ghosts (rank_system.hpp), and the source's send list
+// to this rank holds the same particles in the same (ascending) order, so a message is
+// unpacked by position.
+class HaloExchange {
+public:
+  HaloExchange(const RankLayout& L, MPI_Comm comm) : comm_(comm), owned_(L.owned()) {
+    for (size_t d = 0; d < L.halo.send_ranks.size(); ++d) {
+      std::vector<int32_t> local(L.halo.send_lists[d].size());
+      for (size_t q = 0; q < local.size(); ++q) local[q] = static_cast<int32_t>(L.halo.send_lists[d][q] - L.begin());
+      send_.push_back({L.halo.send_ranks[d], std::move(local)});
+    }
+    for (size_t r = 0; r < L.halo.recv_ranks.size(); ++r)
+      recv_.push_back({L.halo.recv_ranks[r], L.halo.recv_begin[r], L.halo.recv_begin[r + 1]});
+    ghosts_ = L.ghosts();
+    check_counts(L);
+  }
+
+  void exchange(std::initializer_list<HaloArray> arrays) {
+    size_t per = 0;
+    for (const HaloArray& a : arrays) per += a.bytes;
+    if (per == 0) return;
+    size_t send_total = 0;
+    for (const Peer& p : send_) send_total += p.local.size();
+    send_buf_.resize(send_total * per);
+    recv_buf_.resize(static_cast<size_t>(ghosts_) * per);
+    requests_.resize(send_.size() + recv_.size());
+    size_t req = 0;
+    for (const Source& s : recv_)
+      MPI_Irecv(recv_buf_.data() + s.begin * per, static_cast<int>((s.end - s.begin) * per), MPI_BYTE, s.rank, kTag,
+                comm_, &requests_[req++]);
+    size_t at = 0;
+    for (const Peer& p : send_) {
+      char* out = send_buf_.data() + at * per;
+      for (size_t q = 0; q < p.local.size(); ++q) {
+        char* item = out + q * per;
+        for (const HaloArray& a : arrays) {
+          std::memcpy(item, static_cast<const char*>(a.data) + static_cast<size_t>(p.local[q]) * a.bytes, a.bytes);
+          item += a.bytes;
+        }
+      }
+      MPI_Isend(out, static_cast<int>(p.local.size() * per), MPI_BYTE, p.rank, kTag, comm_, &requests_[req++]);
+      at += p.local.size();
+    }
+    MPI_Waitall(static_cast<int>(req), requests_.data(), MPI_STATUSES_IGNORE);
+    for (int64_t g = 0; g < ghosts_; ++g) {
+      const char* item = recv_buf_.data() + static_cast<size_t>(g) * per;
+      for (const HaloArray& a : arrays) {
+        std::memcpy(static_cast<char*>(a.data) + static_cast<size_t>(owned_ + g) * a.bytes, item, a.bytes);
+        item += a.bytes;
+      }
+    }
+  }
+
+private:
+  static constexpr int kTag = 7101;
+  struct Peer {
+    int rank;
+    std::vector<int32_t> local;  // owned local indices this peer reads
+  };
+  struct Source {
+    int rank;
+    int64_t begin, end;  // its run of this rank's ghosts
+  };
+
+  // Each rank's send count to a peer must be what the peer expects to receive: the families
+  // are symmetric (j in i's iff i in j's). A mismatch would mean unmatched messages and
+  // wrong ghosts, so it stops the run at set-up on every rank.
+  void check_counts(const RankLayout& L) {
+    const int ranks = L.part.ranks();
+    std::vector<long long> sends(ranks, 0), expected(ranks, 0), told(ranks, 0);
+    for (const Peer& p : send_) sends[p.rank] = static_cast<long long>(p.local.size());
+    for (const Source& s : recv_) expected[s.rank] = s.end - s.begin;
+    MPI_Alltoall(sends.data(), 1, MPI_LONG_LONG, told.data(), 1, MPI_LONG_LONG, comm_);
+    int bad = told != expected ? 1 : 0, any_bad = 0;
+    MPI_Allreduce(&bad, &any_bad, 1, MPI_INT, MPI_MAX, comm_);
+    if (any_bad)
+      throw RunError("distributed run: the bond families are not symmetric (a rank's ghosts differ from what "
+                     "their owners send); this case cannot be split across ranks");
+  }
+
+  MPI_Comm comm_;
+  int64_t owned_ = 0, ghosts_ = 0;
+  std::vector<Peer> send_;
+  std::vector<Source> recv_;
+  std::vector<char> send_buf_, recv_buf_;
+  std::vector<MPI_Request> requests_;
+};
+
+// The CPU's execution space plus the exchanges a distributed step needs (step.hpp).
+class MpiExec : public OpenMpExec {
+public:
+  MpiExec(PdSystem& local, HaloExchange& halo) : OpenMpExec(local), local_(local), halo_(halo) {}
+
+  // The minimum stretches the coming pass reads: the owners' values of the last pass.
+  template <class Real>
+  void commit_min_stretch(StepArrays<Real>& a) const {
+    OpenMpExec::commit_min_stretch(a);
+    if (!local_.min_stretch.empty()) halo_.exchange({{local_.min_stretch.data(), sizeof(float)}});
+  }
+
+  template <class Real>
+  void exchange(const StepArrays<Real>& a, HaloField field) const {
+    switch (field) {
+      case HaloField::Displacement:
+        halo_.exchange({{a.p.u, 3 * sizeof(Real)}});
+        break;
+      case HaloField::Lps:
+        if (a.p.lps_a) halo_.exchange({{a.p.dilatation, sizeof(Real)}, {a.p.lps_a, sizeof(Real)}, {a.p.lps_b, sizeof(Real)}});
+        else halo_.exchange({{a.p.dilatation, sizeof(Real)}});
+        break;
+      case HaloField::Correspondence:
+        halo_.exchange({{a.corr.force_tensor, 9 * sizeof(double)}});
+        break;
+    }
+  }
+
+private:
+  PdSystem& local_;
+  HaloExchange& halo_;
+};
+
+// Rank 0 receives every rank's owned rows of a per-particle array (`width` values each) into
+// the global array, at the rank's range of the internal order.
+template <class T>
+void gather_rows(const std::vector<T>& local, std::vector<T>& global, size_t width, const RankLayout& L, MPI_Comm comm) {
+  if (local.empty() || global.empty()) return;
+  const int ranks = L.part.ranks();
+  std::vector<int> counts(ranks), displs(ranks);
+  for (int r = 0; r < ranks; ++r) {
+    counts[r] = static_cast<int>(L.part.owned(r) * width * sizeof(T));
+    displs[r] = static_cast<int>(L.part.begin[r] * width * sizeof(T));
+  }
+  MPI_Gatherv(local.data(), counts[L.rank], MPI_BYTE, global.data(), counts.data(), displs.data(), MPI_BYTE, 0, comm);
+}
+
+// The same for per-entry arrays: a rank's owned rows are one contiguous run of entries.
+template <class T>
+void gather_entries(const std::vector<T>& local, std::vector<T>& global, const std::vector<int64_t>& offsets,
+                    const RankLayout& L, MPI_Comm comm) {
+  if (local.empty() && global.empty()) return;
+  const int ranks = L.part.ranks();
+  std::vector<int> counts(ranks), displs(ranks);
+  for (int r = 0; r < ranks; ++r) {
+    const int64_t b = offsets[L.part.begin[r]], e = offsets[L.part.begin[r + 1]];
+    counts[r] = static_cast<int>((e - b) * sizeof(T));
+    displs[r] = static_cast<int>(b * sizeof(T));
+  }
+  MPI_Gatherv(local.data(), counts[L.rank], MPI_BYTE, global.data(), counts.data(), displs.data(), MPI_BYTE, 0, comm);
+}
+
+template <class T>
+void float_to_double(const std::vector<float>& from, std::vector<T>& to, size_t count) {
+  for (size_t k = 0; k < count; ++k) to[k] = static_cast<T>(from[k]);
+}
+
+class MpiBackend final : public StepBackend {
+public:
+  MpiBackend(PdSystem& global, MPI_Comm comm) : comm_(comm) {
+    int rank = 0, size = 1;
+    MPI_Comm_rank(comm, &rank);
+    MPI_Comm_size(comm, &size);
+    if (const std::string key = distributed_unsupported(global); !key.empty())
+      throw InputError(global.config.file, key, "set, which a run on " + std::to_string(size) + " ranks does not support yet",
+                       "a run on one process (docs/parallel.md lists what is distributed)");
+    layout_ = rank_layout(global, size, rank);
+    local_ = restrict_to_rank(global, layout_);
+    halo_ = std::make_unique<HaloExchange>(layout_, comm);
+  }
+
+  void step(PdSystem& g) override {
+    local_.diagnostics = g.diagnostics;
+    MpiExec exec(local_, *halo_);
+    if (local_.f32.active) {
+      StepArrays<float> a = float32_step_arrays(local_);
+      a.ghosts = layout_.ghosts();
+      pd_step(exec, a, local_);
+    } else {
+      StepArrays<double> a = cpu_step_arrays(local_);
+      a.ghosts = layout_.ghosts();
+      pd_step(exec, a, local_);
+    }
+    g.time = local_.time;
+    g.step = local_.step;
+    std::copy(local_.indenter_position, local_.indenter_position + 3, g.indenter_position);
+  }
+
+  void compute_forces(PdSystem& g) override {
+    local_.diagnostics = true;
+    MpiExec exec(local_, *halo_);
+    if (local_.f32.active) {
+      StepArrays<float> a = float32_step_arrays(local_);
+      a.ghosts = layout_.ghosts();
+      pd_force_pass(exec, a, true);
+      float32_download(local_);
+    } else {
+      StepArrays<double> a = cpu_step_arrays(local_);
+      a.ghosts = layout_.ghosts();
+      pd_force_pass(exec, a, true);
+    }
+  }
+
+  // Sums over ranks: energies to rounding (the order of the sum differs from one process's),
+  // counts and the largest damage exactly; the accumulators into the global system.
+  Energies measure(PdSystem& g) override {
+    if (local_.f32.active) {  // the float state is the truth; measure reads u and v
+      float_to_double(local_.f32.u, local_.u, 3 * local_.n);
+      float_to_double(local_.f32.v, local_.v, 3 * local_.n);
+    }
+    const Energies e = solver::measure(local_);
+    double sums[4] = {e.kinetic, e.strain, local_.external_work, local_.dissipated_energy}, total[4];
+    MPI_Allreduce(sums, total, 4, MPI_DOUBLE, MPI_SUM, comm_);
+    double dmax = e.max_damage, gmax = 0.0;
+    MPI_Allreduce(&dmax, &gmax, 1, MPI_DOUBLE, MPI_MAX, comm_);
+    long long counts[2] = {e.broken_half_bonds, e.finite ? 0 : 1}, gcounts[2];
+    MPI_Allreduce(counts, gcounts, 2, MPI_LONG_LONG, MPI_SUM, comm_);
+    long long bad = e.bad_particle >= 0 ? e.bad_particle + layout_.begin() : -1, gbad = -1;
+    MPI_Allreduce(&bad, &gbad, 1, MPI_LONG_LONG, MPI_MAX, comm_);
+    Energies out;
+    out.kinetic = total[0];
+    out.strain = total[1];
+    out.max_damage = gmax;
+    out.broken_half_bonds = gcounts[0];
+    out.finite = gcounts[1] == 0;
+    out.bad_particle = gbad;
+    g.external_work = total[2];
+    g.dissipated_energy = total[3];
+    return out;
+  }
+
+  void download(PdSystem& g) override {
+    if (local_.f32.active) float32_download(local_);
+    for (auto [l, gl] : {std::pair{&local_.u, &g.u}, {&local_.v, &g.v}, {&local_.a, &g.a}, {&local_.force, &g.force},
+                         {&local_.body, &g.body}})
+      gather_rows(*l, *gl, 3, layout_, comm_);
+    for (auto [l, gl] : {std::pair{&local_.energy_density, &g.energy_density}, {&local_.dissipated, &g.dissipated},
+                         {&local_.damage, &g.damage}, {&local_.max_stretch, &g.max_stretch},
+                         {&local_.dilatation, &g.dilatation}, {&local_.lps_a, &g.lps_a}, {&local_.lps_b, &g.lps_b},
+                         {&local_.corr_nonaffine, &g.corr_nonaffine}})
+      gather_rows(*l, *gl, 1, layout_, comm_);
+    gather_rows(local_.corr_deformation, g.corr_deformation, 9, layout_, comm_);
+    gather_rows(local_.corr_force_tensor, g.corr_force_tensor, 9, layout_, comm_);
+    gather_rows(local_.min_stretch, g.min_stretch, 1, layout_, comm_);
+    gather_rows(local_.min_stretch_next, g.min_stretch_next, 1, layout_, comm_);
+    gather_entries(local_.state, g.state, g.offsets, layout_, comm_);
+    gather_entries(local_.bond_damage, g.bond_damage, g.offsets, layout_, comm_);
+  }
+
+  void download_kinematics(PdSystem& g) override {
+    if (local_.f32.active) {
+      float_to_double(local_.f32.u, local_.u, 3 * local_.n);
+      float_to_double(local_.f32.v, local_.v, 3 * local_.n);
+    }
+    gather_rows(local_.u, g.u, 3, layout_, comm_);
+    gather_rows(local_.v, g.v, 3, layout_, comm_);
+  }
+
+  bool any(bool flag) override {
+    int mine = flag ? 1 : 0, all = 0;
+    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MAX, comm_);
+    return all != 0;
+  }
+
+private:
+  MPI_Comm comm_;
+  RankLayout layout_;
+  PdSystem local_;
+  std::unique_ptr<HaloExchange> halo_;
+};
+
+}  // namespace
+
+std::unique_ptr<StepBackend> make_mpi_backend(PdSystem& global, MPI_Comm comm) {
+  return std::make_unique<MpiBackend>(global, comm);
+}
+
+RunResult mpi_time_loop(PdSystem& global, const RunOptions& o, ResultsWriter* results, HistoryWriter* history) {
+  // Every rank gets here with the same (replicated) system, so a case the backend refuses is
+  // refused by all alike: an InputError, reported once by rank 0.
+  const std::unique_ptr<StepBackend> backend = make_mpi_backend(global, MPI_COMM_WORLD);
+  try {
+    return run_time_loop(global, o, *backend, results, history);
+  } catch (const std::exception& e) {
+    // From here a failure may be one rank's alone (a file rank 0 writes): stop them all.
+    mpi_abort_all(e.what(), dynamic_cast<const InputError*>(&e) ? kExitBadInput : kExitRunFailed);
+  }
+}
+
+}  // namespace breccia::solver

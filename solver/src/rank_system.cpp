@@ -1,0 +1,161 @@
+#include "breccia/solver/rank_system.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "breccia/common/error.hpp"
+#include "breccia/solver/correspondence_kernels.hpp"
+
+namespace breccia::solver {
+namespace {
+
+// Rows `ids` of a per-particle array of `width` values each; an array that is not held
+// (empty: the feature is off) stays empty.
+template <class T>
+std::vector<T> take(const std::vector<T>& global, const std::vector<int32_t>& ids, size_t width, size_t n) {
+  if (global.empty()) return {};
+  if (global.size() != width * n)
+    throw std::logic_error("restrict_to_rank: a per-particle array of unexpected size");
+  std::vector<T> out(width * ids.size());
+  for (size_t q = 0; q < ids.size(); ++q)
+    std::copy_n(global.begin() + static_cast<int64_t>(width) * ids[q], width, out.begin() + static_cast<int64_t>(width * q));
+  return out;
+}
+
+// Entries [b, e) of a per-entry array; empty stays empty.
+template <class T>
+std::vector<T> slice(const std::vector<T>& global, int64_t b, int64_t e) {
+  if (global.empty()) return {};
+  return std::vector<T>(global.begin() + b, global.begin() + e);
+}
+
+}  // namespace
+
+int64_t RankLayout::local_index(int64_t j) const {
+  if (j >= begin() && j < begin() + owned()) return j - begin();
+  const auto it = std::lower_bound(halo.ghosts.begin(), halo.ghosts.end(), static_cast<int32_t>(j));
+  if (it == halo.ghosts.end() || *it != j) return -1;
+  return owned() + (it - halo.ghosts.begin());
+}
+
+RankLayout rank_layout(const PdSystem& g, int ranks, int rank) {
+  RankLayout L;
+  try {
+    L.part = MortonRangePartitioner().partition(g.offsets, ranks);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(g.config.file, "mpirun -np", e.what(), "at most one rank per particle");
+  }
+  L.rank = rank;
+  L.halo = build_halo(L.part, rank, g.offsets, g.neighbor);
+  return L;
+}
+
+std::string distributed_unsupported(const PdSystem& g) {
+  // Each of these reads particles that are not bond partners (a cell grid of the current
+  // positions, the cavity's whole wall) or relaxes with global sums not yet distributed.
+  if (g.config.short_range_forces) return "model.short_range_forces";
+  if (g.gas.active) return "loads[].type: gas";
+  if (g.config.quasi_static) return "time.quasi_static";
+  return "";
+}
+
+PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) {
+  PdSystem s;
+  s.config = g.config;
+  s.dimension = g.dimension;
+  s.thickness = g.thickness;
+  const int64_t b = L.begin(), owned = L.owned();
+  s.n = static_cast<size_t>(owned);
+  // Local index -> global internal index: owned, then ghosts.
+  std::vector<int32_t> ids(static_cast<size_t>(owned) + L.halo.ghosts.size());
+  for (int64_t i = 0; i < owned; ++i) ids[i] = static_cast<int32_t>(b + i);
+  std::copy(L.halo.ghosts.begin(), L.halo.ghosts.end(), ids.begin() + owned);
+  const size_t n = g.n;
+  s.original_index = take(g.original_index, ids, 1, n);
+  s.x0 = take(g.x0, ids, 3, n);
+  s.u = take(g.u, ids, 3, n);
+  s.v = take(g.v, ids, 3, n);
+  s.a = take(g.a, ids, 3, n);
+  s.force = take(g.force, ids, 3, n);
+  s.body = take(g.body, ids, 3, n);
+  s.x = g.x.size() == 3 * n ? take(g.x, ids, 3, n) : std::vector<double>{};
+  s.volume = take(g.volume, ids, 1, n);
+  s.density = take(g.density, ids, 1, n);
+  s.horizon = take(g.horizon, ids, 1, n);
+  s.half_cell = take(g.half_cell, ids, 1, n);
+  s.material = take(g.material, ids, 1, n);
+  s.fixed_dof = take(g.fixed_dof, ids, 1, n);
+  s.energy_density = take(g.energy_density, ids, 1, n);
+  s.dissipated = take(g.dissipated, ids, 1, n);
+  s.damage = take(g.damage, ids, 1, n);
+  s.max_stretch = take(g.max_stretch, ids, 1, n);
+  s.dilatation = take(g.dilatation, ids, 1, n);
+  s.weighted_volume = take(g.weighted_volume, ids, 1, n);
+  s.lps_a = take(g.lps_a, ids, 1, n);
+  s.lps_b = take(g.lps_b, ids, 1, n);
+  s.lps = take(g.lps, ids, 1, n);
+  s.calibration_factor = take(g.calibration_factor, ids, 1, n);
+  s.corr_moduli = take(g.corr_moduli, ids, kCorrModuli, n);
+  s.corr_deformation = take(g.corr_deformation, ids, 9, n);
+  s.corr_force_tensor = take(g.corr_force_tensor, ids, 9, n);
+  s.corr_nonaffine = take(g.corr_nonaffine, ids, 1, n);
+  s.min_stretch = take(g.min_stretch, ids, 1, n);
+  s.min_stretch_next = take(g.min_stretch_next, ids, 1, n);
+  s.short_range_k = take(g.short_range_k, ids, 1, n);
+  s.spacing = take(g.spacing, ids, 1, n);
+
+  // The owned rows, partners renumbered (ghosts are sorted: a binary search each).
+  const int64_t eb = g.offsets[b], ee = g.offsets[b + owned];
+  s.offsets.resize(static_cast<size_t>(owned) + 1);
+  for (int64_t i = 0; i <= owned; ++i) s.offsets[i] = g.offsets[b + i] - eb;
+  s.neighbor.resize(static_cast<size_t>(ee - eb));
+  for (int64_t k = eb; k < ee; ++k) s.neighbor[k - eb] = static_cast<int32_t>(L.local_index(g.neighbor[k]));
+  s.xi_len = slice(g.xi_len, eb, ee);
+  s.k_own = slice(g.k_own, eb, ee);
+  s.k_dual = slice(g.k_dual, eb, ee);
+  s.vol_own = slice(g.vol_own, eb, ee);
+  s.s0_own = slice(g.s0_own, eb, ee);
+  s.s0_dual = slice(g.s0_dual, eb, ee);
+  s.state = slice(g.state, eb, ee);
+  s.s_onset = slice(g.s_onset, eb, ee);
+  s.bond_damage = slice(g.bond_damage, eb, ee);
+  s.contact_cell_edge = g.contact_cell_edge;
+
+  // Loads and constraints on the owned particles, in the global lists' order.
+  auto owned_local = [&](const std::vector<int32_t>& list) {
+    std::vector<int32_t> out;
+    for (const int32_t i : list)
+      if (i >= b && i < b + owned) out.push_back(static_cast<int32_t>(i - b));
+    return out;
+  };
+  for (const auto& sl : g.surface_loads) {
+    PdSystem::SurfaceLoad l{sl.spec, {}};
+    for (PressureFacet f : sl.facets)
+      if (f.particle >= b && f.particle < b + owned) {
+        f.particle = static_cast<int32_t>(f.particle - b);
+        l.facets.push_back(f);
+      }
+    s.surface_loads.push_back(std::move(l));
+  }
+  s.facets = group_facets_by_particle(s);
+  for (const auto& bl : g.body_loads)  // empty: every particle, which is every owned one here
+    s.body_loads.push_back({bl.spec, bl.particles.empty() ? std::vector<int32_t>{} : owned_local(bl.particles)});
+  for (const auto& c : g.constraints) s.constraints.push_back({c.spec, owned_local(c.particles)});
+
+  s.step = g.step;
+  s.time = g.time;
+  s.dt = g.dt;
+  s.stable_dt = g.stable_dt;
+  s.silling_askari_dt = g.silling_askari_dt;
+  s.indenter_position[0] = g.indenter_position[0];
+  s.indenter_position[1] = g.indenter_position[1];
+  s.indenter_position[2] = g.indenter_position[2];
+  s.symmetric_halves = g.symmetric_halves;
+  // The accumulators are sums over ranks: rank 0 carries what came before (a restart).
+  s.external_work = L.rank == 0 ? g.external_work : 0.0;
+  s.dissipated_energy = L.rank == 0 ? g.dissipated_energy : 0.0;
+  if (g.f32.active) float32_enable(s, g.f32.origin);
+  return s;
+}
+
+}  // namespace breccia::solver

@@ -10,6 +10,8 @@
 #include <memory>
 #include <numeric>
 
+#include <omp.h>
+
 #include "breccia/common/error.hpp"
 #include "breccia/common/expression.hpp"
 #include "breccia/common/units.hpp"
@@ -887,7 +889,12 @@ PdSystem setup_system(const CaseConfig& config) {
         surfaces[p] = std::make_unique<SurfaceCut>(s.particles, require_surface(s, pc.surface, field + ".surface"),
                                                    longest_bond);
     }
-    for (size_t i = 0; i < n; ++i)
+    // Each entry is decided alone (threads write disjoint entries); the pairs are collected
+    // per thread and sorted, so the list does not depend on the thread count.
+    std::vector<std::vector<std::pair<int64_t, int64_t>>> pairs(static_cast<size_t>(omp_get_max_threads()));
+    const int64_t rows = static_cast<int64_t>(n);
+#pragma omp parallel for schedule(dynamic, 256)
+    for (int64_t i = 0; i < rows; ++i)
       for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
         const int32_t j = s.neighbor[k];
         // Both half-bonds of a pair are tested in one fixed order: the crossing tests are
@@ -907,8 +914,9 @@ PdSystem setup_system(const CaseConfig& config) {
         if (!cut) continue;
         s.state[k] = 0;
         const int64_t fi = s.original_index[i], fj = s.original_index[j];
-        if (fi < fj) s.precrack_pairs.emplace_back(fi, fj);
+        if (fi < fj) pairs[static_cast<size_t>(omp_get_thread_num())].emplace_back(fi, fj);
       }
+    for (const auto& list : pairs) s.precrack_pairs.insert(s.precrack_pairs.end(), list.begin(), list.end());
     std::sort(s.precrack_pairs.begin(), s.precrack_pairs.end());
   }
 
@@ -1027,6 +1035,10 @@ PdSystem setup_system(const CaseConfig& config) {
     }
   }
 
+  // Correspondence's moduli and tensors before the checks below, which run force passes
+  // (a graded tet mesh crashed here when they came after).
+  if (c.model == PdModel::Correspondence) setup_correspondence(s, elastic);  // correspondence.cpp
+
   // One horizon over a graded arrangement under-resolves its coarse part, and dual horizon
   // over steep grading reflects waves (docs/atlas.md, stability map, graded_check.hpp).
   if (c.check_stability) require_graded_horizon(s);
@@ -1034,8 +1046,6 @@ PdSystem setup_system(const CaseConfig& config) {
   // A horizon too small for irregular particles makes each particle's stiffness random
   // (docs/atlas.md, stability map): refuse it before the run.
   if (c.check_stability) require_resolved_families(s);
-
-  if (c.model == PdModel::Correspondence) setup_correspondence(s, elastic);  // correspondence.cpp
   phase("state and start-up checks");
 
   // Stable time step: sharp estimate by power iteration; Silling & Askari (2005) for reference.

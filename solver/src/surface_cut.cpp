@@ -98,6 +98,10 @@ SurfaceCut::SurfaceCut(const ParticleModel& model, const SurfaceFacets& facets, 
       const double r = dimension_ == 3 ? std::sqrt(facets.area_m2[f] / M_PI) : 0.5 * facets.area_m2[f] / thickness_m_;
       for (int d = 0; d < 3; ++d) a[d] = facets.centroid_m[3 * f + d] - r, b[d] = facets.centroid_m[3 * f + d] + r;
     }
+    for (int d = 0; d < 3; ++d) {
+      box_lo_[d] = std::min(box_lo_[d], a[d]);
+      box_hi_[d] = std::max(box_hi_[d], b[d]);
+    }
     int64_t ca[3], cb[3];
     for (int d = 0; d < 3; ++d) {
       ca[d] = static_cast<int64_t>(std::floor((a[d] - origin_m_[d]) / cell_m_));
@@ -131,6 +135,8 @@ bool SurfaceCut::crosses_facet(size_t f, const double* p, const double* q) const
 }
 
 bool SurfaceCut::crosses(const double* p, const double* q) const {
+  for (int d = 0; d < 3; ++d)
+    if (std::max(p[d], q[d]) < box_lo_[d] || std::min(p[d], q[d]) > box_hi_[d]) return false;
   int64_t c[3];
   for (int d = 0; d < 3; ++d) c[d] = static_cast<int64_t>(std::floor((0.5 * (p[d] + q[d]) - origin_m_[d]) / cell_m_));
   for (int64_t x = c[0] - 1; x <= c[0] + 1; ++x)

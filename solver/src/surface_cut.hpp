@@ -32,6 +32,9 @@ private:
   // Uniform grid of cell >= the longest bond over the facets' bounding boxes: a bond can
   // only cross facets registered in the 27 cells around its midpoint.
   double cell_m_ = 1.0, origin_m_[3] = {0, 0, 0};
+  // The facets' bounding box: a bond entirely on one side of it is rejected before the grid
+  // (most bonds of a body are far from its pre-crack).
+  double box_lo_[3] = {1e300, 1e300, 1e300}, box_hi_[3] = {-1e300, -1e300, -1e300};
   std::unordered_map<int64_t, std::vector<int32_t>> grid_;
   int64_t key(int64_t x, int64_t y, int64_t z) const { return (x * 2097152 + y) * 2097152 + z; }
 };

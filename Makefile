@@ -38,6 +38,11 @@ case-%: build
 
 bench: build
 	bash scripts/bench.sh $(BUILD)
+	bash scripts/bench_mpi.sh $(BUILD)
+
+# make bench-mpi: strong scaling of a distributed run, 1 -> 2 ranks beside LAMMPS (docs/parallel.md)
+bench-mpi: build
+	bash scripts/bench_mpi.sh $(BUILD)
 
 # make lammps-peri: LAMMPS PERI's own projectile examples run in LAMMPS and in Breccia with
 # each of LAMMPS's modelling choices on and off, plus a time-step study

@@ -213,13 +213,11 @@ int main(int argc, char** argv) {
     }
     if (distributed) {
 #ifdef BRECCIA_WITH_MPI
-      if (config.quasi_static)
-        throw InputError(case_file, "time.quasi_static", "true under mpirun -np " + std::to_string(ranks),
-                         "one process (dynamic relaxation is not distributed yet, docs/parallel.md)");
       opt.root = rank == 0;
       opt.ranks = ranks;
       opt.progress = opt.progress && rank == 0;
       opt.backend_loop = solver::mpi_time_loop;
+      opt.relax = solver::mpi_relax;
       // Only rank 0 writes: make sure it can before the others set up and wait for it.
       std::string why;
       if (rank == 0) {

@@ -52,10 +52,9 @@ RankLayout rank_layout(const PdSystem& g, int ranks, int rank) {
 
 std::string distributed_unsupported(const PdSystem& g) {
   // Each of these reads particles that are not bond partners (a cell grid of the current
-  // positions, the cavity's whole wall) or relaxes with global sums not yet distributed.
+  // positions, the cavity's whole wall).
   if (g.config.short_range_forces) return "model.short_range_forces";
   if (g.gas.active) return "loads[].type: gas";
-  if (g.config.quasi_static) return "time.quasi_static";
   return "";
 }
 

@@ -15,6 +15,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/output_file.hpp"
+#include "breccia/common/reproducible_sum.hpp"
 #include "breccia/common/units.hpp"
 #include "breccia/solver/correspondence.hpp"
 #include "breccia/solver/outputs.hpp"
@@ -142,7 +143,16 @@ std::string instability_message(const PdSystem& s, const Energies& e, double ene
   return m.str();
 }
 
-long long relax_to_equilibrium(PdSystem& s, bool progress) {
+long long relax_to_equilibrium(PdSystem& s, bool progress, const RelaxHooks& hooks) {
+  // A distributed run passes its force pass (with the halo exchange) and its sum over ranks.
+  const auto forces = hooks.forces ? hooks.forces : [](PdSystem& sys) { cpu_compute_forces(sys); };
+  // Its sums steer the iteration (damping, convergence): they are taken reproducibly, so
+  // that P ranks, or any thread count, follow one process's path bit for bit.
+  std::vector<double> sums_out;
+  const auto sum_terms = [&](int quantities, const std::function<double(size_t, int)>& term) {
+    reproducible_sums(3 * s.n, quantities, term, sums_out, hooks.max, hooks.sum);
+    return sums_out;
+  };
   // Fictitious density rho* = 1.2 rho omega_max^2 / 4 makes the unit step stable.
   const size_t n3 = 3 * s.n;
   const double omega2 = std::pow(2.0 / s.stable_dt, 2);
@@ -151,28 +161,29 @@ long long relax_to_equilibrium(PdSystem& s, bool progress) {
   apply_constraints(s, 1e300, 0.0);  // prescribed values at their full size
   for (auto& x : s.v) x = 0.0;
   compute_external(s, 0.0);
-  double load_norm = 0.0;
-  for (size_t k = 0; k < n3; ++k) load_norm += s.body[k] * s.body[k] * s.volume[k / 3];
-  load_norm = std::sqrt(load_norm);
+  const double load_norm =
+      std::sqrt(sum_terms(1, [&](size_t k, int) { return s.body[k] * s.body[k] * s.volume[k / 3]; })[0]);
   auto is_free = [&](size_t k) { return !(s.fixed_dof[k / 3] & (1u << (k % 3))); };
   const auto start = std::chrono::steady_clock::now();
   auto last = start;
   for (long long it = 0; it < s.config.adr_max_steps; ++it) {
     commit_min_stretch(s);
     if (s.gas.active && it > 0) compute_external(s, 0.0);  // the gas follows the cavity's volume
-    cpu_compute_forces(s);
-    double num = 0.0, den = 0.0, residual = 0.0;
-    for (size_t k = 0; k < n3; ++k) {
-      if (!is_free(k)) continue;
-      const double f = (s.force[k] + s.body[k]) / lam[k / 3];
-      residual += std::pow(s.force[k] + s.body[k], 2) * s.volume[k / 3];
-      if (it > 0 && v_half[k] != 0.0) {
+    forces(s);
+    // Terms per component: the Rayleigh quotient's numerator and denominator of the local
+    // stiffness (Kilic & Madenci's damping), and the squared residual force.
+    const std::vector<double> totals = sum_terms(3, [&](size_t k, int q) {
+      if (!is_free(k)) return 0.0;
+      if (q == 0) {
+        if (it == 0 || v_half[k] == 0.0) return 0.0;
+        const double f = (s.force[k] + s.body[k]) / lam[k / 3];
         const double kdiag = -(f - f_prev[k]) / v_half[k];
-        num += s.u[k] * kdiag * s.u[k];
+        return s.u[k] * kdiag * s.u[k];
       }
-      den += s.u[k] * s.u[k];
-    }
-    residual = std::sqrt(residual);
+      if (q == 1) return s.u[k] * s.u[k];
+      return std::pow(s.force[k] + s.body[k], 2) * s.volume[k / 3];
+    });
+    const double num = totals[0], den = totals[1], residual = std::sqrt(totals[2]);
     const double ref = load_norm > 0 ? load_norm : 1.0;
     if (it > 10 && residual <= s.config.adr_tolerance * ref) {
       s.step = it;
@@ -315,13 +326,13 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
   RunResult r;
   if (s.config.quasi_static) {
     const auto t0 = std::chrono::steady_clock::now();
-    const long long iters = relax_to_equilibrium(s, o.progress);
+    const long long iters = o.relax ? o.relax(s, o.progress) : relax_to_equilibrium(s, o.progress);
     r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     r.steps = iters < 0 ? s.config.adr_max_steps : iters;
     r.status = iters < 0 ? "not_converged" : "converged";
     r.final_energies = measure(s);
     if (iters < 0) r.message = "ADR did not reach the tolerance within time.adr_max_steps";
-    history->write(s, r.final_energies);
+    if (history) history->write(s, r.final_energies);
     if (results) results->write(s);
   } else if (o.backend_loop) {
     r = o.backend_loop(s, o, results.get(), history.get());

@@ -5,7 +5,7 @@
 // through the thickness), meshed by gmsh with 0.6 mm tets near the notch grading to 1.5 mm:
 // about 19,000 particles, so every model runs on a graded tet arrangement with the dual
 // horizon (variable_horizon) and families of very unequal size. Its ends are pulled apart at
-// 2 m/s: by step 60 about 5% of the bond pairs are broken (the notch's and new ones).
+// 2 m/s: by step 40 about 5% of the bond pairs are broken (the notch's and new ones).
 //
 // What must hold (the issue's requirement, no tolerance): displacements, velocities,
 // accelerations, forces, damage and bond states byte-identical to the one-process run;
@@ -15,6 +15,7 @@
 #include <sys/wait.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -134,7 +135,7 @@ std::string notched_block() {
   return path;
 }
 
-std::string block_case(const std::string& name, const std::string& model, int steps = 60) {
+std::string block_case(const std::string& name, const std::string& model, int steps = 40) {
   const std::string particles = notched_block();
   EXPECT_FALSE(particles.empty()) << "could not mesh the notched block";
   return write_case(name,
@@ -147,7 +148,7 @@ std::string block_case(const std::string& name, const std::string& model, int st
                     "  - {type: velocity, set: xmin, value: [-2, 0, 0], components: [x]}\n"
                     "  - {type: velocity, set: xmax, value: [2, 0, 0], components: [x]}\n"
                     "time: {steps: " + std::to_string(steps) + "}\n"
-                    "output: {every: 30, history_every: 10, fields: [damage, displacement, velocity]}\n");
+                    "output: {every: 20, history_every: 10, fields: [damage, displacement, velocity]}\n");
 }
 
 void expect_same_energies(const nlohmann::json& a, const nlohmann::json& b, const std::string& what) {
@@ -179,7 +180,7 @@ TEST_P(SameAnswer, AtOneToFourRanksAndOneOrTwoThreads) {
   struct Variant {
     int ranks, threads;
   };
-  for (const Variant v : {Variant{2, 1}, Variant{3, 1}, Variant{4, 1}, Variant{1, 2}, Variant{2, 2}}) {
+  for (const Variant v : {Variant{2, 1}, Variant{3, 1}, Variant{4, 1}, Variant{1, 2}}) {
     const std::string out = base + "_np" + std::to_string(v.ranks) + "_t" + std::to_string(v.threads);
     const Outcome o = solve(file, out, v.ranks, v.threads);
     ASSERT_EQ(o.exit_code, 0) << out << ": " << o.err;
@@ -194,19 +195,79 @@ TEST_P(SameAnswer, AtOneToFourRanksAndOneOrTwoThreads) {
 INSTANTIATE_TEST_SUITE_P(Models, SameAnswer, ::testing::Values("pmb", "lps", "correspondence", "float32"),
                          [](const auto& info) { return std::string(info.param); });
 
+// The checkpoint holds the whole state in the particle file's order, whatever wrote it. A
+// lattice block with a through-crack is enough here (the byte-identity above is the graded
+// block's); its ends pulled apart break bonds on both sides of the stop.
 TEST(Distributed, CheckpointOfThreeRanksRestartsOnTwoAndOneByteIdentical) {
-  const std::string file = block_case("block_restart", "type: lps");
+  const std::string file = write_case("mpi_restart",
+      "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.02, 0.01, 0.004], spacing: 0.5 mm}}\n"
+      "model: {type: lps, horizon_factor: 3.015}\n"
+      "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 5}]\n"
+      "precracks: [{type: polygon, points: [[0.01, -0.001, -0.001], [0.01, 0.004, -0.001], [0.01, 0.004, 0.005], [0.01, -0.001, 0.005]]}]\n"
+      "boundary:\n"
+      "  - {type: velocity, set: xmin, value: [-5, 0, 0], components: [x]}\n"
+      "  - {type: velocity, set: xmax, value: [5, 0, 0], components: [x]}\n"
+      "time: {steps: 120}\n"
+      "output: {every: 60, history_every: 10, fields: [damage, displacement, velocity]}\n");
   const std::string base = process_temp_dir() + "/restart";
-  ASSERT_EQ(solve(file, base + "_whole", 1, 2).exit_code, 0);
+  ASSERT_EQ(solve(file, base + "_whole", 1, 1).exit_code, 0);
+  long long broken_half = 0;
   for (const int ranks : {2, 1}) {
     const std::string out = base + "_on" + std::to_string(ranks);
-    const Outcome first = solve(file, out, 3, 1, "--steps 30");
+    const Outcome first = solve(file, out, 3, 1, "--steps 60");
     ASSERT_EQ(first.exit_code, 0) << first.err;
-    const Outcome second = solve(file, out, ranks, 1, "--steps 30 --restart " + out + "/checkpoint.h5");
+    broken_half = summary(out)["broken_bonds"].get<long long>();
+    const Outcome second = solve(file, out, ranks, 1, "--steps 60 --restart " + out + "/checkpoint.h5");
     ASSERT_EQ(second.exit_code, 0) << second.err;
     EXPECT_EQ(differing(base + "_whole/checkpoint.h5", out + "/checkpoint.h5"), std::vector<std::string>{})
-        << "stopped at step 30 on 3 ranks, finished on " << ranks;
+        << "stopped at step 60 on 3 ranks, finished on " << ranks;
   }
+  EXPECT_GT(summary(base + "_whole")["broken_bonds"].get<long long>(), broken_half) << "no bond broke after the restart";
+}
+
+// Doubles of a dataset (its raw bytes as read above).
+std::vector<double> doubles(const std::map<std::string, std::string>& sets, const std::string& name) {
+  const auto it = sets.find(name);
+  if (it == sets.end()) return {};
+  std::vector<double> v(it->second.size() / sizeof(double));
+  std::memcpy(v.data(), it->second.data(), v.size() * sizeof(double));
+  return v;
+}
+
+// Dynamic relaxation's sums (damping, residual) steer its path: they are taken
+// reproducibly (reproducible_sum.hpp), so 3 ranks follow one process's iterations and end in
+// the same state; the issue asks 1e-12 of the displacement, this checks bytes too.
+TEST(Distributed, DynamicRelaxationConvergesToTheSameStateOnThreeRanks) {
+  const std::string file = write_case("mpi_adr",
+      "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.016, 0.008, 0.004], spacing: 1 mm}}\n"
+      "model: {type: lps, horizon_factor: 3.015}\n"
+      "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25}]\n"
+      "precracks: [{type: polygon, points: [[0.008, -0.001, -0.001], [0.008, 0.004, -0.001], [0.008, 0.004, 0.005], [0.008, -0.001, 0.005]]}]\n"
+      "loads: [{type: pressure, surface: xmax, history: {type: constant, value: -2 MPa}}]\n"
+      "boundary: [{type: displacement, set: xmin, value: [0, 0, 0]}]\n"
+      "time: {integrator: adr, adr_tolerance: 1e-10, adr_max_steps: 100000}\n"
+      "output: {fields: [displacement]}\n");
+  const std::string base = process_temp_dir() + "/adr";
+  const Outcome one = solve(file, base + "_np1", 1, 1), three = solve(file, base + "_np3", 3, 1);
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  ASSERT_EQ(three.exit_code, 0) << three.err;
+  EXPECT_EQ(summary(base + "_np1")["status"], "converged");
+  EXPECT_EQ(summary(base + "_np1")["steps"], summary(base + "_np3")["steps"]) << "iterations";
+  const auto a = datasets(base + "_np1/results.h5"), b = datasets(base + "_np3/results.h5");
+  std::string last;  // the last frame's displacement
+  for (const auto& [name, bytes] : a)
+    if (name.size() > 13 && name.substr(name.size() - 13) == "/displacement") last = name;
+  const std::vector<double> ua = doubles(a, last), ub = doubles(b, last);
+  ASSERT_EQ(ua.size(), ub.size());
+  ASSERT_FALSE(ua.empty());
+  double umax = 0.0, diff = 0.0;
+  for (size_t k = 0; k < ua.size(); ++k) {
+    umax = std::max(umax, std::fabs(ua[k]));
+    diff = std::max(diff, std::fabs(ua[k] - ub[k]));
+  }
+  EXPECT_GT(umax, 1e-5);  // 2 MPa over 16 mm of a 10 GPa bar with a half-depth crack: ~1.7e-5 m
+  EXPECT_LE(diff, 1e-12 * umax) << "largest difference " << diff << " m against " << umax << " m";
+  EXPECT_EQ(differing(base + "_np1/results.h5", base + "_np3/results.h5"), std::vector<std::string>{});
 }
 
 TEST(Distributed, BadInputIsReportedOnceWithExitCode2) {

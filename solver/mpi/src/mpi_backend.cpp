@@ -344,6 +344,42 @@ public:
     gather_rows(local_.v, g.v, 3, layout_, comm_);
   }
 
+  // Dynamic relaxation on the rank's share: the force pass exchanges the halo, the sums
+  // (load norm, residual, the damping's Rayleigh quotient) are taken over ranks,
+  // reproducibly (reproducible_sum.hpp), so every rank and one process take the same
+  // decisions from the same bits; then the state is gathered as for an output.
+  long long relax(PdSystem& g, bool progress) {
+    RelaxHooks hooks;
+    hooks.forces = [this](PdSystem& l) {
+      l.diagnostics = true;
+      // ADR commits the minimum stretches itself (commit_min_stretch): the ghosts' follow.
+      if (!l.min_stretch.empty()) halo_->exchange({{l.min_stretch.data(), sizeof(float)}});
+      MpiExec exec(l, *halo_);
+      if (l.f32.active) {
+        float32_upload(l);
+        StepArrays<float> a = float32_step_arrays(l);
+        a.ghosts = layout_.ghosts();
+        pd_force_pass(exec, a, true);
+        float32_download(l);
+      } else {
+        StepArrays<double> a = cpu_step_arrays(l);
+        a.ghosts = layout_.ghosts();
+        pd_force_pass(exec, a, true);
+      }
+    };
+    hooks.sum = [this](double* values, int count) {
+      MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_SUM, comm_);
+    };
+    hooks.max = [this](double* values, int count) {
+      MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_MAX, comm_);
+    };
+    const long long iterations = relax_to_equilibrium(local_, progress, hooks);
+    measure(g);  // the accumulators
+    download(g);
+    g.step = local_.step;
+    return iterations;
+  }
+
   bool any(bool flag) override {
     int mine = flag ? 1 : 0, all = 0;
     MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MAX, comm_);
@@ -361,6 +397,15 @@ private:
 
 std::unique_ptr<StepBackend> make_mpi_backend(PdSystem& global, MPI_Comm comm) {
   return std::make_unique<MpiBackend>(global, comm);
+}
+
+long long mpi_relax(PdSystem& global, bool progress) {
+  MpiBackend backend(global, MPI_COMM_WORLD);
+  try {
+    return backend.relax(global, progress);
+  } catch (const std::exception& e) {
+    mpi_abort_all(e.what(), kExitRunFailed);
+  }
 }
 
 RunResult mpi_time_loop(PdSystem& global, const RunOptions& o, ResultsWriter* results, HistoryWriter* history) {

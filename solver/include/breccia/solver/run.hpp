@@ -28,6 +28,8 @@ struct RunOptions {
   // A backend's dynamic loop (the CUDA backend sets it; it runs run_time_loop with its own
   // StepBackend); empty: the CPU backend.
   std::function<RunResult(PdSystem&, const RunOptions&, ResultsWriter*, HistoryWriter*)> backend_loop;
+  // A backend's dynamic relaxation (a distributed run's); empty: relax_to_equilibrium here.
+  std::function<long long(PdSystem&, bool progress)> relax;
 };
 
 struct RunResult {
@@ -66,9 +68,17 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
 RunResult run_case(const CaseConfig& config, const RunOptions& options);
 RunResult run_system(PdSystem& sys, const RunOptions& options);
 
+// What adaptive dynamic relaxation needs beyond the PdSystem, for a distributed run: its
+// force pass (with the halo exchange) and a sum over ranks in place. Empty: one process.
+struct RelaxHooks {
+  std::function<void(PdSystem&)> forces;
+  std::function<void(double* values, int count)> sum;  // in place, over ranks
+  std::function<void(double* values, int count)> max;
+};
+
 // Adaptive dynamic relaxation (Kilic & Madenci 2010) to static equilibrium; returns the
 // number of iterations, or -1 if not converged within config.adr_max_steps.
-long long relax_to_equilibrium(PdSystem& sys, bool progress);
+long long relax_to_equilibrium(PdSystem& sys, bool progress, const RelaxHooks& hooks = {});
 
 // One progress line on stderr: step, simulated time, rate, ETA, max damage.
 void print_progress(long long step, long long total_steps, double time_s, long long steps_done, double elapsed_s,

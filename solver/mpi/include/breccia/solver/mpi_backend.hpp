@@ -49,6 +49,10 @@ bool mpi_all_agree(bool ok);
 // Throws InputError for a case it cannot distribute (naming the key).
 std::unique_ptr<StepBackend> make_mpi_backend(PdSystem& global, MPI_Comm comm);
 
+// RunOptions::relax for a distributed run: dynamic relaxation on every rank's share, the
+// state gathered into `global` on rank 0; returns the iterations (-1: not converged).
+long long mpi_relax(PdSystem& global, bool progress);
+
 // RunOptions::backend_loop for a distributed run.
 RunResult mpi_time_loop(PdSystem& global, const RunOptions& options, ResultsWriter* results,
                         HistoryWriter* history);

@@ -1,6 +1,8 @@
 // breccia-solve: run a peridynamics (or MPS) case.
 //   breccia-solve CASE.yaml [-o DIR] [--threads N] [--restart FILE] [--steps N] [--backend cpu|cuda|auto] [--quiet]
 //   breccia-solve CASE.yaml --decomposition 2,4,...   (set up, print the domain decomposition's figures, exit)
+#include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <algorithm>
@@ -12,6 +14,7 @@
 #include "breccia/common/error.hpp"
 #include "breccia/common/yaml_input.hpp"
 #include "breccia/solver/partition.hpp"
+#include "breccia/solver/pd_physics.hpp"
 #include "breccia/solver/run.hpp"
 #ifdef BRECCIA_WITH_MPS
 #include "breccia/mps/run_case.hpp"
@@ -169,35 +172,69 @@ int main(int argc, char** argv) {
       if (rank != 0) return 0;  // figures, not a run: one process prints them
       // The partition of the distributed runs (partition.hpp) on this case's families: load
       // balance, ghosts and halo bytes per rank count, without launching any process.
-      solver::PdSystem s = solver::setup_system(config);
       const double bytes_per_ghost = config.model == solver::PdModel::PMB ? 24.0 : 48.0;
-      std::printf("# %s: %zu particles, %zu bond entries, %s; halo bytes at %g B per ghost per step\n", case_file.c_str(),
-                  s.n, s.bond_count(), config.model_name.c_str(), bytes_per_ghost);
-      std::printf("ranks,owned_min,owned_max,bonds_max_over_mean,ghosts_per_owned_mean,ghosts_per_owned_max,"
-                  "halo_bytes_mean,halo_bytes_max,neighbour_ranks_max\n");
-      size_t at = 0;
-      while (at <= decomposition.size()) {
+      std::vector<int> rank_counts;
+      for (size_t at = 0; at <= decomposition.size();) {
         const size_t comma = std::min(decomposition.find(',', at), decomposition.size());
         const std::string item = decomposition.substr(at, comma - at);
-        long long ranks = 0;
+        long long ranks_here = 0;
         try {
-          ranks = whole_number(item);
+          ranks_here = whole_number(item);
         } catch (const std::exception&) {
-          ranks = 0;
+          ranks_here = 0;
         }
-        if (ranks < 1 || ranks > (1 << 30))
+        if (ranks_here < 1 || ranks_here > (1 << 30))
           throw InputError("--decomposition", "", "'" + item + "'", "comma-separated rank counts >= 1");
+        rank_counts.push_back(static_cast<int>(ranks_here));
+        at = comma + 1;
+      }
+      auto print_row = [](int r, const solver::DecompositionStats& st) {
+        std::printf("%d,%lld,%lld,%.4f,%.4f,%.4f,%.0f,%.0f,%d\n", r, static_cast<long long>(st.min_owned),
+                    static_cast<long long>(st.max_owned), st.max_over_mean_bonds, st.mean_ghost_ratio,
+                    st.max_ghost_ratio, st.mean_halo_bytes, st.max_halo_bytes, st.max_neighbour_ranks);
+      };
+      const char* header = "ranks,owned_min,owned_max,bonds_max_over_mean,ghosts_per_owned_mean,ghosts_per_owned_max,"
+                           "halo_bytes_mean,halo_bytes_max,neighbour_ranks_max\n";
+      if (config.lattice && config.lattice->dimension == 3 && !config.horizon_m && !config.variable_horizon) {
+        // A box lattice: its families are one stencil clipped to the box, so the figures
+        // need no set-up (10^8 particles and more; partition.hpp).
+        const solver::LatticeSpec& l = *config.lattice;
+        std::array<int64_t, 3> n{};
+        for (int d = 0; d < 3; ++d) n[d] = std::max(1LL, std::llround((l.box[d + 3] - l.box[d]) / l.spacing));
+        std::vector<std::array<int, 3>> stencil;
+        const int reach = static_cast<int>(std::ceil(config.horizon_factor)) + 1;
+        for (int a = -reach; a <= reach; ++a)
+          for (int b = -reach; b <= reach; ++b)
+            for (int c = -reach; c <= reach; ++c) {
+              const double xi[3] = {double(a), double(b), double(c)};  // lattice units
+              if ((a || b || c) && solver::partial_volume_sampled_positive(xi, config.horizon_factor, 0.5, 3))
+                stencil.push_back({a, b, c});
+            }
+        const int64_t total = n[0] * n[1] * n[2];
+        const int64_t sample = std::max<int64_t>(1, total / 4000000);
+        std::printf("# %s: %lld x %lld x %lld lattice = %lld particles, %zu-point family stencil (partial volumes, m = "
+                    "%g), %s; Morton order of the lattice indices; ghosts counted on every %lld-th particle; halo "
+                    "bytes at %g B per ghost per step\n",
+                    case_file.c_str(), static_cast<long long>(n[0]), static_cast<long long>(n[1]),
+                    static_cast<long long>(n[2]), static_cast<long long>(total), stencil.size(),
+                    config.horizon_factor, config.model_name.c_str(), static_cast<long long>(sample), bytes_per_ghost);
+        std::printf("%s", header);
+        const auto stats = solver::lattice_decomposition_stats(n, stencil, rank_counts, bytes_per_ghost, sample);
+        for (size_t q = 0; q < stats.size(); ++q) print_row(rank_counts[q], stats[q]);
+        return 0;
+      }
+      solver::PdSystem s = solver::setup_system(config);
+      std::printf("# %s: %zu particles, %zu bond entries, %s; halo bytes at %g B per ghost per step\n", case_file.c_str(),
+                  s.n, s.bond_count(), config.model_name.c_str(), bytes_per_ghost);
+      std::printf("%s", header);
+      for (const int ranks_here : rank_counts) {
         solver::Partition p;
         try {
-          p = solver::MortonRangePartitioner().partition(s.offsets, static_cast<int>(ranks));
+          p = solver::MortonRangePartitioner().partition(s.offsets, ranks_here);
         } catch (const std::invalid_argument& e) {
           throw InputError(case_file, "--decomposition", e.what(), "at most one rank per particle");
         }
-        const auto st = solver::decomposition_stats(p, s.offsets, s.neighbor, bytes_per_ghost);
-        std::printf("%lld,%lld,%lld,%.4f,%.4f,%.4f,%.0f,%.0f,%d\n", ranks, static_cast<long long>(st.min_owned),
-                    static_cast<long long>(st.max_owned), st.max_over_mean_bonds, st.mean_ghost_ratio,
-                    st.max_ghost_ratio, st.mean_halo_bytes, st.max_halo_bytes, st.max_neighbour_ranks);
-        at = comma + 1;
+        print_row(ranks_here, solver::decomposition_stats(p, s.offsets, s.neighbor, bytes_per_ghost));
       }
       return 0;
     }

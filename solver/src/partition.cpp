@@ -1,6 +1,9 @@
 #include "breccia/solver/partition.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
+#include <set>
 #include <stdexcept>
 #include <utility>
 
@@ -95,6 +98,161 @@ DecompositionStats decomposition_stats(const Partition& part, const std::vector<
   s.mean_ghost_ratio = ratio_sum / s.ranks;
   s.mean_halo_bytes = bytes_sum / s.ranks;
   return s;
+}
+
+namespace {
+
+uint64_t spread_bits(uint64_t v) {  // 21 bits -> every third bit
+  v &= 0x1fffff;
+  v = (v | v << 32) & 0x1f00000000ffffull;
+  v = (v | v << 16) & 0x1f0000ff0000ffull;
+  v = (v | v << 8) & 0x100f00f00f00f00full;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+  v = (v | v << 2) & 0x1249249249249249ull;
+  return v;
+}
+
+uint64_t compact_bits(uint64_t v) {  // the inverse of spread_bits
+  v &= 0x1249249249249249ull;
+  v = (v | v >> 2) & 0x10c30c30c30c30c3ull;
+  v = (v | v >> 4) & 0x100f00f00f00f00full;
+  v = (v | v >> 8) & 0x1f0000ff0000ffull;
+  v = (v | v >> 16) & 0x1f00000000ffffull;
+  v = (v | v >> 32) & 0x1fffff;
+  return v;
+}
+
+uint64_t morton_key(int64_t x, int64_t y, int64_t z) {
+  return spread_bits(static_cast<uint64_t>(x)) | spread_bits(static_cast<uint64_t>(y)) << 1 |
+         spread_bits(static_cast<uint64_t>(z)) << 2;
+}
+
+}  // namespace
+
+std::vector<DecompositionStats> lattice_decomposition_stats(const std::array<int64_t, 3>& n,
+                                                            const std::vector<std::array<int, 3>>& stencil,
+                                                            const std::vector<int>& ranks_list, double bytes_per_ghost,
+                                                            int64_t sample, double particle_weight) {
+  for (int d = 0; d < 3; ++d)
+    if (n[d] < 1 || n[d] > (int64_t{1} << 21)) throw std::invalid_argument("lattice: 1 to 2^21 points per side");
+  const int64_t total = n[0] * n[1] * n[2];
+  // The points in Morton order: every key of the enclosing power-of-two cube whose
+  // coordinates fall inside the box, in key order (no sort needed).
+  int64_t side = 1;
+  while (side < std::max({n[0], n[1], n[2]})) side *= 2;
+  std::vector<uint64_t> keys;
+  keys.reserve(static_cast<size_t>(total));
+  const uint64_t cube = static_cast<uint64_t>(side) * side * side;
+  for (uint64_t key = 0; key < cube; ++key) {
+    const int64_t x = compact_bits(key), y = compact_bits(key >> 1), z = compact_bits(key >> 2);
+    if (x < n[0] && y < n[1] && z < n[2]) keys.push_back(key);
+  }
+  auto family = [&](uint64_t key) {  // the stencil clipped to the box
+    const int64_t x = compact_bits(key), y = compact_bits(key >> 1), z = compact_bits(key >> 2);
+    int64_t count = 0;
+    for (const auto& o : stencil) {
+      const int64_t a = x + o[0], b = y + o[1], c = z + o[2];
+      count += a >= 0 && a < n[0] && b >= 0 && b < n[1] && c >= 0 && c < n[2];
+    }
+    return count;
+  };
+  // Prefix sums of bond entries (exact integers) in that order.
+  std::vector<int64_t> bonds(static_cast<size_t>(total) + 1, 0);
+  {
+    std::vector<int64_t> fam(static_cast<size_t>(total));
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < total; ++i) fam[i] = family(keys[i]);
+    for (int64_t i = 0; i < total; ++i) bonds[i + 1] = bonds[i] + fam[i];
+  }
+  std::vector<DecompositionStats> out;
+  for (const int ranks : ranks_list) {
+    if (ranks < 1 || ranks > total) throw std::invalid_argument("lattice: 1 to one rank per particle");
+    // MortonRangePartitioner's cuts on the same weights (bonds + particle_weight each).
+    Partition part;
+    part.begin.assign(static_cast<size_t>(ranks) + 1, 0);
+    part.begin[ranks] = total;
+    auto cum = [&](int64_t i) { return static_cast<double>(bonds[i]) + particle_weight * static_cast<double>(i); };
+    for (int r = 1; r < ranks; ++r) {
+      const double target = cum(total) * r / ranks;
+      int64_t lo = 0, hi = total;  // first i with cum(i) >= target
+      while (lo < hi) {
+        const int64_t mid = (lo + hi) / 2;
+        if (cum(mid) < target) lo = mid + 1;
+        else hi = mid;
+      }
+      int64_t i = lo;
+      if (i > 0 && target - cum(i - 1) < cum(i) - target) --i;
+      i = std::clamp<int64_t>(i, part.begin[r - 1] + 1, total - (ranks - r));
+      part.begin[r] = i;
+    }
+    std::vector<uint64_t> first_key(static_cast<size_t>(ranks));
+    for (int r = 0; r < ranks; ++r) first_key[r] = keys[part.begin[r]];
+    auto owner_of = [&](uint64_t key) {
+      return static_cast<int>(std::upper_bound(first_key.begin(), first_key.end(), key) - first_key.begin()) - 1;
+    };
+    // Ghosts: a particle is a ghost on every other rank that owns one of its partners.
+    const int threads = omp_get_max_threads();
+    std::vector<std::vector<int64_t>> ghosts(threads, std::vector<int64_t>(ranks, 0));
+    std::vector<std::set<std::pair<int, int>>> links(threads);
+#pragma omp parallel
+    {
+      const int t = omp_get_thread_num();
+      std::vector<int> seen;
+#pragma omp for schedule(dynamic, 4096)
+      for (int64_t i = 0; i < total; i += sample) {
+        const uint64_t key = keys[i];
+        const int own = owner_of(key);
+        const int64_t x = compact_bits(key), y = compact_bits(key >> 1), z = compact_bits(key >> 2);
+        seen.clear();
+        for (const auto& o : stencil) {
+          const int64_t a = x + o[0], b = y + o[1], c = z + o[2];
+          if (a < 0 || a >= n[0] || b < 0 || b >= n[1] || c < 0 || c >= n[2]) continue;
+          const uint64_t k2 = morton_key(a, b, c);
+          // Partners in the own range are the common case: skip the search.
+          if (k2 >= first_key[own] && (own + 1 == ranks || k2 < first_key[own + 1])) continue;
+          const int r = owner_of(k2);
+          if (std::find(seen.begin(), seen.end(), r) == seen.end()) seen.push_back(r);
+        }
+        for (const int r : seen) {
+          ghosts[t][r] += sample;
+          links[t].emplace(std::min(r, own), std::max(r, own));
+        }
+      }
+    }
+    DecompositionStats s;
+    s.ranks = ranks;
+    s.min_owned = s.max_owned = part.owned(0);
+    std::vector<int> neighbours(static_cast<size_t>(ranks), 0);
+    std::set<std::pair<int, int>> all_links;
+    for (const auto& l : links) all_links.insert(l.begin(), l.end());
+    for (const auto& [a, b] : all_links) {
+      ++neighbours[a];
+      ++neighbours[b];
+    }
+    double bonds_sum = 0.0, bonds_max = 0.0, ratio_sum = 0.0, bytes_sum = 0.0;
+    for (int r = 0; r < ranks; ++r) {
+      int64_t g = 0;
+      for (int t = 0; t < threads; ++t) g += ghosts[t][r];
+      const int64_t owned = part.owned(r);
+      s.min_owned = std::min(s.min_owned, owned);
+      s.max_owned = std::max(s.max_owned, owned);
+      const double b = static_cast<double>(bonds[part.begin[r + 1]] - bonds[part.begin[r]]);
+      bonds_sum += b;
+      bonds_max = std::max(bonds_max, b);
+      const double ratio = owned > 0 ? static_cast<double>(g) / static_cast<double>(owned) : 0.0;
+      ratio_sum += ratio;
+      s.max_ghost_ratio = std::max(s.max_ghost_ratio, ratio);
+      const double bytes = static_cast<double>(g) * bytes_per_ghost;
+      bytes_sum += bytes;
+      s.max_halo_bytes = std::max(s.max_halo_bytes, bytes);
+      s.max_neighbour_ranks = std::max(s.max_neighbour_ranks, neighbours[r]);
+    }
+    s.max_over_mean_bonds = bonds_sum > 0 ? bonds_max / (bonds_sum / ranks) : 1.0;
+    s.mean_ghost_ratio = ratio_sum / ranks;
+    s.mean_halo_bytes = bytes_sum / ranks;
+    out.push_back(s);
+  }
+  return out;
 }
 
 }  // namespace breccia::solver

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <map>
 #include <set>
 #include <stdexcept>
 
@@ -122,5 +124,55 @@ TEST(Partition, MoreRanksThanParticlesIsRefusedNamingBoth) {
     FAIL() << "expected an error";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("3 ranks for 2 particles"), std::string::npos) << e.what();
+  }
+}
+
+// The lattice figures without families (lattice_decomposition_stats, used for 10^8
+// particles) equal decomposition_stats on the families built here explicitly, in the same
+// Morton order of the lattice indices, when every particle is counted (sample 1).
+TEST(Partition, LatticeFiguresWithoutFamiliesEqualThoseOfTheBuiltFamilies) {
+  const std::array<int64_t, 3> n{13, 9, 6};
+  std::vector<std::array<int, 3>> stencil;
+  for (int a = -2; a <= 2; ++a)
+    for (int b = -2; b <= 2; ++b)
+      for (int c = -2; c <= 2; ++c)
+        if ((a || b || c) && a * a + b * b + c * c <= 5) stencil.push_back({a, b, c});
+  // Lattice points in Morton order of their indices (keys of a brute-force interleave).
+  auto key = [](int64_t x, int64_t y, int64_t z) {
+    uint64_t k = 0;
+    for (int bit = 0; bit < 21; ++bit)
+      k |= ((uint64_t(x) >> bit & 1) << (3 * bit)) | ((uint64_t(y) >> bit & 1) << (3 * bit + 1)) |
+           ((uint64_t(z) >> bit & 1) << (3 * bit + 2));
+    return k;
+  };
+  std::vector<std::array<int64_t, 3>> points;
+  for (int64_t z = 0; z < n[2]; ++z)
+    for (int64_t y = 0; y < n[1]; ++y)
+      for (int64_t x = 0; x < n[0]; ++x) points.push_back({x, y, z});
+  std::sort(points.begin(), points.end(),
+            [&](const auto& p, const auto& q) { return key(p[0], p[1], p[2]) < key(q[0], q[1], q[2]); });
+  std::map<std::array<int64_t, 3>, int32_t> index;
+  for (size_t i = 0; i < points.size(); ++i) index[points[i]] = static_cast<int32_t>(i);
+  std::vector<int64_t> offsets{0};
+  std::vector<int32_t> neighbor;
+  for (const auto& p : points) {
+    for (const auto& o : stencil) {
+      const auto it = index.find({p[0] + o[0], p[1] + o[1], p[2] + o[2]});
+      if (it != index.end()) neighbor.push_back(it->second);
+    }
+    offsets.push_back(static_cast<int64_t>(neighbor.size()));
+  }
+  const std::vector<int> ranks{1, 2, 3, 5, 8, 13};
+  const auto lattice_stats = lattice_decomposition_stats(n, stencil, ranks, 24.0, 1);
+  for (size_t q = 0; q < ranks.size(); ++q) {
+    const auto ref = decomposition_stats(MortonRangePartitioner().partition(offsets, ranks[q]), offsets, neighbor, 24.0);
+    const auto& got = lattice_stats[q];
+    EXPECT_EQ(got.min_owned, ref.min_owned) << ranks[q];
+    EXPECT_EQ(got.max_owned, ref.max_owned) << ranks[q];
+    EXPECT_DOUBLE_EQ(got.max_over_mean_bonds, ref.max_over_mean_bonds) << ranks[q];
+    EXPECT_DOUBLE_EQ(got.mean_ghost_ratio, ref.mean_ghost_ratio) << ranks[q];
+    EXPECT_DOUBLE_EQ(got.max_ghost_ratio, ref.max_ghost_ratio) << ranks[q];
+    EXPECT_DOUBLE_EQ(got.max_halo_bytes, ref.max_halo_bytes) << ranks[q];
+    EXPECT_EQ(got.max_neighbour_ranks, ref.max_neighbour_ranks) << ranks[q];
   }
 }

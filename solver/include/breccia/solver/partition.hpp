@@ -9,6 +9,7 @@
 // compact in space. `MortonRangePartitioner` cuts it into ranges of equal work (bond entries
 // plus a per-particle share); other partitioners (RCB, a graph partitioner) fit the same
 // interface.
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -77,5 +78,18 @@ struct DecompositionStats {
 // dilatation and the fast path's two factors between its passes, 24 B more).
 DecompositionStats decomposition_stats(const Partition& part, const std::vector<int64_t>& offsets,
                                        const std::vector<int32_t>& neighbor, double bytes_per_ghost);
+
+// The same figures for a box lattice of n[0] x n[1] x n[2] points whose every point's
+// family is `stencil` (offsets in lattice units) clipped to the box, without building the
+// families: for lattices too large to set up on one process (10^8 particles and more).
+// The order is the Morton order of the lattice indices, cut as MortonRangePartitioner cuts
+// (equal bond entries + particle_weight per particle); bond balance is exact; ghosts are
+// counted from every `sample`-th particle of that order and scaled (1: exact; the tests
+// compare sample 1 with build_halo), and so are the neighbour-rank counts (a lower bound
+// when sampled).
+std::vector<DecompositionStats> lattice_decomposition_stats(const std::array<int64_t, 3>& n,
+                                                            const std::vector<std::array<int, 3>>& stencil,
+                                                            const std::vector<int>& ranks, double bytes_per_ghost,
+                                                            int64_t sample = 1, double particle_weight = 4.0);
 
 }  // namespace breccia::solver

@@ -9,6 +9,7 @@
 # tensile_strength (softening bonds; every bond below its onset, as most bonds of a fracture
 # run are), to cost the softening law against the critical-stretch one.
 set -euo pipefail
+source "$(dirname "$0")/lammps_lattice_input.sh"
 BUILD=${1:-build}; N=${2:-41}; STEPS=${3:-100}
 BIN="$(cd "$BUILD" && pwd)/bin"
 OUT="${OUT:-$(pwd)/runs/bench}"
@@ -69,32 +70,7 @@ print(f"{total / n**3:.1f}")
 PY
 )
 for model in pmb lps; do
-  if [ "$model" = pmb ]; then
-    coeff="pair_style peri/pmb
-pair_coeff * * $(awk -v K=14.9e9 -v d=$(awk -v dx=$DX 'BEGIN{print 3.015*dx}') 'BEGIN{printf "%.6e", 18*K/(3.14159265358979*d^4)}') $(awk -v dx=$DX 'BEGIN{print 3.015*dx}') 0.01 0.0"
-  else
-    coeff="pair_style peri/lps
-pair_coeff * * 14.9e9 8.94e9 $(awk -v dx=$DX 'BEGIN{print 3.015*dx}') 0.01 0.0"
-  fi
-  cat > "$OUT/lammps-$model.in" <<LMP
-units si
-boundary s s s
-atom_style peri
-atom_modify map array
-lattice sc $DX
-region box block 0 $((N-1)) 0 $((N-1)) 0 $((N-1))
-create_box 1 box
-create_atoms 1 region box
-$coeff
-set group all density 2200
-set group all volume $(awk -v dx=$DX 'BEGIN{printf "%.6e", dx^3}')
-velocity all create 1e-3 4928459 dist gaussian
-neighbor $(awk -v dx=$DX 'BEGIN{print 0.1*dx}') bin
-timestep 1.0e-8
-fix 1 all nve
-run 0
-run $STEPS
-LMP
+  write_lammps_lattice_input "$OUT/lammps-$model.in" "$model" "$N" "$DX" "$STEPS"
   for t in $THREADS_LIST; do
     if ( cd "$OUT" && mpirun --allow-run-as-root --oversubscribe -np "$t" lmp -in "lammps-$model.in" -log "lammps-$model-$t.log" -screen none ) >/dev/null 2>&1; then
       loop=$(grep "^Loop time" "$OUT/lammps-$model-$t.log" | tail -1 | awk '{print $4}')

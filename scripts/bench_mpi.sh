@@ -6,6 +6,7 @@
 # wall time is what the speed-up is measured on.
 # Usage: scripts/bench_mpi.sh BUILD_DIR [N=41] [STEPS=200]   (OUT=runs/bench-mpi)
 set -euo pipefail
+source "$(dirname "$0")/lammps_lattice_input.sh"
 BUILD=${1:-build}; N=${2:-41}; STEPS=${3:-200}
 BIN="$(cd "$BUILD" && pwd)/bin"
 OUT="${OUT:-$(pwd)/runs/bench-mpi}"
@@ -14,7 +15,6 @@ mkdir -p "$OUT"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 DX=0.0005
 L=$(awk -v n="$N" -v dx="$DX" 'BEGIN{printf "%.6g", n*dx}')
-D=$(awk -v dx=$DX 'BEGIN{print 3.015*dx}')
 results="$OUT/scaling.csv"
 echo "code,model,ranks,threads,particles,steps,setup_s,loop_wall_s,total_wall_s,bond_updates_per_s" > "$results"
 now() { date +%s.%N; }
@@ -43,32 +43,7 @@ print(f"breccia,{sys.argv[2]},{sys.argv[3]},{sys.argv[4]},{s['particles']},{s['s
       f"{s['wall_s']:.3f},{float(sys.argv[5]):.2f},{s['bond_updates_per_s']:.4g}")
 PY
   done
-  if [ "$model" = pmb ]; then
-    coeff="pair_style peri/pmb
-pair_coeff * * $(awk -v K=14.9e9 -v d=$D 'BEGIN{printf "%.6e", 18*K/(3.14159265358979*d^4)}') $D 0.01 0.0"
-  else
-    coeff="pair_style peri/lps
-pair_coeff * * 14.9e9 8.94e9 $D 0.01 0.0"
-  fi
-  cat > "$OUT/lammps-$model.in" <<LMP
-units si
-boundary s s s
-atom_style peri
-atom_modify map array
-lattice sc $DX
-region box block 0 $((N-1)) 0 $((N-1)) 0 $((N-1))
-create_box 1 box
-create_atoms 1 region box
-$coeff
-set group all density 2200
-set group all volume $(awk -v dx=$DX 'BEGIN{printf "%.6e", dx^3}')
-velocity all create 1e-3 4928459 dist gaussian
-neighbor $(awk -v dx=$DX 'BEGIN{print 0.1*dx}') bin
-timestep 1.0e-8
-fix 1 all nve
-run 0
-run $STEPS
-LMP
+  write_lammps_lattice_input "$OUT/lammps-$model.in" "$model" "$N" "$DX" "$STEPS"
   if command -v lmp >/dev/null 2>&1; then
     for ranks in 1 2; do
       t0=$(now)

@@ -156,27 +156,28 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
   return fam;
 }
 
+uint64_t morton_spread(uint64_t v) {
+  v &= 0x1fffff;
+  v = (v | v << 32) & 0x1f00000000ffffull;
+  v = (v | v << 16) & 0x1f0000ff0000ffull;
+  v = (v | v << 8) & 0x100f00f00f00f00full;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+  v = (v | v << 2) & 0x1249249249249249ull;
+  return v;
+}
+
 std::vector<int32_t> morton_order(std::span<const double> x) {
   const size_t n = x.size() / 3;
   const Box box = bounding_box(x, n);
   double extent = 0.0;
   for (int d = 0; d < 3; ++d) extent = std::max(extent, box.hi[d] - box.lo[d]);
   if (extent <= 0) extent = 1.0;
-  auto spread = [](uint64_t v) {  // 21 bits -> every third bit
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffull;
-    v = (v | v << 16) & 0x1f0000ff0000ffull;
-    v = (v | v << 8) & 0x100f00f00f00f00full;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-    v = (v | v << 2) & 0x1249249249249249ull;
-    return v;
-  };
   std::vector<uint64_t> key(n);
   for (size_t i = 0; i < n; ++i) {
     uint64_t k = 0;
     for (int d = 0; d < 3; ++d) {
       const double t = (x[3 * i + d] - box.lo[d]) / extent;
-      k |= spread(static_cast<uint64_t>(t * 2097151.0)) << d;
+      k |= morton_spread(static_cast<uint64_t>(t * 2097151.0)) << d;
     }
     key[i] = k;
   }

@@ -1,5 +1,7 @@
 #include "breccia/solver/partition.hpp"
 
+#include "breccia/solver/family.hpp"
+
 #include <omp.h>
 
 #include <algorithm>
@@ -72,27 +74,29 @@ Halo build_halo(const Partition& part, int rank, const std::vector<int64_t>& off
   return h;
 }
 
-DecompositionStats decomposition_stats(const Partition& part, const std::vector<int64_t>& offsets,
-                                       const std::vector<int32_t>& neighbor, double bytes_per_ghost) {
+namespace {
+
+// The figures from what each rank owns, computes (bond entries), receives (ghosts) and
+// exchanges with (neighbour ranks): shared by the built-families and the lattice routes.
+DecompositionStats summarise(const Partition& part, const std::vector<int64_t>& bonds, const std::vector<int64_t>& ghosts,
+                             const std::vector<int>& neighbours, double bytes_per_ghost) {
   DecompositionStats s;
   s.ranks = part.ranks();
   s.min_owned = s.max_owned = part.owned(0);
   double bonds_sum = 0.0, bonds_max = 0.0, ratio_sum = 0.0, bytes_sum = 0.0;
   for (int r = 0; r < s.ranks; ++r) {
-    const Halo h = build_halo(part, r, offsets, neighbor);
     const int64_t owned = part.owned(r);
     s.min_owned = std::min(s.min_owned, owned);
     s.max_owned = std::max(s.max_owned, owned);
-    const double bonds = static_cast<double>(offsets[part.begin[r + 1]] - offsets[part.begin[r]]);
-    bonds_sum += bonds;
-    bonds_max = std::max(bonds_max, bonds);
-    const double ratio = owned > 0 ? static_cast<double>(h.ghosts.size()) / static_cast<double>(owned) : 0.0;
+    bonds_sum += static_cast<double>(bonds[r]);
+    bonds_max = std::max(bonds_max, static_cast<double>(bonds[r]));
+    const double ratio = owned > 0 ? static_cast<double>(ghosts[r]) / static_cast<double>(owned) : 0.0;
     ratio_sum += ratio;
     s.max_ghost_ratio = std::max(s.max_ghost_ratio, ratio);
-    const double bytes = static_cast<double>(h.ghosts.size()) * bytes_per_ghost;
+    const double bytes = static_cast<double>(ghosts[r]) * bytes_per_ghost;
     bytes_sum += bytes;
     s.max_halo_bytes = std::max(s.max_halo_bytes, bytes);
-    s.max_neighbour_ranks = std::max<int>(s.max_neighbour_ranks, static_cast<int>(std::max(h.recv_ranks.size(), h.send_ranks.size())));
+    s.max_neighbour_ranks = std::max(s.max_neighbour_ranks, neighbours[r]);
   }
   s.max_over_mean_bonds = bonds_sum > 0 ? bonds_max / (bonds_sum / s.ranks) : 1.0;
   s.mean_ghost_ratio = ratio_sum / s.ranks;
@@ -100,19 +104,25 @@ DecompositionStats decomposition_stats(const Partition& part, const std::vector<
   return s;
 }
 
-namespace {
+}  // namespace
 
-uint64_t spread_bits(uint64_t v) {  // 21 bits -> every third bit
-  v &= 0x1fffff;
-  v = (v | v << 32) & 0x1f00000000ffffull;
-  v = (v | v << 16) & 0x1f0000ff0000ffull;
-  v = (v | v << 8) & 0x100f00f00f00f00full;
-  v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-  v = (v | v << 2) & 0x1249249249249249ull;
-  return v;
+DecompositionStats decomposition_stats(const Partition& part, const std::vector<int64_t>& offsets,
+                                       const std::vector<int32_t>& neighbor, double bytes_per_ghost) {
+  const int ranks = part.ranks();
+  std::vector<int64_t> bonds(ranks), ghosts(ranks);
+  std::vector<int> neighbours(ranks);
+  for (int r = 0; r < ranks; ++r) {
+    const Halo h = build_halo(part, r, offsets, neighbor);
+    bonds[r] = offsets[part.begin[r + 1]] - offsets[part.begin[r]];
+    ghosts[r] = static_cast<int64_t>(h.ghosts.size());
+    neighbours[r] = static_cast<int>(std::max(h.recv_ranks.size(), h.send_ranks.size()));
+  }
+  return summarise(part, bonds, ghosts, neighbours, bytes_per_ghost);
 }
 
-uint64_t compact_bits(uint64_t v) {  // the inverse of spread_bits
+namespace {
+
+uint64_t compact_bits(uint64_t v) {  // the inverse of morton_spread
   v &= 0x1249249249249249ull;
   v = (v | v >> 2) & 0x10c30c30c30c30c3ull;
   v = (v | v >> 4) & 0x100f00f00f00f00full;
@@ -123,8 +133,8 @@ uint64_t compact_bits(uint64_t v) {  // the inverse of spread_bits
 }
 
 uint64_t morton_key(int64_t x, int64_t y, int64_t z) {
-  return spread_bits(static_cast<uint64_t>(x)) | spread_bits(static_cast<uint64_t>(y)) << 1 |
-         spread_bits(static_cast<uint64_t>(z)) << 2;
+  return morton_spread(static_cast<uint64_t>(x)) | morton_spread(static_cast<uint64_t>(y)) << 1 |
+         morton_spread(static_cast<uint64_t>(z)) << 2;
 }
 
 }  // namespace
@@ -219,9 +229,6 @@ std::vector<DecompositionStats> lattice_decomposition_stats(const std::array<int
         }
       }
     }
-    DecompositionStats s;
-    s.ranks = ranks;
-    s.min_owned = s.max_owned = part.owned(0);
     std::vector<int> neighbours(static_cast<size_t>(ranks), 0);
     std::set<std::pair<int, int>> all_links;
     for (const auto& l : links) all_links.insert(l.begin(), l.end());
@@ -229,27 +236,12 @@ std::vector<DecompositionStats> lattice_decomposition_stats(const std::array<int
       ++neighbours[a];
       ++neighbours[b];
     }
-    double bonds_sum = 0.0, bonds_max = 0.0, ratio_sum = 0.0, bytes_sum = 0.0;
+    std::vector<int64_t> rank_bonds(ranks), rank_ghosts(ranks, 0);
     for (int r = 0; r < ranks; ++r) {
-      int64_t g = 0;
-      for (int t = 0; t < threads; ++t) g += ghosts[t][r];
-      const int64_t owned = part.owned(r);
-      s.min_owned = std::min(s.min_owned, owned);
-      s.max_owned = std::max(s.max_owned, owned);
-      const double b = static_cast<double>(bonds[part.begin[r + 1]] - bonds[part.begin[r]]);
-      bonds_sum += b;
-      bonds_max = std::max(bonds_max, b);
-      const double ratio = owned > 0 ? static_cast<double>(g) / static_cast<double>(owned) : 0.0;
-      ratio_sum += ratio;
-      s.max_ghost_ratio = std::max(s.max_ghost_ratio, ratio);
-      const double bytes = static_cast<double>(g) * bytes_per_ghost;
-      bytes_sum += bytes;
-      s.max_halo_bytes = std::max(s.max_halo_bytes, bytes);
-      s.max_neighbour_ranks = std::max(s.max_neighbour_ranks, neighbours[r]);
+      rank_bonds[r] = bonds[part.begin[r + 1]] - bonds[part.begin[r]];
+      for (int t = 0; t < threads; ++t) rank_ghosts[r] += ghosts[t][r];
     }
-    s.max_over_mean_bonds = bonds_sum > 0 ? bonds_max / (bonds_sum / ranks) : 1.0;
-    s.mean_ghost_ratio = ratio_sum / ranks;
-    s.mean_halo_bytes = bytes_sum / ranks;
+    const DecompositionStats s = summarise(part, rank_bonds, rank_ghosts, neighbours, bytes_per_ghost);
     out.push_back(s);
   }
   return out;

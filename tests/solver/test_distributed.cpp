@@ -284,24 +284,28 @@ TEST(Distributed, BadInputIsReportedOnceWithExitCode2) {
   EXPECT_NE(o.err.find(key), std::string::npos) << o.err;
 }
 
-TEST(Distributed, MoreRanksThanParticlesIsAnInputError) {
-  const std::string file = write_case("mpi_tiny", "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.003, 0.001, 0.001], spacing: 1 mm}}\n"
-                                                  "model: {type: pmb, horizon_factor: 3.015}\n"
-                                                  "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25}]\n"
-                                                  "time: {steps: 5, check_stability: false}\n");
-  const Outcome o = solve(file, process_temp_dir() + "/mpi_tiny", 4, 1);
+// A case refused under `ranks` processes: exit code 2 and a message holding `expected`.
+void expect_refused(const std::string& name, const std::string& body, int ranks, const std::string& expected) {
+  const std::string file = write_case(name, "specimen: {lattice: {dimension: 3, box: " + body);
+  const Outcome o = solve(file, process_temp_dir() + "/" + name, ranks, 1);
   EXPECT_EQ(o.exit_code, 2) << o.err;
-  EXPECT_NE(o.err.find("at most one rank per particle"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find(expected), std::string::npos) << o.err;
+}
+
+TEST(Distributed, MoreRanksThanParticlesIsAnInputError) {
+  expect_refused("mpi_tiny", "[0, 0, 0, 0.003, 0.001, 0.001], spacing: 1 mm}}\n"
+                 "model: {type: pmb, horizon_factor: 3.015}\n"
+                 "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25}]\n"
+                 "time: {steps: 5, check_stability: false}\n",
+                 4, "at most one rank per particle");
 }
 
 TEST(Distributed, WhatIsNotDistributedYetIsRefusedByItsKey) {
-  const std::string file = write_case("mpi_contact", "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.004, 0.004], spacing: 1 mm}}\n"
-                                                     "model: {type: pmb, horizon_factor: 3.015, short_range_forces: true}\n"
-                                                     "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25}]\n"
-                                                     "time: {steps: 5}\n");
-  const Outcome o = solve(file, process_temp_dir() + "/mpi_contact", 2, 1);
-  EXPECT_EQ(o.exit_code, 2) << o.err;
-  EXPECT_NE(o.err.find("model.short_range_forces"), std::string::npos) << o.err;
+  expect_refused("mpi_contact", "[0, 0, 0, 0.004, 0.004, 0.004], spacing: 1 mm}}\n"
+                 "model: {type: pmb, horizon_factor: 3.015, short_range_forces: true}\n"
+                 "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25}]\n"
+                 "time: {steps: 5}\n",
+                 2, "model.short_range_forces");
 }
 
 // The rank's system (no MPI needed): each owned row reads the same partners, through local

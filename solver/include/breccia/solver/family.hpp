@@ -26,5 +26,7 @@ Families build_families(std::span<const double> position, std::span<const double
 // Permutation that sorts particles along a Morton (Z-order) curve: new index k holds old
 // particle order[k]. Neighbouring particles end up close in memory.
 std::vector<int32_t> morton_order(std::span<const double> position);
+// The low 21 bits of v spread to every third bit (a coordinate's share of a Morton key).
+uint64_t morton_spread(uint64_t v);
 
 }  // namespace breccia::solver

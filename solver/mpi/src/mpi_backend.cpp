@@ -260,33 +260,16 @@ public:
   void step(PdSystem& g) override {
     local_.diagnostics = g.diagnostics;
     MpiExec exec(local_, *halo_);
-    if (local_.f32.active) {
-      StepArrays<float> a = float32_step_arrays(local_);
-      a.ghosts = layout_.ghosts();
-      pd_step(exec, a, local_);
-    } else {
-      StepArrays<double> a = cpu_step_arrays(local_);
-      a.ghosts = layout_.ghosts();
-      pd_step(exec, a, local_);
-    }
+    with_step_arrays(local_, [&](auto& a) { pd_step(exec, a, local_); });
     g.time = local_.time;
     g.step = local_.step;
     std::copy(local_.indenter_position, local_.indenter_position + 3, g.indenter_position);
   }
 
-  void compute_forces(PdSystem& g) override {
+  void compute_forces(PdSystem&) override {
     local_.diagnostics = true;
-    MpiExec exec(local_, *halo_);
-    if (local_.f32.active) {
-      StepArrays<float> a = float32_step_arrays(local_);
-      a.ghosts = layout_.ghosts();
-      pd_force_pass(exec, a, true);
-      float32_download(local_);
-    } else {
-      StepArrays<double> a = cpu_step_arrays(local_);
-      a.ghosts = layout_.ghosts();
-      pd_force_pass(exec, a, true);
-    }
+    force_pass(local_);
+    if (local_.f32.active) float32_download(local_);
   }
 
   // Sums over ranks: energies to rounding (the order of the sum differs from one process's),
@@ -354,18 +337,9 @@ public:
       l.diagnostics = true;
       // ADR commits the minimum stretches itself (commit_min_stretch): the ghosts' follow.
       if (!l.min_stretch.empty()) halo_->exchange({{l.min_stretch.data(), sizeof(float)}});
-      MpiExec exec(l, *halo_);
-      if (l.f32.active) {
-        float32_upload(l);
-        StepArrays<float> a = float32_step_arrays(l);
-        a.ghosts = layout_.ghosts();
-        pd_force_pass(exec, a, true);
-        float32_download(l);
-      } else {
-        StepArrays<double> a = cpu_step_arrays(l);
-        a.ghosts = layout_.ghosts();
-        pd_force_pass(exec, a, true);
-      }
+      if (l.f32.active) float32_upload(l);  // ADR moves the double state
+      force_pass(l);
+      if (l.f32.active) float32_download(l);
     };
     hooks.sum = [this](double* values, int count) {
       MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_SUM, comm_);
@@ -387,6 +361,25 @@ public:
   }
 
 private:
+  // The step's arrays over the rank's state in its precision, with the ghosts counted.
+  template <class F>
+  void with_step_arrays(PdSystem& l, F&& f) {
+    if (l.f32.active) {
+      StepArrays<float> a = float32_step_arrays(l);
+      a.ghosts = layout_.ghosts();
+      f(a);
+    } else {
+      StepArrays<double> a = cpu_step_arrays(l);
+      a.ghosts = layout_.ghosts();
+      f(a);
+    }
+  }
+
+  void force_pass(PdSystem& l) {
+    MpiExec exec(l, *halo_);
+    with_step_arrays(l, [&](auto& a) { pd_force_pass(exec, a, true); });
+  }
+
   MPI_Comm comm_;
   RankLayout layout_;
   PdSystem local_;

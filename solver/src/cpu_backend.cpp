@@ -110,7 +110,7 @@ Energies measure(const PdSystem& sys) {
   return e;
 }
 
-double estimate_max_frequency(PdSystem& sys, int iterations) {
+double estimate_max_frequency(PdSystem& sys, int iterations, const ForcePass& forces) {
   // Power iteration on M^-1 K with K applied through the force kernel at a displacement
   // small enough to be linear; fracture off, state restored afterwards.
   const size_t n3 = 3 * sys.n;
@@ -136,7 +136,8 @@ double estimate_max_frequency(PdSystem& sys, int iterations) {
     norm = std::sqrt(norm);
     if (norm == 0) break;
     for (size_t k = 0; k < n3; ++k) sys.u[k] = amplitude * x[k] / norm;
-    cpu_compute_forces(sys);
+    if (forces) forces(sys);
+    else cpu_compute_forces(sys);
     double rayleigh = 0.0;
     for (size_t k = 0; k < n3; ++k) {
       const double y = -sys.force[k] / sys.density[k / 3] / amplitude;  // (M^-1 K) x_hat

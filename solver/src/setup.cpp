@@ -381,7 +381,7 @@ double PdSystem::total_mass() const {
   return m;
 }
 
-PdSystem setup_system(const CaseConfig& config) {
+PdSystem setup_system(const CaseConfig& config, const ForcePassFactory& stable_step_forces) {
   PdSystem s;
   s.config = config;
   const CaseConfig& c = s.config;
@@ -1073,7 +1073,7 @@ PdSystem setup_system(const CaseConfig& config) {
   }
   // The stable step is that of the bonds: the short-range forces act only under more than
   // 10% compression, which a strain of 1e-9 never reaches (docs/theory.md).
-  const double omega_max = estimate_max_frequency(s);
+  const double omega_max = estimate_max_frequency(s, 60, stable_step_forces ? stable_step_forces(s) : ForcePass{});
   s.stable_dt = 2.0 / omega_max;
   // Compressive enhancement: no stretch seen before the first step (s_min = 0: s0 = s00).
   if (c.compressive_enhancement > 0.0 && c.fracture) {

@@ -392,6 +392,48 @@ std::unique_ptr<StepBackend> make_mpi_backend(PdSystem& global, MPI_Comm comm) {
   return std::make_unique<MpiBackend>(global, comm);
 }
 
+ForcePass mpi_stable_step_forces(PdSystem& global) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  if (size == 1) return {};
+  // What the passes share, built once (every rank reaches here at the same point of set-up)
+  // and dropped with the ForcePass after the estimate.
+  struct Shared {
+    RankLayout layout;
+    PdSystem local;
+    std::unique_ptr<HaloExchange> halo;
+    std::vector<int> counts, displs;
+  };
+  auto sh = std::make_shared<Shared>();
+  sh->layout = rank_layout(global, size, rank);
+  sh->local = restrict_to_rank(global, sh->layout);
+  sh->halo = std::make_unique<HaloExchange>(sh->layout, MPI_COMM_WORLD);
+  for (int r = 0; r < size; ++r) {
+    sh->counts.push_back(static_cast<int>(3 * sh->layout.part.owned(r)));
+    sh->displs.push_back(static_cast<int>(3 * sh->layout.part.begin[r]));
+  }
+  // Each rank computes its rows at the iteration's displacement and all gather the forces:
+  // every rank then holds one process's force array, bit for bit, and takes the power
+  // iteration's sums in its order, so the stable step is one process's to the last bit.
+  return [sh](PdSystem& g) {
+    PdSystem& l = sh->local;
+    const RankLayout& L = sh->layout;
+    const int64_t b = L.begin(), owned = L.owned();
+    std::copy(g.u.begin() + 3 * b, g.u.begin() + 3 * (b + owned), l.u.begin());
+    for (int64_t q = 0; q < L.ghosts(); ++q)
+      std::copy_n(g.u.begin() + 3 * static_cast<int64_t>(L.halo.ghosts[q]), 3, l.u.begin() + 3 * (owned + q));
+    l.config.fracture = g.config.fracture;  // the estimate turns fracture off
+    l.diagnostics = g.diagnostics;
+    MpiExec exec(l, *sh->halo);
+    StepArrays<double> a = cpu_step_arrays(l);
+    a.ghosts = L.ghosts();
+    pd_force_pass(exec, a, true);
+    MPI_Allgatherv(l.force.data(), static_cast<int>(3 * owned), MPI_DOUBLE, g.force.data(), sh->counts.data(),
+                   sh->displs.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+  };
+}
+
 long long mpi_relax(PdSystem& global, bool progress) {
   MpiBackend backend(global, MPI_COMM_WORLD);
   try {

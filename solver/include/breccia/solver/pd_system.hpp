@@ -3,6 +3,7 @@
 // in Morton order internally (locality); `original_index` maps back to particles.h5 order,
 // in which every output is written.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -105,9 +106,16 @@ struct PdSystem {
   double total_mass() const;
 };
 
+// How the stable-step estimate's force passes run: fill sys.force from sys.u (a distributed
+// run shares them between its ranks, solver/mpi/); empty: cpu_compute_forces. The factory
+// builds one for a system once its families are set up (and it is dropped after the
+// estimate, with whatever it holds).
+using ForcePass = std::function<void(PdSystem&)>;
+using ForcePassFactory = std::function<ForcePass(PdSystem&)>;
+
 // Build everything from a case file: particles (file or lattice), families, coefficients,
 // pre-cracks, loads, constraints, initial conditions, stable step. Throws InputError.
-PdSystem setup_system(const CaseConfig& config);
+PdSystem setup_system(const CaseConfig& config, const ForcePassFactory& stable_step_forces = {});
 // The gas load surface_loads[load_index] (gas.hpp): reference volume, vents, crack factors.
 // Called once the facets are grouped. Throws InputError naming `field`.
 void setup_gas(PdSystem& s, int load_index, const std::string& field);
@@ -142,7 +150,8 @@ struct Energies {
 Energies measure(const PdSystem& sys);
 
 // Largest angular frequency of the linearised system by power iteration (uses the force
-// kernel on a tiny displacement, so it is exact for the discretisation at hand).
-double estimate_max_frequency(PdSystem& sys, int iterations = 60);
+// kernel on a tiny displacement, so it is exact for the discretisation at hand). `forces`:
+// how each iteration's force pass runs (ForcePass); the result does not depend on it.
+double estimate_max_frequency(PdSystem& sys, int iterations = 60, const ForcePass& forces = {});
 
 }  // namespace breccia::solver

@@ -255,7 +255,8 @@ int main(int argc, char** argv) {
       opt.progress = opt.progress && rank == 0;
       opt.backend_loop = solver::mpi_time_loop;
       opt.relax = solver::mpi_relax;
-      opt.stable_step_forces = solver::mpi_stable_step_forces;
+      opt.setup_hooks.stable_step_forces = solver::mpi_stable_step_forces;
+      opt.setup_hooks.coefficients = solver::mpi_row_share();
       // Only rank 0 writes: make sure it can before the others set up and wait for it.
       std::string why;
       if (rank == 0) {

@@ -350,7 +350,7 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
 RunResult run_case(const CaseConfig& config, const RunOptions& o) {
   if (o.threads > 0) omp_set_num_threads(o.threads);
   const auto t0 = std::chrono::steady_clock::now();
-  PdSystem s = setup_system(config, o.stable_step_forces);
+  PdSystem s = setup_system(config, o.setup_hooks);
   if (!o.restart_file.empty()) read_checkpoint(s, o.restart_file);
   const double setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (o.progress) {

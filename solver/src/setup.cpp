@@ -381,7 +381,7 @@ double PdSystem::total_mass() const {
   return m;
 }
 
-PdSystem setup_system(const CaseConfig& config, const ForcePassFactory& stable_step_forces) {
+PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   PdSystem s;
   s.config = config;
   const CaseConfig& c = s.config;
@@ -518,8 +518,17 @@ PdSystem setup_system(const CaseConfig& config, const ForcePassFactory& stable_s
   }
   // Correspondence shares LPS's bond data: weights w = omega beta, no modulus per bond, LPS critical stretch.
   const bool lps = c.model == PdModel::LPS || c.model == PdModel::Correspondence;
+  // This process's rows (all on one process; equal entries each in a distributed run).
+  const RowShare& share = hooks.coefficients;
+  const int shares = share.gather ? std::max(1, share.ranks) : 1;
+  std::vector<int64_t> row_begin(static_cast<size_t>(shares) + 1, 0);
+  row_begin[shares] = static_cast<int64_t>(n);
+  for (int r = 1; r < shares; ++r)
+    row_begin[r] = std::lower_bound(s.offsets.begin(), s.offsets.end() - 1, static_cast<int64_t>(nb) * r / shares) -
+                   s.offsets.begin();
+  const int64_t rows_begin = row_begin[shares > 1 ? share.rank : 0], rows_end = row_begin[shares > 1 ? share.rank + 1 : 1];
 #pragma omp parallel for schedule(dynamic, 256)
-  for (size_t i = 0; i < n; ++i) {
+  for (int64_t i = rows_begin; i < rows_end; ++i) {
     int64_t out = s.offsets[i];
     for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
       const int32_t j = fam.neighbors[k];
@@ -580,6 +589,15 @@ PdSystem setup_system(const CaseConfig& config, const ForcePassFactory& stable_s
       }
       ++out;
     }
+  }
+  if (shares > 1) {  // every process gets every range
+    std::vector<int64_t> entry_begin(row_begin.size());
+    for (size_t r = 0; r < row_begin.size(); ++r) entry_begin[r] = s.offsets[row_begin[r]];
+    share.gather(s.neighbor.data(), sizeof(int32_t), entry_begin);
+    for (auto* a : {&s.xi_len, &s.vol_own, &s.k_own, &s.k_dual}) share.gather(a->data(), sizeof(double), entry_begin);
+    for (auto* a : {&s.s0_own, &s.s0_dual}) share.gather(a->data(), sizeof(float), entry_begin);
+    share.gather(s.state.data(), sizeof(uint8_t), entry_begin);
+    if (c.softening) share.gather(s.s_onset.data(), sizeof(float), entry_begin);
   }
   fam = Families{};
 
@@ -1073,7 +1091,8 @@ PdSystem setup_system(const CaseConfig& config, const ForcePassFactory& stable_s
   }
   // The stable step is that of the bonds: the short-range forces act only under more than
   // 10% compression, which a strain of 1e-9 never reaches (docs/theory.md).
-  const double omega_max = estimate_max_frequency(s, 60, stable_step_forces ? stable_step_forces(s) : ForcePass{});
+  const double omega_max =
+      estimate_max_frequency(s, 60, hooks.stable_step_forces ? hooks.stable_step_forces(s) : ForcePass{});
   s.stable_dt = 2.0 / omega_max;
   // Compressive enhancement: no stretch seen before the first step (s_min = 0: s0 = s00).
   if (c.compressive_enhancement > 0.0 && c.fracture) {

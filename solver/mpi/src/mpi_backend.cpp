@@ -434,6 +434,26 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
   };
 }
 
+RowShare mpi_row_share() {
+  RowShare share;
+  MPI_Comm_rank(MPI_COMM_WORLD, &share.rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &share.ranks);
+  share.gather = [](void* data, size_t element_bytes, const std::vector<int64_t>& entry_begin) {
+    const int ranks = static_cast<int>(entry_begin.size()) - 1;
+    MPI_Datatype element;  // counts in elements: a rank's range may pass 2^31 bytes
+    MPI_Type_contiguous(static_cast<int>(element_bytes), MPI_BYTE, &element);
+    MPI_Type_commit(&element);
+    std::vector<int> counts(ranks), displs(ranks);
+    for (int r = 0; r < ranks; ++r) {
+      counts[r] = static_cast<int>(entry_begin[r + 1] - entry_begin[r]);
+      displs[r] = static_cast<int>(entry_begin[r]);
+    }
+    MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, data, counts.data(), displs.data(), element, MPI_COMM_WORLD);
+    MPI_Type_free(&element);
+  };
+  return share;
+}
+
 long long mpi_relax(PdSystem& global, bool progress) {
   MpiBackend backend(global, MPI_COMM_WORLD);
   try {

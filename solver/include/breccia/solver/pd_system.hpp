@@ -113,9 +113,25 @@ struct PdSystem {
 using ForcePass = std::function<void(PdSystem&)>;
 using ForcePassFactory = std::function<ForcePass(PdSystem&)>;
 
+// The set-up's heaviest row loop (the bond coefficients: partial-volume quadratures, Weibull
+// draws) shared by the processes of a distributed run: process `rank` of `ranks` fills its
+// range of rows (equal bond entries each), then `gather` gives every process every range of
+// a per-entry array in place (elements of `element_bytes`; `entry_begin`: ranks + 1 entry
+// offsets). Every entry is computed by the same code either way: the arrays are the same.
+struct RowShare {
+  int rank = 0, ranks = 1;
+  std::function<void(void* data, size_t element_bytes, const std::vector<int64_t>& entry_begin)> gather;
+};
+
+// What a distributed run changes in the set-up (solver/mpi/); empty: one process.
+struct SetupHooks {
+  ForcePassFactory stable_step_forces;
+  RowShare coefficients;
+};
+
 // Build everything from a case file: particles (file or lattice), families, coefficients,
 // pre-cracks, loads, constraints, initial conditions, stable step. Throws InputError.
-PdSystem setup_system(const CaseConfig& config, const ForcePassFactory& stable_step_forces = {});
+PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks = {});
 // The gas load surface_loads[load_index] (gas.hpp): reference volume, vents, crack factors.
 // Called once the facets are grouped. Throws InputError naming `field`.
 void setup_gas(PdSystem& s, int load_index, const std::string& field);

@@ -28,8 +28,9 @@ struct RunOptions {
   // A backend's dynamic loop (the CUDA backend sets it; it runs run_time_loop with its own
   // StepBackend); empty: the CPU backend.
   std::function<RunResult(PdSystem&, const RunOptions&, ResultsWriter*, HistoryWriter*)> backend_loop;
-  // The stable-step estimate's force passes during set-up (a distributed run shares them).
-  ForcePassFactory stable_step_forces;
+  // What a distributed run shares of the set-up (its stable step's force passes, its bond
+  // coefficients) between the ranks.
+  SetupHooks setup_hooks;
   // A backend's dynamic relaxation (a distributed run's); empty: relax_to_equilibrium here.
   std::function<long long(PdSystem&, bool progress)> relax;
 };

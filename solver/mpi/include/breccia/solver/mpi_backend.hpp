@@ -49,9 +49,13 @@ bool mpi_all_agree(bool ok);
 // Throws InputError for a case it cannot distribute (naming the key).
 std::unique_ptr<StepBackend> make_mpi_backend(PdSystem& global, MPI_Comm comm);
 
-// RunOptions::stable_step_forces for a distributed run: the set-up's stable-step estimate
+// SetupHooks::stable_step_forces for a distributed run: the set-up's stable-step estimate
 // with its force passes shared between the ranks (the step comes out as one process's).
 ForcePass mpi_stable_step_forces(PdSystem& global);
+
+// SetupHooks::coefficients for a distributed run: the bond coefficients' rows shared
+// between the ranks of MPI_COMM_WORLD, gathered by all.
+RowShare mpi_row_share();
 
 // RunOptions::relax for a distributed run: dynamic relaxation on every rank's share, the
 // state gathered into `global` on rank 0; returns the iterations (-1: not converged).

@@ -488,11 +488,24 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     for (auto f : require_set(s, c.no_fail_sets[k], "model.no_fail[" + std::to_string(k) + "]").indices)
       no_fail[s.internal_index[f]] = 1;
 
+  // A distributed run shares the two passes over the candidate bonds below between its
+  // processes (RowShare): equal shares of rows, gathered by all.
+  const RowShare& share = hooks.coefficients;
+  const int shares = share.gather ? std::max(1, share.ranks) : 1;
+  auto share_rows = [&](const std::vector<int64_t>& offsets) {
+    std::vector<int64_t> begin(static_cast<size_t>(shares) + 1, 0);
+    begin[shares] = static_cast<int64_t>(n);
+    for (int r = 1; r < shares; ++r)
+      begin[r] = std::lower_bound(offsets.begin(), offsets.end() - 1, offsets[n] * r / shares) - offsets.begin();
+    return begin;
+  };
   s.offsets.assign(n + 1, 0);
   {
     std::vector<int64_t> keep_count(n, 0);
+    const std::vector<int64_t> rows = share_rows(fam.offsets);
+    const int64_t first = rows[shares > 1 ? share.rank : 0], last = rows[shares > 1 ? share.rank + 1 : 1];
 #pragma omp parallel for schedule(dynamic, 256)
-    for (size_t i = 0; i < n; ++i)
+    for (int64_t i = first; i < last; ++i)
       for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
         const int32_t j = fam.neighbors[k];
         const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1], s.x0[3 * j + 2] - s.x0[3 * i + 2]};
@@ -501,6 +514,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
             partial_volume_positive(c.partial_volume, xm, s.horizon[j], s.half_cell[i], s.dimension))
           ++keep_count[i];
       }
+    if (shares > 1) share.gather(keep_count.data(), sizeof(int64_t), rows);  // rows as the elements
     for (size_t i = 0; i < n; ++i) s.offsets[i + 1] = s.offsets[i] + keep_count[i];
   }
   const size_t nb = static_cast<size_t>(s.offsets[n]);
@@ -519,13 +533,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // Correspondence shares LPS's bond data: weights w = omega beta, no modulus per bond, LPS critical stretch.
   const bool lps = c.model == PdModel::LPS || c.model == PdModel::Correspondence;
   // This process's rows (all on one process; equal entries each in a distributed run).
-  const RowShare& share = hooks.coefficients;
-  const int shares = share.gather ? std::max(1, share.ranks) : 1;
-  std::vector<int64_t> row_begin(static_cast<size_t>(shares) + 1, 0);
-  row_begin[shares] = static_cast<int64_t>(n);
-  for (int r = 1; r < shares; ++r)
-    row_begin[r] = std::lower_bound(s.offsets.begin(), s.offsets.end() - 1, static_cast<int64_t>(nb) * r / shares) -
-                   s.offsets.begin();
+  const std::vector<int64_t> row_begin = share_rows(s.offsets);
   const int64_t rows_begin = row_begin[shares > 1 ? share.rank : 0], rows_end = row_begin[shares > 1 ? share.rank + 1 : 1];
 #pragma omp parallel for schedule(dynamic, 256)
   for (int64_t i = rows_begin; i < rows_end; ++i) {

@@ -14,6 +14,8 @@
 #include "helpers.hpp"
 #include "breccia/common/particle_file.hpp"
 
+#include <sstream>
+
 #include <nlohmann/json.hpp>
 
 namespace {
@@ -232,4 +234,24 @@ TEST(SolverCli, BoundarySetListingAParticleTwiceIsRejected) {
   while (fgets(buf.data(), buf.size(), p)) out += buf.data();
   const int status = pclose(p);
   expect_bad_input({WEXITSTATUS(status), out}, {"boundary[0].set", "'edge'", "particle 1 more than once"});
+}
+
+// --decomposition on a box lattice takes the route without families (partition.hpp): one
+// row per rank count, and the bond balance of an 8,000-particle cube cut in two is close to 1.
+TEST(SolverCli, DecompositionOfALatticePrintsOneRowPerRankCount) {
+  const Outcome o = run_solver("specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.02, 0.02, 0.02], spacing: 1 mm}}\n"
+                               "model: {type: pmb, horizon_factor: 3.015}\n" + kMaterial + kTime,
+                               "decomposition", "--decomposition 2,4");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_NE(o.output.find("20 x 20 x 20 lattice = 8000 particles"), std::string::npos) << o.output;
+  const size_t row = o.output.find("\n2,");
+  ASSERT_NE(row, std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("\n4,"), std::string::npos) << o.output;
+  // ranks,owned_min,owned_max,bonds_max_over_mean,...: the balance column of the 2-rank row
+  std::istringstream fields(o.output.substr(row + 1));
+  std::string cell;
+  for (int c = 0; c < 4; ++c) std::getline(fields, cell, ',');
+  EXPECT_LT(std::stod(cell), 1.01) << o.output;
+  EXPECT_GE(std::stod(cell), 1.0) << o.output;
+  expect_bad_input(run_solver(kBase + kMaterial + kTime, "decomposition_bad", "--decomposition 2,x"), {"--decomposition", "'x'"});
 }

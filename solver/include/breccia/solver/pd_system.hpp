@@ -113,11 +113,12 @@ struct PdSystem {
 using ForcePass = std::function<void(PdSystem&)>;
 using ForcePassFactory = std::function<ForcePass(PdSystem&)>;
 
-// The set-up's heaviest row loop (the bond coefficients: partial-volume quadratures, Weibull
-// draws) shared by the processes of a distributed run: process `rank` of `ranks` fills its
-// range of rows (equal bond entries each), then `gather` gives every process every range of
-// a per-entry array in place (elements of `element_bytes`; `entry_begin`: ranks + 1 entry
-// offsets). Every entry is computed by the same code either way: the arrays are the same.
+// The set-up's heaviest row loops (over the candidate bonds: which are kept, then their
+// coefficients: partial-volume quadratures, Weibull draws) shared by the processes of a
+// distributed run: process `rank` of `ranks` fills its range of rows (equal bond entries
+// each), then `gather` gives every process every range of an array in place (elements of
+// `element_bytes`; `entry_begin`: ranks + 1 element offsets). Every value is computed by
+// the same code either way: the arrays are the same.
 struct RowShare {
   int rank = 0, ranks = 1;
   std::function<void(void* data, size_t element_bytes, const std::vector<int64_t>& entry_begin)> gather;

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -72,6 +73,17 @@ int main(int argc, char** argv) {
   const int ranks = mpi.size(), rank = mpi.rank();
 #else
   const int ranks = 1, rank = 0;
+  // Started by mpirun with several processes, a build without MPI would run the case that
+  // many times into the same folder: refuse (once, from the first process).
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"})
+    if (const char* size = std::getenv(name); size && std::atoi(size) > 1) {
+      const char* me = std::getenv("OMPI_COMM_WORLD_RANK") ? std::getenv("OMPI_COMM_WORLD_RANK") : std::getenv("PMI_RANK");
+      if (!me || std::atoi(me) == 0)
+        std::fprintf(stderr, "error: started by mpirun with %s processes, but this breccia-solve was built without MPI "
+                             "(-DBRECCIA_MPI=OFF or no MPI found); rebuild with OpenMPI (make deps) or run one process\n",
+                     size);
+      return kExitBadInput;
+    }
 #endif
   const bool distributed = ranks > 1;
   std::string case_file;

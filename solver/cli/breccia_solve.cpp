@@ -210,9 +210,7 @@ int main(int argc, char** argv) {
       if (config.lattice && config.lattice->dimension == 3 && !config.horizon_m && !config.variable_horizon) {
         // A box lattice: its families are one stencil clipped to the box, so the figures
         // need no set-up (10^8 particles and more; partition.hpp).
-        const solver::LatticeSpec& l = *config.lattice;
-        std::array<int64_t, 3> n{};
-        for (int d = 0; d < 3; ++d) n[d] = std::max(1LL, std::llround((l.box[d + 3] - l.box[d]) / l.spacing));
+        const std::array<int64_t, 3> n = solver::lattice_point_counts(*config.lattice);
         std::vector<std::array<int, 3>> stencil;
         const int reach = static_cast<int>(std::ceil(config.horizon_factor)) + 1;
         for (int a = -reach; a <= reach; ++a)

@@ -127,6 +127,11 @@ void float32_download(PdSystem& s) {
   convert(s.f32.dilatation, s.dilatation);
 }
 
+void float32_download_kinematics(PdSystem& s) {
+  convert(s.f32.u, s.u);
+  convert(s.f32.v, s.v);
+}
+
 StepArrays<float> float32_step_arrays(PdSystem& s) {
   Float32State& f = s.f32;
   StepArrays<float> a;
@@ -159,8 +164,7 @@ public:
   explicit Float32Backend(PdSystem& s) { float32_upload(s); }  // a checkpoint may have been read
   void step(PdSystem& s) override { float32_step(s); }
   Energies measure(PdSystem& s) override {
-    convert(s.f32.u, s.u);
-    convert(s.f32.v, s.v);
+    float32_download_kinematics(s);
     return solver::measure(s);
   }
   void compute_forces(PdSystem& s) override {
@@ -168,10 +172,7 @@ public:
     float32_download(s);
   }
   void download(PdSystem& s) override { float32_download(s); }
-  void download_kinematics(PdSystem& s) override {
-    convert(s.f32.u, s.u);
-    convert(s.f32.v, s.v);
-  }
+  void download_kinematics(PdSystem& s) override { float32_download_kinematics(s); }
 };
 
 }  // namespace

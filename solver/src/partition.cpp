@@ -16,6 +16,35 @@ int Partition::owner(int64_t i) const {
   return static_cast<int>(std::upper_bound(begin.begin(), begin.end() - 1, i) - begin.begin()) - 1;
 }
 
+namespace {
+
+// Ranges of equal work along an order: `cum(i)` is the work of particles [0, i), non-
+// decreasing, i in [0, n]. Each cut goes to the nearer side of its target, and every rank
+// keeps at least one particle. Shared by MortonRangePartitioner and the lattice figures.
+template <class Cumulative>
+Partition cut_equal_work(int64_t n, int ranks, const Cumulative& cum) {
+  Partition p;
+  p.begin.assign(static_cast<size_t>(ranks) + 1, 0);
+  p.begin[ranks] = n;
+  for (int r = 1; r < ranks; ++r) {
+    const double target = cum(n) * r / ranks;
+    int64_t lo = 0, hi = n;  // the first i with cum(i) >= target
+    while (lo < hi) {
+      const int64_t mid = lo + (hi - lo) / 2;
+      if (cum(mid) < target) lo = mid + 1;
+      else hi = mid;
+    }
+    int64_t i = lo;
+    if (i > 0 && target - cum(i - 1) < cum(i) - target) --i;  // the nearer cut
+    // Every rank keeps at least one particle: ranges stay non-empty while ranks <= n.
+    i = std::clamp<int64_t>(i, p.begin[r - 1] + 1, n - (ranks - r));
+    p.begin[r] = i;
+  }
+  return p;
+}
+
+}  // namespace
+
 Partition MortonRangePartitioner::partition(const std::vector<int64_t>& offsets, int ranks) const {
   const int64_t n = static_cast<int64_t>(offsets.size()) - 1;
   if (ranks < 1) throw std::invalid_argument("partition: at least one rank");
@@ -25,18 +54,7 @@ Partition MortonRangePartitioner::partition(const std::vector<int64_t>& offsets,
   // cum[i]: work of particles [0, i).
   std::vector<double> cum(static_cast<size_t>(n) + 1, 0.0);
   for (int64_t i = 0; i < n; ++i) cum[i + 1] = cum[i] + static_cast<double>(offsets[i + 1] - offsets[i]) + particle_weight_;
-  Partition p;
-  p.begin.assign(static_cast<size_t>(ranks) + 1, 0);
-  p.begin[ranks] = n;
-  for (int r = 1; r < ranks; ++r) {
-    const double target = cum[n] * r / ranks;
-    int64_t i = std::lower_bound(cum.begin(), cum.end(), target) - cum.begin();
-    if (i > 0 && target - cum[i - 1] < cum[i] - target) --i;  // the nearer cut
-    // Every rank keeps at least one particle: ranges stay non-empty while ranks <= n.
-    i = std::clamp<int64_t>(i, p.begin[r - 1] + 1, n - (ranks - r));
-    p.begin[r] = i;
-  }
-  return p;
+  return cut_equal_work(n, ranks, [&](int64_t i) { return cum[i]; });
 }
 
 Halo build_halo(const Partition& part, int rank, const std::vector<int64_t>& offsets,
@@ -178,23 +196,9 @@ std::vector<DecompositionStats> lattice_decomposition_stats(const std::array<int
   for (const int ranks : ranks_list) {
     if (ranks < 1 || ranks > total) throw std::invalid_argument("lattice: 1 to one rank per particle");
     // MortonRangePartitioner's cuts on the same weights (bonds + particle_weight each).
-    Partition part;
-    part.begin.assign(static_cast<size_t>(ranks) + 1, 0);
-    part.begin[ranks] = total;
-    auto cum = [&](int64_t i) { return static_cast<double>(bonds[i]) + particle_weight * static_cast<double>(i); };
-    for (int r = 1; r < ranks; ++r) {
-      const double target = cum(total) * r / ranks;
-      int64_t lo = 0, hi = total;  // first i with cum(i) >= target
-      while (lo < hi) {
-        const int64_t mid = (lo + hi) / 2;
-        if (cum(mid) < target) lo = mid + 1;
-        else hi = mid;
-      }
-      int64_t i = lo;
-      if (i > 0 && target - cum(i - 1) < cum(i) - target) --i;
-      i = std::clamp<int64_t>(i, part.begin[r - 1] + 1, total - (ranks - r));
-      part.begin[r] = i;
-    }
+    const Partition part = cut_equal_work(total, ranks, [&](int64_t i) {
+      return static_cast<double>(bonds[i]) + particle_weight * static_cast<double>(i);
+    });
     std::vector<uint64_t> first_key(static_cast<size_t>(ranks));
     for (int r = 0; r < ranks; ++r) first_key[r] = keys[part.begin[r]];
     auto owner_of = [&](uint64_t key) {

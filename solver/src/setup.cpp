@@ -1,6 +1,7 @@
 // Building a PD run from a case file: particles, families, coefficients, pre-cracks,
 // loads, constraints, initial state and the stable time step.
 #include <algorithm>
+#include <array>
 #include <cfloat>
 #include <chrono>
 #include <cmath>
@@ -25,6 +26,13 @@
 #include "surface_cut.hpp"
 
 namespace breccia::solver {
+std::array<int64_t, 3> lattice_point_counts(const LatticeSpec& l) {
+  std::array<int64_t, 3> count{1, 1, 1};
+  for (int k = 0; k < l.dimension; ++k)
+    count[k] = std::max<int64_t>(1, std::llround((l.box[k + l.dimension] - l.box[k]) / l.spacing));
+  return count;
+}
+
 namespace {
 
 std::string list_names(const std::vector<std::string>& names) {
@@ -39,12 +47,9 @@ ParticleModel lattice_model(const LatticeSpec& l) {
   m.dimension = l.dimension;
   m.thickness_m = l.dimension == 2 ? l.thickness : 1.0;
   const int d = l.dimension;
-  long long count[3] = {1, 1, 1};
+  const std::array<int64_t, 3> count = lattice_point_counts(l);
   double lo[3] = {0, 0, 0};
-  for (int k = 0; k < d; ++k) {
-    lo[k] = l.box[k];
-    count[k] = std::max(1LL, std::llround((l.box[k + d] - l.box[k]) / l.spacing));
-  }
+  for (int k = 0; k < d; ++k) lo[k] = l.box[k];
   const double vol = d == 3 ? l.spacing * l.spacing * l.spacing : l.spacing * l.spacing * l.thickness;
   const char* names[6] = {"xmin", "xmax", "ymin", "ymax", "zmin", "zmax"};
   std::vector<ParticleSet> faces(2 * d);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -33,6 +34,22 @@ inline std::string write_case(const std::string& name, const std::string& yaml) 
   std::ofstream(path) << yaml;
   return path;
 }
+
+#if defined(BRECCIA_MESH_EXE) && defined(BRECCIA_PLACE_EXE)
+// A specimen meshed by breccia-mesh and placed by breccia-place in this process's scratch
+// folder `name`: the path of its particles.h5, or empty if a stage failed.
+inline std::string mesh_and_place(const std::string& name, const std::string& specimen_yaml,
+                                  const std::string& place_options = "") {
+  const std::string dir = process_temp_dir() + "/" + name;
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/specimen.yaml") << specimen_yaml;
+  const std::string cmd = std::string(BRECCIA_MESH_EXE) + " " + dir + "/specimen.yaml -o " + dir +
+                          "/specimen.msh --quiet > /dev/null 2>&1 && " + BRECCIA_PLACE_EXE + " " + dir +
+                          "/specimen.msh -o " + dir + "/particles.h5 " + place_options + " > /dev/null 2>&1";
+  if (std::system(cmd.c_str()) != 0) return std::string();
+  return dir + "/particles.h5";
+}
+#endif
 
 inline PdSystem system_from_yaml(const std::string& name, const std::string& yaml) {
   return setup_system(parse_case_file(write_case(name, yaml)));

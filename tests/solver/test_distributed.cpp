@@ -25,7 +25,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include "breccia/solver/rank_system.hpp"
 #include "helpers.hpp"
 
 using namespace breccia::solver;
@@ -118,20 +117,12 @@ nlohmann::json summary(const std::string& dir) {
 
 // The notched block's particles (meshed once per test process).
 std::string notched_block() {
-  static const std::string path = [] {
-    const std::string dir = process_temp_dir() + "/notched_block";
-    std::filesystem::create_directories(dir);
-    std::ofstream(dir + "/block.yaml")
-        << "dimension: 3\n"
-           "body: {shape: box, name: block, size: [40 mm, 20 mm, 8 mm]}\n"
-           "notches: [{name: notch, corner: [20 mm, 0, 0], edge_a: [0, 6 mm, 0], edge_b: [0, 0, 8 mm]}]\n"
-           "mesh: {size: 1.5 mm, refine: [{near: notch, size: 0.6 mm, distance_min: 1 mm, distance_max: 10 mm}]}\n";
-    const std::string cmd = std::string(BRECCIA_MESH_EXE) + " " + dir + "/block.yaml -o " + dir +
-                            "/block.msh --quiet > /dev/null 2>&1 && " + BRECCIA_PLACE_EXE + " " + dir +
-                            "/block.msh -o " + dir + "/particles.h5 > /dev/null 2>&1";
-    if (std::system(cmd.c_str()) != 0) return std::string();
-    return dir + "/particles.h5";
-  }();
+  static const std::string path = mesh_and_place(
+      "notched_block",
+      "dimension: 3\n"
+      "body: {shape: box, name: block, size: [40 mm, 20 mm, 8 mm]}\n"
+      "notches: [{name: notch, corner: [20 mm, 0, 0], edge_a: [0, 6 mm, 0], edge_b: [0, 0, 8 mm]}]\n"
+      "mesh: {size: 1.5 mm, refine: [{near: notch, size: 0.6 mm, distance_min: 1 mm, distance_max: 10 mm}]}\n");
   return path;
 }
 
@@ -306,37 +297,4 @@ TEST(Distributed, WhatIsNotDistributedYetIsRefusedByItsKey) {
                  "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25}]\n"
                  "time: {steps: 5}\n",
                  2, "model.short_range_forces");
-}
-
-// The rank's system (no MPI needed): each owned row reads the same partners, through local
-// indices, with the same bond data, as the global row; ghosts hold the partners' values.
-TEST(RankSystem, OwnedRowsReadTheGlobalPartnersThroughLocalIndices) {
-  PdSystem g = system_from_yaml("rank_rows", "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], spacing: 1 mm}}\n"
-                                             "model: {type: lps, horizon_factor: 3.015}\n"
-                                             "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 10}]\n"
-                                             "boundary: [{type: velocity, set: xmin, value: [-1, 0, 0], components: [x]}]\n"
-                                             "time: {steps: 5}\n");
-  for (int ranks : {1, 3, 5}) {
-    for (int r = 0; r < ranks; ++r) {
-      const RankLayout L = rank_layout(g, ranks, r);
-      const PdSystem s = restrict_to_rank(g, L);
-      ASSERT_EQ(static_cast<int64_t>(s.n), L.owned());
-      ASSERT_EQ(s.x0.size(), 3 * static_cast<size_t>(L.owned() + L.ghosts()));
-      for (int64_t i = 0; i < L.owned(); ++i) {
-        const int64_t gi = L.begin() + i;
-        ASSERT_EQ(s.offsets[i + 1] - s.offsets[i], g.offsets[gi + 1] - g.offsets[gi]);
-        for (int64_t k = 0; k < s.offsets[i + 1] - s.offsets[i]; ++k) {
-          const int64_t lj = s.neighbor[s.offsets[i] + k], gj = g.neighbor[g.offsets[gi] + k];
-          ASSERT_GE(lj, 0);
-          EXPECT_EQ(s.original_index[lj], g.original_index[gj]);
-          EXPECT_EQ(s.x0[3 * lj], g.x0[3 * gj]);
-          EXPECT_EQ(s.k_own[s.offsets[i] + k], g.k_own[g.offsets[gi] + k]);
-        }
-      }
-      // The constraint keeps exactly the owned members, in order.
-      size_t owned_members = 0;
-      for (const int32_t p : g.constraints[0].particles) owned_members += p >= L.begin() && p < L.begin() + L.owned();
-      EXPECT_EQ(s.constraints[0].particles.size(), owned_members);
-    }
-  }
 }

@@ -29,19 +29,13 @@ constexpr double kP0 = 20e6, kSwitch = 18e6, kGammaHigh = 3.0, kGammaLow = 1.4;
 
 // Particles of the disc with its hole (meshed once per test process).
 std::string thick_cylinder_particles() {
-  static const std::string path = [] {
-    const std::string dir = process_temp_dir() + "/gas_disc";
-    std::filesystem::create_directories(dir);
-    std::ofstream(dir + "/disc.yaml") << "dimension: 2\nthickness: 10 mm\n"
-        "body: {shape: disc, name: rock, radius: 40 mm}\n"
-        "holes: [{name: charge_hole, centre: [0, 0], radius: 5 mm}]\n"
-        "mesh: {size: 2 mm, refine: [{near: charge_hole, size: 0.6 mm, distance_min: 1 mm, distance_max: 15 mm}]}\n";
-    const std::string cmd = std::string(BRECCIA_MESH_EXE) + " " + dir + "/disc.yaml -o " + dir +
-                            "/disc.msh --quiet > /dev/null 2>&1 && " + BRECCIA_PLACE_EXE + " " + dir +
-                            "/disc.msh -o " + dir + "/particles.h5 --thickness 10mm > /dev/null 2>&1";
-    if (std::system(cmd.c_str()) != 0) return std::string();
-    return dir + "/particles.h5";
-  }();
+  static const std::string path = mesh_and_place(
+      "gas_disc",
+      "dimension: 2\nthickness: 10 mm\n"
+      "body: {shape: disc, name: rock, radius: 40 mm}\n"
+      "holes: [{name: charge_hole, centre: [0, 0], radius: 5 mm}]\n"
+      "mesh: {size: 2 mm, refine: [{near: charge_hole, size: 0.6 mm, distance_min: 1 mm, distance_max: 15 mm}]}\n",
+      "--thickness 10mm");
   return path;
 }
 

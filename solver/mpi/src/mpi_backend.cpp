@@ -209,38 +209,52 @@ private:
   HaloExchange& halo_;
 };
 
-// Rank 0 receives every rank's owned rows of a per-particle array (`width` values each) into
-// the global array, at the rank's range of the internal order.
-template <class T>
-void gather_rows(const std::vector<T>& local, std::vector<T>& global, size_t width, const RankLayout& L, MPI_Comm comm) {
-  if (local.empty() || global.empty()) return;
-  const int ranks = L.part.ranks();
-  std::vector<int> counts(ranks), displs(ranks);
-  for (int r = 0; r < ranks; ++r) {
-    counts[r] = static_cast<int>(L.part.owned(r) * width * sizeof(T));
-    displs[r] = static_cast<int>(L.part.begin[r] * width * sizeof(T));
+// Each rank's elements [begin[r], begin[r + 1]) of an array, in elements of `bytes` (a
+// derived type, so a rank's range may pass 2^31 bytes).
+struct ElementRanges {
+  MPI_Datatype type;
+  std::vector<int> counts, displs;
+  ElementRanges(size_t bytes, const std::vector<int64_t>& begin) {
+    MPI_Type_contiguous(static_cast<int>(bytes), MPI_BYTE, &type);
+    MPI_Type_commit(&type);
+    for (size_t r = 0; r + 1 < begin.size(); ++r) {
+      counts.push_back(static_cast<int>(begin[r + 1] - begin[r]));
+      displs.push_back(static_cast<int>(begin[r]));
+    }
   }
-  MPI_Gatherv(local.data(), counts[L.rank], MPI_BYTE, global.data(), counts.data(), displs.data(), MPI_BYTE, 0, comm);
+  ~ElementRanges() { MPI_Type_free(&type); }
+  ElementRanges(const ElementRanges&) = delete;
+  ElementRanges& operator=(const ElementRanges&) = delete;
+};
+
+// Every rank's range of `data` to every rank, in place.
+void allgather_ranges(void* data, size_t bytes, const std::vector<int64_t>& begin, MPI_Comm comm) {
+  const ElementRanges e(bytes, begin);
+  MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, data, e.counts.data(), e.displs.data(), e.type, comm);
 }
 
-// The same for per-entry arrays: a rank's owned rows are one contiguous run of entries.
+// Rank 0 receives every rank's range (the rank's own, from the start of `local`) into
+// `global`. The global system is held by every rank, so whether an array is held (the
+// feature is on) is the same everywhere and every rank takes part or none.
 template <class T>
-void gather_entries(const std::vector<T>& local, std::vector<T>& global, const std::vector<int64_t>& offsets,
-                    const RankLayout& L, MPI_Comm comm) {
-  if (local.empty() && global.empty()) return;
-  const int ranks = L.part.ranks();
-  std::vector<int> counts(ranks), displs(ranks);
-  for (int r = 0; r < ranks; ++r) {
-    const int64_t b = offsets[L.part.begin[r]], e = offsets[L.part.begin[r + 1]];
-    counts[r] = static_cast<int>((e - b) * sizeof(T));
-    displs[r] = static_cast<int>(b * sizeof(T));
-  }
-  MPI_Gatherv(local.data(), counts[L.rank], MPI_BYTE, global.data(), counts.data(), displs.data(), MPI_BYTE, 0, comm);
+void gather_ranges(const std::vector<T>& local, std::vector<T>& global, const std::vector<int64_t>& begin, int rank,
+                   MPI_Comm comm) {
+  if (global.empty()) return;
+  const ElementRanges e(sizeof(T), begin);
+  MPI_Gatherv(local.data(), e.counts[rank], e.type, global.data(), e.counts.data(), e.displs.data(), e.type, 0, comm);
 }
 
-template <class T>
-void float_to_double(const std::vector<float>& from, std::vector<T>& to, size_t count) {
-  for (size_t k = 0; k < count; ++k) to[k] = static_cast<T>(from[k]);
+// The ranks' element ranges of a per-particle array of `width` values each, and of a
+// per-entry array (a rank's owned rows are one contiguous run of entries).
+std::vector<int64_t> particle_ranges(const Partition& part, size_t width) {
+  std::vector<int64_t> begin;
+  for (const int64_t b : part.begin) begin.push_back(b * static_cast<int64_t>(width));
+  return begin;
+}
+std::vector<int64_t> entry_ranges(const Partition& part, const std::vector<int64_t>& offsets) {
+  std::vector<int64_t> begin;
+  for (const int64_t b : part.begin) begin.push_back(offsets[b]);
+  return begin;
 }
 
 class MpiBackend final : public StepBackend {
@@ -275,10 +289,7 @@ public:
   // Sums over ranks: energies to rounding (the order of the sum differs from one process's),
   // counts and the largest damage exactly; the accumulators into the global system.
   Energies measure(PdSystem& g) override {
-    if (local_.f32.active) {  // the float state is the truth; measure reads u and v
-      float_to_double(local_.f32.u, local_.u, 3 * local_.n);
-      float_to_double(local_.f32.v, local_.v, 3 * local_.n);
-    }
+    if (local_.f32.active) float32_download_kinematics(local_);  // the float state is the truth
     const Energies e = solver::measure(local_);
     double sums[4] = {e.kinetic, e.strain, local_.external_work, local_.dissipated_energy}, total[4];
     MPI_Allreduce(sums, total, 4, MPI_DOUBLE, MPI_SUM, comm_);
@@ -302,29 +313,30 @@ public:
 
   void download(PdSystem& g) override {
     if (local_.f32.active) float32_download(local_);
+    const std::vector<int64_t> one = particle_ranges(layout_.part, 1), three = particle_ranges(layout_.part, 3),
+                               nine = particle_ranges(layout_.part, 9), entries = entry_ranges(layout_.part, g.offsets);
+    const int r = layout_.rank;
     for (auto [l, gl] : {std::pair{&local_.u, &g.u}, {&local_.v, &g.v}, {&local_.a, &g.a}, {&local_.force, &g.force},
                          {&local_.body, &g.body}})
-      gather_rows(*l, *gl, 3, layout_, comm_);
+      gather_ranges(*l, *gl, three, r, comm_);
     for (auto [l, gl] : {std::pair{&local_.energy_density, &g.energy_density}, {&local_.dissipated, &g.dissipated},
                          {&local_.damage, &g.damage}, {&local_.max_stretch, &g.max_stretch},
                          {&local_.dilatation, &g.dilatation}, {&local_.lps_a, &g.lps_a}, {&local_.lps_b, &g.lps_b},
                          {&local_.corr_nonaffine, &g.corr_nonaffine}})
-      gather_rows(*l, *gl, 1, layout_, comm_);
-    gather_rows(local_.corr_deformation, g.corr_deformation, 9, layout_, comm_);
-    gather_rows(local_.corr_force_tensor, g.corr_force_tensor, 9, layout_, comm_);
-    gather_rows(local_.min_stretch, g.min_stretch, 1, layout_, comm_);
-    gather_rows(local_.min_stretch_next, g.min_stretch_next, 1, layout_, comm_);
-    gather_entries(local_.state, g.state, g.offsets, layout_, comm_);
-    gather_entries(local_.bond_damage, g.bond_damage, g.offsets, layout_, comm_);
+      gather_ranges(*l, *gl, one, r, comm_);
+    gather_ranges(local_.corr_deformation, g.corr_deformation, nine, r, comm_);
+    gather_ranges(local_.corr_force_tensor, g.corr_force_tensor, nine, r, comm_);
+    gather_ranges(local_.min_stretch, g.min_stretch, one, r, comm_);
+    gather_ranges(local_.min_stretch_next, g.min_stretch_next, one, r, comm_);
+    gather_ranges(local_.state, g.state, entries, r, comm_);
+    gather_ranges(local_.bond_damage, g.bond_damage, entries, r, comm_);
   }
 
   void download_kinematics(PdSystem& g) override {
-    if (local_.f32.active) {
-      float_to_double(local_.f32.u, local_.u, 3 * local_.n);
-      float_to_double(local_.f32.v, local_.v, 3 * local_.n);
-    }
-    gather_rows(local_.u, g.u, 3, layout_, comm_);
-    gather_rows(local_.v, g.v, 3, layout_, comm_);
+    if (local_.f32.active) float32_download_kinematics(local_);
+    const std::vector<int64_t> three = particle_ranges(layout_.part, 3);
+    gather_ranges(local_.u, g.u, three, layout_.rank, comm_);
+    gather_ranges(local_.v, g.v, three, layout_.rank, comm_);
   }
 
   // Dynamic relaxation on the rank's share: the force pass exchanges the halo, the sums
@@ -403,16 +415,11 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
     RankLayout layout;
     PdSystem local;
     std::unique_ptr<HaloExchange> halo;
-    std::vector<int> counts, displs;
   };
   auto sh = std::make_shared<Shared>();
   sh->layout = rank_layout(global, size, rank);
   sh->local = restrict_to_rank(global, sh->layout);
   sh->halo = std::make_unique<HaloExchange>(sh->layout, MPI_COMM_WORLD);
-  for (int r = 0; r < size; ++r) {
-    sh->counts.push_back(static_cast<int>(3 * sh->layout.part.owned(r)));
-    sh->displs.push_back(static_cast<int>(3 * sh->layout.part.begin[r]));
-  }
   // Each rank computes its rows at the iteration's displacement and all gather the forces:
   // every rank then holds one process's force array, bit for bit, and takes the power
   // iteration's sums in its order, so the stable step is one process's to the last bit.
@@ -429,8 +436,8 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
     StepArrays<double> a = cpu_step_arrays(l);
     a.ghosts = L.ghosts();
     pd_force_pass(exec, a, true);
-    MPI_Allgatherv(l.force.data(), static_cast<int>(3 * owned), MPI_DOUBLE, g.force.data(), sh->counts.data(),
-                   sh->displs.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+    std::copy(l.force.begin(), l.force.begin() + 3 * owned, g.force.begin() + 3 * b);
+    allgather_ranges(g.force.data(), sizeof(double), particle_ranges(L.part, 3), MPI_COMM_WORLD);
   };
 }
 
@@ -439,17 +446,7 @@ RowShare mpi_row_share() {
   MPI_Comm_rank(MPI_COMM_WORLD, &share.rank);
   MPI_Comm_size(MPI_COMM_WORLD, &share.ranks);
   share.gather = [](void* data, size_t element_bytes, const std::vector<int64_t>& entry_begin) {
-    const int ranks = static_cast<int>(entry_begin.size()) - 1;
-    MPI_Datatype element;  // counts in elements: a rank's range may pass 2^31 bytes
-    MPI_Type_contiguous(static_cast<int>(element_bytes), MPI_BYTE, &element);
-    MPI_Type_commit(&element);
-    std::vector<int> counts(ranks), displs(ranks);
-    for (int r = 0; r < ranks; ++r) {
-      counts[r] = static_cast<int>(entry_begin[r + 1] - entry_begin[r]);
-      displs[r] = static_cast<int>(entry_begin[r]);
-    }
-    MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, data, counts.data(), displs.data(), element, MPI_COMM_WORLD);
-    MPI_Type_free(&element);
+    allgather_ranges(data, element_bytes, entry_begin, MPI_COMM_WORLD);
   };
   return share;
 }

@@ -21,14 +21,14 @@
 namespace breccia {
 
 // `reduce_max(values, count)` and `reduce_sum(values, count)` combine in place over the
-// processes (empty: one process). `terms(k)` gives term k of this process's `count` terms
-// for each of `quantities` sums (term(k, q)); the sums come back in `out`.
+// processes (empty: one process). `term(k, q)` gives term k of this process's `count`
+// terms of sum q, for each of `quantities` sums; the sums come back in `out`.
 inline void reproducible_sums(size_t count, int quantities, const std::function<double(size_t, int)>& term,
                               std::vector<double>& out, const std::function<void(double*, int)>& reduce_max = {},
                               const std::function<void(double*, int)>& reduce_sum = {}) {
   constexpr int kLevels = 3;
   out.assign(static_cast<size_t>(quantities), 0.0);
-  // Largest magnitude per quantity and the total count (carried as a double: exact below 2^53).
+  // Largest magnitude per quantity, and the total count (a double: exact below 2^53).
   std::vector<double> head(static_cast<size_t>(quantities), 0.0);
   for (size_t k = 0; k < count; ++k)
     for (int q = 0; q < quantities; ++q) head[q] = std::max(head[q], std::fabs(term(k, q)));

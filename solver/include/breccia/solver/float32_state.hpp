@@ -44,6 +44,8 @@ PdViewT<float> float32_view(PdSystem& sys);
 void float32_upload(PdSystem& sys);
 // Float -> double: displacement, velocity, acceleration, internal force, dilatation.
 void float32_download(PdSystem& sys);
+// Float -> double: displacement and velocity only (energies, probes).
+void float32_download_kinematics(PdSystem& sys);
 // Internal forces at the float displacement (the float state is the truth).
 void float32_compute_forces(PdSystem& sys);
 // One velocity-Verlet step on the float state.

@@ -2,6 +2,7 @@
 // The state of one PD run, as structure-of-arrays owned by one object. Particles are held
 // in Morton order internally (locality); `original_index` maps back to particles.h5 order,
 // in which every output is written.
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -129,6 +130,9 @@ struct SetupHooks {
   ForcePassFactory stable_step_forces;
   RowShare coefficients;
 };
+
+// Points per axis of a `specimen: {lattice: ...}` box (1 on the axes it does not have).
+std::array<int64_t, 3> lattice_point_counts(const LatticeSpec& lattice);
 
 // Build everything from a case file: particles (file or lattice), families, coefficients,
 // pre-cracks, loads, constraints, initial conditions, stable step. Throws InputError.

@@ -9,7 +9,7 @@
 // value an owned particle computes is therefore the serial run's, bit for bit.
 //
 // No MPI here: the layout and the restriction are plain data, so they are tested without it
-// (tests/solver/test_partition.cpp); the exchange itself is in solver/mpi/.
+// (tests/solver/test_partition.cpp, RankSystem.*); the exchange itself is in solver/mpi/.
 #include <cstdint>
 #include <vector>
 

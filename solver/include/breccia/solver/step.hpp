@@ -232,7 +232,8 @@ struct StepFinish {
 };
 
 // ---------------------------------------------------------------------------------------
-// What a distributed run's ranks exchange (rank_system.hpp): the ghosts' values of
+// What a distributed run's ranks exchange (rank_system.hpp): each names the values its
+// ghosts receive from their owners.
 enum class HaloField : int {
   Displacement,    // u, before a force pass reads the partners' positions
   Lps,             // dilatation and the fast path's factors, between LPS's two passes

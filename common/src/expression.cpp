@@ -21,6 +21,10 @@ Expression::Expression(const std::string& text, const std::vector<std::string>& 
   for (const auto& v : variables) names += (names.empty() ? "" : ", ") + v;
   impl_->slots.assign(variables.size(), 0.0);
   try {
+    // Built with GCC, muparser 2.3 defines _pi as 3.141592653589 (for speed), 2.5e-13 off:
+    // full precision here, so that an expression agrees with the same formula in C++.
+    impl_->parser.DefineConst("_pi", 3.141592653589793238462643);
+    impl_->parser.DefineConst("_e", 2.718281828459045235360287);
     for (size_t k = 0; k < variables.size(); ++k) impl_->parser.DefineVar(variables[k], &impl_->slots[k]);
     impl_->parser.SetExpr(text);
     impl_->parser.Eval();  // parses now: syntax errors and unknown names surface here
@@ -36,6 +40,11 @@ Expression::Expression(const std::string& text, const std::vector<std::string>& 
 Expression::~Expression() = default;
 Expression::Expression(Expression&&) noexcept = default;
 Expression& Expression::operator=(Expression&&) noexcept = default;
+
+bool Expression::uses(const std::string& variable) const {
+  const mu::varmap_type used = impl_->parser.GetUsedVar();
+  return used.count(variable) > 0;
+}
 
 double Expression::operator()(const std::vector<double>& values) const {
   for (size_t k = 0; k < impl_->slots.size() && k < values.size(); ++k) impl_->slots[k] = values[k];

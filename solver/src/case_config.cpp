@@ -30,6 +30,22 @@ std::array<bool, 3> parse_components(const Section& s) {
   return c;
 }
 
+// `expression: [...]`, one per component, instead of `value` (exactly one of the two):
+// each checked now, so that a bad one is reported before anything runs.
+std::vector<std::string> parse_component_expressions(const Section& s, const std::vector<std::string>& variables) {
+  if (s.has("value"))
+    throw InputError(s.file(), s.field("value"), "both value and expression", "value: [...] or expression: [...], not both");
+  std::string list;
+  for (const auto& v : variables) list += (list.empty() ? "" : ", ") + v;
+  std::vector<std::string> e = s.texts("expression");
+  if (e.size() < 2 || e.size() > 3)
+    throw InputError(s.file(), s.field("expression"), std::to_string(e.size()) + " entries",
+                     "one expression per component: [ex, ey] (2D) or [ex, ey, ez], in " + list + " (SI)");
+  for (size_t k = 0; k < e.size(); ++k)
+    Expression(e[k], variables, s.file(), s.field("expression") + "[" + std::to_string(k) + "]");
+  return e;
+}
+
 }  // namespace
 
 HistorySpec parse_history(const Section& s, Quantity q, const std::string& dir) {
@@ -389,44 +405,48 @@ CaseConfig parse_case_file(const std::string& path) {
   }
 
   for (const Section& b : root.list("boundary")) {
-    b.allow_only({"type", "set", "value", "components", "ramp_time"});
+    b.allow_only({"type", "set", "value", "expression", "components", "ramp_time"});
     BoundarySpec bs;
     const std::string type = b.choice("type", {"fixed", "velocity", "displacement"});
     bs.set = b.text("set");
     bs.components = parse_components(b);
     if (type == "fixed") {
       bs.kind = BoundarySpec::Kind::Fixed;
-    } else if (type == "velocity") {
-      bs.kind = BoundarySpec::Kind::Velocity;
-      bs.value = b.vec3("value", Quantity::Velocity);
     } else {
-      bs.kind = BoundarySpec::Kind::Displacement;
-      bs.value = b.vec3("value", Quantity::Length);
+      bs.kind = type == "velocity" ? BoundarySpec::Kind::Velocity : BoundarySpec::Kind::Displacement;
+      const Quantity unit = type == "velocity" ? Quantity::Velocity : Quantity::Length;
+      if (b.has("expression")) {
+        bs.expression = parse_component_expressions(b, {"x", "y", "z", "t"});
+      } else {
+        bs.value = b.vec3("value", unit);
+      }
     }
     bs.ramp_time = b.number("ramp_time", Quantity::Time, 0.0);
     c.boundaries.push_back(bs);
   }
 
   for (const Section& s : root.list("initial")) {
-    s.allow_only({"type", "set", "value", "expression", "center", "strain_rate", "cylindrical"});
+    s.allow_only({"type", "set", "value", "expression", "file", "dataset", "center", "strain_rate", "cylindrical"});
     InitialSpec is;
     const std::string type = s.choice("type", {"velocity", "displacement", "radial_velocity"});
     is.set = s.text("set", "");
     if (type == "velocity" || type == "displacement") {
       is.kind = type == "velocity" ? InitialSpec::Kind::Velocity : InitialSpec::Kind::Displacement;
-      if (s.has("value") == s.has("expression"))
-        throw InputError(s.file(), s.field("value"), s.has("value") ? "both value and expression" : "neither",
-                         "value: [vx, vy, vz] or expression: ['...', '...', '...'] (in x, y, z; SI)");
-      if (s.has("value")) {
+      if (s.has("file") && (s.has("value") || s.has("expression")))
+        throw InputError(s.file(), s.field("file"), "file with " + std::string(s.has("value") ? "value" : "expression"),
+                         "one of value, expression or file");
+      if (s.has("file")) {
+        is.field_file = resolve(c.directory, s.text("file"));
+        const bool h5 = std::filesystem::path(is.field_file).extension() == ".h5";
+        if (h5 != s.has("dataset"))
+          throw InputError(s.file(), s.field(h5 ? "file" : "dataset"),
+                           h5 ? "an HDF5 file without dataset" : "dataset with a file that is not .h5",
+                           "file: F.h5 with dataset: NAME (N x 2 or N x 3), or file: F.csv (one row per particle)");
+        is.field_dataset = s.text("dataset", "");
+      } else if (s.has("expression"))
+        is.expression = parse_component_expressions(s, {"x", "y", "z"});
+      else
         is.value = s.vec3("value", type == "velocity" ? Quantity::Velocity : Quantity::Length);
-      } else {
-        is.expression = s.texts("expression");
-        if (is.expression.size() < 2 || is.expression.size() > 3)
-          throw InputError(s.file(), s.field("expression"), std::to_string(is.expression.size()) + " entries",
-                           "one expression per component: [ex, ey] (2D) or [ex, ey, ez]");
-        for (size_t k = 0; k < is.expression.size(); ++k)
-          Expression(is.expression[k], {"x", "y", "z"}, s.file(), s.field("expression") + "[" + std::to_string(k) + "]");
-      }
     } else {
       is.kind = InitialSpec::Kind::RadialVelocity;
       is.center = s.vec3("center", Quantity::Length);
@@ -457,6 +477,13 @@ CaseConfig parse_case_file(const std::string& path) {
   c.adr_max_steps = time.integer("adr_max_steps", 100000);
   if (!c.end_time && !c.steps && !c.quasi_static)
     throw InputError(path, "time", "neither 'end' nor 'steps' given", "time.end (e.g. 700 us) or time.steps");
+  if (c.quasi_static)  // relaxation finds one equilibrium: a boundary value in time has no meaning there
+    for (size_t b = 0; b < c.boundaries.size(); ++b)
+      for (size_t d = 0; d < c.boundaries[b].expression.size(); ++d)
+        if (Expression(c.boundaries[b].expression[d], {"x", "y", "z", "t"}, path, "").uses("t"))
+          throw InputError(path, "boundary[" + std::to_string(b) + "].expression[" + std::to_string(d) + "]",
+                           "an expression in t with time.integrator: adr",
+                           "an expression in x, y, z only (relaxation finds one equilibrium; it has no time)");
 
   if (auto out = root.optional_section("output")) {
     out->allow_only({"every", "history_every", "checkpoint_every", "fields", "probes", "results"});

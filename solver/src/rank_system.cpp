@@ -1,3 +1,4 @@
+#include "breccia/solver/boundary_field.hpp"
 #include "breccia/solver/rank_system.hpp"
 
 #include <algorithm>
@@ -139,7 +140,11 @@ PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) {
   s.facets = group_facets_by_particle(s);
   for (const auto& bl : g.body_loads)  // empty: every particle, which is every owned one here
     s.body_loads.push_back({bl.spec, bl.particles.empty() ? std::vector<int32_t>{} : owned_local(bl.particles)});
-  for (const auto& c : g.constraints) s.constraints.push_back({c.spec, owned_local(c.particles)});
+  for (const auto& c : g.constraints) {
+    PdSystem::Constraint rc{c.spec, owned_local(c.particles), nullptr, {}, 0.0};
+    attach_boundary_field(rc, c.field);  // values follow the rank's own particles
+    s.constraints.push_back(std::move(rc));
+  }
 
   s.step = g.step;
   s.time = g.time;

@@ -16,11 +16,13 @@
 #include "breccia/common/error.hpp"
 #include "breccia/common/expression.hpp"
 #include "breccia/common/units.hpp"
+#include "breccia/solver/boundary_field.hpp"
 #include "breccia/solver/calibration.hpp"
 #include "breccia/solver/correspondence.hpp"
 #include "breccia/solver/family.hpp"
 #include "breccia/solver/family_check.hpp"
 #include "breccia/solver/graded_check.hpp"
+#include "breccia/solver/particle_field.hpp"
 #include "breccia/solver/pd_system.hpp"
 #include "breccia/solver/step.hpp"
 #include "surface_cut.hpp"
@@ -987,7 +989,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   for (size_t b = 0; b < c.boundaries.size(); ++b) {
     const BoundarySpec& bs = c.boundaries[b];
     const auto& listed = require_set(s, bs.set, "boundary[" + std::to_string(b) + "].set").indices;
-    PdSystem::Constraint con{&bs, internal_particles(s, listed)};
+    PdSystem::Constraint con{&bs, internal_particles(s, listed), nullptr, {}, 0.0};
+    attach_boundary_field(con, make_boundary_field(bs, c.file, b));
     // Each listed particle is written by its own thread of the constraint kernels (a
     // read-modify-write on the GPU): a particle listed twice would race with itself.
     {
@@ -1028,6 +1031,19 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       std::iota(who.begin(), who.end(), 0);
     } else {
       who = internal_particles(s, require_set(s, is.set, "initial[" + std::to_string(q) + "].set").indices);
+    }
+    if (!is.field_file.empty()) {
+      // A field from a file, in the particle file's order (original_index: internal -> file).
+      const std::string key = "initial[" + std::to_string(q) + "]";
+      const ParticleField f = read_particle_field(is.field_file, is.field_dataset, n, c.file, key);
+      if (f.columns < s.dimension)
+        throw InputError(is.field_file, is.field_dataset.empty() ? "columns" : is.field_dataset,
+                         std::to_string(f.columns) + " numbers a row", "3 numbers a row for a 3D specimen");
+      double* target = is.kind == InitialSpec::Kind::Velocity ? s.v.data() : s.u.data();
+      for (auto i : who)
+        for (int d = 0; d < std::min(s.dimension, f.columns); ++d)
+          target[3 * i + d] = f.values[static_cast<size_t>(f.columns) * s.original_index[i] + d];
+      continue;
     }
     if (!is.expression.empty()) {
       // Fields by expression, evaluated once per particle at its reference position.

@@ -177,6 +177,7 @@ struct CudaSystem::Impl {
   DeviceArray<uint8_t> load_is_pressure;
   std::vector<DeviceArray<int32_t>> body_load_particles;   // one per sys.body_loads entry
   std::vector<DeviceArray<int32_t>> constraint_particles;  // one per sys.constraints entry
+  std::vector<DeviceArray<double>> constraint_values;      // per entry: a field's values (boundary_field.hpp)
   // reductions
   DeviceArray<StepSums> step_partial;
   DeviceArray<MeasureSums> measure_partial;
@@ -271,6 +272,10 @@ public:
   }
   template <class Real>
   void gas_crack_forces(const StepArrays<Real>&, PdSystem&) const {}
+  // A boundary by expression: the host's refreshed values into the device copy the step reads.
+  void upload_boundary_values(size_t c, const std::vector<double>& values) const {
+    m_.constraint_values[c].copy_in(values, "boundary values");
+  }
 
 private:
   CudaSystem::Impl& m_;
@@ -437,6 +442,8 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   for (size_t b = 0; b < s.body_loads.size(); ++b) m.body_load_particles[b].upload(s.body_loads[b].particles, "body-load set");
   m.constraint_particles = std::vector<DeviceArray<int32_t>>(s.constraints.size());
   for (size_t c = 0; c < s.constraints.size(); ++c) m.constraint_particles[c].upload(s.constraints[c].particles, "boundary set");
+  m.constraint_values = std::vector<DeviceArray<double>>(s.constraints.size());
+  for (size_t c = 0; c < s.constraints.size(); ++c) m.constraint_values[c].upload(s.constraints[c].values, "boundary values");
 
   m.step_partial.allocate(kMaxReduceBlocks, "step partial sums");
   m.measure_partial.allocate(kMaxReduceBlocks, "measure partial sums");
@@ -448,8 +455,10 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
     a.x = m.x.get();
     a.f_before = m.f_before.get();
     a.facets = m.facets;
-    for (size_t c = 0; c < s.constraints.size(); ++c)
+    for (size_t c = 0; c < s.constraints.size(); ++c) {
       a.constraint_sets.push_back({static_cast<int64_t>(m.constraint_particles[c].size()), m.constraint_particles[c].get()});
+      a.constraint_values.push_back(s.constraints[c].field ? m.constraint_values[c].get() : nullptr);
+    }
     for (size_t b = 0; b < s.body_loads.size(); ++b)
       a.body_load_sets.push_back(s.body_loads[b].particles.empty()
                                      ? SetView{static_cast<int64_t>(s.n), nullptr}

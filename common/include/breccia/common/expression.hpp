@@ -23,6 +23,8 @@ public:
   // one Expression per thread. A non-finite result throws InputError naming the key.
   double operator()(const std::vector<double>& values) const;
   const std::string& text() const { return text_; }
+  // Whether the text names `variable` (a boundary value in t is evaluated every step).
+  bool uses(const std::string& variable) const;
 
 private:
   struct Impl;

@@ -65,6 +65,10 @@ struct BoundarySpec {
   Vec3 value{0, 0, 0};
   std::array<bool, 3> components{true, true, true};
   double ramp_time = 0.0;  // linear ramp of the velocity/displacement to its value
+  // Velocity, Displacement: per component an expression in x, y, z (reference position, m)
+  // and t (s), SI result, instead of `value` when not empty (checked at parse; the ramp
+  // multiplies it too). Evaluated per particle once, or every step when it names t.
+  std::vector<std::string> expression;
 };
 
 struct InitialSpec {
@@ -74,6 +78,9 @@ struct InitialSpec {
   // Velocity, Displacement: per component an expression in x, y, z (reference position, m;
   // SI result), instead of `value` when not empty (checked at parse, common/expression.hpp).
   std::vector<std::string> expression;
+  // Velocity, Displacement: or read from a file, one row per particle in the particle file's
+  // order (HDF5 dataset N x 2|3, or CSV rows of 2|3 numbers), when `field_file` is not empty.
+  std::string field_file, field_dataset;
   Vec3 center{0, 0, 0};
   double strain_rate = 0.0;  // RadialVelocity: v = rate * (x - center) (in-plane in 2D)
   bool cylindrical = false;  // RadialVelocity about the z axis through center

@@ -88,7 +88,11 @@ template <class Real>
 void fill_load_sets(const PdSystem& s, StepArrays<Real>& a) {
   a.facets = s.facets.view();
   a.constraint_sets.clear();
-  for (const auto& c : s.constraints) a.constraint_sets.push_back({static_cast<int64_t>(c.particles.size()), c.particles.data()});
+  a.constraint_values.clear();
+  for (const auto& c : s.constraints) {
+    a.constraint_sets.push_back({static_cast<int64_t>(c.particles.size()), c.particles.data()});
+    a.constraint_values.push_back(c.field ? c.values.data() : nullptr);
+  }
   a.body_load_sets.clear();
   for (const auto& b : s.body_loads)
     a.body_load_sets.push_back(b.particles.empty() ? SetView{static_cast<int64_t>(s.n), nullptr}

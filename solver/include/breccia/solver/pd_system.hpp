@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,8 @@
 #include "breccia/solver/pd_kernels.hpp"
 
 namespace breccia::solver {
+
+struct BoundaryField;  // boundary_field.hpp
 
 struct PressureFacet {  // a boundary facet carrying pressure or traction
   int32_t particle;     // internal index
@@ -80,6 +83,11 @@ struct PdSystem {
   struct Constraint {
     const BoundarySpec* spec;
     std::vector<int32_t> particles;  // internal
+    // A boundary by expression (boundary_field.hpp): its ramped value per particle of the
+    // set, 3 per entry, refreshed on the host when it changes; empty for a constant value.
+    std::shared_ptr<const BoundaryField> field;
+    std::vector<double> values;
+    double values_time = 0.0;  // the time `values` were evaluated at (NaN: never; attach_boundary_field)
   };
   std::vector<Constraint> constraints;
   GasState gas;  // loads[].type: gas (gas.hpp); inactive without one

@@ -29,6 +29,7 @@
 #include <utility>
 #include <vector>
 
+#include "breccia/solver/boundary_field.hpp"
 #include "breccia/solver/correspondence_kernels.hpp"
 #include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_kernels.hpp"
@@ -76,11 +77,13 @@ struct WorkBefore {
   }
 };
 
-// The ramped values are imposed in double and rounded to Real.
+// The ramped values are imposed in double and rounded to Real. A boundary by expression
+// reads its per-particle values (3 per entry of the set, boundary_field.hpp) instead of c's.
 template <class Real>
 struct Constrain {
   SetView set;
   ConstraintStep c;
+  const double* values;  // null: c's values for every particle
   Real* u;
   Real* v;
   BRECCIA_HD void operator()(int64_t q) const {
@@ -88,7 +91,9 @@ struct Constrain {
     for (int d = 0; d < 3; ++d)
       if (c.components & (1u << d)) {
         double uk = u[3 * i + d], vk = v[3 * i + d];
-        constrain_component(c.kind, c.velocity[d], c.target[d], c.dt, uk, vk);
+        const double velocity = values ? values[3 * q + d] : c.velocity[d];
+        const double target = values ? values[3 * q + d] : c.target[d];
+        constrain_component(c.kind, velocity, target, c.dt, uk, vk);
         u[3 * i + d] = static_cast<Real>(uk);
         v[3 * i + d] = static_cast<Real>(vk);
       }
@@ -252,6 +257,7 @@ struct StepArrays {
   double* f_before = nullptr; // 3N scratch
   FacetView facets;
   std::vector<SetView> constraint_sets;  // one per PdSystem::constraints entry
+  std::vector<const double*> constraint_values;  // per entry: its field's values (null: constant)
   std::vector<SetView> body_load_sets;   // one per PdSystem::body_loads entry
   CorrespondenceView corr{};             // correspondence model: moduli, F, A, non-affine energy
   double* external_work = nullptr;       // accumulators (StepFinish)
@@ -317,19 +323,35 @@ void pd_external(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t,
   }
 }
 
+// exec.upload_boundary_values(c, values) where the execution space keeps its own copy of a
+// boundary's per-particle values (a device's); host spaces read the PdSystem's directly.
+template <class Exec, class = void>
+struct HasBoundaryUpload : std::false_type {};
+template <class Exec>
+struct HasBoundaryUpload<Exec, std::void_t<decltype(std::declval<Exec&>().upload_boundary_values(
+                                   size_t{}, std::declval<const std::vector<double>&>()))>> : std::true_type {};
+
 // Prescribed components at time t: one pass per boundary, in the case's order (a particle
-// in two boundaries takes the later one's value), the ramps evaluated here on the host.
+// in two boundaries takes the later one's value), the ramps (and fields by expression)
+// evaluated here on the host.
 template <class Exec, class Real>
-void pd_constraints(Exec& exec, const StepArrays<Real>& a, const PdSystem& sys, double t, double dt) {
+void pd_constraints(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t, double dt) {
   for (size_t c = 0; c < sys.constraints.size(); ++c) {
-    const BoundarySpec& b = *sys.constraints[c].spec;
+    PdSystem::Constraint& con = sys.constraints[c];
+    const BoundarySpec& b = *con.spec;
     ConstraintStep cs{static_cast<int>(b.kind), 0u, {0, 0, 0}, {0, 0, 0}, dt};
     for (int d = 0; d < 3; ++d)
       if (b.components[d]) cs.components |= 1u << d;
     prescribed_values(b, t, dt, cs.velocity, cs.target);
     const SetView set = a.constraint_sets[c];
     if (set.count == 0) continue;
-    exec.for_each(set.count, Constrain<Real>{set, cs, a.p.u, a.p.v}, "constraint");
+    const double* values = nullptr;
+    if (con.field) {
+      if (refresh_boundary_values(con, sys.x0, boundary_value_time(b.kind, t, dt)))
+        if constexpr (HasBoundaryUpload<Exec>::value) exec.upload_boundary_values(c, con.values);
+      values = a.constraint_values[c];
+    }
+    exec.for_each(set.count, Constrain<Real>{set, cs, values, a.p.u, a.p.v}, "constraint");
   }
 }
 

@@ -4,6 +4,7 @@
 #include <cuda_runtime.h>
 
 #include <cstddef>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -55,6 +56,13 @@ public:
     if (count_ == 0) return;
     check(cudaMemcpy(ptr_, host.data(), count_ * sizeof(T), cudaMemcpyHostToDevice),
           std::string("upload of ") + name);
+  }
+  // Into the present allocation (its device pointer stays valid in the views that hold it).
+  void copy_in(const std::vector<T>& host, const char* name) {
+    if (host.size() != count_)
+      throw std::runtime_error(std::string("copy of ") + name + ": size differs from the device array's");
+    if (count_ == 0) return;
+    check(cudaMemcpy(ptr_, host.data(), count_ * sizeof(T), cudaMemcpyHostToDevice), std::string("copy of ") + name);
   }
   void download(std::vector<T>& host, const char* name) const {
     if (count_ == 0) return;

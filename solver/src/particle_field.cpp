@@ -1,0 +1,40 @@
+#include "breccia/solver/particle_field.hpp"
+
+#include <filesystem>
+
+#include "breccia/common/error.hpp"
+#include "breccia/common/h5.hpp"
+
+namespace breccia::solver {
+
+namespace {
+
+ParticleField read_h5_field(const std::string& path, const std::string& dataset, const std::string& case_file,
+                            const std::string& key) {
+  const h5::File f(path, h5::File::Mode::Read);
+  if (!f.exists(dataset))
+    throw InputError(case_file, key + ".dataset", "no dataset '" + dataset + "' in '" + path + "'",
+                     "the name of an N x 2 or N x 3 dataset of that file");
+  const auto dims = f.dims(dataset);
+  if (dims.size() != 2 || (dims[1] != 2 && dims[1] != 3))
+    throw InputError(path, dataset, "a dataset of rank " + std::to_string(dims.size()),
+                     "N x 2 or N x 3 numbers (one row per particle)");
+  return {f.read_doubles(dataset), static_cast<int>(dims[1])};
+}
+
+}  // namespace
+
+ParticleField read_particle_field(const std::string& path, const std::string& dataset, size_t particles,
+                                  const std::string& case_file, const std::string& key) {
+  if (!std::filesystem::is_regular_file(path))
+    throw InputError(case_file, key + ".file", "cannot open '" + path + "'",
+                     "a readable HDF5 (.h5) or CSV file, relative to the case file");
+  ParticleField field = read_h5_field(path, dataset, case_file, key);
+  const size_t rows = field.values.size() / static_cast<size_t>(field.columns);
+  if (rows != particles)
+    throw InputError(path, dataset.empty() ? "rows" : dataset, std::to_string(rows) + " rows",
+                     std::to_string(particles) + " rows, one per particle of the particle file in its order");
+  return field;
+}
+
+}  // namespace breccia::solver

@@ -20,6 +20,7 @@ set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+set(CPACK_STRIP_FILES ON)  # as Debian ships executables: no symbol tables
 # python3-*: breccia-post's chart scripts and the cases' run.sh helpers (numpy, h5py,
 # matplotlib); meshio (scripts/convert_mesh.py, two cases' specimen builders) and yaml (one
 # case's report) are recommended; openmpi-bin gives mpirun for distributed runs.

@@ -1,6 +1,7 @@
 # Breccia: one entry point for people and CI.
 #   make demo   - the default case end to end (concrete block with a charge hole)
 #   make test   - build and run the test suite
+#   make package - the .deb (CPack), breccia_<version>_<arch>.deb in $(BUILD)
 # Both install the Debian packages they need first (make deps).
 BUILD    ?= build
 JOBS     ?= $(shell nproc)
@@ -9,12 +10,12 @@ PYTHON   ?= /usr/bin/python3
 QUICK    ?=
 export PYTHON
 
-.PHONY: all deps configure build test demo bench clean help lammps-peri
+.PHONY: all deps configure build test demo bench clean help lammps-peri package check-package install
 
 all: build
 
 help:
-	@echo "make deps | build | test | demo | bench | case-NAME [QUICK=1] | clean"
+	@echo "make deps | build | test | demo | bench | case-NAME [QUICK=1] | install PREFIX=P | package | check-package | clean"
 
 deps:
 	@bash scripts/install-deps.sh
@@ -35,6 +36,20 @@ demo: build
 
 case-%: build
 	bash scripts/run_case.sh $(BUILD) cases/$* $(if $(QUICK),quick,full)
+
+# make install PREFIX=P: the tools, cases, chart scripts, planner data and docs under P
+# (README.md, "Install"); the tools find their data from their own location.
+PREFIX ?= /usr/local
+install: build
+	cmake --install $(BUILD) --prefix $(PREFIX)
+
+# make package: the .deb of the same layout under /usr (cmake/BrecciaPackage.cmake).
+package: build
+	cmake --build $(BUILD) --target package
+
+# make check-package: the .deb unpacked into an empty folder and the quick demo run from it alone.
+check-package: build
+	bash scripts/check-package.sh $(BUILD)
 
 bench: build
 	bash scripts/bench.sh $(BUILD)

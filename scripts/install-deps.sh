@@ -3,6 +3,7 @@
 set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config
+  dpkg-dev binutils           # make package: dpkg-shlibdeps (the .deb's library dependencies); check-package: strings
   libgmsh-dev gmsh            # mesher: OpenCASCADE geometry + tet/tri meshing
   libcgal-dev                 # geometry: exact predicates, AABB trees
   libeigen3-dev               # small dense linear algebra (least squares, 3x3)

@@ -11,6 +11,7 @@
 #include <span>
 #include <sstream>
 
+#include "breccia/common/data_dir.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/h5.hpp"
 #include "breccia/common/output_file.hpp"
@@ -28,14 +29,8 @@
 namespace breccia::postproc {
 namespace fs = std::filesystem;
 
-#ifndef BRECCIA_POSTPROC_SCRIPTS_DIR
-#define BRECCIA_POSTPROC_SCRIPTS_DIR ""
-#endif
-
-fs::path default_scripts_dir() {
-  if (const char* env = std::getenv("BRECCIA_POSTPROC_SCRIPTS")) return env;
-  return BRECCIA_POSTPROC_SCRIPTS_DIR;
-}
+// Installed as share/breccia/postproc/scripts (in the build tree: a link to postproc/scripts).
+fs::path default_scripts_dir() { return data_path("BRECCIA_POSTPROC_SCRIPTS", "postproc/scripts"); }
 
 namespace {
 

@@ -81,7 +81,7 @@ TEST(MpsClumping, PairedNeighboursStopTheRunNamingTheCause) {
 
 namespace {
 
-// The atlas's quasi-static pull (solver/atlas/mps_atlas.cpp, "MPS in tension"): a 2D strip
+// The atlas's quasi-static pull (tools/atlas/mps_atlas.cpp, "MPS in tension"): a 2D strip
 // 40 x 10 particles, dx 1 mm, rock (E 50 GPa, nu 0.25), two particle columns at each end driven
 // apart in x to a nominal strain, ramped smoothly over eight transit times and held for two.
 // Returns the smallest clumping ratio seen; throws RunError if Solid::step's check stops it.

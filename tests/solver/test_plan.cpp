@@ -1,4 +1,4 @@
-// Verification of breccia-plan (solver/plan, docs/plan.md): its cost estimate against what
+// Verification of breccia-plan (tools/plan, docs/plan.md): its cost estimate against what
 // the solver actually sets up and spends, its proposals against the error they actually
 // reach when run, and its handling of bad input.
 //
@@ -193,7 +193,7 @@ TEST(PlanCost, CountsAreExactAndSecondsWithinAFactorOnePointFiveOnThreeCases) {
 namespace {
 
 // The two problems and their error measures as the atlas sweeps them
-// (solver/atlas/problems.cpp, wave_speed_bar and quasi_static_bar), so that rows measured
+// (tools/atlas/problems.cpp, wave_speed_bar and quasi_static_bar), so that rows measured
 // here mean what the atlas's rows mean: same strips, same settings (PMB with the energy
 // surface correction, LPS without), same measures.
 constexpr double kSteelE = 200e9, kSteelRho = 7850;

@@ -188,7 +188,7 @@ CaseConfig proposed_config(const CaseConfig& c, const Proposal& p) {
   out.horizon_factor = p.horizon_factor;
   out.horizon_m.reset();
   if (p.precision == "float32") out.precision = solver::CaseConfig::Precision::Float32;
-  // The atlas measures PMB with the energy surface correction (solver/atlas, model_yaml):
+  // The atlas measures PMB with the energy surface correction (tools/atlas, model_yaml):
   // a PMB proposal must run as its rows ran to have their error. LPS has no correction.
   if (p.from_atlas && p.model == "pmb") out.surface_correction = true;
   if (!c.lattice) return out;

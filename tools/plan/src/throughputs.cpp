@@ -9,6 +9,7 @@
 #include <ctime>
 #include <filesystem>
 
+#include "breccia/common/data_dir.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/yaml_input.hpp"
 #include "breccia/plan/plan.hpp"
@@ -57,8 +58,8 @@ std::optional<double> Throughputs::relative_cost(PdModel model, PdModel referenc
 }
 
 std::string default_throughputs_path() {
-  if (const char* env = std::getenv("BRECCIA_PLAN_THROUGHPUTS")) return env;
-  return BRECCIA_PLAN_THROUGHPUTS;
+  // Installed as share/breccia/plan/throughputs.yaml (in the build tree: a link to tools/plan/).
+  return data_path("BRECCIA_PLAN_THROUGHPUTS", "plan/throughputs.yaml").string();
 }
 
 Throughputs load_throughputs(const std::string& path) {

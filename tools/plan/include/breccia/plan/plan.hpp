@@ -160,7 +160,7 @@ ErrorEstimate expected_error(const std::vector<AtlasRow>& atlas, const std::stri
                              int dimension, const std::string& kind, double m, double resolution);
 
 // The atlas records a nominal m (2, 3, 4, 5) and runs the solver at m + 0.015 so a lattice
-// point at exactly m spacings is inside (solver/atlas, horizon_factor). A row's m that is a
+// point at exactly m spacings is inside (tools/atlas, horizon_factor). A row's m that is a
 // multiple of 0.5 is read as nominal; any other value is the horizon factor itself.
 double horizon_factor_of_row_m(double m);
 

@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "breccia/common/data_dir.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/plan/plan.hpp"
 
@@ -112,8 +113,8 @@ double AtlasRow::resolution() const {
 }
 
 std::string default_atlas_path() {
-  if (const char* env = std::getenv("BRECCIA_PLAN_ATLAS")) return env;
-  return BRECCIA_PLAN_ATLAS;
+  // Installed as share/breccia/plan/atlas.csv (in the build tree: a link to docs/atlas/atlas.csv).
+  return data_path("BRECCIA_PLAN_ATLAS", "plan/atlas.csv").string();
 }
 
 std::vector<AtlasRow> read_atlas(const std::string& path) {

@@ -4,7 +4,7 @@
 #include <bit>
 
 #include "breccia/common/error.hpp"
-#include "breccia/postproc/union_find.hpp"
+#include "breccia/common/union_find.hpp"
 
 namespace breccia::postproc {
 

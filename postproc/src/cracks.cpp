@@ -7,7 +7,7 @@
 #include <unordered_map>
 
 #include "breccia/common/error.hpp"
-#include "breccia/postproc/union_find.hpp"
+#include "breccia/common/union_find.hpp"
 
 namespace breccia::postproc {
 namespace {

@@ -9,7 +9,7 @@ PACKAGES=(
   libeigen3-dev               # small dense linear algebra (least squares, 3x3)
   libhdf5-dev                 # particles.h5 / results.h5
   libyaml-cpp-dev             # case and specimen files
-  nlohmann-json3-dev          # JSON outputs (summary.json): non-finite values as null, strings escaped
+  nlohmann-json3-dev          # JSON outputs (summary.json, post.json; common/json_file.hpp): non-finite values as null, strings escaped
   libmuparser-dev             # fields by expression in case files (initial velocity, displacement)
   libvtk9-dev                 # postproc: VTU/VTP output, contouring
   libgtest-dev                # tests

@@ -9,6 +9,7 @@
 #include "breccia/common/error.hpp"
 #include "breccia/common/h5.hpp"
 #include "breccia/common/output_file.hpp"
+#include "breccia/common/xdmf.hpp"
 
 namespace breccia {
 
@@ -41,37 +42,33 @@ namespace {
 
 std::string xdmf_sidecar(const std::string& h5_name, const ParticleModel& m) {
   const size_t n = m.size();
+  auto hdf = [&](const char* dataset) { return h5_name + ":" + dataset; };
   std::ostringstream x;
-  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
-    << "  <Grid Name=\"particles\" GridType=\"Uniform\">\n"
-    << "   <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\" NodesPerElement=\"1\"/>\n"
+  x << xdmf_document_begin() << "  <Grid Name=\"particles\" GridType=\"Uniform\">\n"
+    << "   " << xdmf_polyvertex_topology(n) << "\n"
     << "   <Geometry GeometryType=\"XYZ\">\n"
-    << "    <DataItem Dimensions=\"" << n << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
-    << h5_name << ":/particles/position</DataItem>\n   </Geometry>\n";
-  auto attr = [&](const char* name, const char* path, const char* type, int prec) {
-    x << "   <Attribute Name=\"" << name << "\" AttributeType=\"Scalar\" Center=\"Node\">\n"
-      << "    <DataItem Dimensions=\"" << n << "\" NumberType=\"" << type << "\" Precision=\"" << prec
-      << "\" Format=\"HDF\">" << h5_name << ":" << path << "</DataItem>\n   </Attribute>\n";
+    << "    " << xdmf_data_item(xdmf_dimensions(n, 3), false, 8, hdf("/particles/position")) << "\n   </Geometry>\n";
+  auto attr = [&](const char* name, const char* path, bool integer, int prec) {
+    x << "   " << xdmf_attribute_begin(name, "Scalar", "Node") << "\n"
+      << "    " << xdmf_data_item(xdmf_dimensions(n), integer, prec, hdf(path)) << "\n   </Attribute>\n";
   };
-  attr("volume", "/particles/volume", "Float", 8);
-  attr("spacing", "/particles/spacing", "Float", 8);
-  attr("material_id", "/particles/material_id", "Int", 4);
+  attr("volume", "/particles/volume", false, 8);
+  attr("spacing", "/particles/spacing", false, 8);
+  attr("material_id", "/particles/material_id", true, 4);
   x << "  </Grid>\n";
   if (m.nodes_per_cell > 0) {
     const char* topo = m.nodes_per_cell == 4 ? "Tetrahedron" : "Triangle";
     x << "  <Grid Name=\"mesh\" GridType=\"Uniform\">\n"
       << "   <Topology TopologyType=\"" << topo << "\" NumberOfElements=\"" << n << "\">\n"
-      << "    <DataItem Dimensions=\"" << n << " " << m.nodes_per_cell
-      << "\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":/mesh/cells</DataItem>\n"
+      << "    " << xdmf_data_item(xdmf_dimensions(n, m.nodes_per_cell), true, 8, hdf("/mesh/cells")) << "\n"
       << "   </Topology>\n   <Geometry GeometryType=\"XYZ\">\n"
-      << "    <DataItem Dimensions=\"" << m.mesh_nodes_m.size() / 3
-      << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name
-      << ":/mesh/nodes</DataItem>\n   </Geometry>\n"
-      << "   <Attribute Name=\"material_id\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
-      << "    <DataItem Dimensions=\"" << n << "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">"
-      << h5_name << ":/particles/material_id</DataItem>\n   </Attribute>\n  </Grid>\n";
+      << "    " << xdmf_data_item(xdmf_dimensions(m.mesh_nodes_m.size() / 3, 3), false, 8, hdf("/mesh/nodes"))
+      << "\n   </Geometry>\n"
+      << "   " << xdmf_attribute_begin("material_id", "Scalar", "Cell") << "\n"
+      << "    " << xdmf_data_item(xdmf_dimensions(n), true, 4, hdf("/particles/material_id"))
+      << "\n   </Attribute>\n  </Grid>\n";
   }
-  x << " </Domain>\n</Xdmf>\n";
+  x << xdmf_document_end();
   return x.str();
 }
 

@@ -4,7 +4,7 @@
 #include <bit>
 
 #include "breccia/common/error.hpp"
-#include "breccia/postproc/union_find.hpp"
+#include "breccia/common/union_find.hpp"
 
 namespace breccia::postproc {
 
@@ -40,7 +40,7 @@ bool RemovedBonds::contains(int64_t i, int64_t j) const {
   return std::binary_search(p.begin(), p.end(), static_cast<int32_t>(j));
 }
 
-std::vector<int32_t> intact_components(const solver::Families& fam, const RemovedBonds& broken,
+std::vector<int32_t> intact_components(const Families& fam, const RemovedBonds& broken,
                                        const RemovedBonds& precracks, int32_t* component_count) {
   const size_t n = fam.particle_count();
   UnionFind uf(n);
@@ -68,7 +68,7 @@ size_t count_bits(std::span<const uint8_t> bits) {
   return c;
 }
 
-int64_t bond_index(const solver::Families& half, int64_t i, int64_t j) {
+int64_t bond_index(const Families& half, int64_t i, int64_t j) {
   if (i > j) std::swap(i, j);
   if (i < 0 || static_cast<size_t>(i) >= half.particle_count()) return -1;
   const auto first = half.neighbors.begin() + half.offsets[i], last = half.neighbors.begin() + half.offsets[i + 1];
@@ -76,7 +76,7 @@ int64_t bond_index(const solver::Families& half, int64_t i, int64_t j) {
   return it != last && *it == j ? static_cast<int64_t>(it - half.neighbors.begin()) : -1;
 }
 
-std::vector<int32_t> intact_components(const solver::Families& half, std::span<const uint8_t> graph,
+std::vector<int32_t> intact_components(const Families& half, std::span<const uint8_t> graph,
                                        std::span<const uint8_t> broken, const RemovedBonds& precracks,
                                        int32_t* component_count) {
   const size_t n = half.particle_count();

@@ -6,8 +6,9 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "breccia/common/cell_list.hpp"
 #include "breccia/common/error.hpp"
-#include "breccia/postproc/union_find.hpp"
+#include "breccia/common/union_find.hpp"
 
 namespace breccia::postproc {
 namespace {
@@ -79,7 +80,7 @@ CandidateFaces mesh_candidate_faces(const ParticleModel& m) {
   return out;
 }
 
-CandidateFaces lattice_candidate_faces(const ParticleModel& m, const solver::Families& fam) {
+CandidateFaces lattice_candidate_faces(const ParticleModel& m, const Families& fam) {
   CandidateFaces out;
   out.dimension = m.dimension;
   out.vertices_per_face = m.dimension == 3 ? 4 : 2;
@@ -146,7 +147,7 @@ CandidateFaces lattice_candidate_faces(const ParticleModel& m, const solver::Fam
   return out;
 }
 
-CandidateFaces candidate_faces(const ParticleModel& m, const solver::Families& fam) {
+CandidateFaces candidate_faces(const ParticleModel& m, const Families& fam) {
   return m.nodes_per_cell > 0 ? mesh_candidate_faces(m) : lattice_candidate_faces(m, fam);
 }
 
@@ -205,12 +206,10 @@ Smoothed smooth_areas(const CandidateFaces& faces, const CrackInputs& in, const 
     lo = lo.cwiseMin(c);
     hi = hi.cwiseMax(c);
   }
-  long long dims[3];
-  for (int d = 0; d < 3; ++d) dims[d] = static_cast<long long>((hi[d] - lo[d]) / cell) + 1;
-  auto cell_of = [&](const Eigen::Vector3d& c, int d) {
-    return std::min<long long>(dims[d] - 1, static_cast<long long>((c[d] - lo[d]) / cell));
-  };
-  auto key_of = [&](long long x, long long y, long long z) { return (z * dims[1] + y) * dims[0] + x; };
+  // The cell list's grid (common/cell_list.hpp) over the centroids; only occupied cells are
+  // kept (in maps), so its members are not sorted.
+  const CellGrid grid = CellGrid::covering({{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}}, cell);
+  const long long* dims = grid.count;
   struct Moments {
     double w = 0.0;
     Eigen::Vector3d first = Eigen::Vector3d::Zero();
@@ -219,7 +218,7 @@ Smoothed smooth_areas(const CandidateFaces& faces, const CrackInputs& in, const 
   std::unordered_map<long long, Moments> cell_moments;
   std::vector<long long> face_cell(nc);
   for (size_t k = 0; k < nc; ++k) {
-    face_cell[k] = key_of(cell_of(centroid[k], 0), cell_of(centroid[k], 1), cell_of(centroid[k], 2));
+    face_cell[k] = grid.index_of(centroid[k].data());
     Moments& m = cell_moments[face_cell[k]];
     const double w = weight[crack[k]] * faces.area_m2[crack[k]];
     m.w += w;
@@ -239,7 +238,7 @@ Smoothed smooth_areas(const CandidateFaces& faces, const CrackInputs& in, const 
     for (long long z = std::max(0LL, cz - 1); z <= std::min(dims[2] - 1, cz + 1); ++z)
       for (long long y = std::max(0LL, cy - 1); y <= std::min(dims[1] - 1, cy + 1); ++y)
         for (long long x = std::max(0LL, cx - 1); x <= std::min(dims[0] - 1, cx + 1); ++x) {
-          const auto it = cell_moments.find(key_of(x, y, z));
+          const auto it = cell_moments.find(grid.index(x, y, z));
           if (it == cell_moments.end()) continue;
           block.w += it->second.w;
           block.first += it->second.first;

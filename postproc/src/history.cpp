@@ -1,9 +1,6 @@
 #include "breccia/postproc/history.hpp"
 
-#include <cstdlib>
-#include <fstream>
-#include <sstream>
-
+#include "breccia/common/csv.hpp"
 #include "breccia/common/error.hpp"
 
 namespace breccia::postproc {
@@ -42,41 +39,11 @@ std::vector<std::string> History::probe_columns(const std::string& probe) const 
 }
 
 History read_history(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path.string(), "", "cannot be opened", "history.csv written by breccia-solve");
+  CsvColumns table = read_csv_columns(path, {.expected = "history.csv written by breccia-solve"});
   History h;
   h.path = path;
-  std::string line;
-  if (!std::getline(in, line)) throw InputError(path.string(), "header", "empty file", "a CSV header line");
-  {
-    std::stringstream ss(line);
-    std::string name;
-    while (std::getline(ss, name, ',')) {
-      while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
-      h.names.push_back(name);
-    }
-  }
-  h.columns.resize(h.names.size());
-  size_t row = 1;
-  while (std::getline(in, line)) {
-    ++row;
-    if (line.empty() || line == "\r") continue;
-    std::stringstream ss(line);
-    std::string cell;
-    size_t col = 0;
-    while (std::getline(ss, cell, ',')) {
-      if (col >= h.names.size()) break;
-      char* end = nullptr;
-      const double v = std::strtod(cell.c_str(), &end);
-      if (end == cell.c_str())
-        throw InputError(path.string(), "line " + std::to_string(row) + ", column " + h.names[col],
-                         "'" + cell + "'", "a number");
-      h.columns[col++].push_back(v);
-    }
-    if (col != h.names.size())
-      throw InputError(path.string(), "line " + std::to_string(row), std::to_string(col) + " values",
-                       std::to_string(h.names.size()) + " (one per header column)");
-  }
+  h.names = std::move(table.names);
+  h.columns = std::move(table.columns);
   return h;
 }
 

@@ -14,6 +14,7 @@
 #include "breccia/common/data_dir.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/h5.hpp"
+#include "breccia/common/json_file.hpp"
 #include "breccia/common/output_file.hpp"
 #include "breccia/common/progress.hpp"
 #include "breccia/postproc/bond_graph.hpp"
@@ -24,7 +25,6 @@
 #include "breccia/postproc/run_data.hpp"
 #include "breccia/postproc/size_distribution.hpp"
 #include "breccia/postproc/spectrum.hpp"
-#include "json_writer.hpp"
 
 namespace breccia::postproc {
 namespace fs = std::filesystem;
@@ -512,128 +512,151 @@ private:
            "spectrum_" + probe + ".png");
   }
 
-  void write_cracks_json(JsonWriter& j, const CrackResult& c) {
-    j.value("crack_area_m2", c.area_m2).value("fracture_area_m2", c.fracture_area_m2)
-        .value("precrack_area_m2", c.precrack_area_m2);
-    if (run_.dimension == 2) j.value("crack_length_m", c.length_m).value("fracture_length_m", c.fracture_length_m);
-    j.value("smoothed_crack_area_m2", c.smoothed_area_m2).value("smoothed_fracture_area_m2", c.smoothed_fracture_area_m2);
-    if (run_.dimension == 2) j.value("smoothed_crack_length_m", c.smoothed_length_m);
-    j.value("smoothing_radius_m", c.smoothing_radius_m);
+  // Doubles go through json_number (null when not finite: a ratio without a G0 area).
+  void write_cracks_json(Json& j, const CrackResult& c) {
+    j["crack_area_m2"] = json_number(c.area_m2);
+    j["fracture_area_m2"] = json_number(c.fracture_area_m2);
+    j["precrack_area_m2"] = json_number(c.precrack_area_m2);
+    if (run_.dimension == 2) {
+      j["crack_length_m"] = json_number(c.length_m);
+      j["fracture_length_m"] = json_number(c.fracture_length_m);
+    }
+    j["smoothed_crack_area_m2"] = json_number(c.smoothed_area_m2);
+    j["smoothed_fracture_area_m2"] = json_number(c.smoothed_fracture_area_m2);
+    if (run_.dimension == 2) j["smoothed_crack_length_m"] = json_number(c.smoothed_length_m);
+    j["smoothing_radius_m"] = json_number(c.smoothing_radius_m);
     // Without a fracture energy (MPS) the G0 x area terms would be zeros standing for "unknown".
     const bool g0 = !run_.fracture_energy_J_m2.empty();
-    j.value("crack_count", c.crack_count).value("crack_faces", c.face_count);
-    if (g0) j.value("G0_times_fracture_area_J", c.G0_area_J).value("G0_times_smoothed_fracture_area_J", c.G0_smoothed_area_J);
+    j["crack_count"] = c.crack_count;
+    j["crack_faces"] = c.face_count;
+    if (g0) {
+      j["G0_times_fracture_area_J"] = json_number(c.G0_area_J);
+      j["G0_times_smoothed_fracture_area_J"] = json_number(c.G0_smoothed_area_J);
+    }
     if (c.has_separating) {
-      j.value("separating_faces", c.separating_face_count).value("separating_fracture_area_m2", c.separating_fracture_area_m2)
-          .value("smoothed_separating_fracture_area_m2", c.smoothed_separating_fracture_area_m2);
-      if (g0) j.value("G0_times_smoothed_separating_area_J", c.G0_smoothed_separating_area_J);
+      j["separating_faces"] = c.separating_face_count;
+      j["separating_fracture_area_m2"] = json_number(c.separating_fracture_area_m2);
+      j["smoothed_separating_fracture_area_m2"] = json_number(c.smoothed_separating_fracture_area_m2);
+      if (g0) j["G0_times_smoothed_separating_area_J"] = json_number(c.G0_smoothed_separating_area_J);
     }
   }
 
   void write_json() {
-    JsonWriter j;
-    j.begin_object();
-    j.value("format", "breccia-post").value("format_version", 1);
-    j.value("results_file", run_.results_path.string()).value("particles_file", run_.particles_path.string());
-    j.value("model", run_.model).value("dimension", run_.dimension).value("particles", run_.size());
-    j.value("crack_criterion", opt_.crack_criterion == CrackCriterion::Bond ? "bond" : "damage");
-    j.value("damage_threshold", opt_.damage_threshold);
+    Json j;
+    j["format"] = "breccia-post";
+    j["format_version"] = 1;
+    j["results_file"] = run_.results_path.string();
+    j["particles_file"] = run_.particles_path.string();
+    j["model"] = run_.model;
+    j["dimension"] = run_.dimension;
+    j["particles"] = run_.size();
+    j["crack_criterion"] = opt_.crack_criterion == CrackCriterion::Bond ? "bond" : "damage";
+    j["damage_threshold"] = json_number(opt_.damage_threshold);
     if (!records_.empty()) {
       const StepRecord& r = records_.back();
-      j.value("step", r.info.step).value("time_s", r.info.time_s);
+      j["step"] = r.info.step;
+      j["time_s"] = json_number(r.info.time_s);
       if (r.has_cracks) {
-        j.begin_object("cracks");
-        write_cracks_json(j, r.cracks);
-        j.end_object();
+        Json cracks = Json::object();
+        write_cracks_json(cracks, r.cracks);
+        j["cracks"] = std::move(cracks);
       }
     }
     if (!fragments_.component.empty()) {
-      j.begin_object("fragments");
-      j.value("fragment_count", fragments_.fragments.size()).value("component_count", fragments_.component_count);
-      j.value("min_fragment_particles", opt_.min_fragment_particles);
-      j.value("filtered_out_count", fragments_.filtered_count).value("filtered_out_mass_kg", fragments_.filtered_mass_kg);
+      Json f;
+      f["fragment_count"] = fragments_.fragments.size();
+      f["component_count"] = fragments_.component_count;
+      f["min_fragment_particles"] = opt_.min_fragment_particles;
+      f["filtered_out_count"] = fragments_.filtered_count;
+      f["filtered_out_mass_kg"] = json_number(fragments_.filtered_mass_kg);
       // MPS with fracture: particles where the solver's own `fragment` labels split differently (0: same pieces).
-      if (solver_fragment_mismatches_ >= 0) j.value("solver_fragment_mismatches", solver_fragment_mismatches_);
+      if (solver_fragment_mismatches_ >= 0) f["solver_fragment_mismatches"] = solver_fragment_mismatches_;
       if (!fragments_.fragments.empty()) {
         const Fragment& big = fragments_.fragments.front();
-        j.value("largest_mass_kg", big.mass_kg).value("largest_volume_m3", big.volume_m3);
+        f["largest_mass_kg"] = json_number(big.mass_kg);
+        f["largest_volume_m3"] = json_number(big.volume_m3);
       }
-      j.end_object();
-      j.begin_object("size_distribution");
-      j.value("size_measure", opt_.size_by_diameter ? "equivalent_diameter" : "sieve_size");
-      j.value("fragment_count", dist_.fragment_count).value("x50_m", dist_.x50_m).value("x80_m", dist_.x80_m);
-      j.value("fitted", dist_.fitted);
+      j["fragments"] = std::move(f);
+      Json d;
+      d["size_measure"] = opt_.size_by_diameter ? "equivalent_diameter" : "sieve_size";
+      d["fragment_count"] = dist_.fragment_count;
+      d["x50_m"] = json_number(dist_.x50_m);
+      d["x80_m"] = json_number(dist_.x80_m);
+      d["fitted"] = dist_.fitted;
       if (dist_.fitted) {
         const auto& rr = dist_.rosin_rammler;
         const auto& sw = dist_.swebrec;
-        j.begin_object("rosin_rammler").value("xc_m", rr.xc_m).value("n", rr.n).value("x50_m", rr.x50_m)
-            .value("x80_m", rr.x80_m).value("r_squared", rr.r2).end_object();
-        j.begin_object("swebrec").value("xmax_m", sw.xmax_m).value("x50_m", sw.x50_m).value("b", sw.b)
-            .value("x80_m", sw.x80_m).value("r_squared", sw.r2).end_object();
+        d["rosin_rammler"] = Json{{"xc_m", json_number(rr.xc_m)}, {"n", json_number(rr.n)},
+                                  {"x50_m", json_number(rr.x50_m)}, {"x80_m", json_number(rr.x80_m)},
+                                  {"r_squared", json_number(rr.r2)}};
+        d["swebrec"] = Json{{"xmax_m", json_number(sw.xmax_m)}, {"x50_m", json_number(sw.x50_m)},
+                            {"b", json_number(sw.b)}, {"x80_m", json_number(sw.x80_m)},
+                            {"r_squared", json_number(sw.r2)}};
       }
-      j.end_object();
+      j["size_distribution"] = std::move(d);
     }
     if (energy_done_) {
-      j.begin_object("energy");
-      j.value("history_row", energy_row_).value("dissipated_J", energy_dissipated_J_);
-      j.value("G0_times_crack_area_J", energy_G0_area_J_);
-      j.value("ratio", energy_G0_area_J_ > 0 ? energy_dissipated_J_ / energy_G0_area_J_ : NAN);
-      j.value("G0_times_face_area_J", energy_G0_face_area_J_);
-      j.value("ratio_face_area", energy_G0_face_area_J_ > 0 ? energy_dissipated_J_ / energy_G0_face_area_J_ : NAN);
-      j.value("G0_times_separating_area_J", energy_G0_separating_area_J_);
-      j.value("ratio_separating", energy_G0_separating_area_J_ > 0 ? energy_dissipated_J_ / energy_G0_separating_area_J_ : NAN);
-      j.value("relative_imbalance", energy_imbalance_);
+      auto ratio = [&](double g0_area) { return json_number(g0_area > 0 ? energy_dissipated_J_ / g0_area : NAN); };
+      Json e;
+      e["history_row"] = energy_row_;
+      e["dissipated_J"] = json_number(energy_dissipated_J_);
+      e["G0_times_crack_area_J"] = json_number(energy_G0_area_J_);
+      e["ratio"] = ratio(energy_G0_area_J_);
+      e["G0_times_face_area_J"] = json_number(energy_G0_face_area_J_);
+      e["ratio_face_area"] = ratio(energy_G0_face_area_J_);
+      e["G0_times_separating_area_J"] = json_number(energy_G0_separating_area_J_);
+      e["ratio_separating"] = ratio(energy_G0_separating_area_J_);
+      e["relative_imbalance"] = json_number(energy_imbalance_);
       if (!mps_terms_.empty()) {
-        j.begin_object("mps_terms");  // what each balance term is made of in an MPS run
-        for (const auto& [term, source] : mps_terms_) j.value(term, source);
-        j.end_object();
+        Json terms;  // what each balance term is made of in an MPS run
+        for (const auto& [term, source] : mps_terms_) terms[term] = source;
+        e["mps_terms"] = std::move(terms);
       }
-      j.end_object();
+      j["energy"] = std::move(e);
     }
     if (!spectra_.empty()) {
-      j.begin_array("spectra");
+      Json spectra = Json::array();
       for (const auto& sp : spectra_) {
         for (const auto& [comp, s] : sp.components) {
-          j.begin_object().value("probe", sp.probe).value("component", comp)
-              .value("window", window_name(spectrum_window(opt_)));
-          if (opt_.gate_s) {
-            j.begin_array("gate_s").value("", opt_.gate_s->first).value("", opt_.gate_s->second).end_array();
-          }
-          j.value("samples", static_cast<long long>(s.samples)).value("transform_length", static_cast<long long>(s.transform_length));
-          if (opt_.band_Hz) j.value("band_Hz", *opt_.band_Hz);
-          j.value("resampled", sp.resampled).value("reference_frequency_Hz", s.reference_frequency_Hz);
-          j.value("reference_amplitude", s.reference_amplitude);
-          j.begin_array("harmonics");
+          Json o;
+          o["probe"] = sp.probe;
+          o["component"] = comp;
+          o["window"] = window_name(spectrum_window(opt_));
+          if (opt_.gate_s) o["gate_s"] = Json::array({json_number(opt_.gate_s->first), json_number(opt_.gate_s->second)});
+          o["samples"] = static_cast<long long>(s.samples);
+          o["transform_length"] = static_cast<long long>(s.transform_length);
+          if (opt_.band_Hz) o["band_Hz"] = json_number(*opt_.band_Hz);
+          o["resampled"] = sp.resampled;
+          o["reference_frequency_Hz"] = json_number(s.reference_frequency_Hz);
+          o["reference_amplitude"] = json_number(s.reference_amplitude);
+          Json harmonics = Json::array();
           for (const auto& hm : s.harmonics)
-            j.begin_object().value("order", hm.order).value("frequency_Hz", hm.frequency_Hz)
-                .value("amplitude", hm.amplitude).value("ratio", hm.ratio).end_object();
-          j.end_array().end_object();
+            harmonics.push_back(Json{{"order", hm.order}, {"frequency_Hz", json_number(hm.frequency_Hz)},
+                                     {"amplitude", json_number(hm.amplitude)}, {"ratio", json_number(hm.ratio)}});
+          o["harmonics"] = std::move(harmonics);
+          spectra.push_back(std::move(o));
         }
       }
-      j.end_array();
+      j["spectra"] = std::move(spectra);
     }
     if (records_.size() > 1) {
-      j.begin_array("outputs");
+      Json outputs = Json::array();
       for (const auto& r : records_) {
-        j.begin_object().value("step", r.info.step).value("time_s", r.info.time_s);
-        if (r.has_cracks) write_cracks_json(j, r.cracks);
-        if (r.has_fragments) j.value("fragment_count", r.fragment_count);
-        j.end_object();
+        Json o;
+        o["step"] = r.info.step;
+        o["time_s"] = json_number(r.info.time_s);
+        if (r.has_cracks) write_cracks_json(o, r.cracks);
+        if (r.has_fragments) o["fragment_count"] = r.fragment_count;
+        outputs.push_back(std::move(o));
       }
-      j.end_array();
+      j["outputs"] = std::move(outputs);
     }
-    j.begin_array("files");
-    for (const auto& f : summary_.written) j.value("", f);
-    j.value("", "post.json");
-    j.end_array();
-    j.begin_array("plot_failures");
-    for (const auto& f : summary_.plot_failures) j.value("", f);
-    j.end_array();
-    j.begin_array("notes");
-    for (const auto& f : notes_) j.value("", f);
-    j.end_array();
-    j.end_object();
-    write_text_file(summary_.post_dir / "post.json", j.str());
+    Json files = summary_.written;
+    files.push_back("post.json");
+    j["files"] = std::move(files);
+    j["plot_failures"] = summary_.plot_failures;
+    j["notes"] = notes_;
+    write_json_file(summary_.post_dir / "post.json", j);
     summary_.written.push_back("post.json");
   }
 

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "breccia/common/csv.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/expression.hpp"
 #include "breccia/common/yaml_input.hpp"
@@ -69,24 +70,20 @@ HistorySpec parse_history(const Section& s, Quantity q, const std::string& dir) 
   } else {
     h.kind = HistorySpec::Kind::Table;
     const std::string csv = resolve(dir, s.text("file"));
-    std::ifstream in(csv);
-    if (!in) throw InputError(s.file(), s.field("file"), "cannot open '" + csv + "'", "a CSV file time_s,value");
-    std::string line;
-    int lineno = 0;
-    while (std::getline(in, line)) {
-      ++lineno;
-      if (line.empty() || line[0] == '#') continue;
-      std::replace(line.begin(), line.end(), ',', ' ');
-      std::istringstream ls(line);
-      double t, v;
-      if (!(ls >> t >> v)) {
-        if (lineno == 1) continue;  // header
-        throw InputError(csv, "line " + std::to_string(lineno), "'" + line + "'", "two numbers: time_s, value");
-      }
+    if (!std::filesystem::exists(csv))
+      throw InputError(s.file(), s.field("file"), "cannot open '" + csv + "'", "a CSV file time_s,value");
+    // Rows time_s, value under an optional header; '#' lines are comments.
+    const CsvColumns table =
+        read_csv_columns(csv, {.header_optional = true, .comments = true, .expected = "a CSV file time_s,value"});
+    if (table.columns.size() < 2)
+      throw InputError(csv, "line " + std::to_string(table.line.empty() ? 1 : table.line.front()),
+                       std::to_string(table.columns.size()) + " column", "two numbers: time_s, value");
+    for (size_t r = 0; r < table.columns[0].size(); ++r) {
+      const double t = table.columns[0][r];
       if (!h.table_time.empty() && t <= h.table_time.back())
-        throw InputError(csv, "line " + std::to_string(lineno), "time does not increase", "increasing times");
+        throw InputError(csv, "line " + std::to_string(table.line[r]), "time does not increase", "increasing times");
       h.table_time.push_back(t);
-      h.table_value.push_back(v);
+      h.table_value.push_back(table.columns[1][r]);
     }
     if (h.table_time.size() < 2) throw InputError(csv, "", "fewer than two rows", "a table of at least two rows");
   }

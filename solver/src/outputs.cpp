@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "breccia/common/csv.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/output_file.hpp"
 #include "breccia/common/particle_file.hpp"
@@ -269,7 +270,7 @@ HistoryWriter::HistoryWriter(const PdSystem& s, const std::string& out_dir, bool
     std::string line, kept;
     bool header = true;
     while (std::getline(in, line)) {
-      if (!header && std::stoll(line.substr(0, line.find(','))) > s.step) break;
+      if (!header && std::stoll(split_csv_line(line, 2)[0]) > s.step) break;  // column 1: step
       kept += line + "\n";
       header = false;
     }

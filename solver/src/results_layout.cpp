@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "breccia/common/output_file.hpp"
+#include "breccia/common/xdmf.hpp"
 
 namespace breccia::solver {
 
@@ -52,27 +53,22 @@ void finish_results_output(const h5::File& f, int index, long long step, double 
 void write_results_xdmf(const std::string& path, size_t n, const std::vector<double>& times,
                         const std::vector<XdmfField>& fields) {
   std::ostringstream x;
-  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
-    << "  <Grid Name=\"results\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  x << xdmf_document_begin() << "  <Grid Name=\"results\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
   auto item = [&](const std::string& dataset, int components, bool integer) {
-    const std::string dims = std::to_string(n) + (components > 1 ? " " + std::to_string(components) : "");
-    return "<DataItem Dimensions=\"" + dims + "\" NumberType=\"" + (integer ? "Int" : "Float") + "\" Precision=\"" +
-           (integer ? "4" : "8") + "\" Format=\"HDF\">results.h5:" + dataset + "</DataItem>";
+    return xdmf_data_item(xdmf_dimensions(n, components), integer, integer ? 4 : 8, "results.h5:" + dataset);
   };
   for (size_t k = 0; k < times.size(); ++k) {
     const std::string g = results_output_group(static_cast<int>(k));
     x << "   <Grid Name=\"step" << k << "\" GridType=\"Uniform\">\n"
       << "    <Time Value=\"" << times[k] << "\"/>\n"
-      << "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\" NodesPerElement=\"1\"/>\n"
+      << "    " << xdmf_polyvertex_topology(n) << "\n"
       << "    <Geometry GeometryType=\"XYZ\">" << item("/particles/position", 3, false) << "</Geometry>\n";
-    for (const XdmfField& v : fields) {
-      const char* type = v.components == 3 ? "Vector" : v.components == 6 ? "Tensor6" : "Scalar";
-      x << "    <Attribute Name=\"" << v.name << "\" AttributeType=\"" << type << "\" Center=\"Node\">"
+    for (const XdmfField& v : fields)
+      x << "    " << xdmf_attribute_begin(v.name, xdmf_attribute_type(v.components), "Node")
         << item(g + "/" + v.name, v.components, v.integer) << "</Attribute>\n";
-    }
     x << "   </Grid>\n";
   }
-  x << "  </Grid>\n </Domain>\n</Xdmf>\n";
+  x << "  </Grid>\n" << xdmf_document_end();
   write_text_file(path, x.str());
 }
 

@@ -11,10 +11,8 @@
 #include <filesystem>
 #include <sstream>
 
-#include <nlohmann/json.hpp>
-
 #include "breccia/common/error.hpp"
-#include "breccia/common/output_file.hpp"
+#include "breccia/common/json_file.hpp"
 #include "breccia/common/reproducible_sum.hpp"
 #include "breccia/common/units.hpp"
 #include "breccia/solver/correspondence.hpp"
@@ -30,19 +28,12 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   const double bytes_per_particle =
       (s.bond_count() * (sizeof(int32_t) + 4 * sizeof(double) + 2 * sizeof(float) + 1) +
        s.n * (13 * sizeof(double) + 2 * sizeof(int32_t) + 1)) / std::max<double>(1.0, s.n);
-  // nlohmann::json escapes the strings (a message may quote a path); a value that is not
+  // json_file.hpp escapes the strings (a message may quote a path); a value that is not
   // finite (a run stopped for blowing up) is written as null and named in non_finite, so
   // the file stays JSON that any strict parser reads.
-  nlohmann::ordered_json j;
+  Json j;
   std::vector<std::string> non_finite;
-  auto number = [&](const char* key, double v) {
-    if (std::isfinite(v)) {
-      j[key] = v;
-    } else {
-      j[key] = nullptr;
-      non_finite.push_back(key);
-    }
-  };
+  auto number = [&](const char* key, double v) { set_json_number(j, key, v, &non_finite); };
   j["case"] = s.config.name;
   j["status"] = r.status;
   j["message"] = r.message;
@@ -63,7 +54,7 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   number("stable_dt_s", s.stable_dt);
   number("silling_askari_dt_s", s.silling_askari_dt);
   number("setup_wall_s", setup_s);
-  nlohmann::ordered_json phases;  // where the set-up's time went (setup_system)
+  Json phases;  // where the set-up's time went (setup_system)
   for (const auto& [name, seconds] : s.setup_phases) phases[name] = seconds;
   j["setup_phases_s"] = phases;
   j["stable_step_force_passes"] = s.stable_step_passes;
@@ -90,7 +81,7 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   if (!non_finite.empty())
     j["non_finite_note"] = "these values were not finite when the run stopped (status " + r.status +
                            "): written as null; the last good values are in history.csv";
-  write_text_file(o.out_dir + "/summary.json", j.dump(2) + "\n");
+  write_json_file(o.out_dir + "/summary.json", j);
 }
 
 }  // namespace

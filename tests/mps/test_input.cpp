@@ -11,6 +11,7 @@
 #include <string>
 
 #include "breccia/common/error.hpp"
+#include "breccia/common/json_file.hpp"
 #include "breccia/common/particle_file.hpp"
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/simulation.hpp"
@@ -122,12 +123,13 @@ TEST(MpsCli, RunWritesHistorySummaryAndResults) {
   std::string header;
   std::getline(hist, header);
   EXPECT_EQ(header.rfind("time_s,A_velocity_x", 0), 0u) << header;
-  std::ifstream js(dir / "out" / "summary.json");
-  const std::string summary((std::istreambuf_iterator<char>(js)), std::istreambuf_iterator<char>());
-  EXPECT_NE(summary.find("\"steps\""), std::string::npos);
-  EXPECT_NE(summary.find("\"dt_s\""), std::string::npos);
-  EXPECT_NE(summary.find("\"wall_time_s\""), std::string::npos);
-  EXPECT_NE(summary.find("\"particles\": 400"), std::string::npos) << summary;  // 20 x 20 lattice
+  // A strict parse (escaped strings, no NaN tokens), then the keys.
+  const breccia::Json summary = breccia::read_json_file(dir / "out" / "summary.json");
+  EXPECT_TRUE(summary.contains("steps"));
+  EXPECT_TRUE(summary.at("dt_s").is_number());
+  EXPECT_TRUE(summary.at("wall_time_s").is_number());
+  EXPECT_EQ(summary.at("particles"), 400) << summary;  // 20 x 20 lattice
+  EXPECT_EQ(summary.at("case_file"), (dir / "case.yaml").string());
 }
 
 TEST(MpsParticleFile, SpecimenFromParticlesH5MatchesTheEquivalentLattice) {

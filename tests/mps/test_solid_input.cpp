@@ -10,6 +10,7 @@
 #include <string>
 
 #include "breccia/common/error.hpp"
+#include "breccia/common/json_file.hpp"
 #include "breccia/common/h5.hpp"
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/solid_case.hpp"
@@ -135,10 +136,9 @@ TEST(MpsSolidCli, StressCaseWritesStressAndPlasticStrainSnapshots) {
   EXPECT_EQ(header,
             "time_s,plastic_fraction,kinetic_energy_J,stress_work_J,hourglass_energy_J,contact_energy_J,gravity_energy_J,"
             "floor_force_N");
-  std::ifstream js(dir / "out" / "summary.json");
-  std::ostringstream summary;
-  summary << js.rdbuf();
-  EXPECT_NE(summary.str().find("\"formulation\": \"stress\""), std::string::npos) << summary.str();
+  const breccia::Json summary = breccia::read_json_file(dir / "out" / "summary.json");  // strict parse
+  EXPECT_EQ(summary.at("formulation"), "stress") << summary;
+  EXPECT_TRUE(summary.at("friction_dissipation_j").is_number());
 }
 
 // Contact keys (docs/mps.md, "Contact"): two bodies, a frictional floor, a rigid polygon.

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
+#include "breccia/common/families.hpp"
 #include "breccia/common/h5.hpp"
 #include "breccia/common/particle_file.hpp"
-#include "breccia/solver/family.hpp"
 
 namespace breccia::postproc::testing {
 
@@ -102,7 +102,7 @@ inline ParticleModel merge(const std::vector<ParticleModel>& parts) {
 inline std::vector<int64_t> bonds_where(const ParticleModel& m, double horizon_m,
                                         const std::function<bool(const double*, const double*)>& cut) {
   const std::vector<double> horizon(m.size(), horizon_m);
-  const auto fam = solver::build_families(m.position_m, horizon);
+  const auto fam = build_families(m.position_m, horizon);
   std::vector<int64_t> out;
   for (size_t i = 0; i < m.size(); ++i)
     for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
@@ -159,7 +159,7 @@ inline void write_run(const SyntheticRun& run) {
   f.write("/precrack_bonds", run.precrack_bonds, {run.precrack_bonds.size() / 2, 2});
   // The bond list as breccia-solve writes it: each family pair once from its lower index.
   // Here the families have no pad bonds, so every bond is within the horizon.
-  const auto fam = solver::build_families(written.position_m, std::vector<double>(n, run.horizon_m));
+  const auto fam = build_families(written.position_m, std::vector<double>(n, run.horizon_m));
   std::vector<int64_t> offsets(n + 1, 0);
   std::vector<int32_t> partners;
   for (size_t i = 0; i < n; ++i) {

@@ -18,7 +18,7 @@ constexpr double kH = 1e-3;  // cell edge [m]
 
 struct Cracked {
   ParticleModel model;
-  solver::Families families;
+  Families families;
   CandidateFaces faces;
   RemovedBonds broken, precracks;
   std::vector<double> fracture_energy{100.0};
@@ -30,7 +30,7 @@ struct Cracked {
 Cracked make(ParticleModel m, double horizon, const std::vector<int64_t>& broken, const std::vector<int64_t>& pre = {}) {
   Cracked c;
   c.model = std::move(m);
-  c.families = solver::build_families(c.model.position_m, std::vector<double>(c.model.size(), horizon));
+  c.families = build_families(c.model.position_m, std::vector<double>(c.model.size(), horizon));
   c.faces = candidate_faces(c.model, c.families);
   c.broken = RemovedBonds(broken, c.model.size());
   c.precracks = RemovedBonds(pre, c.model.size());

@@ -20,7 +20,7 @@ constexpr double kDensity = 2500.0;
 
 FragmentResult fragments_of(const ParticleModel& m, double horizon, const std::vector<int64_t>& broken,
                             int64_t min_particles = 1, const std::vector<double>& displacement = {}) {
-  const auto fam = solver::build_families(m.position_m, std::vector<double>(m.size(), horizon));
+  const auto fam = build_families(m.position_m, std::vector<double>(m.size(), horizon));
   int32_t count = 0;
   const auto comp = intact_components(fam, RemovedBonds(broken, m.size()), RemovedBonds({}, m.size()), &count);
   const std::vector<double> density(m.size(), kDensity);
@@ -162,8 +162,8 @@ TEST(DeformedMesh, NodesOnTheCrackAreDuplicatedPerFragmentAndMoveWithIt) {
 TEST(Fragments, BrokenBitsOverTheHalfBondListGiveThePairListComponents) {
   const auto m = bt::structured_mesh(3, {5, 4, 4}, kH);
   const double horizon = 1.6 * kH;
-  const auto fam = solver::build_families(m.position_m, std::vector<double>(m.size(), horizon));
-  solver::Families half;
+  const auto fam = build_families(m.position_m, std::vector<double>(m.size(), horizon));
+  Families half;
   half.offsets.assign(m.size() + 1, 0);
   for (size_t i = 0; i < m.size(); ++i) {
     for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k)

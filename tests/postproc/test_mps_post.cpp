@@ -15,6 +15,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "breccia/common/csv.hpp"
 #include "breccia/common/h5.hpp"
 #include "breccia/postproc/bond_graph.hpp"
 #include "breccia/postproc/history.hpp"
@@ -109,17 +110,10 @@ bool same_partition(const std::vector<int32_t>& a, const std::vector<int32_t>& b
 
 // fragments.csv: the volume_m3 column, sorted.
 std::vector<double> fragment_volumes(const fs::path& csv) {
-  std::ifstream in(csv);
-  std::string line;
-  std::getline(in, line);
-  std::vector<double> v;
-  while (std::getline(in, line)) {
-    std::stringstream ss(line);
-    std::string cell;
-    for (int c = 0; c < 3 && std::getline(ss, cell, ','); ++c) {
-    }
-    v.push_back(std::stod(cell));
-  }
+  const breccia::CsvColumns t = breccia::read_csv_columns(csv, {});
+  const auto at = std::find(t.names.begin(), t.names.end(), "volume_m3");
+  if (at == t.names.end()) return {};
+  std::vector<double> v = t.columns[static_cast<size_t>(at - t.names.begin())];
   std::sort(v.begin(), v.end());
   return v;
 }

@@ -22,6 +22,7 @@
 
 #include "cpu_gpu_compare.hpp"
 #include "breccia/common/error.hpp"
+#include "breccia/common/json_file.hpp"
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/cuda_solid.hpp"
 #include "breccia/mps/fracture.hpp"
@@ -761,9 +762,8 @@ TEST(MpsSolidCuda, FeaturesTheLauncherDoesNotRunAreRefusedNamingTheirKeys) {
   EXPECT_FALSE(std::filesystem::exists(out + "/history.csv"));
   o.cpu_when_refused = true;
   EXPECT_EQ(run_case(file, out, o), 0);
-  std::ifstream summary(out + "/summary.json");
-  const std::string text((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("\"backend\": \"cpu"), std::string::npos) << text;
+  const breccia::Json summary = breccia::read_json_file(out + "/summary.json");  // strict parse
+  EXPECT_EQ(summary.at("backend").get<std::string>().rfind("cpu", 0), 0u) << summary;
 }
 
 // A Solid built by hand (no case file) is guarded by attach_device itself.

@@ -12,6 +12,7 @@
 
 #include "atlas.hpp"
 #include "measures.hpp"
+#include "breccia/common/csv.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/particle_file.hpp"
 #include "breccia/solver/calibration.hpp"
@@ -41,19 +42,13 @@ struct GradedRow {
   std::string message;
 };
 
-std::string clean(std::string s) {
-  for (char& c : s)
-    if (c == ',' || c == '"' || c == '\n') c = c == ',' ? ';' : ' ';
-  return s;
-}
-
 std::string line_of(const GradedRow& r) {
   char b[512];
   std::snprintf(b, sizeof b, "%s,%.4g,%d,%zu,%zu,%lld,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%lld,%s,%s,%.4g,", r.model.c_str(),
                 r.grading, r.dual_horizon ? 1 : 0, r.particles, r.bonds, static_cast<long long>(r.min_family),
                 r.min_local_m, r.coarse_energy_error, r.fine_energy_error, r.ghost_force, r.net_force, r.reflected, r.steps,
                 r.status.c_str(), r.detected_by.c_str(), r.energy_ratio);
-  return std::string(b) + clean(r.message);
+  return std::string(b) + csv_plain_field(r.message);
 }
 
 // Affine strains (uniaxial and shear): the energy of the interiors of both halves against the

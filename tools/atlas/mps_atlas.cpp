@@ -17,6 +17,7 @@
 
 // The MPS headers define BRECCIA_HD empty (their functions say `inline` themselves), the
 // PD headers as `inline`: the MPS ones come first and the macro is reset for the PD ones.
+#include "breccia/common/csv.hpp"
 #include "breccia/mps/solid.hpp"
 #include "breccia/mps/stability_checks.hpp"
 #include "breccia/mps/strip_pull.hpp"
@@ -254,10 +255,7 @@ void mps_tension_stability(const SweepPlan& plan, CsvTable& table) {
         std::snprintf(line, sizeof line, "%.3g,%s,%.3g,%.4g,%zu,%zu,%lld,%.4g,%.4g,%s,%s,", ramp_transits, repulsive ? "repulsive" : "conservative",
                       alpha, strain, solid.size(), solid.bonds().size(), solid.steps(), min_ratio,
                       max_speed / (strain * c_l + 1e-300), status.c_str(), detected.c_str());
-        std::string text = message;
-        for (char& ch : text)
-          if (ch == ',' || ch == '\n' || ch == '"') ch = ch == ',' ? ';' : ' ';
-        table.add(std::string(line) + text);
+        table.add(std::string(line) + csv_plain_field(message));
         std::fprintf(stderr, "[atlas] stability mps ramp %.1f %s alpha %.2f strain %.3g: %s, min neighbour ratio %.3g at (%.1f, %.1f) mm (%s)\n",
                      ramp_transits, repulsive ? "repulsive" : "conservative", alpha, strain, status.c_str(), min_ratio, worst_x * 1e3, worst_y * 1e3, detected.c_str());
       }

@@ -15,6 +15,7 @@
 
 #include "atlas.hpp"
 #include "stability_correspondence.hpp"
+#include "breccia/common/csv.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/solver/family_check.hpp"
 #include "breccia/solver/run.hpp"
@@ -49,12 +50,6 @@ StabilityRow make_row(const std::string& study, const std::string& model, int di
   return r;
 }
 
-std::string clean(std::string s) {  // one CSV field: no commas, quotes or newlines
-  for (char& c : s)
-    if (c == ',' || c == '"' || c == '\n') c = c == ',' ? ';' : ' ';
-  return s;
-}
-
 std::string line_of(const StabilityRow& r) {
   char b[256];
   std::snprintf(b, sizeof b, "%s,%s,%d,%s,%.4g,%.4g,%zu,%zu,%lld,%lld,", r.study.c_str(), r.model.c_str(),
@@ -62,7 +57,7 @@ std::string line_of(const StabilityRow& r) {
                 static_cast<long long>(r.min_family), r.steps);
   char e[96];
   std::snprintf(e, sizeof e, ",%.4g,%.4g,", r.energy_ratio, r.energy_scatter);
-  return std::string(b) + r.status + "," + r.detected_by + e + clean(r.message);
+  return std::string(b) + r.status + "," + r.detected_by + e + csv_plain_field(r.message);
 }
 
 // A smooth standing-wave velocity field (as tests/solver/test_dynamics.cpp): energy in long

@@ -13,6 +13,7 @@
 #include <random>
 #include <sstream>
 
+#include "breccia/common/csv.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/output_file.hpp"
 #include "breccia/solver/correspondence.hpp"
@@ -25,12 +26,6 @@ std::string number(double v) {
   char b[32];
   std::snprintf(b, sizeof b, "%.4g", v);
   return b;
-}
-
-std::string clean(std::string s) {
-  for (char& c : s)
-    if (c == ',' || c == '"' || c == '\n') c = c == ',' ? ';' : ' ';
-  return s;
 }
 
 }  // namespace
@@ -110,7 +105,7 @@ void stability_correspondence(const SweepPlan& plan, SpecimenMaker& maker, CsvTa
       std::snprintf(b, sizeof b, "zero_energy_%s,%s,2,lattice,%.4g,0.8,%zu,%zu,%lld,%lld,", scenario.c_str(), model.c_str(), m, particles,
                     bonds, static_cast<long long>(min_family), tripped_at > 0 ? tripped_at : ran);
       table.add(std::string(b) + status + "," + detected_by + "," + number(energy_ratio) + "," + number(max_ratio) + "," +
-                clean(message));
+                csv_plain_field(message));
       std::fprintf(stderr, "[atlas] correspondence %s m=%.1f G=%g: %s%s, max non-affine ratio %.3g, energy x%.3g\n", scenario.c_str(), m, G,
                    status.c_str(), tripped_at > 0 ? (" at step " + std::to_string(tripped_at)).c_str() : "", max_ratio,
                    energy_ratio);

@@ -6,6 +6,8 @@
 
 #include <omp.h>
 
+#include "breccia/common/cell_list.hpp"
+
 namespace breccia::mps {
 
 // Below this many particles thread start-up costs more than the pair loop (as in solid.cpp).
@@ -118,8 +120,7 @@ Contact::PairCandidates Contact::pair_candidates(const ParticleStateView& s) con
   const bool distribution = particles_.normal == ContactNormal::NeighbourDistribution;
   // Planar face-face pairs reach one window sideways (contact_kernels.hpp).
   const double d = pair_search_radius(pair_params());
-  std::array<double, 3> lo{0, 0, 0}, cell{1, 1, 1};
-  std::array<long long, 3> count{1, 1, 1};
+  CellGrid grid;  // common's cell list; axes beyond the dimension stay one cell
   // At most ~4N cells, so a particle flung far away cannot make the grid huge (cells then
   // grow beyond the contact distance, which stays correct).
   const double cap = std::pow(4.0 * static_cast<double>(std::max<long long>(n, 1)), 1.0 / dim);
@@ -129,35 +130,24 @@ Contact::PairCandidates Contact::pair_candidates(const ParticleStateView& s) con
       mn = std::min(mn, x[3 * i + a]);
       mx = std::max(mx, x[3 * i + a]);
     }
-    lo[a] = mn;
+    grid.origin[a] = mn;
     const double extent = std::max(mx - mn, 0.0);
-    count[a] = std::clamp<long long>(static_cast<long long>(std::floor(extent / d)), 1, static_cast<long long>(cap) + 1);
-    cell[a] = std::max(extent / count[a], d);
+    grid.count[a] =
+        std::clamp<long long>(static_cast<long long>(std::floor(extent / d)), 1, static_cast<long long>(cap) + 1);
+    grid.cell[a] = std::max(extent / grid.count[a], d);
   }
-  auto coord = [&](int a, double v) {
-    return std::clamp<long long>(static_cast<long long>(std::floor((v - lo[a]) / cell[a])), 0, count[a] - 1);
-  };
-  const long long ncell = count[0] * count[1] * count[2];
-  std::vector<long long> start(ncell + 1, 0), cell_of(n);
-  for (long long i = 0; i < n; ++i) {
-    cell_of[i] = (coord(2, x[3 * i + 2]) * count[1] + coord(1, x[3 * i + 1])) * count[0] + coord(0, x[3 * i]);
-    ++start[cell_of[i] + 1];
-  }
-  for (long long cc = 0; cc < ncell; ++cc) start[cc + 1] += start[cc];
-  std::vector<int> order(n);
-  {
-    std::vector<long long> fill(start.begin(), start.end() - 1);
-    for (long long i = 0; i < n; ++i) order[fill[cell_of[i]]++] = static_cast<int>(i);
-  }
+  const CellList cells = sort_into_cells(grid, x);
+  const long long* count = grid.count;
   // visit(i, emit): every unbonded j > i within d of i.
   auto visit = [&](long long i, auto&& emit) {
-    const long long ci[3] = {coord(0, x[3 * i]), coord(1, x[3 * i + 1]), coord(2, x[3 * i + 2])};
+    const long long ci[3] = {grid.coordinate(0, x[3 * i]), grid.coordinate(1, x[3 * i + 1]),
+                             grid.coordinate(2, x[3 * i + 2])};
     for (long long cz = std::max(0LL, ci[2] - 1); cz <= std::min(count[2] - 1, ci[2] + 1); ++cz)
       for (long long cy = std::max(0LL, ci[1] - 1); cy <= std::min(count[1] - 1, ci[1] + 1); ++cy)
         for (long long cx = std::max(0LL, ci[0] - 1); cx <= std::min(count[0] - 1, ci[0] + 1); ++cx) {
-          const long long cell_index = (cz * count[1] + cy) * count[0] + cx;
-          for (long long q = start[cell_index]; q < start[cell_index + 1]; ++q) {
-            const int j = order[q];
+          const long long cell_index = grid.index(cx, cy, cz);
+          for (int64_t q = cells.start[cell_index]; q < cells.start[cell_index + 1]; ++q) {
+            const int j = cells.members[q];
             if (j <= i) continue;
             const double dx[3] = {x[3 * i] - x[3 * j], x[3 * i + 1] - x[3 * j + 1], x[3 * i + 2] - x[3 * j + 2]};
             if (dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2] >= d * d) continue;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <numeric>
 
+#include "breccia/common/union_find.hpp"
+
 namespace breccia::mps {
 
 // Below this many particles thread start-up costs more than the loop (as in solid.cpp).
@@ -181,24 +183,21 @@ std::vector<double> FractureModel::damage(const BondList& bonds) const {
 
 std::vector<int> FractureModel::fragment_labels(const BondList& bonds) {
   const size_t n = bonds.particles();
-  std::vector<size_t> parent(n);
-  std::iota(parent.begin(), parent.end(), size_t{0});
-  auto root = [&](size_t a) {
-    while (parent[a] != a) a = parent[a] = parent[parent[a]];
-    return a;
-  };
+  UnionFind uf(n);
   for (size_t i = 0; i < n; ++i)
     for (long long k = bonds.offset[i]; k < bonds.offset[i + 1]; ++k)
-      if (bonds.weight[k] > 0.0) parent[root(i)] = root(static_cast<size_t>(bonds.neighbour[k]));
-  std::vector<size_t> size(n, 0);
-  for (size_t i = 0; i < n; ++i) ++size[root(i)];
-  std::vector<size_t> roots;
-  for (size_t i = 0; i < n; ++i)
-    if (root(i) == i) roots.push_back(i);
-  std::stable_sort(roots.begin(), roots.end(), [&](size_t a, size_t b) { return size[a] > size[b]; });
-  std::vector<int> label_of_root(n, -1), labels(n);
-  for (size_t r = 0; r < roots.size(); ++r) label_of_root[roots[r]] = static_cast<int>(r);
-  for (size_t i = 0; i < n; ++i) labels[i] = label_of_root[root(i)];
+      if (bonds.weight[k] > 0.0) uf.unite(static_cast<int32_t>(i), bonds.neighbour[k]);
+  // Pieces numbered largest first; equal sizes in the order of their first particle.
+  int32_t count = 0;
+  const std::vector<int32_t> piece = uf.labels(&count);
+  std::vector<size_t> size(static_cast<size_t>(count), 0);
+  for (int32_t p : piece) ++size[static_cast<size_t>(p)];
+  std::vector<int> by_size(static_cast<size_t>(count));
+  std::iota(by_size.begin(), by_size.end(), 0);
+  std::stable_sort(by_size.begin(), by_size.end(), [&](int a, int b) { return size[a] > size[b]; });
+  std::vector<int> label_of_piece(static_cast<size_t>(count)), labels(n);
+  for (size_t r = 0; r < by_size.size(); ++r) label_of_piece[static_cast<size_t>(by_size[r])] = static_cast<int>(r);
+  for (size_t i = 0; i < n; ++i) labels[i] = label_of_piece[static_cast<size_t>(piece[i])];
   return labels;
 }
 

@@ -4,26 +4,14 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "breccia/common/cell_list.hpp"
+
 namespace breccia::mps {
 namespace {
 
-// Uniform grid of cells of edge >= radius_re; particles sorted by cell (counting sort).
-struct CellGrid {
-  std::array<double, 3> origin{}, cell{};
-  std::array<long long, 3> count{1, 1, 1};
-  std::vector<long long> start;  // per cell, into `order`
-  std::vector<int> order;
-
-  long long index(long long cx, long long cy, long long cz) const {
-    return (cz * count[1] + cy) * count[0] + cx;
-  }
-  long long coordinate(int axis, double x) const {
-    const long long c = static_cast<long long>(std::floor((x - origin[axis]) / cell[axis]));
-    return std::clamp<long long>(c, 0, count[axis] - 1);
-  }
-};
-
-CellGrid make_grid(int dimension, const std::vector<double>& p, double re, const Periodicity& periodic) {
+// Uniform grid of cells of edge >= radius_re (common's cell list); a periodic axis is cut
+// into whole cells of its period, an axis beyond the dimension is one cell.
+CellList make_grid(int dimension, const std::vector<double>& p, double re, const Periodicity& periodic) {
   const size_t n = p.size() / 3;
   CellGrid g;
   for (int a = 0; a < 3; ++a) {
@@ -46,18 +34,7 @@ CellGrid make_grid(int dimension, const std::vector<double>& p, double re, const
     g.cell[a] = std::max(extent / g.count[a], 1e-300);
     if (periodic.period_m[a] <= 0) g.cell[a] = std::max(g.cell[a], re);
   }
-  const long long ncell = g.count[0] * g.count[1] * g.count[2];
-  std::vector<long long> cell_of(n);
-  g.start.assign(ncell + 1, 0);
-  for (size_t i = 0; i < n; ++i) {
-    cell_of[i] = g.index(g.coordinate(0, p[3 * i]), g.coordinate(1, p[3 * i + 1]), g.coordinate(2, p[3 * i + 2]));
-    ++g.start[cell_of[i] + 1];
-  }
-  for (long long c = 0; c < ncell; ++c) g.start[c + 1] += g.start[c];
-  g.order.resize(n);
-  std::vector<long long> fill(g.start.begin(), g.start.end() - 1);
-  for (size_t i = 0; i < n; ++i) g.order[fill[cell_of[i]]++] = static_cast<int>(i);
-  return g;
+  return sort_into_cells(g, p);
 }
 
 double minimum_image(double d, double period) {
@@ -67,8 +44,9 @@ double minimum_image(double d, double period) {
 
 // Visit every j within re of particle i (j != i): fn(j, rx, ry, rz, r).
 template <class Fn>
-void for_each_neighbour(const CellGrid& g, int dimension, const std::vector<double>& p, double re,
+void for_each_neighbour(const CellList& cells, int dimension, const std::vector<double>& p, double re,
                         const Periodicity& per, long long i, Fn&& fn) {
+  const CellGrid& g = cells.grid;
   long long c[3];
   for (int a = 0; a < 3; ++a) c[a] = g.coordinate(a, p[3 * i + a]);
   long long lo[3], hi[3];
@@ -96,8 +74,8 @@ void for_each_neighbour(const CellGrid& g, int dimension, const std::vector<doub
         }
         if (outside) continue;
         const long long cell = g.index(q[0], q[1], q[2]);
-        for (long long s = g.start[cell]; s < g.start[cell + 1]; ++s) {
-          const long long j = g.order[s];
+        for (int64_t s = cells.start[cell]; s < cells.start[cell + 1]; ++s) {
+          const long long j = cells.members[s];
           if (j == i) continue;
           const double rx = minimum_image(p[3 * j] - p[3 * i], per.period_m[0]);
           const double ry = minimum_image(p[3 * j + 1] - p[3 * i + 1], per.period_m[1]);
@@ -115,7 +93,7 @@ BondList build_bonds(int dimension, const std::vector<double>& p, double re, con
     if (per.period_m[a] > 0 && per.period_m[a] < 2.0 * re)
       throw std::invalid_argument("periodic length shorter than twice the MPS radius re");
   const long long n = static_cast<long long>(p.size() / 3);
-  const CellGrid g = make_grid(dimension, p, re, per);
+  const CellList g = make_grid(dimension, p, re, per);
   BondList b;
   b.dimension = dimension;
   b.radius_re_m = re;

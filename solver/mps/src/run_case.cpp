@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "breccia/common/error.hpp"
+#include "breccia/common/json_file.hpp"
 #include "breccia/common/output_file.hpp"
 #include "breccia/common/progress.hpp"
 #include "breccia/mps/case_spec.hpp"
@@ -34,15 +35,14 @@ double particle_steps_per_s(const Model& sim, double loop_s) {
 }
 
 // The last keys of summary.json, both formulations: threads, backend, wall and loop time,
-// and the rate; then the closing brace.
+// and the rate.
 template <class Model>
-std::string timing_json(const Model& sim, double wall_s, double loop_s) {
-  std::ostringstream js;
-  js << "  \"threads\": " << omp_get_max_threads() << ",\n  \"backend\": \"" << sim.backend_description() << "\",\n"
-     << "  \"wall_time_s\": " << fmt(wall_s) << ",\n"
-     << "  \"step_loop_s\": " << fmt(loop_s) << ",\n"
-     << "  \"particle_steps_per_s\": " << fmt(particle_steps_per_s(sim, loop_s)) << "\n}\n";
-  return js.str();
+void add_timing(Json& j, const Model& sim, double wall_s, double loop_s) {
+  j["threads"] = omp_get_max_threads();
+  j["backend"] = sim.backend_description();
+  j["wall_time_s"] = json_number(wall_s);
+  j["step_loop_s"] = json_number(loop_s);
+  j["particle_steps_per_s"] = json_number(particle_steps_per_s(sim, loop_s));
 }
 
 template <class Model>
@@ -170,29 +170,40 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
   write_text_file(dir / "history.csv", history.str());
   double max_plastic = 0.0;
   for (double e : sim.eq_plastic_strain()) max_plastic = std::max(max_plastic, e);
-  std::ostringstream js;
-  js << "{\n  \"model\": \"mps\",\n  \"formulation\": \"stress\",\n  \"case_file\": \"" << case_file << "\",\n"
-     << "  \"dimension\": " << sim.dimension() << ",\n  \"particles\": " << sim.size() << ",\n"
-     << "  \"bonds\": " << sim.bonds().size() << ",\n  \"spacing_m\": " << fmt(sim.spacing_m()) << ",\n"
-     << "  \"re_over_spacing\": " << fmt(spec.re_over_spacing) << ",\n"
-     << "  \"pressure_force\": \"" << (spec.repulsive_pressure ? "repulsive" : "conservative") << "\",\n"
-     << "  \"hourglass\": " << fmt(spec.hourglass) << ",\n  \"plastic\": " << (sim.law().plastic ? "true" : "false") << ",\n"
-     << "  \"steps\": " << sim.steps() << ",\n  \"dt_s\": " << fmt(sim.dt_s()) << ",\n"
-     << "  \"max_substeps\": " << max_substeps << ",\n"
-     << "  \"end_time_s\": " << fmt(sim.time_s()) << ",\n  \"p_wave_speed_m_s\": " << fmt(sim.p_wave_speed()) << ",\n"
-     << "  \"kinetic_energy_j\": " << fmt(sim.kinetic_energy_j()) << ",\n  \"stress_work_j\": " << fmt(sim.stress_work_j()) << ",\n"
-     << "  \"max_eq_plastic_strain\": " << fmt(max_plastic) << ",\n  \"plastic_fraction\": " << fmt(sim.plastic_fraction()) << ",\n"
-     << "  \"fracture\": " << (sim.fracture() ? "true" : "false") << ",\n"
-     << "  \"failed_particles\": " << (sim.fracture() ? sim.fracture()->failed_particles() : 0) << ",\n"
-     << "  \"cut_bonds\": " << (sim.fracture() ? sim.fracture()->cut_bonds() : 0) << ",\n"
-     << "  \"detached_particles\": " << (sim.fracture() ? sim.fracture()->detached_particles() : 0) << ",\n"
-     << "  \"fragments_min10\": "
-     << (sim.fracture() ? FractureModel::fragment_count(FractureModel::fragment_labels(sim.bonds()), 10) : 1) << ",\n"
-     << "  \"bodies\": " << (spec.bodies ? spec.bodies->shapes.size() : 1) << ",\n  \"rigid_bodies\": "
-     << spec.rigid_bodies.size() << ",\n  \"contact_pairs\": " << sim.contact().contact_pairs() << ",\n"
-     << "  \"friction_dissipation_j\": " << fmt(sim.friction_dissipation_j()) << ",\n"
-     << timing_json(sim, wall_s, loop_s);
-  write_text_file(dir / "summary.json", js.str());
+  // Doubles through json_number: null where not finite (json_file.hpp).
+  Json j;
+  j["model"] = "mps";
+  j["formulation"] = "stress";
+  j["case_file"] = case_file;
+  j["dimension"] = sim.dimension();
+  j["particles"] = sim.size();
+  j["bonds"] = sim.bonds().size();
+  j["spacing_m"] = json_number(sim.spacing_m());
+  j["re_over_spacing"] = json_number(spec.re_over_spacing);
+  j["pressure_force"] = spec.repulsive_pressure ? "repulsive" : "conservative";
+  j["hourglass"] = json_number(spec.hourglass);
+  j["plastic"] = sim.law().plastic;
+  j["steps"] = sim.steps();
+  j["dt_s"] = json_number(sim.dt_s());
+  j["max_substeps"] = max_substeps;
+  j["end_time_s"] = json_number(sim.time_s());
+  j["p_wave_speed_m_s"] = json_number(sim.p_wave_speed());
+  j["kinetic_energy_j"] = json_number(sim.kinetic_energy_j());
+  j["stress_work_j"] = json_number(sim.stress_work_j());
+  j["max_eq_plastic_strain"] = json_number(max_plastic);
+  j["plastic_fraction"] = json_number(sim.plastic_fraction());
+  j["fracture"] = sim.fracture() != nullptr;
+  j["failed_particles"] = sim.fracture() ? sim.fracture()->failed_particles() : 0;
+  j["cut_bonds"] = sim.fracture() ? sim.fracture()->cut_bonds() : 0;
+  j["detached_particles"] = sim.fracture() ? sim.fracture()->detached_particles() : 0;
+  j["fragments_min10"] =
+      sim.fracture() ? FractureModel::fragment_count(FractureModel::fragment_labels(sim.bonds()), 10) : 1;
+  j["bodies"] = spec.bodies ? spec.bodies->shapes.size() : 1;
+  j["rigid_bodies"] = spec.rigid_bodies.size();
+  j["contact_pairs"] = sim.contact().contact_pairs();
+  j["friction_dissipation_j"] = json_number(sim.friction_dissipation_j());
+  add_timing(j, sim, wall_s, loop_s);
+  write_json_file(dir / "summary.json", j);
   report_timing(sim, wall_s, loop_s, out_dir);
   return 0;
 }
@@ -274,20 +285,28 @@ int run_case(const std::string& case_file, const std::string& out_dir, const Run
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   write_text_file(dir / "history.csv", history.str());
 
-  std::ostringstream js;
-  js << "{\n  \"model\": \"mps\",\n  \"case_file\": \"" << case_file << "\",\n"
-     << "  \"dimension\": " << sim.dimension() << ",\n  \"particles\": " << sim.size() << ",\n"
-     << "  \"bonds\": " << sim.bonds().size() << ",\n  \"crack_pairs\": " << sim.cracks().size() << ",\n"
-     << "  \"spacing_m\": " << fmt(sim.spacing_m()) << ",\n  \"re_over_spacing\": " << fmt(spec.re_over_spacing) << ",\n"
-     << "  \"equation\": \"" << (spec.equation == Equation::Navier ? "navier" : "rotation_free") << "\",\n"
-     << "  \"integrator\": \"" << (spec.integrator == Integrator::SymplecticEuler ? "symplectic_euler" : "velocity_verlet")
-     << "\",\n  \"steps\": " << sim.steps() << ",\n  \"dt_s\": " << fmt(sim.dt_s()) << ",\n"
-     << "  \"cfl_dt_s\": " << fmt(sim.cfl_dt_s()) << ",\n  \"spectral_dt_limit_s\": " << fmt(sim.spectral_dt_limit_s()) << ",\n"
-     << "  \"end_time_s\": " << fmt(sim.time_s()) << ",\n  \"p_wave_speed_m_s\": " << fmt(m.p_wave_speed()) << ",\n"
-     << "  \"s_wave_speed_m_s\": " << fmt(m.s_wave_speed()) << ",\n"
-     << "  \"max_slipping_fraction\": " << fmt(max_slip) << ",\n  \"max_open_fraction\": " << fmt(max_open) << ",\n"
-     << timing_json(sim, wall_s, loop_s);
-  write_text_file(dir / "summary.json", js.str());
+  Json j;
+  j["model"] = "mps";
+  j["case_file"] = case_file;
+  j["dimension"] = sim.dimension();
+  j["particles"] = sim.size();
+  j["bonds"] = sim.bonds().size();
+  j["crack_pairs"] = sim.cracks().size();
+  j["spacing_m"] = json_number(sim.spacing_m());
+  j["re_over_spacing"] = json_number(spec.re_over_spacing);
+  j["equation"] = spec.equation == Equation::Navier ? "navier" : "rotation_free";
+  j["integrator"] = spec.integrator == Integrator::SymplecticEuler ? "symplectic_euler" : "velocity_verlet";
+  j["steps"] = sim.steps();
+  j["dt_s"] = json_number(sim.dt_s());
+  j["cfl_dt_s"] = json_number(sim.cfl_dt_s());
+  j["spectral_dt_limit_s"] = json_number(sim.spectral_dt_limit_s());
+  j["end_time_s"] = json_number(sim.time_s());
+  j["p_wave_speed_m_s"] = json_number(m.p_wave_speed());
+  j["s_wave_speed_m_s"] = json_number(m.s_wave_speed());
+  j["max_slipping_fraction"] = json_number(max_slip);
+  j["max_open_fraction"] = json_number(max_open);
+  add_timing(j, sim, wall_s, loop_s);
+  write_json_file(dir / "summary.json", j);
   report_timing(sim, wall_s, loop_s, out_dir);
   return 0;
 }

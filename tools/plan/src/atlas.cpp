@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "breccia/common/csv.hpp"
 #include "breccia/common/data_dir.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/plan/plan.hpp"
@@ -18,40 +19,6 @@ namespace {
 const char* kHeader =
     "problem,model,dimension,particles_kind,m,spacing_m,precision,backend,threads,particles,bonds,steps,wall_s,error,"
     "error_measure";
-
-std::string trim(std::string s) {
-  while (!s.empty() && (s.back() == '\r' || s.back() == ' ' || s.back() == '\n')) s.pop_back();
-  size_t a = 0;
-  while (a < s.size() && s[a] == ' ') ++a;
-  return s.substr(a);
-}
-
-// Comma-separated fields; a field may be double-quoted. The last of `fields` takes the
-// rest of the line, commas included (error_measure is free text, written unquoted).
-std::vector<std::string> split_csv(const std::string& line, size_t fields) {
-  std::vector<std::string> out;
-  std::string cur;
-  bool quoted = false;
-  for (size_t k = 0; k < line.size(); ++k) {
-    const char ch = line[k];
-    if (ch == '"') {
-      if (quoted && k + 1 < line.size() && line[k + 1] == '"') {
-        cur += '"';
-        ++k;
-      } else {
-        quoted = !quoted;
-      }
-    } else if (ch == ',' && !quoted && out.size() + 1 < fields) {
-      out.push_back(trim(cur));
-      cur.clear();
-    } else {
-      cur += ch;
-    }
-  }
-  out.push_back(trim(cur));
-  return out;
-}
-
 
 bool is_double_precision(const std::string& p) { return p == "float64" || p == "double" || p == "fp64"; }
 
@@ -122,13 +89,15 @@ std::vector<AtlasRow> read_atlas(const std::string& path) {
   if (!in) throw InputError(path, "", "cannot open the atlas", "docs/atlas/atlas.csv from `make atlas` (or --atlas FILE)");
   std::string line;
   std::getline(in, line);
-  if (trim(line) != kHeader) throw InputError(path, "header", "'" + trim(line) + "'", std::string("'") + kHeader + "'");
+  const std::string header = split_csv_line(line, 1)[0];  // the whole line, trimmed
+  if (header != kHeader) throw InputError(path, "header", "'" + header + "'", std::string("'") + kHeader + "'");
   std::vector<AtlasRow> rows;
   int lineno = 1;
   while (std::getline(in, line)) {
     ++lineno;
-    if (trim(line).empty() || line[0] == '#') continue;
-    const auto f = split_csv(line, 15);
+    if (line.find_first_not_of(" \r\n") == std::string::npos || line[0] == '#') continue;
+    // error_measure (the 15th field) is free text written unquoted: it takes the rest of the line.
+    const auto f = split_csv_line(line, 15);
     const std::string where = "line " + std::to_string(lineno);
     if (f.size() != 15) throw InputError(path, where, std::to_string(f.size()) + " fields", "15 fields as in the header");
     AtlasRow r;

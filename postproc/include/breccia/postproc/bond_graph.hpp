@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "breccia/solver/family.hpp"
+#include "breccia/common/families.hpp"
 
 namespace breccia::postproc {
 
@@ -44,16 +44,16 @@ private:
 inline bool bond_bit(std::span<const uint8_t> bits, int64_t b) { return (bits[b >> 3] >> (b & 7)) & 1; }
 size_t count_bits(std::span<const uint8_t> bits);
 
-// Position of bond (i, j) in a half list (solver::Families holding only partners j > i, as
+// Position of bond (i, j) in a half list (Families holding only partners j > i, as
 // results.h5 /bonds stores them), or -1 when the pair is not a bond.
-int64_t bond_index(const solver::Families& half, int64_t i, int64_t j);
+int64_t bond_index(const Families& half, int64_t i, int64_t j);
 
 // The bonds of a half list whose bit is set: the bonds broken by fracture at one output.
 // face_bond (optional): bond_index of each candidate face's pair, computed once per run.
 // Holds references: `half`, `bits` and `face_bond` must outlive it.
 class BondBits : public BondSet {
 public:
-  BondBits(const solver::Families& half, std::span<const uint8_t> bits, std::span<const int64_t> face_bond = {})
+  BondBits(const Families& half, std::span<const uint8_t> bits, std::span<const int64_t> face_bond = {})
       : half_(&half), bits_(bits), face_bond_(face_bond) {}
   bool contains(int64_t i, int64_t j) const override {
     const int64_t b = bond_index(*half_, i, j);
@@ -65,7 +65,7 @@ public:
   }
 
 private:
-  const solver::Families* half_;
+  const Families* half_;
   std::span<const uint8_t> bits_;
   std::span<const int64_t> face_bond_;
 };
@@ -75,12 +75,12 @@ void validate_pairs(std::span<const int64_t> pairs, size_t n, const std::string&
                     const std::string& dataset);
 
 // Component label of every particle over bonds of `families` that are in neither removed set.
-std::vector<int32_t> intact_components(const solver::Families& families, const RemovedBonds& broken,
+std::vector<int32_t> intact_components(const Families& families, const RemovedBonds& broken,
                                        const RemovedBonds& precracks, int32_t* component_count);
 
 // The same over a half list: bonds b with bond_bit(graph, b) set (all when `graph` is
 // empty), bond_bit(broken, b) clear and not in `precracks`.
-std::vector<int32_t> intact_components(const solver::Families& half, std::span<const uint8_t> graph,
+std::vector<int32_t> intact_components(const Families& half, std::span<const uint8_t> graph,
                                        std::span<const uint8_t> broken, const RemovedBonds& precracks,
                                        int32_t* component_count);
 

@@ -27,8 +27,8 @@ struct CandidateFaces {
 // Mesh faces shared by two cells (tets or triangles).
 CandidateFaces mesh_candidate_faces(const ParticleModel& particles);
 // Lattice (no mesh): pairs of family members at distance within 1 % of their mean spacing.
-CandidateFaces lattice_candidate_faces(const ParticleModel& particles, const solver::Families& families);
-CandidateFaces candidate_faces(const ParticleModel& particles, const solver::Families& families);
+CandidateFaces lattice_candidate_faces(const ParticleModel& particles, const Families& families);
+CandidateFaces candidate_faces(const ParticleModel& particles, const Families& families);
 
 enum class CrackCriterion { Bond, Damage };
 

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "breccia/common/particle_file.hpp"
-#include "breccia/solver/family.hpp"
+#include "breccia/common/families.hpp"
 
 namespace breccia::postproc {
 
@@ -33,7 +33,7 @@ struct RunData {
   std::vector<int64_t> precrack_bonds;       // 2P, pairs i < j
   // The run's bonds, each pair once from its lower index (partners j > i, ascending): the
   // list the per-output broken bits index. /bonds in results.h5; not rebuilt here.
-  solver::Families bonds;
+  Families bonds;
   // Bit per bond: within max(horizon_i, horizon_j), i.e. in the fragment graph (the rest
   // are the solver's partial-volume bonds whose neighbour cell only reaches the horizon).
   std::vector<uint8_t> within_horizon;

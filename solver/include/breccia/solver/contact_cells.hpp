@@ -2,14 +2,17 @@
 // Particles close in the current configuration that are not family members: the short-range
 // forces' second half (model.short_range_forces; LAMMPS PERI applies its contact term to every
 // pair of its neighbour list, so fragments that meet repel). A hashed cell grid on the current
-// positions, rebuilt every force pass (a counting sort, O(N)); each particle gathers its own
-// partners, so the kernel writes only its own force (no atomics, any thread count gives the
-// same sums: partners are visited in a fixed cell order, then ascending within a cell). The
-// cell and bucket arithmetic is the hashed grid's (common/hashed_grid.hpp), shared with MPS.
+// positions, rebuilt every force pass (a counting sort, O(N): cell_list.hpp's group_by_key);
+// each particle gathers its own partners, so the kernel writes only its own force (no
+// atomics, any thread count gives the same sums: partners are visited in a fixed cell
+// order, then ascending within a cell). The cell and bucket arithmetic is the hashed grid's
+// (common/hashed_grid.hpp), shared with MPS.
 #include <cmath>
 #include <cstdint>
+#include <span>
 #include <vector>
 
+#include "breccia/common/cell_list.hpp"
 #include "breccia/common/hashed_grid.hpp"
 #include "breccia/solver/pd_kernels.hpp"
 
@@ -88,12 +91,7 @@ struct ContactCells {
       grid_cell_of(&x[3 * i], cell, 3, &cell_of[3 * i]);  // 2D: z = 0, cell 0
       bucket[i] = grid_bucket(&cell_of[3 * i], buckets);
     }
-    start.assign(buckets + 1, 0);
-    for (int64_t i = 0; i < n; ++i) ++start[bucket[i] + 1];
-    for (unsigned long long b = 0; b < buckets; ++b) start[b + 1] += start[b];
-    order.resize(static_cast<size_t>(n));
-    std::vector<int64_t> fill(start.begin(), start.end() - 1);
-    for (int64_t i = 0; i < n; ++i) order[fill[bucket[i]]++] = static_cast<int32_t>(i);
+    group_by_key(std::span<const unsigned long long>(bucket), static_cast<size_t>(buckets), start, order);
   }
   ContactCellsView view() const { return {cell, buckets, cell_of.data(), start.data(), order.data()}; }
 };

@@ -345,7 +345,8 @@ public:
   // Fraction of the particle's initial bonds that are cut (0 ... 1).
   std::vector<double> damage(const BondList& bonds) const;
   // Connected pieces over the intact bonds: a label per particle (0 ... pieces - 1, the
-  // largest piece first) and the number of pieces with at least min_particles particles.
+  // largest piece first, equal sizes in the order of their first particle) and the number
+  // of pieces with at least min_particles particles.
   static std::vector<int> fragment_labels(const BondList& bonds);
   static int fragment_count(const std::vector<int>& labels, int min_particles);
   long long cut_bonds() const { return cut_bonds_; }

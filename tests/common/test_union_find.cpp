@@ -3,9 +3,9 @@
 #include <queue>
 #include <random>
 
-#include "breccia/postproc/union_find.hpp"
+#include "breccia/common/union_find.hpp"
 
-using breccia::postproc::UnionFind;
+using breccia::UnionFind;
 
 TEST(UnionFind, UniteReportsWhetherSetsWereSeparate) {
   UnionFind uf(4);

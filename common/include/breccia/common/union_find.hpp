@@ -1,11 +1,13 @@
 #pragma once
 // Disjoint sets with path compression (halving) and union by rank: near-constant
 // amortised time per operation (Tarjan 1975), so 10^7 bonds cost well under a second.
+// The one union-find of every stage: post-processing's fragments and crack faces, and MPS's
+// fragment labels (solver/mps/src/fracture.cpp).
 #include <cstdint>
 #include <numeric>
 #include <vector>
 
-namespace breccia::postproc {
+namespace breccia {
 
 class UnionFind {
 public:
@@ -51,4 +53,4 @@ private:
   std::vector<uint8_t> rank_;
 };
 
-}  // namespace breccia::postproc
+}  // namespace breccia

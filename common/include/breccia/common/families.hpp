@@ -1,0 +1,28 @@
+#pragma once
+// Peridynamic families (bonds): for each particle i, every j != i whose reference distance is
+// within reach(i, j) = max(horizon_i, horizon_j) + max(pad_i, pad_j). Full lists (each
+// pair appears from both ends) so a particle sums its own force without atomics.
+// Built with a uniform cell list (cell_list.hpp) sized to the smallest reach (each particle
+// scans the cells its own reach covers; the family is the union of both directions): O(N)
+// for bounded density contrast. Shared by the solver (set-up, breccia-plan's bond counts) and
+// post-processing (the bond list of results.h5 and its fragment graph), so that both see
+// the same bonds in the same order.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace breccia {
+
+struct Families {
+  std::vector<int64_t> offsets;   // N + 1
+  std::vector<int32_t> neighbors; // offsets[N], sorted ascending within a family
+  size_t particle_count() const { return offsets.empty() ? 0 : offsets.size() - 1; }
+  size_t bond_count() const { return neighbors.size(); }
+};
+
+// position: 3N (x, y, z interleaved); horizon_m, pad_m: N (pad may be empty = 0).
+// The pad lets partial-volume rules include neighbours whose cell straddles the horizon.
+Families build_families(std::span<const double> position, std::span<const double> horizon_m,
+                        std::span<const double> pad_m = {});
+
+}  // namespace breccia

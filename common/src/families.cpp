@@ -1,0 +1,124 @@
+#include "breccia/common/families.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "breccia/common/cell_list.hpp"
+
+namespace breccia {
+
+Families build_families(std::span<const double> x, std::span<const double> horizon,
+                        std::span<const double> pad) {
+  const size_t n = horizon.size();
+  if (x.size() != 3 * n) throw std::invalid_argument("build_families: position must be 3N");
+  Families fam;
+  fam.offsets.assign(n + 1, 0);
+  if (n == 0) return fam;
+  auto pad_of = [&](size_t i) { return pad.empty() ? 0.0 : pad[i]; };
+  double max_pad = 0.0, min_horizon = horizon[0], max_horizon = horizon[0];
+  for (size_t i = 0; i < n; ++i) {
+    max_pad = std::max(max_pad, pad_of(i));
+    min_horizon = std::min(min_horizon, horizon[i]);
+    max_horizon = std::max(max_horizon, horizon[i]);
+  }
+  const bool uniform = min_horizon == max_horizon;
+  // reach(i, j) = max(h_i, h_j) + max(p_i, p_j) is the larger of the two "own" reaches
+  // h_i + max(p_i, p_j) and h_j + max(p_i, p_j). Each particle searches its own reach; the
+  // family is the union of what i found and what found i. With one horizon the own lists
+  // are already symmetric. Cells are sized to the smallest reach (at least 1/8 of the
+  // largest), so a fine region of a graded mesh with a 3x smaller horizon does not scan
+  // cells sized for the coarse one (that made a 291k-particle dual-horizon family build
+  // take a minute).
+  const double max_reach = max_horizon + max_pad;
+  const double cell = std::max({min_horizon + max_pad, max_reach / 8.0, 1e-300});
+  const CellList cells = sort_into_cells(CellGrid::covering(bounding_box(x), cell), x);
+  const CellGrid& grid = cells.grid;
+  // Own search of particle i: every j within h_i + max(p_i, p_j).
+  auto visit = [&](size_t i, auto&& emit) {
+    long long ci[3];
+    for (int d = 0; d < 3; ++d) ci[d] = grid.coordinate(d, x[3 * i + d]);
+    const long long ring = static_cast<long long>(std::ceil((horizon[i] + max_pad) / cell));
+    for (long long az = std::max(0LL, ci[2] - ring); az <= std::min(grid.count[2] - 1, ci[2] + ring); ++az)
+      for (long long ay = std::max(0LL, ci[1] - ring); ay <= std::min(grid.count[1] - 1, ci[1] + ring); ++ay)
+        for (long long ax = std::max(0LL, ci[0] - ring); ax <= std::min(grid.count[0] - 1, ci[0] + ring); ++ax) {
+          const long long c = grid.index(ax, ay, az);
+          for (int64_t k = cells.start[c]; k < cells.start[c + 1]; ++k) {
+            const size_t j = static_cast<size_t>(cells.members[k]);
+            if (j == i) continue;
+            const double reach = horizon[i] + std::max(pad_of(i), pad_of(j));
+            double r2 = 0.0;
+            for (int d = 0; d < 3; ++d) {
+              const double e = x[3 * j + d] - x[3 * i + d];
+              r2 += e * e;
+            }
+            if (r2 <= reach * reach) emit(j);
+          }
+        }
+  };
+  // Two passes (count, fill) keep memory exact for 10^8 bonds.
+  Families own;
+  own.offsets.assign(n + 1, 0);
+  {
+    std::vector<int64_t> count(n, 0);
+#pragma omp parallel for schedule(dynamic, 256)
+    for (size_t i = 0; i < n; ++i) {
+      int64_t c = 0;
+      visit(i, [&](size_t) { ++c; });
+      count[i] = c;
+    }
+    for (size_t i = 0; i < n; ++i) own.offsets[i + 1] = own.offsets[i] + count[i];
+  }
+  own.neighbors.resize(static_cast<size_t>(own.offsets[n]));
+#pragma omp parallel for schedule(dynamic, 256)
+  for (size_t i = 0; i < n; ++i) {
+    int64_t k = own.offsets[i];
+    visit(i, [&](size_t j) { own.neighbors[k++] = static_cast<int32_t>(j); });
+    std::sort(own.neighbors.begin() + own.offsets[i], own.neighbors.begin() + own.offsets[i + 1]);
+  }
+  if (uniform) return own;
+  // Transpose (who found i), filled in ascending i, so each list comes out sorted.
+  std::vector<int64_t> t_offsets(n + 1, 0);
+  for (int32_t j : own.neighbors) ++t_offsets[static_cast<size_t>(j) + 1];
+  for (size_t i = 0; i < n; ++i) t_offsets[i + 1] += t_offsets[i];
+  std::vector<int32_t> t_neighbors(own.neighbors.size());
+  {
+    std::vector<int64_t> fill(t_offsets.begin(), t_offsets.end() - 1);
+    for (size_t i = 0; i < n; ++i)
+      for (int64_t k = own.offsets[i]; k < own.offsets[i + 1]; ++k)
+        t_neighbors[fill[own.neighbors[k]]++] = static_cast<int32_t>(i);
+  }
+  auto merged = [&](size_t i, auto&& emit) {
+    int64_t a = own.offsets[i], b = t_offsets[i];
+    const int64_t ae = own.offsets[i + 1], be = t_offsets[i + 1];
+    while (a < ae || b < be) {
+      int32_t v;
+      if (b >= be || (a < ae && own.neighbors[a] < t_neighbors[b])) v = own.neighbors[a++];
+      else if (a >= ae || t_neighbors[b] < own.neighbors[a]) v = t_neighbors[b++];
+      else {
+        v = own.neighbors[a++];
+        ++b;
+      }
+      emit(v);
+    }
+  };
+  {
+    std::vector<int64_t> count(n, 0);
+#pragma omp parallel for schedule(dynamic, 256)
+    for (size_t i = 0; i < n; ++i) {
+      int64_t c = 0;
+      merged(i, [&](int32_t) { ++c; });
+      count[i] = c;
+    }
+    for (size_t i = 0; i < n; ++i) fam.offsets[i + 1] = fam.offsets[i] + count[i];
+  }
+  fam.neighbors.resize(static_cast<size_t>(fam.offsets[n]));
+#pragma omp parallel for schedule(dynamic, 256)
+  for (size_t i = 0; i < n; ++i) {
+    int64_t k = fam.offsets[i];
+    merged(i, [&](int32_t v) { fam.neighbors[k++] = v; });
+  }
+  return fam;
+}
+
+}  // namespace breccia

@@ -1,0 +1,65 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "breccia/common/cell_list.hpp"
+#include "breccia/common/families.hpp"
+
+using namespace breccia;
+
+TEST(CellList, EveryParticleInItsCellInAscendingOrder) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 3.0);
+  std::vector<double> x(3 * 500);
+  for (double& v : x) v = u(rng);
+  const CellList cells = sort_into_cells(CellGrid::covering(bounding_box(x), 0.37), x);
+  ASSERT_EQ(cells.start.size(), static_cast<size_t>(cells.grid.cells()) + 1);
+  ASSERT_EQ(cells.members.size(), 500u);
+  for (long long c = 0; c < cells.grid.cells(); ++c) {
+    EXPECT_TRUE(std::is_sorted(cells.members.begin() + cells.start[c], cells.members.begin() + cells.start[c + 1]));
+    for (int64_t k = cells.start[c]; k < cells.start[c + 1]; ++k) {
+      const int32_t i = cells.members[k];
+      EXPECT_EQ(cells.grid.index_of(&x[3 * i]), c);
+      for (int d = 0; d < 3; ++d) {  // the cell holds the point (brute force from the definition)
+        const long long cd = static_cast<long long>(std::floor((x[3 * i + d] - cells.grid.origin[d]) / 0.37));
+        EXPECT_EQ(std::min(cd, cells.grid.count[d] - 1), cells.grid.coordinate(d, x[3 * i + d]));
+      }
+    }
+  }
+}
+
+TEST(CellList, GroupByKeyIsAStableCountingSort) {
+  const std::vector<unsigned long long> key{3, 0, 3, 1, 0};
+  std::vector<int64_t> start;
+  std::vector<int32_t> members;
+  group_by_key(std::span<const unsigned long long>(key), 4, start, members);
+  EXPECT_EQ(start, (std::vector<int64_t>{0, 2, 3, 3, 5}));
+  EXPECT_EQ(members, (std::vector<int32_t>{1, 4, 3, 0, 2}));
+}
+
+TEST(Families, MatchBruteForceWithGradedHorizonsAndPads) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const size_t n = 400;
+  std::vector<double> x(3 * n), h(n), pad(n);
+  for (double& v : x) v = u(rng);
+  for (size_t i = 0; i < n; ++i) {
+    h[i] = 0.08 + 0.1 * u(rng);
+    pad[i] = 0.02 * u(rng);
+  }
+  const Families f = build_families(x, h, pad);
+  for (size_t i = 0; i < n; ++i) {
+    std::vector<int32_t> expected;
+    for (size_t j = 0; j < n; ++j) {
+      if (j == i) continue;
+      const double reach = std::max(h[i], h[j]) + std::max(pad[i], pad[j]);
+      double r2 = 0;
+      for (int d = 0; d < 3; ++d) r2 += (x[3 * j + d] - x[3 * i + d]) * (x[3 * j + d] - x[3 * i + d]);
+      if (r2 <= reach * reach) expected.push_back(static_cast<int32_t>(j));
+    }
+    EXPECT_EQ(std::vector<int32_t>(f.neighbors.begin() + f.offsets[i], f.neighbors.begin() + f.offsets[i + 1]), expected)
+        << "particle " << i;
+  }
+}

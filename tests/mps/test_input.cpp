@@ -14,6 +14,7 @@
 #include "breccia/common/particle_file.hpp"
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/simulation.hpp"
+#include "../common/cli_contract.hpp"
 #include "mps_test_util.hpp"
 
 using namespace breccia::mps;
@@ -105,6 +106,12 @@ TEST(MpsCli, BadInputExitsWithCode2AndNamesTheField) {
   EXPECT_EQ(text.rfind("error: ", 0), 0u) << text;
   EXPECT_NE(text.find("cracks[0].kinetic_friction"), std::string::npos) << text;
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "results.h5"));
+}
+
+// --help, --version, and usage errors (exit 2 naming the option): the tools' shared contract.
+TEST(MpsCli, FollowsTheToolsCommandLineContract) {
+  breccia::testing::expect_cli_contract(BRECCIA_MPS_EXE, "breccia-mps", "case.yaml -o out",
+                                        {{"--threads", "4x"}, {"--threads", "-1"}, {"--threads", "0"}});
 }
 
 TEST(MpsCli, RunWritesHistorySummaryAndResults) {

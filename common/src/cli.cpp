@@ -16,7 +16,9 @@
 
 namespace breccia::cli {
 
-const char* version() { return BRECCIA_VERSION; }
+const char* version() {
+  return BRECCIA_VERSION;
+}
 
 void configure(CLI::App& app, const std::string& footer) {
   app.set_version_flag("--version", app.get_name() + " (Breccia) " + version(), "Print the version and exit");
@@ -74,9 +76,11 @@ std::optional<int> parse(CLI::App& app, int argc, char** argv, bool speak) {
     const bool missing = colon != std::string::npos && what.size() > 8 && what.ends_with(" missing");
     if (speak)
       std::cerr << "error: command line: "
-                << (missing ? what.substr(0, colon) + ": no value (expected a value after " + what.substr(0, colon) + ")"
-                            : what)
-                << "\n" << hint;
+                << (missing
+                        ? what.substr(0, colon) + ": no value (expected a value after " + what.substr(0, colon) + ")"
+                        : what)
+                << "\n"
+                << hint;
     return kExitBadInput;
   } catch (const CLI::ParseError& e) {
     if (speak) std::cerr << "error: command line: " << e.what() << "\n" << hint;
@@ -97,8 +101,10 @@ std::optional<long long> to_whole_number(const std::string& text) {
 
 CLI::Validator whole_number(long long min, long long max) {
   std::string expected = "a whole number";
-  if (max >= INT_MAX) expected += " >= " + std::to_string(min);
-  else expected += " from " + std::to_string(min) + " to " + std::to_string(max);
+  if (max >= INT_MAX)
+    expected += " >= " + std::to_string(min);
+  else
+    expected += " from " + std::to_string(min) + " to " + std::to_string(max);
   return CLI::Validator(
       [min, max, expected](std::string& text) -> std::string {
         const std::optional<long long> v = to_whole_number(text);

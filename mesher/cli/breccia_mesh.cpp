@@ -58,7 +58,8 @@ int main(int argc, char** argv) {
   app.add_option("--threads", args.options.threads, "gmsh threads (default 1)")
       ->type_name("N")
       ->check(cli::whole_number(1, 1024));
-  app.add_flag_callback("-q,--quiet", [&] { args.options.verbose = false; }, "no progress on stderr");
+  app.add_flag_callback(
+      "-q,--quiet", [&] { args.options.verbose = false; }, "no progress on stderr");
   if (const auto code = cli::parse(app, argc, argv)) return *code;
   try {
     if (std::filesystem::path(args.options.output).extension() != ".msh")
@@ -68,7 +69,8 @@ int main(int argc, char** argv) {
     if (!args.size.empty()) args.options.size_m = parse_positive("--size", args.size, Quantity::Length);
     mesher::MeshSummary summary;
     if (is_spec(args.input)) {
-      if (args.options.size_m > 0) cli::usage_error("--size", "given with a spec", ".geo/.step input (a spec sets mesh.size)");
+      if (args.options.size_m > 0)
+        cli::usage_error("--size", "given with a spec", ".geo/.step input (a spec sets mesh.size)");
       summary = mesher::mesh_specimen(mesher::load_specimen(args.input), args.options);
     } else {
       summary = mesher::mesh_file(args.input, args.options);

@@ -8,9 +8,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "../common/cli_contract.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/particle_file.hpp"
-#include "../common/cli_contract.hpp"
 #include "test_meshes.hpp"
 
 namespace breccia::geometry {
@@ -209,9 +209,10 @@ TEST(PlaceCli, FollowsTheToolsCommandLineContract) {
   const std::string output = dir() + "/never.h5";
   fs::remove(output);
   // A value given twice: the last one counts (the malformed values come after the good ones).
-  breccia::testing::expect_cli_contract(BRECCIA_PLACE_EXE, "breccia-place",
-                                        "--lattice square --box 0,0,1,1 --spacing 0.5 --thickness 1mm -o '" + output + "'",
-                                        {{"--spacing", "10x"}, {"--thickness", "two"}});
+  breccia::testing::expect_cli_contract(
+      BRECCIA_PLACE_EXE, "breccia-place",
+      "--lattice square --box 0,0,1,1 --spacing 0.5 --thickness 1mm -o '" + output + "'",
+      {{"--spacing", "10x"}, {"--thickness", "two"}});
   EXPECT_FALSE(fs::exists(output));
 }
 

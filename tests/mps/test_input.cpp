@@ -10,11 +10,11 @@
 #include <fstream>
 #include <string>
 
+#include "../common/cli_contract.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/particle_file.hpp"
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/simulation.hpp"
-#include "../common/cli_contract.hpp"
 #include "mps_test_util.hpp"
 
 using namespace breccia::mps;

@@ -8,7 +8,6 @@
 // Usage errors found after parsing (two options that exclude each other) are InputErrors
 // with file "command line", as in usage_error below: the tools print those the same way.
 #include <CLI/CLI.hpp>
-
 #include <climits>
 #include <optional>
 #include <string>

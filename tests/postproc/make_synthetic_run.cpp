@@ -24,7 +24,8 @@ int main(int argc, char** argv) {
   app.add_option("CELLS", cells, "hexes per edge, 6 tets each (default 37 36 36)")
       ->type_name("NX NY NZ")
       ->expected(3)
-      ->multi_option_policy(CLI::MultiOptionPolicy::Throw)  // all three or none (TakeLast, the tools' default, takes fewer)
+      // All three or none: TakeLast, the tools' default, would accept fewer.
+      ->multi_option_policy(CLI::MultiOptionPolicy::Throw)
       ->check(breccia::cli::whole_number(1, 1000));
   if (const auto code = breccia::cli::parse(app, argc, argv)) return *code;
   const int nx = cells[0], ny = cells[1], nz = cells[2];

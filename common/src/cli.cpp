@@ -71,16 +71,12 @@ std::optional<int> parse(CLI::App& app, int argc, char** argv, bool speak) {
     return 0;
   } catch (const CLI::ArgumentMismatch& e) {
     // CLI11 says "--threads: 1 required N missing" for an option given last without its value.
-    const std::string what = e.what();
-    const size_t colon = what.find(": ");
-    const bool missing = colon != std::string::npos && what.size() > 8 && what.ends_with(" missing");
-    if (speak)
-      std::cerr << "error: command line: "
-                << (missing
-                        ? what.substr(0, colon) + ": no value (expected a value after " + what.substr(0, colon) + ")"
-                        : what)
-                << "\n"
-                << hint;
+    std::string what = e.what();
+    if (const size_t colon = what.find(": "); colon != std::string::npos && what.ends_with(" missing")) {
+      const std::string option = what.substr(0, colon);
+      what = option + ": no value (expected a value after " + option + ")";
+    }
+    if (speak) std::cerr << "error: command line: " << what << "\n" << hint;
     return kExitBadInput;
   } catch (const CLI::ParseError& e) {
     if (speak) std::cerr << "error: command line: " << e.what() << "\n" << hint;

@@ -114,10 +114,10 @@ int main(int argc, char** argv) {
   app.add_option_function<std::string>("--thickness", text_into(args.thickness), "thickness of a 2D model, e.g. '5 mm'")
       ->type_name("T");
   app.add_option_function<std::string>("--volume-groups", list_into(args.volume_groups),
-                                       "place particles only in these physical volume groups")
+                                       "the physical groups that define materials (default: every group of the mesh dimension)")
       ->type_name("a,b");
   app.add_option_function<std::string>("--require-groups", list_into(args.required_groups),
-                                       "fail unless these physical groups exist and are not empty")
+                                       "physical groups that must exist and hold at least one particle")
       ->type_name("g1,g2");
   app.add_option_function<std::string>("--lattice", text_into(args.lattice), "a regular lattice instead of a mesh")
       ->type_name("cubic|square")

@@ -12,6 +12,7 @@ PACKAGES=(
   nlohmann-json3-dev          # JSON outputs (summary.json, post.json; common/json_file.hpp): non-finite values as null, strings escaped
   libmuparser-dev             # fields by expression in case files (initial velocity, displacement)
   libvtk9-dev                 # postproc: VTU/VTP output, contouring
+  libcli11-dev                # every tool's command line (common/cli.hpp): --help, --version, exit 2 on usage errors
   libgtest-dev                # tests
   openmpi-bin libopenmpi-dev  # distributed runs: mpirun -np N breccia-solve (docs/parallel.md)
   libhdf5-openmpi-dev         # parallel HDF5, for collective writes of one results file

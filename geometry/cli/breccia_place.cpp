@@ -6,7 +6,8 @@
 //   breccia-place --lattice square --box x0,y0,x1,y1 --spacing dx --thickness t -o particles.h5
 //
 // Lengths are metres, or "<number> <unit>" ("5 mm"). Bad input: a message naming the
-// file and the entity on stderr, exit code 2, and no output file.
+// file and the entity on stderr, exit code 2, and no output file. The command line is CLI11's
+// with the tools' conventions (common/cli.hpp).
 #include <chrono>
 #include <cstdio>
 #include <exception>
@@ -14,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "breccia/common/cli.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/particle_file.hpp"
 #include "breccia/common/units.hpp"
@@ -23,17 +25,18 @@
 
 namespace {
 
-constexpr const char* kUsage =
-    "usage:\n"
-    "  breccia-place MESH.msh -o particles.h5 [--thickness T] [--volume-groups a,b]\n"
-    "                [--require-groups g1,g2]\n"
+constexpr const char* kAbout =
+    "breccia-place: particles for the solver, one per cell of a gmsh mesh (at its centroid, with the\n"
+    "exact cell volume) or on a regular lattice, written to particles.h5 (+ particles.xdmf).";
+constexpr const char* kFooter =
+    "Usage forms:\n"
+    "  breccia-place MESH.msh -o particles.h5 [--thickness T] [--volume-groups a,b] [--require-groups g1,g2]\n"
     "  breccia-place --lattice cubic --box x0,y0,z0,x1,y1,z1 --spacing dx -o particles.h5\n"
     "  breccia-place --lattice square --box x0,y0,x1,y1 --spacing dx --thickness t -o particles.h5\n"
-    "\n"
-    "MESH.msh: gmsh format 2.2 or 4.1, linear tetrahedra (3D) or triangles in z = 0 (2D).\n"
-    "One particle per cell at its centroid with the exact cell volume (2D: area x T).\n"
-    "--thickness is required for 2D meshes and square lattices. Lengths in metres or\n"
-    "with a unit (\"5 mm\"). Output format: docs/formats.md, section particles.h5.\n";
+    "Input: MESH.msh, gmsh format 2.2 or 4.1, linear tetrahedra (3D) or triangles in z = 0 (2D; volume\n"
+    "= area x T). --thickness is required for 2D meshes and square lattices. Lengths in metres or with\n"
+    "a unit (\"5 mm\"). Output: particles.h5 (docs/formats.md, section particles.h5) and particles.xdmf;\n"
+    "a summary on stdout. Bad input: one message naming the file and entity, exit code 2, no file.";
 
 const std::string kCommandLine = "command line";
 
@@ -57,34 +60,13 @@ std::vector<std::string> split_commas(const std::string& text) {
   return parts;
 }
 
-Arguments parse_arguments(int argc, char** argv) {
-  Arguments args;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw breccia::InputError(kCommandLine, a, "no value", "a value after " + a);
-      return argv[++i];
-    };
-    if (a == "-o" || a == "--output") args.output_path = value();
-    else if (a == "--thickness") args.thickness = value();
-    else if (a == "--volume-groups") args.volume_groups = split_commas(value());
-    else if (a == "--require-groups") args.required_groups = split_commas(value());
-    else if (a == "--lattice") args.lattice = value();
-    else if (a == "--box") args.box = value();
-    else if (a == "--spacing") args.spacing = value();
-    else if (!a.empty() && a[0] == '-')
-      throw breccia::InputError(kCommandLine, a, "unknown option",
-                                "-o, --thickness, --volume-groups, --require-groups, --lattice, --box, --spacing");
-    else if (args.mesh_path.empty()) args.mesh_path = a;
-    else throw breccia::InputError(kCommandLine, a, "a second input file", "one MESH.msh");
-  }
-  if (args.output_path.empty()) throw breccia::InputError(kCommandLine, "-o", "missing", "-o particles.h5");
+// The checks that involve several options (CLI11 has parsed each one).
+void check_arguments(const Arguments& args) {
   if (args.lattice && !args.mesh_path.empty())
     throw breccia::InputError(kCommandLine, "--lattice", "given together with the mesh " + args.mesh_path,
                               "either a mesh file or --lattice");
   if (!args.lattice && args.mesh_path.empty())
     throw breccia::InputError(kCommandLine, "MESH.msh", "missing", "a mesh file or --lattice cubic|square");
-  return args;
 }
 
 double length(const std::string& text, const std::string& field) {
@@ -94,9 +76,7 @@ double length(const std::string& text, const std::string& field) {
 breccia::ParticleModel make_lattice_from(const Arguments& args) {
   using breccia::geometry::LatticeKind;
   breccia::geometry::LatticeSpec spec;
-  if (*args.lattice == "cubic") spec.kind = LatticeKind::Cubic;
-  else if (*args.lattice == "square") spec.kind = LatticeKind::Square;
-  else throw breccia::InputError(kCommandLine, "--lattice", "'" + *args.lattice + "'", "cubic or square");
+  spec.kind = *args.lattice == "cubic" ? LatticeKind::Cubic : LatticeKind::Square;  // one of the two (parse)
   const bool cubic = spec.kind == LatticeKind::Cubic;
   if (!args.box) throw breccia::InputError(kCommandLine, "--box", "missing", cubic ? "x0,y0,z0,x1,y1,z1" : "x0,y0,x1,y1");
   if (!args.spacing) throw breccia::InputError(kCommandLine, "--spacing", "missing", "the lattice spacing dx");
@@ -122,14 +102,34 @@ breccia::ParticleModel make_lattice_from(const Arguments& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  for (int i = 1; i < argc; ++i)
-    if (std::string(argv[i]) == "-h" || std::string(argv[i]) == "--help") {
-      std::fputs(kUsage, stdout);
-      return 0;
-    }
+  Arguments args;
+  CLI::App app{kAbout, "breccia-place"};
+  breccia::cli::configure(app, kFooter);
+  const auto text_into = [](std::optional<std::string>& into) { return [&into](const std::string& v) { into = v; }; };
+  const auto list_into = [](std::vector<std::string>& into) {
+    return [&into](const std::string& v) { into = split_commas(v); };
+  };
+  app.add_option("MESH.msh", args.mesh_path, "the mesh (gmsh 2.2 or 4.1); omitted with --lattice");
+  app.add_option("-o,--output", args.output_path, "the particle file to write")->required()->type_name("particles.h5");
+  app.add_option_function<std::string>("--thickness", text_into(args.thickness), "thickness of a 2D model, e.g. '5 mm'")
+      ->type_name("T");
+  app.add_option_function<std::string>("--volume-groups", list_into(args.volume_groups),
+                                       "the physical groups that define materials (default: every group of the mesh dimension)")
+      ->type_name("a,b");
+  app.add_option_function<std::string>("--require-groups", list_into(args.required_groups),
+                                       "physical groups that must exist and hold at least one particle")
+      ->type_name("g1,g2");
+  app.add_option_function<std::string>("--lattice", text_into(args.lattice), "a regular lattice instead of a mesh")
+      ->type_name("cubic|square")
+      ->check(breccia::cli::one_of({"cubic", "square"}));
+  app.add_option_function<std::string>("--box", text_into(args.box), "the lattice's box corners (lengths)")
+      ->type_name("x0,y0,[z0,]x1,y1[,z1]");
+  app.add_option_function<std::string>("--spacing", text_into(args.spacing), "the lattice spacing (a length)")
+      ->type_name("dx");
+  if (const auto code = breccia::cli::parse(app, argc, argv)) return *code;
   const auto start = std::chrono::steady_clock::now();
   try {
-    const Arguments args = parse_arguments(argc, argv);
+    check_arguments(args);
     breccia::ParticleModel model;
     if (args.lattice) {
       model = make_lattice_from(args);

@@ -8,117 +8,91 @@
 //                [--min-fragment-particles N] [--size sieve|diameter] [--no-plots]
 //
 // No selector (--cracks, --fragments, --energy, --spectrum) means everything that applies.
+// The command line is CLI11's with the tools' conventions (common/cli.hpp).
+#include <climits>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <tuple>
 #include <vector>
 
+#include "breccia/common/cli.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/units.hpp"
 #include "breccia/postproc/post.hpp"
 
 namespace {
 
-constexpr const char* kUsage =
-    "usage: breccia-post RUN_DIR [--particles FILE] [--step K | --all] [--cracks] [--fragments]\n"
-    "                    [--energy] [--spectrum PROBE [--frequency F] [--hann] [--gate T0,T1]\n"
-    "                                                 [--resolution DF] [--band W]]\n"
-    "                    [--damage-threshold D] [--crack-criterion bond|damage]\n"
-    "                    [--min-fragment-particles N] [--size sieve|diameter] [--no-plots] [--quiet]\n"
-    "Writes RUN_DIR/post/: cracks.vtp, damage_iso.vtp, crack_history.csv, fragments.csv/.vtu,\n"
-    "deformed.vtu, size_distribution.csv, fragment_sizes.png, energy.png, probe_*.csv/.png,\n"
-    "spectrum_*.csv/.png, post.json. No selector = everything that applies.\n";
+constexpr const char* kAbout =
+    "breccia-post: cracks, fragments, fragment size distribution, energy balance and probe spectra of\n"
+    "one solver run directory (results.h5 + history.csv). No selector (--cracks, --fragments, --energy,\n"
+    "--spectrum) means everything that applies.";
+constexpr const char* kFooter =
+    "Input: RUN_DIR, a breccia-solve output folder. Output: RUN_DIR/post/: cracks.vtp, damage_iso.vtp,\n"
+    "crack_history.csv, fragments.csv/.vtu, deformed.vtu, size_distribution.csv, fragment_sizes.png,\n"
+    "energy.png, probe_*.csv/.png, spectrum_*.csv/.png, post.json (docs/postproc.md). Times and\n"
+    "frequencies in SI or with a unit (\"17 us\", \"2 MHz\"). Bad input: exit code 2, one message.";
 
 using breccia::InputError;
 
-std::string value_of(const std::vector<std::string>& args, size_t& k) {
-  if (k + 1 >= args.size()) throw InputError("command line", args[k], "no value", "a value after " + args[k]);
-  return args[++k];
-}
-
-long long integer_of(const std::string& flag, const std::string& text) {
-  char* end = nullptr;
-  const long long v = std::strtoll(text.c_str(), &end, 10);
-  if (text.empty() || *end != '\0') throw InputError("command line", flag, "'" + text + "'", "an integer");
-  return v;
-}
-
-breccia::postproc::PostOptions parse(const std::vector<std::string>& args) {
+// The options as given; quantities are read once the command line is parsed.
+struct Given {
   breccia::postproc::PostOptions o;
-  bool cracks = false, fragments = false, energy = false, any = false;
-  std::string run_dir;
-  bool have_frequency = false, have_hann = false;
-  std::string spectrum_detail;  // the last of --gate/--resolution/--band given
-  for (size_t k = 0; k < args.size(); ++k) {
-    const std::string& a = args[k];
-    if (a == "--particles") o.particles_file = value_of(args, k);
-    else if (a == "--step") o.step = integer_of(a, value_of(args, k));
-    else if (a == "--all") o.all_steps = true;
-    else if (a == "--cracks") cracks = any = true;
-    else if (a == "--fragments") fragments = any = true;
-    else if (a == "--energy") energy = any = true;
-    else if (a == "--spectrum") { o.spectrum_probes.push_back(value_of(args, k)); any = true; }
-    else if (a == "--frequency") {
-      o.frequency_Hz = breccia::parse_quantity(value_of(args, k), breccia::Quantity::Frequency, "command line", a);
-      have_frequency = true;
-    } else if (a == "--hann") { o.hann = true; have_hann = true; }
-    else if (a == "--gate") {
-      // T0,T1: two times (seconds, or with a unit: "17 us,28 us"); inside the record is checked
-      // against history.csv.
-      const std::string v = value_of(args, k);
-      const size_t comma = v.find(',');
-      const std::string expected = "T0,T1: two times with T0 < T1, e.g. 17e-6,28e-6 (s)";
-      if (comma == std::string::npos || v.find(',', comma + 1) != std::string::npos)
-        throw InputError("command line", a, "'" + v + "'", expected);
-      const double t0 = breccia::parse_quantity(v.substr(0, comma), breccia::Quantity::Time, "command line", a);
-      const double t1 = breccia::parse_quantity(v.substr(comma + 1), breccia::Quantity::Time, "command line", a);
-      if (!(t0 < t1)) throw InputError("command line", a, "'" + v + "'", expected);
-      o.gate_s = std::pair{t0, t1};
-      spectrum_detail = a;
-    } else if (a == "--resolution" || a == "--band") {
-      const double f = breccia::parse_quantity(value_of(args, k), breccia::Quantity::Frequency, "command line", a);
-      if (!(f > 0)) throw InputError("command line", a, std::to_string(f) + " Hz", "a positive frequency");
-      (a == "--band" ? o.band_Hz : o.resolution_Hz) = f;
-      spectrum_detail = a;
-    }
-    else if (a == "--damage-threshold") {
-      const std::string v = value_of(args, k);
-      char* end = nullptr;
-      o.damage_threshold = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end != '\0' || !(o.damage_threshold >= 0.0 && o.damage_threshold <= 1.0))
-        throw InputError("command line", a, "'" + v + "'", "a damage value in [0, 1]");
-    } else if (a == "--crack-criterion") {
-      const std::string v = value_of(args, k);
-      if (v == "bond") o.crack_criterion = breccia::postproc::CrackCriterion::Bond;
-      else if (v == "damage") o.crack_criterion = breccia::postproc::CrackCriterion::Damage;
-      else throw InputError("command line", a, "'" + v + "'", "bond or damage");
-    } else if (a == "--min-fragment-particles") {
-      o.min_fragment_particles = integer_of(a, value_of(args, k));
-      if (o.min_fragment_particles < 1) throw InputError("command line", a, std::to_string(o.min_fragment_particles), ">= 1");
-    } else if (a == "--size") {
-      const std::string v = value_of(args, k);
-      if (v != "sieve" && v != "diameter") throw InputError("command line", a, "'" + v + "'", "sieve or diameter");
-      o.size_by_diameter = v == "diameter";
-    } else if (a == "--no-plots") o.plots = false;
-    else if (a == "--quiet") o.progress = false;
-    else if (!a.empty() && a[0] == '-') throw InputError("command line", a, "unknown option", "one of the options in the usage");
-    else if (run_dir.empty()) run_dir = a;
-    else throw InputError("command line", a, "a second run directory", "one RUN_DIR");
+  bool cracks = false, fragments = false, energy = false;
+  std::string run_dir, frequency, gate, resolution, band, crack_criterion, size;
+  bool hann = false;
+};
+
+double frequency_of(const std::string& flag, const std::string& text) {
+  return breccia::parse_quantity(text, breccia::Quantity::Frequency, "command line", flag);
+}
+
+breccia::postproc::PostOptions finish(Given g) {
+  breccia::postproc::PostOptions& o = g.o;
+  o.run_dir = g.run_dir;
+  if (!g.frequency.empty()) o.frequency_Hz = frequency_of("--frequency", g.frequency);
+  o.hann = g.hann;
+  std::string spectrum_detail;  // one of --gate/--resolution/--band given
+  if (!g.gate.empty()) {
+    // T0,T1: two times (seconds, or with a unit: "17 us,28 us"); inside the record is checked
+    // against history.csv.
+    const std::string& v = g.gate;
+    const size_t comma = v.find(',');
+    const std::string expected = "T0,T1: two times with T0 < T1, e.g. 17e-6,28e-6 (s)";
+    if (comma == std::string::npos || v.find(',', comma + 1) != std::string::npos)
+      throw InputError("command line", "--gate", "'" + v + "'", expected);
+    const double t0 = breccia::parse_quantity(v.substr(0, comma), breccia::Quantity::Time, "command line", "--gate");
+    const double t1 = breccia::parse_quantity(v.substr(comma + 1), breccia::Quantity::Time, "command line", "--gate");
+    if (!(t0 < t1)) throw InputError("command line", "--gate", "'" + v + "'", expected);
+    o.gate_s = std::pair{t0, t1};
+    spectrum_detail = "--gate";
   }
-  if (run_dir.empty()) throw InputError("command line", "RUN_DIR", "missing", "a run directory");
+  for (const auto& [flag, text, into] :
+       {std::tuple{"--resolution", &g.resolution, &o.resolution_Hz}, std::tuple{"--band", &g.band, &o.band_Hz}}) {
+    if (text->empty()) continue;
+    const double f = frequency_of(flag, *text);
+    if (!(f > 0)) throw InputError("command line", flag, std::to_string(f) + " Hz", "a positive frequency");
+    *into = f;
+    spectrum_detail = flag;
+  }
+  if (!(o.damage_threshold >= 0.0 && o.damage_threshold <= 1.0))
+    throw InputError("command line", "--damage-threshold", std::to_string(o.damage_threshold),
+                     "a damage value in [0, 1]");
+  if (g.crack_criterion == "damage") o.crack_criterion = breccia::postproc::CrackCriterion::Damage;
+  o.size_by_diameter = g.size == "diameter";
   if (o.step && o.all_steps) throw InputError("command line", "--step", "given with --all", "one of --step K or --all");
-  if ((have_frequency || have_hann) && o.spectrum_probes.empty())
-    throw InputError("command line", have_frequency ? "--frequency" : "--hann", "without --spectrum", "--spectrum PROBE");
+  if ((!g.frequency.empty() || g.hann) && o.spectrum_probes.empty())
+    throw InputError("command line", !g.frequency.empty() ? "--frequency" : "--hann", "without --spectrum",
+                     "--spectrum PROBE");
   if (!spectrum_detail.empty() && o.spectrum_probes.empty())
     throw InputError("command line", spectrum_detail, "without --spectrum", "--spectrum PROBE");
-  o.run_dir = run_dir;
-  if (any) {
-    o.cracks = cracks;
-    o.fragments = fragments;
-    o.energy = energy;
+  if (g.cracks || g.fragments || g.energy || !o.spectrum_probes.empty()) {
+    o.cracks = g.cracks;
+    o.fragments = g.fragments;
+    o.energy = g.energy;
     o.probes = !o.spectrum_probes.empty();
     o.spectrum_all = false;
-    o.history_required = energy || o.probes;
+    o.history_required = g.energy || o.probes;
   }
   if (const char* py = std::getenv("PYTHON")) o.python = py;
   return o;
@@ -127,21 +101,66 @@ breccia::postproc::PostOptions parse(const std::vector<std::string>& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<std::string> args(argv + 1, argv + argc);
-  for (const auto& a : args)
-    if (a == "-h" || a == "--help") {
-      std::fputs(kUsage, stdout);
-      return 0;
-    }
+  using breccia::cli::whole_number;
+  Given g;
+  breccia::postproc::PostOptions& o = g.o;
+  CLI::App app{kAbout, "breccia-post"};
+  breccia::cli::configure(app, kFooter);
+  app.add_option("RUN_DIR", g.run_dir, "directory with results.h5 (and history.csv) written by breccia-solve")
+      ->required()
+      ->type_name("DIR");
+  app.add_option("--particles", o.particles_file, "particle file instead of the one results.h5 names (same content_id)")
+      ->type_name("FILE");
+  app.add_option_function<long long>(
+         "--step", [&](long long k) { o.step = k; }, "analyse the output written at solver step K (default: the last)")
+      ->type_name("K")
+      ->check(whole_number(0, LLONG_MAX));
+  app.add_flag("--all", o.all_steps, "every output: per-output files (_<step> suffix) and ParaView .pvd collections");
+  app.add_flag("--cracks", g.cracks, "crack surfaces, damage isosurface, crack history");
+  app.add_flag("--fragments", g.fragments, "fragments, fragment meshes, deformed mesh, size distribution");
+  app.add_flag("--energy", g.energy, "energy balance from history.csv and the dissipation check");
+  app.add_option("--spectrum", o.spectrum_probes, "probe history and amplitude spectrum of probe PROBE (repeatable)")
+      ->type_name("PROBE")
+      ->allow_extra_args(false);
+  app.add_option("--frequency", g.frequency,
+                 "reference frequency of the normalisation (default: the largest non-DC peak)")
+      ->type_name("F");
+  app.add_flag("--hann", g.hann, "Hann window before the transform (periodic; symmetric over a --gate)");
+  app.add_option("--gate", g.gate, "transform only the samples with T0 <= time_s <= T1 (inside the record)")
+      ->type_name("T0,T1");
+  app.add_option("--resolution", g.resolution, "zero-pad to a power-of-two length with bins at most DF apart")
+      ->type_name("DF");
+  app.add_option("--band", g.band, "peak search half-width around the reference and its harmonics (default: 1 bin)")
+      ->type_name("W");
+  app.add_option("--damage-threshold", o.damage_threshold,
+                 "level of the damage isosurface and of the damage crack criterion (default 0.5)")
+      ->type_name("D")
+      ->check(breccia::cli::real_number());
+  app.add_option("--crack-criterion", g.crack_criterion,
+                 "a face is cracked when its bond is broken, or when both particles' damage > D (default bond)")
+      ->type_name("bond|damage")
+      ->check(breccia::cli::one_of({"bond", "damage"}));
+  app.add_option_function<long long>(
+         "--min-fragment-particles", [&](long long n) { o.min_fragment_particles = n; },
+         "smaller fragments are left out of the table and the distribution (default 1)")
+      ->type_name("N")
+      ->check(whole_number(1, LLONG_MAX));
+  app.add_option("--size", g.size, "size measure of the distribution (default sieve)")
+      ->type_name("sieve|diameter")
+      ->check(breccia::cli::one_of({"sieve", "diameter"}));
+  app.add_flag_callback(
+      "--no-plots", [&] { o.plots = false; }, "skip the PNG charts");
+  app.add_flag_callback(
+      "--quiet", [&] { o.progress = false; }, "no progress on stderr");
+  if (const auto code = breccia::cli::parse(app, argc, argv)) return *code;
   try {
-    const breccia::postproc::PostOptions options = parse(args);
+    const breccia::postproc::PostOptions options = finish(g);
     const auto summary = breccia::postproc::run_post(options);
     std::fprintf(stderr, "breccia-post: wrote %zu files to %s\n", summary.written.size(), summary.post_dir.string().c_str());
     for (const auto& f : summary.plot_failures) std::fprintf(stderr, "breccia-post: chart not drawn: %s\n", f.c_str());
     return 0;
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
-    if (args.empty()) std::fputs(kUsage, stderr);
     return breccia::kExitBadInput;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

@@ -1,17 +1,19 @@
 // breccia-solve: run a peridynamics (or MPS) case.
 //   breccia-solve CASE.yaml [-o DIR] [--threads N] [--restart FILE] [--steps N] [--backend cpu|cuda|auto] [--quiet]
 //   breccia-solve CASE.yaml --decomposition 2,4,...   (set up, print the domain decomposition's figures, exit)
+// The command line is CLI11's with the tools' conventions (common/cli.hpp).
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <algorithm>
+#include <climits>
 #include <cstdlib>
-#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "breccia/common/cli.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/yaml_input.hpp"
 #include "breccia/solver/partition.hpp"
@@ -33,25 +35,20 @@
 
 namespace {
 
-void usage() {
-  std::fprintf(stderr,
-               "usage: breccia-solve CASE.yaml [-o DIR] [--threads N] [--restart FILE] [--steps N]\n"
-               "                     [--backend cpu|cuda|auto] [--quiet] [--set KEY=VALUE ...]\n"
-               "       --set time.end=\"100 us\" --set loads[0].history.peak=\"4 MPa\": override a value of the\n"
-               "             case file (repeatable; KEY as error messages name fields; VALUE as YAML)\n"
-               "       breccia-solve CASE.yaml --decomposition P1,P2,...  (decomposition figures per rank count)\n"
-               "       mpirun -np P breccia-solve CASE.yaml ...  (a distributed run: docs/parallel.md)\n");
-}
-
-// A whole number and nothing else: std::stoll alone takes "4x" as 4.
-long long whole_number(const std::string& text) {
-  size_t used = 0;
-  const long long v = std::stoll(text, &used);
-  if (used != text.size()) throw std::invalid_argument(text);
-  return v;
-}
-
-struct MissingValue {};  // an option without its value (already reported)
+constexpr const char* kAbout =
+    "breccia-solve: run a peridynamics (PMB, LPS, correspondence) or MPS case: particles from the case's\n"
+    "specimen, loads and boundaries over time, fracture; results in a folder.";
+constexpr const char* kFooter =
+    "Input: CASE.yaml (docs/case-format.md). Output in DIR: results.h5 (+ .xdmf), history.csv,\n"
+    "summary.json and checkpoint.h5 (docs/formats.md); progress on stderr unless --quiet.\n"
+    "  --set time.end=\"100 us\" --set 'loads[0].history.peak=4 MPa'   a variant of the case, the file\n"
+    "                                                     untouched: KEY as error messages name fields,\n"
+    "                                                     VALUE as YAML\n"
+    "  breccia-solve CASE.yaml --decomposition P1,P2,...   the domain decomposition's figures per rank\n"
+    "                                                     count (CSV on stdout), without running\n"
+    "  mpirun -np P breccia-solve CASE.yaml ...            a distributed run (docs/parallel.md)\n"
+    "Exit codes: 0 done, 2 bad input or usage, 3 the run failed (unstable, not converged), 130 interrupted\n"
+    "(Ctrl-C: a checkpoint is written).";
 
 bool gpu_available() {
 #ifdef BRECCIA_WITH_CUDA
@@ -91,42 +88,30 @@ int main(int argc, char** argv) {
   std::string backend = "auto";
   std::string decomposition;  // rank counts: print the decomposition's figures instead of running
   std::vector<std::string> overrides;  // --set KEY=VALUE
-  for (int k = 1; k < argc; ++k) {
-    const std::string a = argv[k];
-    auto value = [&](const char* name) -> std::string {
-      if (k + 1 >= argc) {
-        std::fprintf(stderr, "error: %s needs a value\n", name);
-        throw MissingValue{};
-      }
-      return argv[++k];
-    };
-    try {
-      if (a == "-o" || a == "--output") opt.out_dir = value("-o");
-      else if (a == "--threads") opt.threads = static_cast<int>(whole_number(value("--threads")));
-      else if (a == "--restart") opt.restart_file = value("--restart");
-      else if (a == "--steps") opt.steps = whole_number(value("--steps"));
-      else if (a == "--backend") backend = value("--backend");
-      else if (a == "--quiet") opt.progress = false;
-      else if (a == "--decomposition") decomposition = value("--decomposition");
-      else if (a == "--set") overrides.push_back(value("--set"));
-      else if (a == "-h" || a == "--help") { usage(); return 0; }
-      else if (!a.empty() && a[0] == '-') { std::fprintf(stderr, "error: unknown option %s\n", a.c_str()); usage(); return kExitBadInput; }
-      else case_file = a;
-    } catch (const MissingValue&) {
-      return kExitBadInput;
-    } catch (const std::exception&) {
-      std::fprintf(stderr, "error: option %s: '%s' is not a number\n", a.c_str(), argv[k]);
-      return kExitBadInput;
-    }
-  }
-  if (case_file.empty()) {
-    usage();
-    return kExitBadInput;
-  }
-  if (backend != "cpu" && backend != "cuda" && backend != "auto") {
-    std::fprintf(stderr, "error: --backend: '%s' (expected cpu, cuda or auto)\n", backend.c_str());
-    return kExitBadInput;
-  }
+  CLI::App app{kAbout, "breccia-solve"};
+  cli::configure(app, kFooter);
+  app.add_option("CASE", case_file, "the case file")->required()->type_name("CASE.yaml");
+  app.add_option("-o,--output", opt.out_dir, "the folder for the results (default: out)")->type_name("DIR");
+  app.add_option("--threads", opt.threads, "OpenMP threads (default: OpenMP's, all cores)")
+      ->type_name("N")
+      ->check(cli::whole_number(1));
+  app.add_option("--restart", opt.restart_file, "continue from this checkpoint")->type_name("FILE");
+  app.add_option_function<long long>(
+         "--steps", [&](long long n) { opt.steps = n; }, "override the number of steps")
+      ->type_name("N")
+      ->check(cli::whole_number(0, LLONG_MAX));
+  app.add_option("--backend", backend, "where the time loop runs (default: auto, the GPU when there is one)")
+      ->type_name("cpu|cuda|auto")
+      ->check(cli::one_of({"cpu", "cuda", "auto"}));
+  app.add_flag_callback(
+      "--quiet", [&] { opt.progress = false; }, "no progress or notes on stderr");
+  app.add_option("--set", overrides, "override a value of the case file (repeatable; below)")
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false);
+  app.add_option("--decomposition", decomposition, "print the domain decomposition's figures per rank count and exit")
+      ->type_name("P1,P2,...");
+  // Every rank parses; only rank 0 speaks, and all leave with the same code.
+  if (const auto code = cli::parse(app, argc, argv, rank == 0)) return *code;
   if (backend == "cuda" && !gpu_available()) {
     std::fprintf(stderr, "error: --backend cuda: no CUDA device is available on this machine"
 #ifndef BRECCIA_WITH_CUDA
@@ -189,12 +174,7 @@ int main(int argc, char** argv) {
       for (size_t at = 0; at <= decomposition.size();) {
         const size_t comma = std::min(decomposition.find(',', at), decomposition.size());
         const std::string item = decomposition.substr(at, comma - at);
-        long long ranks_here = 0;
-        try {
-          ranks_here = whole_number(item);
-        } catch (const std::exception&) {
-          ranks_here = 0;
-        }
+        const long long ranks_here = cli::to_whole_number(item).value_or(0);
         if (ranks_here < 1 || ranks_here > (1 << 30))
           throw InputError("--decomposition", "", "'" + item + "'", "comma-separated rank counts >= 1");
         rank_counts.push_back(static_cast<int>(ranks_here));

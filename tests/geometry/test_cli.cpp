@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "../common/cli_contract.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/particle_file.hpp"
 #include "test_meshes.hpp"
@@ -200,6 +201,19 @@ TEST(PlaceCli, RequiredGroupThatIsEmptyIsRejected) {
 TEST(PlaceCli, UnknownVolumeGroupIsRejected) {
   expect_rejected(write_file("groups_volume.msh", kEmptyGroupMesh), "--volume-groups granite",
                   {"--volume-groups", "'granite'"});
+}
+
+// --help, --version, and usage errors (exit 2 naming the option): the tools' shared contract.
+// Lengths are quantities ("5 mm"): a malformed one is named the same way.
+TEST(PlaceCli, FollowsTheToolsCommandLineContract) {
+  const std::string output = dir() + "/never.h5";
+  fs::remove(output);
+  // A value given twice: the last one counts (the malformed values come after the good ones).
+  breccia::testing::expect_cli_contract(
+      BRECCIA_PLACE_EXE, "breccia-place",
+      "--lattice square --box 0,0,1,1 --spacing 0.5 --thickness 1mm -o '" + output + "'",
+      {{"--spacing", "10x"}, {"--thickness", "two"}});
+  EXPECT_FALSE(fs::exists(output));
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "../common/cli_contract.hpp"
 #include "mesh_probe.hpp"
 
 namespace {
@@ -123,6 +124,15 @@ TEST(MeshCli, GoodRunPrintsStagesAndSummaryButNoGmshLog) {
   for (const char* item : {"tetrahedra", "nodes", "element size", "charge_hole", "concrete"})
     EXPECT_NE(r.out.find(item), std::string::npos) << item;
   EXPECT_TRUE(std::filesystem::exists(output));
+}
+
+// --help, --version, and usage errors (exit 2 naming the option): the tools' shared contract.
+TEST(MeshCli, FollowsTheToolsCommandLineContract) {
+  breccia::testing::expect_cli_contract(BRECCIA_MESH_EXE, "breccia-mesh", "spec.yaml -o out.msh",
+                                        {{"--threads", "4x"}, {"--threads", "-1"}, {"--threads", "0"}});
+  const CliResult r = run_cli("spec.yaml -o out.msh --threads");  // the value missing at the end
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--threads: no value"), std::string::npos) << r.err;
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <string>
 
+#include "../common/cli_contract.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/json_file.hpp"
 #include "breccia/common/particle_file.hpp"
@@ -106,6 +107,12 @@ TEST(MpsCli, BadInputExitsWithCode2AndNamesTheField) {
   EXPECT_EQ(text.rfind("error: ", 0), 0u) << text;
   EXPECT_NE(text.find("cracks[0].kinetic_friction"), std::string::npos) << text;
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "results.h5"));
+}
+
+// --help, --version, and usage errors (exit 2 naming the option): the tools' shared contract.
+TEST(MpsCli, FollowsTheToolsCommandLineContract) {
+  breccia::testing::expect_cli_contract(BRECCIA_MPS_EXE, "breccia-mps", "case.yaml -o out",
+                                        {{"--threads", "4x"}, {"--threads", "-1"}, {"--threads", "0"}});
 }
 
 TEST(MpsCli, RunWritesHistorySummaryAndResults) {

@@ -4,24 +4,34 @@
 // near the cuts, two outputs and a 4096-row history with one probe.
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <numbers>
+#include <string>
+#include <vector>
 
+#include "breccia/common/cli.hpp"
 #include "synthetic_run.hpp"
 
 namespace bt = breccia::postproc::testing;
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: make_synthetic_run DIR [NX NY NZ]\n");
-    return 2;
-  }
-  const int nx = argc > 4 ? std::atoi(argv[2]) : 37, ny = argc > 4 ? std::atoi(argv[3]) : 36,
-            nz = argc > 4 ? std::atoi(argv[4]) : 36;
+  std::string dir;
+  std::vector<int> cells{37, 36, 36};
+  CLI::App app{"make_synthetic_run: a large synthetic run directory for timing breccia-post (not a test).",
+               "make_synthetic_run"};
+  breccia::cli::configure(app, "Output: DIR/results.h5, particles.h5 and history.csv (one probe, 4096 rows).");
+  app.add_option("DIR", dir, "the run directory to write")->required();
+  app.add_option("CELLS", cells, "hexes per edge, 6 tets each (default 37 36 36)")
+      ->type_name("NX NY NZ")
+      ->expected(3)
+      // All three or none: TakeLast, the tools' default, would accept fewer.
+      ->multi_option_policy(CLI::MultiOptionPolicy::Throw)
+      ->check(breccia::cli::whole_number(1, 1000));
+  if (const auto code = breccia::cli::parse(app, argc, argv)) return *code;
+  const int nx = cells[0], ny = cells[1], nz = cells[2];
   const double h = 1e-3;
   bt::SyntheticRun run;
-  run.dir = argv[1];
+  run.dir = dir;
   run.model = bt::structured_mesh(3, {nx, ny, nz}, h);
   run.horizon_m = 3.0 * std::cbrt(h * h * h / 6.0);  // three mean particle spacings
   const double cx = 0.5 * nx * h, cy = 0.5 * ny * h, cz = 0.5 * nz * h;
@@ -49,6 +59,6 @@ int main(int argc, char** argv) {
     hist << k * 5 << ',' << t << ',' << f << ',' << 0.5 * f << ',' << 1.6 * f << ',' << 0.1 * f << ',' << 1.6 * f
          << ",0.6,0," << 1e-8 * std::sin(2 * std::numbers::pi * 2e6 * t) << '\n';
   }
-  std::printf("%zu particles, %zu broken bonds written to %s\n", n, broken.size() / 2, argv[1]);
+  std::printf("%zu particles, %zu broken bonds written to %s\n", n, broken.size() / 2, dir.c_str());
   return 0;
 }

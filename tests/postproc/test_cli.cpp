@@ -9,6 +9,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "../common/cli_contract.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/h5.hpp"
 #include "breccia/postproc/run_data.hpp"
@@ -264,6 +265,16 @@ TEST(BrecciaPostCli, EnergyWithoutHistoryIsBadInput) {
   const Result r = run_post("'" + dir.string() + "' --energy --no-plots");
   EXPECT_EQ(r.code, kExitBadInput);
   EXPECT_NE(r.output.find("history.csv: file does not exist"), std::string::npos) << r.output;
+}
+
+// --help, --version, and usage errors (exit 2 naming the option): the tools' shared contract.
+TEST(BrecciaPostCli, FollowsTheToolsCommandLineContract) {
+  breccia::testing::expect_cli_contract(BRECCIA_POST_EXE, "breccia-post", "somewhere --quiet",
+                                        {{"--step", "1.5"},
+                                         {"--step", "-1"},
+                                         {"--min-fragment-particles", "0"},
+                                         {"--damage-threshold", "0.5x"},
+                                         {"--frequency", "2 parsecs"}});
 }
 
 TEST(BrecciaPostCli, UnknownOptionIsBadInput) {

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <string>
 #include "helpers.hpp"
+#include "../common/cli_contract.hpp"
 #include "breccia/common/particle_file.hpp"
 
 #include <sstream>
@@ -89,6 +90,25 @@ TEST(SolverCli, MalformedNumbersOnTheCommandLineAreRejected) {
     EXPECT_NE(out.find("is not a number"), std::string::npos) << bad << ": " << out;
   }
 }
+
+// --help, --version, and usage errors (exit 2 naming the option): the tools' shared contract.
+TEST(SolverCli, FollowsTheToolsCommandLineContract) {
+  breccia::testing::expect_cli_contract(
+      BRECCIA_SOLVE_EXE, "breccia-solve", "case.yaml -o out --quiet",
+      {{"--threads", "4x"}, {"--threads", "-1"}, {"--steps", "10s"}, {"--steps", "-3"}});
+}
+
+#ifdef BRECCIA_ATLAS_EXE
+// breccia-atlas: the same contract; a list of numbers is checked item by item. Usage errors
+// stop it before any sweep starts.
+TEST(AtlasCli, FollowsTheToolsCommandLineContract) {
+  const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_atlas";
+  breccia::testing::expect_cli_contract(
+      BRECCIA_ATLAS_EXE, "breccia-atlas", "--quick --no-stability --work " + dir + " --csv " + dir + "/atlas.csv",
+      {{"--threads", "4x"}, {"--threads", "-1"}, {"--m", "3,x"}, {"--gradings", "2,4y"}});
+  EXPECT_FALSE(std::filesystem::exists(dir + "/atlas.csv"));
+}
+#endif
 
 // --set KEY=VALUE overrides a value of the case file for this run (the variants of a case
 // without editing it): the step count, a material's modulus, an initial velocity (its

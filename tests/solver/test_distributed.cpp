@@ -275,6 +275,25 @@ TEST(Distributed, BadInputIsReportedOnceWithExitCode2) {
   EXPECT_NE(o.err.find(key), std::string::npos) << o.err;
 }
 
+// A usage error under mpirun: every rank parses the command line, rank 0 alone speaks, and all
+// leave with exit code 2 (mpirun reports the first non-zero code).
+TEST(Distributed, UsageErrorIsReportedOnceWithExitCode2) {
+  const std::string file =
+      write_case("mpi_usage",
+                 "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.004, 0.004], spacing: 1 mm}}\n"
+                 "model: {type: pmb, horizon_factor: 3.015}\n"
+                 "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25}]\n"
+                 "time: {steps: 5}\n");
+  for (const std::string bad : {"--steps 10s", "--no-such-option"}) {
+    const Outcome o = solve(file, process_temp_dir() + "/mpi_usage", 2, 1, bad);
+    EXPECT_EQ(o.exit_code, 2) << bad << ": " << o.err;
+    size_t count = 0;
+    for (size_t at = o.err.find("error:"); at != std::string::npos; at = o.err.find("error:", at + 1)) ++count;
+    EXPECT_EQ(count, 1u) << o.err;
+    EXPECT_NE(o.err.find("error: command line: " + bad.substr(0, bad.find(' '))), std::string::npos) << o.err;
+  }
+}
+
 // A case refused under `ranks` processes: exit code 2 and a message holding `expected`.
 void expect_refused(const std::string& name, const std::string& body, int ranks, const std::string& expected) {
   const std::string file = write_case(name, "specimen: {lattice: {dimension: 3, box: " + body);

@@ -6,18 +6,19 @@
 // the tests then apply to the proposed setups; the CLI tests use a small hand-written CSV
 // fixture whose numbers are not results.
 #include <gtest/gtest.h>
+#include <omp.h>
 #include <sys/wait.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
-#include <numbers>
 #include <filesystem>
 #include <fstream>
-#include <omp.h>
+#include <numbers>
 #include <sstream>
 
+#include "../common/cli_contract.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/plan/plan.hpp"
 #include "breccia/solver/run.hpp"
@@ -481,6 +482,12 @@ TEST(PlanCli, NonPositiveOrMissingToleranceExitsTwoWithAMessage) {
   const CliResult word = run_plan(c + " --tolerance tight");
   EXPECT_EQ(word.code, kExitBadInput) << word.output;
   EXPECT_NE(word.output.find("not a number"), std::string::npos) << word.output;
+}
+
+// --help, --version, and usage errors (exit 2 naming the option): the tools' shared contract.
+TEST(PlanCli, FollowsTheToolsCommandLineContract) {
+  breccia::testing::expect_cli_contract(BRECCIA_PLAN_EXE, "breccia-plan", "case.yaml --tolerance 0.05",
+                                        {{"--threads", "4x"}, {"--threads", "0"}, {"--tolerance", "5%"}});
 }
 
 TEST(PlanCli, MissingCaseFileExitsTwoNamingTheFile) {

@@ -4,21 +4,24 @@
 //   breccia-atlas [--quick] [--csv docs/atlas/atlas.csv] [--stability-csv docs/atlas/stability.csv]
 //                 [--problems wave_speed_bar,strain_energy,fracture_energy,quasi_static_bar,kalthoff_winkler,
 //                             softening_strength,mps_wave_speed,thick_cylinder,thick_cylinder_hill]
-//                 [--models pmb,lps] [--kinds lattice,tet] [--m 2,3,4,5] [--backends cpu,cuda] [--no-stability] [--only-stability]
-//                 [--stability-studies pd,graded,mps] [--gradings 1.5,2,3] [--append] [--threads N] [--work DIR] [--mesh-exe PATH] [--place-exe PATH]
+//                 [--models pmb,lps] [--kinds lattice,tet] [--m 2,3,4,5] [--backends cpu,cuda] [--no-stability]
+//                 [--only-stability]
+//                 [--stability-studies pd,graded,mps] [--gradings 1.5,2,3] [--append] [--threads N] [--work DIR]
+//                 [--mesh-exe PATH] [--place-exe PATH]
 //
 // Each run appends one row to the CSV (rewritten atomically after every row). Tet-centroid
 // particles come from breccia-mesh + breccia-place (found next to this executable unless
 // given). The precision and backend columns say how each row ran; --backends cuda runs the
-// time-stepping problems (wave speed bar, Kalthoff-Winkler) on the GPU too.
+// time-stepping problems (wave speed bar, Kalthoff-Winkler) on the GPU too. The command line
+// is CLI11's with the tools' conventions (common/cli.hpp).
 #include <omp.h>
 
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <sstream>
 
 #include "atlas.hpp"
+#include "breccia/common/cli.hpp"
 #include "breccia/common/error.hpp"
 #ifdef BRECCIA_WITH_CUDA
 #include "breccia/solver/cuda_backend.hpp"
@@ -26,36 +29,16 @@
 
 namespace {
 
-const char* kUsage =
-    "usage: breccia-atlas [--quick] [--csv FILE] [--stability-csv FILE] [--problems a,b] [--models pmb,lps]\n"
-    "                     [--kinds lattice,tet] [--m 2,3,4,5] [--no-stability] [--only-stability] [--append]\n"
-    "                     [--precisions float64,float32] (default float64)\n"
-    "                     [--backends cpu,cuda] (default cpu; cuda: wave_speed_bar and kalthoff_winkler on the GPU)\n"
-    "                     [--stability-studies pd,graded,mps] (default: all; stability_graded.csv, stability_mps.csv beside the stability CSV)\n"
-    "                     [--gradings 1.5,2,3] (grading ratios of the graded study; default 1,1.5,2,3,4,6, --quick 2,4)\n"
-    "                     [--threads N] [--work DIR] [--mesh-exe PATH] [--place-exe PATH]\n"
-    "problems: wave_speed_bar strain_energy fracture_energy quasi_static_bar kalthoff_winkler softening_strength\n"
-    "          mps_wave_speed thick_cylinder thick_cylinder_hill (MPS stress solid)\n";
-
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream in(s);
-  for (std::string item; std::getline(in, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
-void require_known(const std::vector<std::string>& given, const std::vector<std::string>& known,
-                   const std::string& option) {
-  for (const auto& g : given) {
-    bool ok = false;
-    for (const auto& k : known) ok = ok || g == k;
-    if (ok) continue;
-    std::string list;
-    for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-    throw breccia::InputError("command line", option, "'" + g + "'", "one of " + list);
-  }
-}
+constexpr const char* kAbout =
+    "breccia-atlas: speed against accuracy of the PD (and MPS) solvers on problems with known answers,\n"
+    "and the measured stability maps, as CSV tables (docs/atlas.md; `make atlas`).";
+constexpr const char* kFooter =
+    "Problems: wave_speed_bar strain_energy fracture_energy quasi_static_bar kalthoff_winkler\n"
+    "          softening_strength mps_wave_speed thick_cylinder thick_cylinder_hill (MPS stress solid).\n"
+    "Output: one row per run appended to the CSV (rewritten atomically after every row); the stability\n"
+    "studies write the stability CSV and stability_graded.csv, stability_mps.csv beside it. Tet-centroid\n"
+    "particles come from breccia-mesh + breccia-place, found next to this executable unless given.\n"
+    "Lists are comma-separated (--models pmb,lps).";
 
 // Another table in the folder of the stability CSV.
 std::string sibling_csv(const std::string& csv, const std::string& name) {
@@ -68,8 +51,10 @@ int main(int argc, char** argv) {
   using namespace breccia::atlas;
   try {
     SweepPlan plan;
-    plan.problems = {"wave_speed_bar", "strain_energy", "fracture_energy", "quasi_static_bar", "kalthoff_winkler",
-                     "softening_strength", "mps_wave_speed", "thick_cylinder", "thick_cylinder_hill"};
+    const std::vector<std::string> all_problems = {"wave_speed_bar",   "strain_energy",    "fracture_energy",
+                                                   "quasi_static_bar", "kalthoff_winkler", "softening_strength",
+                                                   "mps_wave_speed",   "thick_cylinder",   "thick_cylinder_hill"};
+    plan.problems = all_problems;
     plan.models = {"pmb", "lps"};
     plan.kinds = {"lattice", "tet"};
     std::string csv = "docs/atlas/atlas.csv", stability_csv = "docs/atlas/stability.csv";
@@ -82,51 +67,53 @@ int main(int argc, char** argv) {
     int threads = 0;
     const std::filesystem::path bin = std::filesystem::absolute(argv[0]).parent_path();
     SpecimenMaker maker{"runs/atlas", (bin / "breccia-mesh").string(), (bin / "breccia-place").string()};
-    for (int k = 1; k < argc; ++k) {
-      const std::string a = argv[k];
-      auto value = [&]() -> std::string {
-        if (k + 1 >= argc) throw breccia::InputError("command line", a, "no value", "a value after " + a);
-        return argv[++k];
-      };
-      if (a == "--quick") plan.quick = true;
-      else if (a == "--csv") csv = value();
-      else if (a == "--stability-csv") stability_csv = value();
-      else if (a == "--problems") plan.problems = split(value());
-      else if (a == "--models") plan.models = split(value());
-      else if (a == "--kinds") plan.kinds = split(value());
-      else if (a == "--precisions") plan.precisions = split(value());
-      else if (a == "--backends") plan.backends = split(value());
-      else if (a == "--m") {
-        plan.m_values.clear();
-        for (const auto& v : split(value())) plan.m_values.push_back(std::stod(v));
-      } else if (a == "--gradings") {
-        for (const auto& g : split(value())) plan.gradings.push_back(std::stod(g));
-      } else if (a == "--stability-studies") stability_studies = split(value());
-      else if (a == "--no-stability") stability = false;
-      else if (a == "--only-stability") sweeps = false;
-      else if (a == "--append") append = true;
-      else if (a == "--threads") threads = std::stoi(value());
-      else if (a == "--work") maker.work_dir = value();
-      else if (a == "--mesh-exe") maker.mesh_exe = value();
-      else if (a == "--place-exe") maker.place_exe = value();
-      else if (a == "-h" || a == "--help") {
-        std::fputs(kUsage, stdout);
-        return 0;
-      } else {
-        throw breccia::InputError("command line", a, "unknown option",
-                                  "--quick, --csv, --stability-csv, --problems, --models, --kinds, --precisions, --backends, --m, "
-                                  "--stability-studies, --gradings, --no-stability, --only-stability, --append, --threads, --work, --mesh-exe, --place-exe");
-      }
-    }
-    require_known(plan.problems,
-                  {"wave_speed_bar", "strain_energy", "fracture_energy", "quasi_static_bar", "kalthoff_winkler",
-                   "softening_strength", "mps_wave_speed", "thick_cylinder", "thick_cylinder_hill"},
-                  "--problems");
-    require_known(plan.models, {"pmb", "lps", "correspondence"}, "--models");
-    require_known(stability_studies, {"pd", "graded", "mps"}, "--stability-studies");
-    require_known(plan.kinds, {"lattice", "tet"}, "--kinds");
-    require_known(plan.precisions, {"float64", "float32"}, "--precisions");
-    require_known(plan.backends, {"cpu", "cuda"}, "--backends");
+    CLI::App app{kAbout, "breccia-atlas"};
+    breccia::cli::configure(app, kFooter);
+    // A comma-separated list, one per occurrence (CLI11 would otherwise take the following
+    // arguments too).
+    const auto list = [&](const std::string& name, auto& into, const std::string& what) {
+      return app.add_option(name, into, what)->delimiter(',')->allow_extra_args(false);
+    };
+    app.add_flag("--quick", plan.quick, "fewer spacings and steps: about 2 minutes for every study instead of 8");
+    app.add_option("--csv", csv, "the sweep table")->type_name("FILE")->capture_default_str();
+    app.add_option("--stability-csv", stability_csv, "the stability table")->type_name("FILE")->capture_default_str();
+    using breccia::cli::one_of;
+    list("--problems", plan.problems, "problems to run (default: all)")->type_name("a,b")->check(one_of(all_problems));
+    list("--models", plan.models, "pmb, lps, correspondence (default: pmb,lps)")
+        ->type_name("a,b")
+        ->check(one_of({"pmb", "lps", "correspondence"}));
+    list("--kinds", plan.kinds, "particle kinds: lattice, tet (default: both)")
+        ->type_name("a,b")
+        ->check(one_of({"lattice", "tet"}));
+    list("--precisions", plan.precisions, "float64, float32 (default: float64)")
+        ->type_name("a,b")
+        ->check(one_of({"float64", "float32"}));
+    list("--backends", plan.backends, "cpu, cuda (default: cpu; cuda: wave_speed_bar and kalthoff_winkler on the GPU)")
+        ->type_name("a,b")
+        ->check(one_of({"cpu", "cuda"}));
+    list("--m", plan.m_values, "horizon factors (default: 2,3,4,5)")
+        ->type_name("2,3,...")
+        ->check(breccia::cli::real_number());
+    list("--stability-studies", stability_studies, "pd, graded, mps (default: all)")
+        ->type_name("a,b")
+        ->check(one_of({"pd", "graded", "mps"}));
+    list("--gradings", plan.gradings, "grading ratios of the graded study (default 1,1.5,2,3,4,6; --quick 2,4)")
+        ->type_name("1.5,2,...")
+        ->check(breccia::cli::real_number());
+    app.add_flag_callback(
+        "--no-stability", [&] { stability = false; }, "skip the stability studies");
+    app.add_flag_callback(
+        "--only-stability", [&] { sweeps = false; }, "only the stability studies");
+    app.add_flag("--append", append, "append to the CSVs instead of starting them anew");
+    app.add_option("--threads", threads, "OpenMP threads (default: all cores)")
+        ->type_name("N")
+        ->check(breccia::cli::whole_number(1));
+    app.add_option("--work", maker.work_dir, "folder for meshes and particle files")
+        ->type_name("DIR")
+        ->capture_default_str();
+    app.add_option("--mesh-exe", maker.mesh_exe, "breccia-mesh to run")->type_name("PATH");
+    app.add_option("--place-exe", maker.place_exe, "breccia-place to run")->type_name("PATH");
+    if (const auto code = breccia::cli::parse(app, argc, argv)) return *code;
     for (const auto& b : plan.backends) {
       if (b != "cuda") continue;
 #ifdef BRECCIA_WITH_CUDA

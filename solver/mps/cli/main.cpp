@@ -1,40 +1,36 @@
 // breccia-mps CASE.yaml -o DIR [--threads N]: run an MPS case on its own (the same entry
-// point breccia-solve calls for `model: {type: mps}`).
+// point breccia-solve calls for `model: {type: mps}`). The command line is CLI11's with the
+// tools' conventions (common/cli.hpp).
 #include <cstdio>
-#include <cstdlib>
 #include <exception>
 #include <string>
 
+#include "breccia/common/cli.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/mps/run_case.hpp"
+
+namespace {
+
+constexpr const char* kAbout =
+    "breccia-mps: run an MPS (moving particle semi-implicit) case on its own, the solver breccia-solve\n"
+    "runs for a case with `model: {type: mps}`.";
+constexpr const char* kFooter =
+    "Input: CASE.yaml with model.type mps (docs/case-format.md). Output: DIR/history.csv,\n"
+    "DIR/results.h5 and DIR/summary.json. Bad input: one message naming the file and field, exit code 2.";
+
+}  // namespace
 
 int main(int argc, char** argv) {
   std::string case_file, out_dir;
   int threads = 0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if ((arg == "-o" || arg == "--out") && i + 1 < argc) {
-      out_dir = argv[++i];
-    } else if (arg == "--threads" && i + 1 < argc) {
-      threads = std::atoi(argv[++i]);
-      if (threads < 1) {
-        std::fprintf(stderr, "error: --threads: '%s' is not a positive integer\n", argv[i]);
-        return breccia::kExitBadInput;
-      }
-    } else if (arg == "-h" || arg == "--help") {
-      std::printf("usage: breccia-mps CASE.yaml -o DIR [--threads N]\n");
-      return 0;
-    } else if (!arg.empty() && arg[0] != '-' && case_file.empty()) {
-      case_file = arg;
-    } else {
-      std::fprintf(stderr, "error: unexpected argument '%s'\nusage: breccia-mps CASE.yaml -o DIR [--threads N]\n", arg.c_str());
-      return breccia::kExitBadInput;
-    }
-  }
-  if (case_file.empty() || out_dir.empty()) {
-    std::fprintf(stderr, "error: a case file and -o DIR are required\nusage: breccia-mps CASE.yaml -o DIR [--threads N]\n");
-    return breccia::kExitBadInput;
-  }
+  CLI::App app{kAbout, "breccia-mps"};
+  breccia::cli::configure(app, kFooter);
+  app.add_option("CASE", case_file, "the case file (YAML)")->required()->type_name("CASE.yaml");
+  app.add_option("-o,--out", out_dir, "the folder for the results")->required()->type_name("DIR");
+  app.add_option("--threads", threads, "OpenMP threads (default: all)")
+      ->type_name("N")
+      ->check(breccia::cli::whole_number(1));
+  if (const auto code = breccia::cli::parse(app, argc, argv)) return *code;
   try {
     return breccia::mps::run_case(case_file, out_dir, threads);
   } catch (const breccia::InputError& e) {

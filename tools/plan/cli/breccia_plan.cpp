@@ -3,6 +3,7 @@
 //   breccia-plan CASE.yaml --tolerance X [--write PROPOSED.yaml] [--atlas atlas.csv]
 //                [--throughputs throughputs.yaml] [--calibrate] [--threads N]
 // Example: breccia-plan cases/kalthoff-winkler/case.yaml --tolerance 0.05 --calibrate
+// The command line is CLI11's with the tools' conventions (common/cli.hpp).
 #include <omp.h>
 
 #include <cmath>
@@ -10,18 +11,21 @@
 #include <filesystem>
 #include <string>
 
+#include "breccia/common/cli.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/plan/plan.hpp"
 #include "breccia/solver/case_config.hpp"
 
 namespace {
 
-void usage() {
-  std::fprintf(stderr,
-               "usage: breccia-plan CASE.yaml --tolerance X [--write PROPOSED.yaml] [--atlas atlas.csv]\n"
-               "                    [--throughputs throughputs.yaml] [--calibrate] [--threads N]\n"
-               "  X: the relative error you accept (0.02 = 2%%), as the atlas measures it\n");
-}
+constexpr const char* kAbout =
+    "breccia-plan: what a peridynamics case will cost (particles, bonds, steps, memory, CPU/GPU time)\n"
+    "and what error to expect, before running it, and the cheapest setup that meets a tolerance.";
+constexpr const char* kFooter =
+    "Input: CASE.yaml (docs/case-format.md); the accuracy atlas (docs/atlas/atlas.csv, `make atlas`) and\n"
+    "the measured throughputs (solver/plan/throughputs.yaml, or this machine's with --calibrate).\n"
+    "Output: the estimates and the proposal on stdout; with --write, the proposed case as YAML.\n"
+    "Example: breccia-plan cases/kalthoff-winkler/case.yaml --tolerance 0.05 --calibrate (docs/plan.md)";
 
 std::string human_bytes(double b) {
   char s[32];
@@ -62,48 +66,31 @@ int main(int argc, char** argv) {
   bool calibrate = false;
   plan::CostOptions opt;
   opt.threads = omp_get_max_threads();
-  for (int k = 1; k < argc; ++k) {
-    const std::string a = argv[k];
-    auto value = [&](const char* name) -> std::string {
-      if (k + 1 >= argc) {
-        std::fprintf(stderr, "error: %s needs a value\n", name);
-        std::exit(kExitBadInput);
-      }
-      return argv[++k];
-    };
-    try {
-      if (a == "--tolerance") tolerance = std::stod(value("--tolerance"));
-      else if (a == "--write") write_path = value("--write");
-      else if (a == "--atlas") atlas_path = value("--atlas");
-      else if (a == "--throughputs") rates_path = value("--throughputs");
-      else if (a == "--calibrate") calibrate = true;
-      else if (a == "--threads") opt.threads = std::stoi(value("--threads"));
-      else if (a == "-h" || a == "--help") { usage(); return 0; }
-      else if (!a.empty() && a[0] == '-') {
-        std::fprintf(stderr, "error: unknown option %s\n", a.c_str());
-        usage();
-        return kExitBadInput;
-      } else case_file = a;
-    } catch (const std::exception&) {
-      std::fprintf(stderr, "error: option %s: '%s' is not a number\n", a.c_str(), argv[k]);
-      return kExitBadInput;
-    }
-  }
-  if (case_file.empty()) {
-    std::fprintf(stderr, "error: no case file given\n");
-    usage();
-    return kExitBadInput;
-  }
+  CLI::App app{kAbout, "breccia-plan"};
+  cli::configure(app, kFooter);
+  app.add_option("CASE", case_file, "the case file")->required()->type_name("CASE.yaml");
+  app.add_option_function<double>(
+         "--tolerance", [&](double x) { tolerance = x; },
+         "the relative error you accept (0.02 = 2%), as the atlas measures it")
+      ->type_name("X")
+      ->check(cli::real_number());
+  app.add_option("--write", write_path, "write the proposed case here")->type_name("PROPOSED.yaml");
+  app.add_option("--atlas", atlas_path, "the accuracy atlas")->type_name("atlas.csv")->capture_default_str();
+  app.add_option("--throughputs", rates_path, "the measured throughputs")
+      ->type_name("throughputs.yaml")
+      ->capture_default_str();
+  app.add_flag("--calibrate", calibrate,
+               "measure this machine first (a short time loop, seconds) instead of the documented throughputs");
+  app.add_option("--threads", opt.threads, "the thread count to cost (default: OpenMP's)")
+      ->type_name("N")
+      ->check(cli::whole_number(1));
+  if (const auto code = cli::parse(app, argc, argv)) return *code;
   if (!tolerance) {
     std::fprintf(stderr, "error: --tolerance: missing (expected a relative error > 0, e.g. --tolerance 0.02)\n");
     return kExitBadInput;
   }
   if (!(*tolerance > 0) || !std::isfinite(*tolerance)) {
     std::fprintf(stderr, "error: --tolerance: %g (expected a relative error > 0, e.g. 0.02)\n", *tolerance);
-    return kExitBadInput;
-  }
-  if (opt.threads < 1) {
-    std::fprintf(stderr, "error: --threads: %d (expected 1 or more)\n", opt.threads);
     return kExitBadInput;
   }
   try {

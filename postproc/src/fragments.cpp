@@ -45,6 +45,10 @@ FragmentResult measure_fragments(const FragmentInputs& in, std::span<const int32
 
   // Principal axes from the volume-weighted covariance of the reference positions.
   std::vector<Eigen::Matrix3d> axes(component_count, Eigen::Matrix3d::Identity());
+  // 3D: whether two principal moments are within kMomentsApart of each other, where the
+  // principal axes are not determined and their box can be up to sqrt(2) too wide.
+  constexpr double kMomentsApart = 0.25;
+  std::vector<char> ambiguous_axes(component_count, 0);
   for (int32_t c = 0; c < component_count; ++c) {
     const Acc& a = acc[c];
     if (a.count < 2) continue;
@@ -56,6 +60,9 @@ FragmentResult measure_fragments(const FragmentInputs& in, std::span<const int32
     }
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
     axes[c] = es.eigenvectors();
+    const Eigen::Vector3d moments = es.eigenvalues();  // ascending
+    ambiguous_axes[c] = moments[1] - moments[0] <= kMomentsApart * moments[1] ||
+                        moments[2] - moments[1] <= kMomentsApart * moments[2];
     if (dim == 2) {
       // The zero-variance z direction may land in any column: rebuild an in-plane pair.
       Eigen::Vector3d e = es.eigenvectors().col(2);
@@ -78,7 +85,13 @@ FragmentResult measure_fragments(const FragmentInputs& in, std::span<const int32
   }
   // The frame of CGAL's smallest box (3D: minimal volume; 2D: minimal area) of each kept
   // fragment; identity where the points span no volume (area), which the other two frames
-  // then decide.
+  // then decide. The 3D search costs about 12 ms a fragment whatever its size (a fixed
+  // evolutionary search), too much for the hundreds of thousands of debris fragments of a
+  // pulverised block: it runs where the principal axes are not determined, on fragments of
+  // at least kOrientedBoxMinParticles (smaller ones are at most about two spacings across,
+  // where the box is mostly the spacing added to every edge). The 2D rectangle is exact and
+  // cheap: always.
+  constexpr int64_t kOrientedBoxMinParticles = 27;
   std::vector<Eigen::Matrix3d> oriented(component_count, Eigen::Matrix3d::Identity());
   {
     std::vector<int64_t> first(static_cast<size_t>(component_count) + 1, 0), member(n);
@@ -90,6 +103,7 @@ FragmentResult measure_fragments(const FragmentInputs& in, std::span<const int32
 #pragma omp parallel for schedule(dynamic, 1)
     for (int64_t k = 0; k < kept_count; ++k) {
       const int32_t c = kept[static_cast<size_t>(k)];
+      if (dim == 3 && (!ambiguous_axes[c] || acc[c].count < kOrientedBoxMinParticles)) continue;
       std::vector<double> xyz;
       xyz.reserve(3 * static_cast<size_t>(acc[c].count));
       for (int64_t m = first[c]; m < first[c + 1]; ++m) {

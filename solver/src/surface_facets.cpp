@@ -108,9 +108,11 @@ FacetVertices facet_vertices(const ParticleModel& model, const SurfaceFacets& fa
 std::unique_ptr<FacetTree> surface_facet_tree(const ParticleModel& model, const SurfaceFacets& facets,
                                               std::string& note) {
   const FacetVertices v = facet_vertices(model, facets);
-  if (v.source == FacetVertices::Source::Squares && model.dimension == 3)
+  // A lattice's facets are squares, so only other 3D models are approximated.
+  const bool lattice = model.source.rfind("lattice", 0) == 0;
+  if (v.source == FacetVertices::Source::Squares && model.dimension == 3 && !lattice)
     note = "surface '" + facets.name + "': each facet taken as a square of its area in its plane (" +
-           v.why_approximate + "; exact for a lattice's facets)";
+           v.why_approximate + ")";
   return std::make_unique<FacetTree>(model.dimension, v.vertices_m);
 }
 

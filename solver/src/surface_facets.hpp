@@ -23,8 +23,9 @@ struct FacetVertices {
 
 FacetVertices facet_vertices(const ParticleModel& model, const SurfaceFacets& facets);
 
-// The tree over a surface's facets. When only the squares are known, `note` receives a line
-// saying so (the caller prints it once, naming its field); otherwise it is left empty.
+// The tree over a surface's facets. When only the squares are known and the model is not a
+// lattice (whose facets they are), `note` receives a line saying so (the caller prints it
+// once, naming its field); otherwise it is left empty.
 std::unique_ptr<FacetTree> surface_facet_tree(const ParticleModel& model, const SurfaceFacets& facets,
                                               std::string& note);
 

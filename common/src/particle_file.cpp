@@ -101,6 +101,10 @@ void validate(const ParticleModel& m, const std::string& file) {
     const size_t f = s.size();
     if (s.normal.size() != 3 * f || s.centroid_m.size() != 3 * f || s.particle.size() != f)
       throw InputError(file, "/surfaces/" + s.name, "inconsistent dataset sizes", "area F, normal F x 3, centroid F x 3, particle F");
+    const size_t per_facet = static_cast<size_t>(m.dimension);  // vertices of a facet: 3 or 2
+    if (s.has_vertices() && s.vertices_m.size() != f * per_facet * 3)
+      throw InputError(file, "/surfaces/" + s.name + "/vertices", "size " + std::to_string(s.vertices_m.size()),
+                       std::to_string(f) + " x " + std::to_string(per_facet) + " x 3 (each facet's vertices)");
     for (auto p : s.particle)
       if (p < 0 || static_cast<size_t>(p) >= n)
         throw InputError(file, "/surfaces/" + s.name + "/particle", "index " + std::to_string(p), "a particle index");
@@ -123,7 +127,8 @@ void write_particle_file(const std::string& path, ParticleModel m) {
   {
     h5::File f(out.temp_path().string(), h5::File::Mode::Create);
     f.set_attr("/", "format", std::string("breccia-particles"));
-    f.set_attr("/", "format_version", 1LL);
+    // 2: /surfaces/<name>/vertices added (version-1 files stay readable without it).
+    f.set_attr("/", "format_version", 2LL);
     f.set_attr("/", "dimension", static_cast<long long>(m.dimension));
     f.set_attr("/", "thickness_m", m.thickness_m);
     f.set_attr("/", "units", std::string("SI (m, m3, kg, s)"));
@@ -143,6 +148,8 @@ void write_particle_file(const std::string& path, ParticleModel m) {
       f.write(g + "/normal", s.normal, {s.size(), 3});
       f.write(g + "/centroid", s.centroid_m, {s.size(), 3});
       f.write(g + "/particle", s.particle, {s.size()});
+      if (s.has_vertices())
+        f.write(g + "/vertices", s.vertices_m, {s.size(), static_cast<hsize_t>(m.dimension), 3});
     }
     if (m.nodes_per_cell > 0) {
       f.write("/mesh/nodes", m.mesh_nodes_m, {m.mesh_nodes_m.size() / 3, 3});
@@ -182,6 +189,7 @@ ParticleModel read_particle_file(const std::string& path) {
     s.normal = f.read_doubles(g + "/normal");
     s.centroid_m = f.read_doubles(g + "/centroid");
     s.particle = f.read_int64(g + "/particle");
+    if (f.exists(g + "/vertices")) s.vertices_m = f.read_doubles(g + "/vertices");
     m.surfaces.push_back(std::move(s));
   }
   if (f.exists("/mesh/cells")) {

@@ -75,7 +75,8 @@ ParticleModel make_lattice(const LatticeSpec& spec) {
     for (int upper = 0; upper < 2; ++upper) {
       const std::string name = std::string(1, kAxis[axis]) + (upper ? "max" : "min");
       ParticleSet set{name, {}};
-      SurfaceFacets surface{name, {}, {}, {}, {}};
+      SurfaceFacets surface;
+      surface.name = name;
       const int64_t layer = upper ? count[axis] - 1 : 0;
       for (int64_t p = 0; p < n; ++p) {
         const int64_t ijk[3] = {p % count[0], (p / count[0]) % count[1], p / (count[0] * count[1])};

@@ -294,7 +294,8 @@ void build_surfaces(const GmshMesh& mesh, const Cells& cells, double thickness_m
   for (const auto& g : mesh.groups) {
     if (g.dim != facet_dim) continue;
     const size_t surface = model.surfaces.size();
-    model.surfaces.push_back(SurfaceFacets{group_label(g), {}, {}, {}, {}});
+    model.surfaces.emplace_back();
+    model.surfaces.back().name = group_label(g);
     for (const auto& b : mesh.blocks) {
       if (b.dim != facet_dim || std::find(g.entities.begin(), g.entities.end(), b.entity) == g.entities.end())
         continue;
@@ -398,6 +399,12 @@ void build_surfaces(const GmshMesh& mesh, const Cells& cells, double thickness_m
     }
     s.area_m2.push_back(measure);
     s.particle.push_back(f.cell[owner]);
+    // The facet's own vertices (gmsh order): the solver cuts bonds against these triangles
+    // and measures distances to them; nothing else in the file gives a facet's shape.
+    for (int v = 0; v < facet_nodes; ++v) {
+      const double* x = cells.node(ref.nodes[v]);
+      s.vertices_m.insert(s.vertices_m.end(), x, x + 3);
+    }
   }
 }
 

@@ -264,18 +264,21 @@ CaseConfig parse_case_file(const std::string& path) {
     size_t k = 0;
     for (const Section& r : root.list("sets")) {
       const std::string field = "sets[" + std::to_string(k++) + "]";
-      r.allow_only({"name", "box", "sphere", "cylinder", "half_space", "union", "intersection", "difference"});
+      r.allow_only({"name", "box", "sphere", "cylinder", "half_space", "near_surface", "material", "union",
+                    "intersection", "difference"});
       RegionSetSpec rs;
       rs.field = field;
       rs.name = r.text("name");
       if (rs.name.empty() || rs.name.find('/') != std::string::npos)
         throw InputError(path, field + ".name", "'" + rs.name + "'", "a non-empty name without '/'");
       int shapes = 0;
-      for (const char* key : {"box", "sphere", "cylinder", "half_space", "union", "intersection", "difference"})
+      for (const char* key : {"box", "sphere", "cylinder", "half_space", "near_surface", "material", "union",
+                              "intersection", "difference"})
         shapes += r.has(key);
       if (shapes != 1)
         throw InputError(path, field, std::to_string(shapes) + " definitions",
-                         "exactly one of box, sphere, cylinder, half_space, union, intersection, difference");
+                         "exactly one of box, sphere, cylinder, half_space, near_surface, material, union, "
+                         "intersection, difference");
       if (r.has("box")) {
         rs.kind = RegionSetSpec::Kind::Box;
         rs.box = r.numbers("box", Quantity::Length);
@@ -307,6 +310,18 @@ CaseConfig parse_case_file(const std::string& path) {
         rs.normal = hs.vec3("normal", Quantity::Dimensionless);
         if (!(std::fabs(rs.normal[0]) + std::fabs(rs.normal[1]) + std::fabs(rs.normal[2]) > 0))
           throw InputError(path, hs.field("normal"), "a zero vector", "the direction the kept side faces");
+      } else if (r.has("near_surface")) {
+        // Names are checked against the particle file in set-up, where it is read.
+        const Section ns = r.section("near_surface");
+        ns.allow_only({"surface", "distance"});
+        rs.kind = RegionSetSpec::Kind::NearSurface;
+        rs.surface = ns.text("surface");
+        rs.distance = ns.positive("distance", Quantity::Length);
+      } else if (r.has("material")) {
+        rs.kind = RegionSetSpec::Kind::Material;
+        rs.materials = r.texts("material");
+        if (rs.materials.empty())
+          throw InputError(path, r.field("material"), "an empty list", "a material name or a list of them");
       } else {
         const char* key = r.has("union") ? "union" : r.has("intersection") ? "intersection" : "difference";
         rs.kind = r.has("union") ? RegionSetSpec::Kind::Union

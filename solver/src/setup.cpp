@@ -25,7 +25,7 @@
 #include "breccia/solver/particle_field.hpp"
 #include "breccia/solver/pd_system.hpp"
 #include "breccia/solver/step.hpp"
-#include "surface_cut.hpp"
+#include "surface_facets.hpp"
 
 namespace breccia::solver {
 std::array<int64_t, 3> lattice_point_counts(const LatticeSpec& l) {
@@ -239,6 +239,52 @@ static void convert_to_softening(PdSystem& s) {
   }
 }
 
+// near_surface: the particles whose reference position lies within r.distance of the named
+// surface's facets (boundaries included), measured to its real triangles by CGAL's AABB tree.
+static std::vector<int64_t> near_surface_set(const ParticleModel& pm, const RegionSetSpec& r, const std::string& file) {
+  const SurfaceFacets* facets = pm.find_surface(r.surface);
+  if (!facets) {
+    std::vector<std::string> names;
+    for (const auto& sf : pm.surfaces) names.push_back(sf.name);
+    throw InputError(file, r.field + ".near_surface.surface", "no surface named '" + r.surface + "'",
+                     "one of the surfaces of the particle file: " + list_names(names));
+  }
+  std::string note;
+  const std::unique_ptr<FacetTree> tree = surface_facet_tree(pm, *facets, note);
+  if (!note.empty()) std::fprintf(stderr, "note: %s: %s\n", r.field.c_str(), note.c_str());
+  const int64_t n = static_cast<int64_t>(pm.size());
+  const double limit2 = r.distance * r.distance;
+  std::vector<char> inside(static_cast<size_t>(n), 0);
+#pragma omp parallel for schedule(dynamic, 1024)
+  for (int64_t i = 0; i < n; ++i) {
+    const double* p = &pm.position_m[3 * i];
+    // The facets' bounding box rejects most particles of a body before the tree is asked.
+    if (tree->box_distance_squared(p) > limit2) continue;
+    inside[static_cast<size_t>(i)] = tree->distance(p) <= r.distance;
+  }
+  std::vector<int64_t> out;
+  for (int64_t i = 0; i < n; ++i)
+    if (inside[static_cast<size_t>(i)]) out.push_back(i);
+  return out;
+}
+
+// material: the particles of the named materials of the particle file.
+static std::vector<int64_t> material_set(const ParticleModel& pm, const RegionSetSpec& r, const std::string& file) {
+  std::vector<char> wanted(pm.material_names.size(), 0);
+  for (size_t k = 0; k < r.materials.size(); ++k) {
+    const auto it = std::find(pm.material_names.begin(), pm.material_names.end(), r.materials[k]);
+    if (it == pm.material_names.end())
+      throw InputError(file, r.field + ".material" + (r.materials.size() > 1 ? "[" + std::to_string(k) + "]" : ""),
+                       "no material named '" + r.materials[k] + "'",
+                       "one of the materials of the particle file: " + list_names(pm.material_names));
+    wanted[static_cast<size_t>(it - pm.material_names.begin())] = 1;
+  }
+  std::vector<int64_t> out;
+  for (size_t i = 0; i < pm.size(); ++i)
+    if (wanted[static_cast<size_t>(pm.material_id[i])]) out.push_back(static_cast<int64_t>(i));
+  return out;
+}
+
 // The case's own sets (sets:), in order, added to the particle model's, so that every key
 // that takes a set name takes them. Regions test the reference positions (boundaries
 // included); an operand is a set of the particle file or one defined earlier in the list.
@@ -291,6 +337,16 @@ static void add_case_sets(ParticleModel& pm, const CaseConfig& c) {
           return false;
       }
     };
+    if (r.kind == RegionSetSpec::Kind::NearSurface) {
+      out.indices = near_surface_set(pm, r, c.file);
+      pm.sets.push_back(std::move(out));
+      continue;
+    }
+    if (r.kind == RegionSetSpec::Kind::Material) {
+      out.indices = material_set(pm, r, c.file);
+      pm.sets.push_back(std::move(out));
+      continue;
+    }
     switch (r.kind) {
       case RegionSetSpec::Kind::Union:
       case RegionSetSpec::Kind::Intersection:
@@ -909,8 +965,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   phase("pmb calibration");
   // Pre-cracks: remove every bond that crosses one.
   if (!c.precracks.empty()) {
-    std::vector<std::unique_ptr<SurfaceCut>> surfaces(c.precracks.size());
-    const double longest_bond = s.xi_len.empty() ? 0.0 : *std::max_element(s.xi_len.begin(), s.xi_len.end());
+    std::vector<std::unique_ptr<FacetTree>> surfaces(c.precracks.size());
     for (size_t p = 0; p < c.precracks.size(); ++p) {
       const auto& pc = c.precracks[p];
       const std::string field = "precracks[" + std::to_string(p) + "]";
@@ -918,9 +973,13 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         throw InputError(c.file, field + ".type", "segment in a 3D model", "polygon or surface in 3D");
       if (pc.kind == PrecrackSpec::Kind::Polygon && s.dimension != 3)
         throw InputError(c.file, field + ".type", "polygon in a 2D model", "segment or surface in 2D");
-      if (pc.kind == PrecrackSpec::Kind::Surface)
-        surfaces[p] = std::make_unique<SurfaceCut>(s.particles, require_surface(s, pc.surface, field + ".surface"),
-                                                   longest_bond);
+      if (pc.kind == PrecrackSpec::Kind::Surface) {
+        // A bond is cut when the segment between its particles touches a facet (CGAL's
+        // AABB tree over the surface's real triangles; exact predicates).
+        std::string note;
+        surfaces[p] = surface_facet_tree(s.particles, require_surface(s, pc.surface, field + ".surface"), note);
+        if (!note.empty()) std::fprintf(stderr, "note: %s: %s\n", field.c_str(), note.c_str());
+      }
     }
     // Each entry is decided alone (threads write disjoint entries); the pairs are collected
     // per thread and sorted, so the list does not depend on the thread count.

@@ -36,6 +36,40 @@ TEST(ParticleFile, RoundTripKeepsEverything) {
   EXPECT_EQ(r.content_id, compute_content_id(m));
 }
 
+TEST(ParticleFile, FacetVerticesRoundTripAndAFileWithoutThemStaysReadable) {
+  ParticleModel m;
+  m.dimension = 3;
+  m.position_m = {0, 0, 0, 1, 0, 0};
+  m.volume_m3 = {0.5, 0.25};
+  m.material_id = {0, 0};
+  SurfaceFacets with;  // one triangle with its vertices
+  with.name = "notch";
+  with.area_m2 = {0.5};
+  with.normal = {0, 0, 1};
+  with.centroid_m = {1.0 / 3, 1.0 / 3, 0};
+  with.particle = {0};
+  with.vertices_m = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  SurfaceFacets without = with;  // as a format-version-1 file has it
+  without.name = "old";
+  without.vertices_m.clear();
+  m.surfaces = {with, without};
+  const std::string path = ::testing::TempDir() + "/vertices/particles.h5";
+  write_particle_file(path, m);
+  const ParticleModel r = read_particle_file(path);
+  ASSERT_NE(r.find_surface("notch"), nullptr);
+  EXPECT_EQ(r.find_surface("notch")->vertices_m, with.vertices_m);
+  ASSERT_NE(r.find_surface("old"), nullptr);
+  EXPECT_FALSE(r.find_surface("old")->has_vertices());
+
+  m.surfaces[0].vertices_m.pop_back();  // not F x 3 x 3
+  try {
+    write_particle_file(::testing::TempDir() + "/vertices_bad/particles.h5", m);
+    FAIL() << "a wrong vertex count was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/surfaces/notch/vertices"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ParticleFile, NonHdf5FileIsRejectedByName) {
   const std::string path = ::testing::TempDir() + "/not_h5.h5";
   { FILE* f = std::fopen(path.c_str(), "w"); std::fputs("hello", f); std::fclose(f); }

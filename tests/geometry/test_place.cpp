@@ -150,6 +150,35 @@ TEST_F(BlockWithHoleModel, FacetNormalsPointOutOfTheBody) {
   }
 }
 
+// Each facet's stored vertices are three nodes of its owner tetrahedron whose mean is the
+// centroid, whose cross product is twice the area along the normal (either sign: the normal
+// was turned away from the owner). Tolerances: round-off of sums of a few products.
+TEST_F(BlockWithHoleModel, FacetVerticesAreTheOwnersFaceWithTheFacetsCentroidAreaAndNormal) {
+  for (const auto& s : model_->surfaces) {
+    ASSERT_EQ(s.vertices_m.size(), 9 * s.size()) << s.name;
+    for (size_t f = 0; f < s.size(); ++f) {
+      const double* a = &s.vertices_m[9 * f];
+      const double *b = a + 3, *c = a + 6;
+      const double scale = std::sqrt(s.area_m2[f]);
+      for (int k = 0; k < 3; ++k)
+        ASSERT_NEAR((a[k] + b[k] + c[k]) / 3.0, s.centroid_m[3 * f + k], 1e-12 * scale) << s.name << " facet " << f;
+      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      const double cross[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+      const double* n = &s.normal[3 * f];
+      const double along = cross[0] * n[0] + cross[1] * n[1] + cross[2] * n[2];
+      ASSERT_NEAR(std::fabs(along), 2.0 * s.area_m2[f], 1e-9 * s.area_m2[f]) << s.name << " facet " << f;
+      for (const double* v : {a, b, c}) {  // a node of the owner cell
+        bool found = false;
+        for (int k = 0; k < 4 && !found; ++k) {
+          const double* x = &model_->mesh_nodes_m[3 * model_->mesh_cells[4 * s.particle[f] + k]];
+          found = x[0] == v[0] && x[1] == v[1] && x[2] == v[2];
+        }
+        ASSERT_TRUE(found) << s.name << " facet " << f;
+      }
+    }
+  }
+}
+
 TEST_F(BlockWithHoleModel, MeshNodesAreCompactAndZeroBased) {
   const int64_t nodes = static_cast<int64_t>(model_->mesh_nodes_m.size() / 3);
   std::vector<char> used(nodes, 0);
@@ -271,6 +300,12 @@ TEST(TwoDimensionalMesh, EdgeFacetsCarryLengthTimesThicknessAndOutwardNormals) {
       const double* x = &m.position_m[3 * s.particle[f]];
       ASSERT_EQ(n[2], 0.0);
       ASSERT_LT(n[0] * (x[0] - c[0]) + n[1] * (x[1] - c[1]), 0.0) << s.name << " facet " << f;
+      // The edge's two vertices: their mean is the centroid, their distance the length.
+      ASSERT_EQ(s.vertices_m.size(), 6 * s.size());
+      const double* v = &s.vertices_m[6 * f];
+      const double length = s.area_m2[f] / thickness;
+      EXPECT_NEAR(std::hypot(v[3] - v[0], v[4] - v[1]), length, 1e-12 * length);
+      for (int k = 0; k < 3; ++k) EXPECT_NEAR(0.5 * (v[k] + v[3 + k]), c[k], 1e-12 * length);
     }
   for (const char* name : {"plate", "edges", "hole"}) {
     ASSERT_NE(m.find_set(name), nullptr) << name;

@@ -20,7 +20,13 @@ struct SurfaceFacets {
   std::vector<double> normal;      // 3F, unit, outward from the body
   std::vector<double> centroid_m;  // 3F
   std::vector<int64_t> particle;   // F, the particle whose cell owns the facet
+  // F x 3 x 3 (3D triangles) or F x 2 x 3 (2D edges): the facet's vertices in the source
+  // mesh's node order. Empty when unknown: lattices (square facets) and files written
+  // before format version 2 (readers then recover them from /mesh, see facet_vertices.hpp
+  // in the solver, or fall back to a disc of the facet's area).
+  std::vector<double> vertices_m;
   size_t size() const { return area_m2.size(); }
+  bool has_vertices() const { return !vertices_m.empty(); }
 };
 
 struct ParticleModel {

@@ -95,7 +95,7 @@ struct PrecrackSpec {
 // A particle set defined in the case (sets:), by a region of the reference configuration or
 // by set algebra over sets defined before it (in the particle file or earlier in the list).
 struct RegionSetSpec {
-  enum class Kind { Box, Sphere, Cylinder, HalfSpace, Union, Intersection, Difference } kind = Kind::Box;
+  enum class Kind { Box, Sphere, Cylinder, HalfSpace, NearSurface, Material, Union, Intersection, Difference } kind = Kind::Box;
   std::string name;
   std::string field;               // "sets[k]", for messages
   std::vector<double> box;         // x0 y0 [z0] x1 y1 [z1]
@@ -105,6 +105,9 @@ struct RegionSetSpec {
   double length = 0.0;             // cylinder: 0 = unbounded along the axis
   Vec3 point{0, 0, 0}, normal{0, 0, 1};  // half-space: (x - point) . normal >= 0
   std::vector<std::string> operands;     // union, intersection, difference (first minus the rest)
+  std::string surface;                   // near_surface: a surface of the particle file ...
+  double distance = 0.0;                 //   ... and the largest distance to its facets (m)
+  std::vector<std::string> materials;    // material: names of the particle file's materials
 };
 
 struct IndenterSpec {

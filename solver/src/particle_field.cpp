@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "breccia/common/csv.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/h5.hpp"
 
@@ -22,6 +23,21 @@ ParticleField read_h5_field(const std::string& path, const std::string& dataset,
   return {f.read_doubles(dataset), static_cast<int>(dims[1])};
 }
 
+// CSV: one row of 2 or 3 numbers per particle; a first line of names is optional.
+ParticleField read_csv_field(const std::string& path) {
+  const CsvColumns csv = read_csv_columns(
+      path, {true, true, "one row per particle in the particle file's order: vx, vy[, vz] (or ux, uy[, uz])"});
+  const size_t columns = csv.columns.size();
+  if (columns != 2 && columns != 3)
+    throw InputError(path, "columns", std::to_string(columns) + " columns", "2 or 3 numbers a row");
+  ParticleField f{{}, static_cast<int>(columns)};
+  const size_t rows = csv.columns[0].size();
+  f.values.resize(rows * columns);
+  for (size_t r = 0; r < rows; ++r)
+    for (size_t c = 0; c < columns; ++c) f.values[r * columns + c] = csv.columns[c][r];
+  return f;
+}
+
 }  // namespace
 
 ParticleField read_particle_field(const std::string& path, const std::string& dataset, size_t particles,
@@ -29,7 +45,8 @@ ParticleField read_particle_field(const std::string& path, const std::string& da
   if (!std::filesystem::is_regular_file(path))
     throw InputError(case_file, key + ".file", "cannot open '" + path + "'",
                      "a readable HDF5 (.h5) or CSV file, relative to the case file");
-  ParticleField field = read_h5_field(path, dataset, case_file, key);
+  ParticleField field = std::filesystem::path(path).extension() == ".h5" ? read_h5_field(path, dataset, case_file, key)
+                                                                         : read_csv_field(path);
   const size_t rows = field.values.size() / static_cast<size_t>(field.columns);
   if (rows != particles)
     throw InputError(path, dataset.empty() ? "rows" : dataset, std::to_string(rows) + " rows",

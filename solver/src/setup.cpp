@@ -621,7 +621,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         s.k_dual[out] = w_dual;
       } else {
         // Dual-horizon PD sums each bond from both horizons, hence half the textbook modulus
-        // per half-bond (seed 001, eq. 2/11).
+        // per half-bond ([Fukuda PD], eq. 2/11).
         s.k_own[out] = 0.5 * pair_micromodulus(s.material[i], s.material[j], s.horizon[i]) * w_own * s.volume[j];
         s.k_dual[out] = 0.5 * pair_micromodulus(s.material[i], s.material[j], s.horizon[j]) * w_dual * s.volume[j];
       }

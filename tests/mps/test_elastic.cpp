@@ -1,7 +1,7 @@
 // Verification of the MPS elastic-wave solver against the isotropic wave speeds
 // c_L = sqrt((lambda + 2 mu)/rho), c_T = sqrt(mu/rho) (any elasticity text, e.g. Achenbach
-// 1973, ch. 4), the sqrt(2) error of the paper's rotation-free eq. (6) (physics.md
-// section 2), and conservation of the discrete energy in free vibration.
+// 1973, ch. 4), the sqrt(2) error of the paper's rotation-free eq. (6) (docs/mps.md,
+// "Physics and numerics"), and conservation of the discrete energy in free vibration.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,7 +16,7 @@ using namespace breccia::mps;
 
 namespace {
 
-// Steel of seed 000: rho 7850, C13 = lambda = 121.1 GPa, C55 = mu = 80.8 GPa.
+// Steel of [MPS harmonics]: rho 7850, C13 = lambda = 121.1 GPa, C55 = mu = 80.8 GPa.
 const double kRho = 7850, kLambda = 121.1e9, kMu = 80.8e9;
 const double kCL = std::sqrt((kLambda + 2 * kMu) / kRho), kCT = std::sqrt(kMu / kRho);
 
@@ -86,7 +86,7 @@ TEST(MpsElasticWaves, NavierSWaveTravelsAtTheShearSpeed) {
 
 TEST(MpsElasticWaves, RotationFreeFormOfThePaperMakesShearWavesSqrt2TooFast) {
   // Eq. (6) has 2 C55 lap u where the Navier equation has C55 lap u + (lambda + mu) grad div u;
-  // for a shear wave div u = 0, so c = sqrt(2 C55 / rho) = sqrt(2) c_T (physics.md sec. 2).
+  // for a shear wave div u = 0, so c = sqrt(2 C55 / rho) = sqrt(2) c_T (docs/mps.md).
   const double c = measured_speed(strip_case("rotation_free", "x", 0.5e6, 30e-6), "displacement_x");
   std::printf("rotation-free S wave: measured %.1f m/s = %.3f c_T (sqrt 2 = 1.414)\n", c, c / kCT);
   EXPECT_NEAR(c / (std::sqrt(2.0) * kCT), 1.0, 0.03) << "measured " << c << " m/s";

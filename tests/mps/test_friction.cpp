@@ -1,4 +1,4 @@
-// Verification of the frictional crack (seed 000, eqs 9-10; physics.md section 2).
+// Verification of the frictional crack ([MPS harmonics] eqs 9-10; docs/references.md).
 // Unit tests of the stick/slip law, crack geometry, and the 1D benchmark recommended in
 // benchmarks.md section 8: a plane shear wave through a pre-compressed Coulomb interface
 // (Meziane, Norris & Shuvalov 2011, JASA 130:1820, arXiv:1108.1556).

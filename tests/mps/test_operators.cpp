@@ -1,4 +1,4 @@
-// Verification of the MPS operators (Koshizuka & Oka 1996; physics.md section 2, eqs 1-3)
+// Verification of the MPS operators (Koshizuka & Oka 1996; [MPS harmonics] eqs 1-3, docs/references.md)
 // on regular lattices. References are the exact derivatives of polynomial fields.
 #include <gtest/gtest.h>
 

@@ -183,7 +183,7 @@ TEST(MpsPost, StripWithoutFractureIsOneFragmentWithoutCrackAndBalancesItsEnergy)
   fs::remove_all(dir);
 }
 
-// A frictional crack of the displacement formulation (seed 000) removes the stencil bonds
+// A frictional crack of the displacement formulation ([MPS harmonics]) removes the stencil bonds
 // across its segment: they are the run's pre-cracks, so post's crack surface is the segment,
 // 4 mm long (8 lattice bisectors of 0.5 mm) times the 1 mm thickness, exactly; the crack is
 // inside the plate, which stays one piece.

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <string>
 
 #include "breccia/common/error.hpp"
@@ -199,6 +200,16 @@ TEST(ExpressionFields, InitialVelocityFromAnHdf5FieldInParticleFileOrder) {
   }
   EXPECT_GT(set, 0);
   EXPECT_LT(set, static_cast<int>(s.n));
+  // The same field as CSV (a header line, 17 significant digits: the same doubles).
+  const std::string csv = process_temp_dir() + "/v0.csv";
+  {
+    std::ofstream out(csv);
+    out << "vx,vy,vz\n";
+    out.precision(17);
+    for (size_t r = 0; r < first.n; ++r) out << rows[3 * r] << "," << rows[3 * r + 1] << "," << rows[3 * r + 2] << "\n";
+  }
+  const PdSystem from_csv = system_from_yaml("fields_csv", head + "initial:\n  - {type: velocity, set: low, file: " + csv + "}\n");
+  EXPECT_EQ(from_csv.v, s.v);
   // Another row count, a missing dataset, a dataset without .h5: errors naming the key.
   {
     breccia::h5::File f(h5path, breccia::h5::File::Mode::Create);

@@ -13,7 +13,7 @@ class Section;
 
 namespace breccia::solver {
 
-// Constant, ramp, double exponential (seed 001 eq. 12), or a CSV table (time_s, value)
+// Constant, ramp, double exponential ([Fukuda PD] eq. 12), or a CSV table (time_s, value)
 // interpolated linearly and held after its end.
 struct HistorySpec {
   enum class Kind { Constant, Ramp, DoubleExponential, Table } kind = Kind::Constant;

@@ -21,7 +21,7 @@ enum class PdModel : int { PMB = 0, LPS = 1, Correspondence = 2 };  // correspon
 enum class Planar : int { None = 0, PlaneStress = 1, PlaneStrain = 2 };
 
 // Influence function in terms of q = |xi| / delta (dimensionless so that micro-moduli keep
-// their textbook units): constant 1; inverse delta/|xi| (= 1/q); Gaussian exp(-q^2) (seed 001, eq. 8).
+// their textbook units): constant 1; inverse delta/|xi| (= 1/q); Gaussian exp(-q^2) ([Fukuda PD], eq. 8).
 BRECCIA_HD double influence(Influence kind, double q) {
   switch (kind) {
     case Influence::Inverse: return 1.0 / q;
@@ -154,7 +154,7 @@ BRECCIA_HD BondGeometryT<Real> bond_geometry(const Real* x0, const Real* u, int6
 inline constexpr uint8_t kOwnIntact = 1;
 inline constexpr uint8_t kDualIntact = 2;
 
-// PMB (eq. 3 of seed 001): force density on i from bond (i, j) is
+// PMB (eq. 3 of [Fukuda PD]): force density on i from bond (i, j) is
 // (k_own [own intact] + k_dual [dual intact]) * s * e_ij, where k = c_half * omega * beta * V_j.
 // Returns the scalar multiplying the unit vector; also the bond's contribution to
 // i's strain-energy density: W_i += 1/4 * k * s^2 * |xi| (docs/theory.md, PMB energy).
@@ -171,7 +171,7 @@ BRECCIA_HD Real pmb_energy_density(Real k_own, SameReal<Real> k_dual, uint8_t st
   return Real(0.25) * k * stretch * stretch * xi_len;
 }
 
-// LPS (Silling et al. 2007; seed 001 eqs. 6-8 with the 3/m factor restored).
+// LPS (Silling et al. 2007; [Fukuda PD] eqs. 6-8 with the 3/m factor restored).
 // Per-particle coefficients: 3D dilatation_factor = 3, bulk term 3K, shear term 15 mu;
 // 2D (Le, Silling & Bobaru 2014): dilatation_factor = 2, bulk term 2 K2, shear term 8 mu.
 struct LpsCoefficients {
@@ -228,7 +228,7 @@ BRECCIA_HD double softening_dissipation(double d, double onset, double ultimate)
   return work - (1.0 - d) * s * s;
 }
 
-// Borehole pressure (seed 001, eq. 12): P0 (e^-at - e^-bt) / (e^-a t0 - e^-b t0), with a and b
+// Borehole pressure ([Fukuda PD], eq. 12): P0 (e^-at - e^-bt) / (e^-a t0 - e^-b t0), with a and b
 // from the rise time t0 and the ratio r = b/a: t0 = ln(r) / (b - a).
 BRECCIA_HD double double_exponential_pressure(double peak, double rise_time, double ratio, double t) {
   const double a = std::log(ratio) / ((ratio - 1.0) * rise_time);

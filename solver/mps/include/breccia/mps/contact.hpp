@@ -1,5 +1,5 @@
 #pragma once
-// Contact of the stress-based MPS solid (solid.hpp; seed 002, physics.md section 3):
+// Contact of the stress-based MPS solid (solid.hpp; [Inagaki 2009], docs/references.md):
 //  - between particles that are not bonded (different bodies, or parts of one body far
 //    apart in the reference configuration) once they come within the contact distance in
 //    the current configuration (a cut bond, weight 0, no longer counts as a bond): a cell

@@ -11,7 +11,7 @@
 
 namespace breccia::mps {
 
-// Outward surface direction of particle i from its neighbour distribution (seed 002: "the
+// Outward surface direction of particle i from its neighbour distribution ([Inagaki 2009]: "the
 // contact normal is estimated from the neighbour relations, so the roughness of the
 // particle arrangement does not matter"): the weighted mean of the unit directions from its
 // intact neighbours to i in the current configuration, sum_j w_ij (x_i - x_j)/r_ij / sum_j
@@ -170,7 +170,7 @@ BRECCIA_HD inline double polygon_penetration(const double* x, const double* y, i
 }
 
 // Coulomb friction of one particle on a rigid surface, regularised as a tangential spring
-// with a slip limit (as the crack model of seed 000, and Cundall & Strack's DEM contact):
+// with a slip limit (as the crack model of [MPS harmonics], and Cundall & Strack's DEM contact):
 // the spring elongation s follows the relative tangential motion, F_t = -k_t s; while
 // sticking, |F_t| <= mu_s N; beyond it the contact slips, |F_t| = mu_k N and s is shortened
 // to mu_k N / k_t (the slip, the rest of the elongation, dissipates mu_k N times its

@@ -1,5 +1,5 @@
 #pragma once
-// Crack faces with Coulomb friction (seed 000, physics.md section 2, eqs 9-10), 2D in-plane.
+// Crack faces with Coulomb friction ([MPS harmonics] eqs 9-10, docs/references.md), 2D in-plane.
 // A crack is a segment; continuum bonds crossing it are removed, and each particle on the
 // + side facing a particle on the - side (mirror images across the segment) forms a pair.
 //

@@ -1,5 +1,5 @@
 #pragma once
-// Brittle fracture of the stress-based MPS solid (seed 002, Inagaki 2009: "a separation
+// Brittle fracture of the stress-based MPS solid ([Inagaki 2009]: "a separation
 // tensor - the stress with its inertial part removed - decides failure; crack faces of any
 // orientation; surface particles do not scatter").
 //

@@ -1,7 +1,7 @@
 #pragma once
 // MPS particle-interaction operators (Koshizuka & Oka 1996), total Lagrangian: every
 // bond carries its reference vector r_ij = r_j - r_i and weight w(|r_ij|), so the
-// operators below act on the reference configuration (physics.md section 2, eqs 1-3).
+// operators below act on the reference configuration ([MPS harmonics] eqs 1-3, docs/references.md).
 //
 // Physics written once: plain inline functions over raw arrays (structure of arrays,
 // CSR bonds), no containers, so the OpenMP loops here and the CUDA launcher call

@@ -1,5 +1,5 @@
 #pragma once
-// Stress-based MPS solid (Inagaki 2009 thesis; physics.md section 3): total Lagrangian
+// Stress-based MPS solid ([Inagaki 2009] thesis, docs/references.md): total Lagrangian
 // bonds, a stress state per particle updated incrementally (Hooke, co-rotated with the
 // Hughes-Winget/Jaumann rotation, optional von Mises plasticity with linear hardening),
 // internal force as the MPS divergence of the stress, symplectic Euler. 2D plane strain

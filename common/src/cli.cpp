@@ -139,4 +139,16 @@ void usage_error(const std::string& option, const std::string& found, const std:
   throw InputError("command line", option, found, expected);
 }
 
+int run_reporting_errors(const std::function<int()>& work) {
+  try {
+    return work();
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitRunFailed;
+  }
+}
+
 }  // namespace breccia::cli

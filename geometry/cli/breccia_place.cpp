@@ -128,7 +128,7 @@ int main(int argc, char** argv) {
       ->type_name("dx");
   if (const auto code = breccia::cli::parse(app, argc, argv)) return *code;
   const auto start = std::chrono::steady_clock::now();
-  try {
+  return breccia::cli::run_reporting_errors([&]() -> int {
     check_arguments(args);
     breccia::ParticleModel model;
     if (args.lattice) {
@@ -146,11 +146,5 @@ int main(int argc, char** argv) {
     std::fputs(breccia::geometry::summarize(model).c_str(), stdout);
     std::printf("written     %s\ntime        %.3f s\n", args.output_path.c_str(), seconds);
     return 0;
-  } catch (const breccia::InputError& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return breccia::kExitBadInput;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return breccia::kExitRunFailed;
-  }
+  });
 }

@@ -49,7 +49,7 @@ std::string sibling_csv(const std::string& csv, const std::string& name) {
 
 int main(int argc, char** argv) {
   using namespace breccia::atlas;
-  try {
+  return breccia::cli::run_reporting_errors([&]() -> int {
     SweepPlan plan;
     const std::vector<std::string> all_problems = {"wave_speed_bar",   "strain_energy",    "fracture_energy",
                                                    "quasi_static_bar", "kalthoff_winkler", "softening_strength",
@@ -166,11 +166,5 @@ int main(int argc, char** argv) {
     }
     std::fprintf(stderr, "[atlas] done in %.0f s\n", seconds_since(t0));
     return 0;
-  } catch (const breccia::InputError& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return breccia::kExitBadInput;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return breccia::kExitRunFailed;
-  }
+  });
 }

@@ -31,13 +31,7 @@ int main(int argc, char** argv) {
       ->type_name("N")
       ->check(breccia::cli::whole_number(1));
   if (const auto code = breccia::cli::parse(app, argc, argv)) return *code;
-  try {
+  return breccia::cli::run_reporting_errors([&]() -> int {
     return breccia::mps::run_case(case_file, out_dir, threads);
-  } catch (const breccia::InputError& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return breccia::kExitBadInput;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return breccia::kExitRunFailed;
-  }
+  });
 }

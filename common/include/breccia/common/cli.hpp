@@ -9,6 +9,7 @@
 // with file "command line", as in usage_error below: the tools print those the same way.
 #include <CLI/CLI.hpp>
 #include <climits>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -45,6 +46,10 @@ CLI::Validator real_number();
 // One of a fixed set of words (--backend cpu|cuda|auto): anything else is rejected with the
 // list ("--backend: 'gpu' is not one of the choices (expected one of cpu, cuda, auto)").
 CLI::Validator one_of(std::vector<std::string> choices);
+
+// Runs a tool's work after parsing: its return value, or an error printed once as
+// "error: ..." with exit code 2 for bad input (InputError) and 3 for a failure mid-way.
+int run_reporting_errors(const std::function<int()>& work);
 
 // A usage error found after parsing, in the format of the tools' other input errors; throws
 // breccia::InputError (exit code 2).

@@ -36,7 +36,8 @@ namespace {
 void usage() {
   std::fprintf(stderr,
                "usage: breccia-solve CASE.yaml [-o DIR] [--threads N] [--restart FILE] [--steps N]\n"
-               "                     [--backend cpu|cuda|auto] [--quiet] [--set KEY=VALUE ...]\n"
+               "                     [--backend cpu|cuda|auto] [--quiet] [--variant NAME] [--set KEY=VALUE ...]\n"
+               "       --variant NAME: apply the case file's variants.NAME overrides (before any --set)\n"
                "       --set time.end=\"100 us\" --set loads[0].history.peak=\"4 MPa\": override a value of the\n"
                "             case file (repeatable; KEY as error messages name fields; VALUE as YAML)\n"
                "       breccia-solve CASE.yaml --decomposition P1,P2,...  (decomposition figures per rank count)\n"
@@ -91,6 +92,7 @@ int main(int argc, char** argv) {
   std::string backend = "auto";
   std::string decomposition;  // rank counts: print the decomposition's figures instead of running
   std::vector<std::string> overrides;  // --set KEY=VALUE
+  std::string variant;                 // --variant NAME
   for (int k = 1; k < argc; ++k) {
     const std::string a = argv[k];
     auto value = [&](const char* name) -> std::string {
@@ -109,6 +111,7 @@ int main(int argc, char** argv) {
       else if (a == "--quiet") opt.progress = false;
       else if (a == "--decomposition") decomposition = value("--decomposition");
       else if (a == "--set") overrides.push_back(value("--set"));
+      else if (a == "--variant") variant = value("--variant");
       else if (a == "-h" || a == "--help") { usage(); return 0; }
       else if (!a.empty() && a[0] == '-') { std::fprintf(stderr, "error: unknown option %s\n", a.c_str()); usage(); return kExitBadInput; }
       else case_file = a;
@@ -150,7 +153,7 @@ int main(int argc, char** argv) {
   if (opt.backend == "cuda") opt.backend_loop = solver::cuda_time_loop;
 #endif
   try {
-    if (!overrides.empty()) Section::set_overrides(case_file, overrides);
+    Section::set_overrides(case_file, overrides, variant, opt.out_dir);
     // The model decides the solver: PD here, MPS in its own library.
     const Section root = Section::load_file(case_file);
     if (root.has("model") && root.section("model").text("type", "") == "mps") {

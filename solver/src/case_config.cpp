@@ -106,7 +106,7 @@ CaseConfig parse_case_file(const std::string& path) {
   const Section spec = root.section("specimen");
   spec.allow_only({"particles", "lattice", "mesh"});
   if (spec.has("particles")) {
-    c.particles_path = resolve(c.directory, spec.text("particles"));
+    c.particles_path = spec.input_path("particles");
   } else if (spec.has("lattice")) {
     const Section l = spec.section("lattice");
     l.allow_only({"dimension", "box", "spacing", "thickness"});

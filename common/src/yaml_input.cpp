@@ -176,6 +176,12 @@ Section Section::load_file(const std::string& file) {
   return Section(root, file, "");
 }
 
+std::string Section::text_as_loaded(const std::string& file) {
+  YAML::Emitter out;
+  out << load_file(file).node();
+  return std::string(out.c_str()) + "\n";
+}
+
 std::string Section::field(const std::string& key) const {
   return path_.empty() ? key : path_ + "." + key;
 }

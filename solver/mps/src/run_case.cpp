@@ -14,6 +14,7 @@
 #include "breccia/common/error.hpp"
 #include "breccia/common/output_file.hpp"
 #include "breccia/common/progress.hpp"
+#include "breccia/common/yaml_input.hpp"
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/results_output.hpp"
 #include "breccia/mps/simulation.hpp"
@@ -222,6 +223,9 @@ int run_case(const std::string& case_file, const std::string& out_dir, const Run
     throw InputError(case_file, "model.formulation", "stress with a device for the displacement formulation only",
                      "formulation: displacement, or --backend cpu");
   std::filesystem::create_directories(out_dir);
+  // The case as run (its variant and --set overrides applied): reports read values from it.
+  if (std::filesystem::exists(case_file))
+    write_text_file(std::filesystem::path(out_dir) / "case_as_run.yaml", Section::text_as_loaded(case_file));
   if (spec.formulation == Formulation::Stress) return run_solid(spec, case_file, out_dir, solid_device);
   const auto wall_start = std::chrono::steady_clock::now();
 

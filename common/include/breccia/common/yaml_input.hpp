@@ -33,6 +33,11 @@ public:
   static void set_overrides(const std::string& file, std::vector<std::string> assignments,
                             std::string variant = "", std::string output_folder = "");
 
+  // The file as this process reads it (variant and --set applied, the variants block
+  // dropped), as YAML text: what a run records next to its results (case_as_run.yaml), so
+  // that a variant's values can be read back. Comments are not kept.
+  static std::string text_as_loaded(const std::string& file);
+
   const std::string& file() const { return file_; }
   const std::string& path() const { return path_; }
   const YAML::Node& node() const { return node_; }

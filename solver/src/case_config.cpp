@@ -13,11 +13,6 @@
 namespace breccia::solver {
 namespace {
 
-std::string resolve(const std::string& dir, const std::string& p) {
-  if (p.empty() || std::filesystem::path(p).is_absolute()) return p;
-  return (std::filesystem::path(dir) / p).lexically_normal().string();
-}
-
 std::array<bool, 3> parse_components(const Section& s) {
   if (!s.has("components")) return {true, true, true};
   std::array<bool, 3> c{false, false, false};
@@ -32,7 +27,7 @@ std::array<bool, 3> parse_components(const Section& s) {
 
 }  // namespace
 
-HistorySpec parse_history(const Section& s, Quantity q, const std::string& dir) {
+HistorySpec parse_history(const Section& s, Quantity q) {
   s.allow_only({"type", "value", "peak", "ramp_time", "rise_time", "ratio", "file"});
   HistorySpec h;
   const std::string type = s.choice("type", {"constant", "ramp", "double_exponential", "table"});
@@ -52,7 +47,8 @@ HistorySpec parse_history(const Section& s, Quantity q, const std::string& dir) 
       throw InputError(s.file(), s.field("ratio"), "value " + std::to_string(h.ratio), "beta/alpha > 1");
   } else {
     h.kind = HistorySpec::Kind::Table;
-    const std::string csv = resolve(dir, s.text("file"));
+    // Looked for like the particle file: the run's output folder, then next to the case.
+    const std::string csv = s.input_path("file");
     std::ifstream in(csv);
     if (!in) throw InputError(s.file(), s.field("file"), "cannot open '" + csv + "'", "a CSV file time_s,value");
     std::string line;
@@ -343,7 +339,7 @@ CaseConfig parse_case_file(const std::string& path) {
     if (type == "gas") {
       ls.kind = LoadSpec::Kind::Gas;
       ls.surface = l.text("surface");
-      ls.history = parse_history(l.section("history"), Quantity::Pressure, c.directory);
+      ls.history = parse_history(l.section("history"), Quantity::Pressure);
       GasSpec& g = ls.gas;
       g.gamma_high = l.number("gamma_high", Quantity::Dimensionless, g.gamma_high);
       g.gamma_low = l.number("gamma_low", Quantity::Dimensionless, g.gamma_low);
@@ -373,17 +369,17 @@ CaseConfig parse_case_file(const std::string& path) {
     } else if (type == "pressure") {
       ls.kind = LoadSpec::Kind::Pressure;
       ls.surface = l.text("surface");
-      ls.history = parse_history(l.section("history"), Quantity::Pressure, c.directory);
+      ls.history = parse_history(l.section("history"), Quantity::Pressure);
     } else if (type == "traction") {
       ls.kind = LoadSpec::Kind::Traction;
       ls.surface = l.text("surface");
       ls.vector = l.vec3("value", Quantity::Pressure);
-      if (l.has("history")) ls.history = parse_history(l.section("history"), Quantity::Dimensionless, c.directory);
+      if (l.has("history")) ls.history = parse_history(l.section("history"), Quantity::Dimensionless);
     } else {
       ls.kind = LoadSpec::Kind::BodyForce;
       ls.set = l.text("set", "");
       ls.vector = l.vec3("value", Quantity::Acceleration);
-      if (l.has("history")) ls.history = parse_history(l.section("history"), Quantity::Dimensionless, c.directory);
+      if (l.has("history")) ls.history = parse_history(l.section("history"), Quantity::Dimensionless);
     }
     c.loads.push_back(ls);
   }

@@ -163,6 +163,7 @@ int main(int argc, char** argv) {
 #ifdef BRECCIA_WITH_MPS
       mps::RunCaseOptions mps_options;
       mps_options.threads = opt.threads;
+      mps_options.max_steps = opt.steps.value_or(0);
       if (opt.backend == "cuda") {
         // Both formulations have a CUDA launcher. A stress case using a feature its launcher
         // does not run is refused under --backend cuda (run_case names the key) and runs on

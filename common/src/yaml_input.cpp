@@ -54,8 +54,10 @@ std::string canonical_or_same(const std::string& file) {
   return ec ? file : p.string();
 }
 
-// KEY = value into root: KEY's parts are map keys and [index] list entries.
-void apply_override(YAML::Node& root, const std::string& key, const YAML::Node& value, const std::string& file) {
+// KEY = value into root: KEY's parts are map keys and [index] list entries. `origin` names
+// where the override came from in errors: "--set" or "variants.NAME".
+void apply_override(YAML::Node& root, const std::string& key, const YAML::Node& value, const std::string& file,
+                    const std::string& origin) {
   // Walk the path; yaml-cpp nodes are handles, so `node = node[k]` would rebind, not assign:
   // collect the handles and assign at the end.
   std::vector<YAML::Node> chain{root};
@@ -69,13 +71,13 @@ void apply_override(YAML::Node& root, const std::string& key, const YAML::Node& 
     YAML::Node at = chain.back();
     if (key[pos] == '[') {
       const size_t close = key.find(']', pos);
-      if (close == std::string::npos) throw InputError("--set", key, "an unclosed '['", "KEY[INDEX] with a whole number");
+      if (close == std::string::npos) throw InputError(origin, key, "an unclosed '['", "KEY[INDEX] with a whole number");
       const std::string digits = key.substr(pos + 1, close - pos - 1);
       if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos)
-        throw InputError("--set", key, "index '" + digits + "'", "a whole number in [ ]");
+        throw InputError(origin, key, "index '" + digits + "'", "a whole number in [ ]");
       const size_t index = std::stoul(digits);
       if (!at.IsSequence() || index >= at.size())
-        throw InputError(file, "--set " + key,
+        throw InputError(file, origin + " " + key,
                          "'" + (done.empty() ? std::string("(top level)") : done) + "' has no entry [" + digits + "]" +
                              (at.IsSequence() ? " (it has " + std::to_string(at.size()) + ")" : " (it is not a list)"),
                          "an existing list entry");
@@ -86,13 +88,13 @@ void apply_override(YAML::Node& root, const std::string& key, const YAML::Node& 
       const size_t end = key.find_first_of(".[", pos);
       const std::string name = key.substr(pos, end == std::string::npos ? std::string::npos : end - pos);
       if (at.IsDefined() && !at.IsNull() && !at.IsMap())
-        throw InputError(file, "--set " + key, "'" + done + "' is not a map of keys", "a path through maps and lists");
+        throw InputError(file, origin + " " + key, "'" + done + "' is not a map of keys", "a path through maps and lists");
       chain.push_back(at[name]);
       done += (done.empty() ? "" : ".") + name;
       pos = end == std::string::npos ? key.size() : end;
     }
   }
-  if (chain.size() < 2) throw InputError("--set", key, "no key before '='", "KEY=VALUE");
+  if (chain.size() < 2) throw InputError(origin, key, "no key", "KEY=VALUE");
   chain.back() = YAML::Clone(value);
 }
 
@@ -108,7 +110,7 @@ void apply_override(YAML::Node& root, const std::string& assignment, const std::
   } catch (const YAML::Exception& e) {
     throw InputError("--set", key, "value '" + text + "': " + e.msg, "a YAML value (a number, text, or [a, b, c])");
   }
-  apply_override(root, key, value, file);
+  apply_override(root, key, value, file, "--set");
 }
 
 // The names of the file's variants block, for error messages.
@@ -139,7 +141,7 @@ void apply_variant(YAML::Node& root, const std::string& name, const std::string&
     // Each entry is applied as `--set KEY=VALUE` would be; a map keeps the file's order.
     auto apply_map = [&](const YAML::Node& m, const std::string& at) {
       if (!m.IsMap()) throw InputError(file, at, "is not a map of KEY: VALUE", "KEY: VALUE entries (time.end: 100 us)");
-      for (auto it = m.begin(); it != m.end(); ++it) apply_override(root, it->first.Scalar(), it->second, file);
+      for (auto it = m.begin(); it != m.end(); ++it) apply_override(root, it->first.Scalar(), it->second, file, where);
     };
     if (chosen.IsSequence()) {
       for (size_t k = 0; k < chosen.size(); ++k) apply_map(chosen[k], where + "[" + std::to_string(k) + "]");

@@ -147,9 +147,13 @@ TEST(SolverCli, VariantAppliesItsOverridesBeforeSet) {
 }
 
 TEST(SolverCli, UnknownVariantOrBadVariantEntryIsBadInput) {
-  const std::string yaml = kBase + kMaterial + kTime + "variants: {short: {time.steps: 3}, typo: {time.stpes: 3}}\n";
-  expect_bad_input(run_solver(yaml, "variant_unknown", "--variant long"), {"case.yaml", "--variant long", "short, typo"});
+  const std::string yaml = kBase + kMaterial + kTime +
+                           "variants:\n  short: {time.steps: 3}\n  typo: {time.stpes: 3}\n"
+                           "  index:\n    materials[3].density: 1\n";
+  expect_bad_input(run_solver(yaml, "variant_unknown", "--variant long"), {"case.yaml", "--variant long", "short, typo, index"});
   expect_bad_input(run_solver(yaml, "variant_typo", "--variant typo"), {"time.stpes", "unknown key"});
+  expect_bad_input(run_solver(yaml, "variant_index", "--variant index"),
+                   {"variants.index materials[3].density", "has no entry [3]", "(it has 1)"});
   expect_bad_input(run_solver(kBase + kMaterial + kTime, "variant_none_given", "--variant short"),
                    {"--variant short", "no 'variants' block"});
 }

@@ -1,7 +1,7 @@
 # The installed layout (`cmake --install build --prefix P`, and the .deb under /usr):
 #   P/bin/breccia-{mesh,place,solve,mps,post,plan,atlas}, P/bin/breccia-run-case (scripts/run_case.sh)
 #   P/share/breccia/cases/             every case folder, as in the source tree
-#   P/share/breccia/scripts/           what the cases' run.sh call (case_env.sh, add_sets.py) and convert_mesh.py
+#   P/share/breccia/scripts/           what the cases' run.sh call (case_env.sh) and convert_mesh.py
 #   P/share/breccia/postproc/scripts/  breccia-post's chart scripts
 #   P/share/breccia/plan/              breccia-plan's throughputs.yaml and atlas.csv
 #   P/share/doc/breccia/               README.md and docs/
@@ -24,7 +24,7 @@ install(PROGRAMS scripts/run_case.sh DESTINATION ${CMAKE_INSTALL_BINDIR} RENAME 
 
 install(DIRECTORY cases/ DESTINATION ${BRECCIA_DATA_SUBDIR}/cases USE_SOURCE_PERMISSIONS
   PATTERN __pycache__ EXCLUDE PATTERN "*.pyc" EXCLUDE)
-install(PROGRAMS scripts/case_env.sh scripts/add_sets.py scripts/convert_mesh.py
+install(PROGRAMS scripts/case_env.sh scripts/convert_mesh.py
   DESTINATION ${BRECCIA_DATA_SUBDIR}/scripts)
 install(DIRECTORY postproc/scripts/ DESTINATION ${BRECCIA_DATA_SUBDIR}/postproc/scripts
   USE_SOURCE_PERMISSIONS PATTERN __pycache__ EXCLUDE PATTERN "*.pyc" EXCLUDE)

@@ -3,7 +3,7 @@ and crack length against opening compared with beam theory.
 
     report.py OUT RUN [RUN ...]
 
-Reads OUT/RUN/case.yaml, OUT/RUN/history.csv and OUT/RUN/post_steps/<step>.json (breccia-post
+Reads OUT/RUN/case_as_run.yaml, OUT/RUN/history.csv and OUT/RUN/post_steps/<step>.json (breccia-post
 at every output, written by run.sh). Writes OUT/report.json, OUT/dcb_energy.png and
 OUT/dcb_crack_length.png.
 """
@@ -33,7 +33,7 @@ def beam_crack_length(opening, chi):
 
 
 def load_run(out, name):
-    case = yaml.safe_load(open(os.path.join(out, name, "case.yaml")))
+    case = yaml.safe_load(open(os.path.join(out, name, "case_as_run.yaml")))
     rate = float(case["boundary"][0]["value"][1])
     rows = []
     for path in sorted(glob.glob(os.path.join(out, name, "post_steps", "*.json"))):

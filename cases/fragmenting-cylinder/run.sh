@@ -13,8 +13,8 @@ case "$VARIANT" in
 esac
 mkdir -p "$OUT"
 "$PYTHON" "$HERE/specimen.py" "$OUT/particles.h5" --spacing "$DX"
-cp "$HERE/case.yaml" "$OUT/case.yaml"   # as shipped: only the particle file is written
-"$BRECCIA_BIN/breccia-solve" "$OUT/case.yaml" -o "$OUT/run" --threads "$THREADS" --quiet
+# case.yaml as shipped, on the particle file just written.
+"$BRECCIA_BIN/breccia-solve" "$HERE/case.yaml" -o "$OUT/run" --set "specimen.particles=$OUT/particles.h5" --threads "$THREADS" --quiet
 "$BRECCIA_BIN/breccia-post" "$OUT/run" --fragments --cracks --energy --quiet > "$OUT/post.log"
 "$PYTHON" "$HERE/report.py" "$OUT"
 echo "report: $OUT/report.json; pictures: $OUT/*.png"

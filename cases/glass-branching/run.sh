@@ -10,6 +10,9 @@
 #   VARIANT=3d-test   : dx = 0.5 mm (m = 2), 200 x 80 x 4 = 64,000 particles, 28 us (CTest)
 #   DIM=3d maps quick|demo|full|test to 3d-quick|3d-quick|3d|3d-test, so that
 #   `make case-glass-branching DIM=3d [QUICK=1]` and cases/glass-branching/3d/run.sh reach them.
+# RUNS (optional): the load levels, names of the case file's variants (sigma2MPa_G3.8,
+#   sigma4MPa_G3.8, sigma12MPa_G135). LOADS (optional): "sigma_MPa:G0_J_per_m2" pairs instead,
+#   any values, given to breccia-solve as --set overrides.
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
@@ -17,30 +20,34 @@ source "$HERE/../../scripts/case_env.sh"
 if [ "${DIM:-2d}" = 3d ]; then
   case "$VARIANT" in quick|demo) VARIANT=3d-quick ;; full) VARIANT=3d ;; test) VARIANT=3d-test ;; esac
 fi
+EXTRA=()  # options for every run of this variant
 case "$VARIANT" in
   3d|3d-quick|3d-test) export VARIANT PYTHON THREADS; exec bash "$HERE/run_3d.sh" ;;
-  quick|demo) DX=0.000333333333333333333; DECK=case-quick.yaml; LOADS=${LOADS:-"2:3.8"} ;;
-  full)       DX=0.00025;                 DECK=case-full.yaml;  LOADS=${LOADS:-"2:3.8 4:3.8 12:135"} ;;
-  test)       DX=0.0005;                  DECK=case-quick.yaml; LOADS="2:3.8"; END="28 us" ;;
+  quick|demo) DX=0.000333333333333333333; DECK=case-quick.yaml; RUNS=${RUNS:-"sigma2MPa_G3.8"} ;;
+  full)       DX=0.00025;                 DECK=case-full.yaml;  RUNS=${RUNS:-"sigma2MPa_G3.8 sigma4MPa_G3.8 sigma12MPa_G135"} ;;
+  test)       DX=0.0005;                  DECK=case-quick.yaml; RUNS="sigma2MPa_G3.8"; EXTRA=(--variant test) ;;
   *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full|test|3d|3d-quick|3d-test)" >&2; exit 2 ;;
 esac
 mkdir -p "$OUT"
-# Specimen: 100 x 40 mm plate, 1 mm thick; no-fail strips within delta = 1 mm of the loaded edges.
+# Specimen: 100 x 40 mm plate, 1 mm thick (the case file names its no-fail strips).
 "$BRECCIA_BIN/breccia-place" --lattice square --box 0,0,0.1,0.04 --spacing "$DX" --thickness 1mm \
   -o "$OUT/particles.h5" > "$OUT/place.log"
-"$PYTHON" "$HERE/../../scripts/add_sets.py" "$OUT/particles.h5" no_fail_bottom:0,0,0.1,0.001 no_fail_top:0,0.039,0.1,0.04
-RUNS=()
-for load in $LOADS; do  # sigma_MPa:G0_J_per_m2
-  s=${load%%:*}; g0=${load##*:}
-  name="sigma${s}MPa_G${g0}"
-  mkdir -p "$OUT/$name"
-  sed -e "s/STRESS/$s/g" -e "s/fracture_energy: G0 /fracture_energy: $g0 /" -e "s#particles: particles.h5#particles: ../particles.h5#" \
-      -e "s/no_fail: \[no_fail\]/no_fail: [no_fail_bottom, no_fail_top]/" -e "s/end: 43 us/end: ${END:-43 us}/" \
-      "$HERE/$DECK" > "$OUT/$name/case.yaml"
+# One run per load level: a variant of the case file by name, or LOADS's values as --set.
+if [ -n "${LOADS:-}" ]; then
+  RUNS=""
+  for load in $LOADS; do RUNS+=" sigma${load%%:*}MPa_G${load##*:}"; done
+fi
+for name in $RUNS; do
+  load=(--variant "$name")
+  if [ -n "${LOADS:-}" ]; then
+    s=${name#sigma}; s=${s%%MPa_G*}; g0=${name##*MPa_G}
+    load=(--set "loads[0].value=[0, $s MPa, 0]" --set "loads[1].value=[0, -$s MPa, 0]" --set "materials[0].fracture_energy=$g0")
+  fi
+  [ ${#EXTRA[@]} -eq 0 ] || load=("${EXTRA[@]}")  # test: one run, the test variant
   echo "== $name"
-  "$BRECCIA_BIN/breccia-solve" "$OUT/$name/case.yaml" -o "$OUT/$name" --threads "$THREADS" --quiet
+  "$BRECCIA_BIN/breccia-solve" "$HERE/$DECK" -o "$OUT/$name" --set "specimen.particles=$OUT/particles.h5" "${load[@]}" \
+    --threads "$THREADS" --quiet
   "$BRECCIA_BIN/breccia-post" "$OUT/$name" --cracks --fragments --energy --quiet > "$OUT/$name/post.log"
-  RUNS+=("$name")
 done
-"$PYTHON" "$HERE/report.py" "$OUT" "${RUNS[@]}"
+"$PYTHON" "$HERE/report.py" "$OUT" $RUNS
 echo "report: $OUT/report.json; pictures: $OUT/*.png"

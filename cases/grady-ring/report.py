@@ -52,7 +52,7 @@ def zmr_e(rate, strength):
 
 def analyse(out, name):
     run = os.path.join(out, name)
-    text = open(os.path.join(run, "case.yaml")).read()
+    text = open(os.path.join(run, "case_as_run.yaml")).read()
     rate = float(re.search(r"strain_rate:\s*([0-9.eE+-]+)", text).group(1))
     m = re.search(r"tensile_strength:\s*([0-9.eE+-]+)\s*MPa", text)
     strength = float(m.group(1)) * 1e6 if m else None

@@ -60,7 +60,7 @@ def cracks_at(r, theta, damaged, radius, dx):
 def analyse(out, name):
     run = os.path.join(out, name)
     x, times, damage, summary = case_report.load_damage_history(run)
-    g0 = float(re.search(r"fracture_energy:\s*([0-9.eE+-]+)", open(os.path.join(run, "case.yaml")).read()).group(1))
+    g0 = float(re.search(r"fracture_energy:\s*([0-9.eE+-]+)", open(os.path.join(run, "case_as_run.yaml")).read()).group(1))
     dx = float(np.min(np.diff(np.unique(np.round(x[:, 0], 9)))))
     r = np.hypot(x[:, 0], x[:, 1])
     theta = np.arctan2(x[:, 1], x[:, 0])

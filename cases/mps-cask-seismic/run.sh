@@ -25,7 +25,6 @@ RUNS=()
 for dx in $SPACINGS; do
   for gap in ${GAPS:-0 0.05}; do
     name="dx${dx}_gap${gap}"
-    mkdir -p "$OUT/$name"
     # Canister particle centres from just above the cavity floor (y = 0.5 m), 4.8 m high, `gap`
     # from the walls at x = +-0.95 m (1e-4 m for "no gap": centres on a wall would start
     # inside it). The spacing is adjusted (by under 3%) so that the columns fit the width.
@@ -35,10 +34,11 @@ c = 0.95 - gap
 m = round(2 * c / dx); h = 2 * c / m
 y0 = 0.5 + 1e-4 - h / 2
 print(f'{h:.8g} [{-c - h / 2:.8g}, {y0:.8g}, {c + h / 2:.8g}, {y0 + round(4.8 / h) * h:.8g}]')")
-    sed -e "s/SPACING/$h/" -e "s/CANISTER_BOX/$box/" -e "s#RECORD#$RECORD#" -e "s/END/$DURATION/" \
-        "$HERE/case.yaml" > "$OUT/$name/case.yaml"
+    # (for the standard spacings and gaps, the values of case.yaml's variants of that name)
     echo "== $name"
-    "$BRECCIA_BIN/breccia-mps" "$OUT/$name/case.yaml" -o "$OUT/$name" --threads "$THREADS" 2>&1 | tail -1
+    "$BRECCIA_BIN/breccia-solve" "$HERE/case.yaml" -o "$OUT/$name" --set "specimen.bodies.spacing=$h" \
+      --set "specimen.bodies.shapes[0].box=$box" --set "contact.floor.motion.history.file=$RECORD" \
+      --set "time.end=$DURATION" --backend cpu --threads "$THREADS" 2>&1 | tail -1
     RUNS+=("$name")
   done
 done

@@ -38,7 +38,7 @@ HINGE_MIN_STRAIN = 0.02
 def analyse(out, name):
     run = os.path.join(out, name)
     angle = float(re.search(r"angle([0-9.]+)", name).group(1))
-    text = open(os.path.join(run, "case.yaml")).read()
+    text = open(os.path.join(run, "case_as_run.yaml")).read()
     particles = os.path.normpath(os.path.join(run, re.search(r"particles:\s*(\S+)", text).group(1)))
     with h5py.File(particles, "r") as f:
         fin = f["sets/fin"][:]

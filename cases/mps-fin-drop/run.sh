@@ -25,7 +25,6 @@ for dx in $SPACINGS; do
     --fin-thickness "$FIN_THICKNESS"
   for angle in $ANGLES; do
     name="dx${dx}_angle${angle}"
-    mkdir -p "$OUT/$name"
     # Target normal n = (sin a, cos a): the fin's axis (0, 1) makes the angle a with it; the
     # plane 1 mm below the lowest particle centre along n.
     IFS='|' read -r normal point velocity gravity < <("$PYTHON" -c "
@@ -37,11 +36,13 @@ q = (np.min(x @ n) - 1e-3) * n
 f = lambda v: '[' + ', '.join(f'{c:.9g}' for c in v) + ']'
 print('|'.join([f(n), f(q), f(-13.3 * n), f(-9.81 * n)]))")
     every=$("$PYTHON" -c "print(max(1, round($END / (0.3 * $dx / 5900) / 6)))")
-    sed -e "s#particles: particles.h5#particles: ../particles_$dx.h5#" -e "s/NORMAL/$normal/" -e "s/POINT/$point/" \
-        -e "s/VELOCITY/$velocity/" -e "s/GRAVITY/$gravity/" -e "s/END/$END/" -e "s/EVERY/$every/" -e "s/MU/$MU/g" \
-        "$HERE/case.yaml" > "$OUT/$name/case.yaml"
+    # (at dx = 5 mm and MU = 0, the values of case.yaml's variants angle0 ... angle40)
     echo "== $name"
-    "$BRECCIA_BIN/breccia-mps" "$OUT/$name/case.yaml" -o "$OUT/$name" --threads "$THREADS" 2>&1 | tail -1
+    "$BRECCIA_BIN/breccia-solve" "$HERE/case.yaml" -o "$OUT/$name" --set "specimen.particles=$OUT/particles_$dx.h5" \
+      --set "contact.floor.normal=$normal" --set "contact.floor.point=$point" --set "initial.velocity=$velocity" \
+      --set "model.gravity=$gravity" --set "time.end=$END" --set "output.every=$every" \
+      --set "contact.floor.static_friction=$MU" --set "contact.floor.kinetic_friction=$MU" \
+      --backend cpu --threads "$THREADS" 2>&1 | tail -1
     RUNS+=("$name")
   done
 done

@@ -15,23 +15,17 @@ case "$VARIANT" in
   full)  SPACINGS="0.25 0.125 0.0625" ;;
   *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full)" >&2; exit 2 ;;
 esac
-if [ -x "$BRECCIA_BIN/breccia-mps" ]; then SOLVER=("$BRECCIA_BIN/breccia-mps")
-else SOLVER=("$BRECCIA_BIN/breccia-solve"); fi
 THREADS=${THREADS:-$(nproc)}
 mkdir -p "$OUT"
 RUNS=()
 for s in $SPACINGS; do
   for crack in crack intact; do
     name="${crack}_h${s}mm"
-    deck="$OUT/$name.yaml"
-    if [ "$crack" = crack ]; then
-      sed "s/spacing: 0.25 mm/spacing: $s mm/" "$HERE/case.yaml" > "$deck"
-    else  # drop the crack block: everything from the crack-begin marker to boundary:
-      sed -e "s/spacing: 0.25 mm/spacing: $s mm/" \
-          -e '/# crack-begin/,/^boundary:/{/^boundary:/!d}' "$HERE/case.yaml" > "$deck"
-    fi
+    # case.yaml at spacing s; intact: its variant without the crack.
+    options=(--set "specimen.lattice.spacing=$s mm")
+    [ "$crack" = crack ] || options+=(--variant intact)
     echo "== $name"
-    "${SOLVER[@]}" "$deck" -o "$OUT/$name" --threads "$THREADS"
+    "$BRECCIA_BIN/breccia-solve" "$HERE/case.yaml" -o "$OUT/$name" "${options[@]}" --backend cpu --threads "$THREADS"
     RUNS+=("$name")
   done
 done

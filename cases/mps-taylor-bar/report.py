@@ -50,12 +50,12 @@ def shape_at(x0, output, h):
 
 
 def spacing_of(run_dir):
-    """The spacing run.sh wrote into the run's case.yaml (metres)."""
-    with open(os.path.join(run_dir, "case.yaml")) as fh:
+    """The spacing of the run (metres), from the case as run (case_as_run.yaml)."""
+    with open(os.path.join(run_dir, "case_as_run.yaml")) as fh:
         for line in fh:
             if line.strip().startswith("spacing:"):
                 return float(line.split(":", 1)[1].split("#")[0])
-    raise SystemExit(f"report.py: no spacing in {run_dir}/case.yaml")
+    raise SystemExit(f"report.py: no spacing in {run_dir}/case_as_run.yaml")
 
 
 def measure(run_dir):

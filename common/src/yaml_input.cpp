@@ -40,6 +40,8 @@ namespace {
 struct Overrides {
   std::string file;  // canonical path
   std::vector<std::string> assignments;
+  std::string variant;        // a name of the file's variants block ("" none)
+  std::string output_folder;  // where relative input files are looked for first ("" none)
 };
 Overrides& registered_overrides() {
   static Overrides o;
@@ -52,18 +54,10 @@ std::string canonical_or_same(const std::string& file) {
   return ec ? file : p.string();
 }
 
-// KEY=VALUE into root: KEY's parts are map keys and [index] list entries.
-void apply_override(YAML::Node& root, const std::string& assignment, const std::string& file) {
-  const size_t eq = assignment.find('=');
-  if (eq == std::string::npos || eq == 0)
-    throw InputError("--set", assignment, "not KEY=VALUE", "--set time.end=\"100 us\" (a field path, '=', a value)");
-  const std::string key = assignment.substr(0, eq), text = assignment.substr(eq + 1);
-  YAML::Node value;
-  try {
-    value = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw InputError("--set", key, "value '" + text + "': " + e.msg, "a YAML value (a number, text, or [a, b, c])");
-  }
+// KEY = value into root: KEY's parts are map keys and [index] list entries. `origin` names
+// where the override came from in errors: "--set" or "variants.NAME".
+void apply_override(YAML::Node& root, const std::string& key, const YAML::Node& value, const std::string& file,
+                    const std::string& origin) {
   // Walk the path; yaml-cpp nodes are handles, so `node = node[k]` would rebind, not assign:
   // collect the handles and assign at the end.
   std::vector<YAML::Node> chain{root};
@@ -77,13 +71,13 @@ void apply_override(YAML::Node& root, const std::string& assignment, const std::
     YAML::Node at = chain.back();
     if (key[pos] == '[') {
       const size_t close = key.find(']', pos);
-      if (close == std::string::npos) throw InputError("--set", key, "an unclosed '['", "KEY[INDEX] with a whole number");
+      if (close == std::string::npos) throw InputError(origin, key, "an unclosed '['", "KEY[INDEX] with a whole number");
       const std::string digits = key.substr(pos + 1, close - pos - 1);
       if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos)
-        throw InputError("--set", key, "index '" + digits + "'", "a whole number in [ ]");
+        throw InputError(origin, key, "index '" + digits + "'", "a whole number in [ ]");
       const size_t index = std::stoul(digits);
       if (!at.IsSequence() || index >= at.size())
-        throw InputError(file, "--set " + key,
+        throw InputError(file, origin + " " + key,
                          "'" + (done.empty() ? std::string("(top level)") : done) + "' has no entry [" + digits + "]" +
                              (at.IsSequence() ? " (it has " + std::to_string(at.size()) + ")" : " (it is not a list)"),
                          "an existing list entry");
@@ -94,19 +88,74 @@ void apply_override(YAML::Node& root, const std::string& assignment, const std::
       const size_t end = key.find_first_of(".[", pos);
       const std::string name = key.substr(pos, end == std::string::npos ? std::string::npos : end - pos);
       if (at.IsDefined() && !at.IsNull() && !at.IsMap())
-        throw InputError(file, "--set " + key, "'" + done + "' is not a map of keys", "a path through maps and lists");
+        throw InputError(file, origin + " " + key, "'" + done + "' is not a map of keys", "a path through maps and lists");
       chain.push_back(at[name]);
       done += (done.empty() ? "" : ".") + name;
       pos = end == std::string::npos ? key.size() : end;
     }
   }
-  if (chain.size() < 2) throw InputError("--set", assignment, "no key before '='", "KEY=VALUE");
-  chain.back() = value;
+  if (chain.size() < 2) throw InputError(origin, key, "no key", "KEY=VALUE");
+  chain.back() = YAML::Clone(value);
+}
+
+// KEY=VALUE (a --set option) into root.
+void apply_override(YAML::Node& root, const std::string& assignment, const std::string& file) {
+  const size_t eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw InputError("--set", assignment, "not KEY=VALUE", "--set time.end=\"100 us\" (a field path, '=', a value)");
+  const std::string key = assignment.substr(0, eq), text = assignment.substr(eq + 1);
+  YAML::Node value;
+  try {
+    value = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError("--set", key, "value '" + text + "': " + e.msg, "a YAML value (a number, text, or [a, b, c])");
+  }
+  apply_override(root, key, value, file, "--set");
+}
+
+// The names of the file's variants block, for error messages.
+std::string variant_names(const YAML::Node& variants) {
+  std::string names;
+  for (auto it = variants.begin(); it != variants.end(); ++it) names += (names.empty() ? "" : ", ") + it->first.Scalar();
+  return names;
+}
+
+// Applies variants.NAME (a map of KEY: VALUE, in order; or a list of such one-entry maps) to
+// root, then drops the variants block, which no case parser knows. Without a variant chosen
+// the block is only checked for its shape (and dropped).
+void apply_variant(YAML::Node& root, const std::string& name, const std::string& file) {
+  const YAML::Node variants = root["variants"];
+  if (!variants.IsDefined() || variants.IsNull()) {
+    if (!name.empty())
+      throw InputError(file, "--variant " + name, "the case file has no 'variants' block",
+                       "a case file with variants: {" + name + ": {KEY: VALUE, ...}}, or no --variant");
+    return;
+  }
+  if (!variants.IsMap())
+    throw InputError(file, "variants", "is not a map", "variants: {NAME: {KEY: VALUE, ...}, ...}");
+  if (!name.empty()) {
+    const YAML::Node chosen = variants[name];
+    if (!chosen.IsDefined())
+      throw InputError(file, "--variant " + name, "no variant '" + name + "'", "one of: " + variant_names(variants));
+    const std::string where = "variants." + name;
+    // Each entry is applied as `--set KEY=VALUE` would be; a map keeps the file's order.
+    auto apply_map = [&](const YAML::Node& m, const std::string& at) {
+      if (!m.IsMap()) throw InputError(file, at, "is not a map of KEY: VALUE", "KEY: VALUE entries (time.end: 100 us)");
+      for (auto it = m.begin(); it != m.end(); ++it) apply_override(root, it->first.Scalar(), it->second, file, where);
+    };
+    if (chosen.IsSequence()) {
+      for (size_t k = 0; k < chosen.size(); ++k) apply_map(chosen[k], where + "[" + std::to_string(k) + "]");
+    } else if (!chosen.IsNull()) {
+      apply_map(chosen, where);
+    }
+  }
+  root.remove("variants");
 }
 }  // namespace
 
-void Section::set_overrides(const std::string& file, std::vector<std::string> assignments) {
-  registered_overrides() = {canonical_or_same(file), std::move(assignments)};
+void Section::set_overrides(const std::string& file, std::vector<std::string> assignments, std::string variant,
+                            std::string output_folder) {
+  registered_overrides() = {canonical_or_same(file), std::move(assignments), std::move(variant), std::move(output_folder)};
 }
 
 Section Section::load_file(const std::string& file) {
@@ -122,9 +171,17 @@ Section Section::load_file(const std::string& file) {
   if (!root.IsMap()) throw InputError(file, "(top level)", "is not a YAML map", "a map of sections");
   reject_duplicate_keys(root, file, "");
   const Overrides& o = registered_overrides();
-  if (!o.assignments.empty() && o.file == canonical_or_same(file))
+  const bool registered = o.file == canonical_or_same(file);
+  apply_variant(root, registered ? o.variant : std::string(), file);
+  if (registered)
     for (const auto& a : o.assignments) apply_override(root, a, file);
   return Section(root, file, "");
+}
+
+std::string Section::text_as_loaded(const std::string& file) {
+  YAML::Emitter out;
+  out << load_file(file).node();
+  return std::string(out.c_str()) + "\n";
 }
 
 std::string Section::field(const std::string& key) const {
@@ -285,6 +342,29 @@ std::vector<std::string> Section::texts(const std::string& key) const {
     out.push_back(n[i].Scalar());
   }
   return out;
+}
+
+std::string Section::input_path(const std::string& key) const {
+  const std::filesystem::path given = text(key);
+  if (given.is_absolute()) {
+    if (!std::filesystem::exists(given)) fail(key, "'" + given.string() + "' does not exist", "an existing file");
+    return given.string();
+  }
+  // The run's output folder first: a run's own inputs (breccia-place -o RUN/particles.h5)
+  // take precedence over files shipped next to the case.
+  std::vector<std::filesystem::path> places;
+  const Overrides& o = registered_overrides();
+  if (!o.output_folder.empty() && o.file == canonical_or_same(file_)) places.push_back(o.output_folder);
+  places.push_back(std::filesystem::path(file_).parent_path());
+  std::string looked;
+  for (const auto& dir : places) {
+    const std::filesystem::path candidate = dir / given;
+    if (std::filesystem::exists(candidate)) return candidate.string();
+    looked += (looked.empty() ? "" : " and ") + candidate.string();
+  }
+  fail(key, "'" + given.string() + "' does not exist (looked for " + looked + ")",
+       places.size() > 1 ? "the file in the output folder (e.g. written there by breccia-place -o) or next to the case file"
+                         : "the file next to the case file (a relative path is relative to the case file)");
 }
 
 }  // namespace breccia

@@ -41,6 +41,8 @@ constexpr const char* kAbout =
 constexpr const char* kFooter =
     "Input: CASE.yaml (docs/case-format.md). Output in DIR: results.h5 (+ .xdmf), history.csv,\n"
     "summary.json and checkpoint.h5 (docs/formats.md); progress on stderr unless --quiet.\n"
+    "  --variant NAME                                     apply the case file's variants.NAME overrides\n"
+    "                                                     (before any --set)\n"
     "  --set time.end=\"100 us\" --set 'loads[0].history.peak=4 MPa'   a variant of the case, the file\n"
     "                                                     untouched: KEY as error messages name fields,\n"
     "                                                     VALUE as YAML\n"
@@ -88,6 +90,7 @@ int main(int argc, char** argv) {
   std::string backend = "auto";
   std::string decomposition;  // rank counts: print the decomposition's figures instead of running
   std::vector<std::string> overrides;  // --set KEY=VALUE
+  std::string variant;                 // --variant NAME
   CLI::App app{kAbout, "breccia-solve"};
   cli::configure(app, kFooter);
   app.add_option("CASE", case_file, "the case file")->required()->type_name("CASE.yaml");
@@ -108,6 +111,8 @@ int main(int argc, char** argv) {
   app.add_option("--set", overrides, "override a value of the case file (repeatable; below)")
       ->type_name("KEY=VALUE")
       ->allow_extra_args(false);
+  app.add_option("--variant", variant, "apply the case file's variants.NAME overrides (before any --set)")
+      ->type_name("NAME");
   app.add_option("--decomposition", decomposition, "print the domain decomposition's figures per rank count and exit")
       ->type_name("P1,P2,...");
   // Every rank parses; only rank 0 speaks, and all leave with the same code.
@@ -135,7 +140,7 @@ int main(int argc, char** argv) {
   if (opt.backend == "cuda") opt.backend_loop = solver::cuda_time_loop;
 #endif
   try {
-    if (!overrides.empty()) Section::set_overrides(case_file, overrides);
+    Section::set_overrides(case_file, overrides, variant, opt.out_dir);
     // The model decides the solver: PD here, MPS in its own library.
     const Section root = Section::load_file(case_file);
     if (root.has("model") && root.section("model").text("type", "") == "mps") {
@@ -145,6 +150,7 @@ int main(int argc, char** argv) {
 #ifdef BRECCIA_WITH_MPS
       mps::RunCaseOptions mps_options;
       mps_options.threads = opt.threads;
+      mps_options.max_steps = opt.steps.value_or(0);
       if (opt.backend == "cuda") {
         // Both formulations have a CUDA launcher. A stress case using a feature its launcher
         // does not run is refused under --backend cuda (run_case names the key) and runs on

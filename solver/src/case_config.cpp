@@ -14,11 +14,6 @@
 namespace breccia::solver {
 namespace {
 
-std::string resolve(const std::string& dir, const std::string& p) {
-  if (p.empty() || std::filesystem::path(p).is_absolute()) return p;
-  return (std::filesystem::path(dir) / p).lexically_normal().string();
-}
-
 std::array<bool, 3> parse_components(const Section& s) {
   if (!s.has("components")) return {true, true, true};
   std::array<bool, 3> c{false, false, false};
@@ -49,7 +44,7 @@ std::vector<std::string> parse_component_expressions(const Section& s, const std
 
 }  // namespace
 
-HistorySpec parse_history(const Section& s, Quantity q, const std::string& dir) {
+HistorySpec parse_history(const Section& s, Quantity q) {
   s.allow_only({"type", "value", "peak", "ramp_time", "rise_time", "ratio", "file"});
   HistorySpec h;
   const std::string type = s.choice("type", {"constant", "ramp", "double_exponential", "table"});
@@ -69,9 +64,8 @@ HistorySpec parse_history(const Section& s, Quantity q, const std::string& dir) 
       throw InputError(s.file(), s.field("ratio"), "value " + std::to_string(h.ratio), "beta/alpha > 1");
   } else {
     h.kind = HistorySpec::Kind::Table;
-    const std::string csv = resolve(dir, s.text("file"));
-    if (!std::filesystem::exists(csv))
-      throw InputError(s.file(), s.field("file"), "cannot open '" + csv + "'", "a CSV file time_s,value");
+    // Looked for like the particle file: the run's output folder, then next to the case.
+    const std::string csv = s.input_path("file");
     // Rows time_s, value under an optional header; '#' lines are comments.
     const CsvColumns table =
         read_csv_columns(csv, {.header_optional = true, .comments = true, .expected = "a CSV file time_s,value"});
@@ -119,7 +113,7 @@ CaseConfig parse_case_file(const std::string& path) {
   const Section spec = root.section("specimen");
   spec.allow_only({"particles", "lattice", "mesh"});
   if (spec.has("particles")) {
-    c.particles_path = resolve(c.directory, spec.text("particles"));
+    c.particles_path = spec.input_path("particles");
   } else if (spec.has("lattice")) {
     const Section l = spec.section("lattice");
     l.allow_only({"dimension", "box", "spacing", "thickness"});
@@ -371,7 +365,7 @@ CaseConfig parse_case_file(const std::string& path) {
     if (type == "gas") {
       ls.kind = LoadSpec::Kind::Gas;
       ls.surface = l.text("surface");
-      ls.history = parse_history(l.section("history"), Quantity::Pressure, c.directory);
+      ls.history = parse_history(l.section("history"), Quantity::Pressure);
       GasSpec& g = ls.gas;
       g.gamma_high = l.number("gamma_high", Quantity::Dimensionless, g.gamma_high);
       g.gamma_low = l.number("gamma_low", Quantity::Dimensionless, g.gamma_low);
@@ -401,17 +395,17 @@ CaseConfig parse_case_file(const std::string& path) {
     } else if (type == "pressure") {
       ls.kind = LoadSpec::Kind::Pressure;
       ls.surface = l.text("surface");
-      ls.history = parse_history(l.section("history"), Quantity::Pressure, c.directory);
+      ls.history = parse_history(l.section("history"), Quantity::Pressure);
     } else if (type == "traction") {
       ls.kind = LoadSpec::Kind::Traction;
       ls.surface = l.text("surface");
       ls.vector = l.vec3("value", Quantity::Pressure);
-      if (l.has("history")) ls.history = parse_history(l.section("history"), Quantity::Dimensionless, c.directory);
+      if (l.has("history")) ls.history = parse_history(l.section("history"), Quantity::Dimensionless);
     } else {
       ls.kind = LoadSpec::Kind::BodyForce;
       ls.set = l.text("set", "");
       ls.vector = l.vec3("value", Quantity::Acceleration);
-      if (l.has("history")) ls.history = parse_history(l.section("history"), Quantity::Dimensionless, c.directory);
+      if (l.has("history")) ls.history = parse_history(l.section("history"), Quantity::Dimensionless);
     }
     c.loads.push_back(ls);
   }
@@ -448,7 +442,7 @@ CaseConfig parse_case_file(const std::string& path) {
         throw InputError(s.file(), s.field("file"), "file with " + std::string(s.has("value") ? "value" : "expression"),
                          "one of value, expression or file");
       if (s.has("file")) {
-        is.field_file = resolve(c.directory, s.text("file"));
+        is.field_file = s.input_path("file");  // the output folder first, then next to the case
         const bool h5 = std::filesystem::path(is.field_file).extension() == ".h5";
         if (h5 != s.has("dataset"))
           throw InputError(s.file(), s.field(h5 ? "file" : "dataset"),

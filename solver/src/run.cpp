@@ -15,6 +15,7 @@
 #include "breccia/common/json_file.hpp"
 #include "breccia/common/reproducible_sum.hpp"
 #include "breccia/common/units.hpp"
+#include "breccia/common/yaml_input.hpp"
 #include "breccia/solver/correspondence.hpp"
 #include "breccia/solver/outputs.hpp"
 
@@ -311,6 +312,9 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
   std::unique_ptr<HistoryWriter> history;
   if (o.root) {
     std::filesystem::create_directories(o.out_dir);
+    // The case as run (its variant and --set overrides applied): reports read values from it.
+    if (!s.config.file.empty() && std::filesystem::exists(s.config.file))
+      write_text_file(o.out_dir + "/case_as_run.yaml", Section::text_as_loaded(s.config.file));
     if (s.config.write_results) results = std::make_unique<ResultsWriter>(s, o.out_dir, restart);
     history = std::make_unique<HistoryWriter>(s, o.out_dir, restart);
   }

@@ -139,6 +139,93 @@ TEST(SolverCli, SetWithAMissingEntryOrNoValueIsBadInput) {
   expect_bad_input(run_solver(yaml, "set_unknown", "--set time.stpes=3"), {"time.stpes", "unknown key"});
 }
 
+// --variant NAME applies the case file's variants.NAME entries as the same --set options
+// would, before any --set (so --set wins); without --variant the block is ignored.
+TEST(SolverCli, VariantAppliesItsOverridesBeforeSet) {
+  const std::string yaml = kBase + kMaterial + kTime +
+                           "variants:\n"
+                           "  short:\n"
+                           "    time.steps: 3\n"
+                           "    materials[0].youngs_modulus: 20 GPa\n"
+                           "  shorter: [{time.steps: 2}]\n";
+  auto steps_run = [](const std::string& name) {
+    std::ifstream js(breccia::solver::testing::process_temp_dir() + "/cli_" + name + "/out/summary.json");
+    return nlohmann::json::parse(js)["steps_this_run"].get<long long>();
+  };
+  const Outcome plain = run_solver(yaml, "variant_none");
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  EXPECT_EQ(steps_run("variant_none"), 5);
+  const Outcome shortv = run_solver(yaml, "variant_short", "--variant short");
+  ASSERT_EQ(shortv.exit_code, 0) << shortv.output;
+  EXPECT_EQ(steps_run("variant_short"), 3);
+  const Outcome listv = run_solver(yaml, "variant_list", "--variant shorter");
+  ASSERT_EQ(listv.exit_code, 0) << listv.output;
+  EXPECT_EQ(steps_run("variant_list"), 2);
+  const Outcome both = run_solver(yaml, "variant_set", "--set time.steps=4 --variant short");
+  ASSERT_EQ(both.exit_code, 0) << both.output;
+  EXPECT_EQ(steps_run("variant_set"), 4);
+}
+
+TEST(SolverCli, UnknownVariantOrBadVariantEntryIsBadInput) {
+  const std::string yaml = kBase + kMaterial + kTime +
+                           "variants:\n  short: {time.steps: 3}\n  typo: {time.stpes: 3}\n"
+                           "  index:\n    materials[3].density: 1\n";
+  expect_bad_input(run_solver(yaml, "variant_unknown", "--variant long"), {"case.yaml", "--variant long", "short, typo, index"});
+  expect_bad_input(run_solver(yaml, "variant_typo", "--variant typo"), {"time.stpes", "unknown key"});
+  expect_bad_input(run_solver(yaml, "variant_index", "--variant index"),
+                   {"variants.index materials[3].density", "has no entry [3]", "(it has 1)"});
+  expect_bad_input(run_solver(kBase + kMaterial + kTime, "variant_none_given", "--variant short"),
+                   {"--variant short", "no 'variants' block"});
+}
+
+// A relative specimen.particles is looked for in the output folder first, then next to the
+// case file; absent from both, the error names the key and both places. The two files differ
+// in particle count, which summary.json reports.
+TEST(SolverCli, RelativeParticleFileIsLookedForInTheOutputFolderFirst) {
+  const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_particles_lookup";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir + "/out");
+  auto square = [](int n) {
+    breccia::ParticleModel m;
+    m.dimension = 2;
+    m.thickness_m = 1e-3;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        m.position_m.insert(m.position_m.end(), {(i + 0.5) * 1e-3, (j + 0.5) * 1e-3, 0.0});
+        m.volume_m3.push_back(1e-9);
+        m.spacing_m.push_back(1e-3);
+        m.material_id.push_back(0);
+      }
+    m.source = "test_cli particle lookup";
+    return m;
+  };
+  breccia::write_particle_file(dir + "/particles.h5", square(6));      // next to the case: 36
+  breccia::write_particle_file(dir + "/out/particles.h5", square(7));  // in the output folder: 49
+  std::ofstream(dir + "/case.yaml") << "specimen: {particles: particles.h5}\nmodel: {type: pmb, planar: plane_strain}\n" +
+                                           kMaterial + kTime;
+  auto solve = [&]() {
+    const std::string cmd = std::string(BRECCIA_SOLVE_EXE) + " " + dir + "/case.yaml -o " + dir + "/out --quiet 2>&1";
+    FILE* p = popen(cmd.c_str(), "r");
+    std::string out;
+    std::array<char, 512> buf{};
+    while (fgets(buf.data(), buf.size(), p)) out += buf.data();
+    return Outcome{WEXITSTATUS(pclose(p)), out};
+  };
+  auto particles_run = [&]() {
+    std::ifstream js(dir + "/out/summary.json");
+    return nlohmann::json::parse(js)["particles"].get<long long>();
+  };
+  Outcome o = solve();
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_EQ(particles_run(), 49);
+  std::filesystem::remove(dir + "/out/particles.h5");
+  o = solve();
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_EQ(particles_run(), 36);
+  std::filesystem::remove(dir + "/particles.h5");
+  expect_bad_input(solve(), {"specimen.particles", "does not exist", dir + "/out/particles.h5", dir + "/particles.h5"});
+}
+
 TEST(SolverCli, HorizonSmallerThanSpacingIsRejected) {
   expect_bad_input(run_solver("specimen: {lattice: {dimension: 2, box: [0, 0, 0.01, 0.01], spacing: 1 mm, thickness: 1 mm}}\n"
                               "model: {type: pmb, planar: plane_strain, horizon: 0.5 mm}\n" + kMaterial + kTime,

@@ -224,9 +224,7 @@ CaseSpec parse_root(const Section& root) {
   } else if (spec.has("lattice")) {
     c.lattice = parse_lattice(spec.section("lattice"));
   } else {
-    std::filesystem::path p = spec.text("particles");
-    if (p.is_relative() && !c.file.empty()) p = std::filesystem::path(c.file).parent_path() / p;
-    c.particle_file = p.string();
+    c.particle_file = spec.input_path("particles");
   }
   const int dimension = c.lattice ? c.lattice->dimension : (c.bodies ? c.bodies->dimension : 2);
 

@@ -145,8 +145,7 @@ PrescribedMotion parse_motion(const Section& s) {
   const Quantity unit = m.quantity == PrescribedMotion::Quantity::Acceleration ? Quantity::Acceleration
                         : m.quantity == PrescribedMotion::Quantity::Velocity   ? Quantity::Velocity
                                                                                : Quantity::Length;
-  const std::string dir = std::filesystem::path(s.file()).parent_path().string();
-  m.history = solver::parse_history(s.section("history"), unit, dir);
+  m.history = solver::parse_history(s.section("history"), unit);
   if (s.has("unit")) {
     // A table (or numbers) in g: the usual form of an accelerogram.
     const std::string u = s.choice("unit", {"g", "m/s2"});

@@ -15,6 +15,7 @@
 #include "breccia/common/json_file.hpp"
 #include "breccia/common/output_file.hpp"
 #include "breccia/common/progress.hpp"
+#include "breccia/common/yaml_input.hpp"
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/results_output.hpp"
 #include "breccia/mps/simulation.hpp"
@@ -85,13 +86,14 @@ double run_time_loop(Model& sim, const CaseSpec& spec, const std::string& case_f
 // The stress formulation (solid.hpp): same files, with stress and plastic strain in the
 // snapshots and the energy terms of the stress solid in history.csv.
 int run_solid(const CaseSpec& spec, const std::string& case_file, const std::string& out_dir,
-              std::unique_ptr<SolidStepDevice> (*device)(const Solid&)) {
+              std::unique_ptr<SolidStepDevice> (*device)(const Solid&), long long max_steps) {
   const auto wall_start = std::chrono::steady_clock::now();
   std::string content_id;
   Solid sim = make_solid(spec, &content_id);
   if (device) sim.attach_device(device(sim));
   if (spec.progress) std::fprintf(stderr, "mps: backend %s\n", sim.backend_description().c_str());
-  const long long total_steps = static_cast<long long>(std::ceil(spec.end_time_s / sim.dt_s() - 1e-9));
+  long long total_steps = static_cast<long long>(std::ceil(spec.end_time_s / sim.dt_s() - 1e-9));
+  if (max_steps > 0) total_steps = std::min(total_steps, max_steps);
   std::fprintf(stderr,
                "mps (stress): %zu particles, %zu bonds, %dD; spacing %.4g m, re %.3g spacing; c_L %.1f m/s; dt %.4g s "
                "(safety %.2f x spacing / c_L); %lld steps; plasticity %s; pressure force %s; hourglass %.3g\n",
@@ -233,14 +235,18 @@ int run_case(const std::string& case_file, const std::string& out_dir, const Run
     throw InputError(case_file, "model.formulation", "stress with a device for the displacement formulation only",
                      "formulation: displacement, or --backend cpu");
   std::filesystem::create_directories(out_dir);
-  if (spec.formulation == Formulation::Stress) return run_solid(spec, case_file, out_dir, solid_device);
+  // The case as run (its variant and --set overrides applied): reports read values from it.
+  if (std::filesystem::exists(case_file))
+    write_text_file(std::filesystem::path(out_dir) / "case_as_run.yaml", Section::text_as_loaded(case_file));
+  if (spec.formulation == Formulation::Stress) return run_solid(spec, case_file, out_dir, solid_device, options.max_steps);
   const auto wall_start = std::chrono::steady_clock::now();
 
   Simulation sim(spec);
   if (options.device) sim.attach_device(options.device(sim));
   if (spec.progress) std::fprintf(stderr, "mps: backend %s\n", sim.backend_description().c_str());
   const MaterialSpec& m = spec.material;
-  const long long total_steps = static_cast<long long>(std::ceil(spec.end_time_s / sim.dt_s() - 1e-9));
+  long long total_steps = static_cast<long long>(std::ceil(spec.end_time_s / sim.dt_s() - 1e-9));
+  if (options.max_steps > 0) total_steps = std::min(total_steps, options.max_steps);
   std::fprintf(stderr,
                "mps: %zu particles, %zu bonds, %zu crack pairs; spacing %.4g m, re %.3g spacing, n0 %.6g, lambda %.6g m^2\n"
                "mps: c_L %.1f m/s, c_T %.1f m/s; dt %.4g s (CFL dt %.4g s = safety %.2f x spacing / c_max; "

@@ -25,7 +25,18 @@ public:
   // `time.end`, `loads[0].history.peak`; VALUE read as YAML (`4 MPa`, `[0, 1, 0]`). Missing
   // map keys are created (the case's own validation then checks them); a list index must
   // exist. Applied, in order, every time this process loads that file.
-  static void set_overrides(const std::string& file, std::vector<std::string> assignments);
+  // `variant` (`breccia-solve CASE --variant NAME`) first applies the file's own
+  // `variants: {NAME: {KEY: VALUE, ...}}` entry, exactly as the same --set options would, then
+  // the assignments (so --set wins); the `variants` block itself is removed from the loaded
+  // tree, so that case parsers never see it. `output_folder` (the run's -o) is where
+  // input_path looks first for a relative input file.
+  static void set_overrides(const std::string& file, std::vector<std::string> assignments,
+                            std::string variant = "", std::string output_folder = "");
+
+  // The file as this process reads it (variant and --set applied, the variants block
+  // dropped), as YAML text: what a run records next to its results (case_as_run.yaml), so
+  // that a variant's values can be read back. Comments are not kept.
+  static std::string text_as_loaded(const std::string& file);
 
   const std::string& file() const { return file_; }
   const std::string& path() const { return path_; }
@@ -57,6 +68,11 @@ public:
   std::vector<double> numbers(const std::string& key, Quantity q, size_t expected_size = 0) const;
   std::array<double, 3> vec3(const std::string& key, Quantity q) const;  // 2 or 3 entries, z = 0
   std::vector<std::string> texts(const std::string& key) const;
+  // An input file named by `key` (e.g. specimen.particles). An absolute path is taken as it
+  // is; a relative one is looked for in the run's output folder (set_overrides) first, then
+  // next to this file. Throws InputError naming the file, the key and both places looked
+  // when it is in neither.
+  std::string input_path(const std::string& key) const;
 
 private:
   YAML::Node child(const std::string& key) const;

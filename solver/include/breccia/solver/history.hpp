@@ -26,8 +26,9 @@ struct HistorySpec {
 };
 
 // A history block (type: constant | ramp | double_exponential | table) with values of
-// quantity q; a table's file is resolved against `dir`. Throws InputError naming the field
+// quantity q; a relative table file is looked for as Section::input_path says (the run's
+// output folder, then next to the case file). Throws InputError naming the field
 // (a table whose times do not increase names the file and the line).
-HistorySpec parse_history(const Section& s, Quantity q, const std::string& dir);
+HistorySpec parse_history(const Section& s, Quantity q);
 
 }  // namespace breccia::solver

@@ -16,7 +16,7 @@ esac
 mkdir -p "$OUT"
 "$PYTHON" "$HERE/specimen.py" "$OUT/particles.h5" --outer 0.036 --inner 0.0012875 --spacing "$DX" --thickness 0.001
 # Runs, each a variant of case.yaml: g0_200 (as shipped: G0 = 200 J/m2, the textbook critical
-# stretch) and seed_s0 (G0 = 200/pi J/m2, the critical stretch of seed 001's formula, which
+# stretch) and seed_s0 (G0 = 200/pi J/m2, the critical stretch of [Fukuda PD]'s formula, which
 # carries an extra 1/sqrt(pi), benchmarks.md section 0.6: a labelled sensitivity run, not a
 # calibration). On request (GRANITE_RUNS=...): softening (G0 = 200 J/m2 and a tensile strength,
 # STRENGTH, default 12 MPa, through softening bonds: docs/theory.md "Quasi-brittle bonds";

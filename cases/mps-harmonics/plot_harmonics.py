@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Transmitted u1 at A and its amplitude spectrum, with and without the crack (seed 000, figs 2-3).
+"""Transmitted u1 at A and its amplitude spectrum, with and without the crack ([MPS harmonics], figs 2-3).
 
 usage: plot_harmonics.py OUT RUN [RUN ...] [--no-window]   (RUN: crack_h0.25mm, intact_h0.25mm, ...)
 Writes OUT/harmonics.png and OUT/ratios.csv (|U(nf)|/|U(f)| for n = 2, 3, 5, f = 2 MHz).

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Nonlinear ultrasonics with a frictional crack (seed 000). Runs the MPS solver with and
+# Nonlinear ultrasonics with a frictional crack ([MPS harmonics]). Runs the MPS solver with and
 # without the crack at one or more particle spacings, then plots u1 at A and its spectrum.
 #   VARIANT=quick: spacing 0.125 mm (320k particles, ~1.5-5 min on 2 cores)
 #   VARIANT=demo : 0.25 and 0.125 mm (spacing comparison)

@@ -13,6 +13,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/json_file.hpp"
+#include "breccia/common/output_file.hpp"
 #include "breccia/common/reproducible_sum.hpp"
 #include "breccia/common/units.hpp"
 #include "breccia/common/yaml_input.hpp"

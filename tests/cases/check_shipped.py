@@ -33,6 +33,9 @@ SPECIMENS = {
         PLACE + " {run}/specimen.msh -o {run}/particles.h5 --require-groups concrete,charge_hole"],
     "dcb-energy/case.yaml": [
         "{py} {case}/specimen.py {run}/particles.h5 --spacing 1e-4 --length 8e-3 --arm-height 2e-3 --grip 0.5e-3"],
+    "first-case/case.yaml": [
+        "{bin}/breccia-mesh {case}/plate.step -o {run}/plate.msh --size '4 mm' --threads 1 --quiet",
+        PLACE + " {run}/plate.msh -o {run}/particles.h5 --require-groups body,outer"],
     "fragmenting-cylinder/case.yaml": ["{py} {case}/specimen.py {run}/particles.h5 --spacing 0.0025"],
     "glass-branching/case-quick.yaml": [PLACE + " --lattice square --box 0,0,0.1,0.04 --spacing 0.0005 --thickness 1mm -o {run}/particles.h5"],
     "glass-branching/case-full.yaml": [PLACE + " --lattice square --box 0,0,0.1,0.04 --spacing 0.0005 --thickness 1mm -o {run}/particles.h5"],

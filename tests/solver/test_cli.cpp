@@ -59,6 +59,21 @@ TEST(SolverCli, UnknownSetIsNamedWithTheAvailableOnes) {
                    {"case.yaml", "boundary[0].set", "bottom", "xmin"});
 }
 
+// A bad expression, a name the expression may not use, and a repeated key: each one message
+// naming the file and the key (and the position in the expression), exit 2.
+TEST(SolverCli, BadExpressionUnknownVariableAndDuplicateKeyExitWith2) {
+  expect_bad_input(run_solver(kBase + kMaterial + kTime +
+                                  "initial: [{type: velocity, expression: [\"10 * (x +\", \"0\"]}]\n",
+                              "bad_expression"),
+                   {"case.yaml", "initial[0].expression[0]", "position"});
+  expect_bad_input(run_solver(kBase + kMaterial + kTime +
+                                  "boundary: [{type: velocity, set: xmin, expression: [\"0\", \"r * t\"]}]\n",
+                              "unknown_variable"),
+                   {"case.yaml", "boundary[0].expression[1]", "position 1"});
+  expect_bad_input(run_solver(kBase + kMaterial + kTime + "time: {steps: 6}\n", "duplicate_key"),
+                   {"case.yaml", "time", "line"});
+}
+
 TEST(SolverCli, NegativeModulusIsRejected) {
   expect_bad_input(
       run_solver(kBase + "materials: [{name: m, density: 2000, youngs_modulus: -1 GPa, poisson_ratio: 0.25}]\n" + kTime,

@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
   app.add_flag_callback(
       "-q,--quiet", [&] { args.options.verbose = false; }, "no progress on stderr");
   if (const auto code = cli::parse(app, argc, argv)) return *code;
-  try {
+  return breccia::cli::run_reporting_errors([&]() -> int {
     if (std::filesystem::path(args.options.output).extension() != ".msh")
       cli::usage_error("-o", "'" + args.options.output + "'", "a file name ending in .msh");
     if (!args.size_factor.empty())
@@ -77,11 +77,5 @@ int main(int argc, char** argv) {
     }
     mesher::print_summary(summary, stdout);
     return 0;
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return kExitBadInput;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return kExitRunFailed;
-  }
+  });
 }

@@ -153,17 +153,11 @@ int main(int argc, char** argv) {
   app.add_flag_callback(
       "--quiet", [&] { o.progress = false; }, "no progress on stderr");
   if (const auto code = breccia::cli::parse(app, argc, argv)) return *code;
-  try {
+  return breccia::cli::run_reporting_errors([&]() -> int {
     const breccia::postproc::PostOptions options = finish(g);
     const auto summary = breccia::postproc::run_post(options);
     std::fprintf(stderr, "breccia-post: wrote %zu files to %s\n", summary.written.size(), summary.post_dir.string().c_str());
     for (const auto& f : summary.plot_failures) std::fprintf(stderr, "breccia-post: chart not drawn: %s\n", f.c_str());
     return 0;
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return breccia::kExitBadInput;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return breccia::kExitRunFailed;
-  }
+  });
 }

@@ -388,9 +388,12 @@ private:
     energy_G0_area_J_ = g0 ? rec->cracks.G0_smoothed_area_J : NAN;
     energy_G0_face_area_J_ = g0 ? rec->cracks.G0_area_J : NAN;
     energy_G0_separating_area_J_ = g0 && rec->cracks.has_separating ? rec->cracks.G0_smoothed_separating_area_J : NAN;
-    const double w = h.column("external_work_J")[row];
-    const double stored = h.column("kinetic_J")[row] + h.column("strain_J")[row] + dissipated[row];
-    energy_imbalance_ = (w - stored) / std::max({std::abs(w), std::abs(stored), 1e-300});
+    // What the run holds at a row, and the energy it started with (the first row: an initial
+    // velocity or displacement field gives K0 or U0 > 0 with no work done).
+    const auto& work = h.column("external_work_J");
+    const auto held = [&](size_t k) { return h.column("kinetic_J")[k] + h.column("strain_J")[k] + dissipated[k]; };
+    const double supplied = work[row] + (held(0) - work[0]), stored = held(row);
+    energy_imbalance_ = (supplied - stored) / std::max({std::abs(supplied), std::abs(stored), 1e-300});
     if (opt_.plots)
       plot("plot_energy.py", "--history " + shell_quote((energy_history_.empty() ? h.path : energy_history_).string()),
            "energy.png");

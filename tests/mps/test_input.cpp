@@ -139,6 +139,35 @@ TEST(MpsCli, RunWritesHistorySummaryAndResults) {
   EXPECT_EQ(summary.at("case_file"), (dir / "case.yaml").string());
 }
 
+// breccia-mps takes a case's variants and --set as breccia-solve does (--set after the
+// variant): the run's end time is what the two made of the file's 1 us.
+TEST(MpsCli, VariantAndSetChangeTheCaseForThisRun) {
+  const auto dir = std::filesystem::temp_directory_path() / "breccia_mps_cli_variant";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto case_file = dir / "case.yaml";
+  std::ofstream(case_file) << kGood << "output: {every: 1000, progress: false}\n"
+                           << "variants: {short: {time.end: 0.25 us}, shorter: {time.end: 0.1 us}}\n";
+  // The run ends at the first whole step at or past the end time: within one step of it.
+  const auto expect_end = [&](const std::string& options, double end) {
+    const std::string cmd = std::string(BRECCIA_MPS_EXE) + " " + case_file.string() + " -o " + (dir / "out").string() +
+                            " --threads 1 " + options + " 2> " + (dir / "stderr.txt").string();
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << options;
+    const breccia::Json summary = breccia::read_json_file(dir / "out" / "summary.json");
+    const double t = summary.at("end_time_s").get<double>(), dt = summary.at("dt_s").get<double>();
+    EXPECT_GE(t, end * (1 - 1e-9)) << options;
+    EXPECT_LT(t, end + dt) << options;
+  };
+  expect_end("", 1e-6);
+  expect_end("--variant short", 0.25e-6);
+  expect_end("--variant short --set 'time.end=0.1 us'", 0.1e-6);
+  const std::string bad = std::string(BRECCIA_MPS_EXE) + " " + case_file.string() + " -o " + (dir / "bad").string() +
+                          " --variant long 2> " + (dir / "stderr.txt").string();
+  const int status = std::system(bad.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), breccia::kExitBadInput);
+}
+
 TEST(MpsParticleFile, SpecimenFromParticlesH5MatchesTheEquivalentLattice) {
   // The same square lattice given as particles.h5 (with a named set for the driven face)
   // and as a lattice block must give the same particles, bonds and probe history.

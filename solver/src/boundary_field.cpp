@@ -1,6 +1,5 @@
 #include "breccia/solver/boundary_field.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -15,8 +14,6 @@ std::shared_ptr<const BoundaryField> make_boundary_field(const BoundarySpec& b, 
                                key + "[" + std::to_string(d) + "]");
     f->uses_time = f->uses_time || f->components.back().uses("t");
   }
-  f->kind = b.kind;
-  f->ramp_time = b.ramp_time;
   return f;
 }
 
@@ -26,20 +23,13 @@ void attach_boundary_field(PdSystem::Constraint& con, std::shared_ptr<const Boun
   con.values_time = std::numeric_limits<double>::quiet_NaN();
 }
 
-double boundary_value_time(BoundarySpec::Kind kind, double t, double dt) {
-  return kind == BoundarySpec::Kind::Velocity ? t - 0.5 * dt : t;
-}
-
-namespace {
-double ramp_factor(double ramp_time, double t) { return ramp_time > 0 ? std::clamp(t / ramp_time, 0.0, 1.0) : 1.0; }
-}  // namespace
-
 bool refresh_boundary_values(PdSystem::Constraint& con, const std::vector<double>& x0, double t) {
   const BoundaryField& f = *con.field;
+  const double ramp_time = con.spec->ramp_time;
   const bool fresh = !std::isnan(con.values_time) && (!f.uses_time || t == con.values_time) &&
-                     ramp_factor(f.ramp_time, t) == ramp_factor(f.ramp_time, con.values_time);
+                     boundary_ramp(ramp_time, t) == boundary_ramp(ramp_time, con.values_time);
   if (fresh) return false;
-  const double ramp = ramp_factor(f.ramp_time, t);
+  const double ramp = boundary_ramp(ramp_time, t);
   std::vector<double> at(4, t);
   for (size_t q = 0; q < con.particles.size(); ++q) {
     const int64_t i = con.particles[q];

@@ -45,8 +45,8 @@ ParticleField read_particle_field(const std::string& path, const std::string& da
   if (!std::filesystem::is_regular_file(path))
     throw InputError(case_file, key + ".file", "cannot open '" + path + "'",
                      "a readable HDF5 (.h5) or CSV file, relative to the case file");
-  ParticleField field = std::filesystem::path(path).extension() == ".h5" ? read_h5_field(path, dataset, case_file, key)
-                                                                         : read_csv_field(path);
+  // The case parser pairs a dataset with an .h5 file and none with a CSV one.
+  ParticleField field = dataset.empty() ? read_csv_field(path) : read_h5_field(path, dataset, case_file, key);
   const size_t rows = field.values.size() / static_cast<size_t>(field.columns);
   if (rows != particles)
     throw InputError(path, dataset.empty() ? "rows" : dataset, std::to_string(rows) + " rows",

@@ -337,17 +337,13 @@ static void add_case_sets(ParticleModel& pm, const CaseConfig& c) {
           return false;
       }
     };
-    if (r.kind == RegionSetSpec::Kind::NearSurface) {
-      out.indices = near_surface_set(pm, r, c.file);
-      pm.sets.push_back(std::move(out));
-      continue;
-    }
-    if (r.kind == RegionSetSpec::Kind::Material) {
-      out.indices = material_set(pm, r, c.file);
-      pm.sets.push_back(std::move(out));
-      continue;
-    }
     switch (r.kind) {
+      case RegionSetSpec::Kind::NearSurface:
+        out.indices = near_surface_set(pm, r, c.file);
+        break;
+      case RegionSetSpec::Kind::Material:
+        out.indices = material_set(pm, r, c.file);
+        break;
       case RegionSetSpec::Kind::Union:
       case RegionSetSpec::Kind::Intersection:
       case RegionSetSpec::Kind::Difference: {

@@ -16,8 +16,6 @@ namespace breccia::solver {
 struct BoundaryField {
   std::vector<Expression> components;  // one per component of the case (2 in 2D, 3 in 3D)
   bool uses_time = false;              // any component names t
-  BoundarySpec::Kind kind = BoundarySpec::Kind::Velocity;
-  double ramp_time = 0.0;
 };
 
 // The field of `boundary[index]` of case file `file`, or null when it has a constant value.
@@ -27,11 +25,8 @@ std::shared_ptr<const BoundaryField> make_boundary_field(const BoundarySpec& b, 
 // unevaluated until the first refresh.
 void attach_boundary_field(PdSystem::Constraint& con, std::shared_ptr<const BoundaryField> field);
 
-// The time a constraint's value is taken at in a step ending at t: the velocity over the
-// step at its middle (as the constant ramp does), the displacement at its end.
-double boundary_value_time(BoundarySpec::Kind kind, double t, double dt);
-
-// Evaluates con's field at `t` (times the boundary's ramp) into con.values when they do not
+// Evaluates con's field at `t` (boundary_value_time of the step; times the boundary's ramp,
+// boundary_ramp of load_kernels.hpp) into con.values when they do not
 // already hold that; true when they changed (a device backend copies them then).
 // `x0`: reference positions, 3 per particle, absolute (what the expression reads).
 bool refresh_boundary_values(PdSystem::Constraint& con, const std::vector<double>& x0, double t);

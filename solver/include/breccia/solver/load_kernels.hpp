@@ -106,16 +106,23 @@ struct SetView {
   const int32_t* particles = nullptr;
 };
 
+// The time a boundary's value is taken at in a step ending at t: a velocity over the step
+// at its middle, a displacement at its end.
+inline double boundary_value_time(BoundarySpec::Kind kind, double t, double dt) {
+  return kind == BoundarySpec::Kind::Velocity ? t - 0.5 * dt : t;
+}
+
+// A boundary's linear ramp at time t: 0 to 1 over ramp_time (1 without one).
+inline double boundary_ramp(double ramp_time, double t) {
+  return ramp_time > 0 ? std::clamp(t / ramp_time, 0.0, 1.0) : 1.0;
+}
+
 inline void prescribed_values(const BoundarySpec& b, double t, double dt, double velocity[3], double target[3]) {
+  const double ramp = boundary_ramp(b.ramp_time, boundary_value_time(b.kind, t, dt));
   for (int d = 0; d < 3; ++d) {
     velocity[d] = target[d] = 0.0;
-    if (b.kind == BoundarySpec::Kind::Velocity) {
-      const double ramp = b.ramp_time > 0 ? std::min(1.0, (t - 0.5 * dt) / b.ramp_time) : 1.0;
-      velocity[d] = b.value[d] * std::max(0.0, ramp);
-    } else if (b.kind == BoundarySpec::Kind::Displacement) {
-      const double ramp = b.ramp_time > 0 ? std::min(1.0, t / b.ramp_time) : 1.0;
-      target[d] = b.value[d] * ramp;
-    }
+    if (b.kind == BoundarySpec::Kind::Velocity) velocity[d] = b.value[d] * ramp;
+    else if (b.kind == BoundarySpec::Kind::Displacement) target[d] = b.value[d] * ramp;
   }
 }
 

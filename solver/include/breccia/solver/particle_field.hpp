@@ -13,7 +13,8 @@ struct ParticleField {
   int columns = 0;
 };
 
-// `case_file` and `key` name the case entry in errors (exit 2): a missing file or dataset,
+// HDF5 when `dataset` is given, CSV otherwise. `case_file` and `key` name the case entry in
+// errors (exit 2): a missing file or dataset,
 // another number of rows than `particles`, or rows of other than 2 or 3 numbers.
 ParticleField read_particle_field(const std::string& path, const std::string& dataset, size_t particles,
                                   const std::string& case_file, const std::string& key);

@@ -16,8 +16,8 @@
 #include "breccia/common/cli.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/yaml_input.hpp"
+#include "breccia/solver/mpi_launch.hpp"
 #include "breccia/solver/partition.hpp"
-#include "breccia/solver/pd_physics.hpp"
 #include "breccia/solver/run.hpp"
 #ifdef BRECCIA_WITH_MPS
 #include "breccia/mps/run_case.hpp"
@@ -74,15 +74,13 @@ int main(int argc, char** argv) {
   const int ranks = 1, rank = 0;
   // Started by mpirun with several processes, a build without MPI would run the case that
   // many times into the same folder: refuse (once, from the first process).
-  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"})
-    if (const char* size = std::getenv(name); size && std::atoi(size) > 1) {
-      const char* me = std::getenv("OMPI_COMM_WORLD_RANK") ? std::getenv("OMPI_COMM_WORLD_RANK") : std::getenv("PMI_RANK");
-      if (!me || std::atoi(me) == 0)
-        std::fprintf(stderr, "error: started by mpirun with %s processes, but this breccia-solve was built without MPI "
-                             "(-DBRECCIA_MPI=OFF or no MPI found); rebuild with OpenMPI (make deps) or run one process\n",
-                     size);
-      return kExitBadInput;
-    }
+  if (const solver::MpiLaunch launch = solver::mpi_launch_from_environment(); launch.size > 1) {
+    if (launch.rank == 0)
+      std::fprintf(stderr, "error: started by mpirun with %d processes, but this breccia-solve was built without MPI "
+                           "(-DBRECCIA_MPI=OFF or no MPI found); rebuild with OpenMPI (make deps) or run one process\n",
+                   launch.size);
+    return kExitBadInput;
+  }
 #endif
   const bool distributed = ranks > 1;
   std::string case_file;
@@ -197,15 +195,7 @@ int main(int argc, char** argv) {
         // A box lattice: its families are one stencil clipped to the box, so the figures
         // need no set-up (10^8 particles and more; partition.hpp).
         const std::array<int64_t, 3> n = solver::lattice_point_counts(*config.lattice);
-        std::vector<std::array<int, 3>> stencil;
-        const int reach = static_cast<int>(std::ceil(config.horizon_factor)) + 1;
-        for (int a = -reach; a <= reach; ++a)
-          for (int b = -reach; b <= reach; ++b)
-            for (int c = -reach; c <= reach; ++c) {
-              const double xi[3] = {double(a), double(b), double(c)};  // lattice units
-              if ((a || b || c) && solver::partial_volume_sampled_positive(xi, config.horizon_factor, 0.5, 3))
-                stencil.push_back({a, b, c});
-            }
+        const auto stencil = solver::lattice_family_stencil(config.horizon_factor, config.partial_volume);
         const int64_t total = n[0] * n[1] * n[2];
         const int64_t sample = std::max<int64_t>(1, total / 4000000);
         std::printf("# %s: %lld x %lld x %lld lattice = %lld particles, %zu-point family stencil (partial volumes, m = "

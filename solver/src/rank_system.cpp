@@ -59,6 +59,19 @@ std::string distributed_unsupported(const PdSystem& g) {
   return "";
 }
 
+namespace {
+
+// Local index -> global internal index: owned, then ghosts.
+std::vector<int32_t> local_to_global(const RankLayout& L) {
+  const int64_t b = L.begin(), owned = L.owned();
+  std::vector<int32_t> ids(static_cast<size_t>(owned) + L.halo.ghosts.size());
+  for (int64_t i = 0; i < owned; ++i) ids[i] = static_cast<int32_t>(b + i);
+  std::copy(L.halo.ghosts.begin(), L.halo.ghosts.end(), ids.begin() + owned);
+  return ids;
+}
+
+}  // namespace
+
 PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) {
   PdSystem s;
   s.config = g.config;
@@ -66,41 +79,22 @@ PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) {
   s.thickness = g.thickness;
   const int64_t b = L.begin(), owned = L.owned();
   s.n = static_cast<size_t>(owned);
-  // Local index -> global internal index: owned, then ghosts.
-  std::vector<int32_t> ids(static_cast<size_t>(owned) + L.halo.ghosts.size());
-  for (int64_t i = 0; i < owned; ++i) ids[i] = static_cast<int32_t>(b + i);
-  std::copy(L.halo.ghosts.begin(), L.halo.ghosts.end(), ids.begin() + owned);
+  const std::vector<int32_t> ids = local_to_global(L);
   const size_t n = g.n;
+  // What the set-up fixes before its stable-step estimate: geometry, materials, families and
+  // their coefficients, loads and constraints. The state follows (copy_rank_state).
   s.original_index = take(g.original_index, ids, 1, n);
   s.x0 = take(g.x0, ids, 3, n);
-  s.u = take(g.u, ids, 3, n);
-  s.v = take(g.v, ids, 3, n);
-  s.a = take(g.a, ids, 3, n);
-  s.force = take(g.force, ids, 3, n);
-  s.body = take(g.body, ids, 3, n);
-  s.x = g.x.size() == 3 * n ? take(g.x, ids, 3, n) : std::vector<double>{};
   s.volume = take(g.volume, ids, 1, n);
   s.density = take(g.density, ids, 1, n);
   s.horizon = take(g.horizon, ids, 1, n);
   s.half_cell = take(g.half_cell, ids, 1, n);
   s.material = take(g.material, ids, 1, n);
   s.fixed_dof = take(g.fixed_dof, ids, 1, n);
-  s.energy_density = take(g.energy_density, ids, 1, n);
-  s.dissipated = take(g.dissipated, ids, 1, n);
-  s.damage = take(g.damage, ids, 1, n);
-  s.max_stretch = take(g.max_stretch, ids, 1, n);
-  s.dilatation = take(g.dilatation, ids, 1, n);
   s.weighted_volume = take(g.weighted_volume, ids, 1, n);
-  s.lps_a = take(g.lps_a, ids, 1, n);
-  s.lps_b = take(g.lps_b, ids, 1, n);
   s.lps = take(g.lps, ids, 1, n);
   s.calibration_factor = take(g.calibration_factor, ids, 1, n);
   s.corr_moduli = take(g.corr_moduli, ids, kCorrModuli, n);
-  s.corr_deformation = take(g.corr_deformation, ids, 9, n);
-  s.corr_force_tensor = take(g.corr_force_tensor, ids, 9, n);
-  s.corr_nonaffine = take(g.corr_nonaffine, ids, 1, n);
-  s.min_stretch = take(g.min_stretch, ids, 1, n);
-  s.min_stretch_next = take(g.min_stretch_next, ids, 1, n);
   s.short_range_k = take(g.short_range_k, ids, 1, n);
   s.spacing = take(g.spacing, ids, 1, n);
 
@@ -116,10 +110,9 @@ PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) {
   s.vol_own = slice(g.vol_own, eb, ee);
   s.s0_own = slice(g.s0_own, eb, ee);
   s.s0_dual = slice(g.s0_dual, eb, ee);
-  s.state = slice(g.state, eb, ee);
   s.s_onset = slice(g.s_onset, eb, ee);
-  s.bond_damage = slice(g.bond_damage, eb, ee);
   s.contact_cell_edge = g.contact_cell_edge;
+  s.symmetric_halves = g.symmetric_halves;
 
   // Loads and constraints on the owned particles, in the global lists' order.
   auto owned_local = [&](const std::vector<int32_t>& list) {
@@ -145,6 +138,35 @@ PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) {
     attach_boundary_field(rc, c.field);  // values follow the rank's own particles
     s.constraints.push_back(std::move(rc));
   }
+  copy_rank_state(s, g, L);
+  return s;
+}
+
+void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
+  const std::vector<int32_t> ids = local_to_global(L);
+  const size_t n = g.n;
+  s.config = g.config;  // the stable-step estimate turns fracture off in its copy
+  s.u = take(g.u, ids, 3, n);
+  s.v = take(g.v, ids, 3, n);
+  s.a = take(g.a, ids, 3, n);
+  s.force = take(g.force, ids, 3, n);
+  s.body = take(g.body, ids, 3, n);
+  s.x = g.x.size() == 3 * n ? take(g.x, ids, 3, n) : std::vector<double>{};
+  s.energy_density = take(g.energy_density, ids, 1, n);
+  s.dissipated = take(g.dissipated, ids, 1, n);
+  s.damage = take(g.damage, ids, 1, n);
+  s.max_stretch = take(g.max_stretch, ids, 1, n);
+  s.dilatation = take(g.dilatation, ids, 1, n);
+  s.lps_a = take(g.lps_a, ids, 1, n);
+  s.lps_b = take(g.lps_b, ids, 1, n);
+  s.corr_deformation = take(g.corr_deformation, ids, 9, n);
+  s.corr_force_tensor = take(g.corr_force_tensor, ids, 9, n);
+  s.corr_nonaffine = take(g.corr_nonaffine, ids, 1, n);
+  s.min_stretch = take(g.min_stretch, ids, 1, n);
+  s.min_stretch_next = take(g.min_stretch_next, ids, 1, n);
+  const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
+  s.state = slice(g.state, eb, ee);
+  s.bond_damage = slice(g.bond_damage, eb, ee);
 
   s.step = g.step;
   s.time = g.time;
@@ -154,12 +176,11 @@ PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) {
   s.indenter_position[0] = g.indenter_position[0];
   s.indenter_position[1] = g.indenter_position[1];
   s.indenter_position[2] = g.indenter_position[2];
-  s.symmetric_halves = g.symmetric_halves;
   // The accumulators are sums over ranks: rank 0 carries what came before (a restart).
   s.external_work = L.rank == 0 ? g.external_work : 0.0;
   s.dissipated_energy = L.rank == 0 ? g.dissipated_energy : 0.0;
+  s.f32 = {};
   if (g.f32.active) float32_enable(s, g.f32.origin);
-  return s;
 }
 
 }  // namespace breccia::solver

@@ -15,6 +15,7 @@
 #include "breccia/common/error.hpp"
 #include "breccia/solver/exec_openmp.hpp"
 #include "breccia/solver/float32_state.hpp"
+#include "breccia/solver/mpi_launch.hpp"
 #include "breccia/solver/rank_system.hpp"
 #include "breccia/solver/step.hpp"
 
@@ -24,14 +25,8 @@ namespace {
 int g_saved_stderr = -1;  // a quiet rank's real stderr, for the message that stops the run
 }  // namespace
 
-bool launched_by_mpi() {
-  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"})
-    if (std::getenv(name)) return true;
-  return false;
-}
-
 MpiSession::MpiSession(int& argc, char**& argv) {
-  if (!launched_by_mpi()) return;
+  if (!mpi_launch_from_environment().by_launcher) return;
   int provided = 0;
   // Threads inside a rank run OpenMP loops; only the main thread calls MPI.
   MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
@@ -257,19 +252,49 @@ std::vector<int64_t> entry_ranges(const Partition& part, const std::vector<int64
   return begin;
 }
 
+// The rank's share of the run: its layout, its system and its halo exchange. Built once per
+// run: by the set-up's stable-step estimate, whose force passes run on it, then handed to the
+// time loop's (or dynamic relaxation's) backend, which brings its state up to date
+// (copy_rank_state) instead of building it again.
+struct RankShare {
+  RankLayout layout;
+  PdSystem local;
+  std::unique_ptr<HaloExchange> halo;
+  size_t global_n = 0, global_bonds = 0;  // of the system it was cut from
+};
+
+std::shared_ptr<RankShare> make_rank_share(const PdSystem& global, MPI_Comm comm) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  auto sh = std::make_shared<RankShare>();
+  sh->layout = rank_layout(global, size, rank);
+  sh->local = restrict_to_rank(global, sh->layout);
+  sh->halo = std::make_unique<HaloExchange>(sh->layout, comm);
+  sh->global_n = global.n;
+  sh->global_bonds = global.bond_count();
+  return sh;
+}
+
+// What the set-up's estimate built, waiting for the backend (one run per process).
+std::shared_ptr<RankShare> g_setup_share;
+
+// The set-up's share with its state brought up to date, or (none, or cut from another
+// system) a new one. Collective: every rank takes the same branch, since every rank holds
+// the same global system and ran the same set-up.
+std::shared_ptr<RankShare> take_rank_share(const PdSystem& global, MPI_Comm comm) {
+  std::shared_ptr<RankShare> sh = std::move(g_setup_share);
+  g_setup_share.reset();
+  if (sh && sh->global_n == global.n && sh->global_bonds == global.bond_count()) {
+    copy_rank_state(sh->local, global, sh->layout);
+    return sh;
+  }
+  return make_rank_share(global, comm);
+}
+
 class MpiBackend final : public StepBackend {
 public:
-  MpiBackend(PdSystem& global, MPI_Comm comm) : comm_(comm) {
-    int rank = 0, size = 1;
-    MPI_Comm_rank(comm, &rank);
-    MPI_Comm_size(comm, &size);
-    if (const std::string key = distributed_unsupported(global); !key.empty())
-      throw InputError(global.config.file, key, "set, which a run on " + std::to_string(size) + " ranks does not support yet",
-                       "a run on one process (docs/parallel.md lists what is distributed)");
-    layout_ = rank_layout(global, size, rank);
-    local_ = restrict_to_rank(global, layout_);
-    halo_ = std::make_unique<HaloExchange>(layout_, comm);
-  }
+  MpiBackend(PdSystem& global, MPI_Comm comm) : comm_(comm), share_(supported_share(global, comm)) {}
 
   void step(PdSystem& g) override {
     local_.diagnostics = g.diagnostics;
@@ -373,6 +398,16 @@ public:
   }
 
 private:
+  static std::shared_ptr<RankShare> supported_share(const PdSystem& global, MPI_Comm comm) {
+    if (const std::string key = distributed_unsupported(global); !key.empty()) {
+      int size = 1;
+      MPI_Comm_size(comm, &size);
+      throw InputError(global.config.file, key, "set, which a run on " + std::to_string(size) + " ranks does not support yet",
+                       "a run on one process (docs/parallel.md lists what is distributed)");
+    }
+    return take_rank_share(global, comm);
+  }
+
   // The step's arrays over the rank's state in its precision, with the ghosts counted.
   template <class F>
   void with_step_arrays(PdSystem& l, F&& f) {
@@ -393,9 +428,10 @@ private:
   }
 
   MPI_Comm comm_;
-  RankLayout layout_;
-  PdSystem local_;
-  std::unique_ptr<HaloExchange> halo_;
+  std::shared_ptr<RankShare> share_;
+  const RankLayout& layout_ = share_->layout;
+  PdSystem& local_ = share_->local;
+  std::unique_ptr<HaloExchange>& halo_ = share_->halo;
 };
 
 }  // namespace
@@ -405,21 +441,12 @@ std::unique_ptr<StepBackend> make_mpi_backend(PdSystem& global, MPI_Comm comm) {
 }
 
 ForcePass mpi_stable_step_forces(PdSystem& global) {
-  int rank = 0, size = 1;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  int size = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   if (size == 1) return {};
-  // What the passes share, built once (every rank reaches here at the same point of set-up)
-  // and dropped with the ForcePass after the estimate.
-  struct Shared {
-    RankLayout layout;
-    PdSystem local;
-    std::unique_ptr<HaloExchange> halo;
-  };
-  auto sh = std::make_shared<Shared>();
-  sh->layout = rank_layout(global, size, rank);
-  sh->local = restrict_to_rank(global, sh->layout);
-  sh->halo = std::make_unique<HaloExchange>(sh->layout, MPI_COMM_WORLD);
+  // The rank's system, built here once and kept for the time loop's backend.
+  auto sh = make_rank_share(global, MPI_COMM_WORLD);
+  g_setup_share = sh;
   // Each rank computes its rows at the iteration's displacement and all gather the forces:
   // every rank then holds one process's force array, bit for bit, and takes the power
   // iteration's sums in its order, so the stable step is one process's to the last bit.

@@ -41,6 +41,13 @@ RankLayout rank_layout(const PdSystem& global, int ranks, int rank);
 // Load specs still point into `global.config`: the global system must outlive it.
 PdSystem restrict_to_rank(const PdSystem& global, const RankLayout& layout);
 
+// The state part of restrict_to_rank again (displacements, velocities, forces, bond states,
+// damage, the LPS / correspondence / compressive fields, step, time, dt, the accumulators,
+// the float state): what the set-up sets after its stable-step estimate and a checkpoint
+// restores. A rank system built for the estimate is brought up to date with it rather than
+// built again.
+void copy_rank_state(PdSystem& local, const PdSystem& global, const RankLayout& layout);
+
 // What a distributed run cannot do yet, as the case key that asks for it (empty: nothing).
 std::string distributed_unsupported(const PdSystem& global);
 

@@ -12,11 +12,9 @@
 
 namespace breccia::solver {
 
-// True when this process was started by an MPI launcher (mpirun, srun): only then is MPI
-// initialised, so `breccia-solve` run directly behaves as a build without MPI.
-bool launched_by_mpi();
-
-// MPI_Init_thread on construction (when launched_by_mpi()), MPI_Finalize on destruction.
+// MPI_Init_thread on construction when an MPI launcher started this process (mpirun, srun:
+// mpi_launch.hpp), MPI_Finalize on destruction. Otherwise MPI is not initialised, so
+// `breccia-solve` run directly behaves as a build without MPI.
 class MpiSession {
 public:
   MpiSession(int& argc, char**& argv);

@@ -1,10 +1,12 @@
 #include "breccia/solver/partition.hpp"
 
+#include "breccia/common/cell_list.hpp"
 #include "breccia/solver/family.hpp"
 
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 #include <stdexcept>
 #include <utility>
@@ -55,6 +57,62 @@ Partition MortonRangePartitioner::partition(const std::vector<int64_t>& offsets,
   std::vector<double> cum(static_cast<size_t>(n) + 1, 0.0);
   for (int64_t i = 0; i < n; ++i) cum[i + 1] = cum[i] + static_cast<double>(offsets[i + 1] - offsets[i]) + particle_weight_;
   return cut_equal_work(n, ranks, [&](int64_t i) { return cum[i]; });
+}
+
+std::vector<int64_t> family_sizes(const std::vector<double>& x, const std::vector<double>& horizon,
+                                  const std::vector<double>& half_cell, int dimension, PartialVolume kind) {
+  const size_t n = horizon.size();
+  if (x.size() != 3 * n || half_cell.size() != n) throw std::invalid_argument("family_sizes: x0 3N, horizon and half_cell N");
+  std::vector<int64_t> count(n, 0);
+  if (n == 0) return count;
+  // The set-up's pad (setup.cpp): a neighbour's cell corner may reach into the horizon.
+  const double root_d = std::sqrt(static_cast<double>(dimension));
+  auto pad = [&](size_t i) { return half_cell[i] * root_d; };
+  double max_pad = 0.0, min_horizon = horizon[0], max_horizon = horizon[0];
+  for (size_t i = 0; i < n; ++i) {
+    max_pad = std::max(max_pad, pad(i));
+    min_horizon = std::min(min_horizon, horizon[i]);
+    max_horizon = std::max(max_horizon, horizon[i]);
+  }
+  // Cells as build_families sizes them; each particle scans the largest reach, since a pair
+  // belongs to the family when either end's search finds the other (no transpose kept).
+  const double max_reach = max_horizon + max_pad;
+  const double cell = std::max({min_horizon + max_pad, max_reach / 8.0, 1e-300});
+  const CellList cells = sort_into_cells(CellGrid::covering(bounding_box(x), cell), x);
+  const CellGrid& grid = cells.grid;
+  const long long ring = static_cast<long long>(std::ceil(max_reach / cell));
+#pragma omp parallel for schedule(dynamic, 256)
+  for (size_t i = 0; i < n; ++i) {
+    long long ci[3];
+    for (int d = 0; d < 3; ++d) ci[d] = grid.coordinate(d, x[3 * i + d]);
+    int64_t kept = 0;
+    for (long long az = std::max(0LL, ci[2] - ring); az <= std::min(grid.count[2] - 1, ci[2] + ring); ++az)
+      for (long long ay = std::max(0LL, ci[1] - ring); ay <= std::min(grid.count[1] - 1, ci[1] + ring); ++ay)
+        for (long long ax = std::max(0LL, ci[0] - ring); ax <= std::min(grid.count[0] - 1, ci[0] + ring); ++ax) {
+          const long long c = grid.index(ax, ay, az);
+          for (int64_t m = cells.start[c]; m < cells.start[c + 1]; ++m) {
+            const size_t j = static_cast<size_t>(cells.members[m]);
+            if (j == i) continue;
+            // build_families' test from each end, in its arithmetic (the same r2 both ways).
+            const double p = std::max(pad(i), pad(j));
+            const double reach_i = horizon[i] + p, reach_j = horizon[j] + p;
+            double r2 = 0.0;
+            for (int d = 0; d < 3; ++d) {
+              const double e = x[3 * j + d] - x[3 * i + d];
+              r2 += e * e;
+            }
+            if (!(r2 <= reach_i * reach_i || r2 <= reach_j * reach_j)) continue;
+            // The set-up's keep test (setup.cpp, its first pass over the candidates).
+            const double xv[3] = {x[3 * j] - x[3 * i], x[3 * j + 1] - x[3 * i + 1], x[3 * j + 2] - x[3 * i + 2]};
+            const double xm[3] = {-xv[0], -xv[1], -xv[2]};
+            if (partial_volume_positive(kind, xv, horizon[i], half_cell[j], dimension) ||
+                partial_volume_positive(kind, xm, horizon[j], half_cell[i], dimension))
+              ++kept;
+          }
+        }
+    count[i] = kept;
+  }
+  return count;
 }
 
 Halo build_halo(const Partition& part, int rank, const std::vector<int64_t>& offsets,
@@ -156,6 +214,19 @@ uint64_t morton_key(int64_t x, int64_t y, int64_t z) {
 }
 
 }  // namespace
+
+std::vector<std::array<int, 3>> lattice_family_stencil(double horizon_factor, PartialVolume kind) {
+  // Every offset the horizon plus a cell's half diagonal (< 1 spacing) can reach.
+  const int reach = static_cast<int>(std::ceil(horizon_factor)) + 1;
+  std::vector<std::array<int, 3>> stencil;
+  for (int a = -reach; a <= reach; ++a)
+    for (int b = -reach; b <= reach; ++b)
+      for (int c = -reach; c <= reach; ++c) {
+        const double xi[3] = {double(a), double(b), double(c)};  // lattice units: half a cell is 0.5
+        if ((a || b || c) && partial_volume_positive(kind, xi, horizon_factor, 0.5, 3)) stencil.push_back({a, b, c});
+      }
+  return stencil;
+}
 
 std::vector<DecompositionStats> lattice_decomposition_stats(const std::array<int64_t, 3>& n,
                                                             const std::vector<std::array<int, 3>>& stencil,

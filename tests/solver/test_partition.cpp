@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <map>
 #include <set>
 #include <stdexcept>
 
+#include "breccia/common/families.hpp"
 #include "breccia/solver/partition.hpp"
 #include "breccia/solver/rank_system.hpp"
 #include "helpers.hpp"
@@ -208,5 +210,94 @@ TEST(RankSystem, OwnedRowsReadTheGlobalPartnersThroughLocalIndices) {
       for (const int32_t p : g.constraints[0].particles) owned_members += p >= L.begin() && p < L.begin() + L.owned();
       EXPECT_EQ(s.constraints[0].particles.size(), owned_members);
     }
+  }
+}
+
+// The lattice stencil the figures without families use (lattice_family_stencil) is the
+// family the set-up builds for a lattice point whose reach stays inside the box: same
+// offsets, none missing, none extra.
+TEST(Partition, LatticeStencilIsTheFamilyTheSetUpBuilds) {
+  const PdSystem s = lattice("partition_stencil");  // 12^3 points at 1 mm, m = 3.015
+  const double spacing = 1e-3;
+  // The point at cell (5, 5, 5): centre (5.5, 5.5, 5.5) mm, 5 cells from the low faces and
+  // 6 from the high ones, beyond the family's reach of m + a half diagonal < 4 cells.
+  size_t centre = s.n;
+  for (size_t i = 0; i < s.n; ++i)
+    if (std::abs(s.x0[3 * i] - 5.5e-3) < 1e-9 && std::abs(s.x0[3 * i + 1] - 5.5e-3) < 1e-9 &&
+        std::abs(s.x0[3 * i + 2] - 5.5e-3) < 1e-9)
+      centre = i;
+  ASSERT_LT(centre, s.n);
+  std::set<std::array<int, 3>> built;
+  for (int64_t k = s.offsets[centre]; k < s.offsets[centre + 1]; ++k) {
+    std::array<int, 3> o{};
+    for (int d = 0; d < 3; ++d)
+      o[d] = static_cast<int>(std::lround((s.x0[3 * s.neighbor[k] + d] - s.x0[3 * centre + d]) / spacing));
+    built.insert(o);
+  }
+  const auto stencil = lattice_family_stencil(3.015, PartialVolume::Sampled);
+  const std::set<std::array<int, 3>> expected(stencil.begin(), stencil.end());
+  EXPECT_EQ(expected.size(), stencil.size());  // no offset twice
+  EXPECT_EQ(built, expected);
+}
+
+// The family sizes counted without families (family_sizes) are the set-up's row lengths,
+// so the partition can be cut before any family is built: a 3D lattice under the sampled
+// partial volumes (rows cut by the faces) and the pre-cracked 2D plate under LAMMPS's rule
+// (pre-cracks keep their entries, broken: the rows do not change).
+TEST(Partition, FamilySizesWithoutFamiliesAreTheSetUpsRowLengths) {
+  const PdSystem cube = lattice("partition_sizes_cube");
+  const PdSystem plate =
+      system_from_yaml("partition_sizes_plate", std::string(kPrecrackedGlassPlateDeck).replace(
+                                                    kPrecrackedGlassPlateDeck.find("horizon_factor: 3.015"), 21,
+                                                    "horizon_factor: 3.015, partial_volume: lammps") +
+                                                    "time: {steps: 1}\n");
+  for (const PdSystem* s : {&cube, &plate}) {
+    const std::vector<int64_t> sizes =
+        family_sizes(s->x0, s->horizon, s->half_cell, s->dimension, s->config.partial_volume);
+    ASSERT_EQ(sizes.size(), s->n);
+    for (size_t i = 0; i < s->n; ++i) ASSERT_EQ(sizes[i], s->offsets[i + 1] - s->offsets[i]) << "particle " << i;
+    std::vector<int64_t> offsets{0};
+    for (const int64_t c : sizes) offsets.push_back(offsets.back() + c);
+    for (int ranks : {2, 3, 5})
+      EXPECT_EQ(MortonRangePartitioner().partition(offsets, ranks).begin,
+                MortonRangePartitioner().partition(s->offsets, ranks).begin);
+  }
+}
+
+// Graded, irregular points with per-particle horizons varying threefold (the dual horizon's
+// case, where a pair is found from one end only): the counts equal build_families' pairs
+// kept by the set-up's test, counted by brute force over the built families.
+TEST(Partition, FamilySizesOfAGradedCloudMatchBuiltFamiliesFiltered) {
+  const int n = 1500;
+  std::vector<double> x(3 * n), horizon(n), half_cell(n), pad(n);
+  uint64_t state = 12345;
+  auto uniform = [&] {  // a fixed LCG: the same cloud on every machine
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  for (int i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) x[3 * i + d] = 0.01 * uniform();
+    const double spacing = 0.4e-3 + 0.8e-3 * x[3 * i] / 0.01;  // finer towards x = 0
+    half_cell[i] = 0.5 * spacing;
+    horizon[i] = 3.0 * spacing;
+    pad[i] = half_cell[i] * std::sqrt(3.0);
+  }
+  const breccia::Families fam = breccia::build_families(x, horizon, pad);
+  for (const PartialVolume kind : {PartialVolume::Sampled, PartialVolume::Lammps}) {
+    const std::vector<int64_t> sizes = family_sizes(x, horizon, half_cell, 3, kind);
+    int64_t total = 0;
+    for (int i = 0; i < n; ++i) {
+      int64_t kept = 0;
+      for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
+        const int j = fam.neighbors[k];
+        const double xv[3] = {x[3 * j] - x[3 * i], x[3 * j + 1] - x[3 * i + 1], x[3 * j + 2] - x[3 * i + 2]};
+        const double xm[3] = {-xv[0], -xv[1], -xv[2]};
+        kept += partial_volume_positive(kind, xv, horizon[i], half_cell[j], 3) ||
+                partial_volume_positive(kind, xm, horizon[j], half_cell[i], 3);
+      }
+      ASSERT_EQ(sizes[i], kept) << "particle " << i;
+      total += kept;
+    }
+    EXPECT_GT(total, 20 * n);  // the families are not trivially empty
   }
 }

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "breccia/solver/pd_physics.hpp"
+
 namespace breccia::solver {
 
 // Rank r owns the internal indices [begin[r], begin[r + 1]).
@@ -44,6 +46,16 @@ public:
 private:
   double particle_weight_;
 };
+
+// The row lengths of the families setup_system builds (its offsets' differences, bond
+// entries per particle), counted without storing a single bond: the pairs build_families
+// finds (common's families.hpp: |xi| <= max(horizon) + max(pad), pad = half cell x sqrt(d))
+// that the set-up keeps (a positive partial volume from either end under `kind`). Arrays in
+// the set-up's internal order: x0 (3N), horizon and half_cell (N). With them the partition
+// above can be cut before any family exists: the first pass of a set-up that builds each
+// rank's families alone. Memory: the cell list (about 12 B per particle) and the counts.
+std::vector<int64_t> family_sizes(const std::vector<double>& x0, const std::vector<double>& horizon,
+                                  const std::vector<double>& half_cell, int dimension, PartialVolume kind);
 
 // What one rank exchanges each step. Ghosts are sorted by internal index; since ranks own
 // contiguous ranges, the ghosts from one source rank are one contiguous run of `ghosts`.
@@ -78,6 +90,12 @@ struct DecompositionStats {
 // dilatation and the fast path's two factors between its passes, 24 B more).
 DecompositionStats decomposition_stats(const Partition& part, const std::vector<int64_t>& offsets,
                                        const std::vector<int32_t>& neighbor, double bytes_per_ghost);
+
+// The family of a point of a 3D box lattice far from its faces, as offsets in lattice units:
+// the neighbours the set-up keeps (setup.cpp) at a horizon of `horizon_factor` spacings
+// under the partial-volume rule `kind`. A point near a face has this stencil clipped to the
+// box. For the figures below, which need no families built.
+std::vector<std::array<int, 3>> lattice_family_stencil(double horizon_factor, PartialVolume kind);
 
 // The same figures for a box lattice of n[0] x n[1] x n[2] points whose every point's
 // family is `stencil` (offsets in lattice units) clipped to the box, without building the

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Peak memory per rank of a distributed run (docs/parallel.md, Memory): a PMB box lattice of
+# N^3 particles (m = 3.015) run for a few steps on 1, 2 and 4 ranks of one thread each; each
+# rank's peak resident set (VmHWM, GNU time's %M) in MB, beside summary.json's figures.
+# Usage: scripts/mem_mpi.sh BUILD_DIR [N=30] [RANKS="1 2 4"]   (OUT=runs/mem-mpi)
+set -euo pipefail
+BUILD=${1:-build}; N=${2:-30}; RANKS=${3:-"1 2 4"}
+BIN="$(cd "$BUILD" && pwd)/bin"
+OUT="${OUT:-$(pwd)/runs/mem-mpi}"
+mkdir -p "$OUT"
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+DX=0.0005
+L=$(awk -v n="$N" -v dx="$DX" 'BEGIN{printf "%.6g", n*dx}')
+cat > "$OUT/case.yaml" <<YAML
+name: memory-per-rank
+specimen: {lattice: {dimension: 3, box: [0, 0, 0, $L, $L, $L], spacing: $DX}}
+model: {type: pmb, horizon_factor: 3.015}
+materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, fracture_energy: 1e6}]
+initial: [{type: radial_velocity, center: [0, 0, 0], strain_rate: 10}]
+time: {steps: 5}
+output: {every: 1000000, history_every: 1000000, results: false}
+YAML
+echo "ranks,particles,bond_entries,peak_rss_mb_per_rank (rank 0 first),peak_rss_mb_max,peak_rss_mb_sum"
+for ranks in $RANKS; do
+  run="$OUT/np$ranks"
+  rm -rf "$run"; mkdir -p "$run"
+  # One file per rank: GNU time writes the rank's own peak when it exits.
+  OMP_NUM_THREADS=1 mpirun --oversubscribe -np "$ranks" bash -c \
+    '/usr/bin/time -f %M -o "$0/rss.$OMPI_COMM_WORLD_RANK" "$1" "$2" -o "$0" --threads 1 --quiet --backend cpu' \
+    "$run" "$BIN/breccia-solve" "$OUT/case.yaml"
+  /usr/bin/python3 - "$run" "$ranks" <<'PY'
+import json, sys
+run, ranks = sys.argv[1], int(sys.argv[2])
+s = json.load(open(f"{run}/summary.json"))
+mb = [int(open(f"{run}/rss.{r}").read().split()[-1]) / 1024 for r in range(ranks)]
+print(f"{ranks},{s['particles']},{s['bonds']},{' '.join(f'{m:.0f}' for m in mb)},{max(mb):.0f},{sum(mb):.0f}")
+PY
+done

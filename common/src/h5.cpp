@@ -156,11 +156,41 @@ static std::vector<T> read_impl(const File& f, const std::string& path) {
   return out;
 }
 
+template <class T>
+static std::vector<T> read_rows_impl(const File& f, const std::string& path, hsize_t first, hsize_t count) {
+  std::vector<hsize_t> d = f.dims(path);
+  if (d.empty() || first > d[0] || count > d[0] - first)
+    throw InputError(f.path(), path,
+                     "has " + std::to_string(d.empty() ? 0 : d[0]) + " rows; rows " + std::to_string(first) + " to " +
+                         std::to_string(first + count) + " were asked for",
+                     "a dataset with those rows (a particle file of this case)");
+  hsize_t row = 1;
+  for (size_t a = 1; a < d.size(); ++a) row *= d[a];
+  std::vector<T> out(count * row);
+  if (out.empty()) return out;
+  Handle ds{H5Dopen2(f.id(), path.c_str(), H5P_DEFAULT), H5Dclose};
+  Handle file_space{H5Dget_space(ds.id), H5Sclose};
+  std::vector<hsize_t> start(d.size(), 0), block(d);
+  start[0] = first;
+  block[0] = count;
+  Handle mem_space{H5Screate_simple(static_cast<int>(block.size()), block.data(), nullptr), H5Sclose};
+  if (H5Sselect_hyperslab(file_space.id, H5S_SELECT_SET, start.data(), nullptr, block.data(), nullptr) < 0 ||
+      H5Dread(ds.id, mem_type<T>(), mem_space.id, file_space.id, H5P_DEFAULT, out.data()) < 0)
+    throw InputError(f.path(), path, "cannot be read as a numeric dataset", "numeric data");
+  return out;
+}
+
 std::vector<double> File::read_doubles(const std::string& p) const { return read_impl<double>(*this, p); }
 std::vector<float> File::read_floats(const std::string& p) const { return read_impl<float>(*this, p); }
 std::vector<int64_t> File::read_int64(const std::string& p) const { return read_impl<int64_t>(*this, p); }
 std::vector<int32_t> File::read_int32(const std::string& p) const { return read_impl<int32_t>(*this, p); }
 std::vector<uint8_t> File::read_uint8(const std::string& p) const { return read_impl<uint8_t>(*this, p); }
+std::vector<double> File::read_double_rows(const std::string& p, hsize_t first, hsize_t count) const {
+  return read_rows_impl<double>(*this, p, first, count);
+}
+std::vector<int32_t> File::read_int32_rows(const std::string& p, hsize_t first, hsize_t count) const {
+  return read_rows_impl<int32_t>(*this, p, first, count);
+}
 
 std::vector<std::string> File::read_strings(const std::string& path) const {
   const auto d = dims(path);

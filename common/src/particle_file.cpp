@@ -164,12 +164,54 @@ void write_particle_file(const std::string& path, ParticleModel m) {
   write_text_file(xdmf, xdmf_sidecar(p.filename().string(), m));
 }
 
-ParticleModel read_particle_file(const std::string& path) {
+namespace {
+
+// The file, checked to be a particle file (shared by the whole and the by-rows readers).
+h5::File open_particle_file(const std::string& path) {
   if (!std::filesystem::exists(path))
     throw InputError(path, "", "file does not exist", "a particles.h5 written by breccia-place");
   h5::File f(path, h5::File::Mode::Read);
   if (!f.has_attr("/", "format") || f.attr_string("/", "format") != "breccia-particles")
     throw InputError(path, "/@format", "missing or not 'breccia-particles'", "a particles.h5 written by breccia-place");
+  return f;
+}
+
+}  // namespace
+
+ParticleRows read_particle_rows(const std::string& path, int64_t first, int64_t count) {
+  h5::File f = open_particle_file(path);
+  ParticleRows r;
+  const std::vector<hsize_t> dims = f.dims("/particles/volume");
+  r.total = dims.empty() ? 0 : static_cast<int64_t>(dims[0]);
+  if (first < 0 || count < 0)
+    throw InputError(path, "/particles", "rows from " + std::to_string(first) + ", " + std::to_string(count) + " of them",
+                     "a range of rows >= 0");
+  r.first = first;
+  r.dimension = static_cast<int>(f.attr_int("/", "dimension"));
+  r.content_id = f.attr_string("/", "content_id");
+  const auto b = static_cast<hsize_t>(first), c = static_cast<hsize_t>(count);
+  r.volume_m3 = f.read_double_rows("/particles/volume", b, c);
+  r.position_m = f.read_double_rows("/particles/position", b, c);
+  r.spacing_m = f.read_double_rows("/particles/spacing", b, c);
+  r.material_id = f.read_int32_rows("/particles/material_id", b, c);
+  r.material_names = f.read_strings("/materials/names");
+  if (r.position_m.size() != 3 * r.size())
+    throw InputError(path, "/particles/position", "not 3 numbers a row", "3 x N (one row per particle)");
+  for (size_t k = 0; k < r.size(); ++k) {
+    // Built in two steps: GCC 12 warns falsely (-Wrestrict) on "[" + std::to_string(...).
+    std::string row = std::to_string(first + static_cast<int64_t>(k));
+    row = '[' + row + ']';
+    if (!(r.volume_m3[k] > 0.0) || !std::isfinite(r.volume_m3[k]))
+      throw InputError(path, "/particles/volume" + row, "value " + std::to_string(r.volume_m3[k]), "a positive finite volume");
+    if (r.material_id[k] < 0 || static_cast<size_t>(r.material_id[k]) >= std::max<size_t>(r.material_names.size(), 1))
+      throw InputError(path, "/particles/material_id" + row, "value " + std::to_string(r.material_id[k]),
+                       "an index into /materials/names");
+  }
+  return r;
+}
+
+ParticleModel read_particle_file(const std::string& path) {
+  h5::File f = open_particle_file(path);
   ParticleModel m;
   m.dimension = static_cast<int>(f.attr_int("/", "dimension"));
   m.thickness_m = f.attr_double("/", "thickness_m");

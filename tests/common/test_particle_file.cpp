@@ -80,3 +80,47 @@ TEST(ParticleFile, NonHdf5FileIsRejectedByName) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos);
   }
 }
+
+// A distributed run's process reads its own rows (hyperslabs): each range equals that slice
+// of the whole file, the ranges of several processes tile it, and rows past the end are an
+// input error naming the file and the dataset.
+TEST(ParticleFile, RowsAreTheSlicesOfTheWholeFile) {
+  ParticleModel m;
+  m.dimension = 3;
+  const int n = 11;
+  for (int i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) m.position_m.push_back(0.1 * i + 0.01 * d);
+    m.volume_m3.push_back(1e-9 * (i + 1));
+    m.spacing_m.push_back(1e-3 * (1 + i % 3));
+    m.material_id.push_back(i % 2);
+  }
+  m.material_names = {"a", "b"};
+  const std::string path = ::testing::TempDir() + "/rows/particles.h5";
+  write_particle_file(path, m);
+  const ParticleModel whole = read_particle_file(path);
+  std::vector<double> tiled;
+  for (const auto& [first, count] : std::vector<std::pair<int64_t, int64_t>>{{0, 4}, {4, 0}, {4, 7}}) {
+    const ParticleRows r = read_particle_rows(path, first, count);
+    EXPECT_EQ(r.total, n);
+    EXPECT_EQ(r.first, first);
+    EXPECT_EQ(r.content_id, whole.content_id);
+    ASSERT_EQ(r.size(), static_cast<size_t>(count));
+    EXPECT_EQ(r.position_m, std::vector<double>(whole.position_m.begin() + 3 * first,
+                                                whole.position_m.begin() + 3 * (first + count)));
+    EXPECT_EQ(r.volume_m3, std::vector<double>(whole.volume_m3.begin() + first, whole.volume_m3.begin() + first + count));
+    EXPECT_EQ(r.spacing_m, std::vector<double>(whole.spacing_m.begin() + first, whole.spacing_m.begin() + first + count));
+    EXPECT_EQ(r.material_id,
+              std::vector<int32_t>(whole.material_id.begin() + first, whole.material_id.begin() + first + count));
+    tiled.insert(tiled.end(), r.volume_m3.begin(), r.volume_m3.end());
+  }
+  EXPECT_EQ(tiled, whole.volume_m3);
+  try {
+    read_particle_rows(path, 8, 4);
+    FAIL() << "rows past the end must be refused";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(path), std::string::npos) << what;
+    EXPECT_NE(what.find("/particles/volume"), std::string::npos) << what;
+    EXPECT_NE(what.find("11 rows"), std::string::npos) << what;
+  }
+}

@@ -1,5 +1,5 @@
 #pragma once
-// A thin RAII layer over the HDF5 C API: whole datasets of doubles/ints, string and
+// A thin RAII layer over the HDF5 C API: whole datasets (or ranges of rows) of doubles/ints, string and
 // numeric attributes, groups. Enough for particles.h5 and results.h5; nothing clever.
 #include <hdf5.h>
 
@@ -41,6 +41,12 @@ public:
   std::vector<int32_t> read_int32(const std::string& path) const;
   std::vector<uint8_t> read_uint8(const std::string& path) const;
   std::vector<std::string> read_strings(const std::string& path) const;
+  // Rows [first, first + count) of a dataset (its first dimension; every other dimension
+  // whole), read through a hyperslab: a process of a distributed run reads its own range
+  // and never the whole array. Throws InputError naming the file and dataset when the rows
+  // are not all there.
+  std::vector<double> read_double_rows(const std::string& path, hsize_t first, hsize_t count) const;
+  std::vector<int32_t> read_int32_rows(const std::string& path, hsize_t first, hsize_t count) const;
 
   // Attributes on an object ("/" for the file).
   void set_attr(const std::string& obj, const std::string& name, const std::string& value) const;

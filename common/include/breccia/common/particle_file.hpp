@@ -60,4 +60,23 @@ void write_particle_file(const std::string& path, ParticleModel model);
 // Read and validate; throws InputError naming the file and the dataset on any defect.
 ParticleModel read_particle_file(const std::string& path);
 
+// Particles [first, first + count) of a particles.h5, in the file's order: what one process
+// of a distributed run reads of the per-particle datasets (hyperslabs), never the whole.
+// Sets, surfaces and the mesh are not read (lists, not per-particle rows).
+struct ParticleRows {
+  int64_t first = 0;               // the file index of the first row
+  int64_t total = 0;               // particles in the whole file
+  int dimension = 3;
+  std::vector<double> position_m;  // 3 x count
+  std::vector<double> volume_m3;   // count
+  std::vector<double> spacing_m;   // count
+  std::vector<int32_t> material_id;  // count, index into material_names
+  std::vector<std::string> material_names;
+  std::string content_id;          // of the whole file
+  size_t size() const { return volume_m3.size(); }
+};
+// Checks the rows as read_particle_file checks them; throws InputError naming the file and
+// the dataset (rows past the end included).
+ParticleRows read_particle_rows(const std::string& path, int64_t first, int64_t count);
+
 }  // namespace breccia

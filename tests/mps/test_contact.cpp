@@ -181,9 +181,10 @@ TEST(MpsContact, BlockSlidingOnFrictionalFloorDeceleratesAtMuKineticG) {
   // At rest it sticks (static friction holds; nothing drives it).
   EXPECT_LT(std::fabs(v_end), 0.01 * v0);
   // Energy balance with friction: kinetic + elastic + gravity + contact + dissipated stays
-  // at its start value. The dissipation is summed per step as mu_k N times the slip, an
-  // O(dt) estimate of the work: measured -1.3% of the kinetic energy (-0.4% at dt/4), so 2%.
-  EXPECT_NEAR(total_energy(solid), total_energy_start, 0.02 * 0.5 * solid.size() * mass_of(solid, 0) * v0 * v0);
+  // at its start value. The dissipation is the step's work less the spring's energy change
+  // (coulomb_tangential_force), exact up to the staggered kinetic energy: measured 7e-5 of
+  // the kinetic energy (-1.3% when it was summed as mu_k N times the slip), so 0.2%.
+  EXPECT_NEAR(total_energy(solid), total_energy_start, 0.002 * 0.5 * solid.size() * mass_of(solid, 0) * v0 * v0);
   }
 }
 

@@ -184,9 +184,11 @@ TEST(MpsContactParticles, BlockSlidingOnAParticleSlabDeceleratesAtMuKineticG) {
     EXPECT_NEAR(x_stop, distance, 0.03 * distance);
     EXPECT_LT(std::fabs(v_end), 0.01 * v0);  // stopped, and static friction holds it
     // Energy balance with the friction dissipation (kinetic + elastic + gravity + contact +
-    // dissipated): the dissipation is summed per step as mu_k N times the slip, an O(dt)
-    // estimate of the work, as on the floor (-1.3% there); measured -0.75%, so 2%.
-    EXPECT_NEAR(balance, 0.0, 0.02);
+    // dissipated): the dissipation is the step's work less the spring's energy change
+    // (coulomb_tangential_force); what is left is the pairs' springs dropped unbooked when
+    // they leave contact and their weighted k_t changing: measured +0.19% (-0.75% when the
+    // dissipation was summed as mu_k N times the slip), so 0.5%.
+    EXPECT_NEAR(balance, 0.0, 0.005);
   }
 }
 

@@ -306,13 +306,14 @@ void Contact::obstacle_forces(const ParticleStateView& s, double dt) {
       const double depth = (px < x0 || px > x1 || py < y0 || py > y1)
                                ? 0.0
                                : polygon_penetration(vx.data(), vy.data(), static_cast<int>(vx.size()), px, py, normal2);
+      const double v_surface[3] = {b.vx - b.omega * (py - b.cy), b.vy + b.omega * (px - b.cx), 0.0};
       if (depth <= 0.0) {
-        if (!friction_.empty()) friction_[slot * n + i] = FrictionState{};
+        const double v_rel[3] = {s.v.x[i] - v_surface[0], s.v.y[i] - v_surface[1], 0.0};
+        dissipated_j_ += release_friction_spring(friction_[slot * n + i], v_rel, dt, poly.law.tangential_stiffness_n_m);
         continue;
       }
       // The penalty pushes the particle out towards the nearest boundary point.
       const double nrm[3] = {normal2[0], normal2[1], 0.0};
-      const double v_surface[3] = {b.vx - b.omega * (py - b.cy), b.vy + b.omega * (px - b.cx), 0.0};
       double f[3] = {0.0, 0.0, 0.0};
       rigid_contact(i, slot, depth, nrm, v_surface, poly.law, s, dt, f);
       for (int a = 0; a < 3; ++a) force_n_[a][i] += f[a];
@@ -397,16 +398,16 @@ void Contact::free_bodies_on_half_spaces(double dt) {
         FrictionState& st = vertex_friction_[h * vertices + first + m];
         const double height = (vx[m] - plane.point[0]) * hs.normal[0] + (vy[m] - plane.point[1]) * hs.normal[1] -
                               plane.point[2] * hs.normal[2];
+        // Relative to the plane (which may be moving: ground motion).
+        const double v_vertex[3] = {b.vx - b.omega * (vy[m] - b.cy) - plane.velocity[0],
+                                    b.vy + b.omega * (vx[m] - b.cx) - plane.velocity[1], -plane.velocity[2]};
         if (height >= 0.0) {
-          st = FrictionState{};
+          dissipated_j_ += release_friction_spring(st, v_vertex, dt, hs.law.tangential_stiffness_n_m);
           continue;
         }
         const double normal_force = -hs.law.normal_stiffness_n_m * height;
         double f[3] = {normal_force * hs.normal[0], normal_force * hs.normal[1], normal_force * hs.normal[2]};
         if (hs.law.frictional()) {
-          // Relative to the plane (which may be moving: ground motion).
-          const double v_vertex[3] = {b.vx - b.omega * (vy[m] - b.cy) - plane.velocity[0],
-                                      b.vy + b.omega * (vx[m] - b.cx) - plane.velocity[1], -plane.velocity[2]};
           dissipated_j_ += coulomb_tangential_force(st, hs.normal.data(), v_vertex, dt, normal_force,
                                                     hs.law.tangential_stiffness_n_m, hs.law.static_friction,
                                                     hs.law.kinetic_friction, f);

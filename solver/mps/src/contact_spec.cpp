@@ -159,8 +159,8 @@ PrescribedMotion parse_motion(const Section& s) {
 }
 
 RigidBodySpec parse_rigid_body(const Section& s, size_t index, int dimension) {
-  std::vector<std::string> keys{"name", "vertices", "fixed", "density", "velocity", "angular_velocity", "stiffness_factor",
-                                "motion"};
+  std::vector<std::string> keys{"name",           "vertices",         "fixed",  "density", "velocity",
+                                "angular_velocity", "stiffness_factor", "stiffness_length", "motion"};
   for (const auto& k : friction_keys()) keys.push_back(k);
   s.allow_only(keys);
   RigidBodySpec r;
@@ -224,6 +224,7 @@ RigidBodySpec parse_rigid_body(const Section& s, size_t index, int dimension) {
     r.angular_velocity_rad_s = s.number("angular_velocity", Quantity::Frequency, 0.0);
   }
   r.stiffness_factor = s.positive("stiffness_factor", Quantity::Dimensionless, 1.0);
+  if (s.has("stiffness_length")) r.stiffness_length_m = s.positive("stiffness_length", Quantity::Length, 0.0);
   r.friction = parse_friction(s);
   return r;
 }

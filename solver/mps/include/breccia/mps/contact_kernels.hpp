@@ -173,9 +173,21 @@ BRECCIA_HD inline double polygon_penetration(const double* x, const double* y, i
 // with a slip limit (as the crack model of [MPS harmonics], and Cundall & Strack's DEM contact):
 // the spring elongation s follows the relative tangential motion, F_t = -k_t s; while
 // sticking, |F_t| <= mu_s N; beyond it the contact slips, |F_t| = mu_k N and s is shortened
-// to mu_k N / k_t (the slip, the rest of the elongation, dissipates mu_k N times its
-// length); a slipping contact sticks again when the spring force falls below mu_k N (the
-// relative motion stopped or reversed).
+// to mu_k N / k_t; a slipping contact sticks again when the spring force falls below mu_k N
+// (the relative motion stopped or reversed).
+//
+// Dissipation, booked so that the discrete energy balance closes. In the symplectic Euler
+// step (a leapfrog with v^n the velocity of the half step before x^n) the force of step n,
+// -k_t s_n, does the work -k_t s_n . (D_n + D_n+1)/2 on the particle, D_n = x^n - x^n-1 the
+// relative displacement that stretches the spring at step n (v_rel dt); summed over the
+// steps this is -sum_n k_t (s_n-1 + s_n) . D_n / 2, the trapezoidal work along the spring's
+// path. The energy removed at step n is that work less the change of the spring's energy:
+//   dissipated_n = k_t (s_n-1 + s_n) . D_n / 2 - k_t (|s_n|^2 - |s_n-1|^2) / 2,
+// exactly 0 while sticking (s_n = s_n-1 + D_n) and mu_k N |D_n| in steady slip (s_n =
+// s_n-1). It differs from mu_k N times the slip when the normal force changes within a step:
+// a contact unloaded in one step (a corner lifting, a particle of a chattering face) sheds
+// most of its spring's energy, which mu_k N (new, small) times the slip missed (an elastic
+// block shaken on a frictional floor lost 7% of the ground's work that way).
 struct FrictionState {
   double s[3] = {0.0, 0.0, 0.0};  // tangential spring elongation, m
   int slipping = 0;
@@ -196,23 +208,47 @@ BRECCIA_HD inline double coulomb_tangential_force(FrictionState& st, const doubl
   if (len1 > 0.0)
     for (int a = 0; a < 3; ++a) st.s[a] *= len0 / len1;
   const double vn = v_rel[0] * n[0] + v_rel[1] * n[1] + v_rel[2] * n[2];
-  for (int a = 0; a < 3; ++a) st.s[a] += (v_rel[a] - vn * n[a]) * dt;
+  double stretch[3], previous[3];  // D_n (tangential) and s_n-1 (in the current tangent plane)
+  for (int a = 0; a < 3; ++a) {
+    stretch[a] = (v_rel[a] - vn * n[a]) * dt;
+    previous[a] = st.s[a];
+    st.s[a] += stretch[a];
+  }
   const double len = std::sqrt(st.s[0] * st.s[0] + st.s[1] * st.s[1] + st.s[2] * st.s[2]);
   const double trial = k_t * len;
-  double dissipated = 0.0;
   const double limit_static = mu_s * normal_force, limit_kinetic = mu_k * normal_force;
-  if (st.slipping ? trial > limit_kinetic : trial > limit_static) {
-    st.slipping = 1;
-    const double keep = limit_kinetic / k_t;  // spring length carrying mu_k N
-    // Work of the friction force mu_k N over the slip len - keep (backward Euler: the
-    // spring energy is then the rest of the work of the relative motion).
-    dissipated = limit_kinetic * (len - keep);
-    for (int a = 0; a < 3; ++a) st.s[a] *= keep / len;
-  } else {
+  if (!(st.slipping ? trial > limit_kinetic : trial > limit_static)) {
     st.slipping = 0;
+    for (int a = 0; a < 3; ++a) f[a] -= k_t * st.s[a];
+    return 0.0;  // sticking: the spring holds all the work (the formula above gives 0)
   }
+  st.slipping = 1;
+  const double keep = limit_kinetic / k_t;  // spring length carrying mu_k N
+  for (int a = 0; a < 3; ++a) st.s[a] *= keep / len;
+  double work = 0.0;  // k_t (s_n-1 + s_n) . D_n / 2
+  for (int a = 0; a < 3; ++a) work += 0.5 * k_t * (previous[a] + st.s[a]) * stretch[a];
+  const double dissipated = work - 0.5 * k_t * (keep * keep - len0 * len0);
   for (int a = 0; a < 3; ++a) f[a] -= k_t * st.s[a];
   return dissipated;
+}
+
+// A contact that opens loses its spring (no normal force, nothing to hold it): the energy of
+// the step's balance above with s_n = 0, k_t s_n-1 . D_n / 2 + k_t |s_n-1|^2 / 2, is
+// dissipated (the second half of the last force's work, and the energy the spring held).
+// v_rel: the particle's velocity relative to the surface (D_n = v_rel dt). Resets the spring
+// and returns that energy (J).
+BRECCIA_HD inline double release_friction_spring(FrictionState& st, const double v_rel[3], double dt, double k_t) {
+  if (st.s[0] == 0.0 && st.s[1] == 0.0 && st.s[2] == 0.0) {
+    st.slipping = 0;
+    return 0.0;
+  }
+  double work = 0.0, energy = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    work += 0.5 * k_t * st.s[a] * v_rel[a] * dt;
+    energy += 0.5 * k_t * st.s[a] * st.s[a];
+  }
+  st = FrictionState{};
+  return work + energy;
 }
 
 }  // namespace breccia::mps

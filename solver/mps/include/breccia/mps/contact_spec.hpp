@@ -71,6 +71,10 @@ struct RigidBodySpec {
   std::array<double, 3> velocity_m_s{};
   double angular_velocity_rad_s = 0.0;
   double stiffness_factor = 1.0;  // penalty k = factor (lambda + 2 mu) A / spacing
+  // > 0: the penalty per unit contact area is set by this length instead of the spacing,
+  // k = factor (lambda + 2 mu) A / stiffness_length (and k_t likewise), so the polygon's
+  // contact stiffness per unit area of a face does not change when the spacing is refined.
+  double stiffness_length_m = 0.0;
   FrictionSpec friction;
   std::optional<PrescribedMotion> motion;  // fixed bodies only
 };

@@ -103,18 +103,19 @@ struct PlaneContact {
 // at plane.velocity): the penalty (half_space_force_at), then, if the plane has friction, the
 // particle's tangential spring on it updated over dt (coulomb_tangential_force, with the
 // penalty's size as the normal force), adding the slip's dissipation to *dissipated_j and
-// the spring's energy to *spring_energy_j. A particle off the plane loses its spring.
+// the spring's energy to *spring_energy_j. A particle off the plane loses its spring
+// (release_friction_spring: what it held is dissipated).
 // Returns the depth (<= 0: no contact). Contact::obstacle_forces and the CUDA launcher run it.
 BRECCIA_HD inline double half_space_contact_at(const double x[3], const double v[3], const PlaneContact& plane,
                                                double dt, FrictionState& spring, double f[3], double* dissipated_j,
                                                double* spring_energy_j) {
   const double depth = half_space_force_at(x, plane.point, plane.normal, plane.normal_stiffness, f);
+  const double v_rel[3] = {v[0] - plane.velocity[0], v[1] - plane.velocity[1], v[2] - plane.velocity[2]};
   if (depth <= 0.0) {
-    spring = FrictionState{};
+    *dissipated_j += release_friction_spring(spring, v_rel, dt, plane.tangential_stiffness);
     return depth;
   }
   if (plane.static_friction > 0.0 || plane.kinetic_friction > 0.0) {
-    const double v_rel[3] = {v[0] - plane.velocity[0], v[1] - plane.velocity[1], v[2] - plane.velocity[2]};
     *dissipated_j += coulomb_tangential_force(spring, plane.normal, v_rel, dt, plane.normal_stiffness * depth,
                                               plane.tangential_stiffness, plane.static_friction,
                                               plane.kinetic_friction, f);

@@ -8,7 +8,8 @@
 #     Ramesh 2006; README.md "Softening bonds against Zhou, Molinari & Ramesh")
 # Each rate is case.yaml with its strain rate and end time given as --set (the standard rates are
 # also the case file's variants rate_5e2 ... rate_2e4).
-# Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
+# Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional);
+#   WIDTH (ring width, m, default 0.0005) and RADIUS (zmr variants, m, default 0.05) for studies.
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 source "$HERE/../../scripts/case_env.sh"
@@ -20,7 +21,7 @@ case "$VARIANT" in
     case "$VARIANT" in zmr) DX=0.0001 ;; zmr-fine) DX=0.00005 ;; *) DX=0.000025 ;; esac
     # A radius of ~30 cohesive lengths: the ring's kinetic energy is then (e R / L0)^2 >= 9
     # times the strain energy at the strength even at e = 0.1, so the rate holds until it breaks.
-    RADIUS=0.05
+    RADIUS=${RADIUS:-0.05}
     STRENGTH_MPA=${STRENGTH_MPA:-18}
     # e0 = c sigma_t^3 / (E^2 G0), c = sqrt(E / rho): the glass of case.yaml.
     RATES=${RATES:-$("$PYTHON" -c "
@@ -31,7 +32,7 @@ print(' '.join('%.4g' % (e * e0) for e in (0.1, 0.3, 1, 3, 10)))")} ;;
   *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full|test|zmr|zmr-fine|zmr-finest)" >&2; exit 2 ;;
 esac
 mkdir -p "$OUT"
-"$PYTHON" "$HERE/specimen.py" "$OUT/particles.h5" --radius "${RADIUS:-0.02}" --width 0.0005 --spacing "$DX" --thickness 0.001
+"$PYTHON" "$HERE/specimen.py" "$OUT/particles.h5" --radius "${RADIUS:-0.02}" --width "${WIDTH:-0.0005}" --spacing "$DX" --thickness 0.001
 RUNS=()
 for r in $RATES; do
   name="rate_$r"

@@ -2,7 +2,9 @@
 // momentum conservation and quasi-static relaxation.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include "breccia/solver/calibration.hpp"
@@ -143,6 +145,23 @@ TEST(Energy, TimeStepAboveTheStableOneIsRejectedBeforeTheRun) {
     FAIL() << "a time step of 1 s must be rejected";
   } catch (const breccia::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("time.dt"), std::string::npos) << e.what();
+  }
+}
+
+// Correspondence builds its shape tensor from the bonds a particle has, so the energy
+// correction is refused for it, by name, rather than silently ignored.
+TEST(CaseInput, EnergySurfaceCorrectionAskedForCorrespondenceIsRefusedNotIgnored) {
+  try {
+    system_from_yaml("correspondence_surface_correction", R"(
+specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.004, 0.004], spacing: 1 mm}}
+model: {type: correspondence, horizon_factor: 3.015, surface_correction: energy}
+materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.3}]
+time: {steps: 1}
+)");
+    FAIL() << "correspondence with the energy correction must be refused";
+  } catch (const breccia::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("model.surface_correction"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("correspondence"), std::string::npos) << e.what();
   }
 }
 

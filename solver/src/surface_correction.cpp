@@ -78,7 +78,10 @@ std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<Elasti
     for (size_t i = 0; i < n; ++i) {
       double log_mean = 0.0;
       for (int a = 0; a < dims; ++a) {
-        if (energy[3 * i + a] > 0) axis_factor[3 * i + a] *= target[s.material[i]] / energy[3 * i + a];
+        // The step is bounded (a factor 2 either way; measured ones stay well inside it) so
+        // that a family with next to no bonds along an axis cannot send its factor to inf.
+        if (energy[3 * i + a] > 0)
+          axis_factor[3 * i + a] *= std::clamp(target[s.material[i]] / energy[3 * i + a], 0.5, 2.0);
         log_mean += std::log(axis_factor[3 * i + a]) / dims;
       }
       for (int a = 0; a < dims; ++a) axis_factor[3 * i + a] /= std::exp(log_mean);

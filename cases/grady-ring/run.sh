@@ -9,7 +9,8 @@
 # Each rate is case.yaml with its strain rate and end time given as --set (the standard rates are
 # also the case file's variants rate_5e2 ... rate_2e4).
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional);
-#   WIDTH (ring width, m, default 0.0005) and RADIUS (zmr variants, m, default 0.05) for studies.
+#   WIDTH (ring width, m, default 0.0005), RADIUS (zmr variants, m, default 0.05) and END_US
+#   (end time, us, instead of the rate's own) for studies.
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 source "$HERE/../../scripts/case_env.sh"
@@ -42,6 +43,7 @@ for r in $RATES; do
   # Softening: 20 us (many release-wave transits of the largest fragment) after 6 times the
   # time to reach the strength's strain.
   [ -z "${STRENGTH_MPA:-}" ] || end_us=$("$PYTHON" -c "print(round(20 + 6 * $STRENGTH_MPA * 1e6 / 72e9 / $r * 1e6, 2))")
+  end_us=${END_US:-$end_us}
   options=(--set "initial[0].strain_rate=$r" --set "time.end=$end_us us")
   [ -z "${STRENGTH_MPA:-}" ] || options+=(--set "materials[0].tensile_strength=$STRENGTH_MPA MPa")
   echo "== $name (end $end_us us)"

@@ -24,7 +24,6 @@ import numpy as np  # noqa: E402
 
 E, RHO, K_IC = 72e9, 2440.0, 0.75e6
 C_BAR = math.sqrt(E / RHO)
-WIDTH = 0.0005
 
 
 def grady_size(rate):
@@ -70,11 +69,14 @@ def analyse(out, name):
     fr = np.atleast_1d(fr)
     count = fr["particle_count"]
     kept = count >= 2 * across
-    arc = fr["volume_m3"] / (WIDTH * thickness)
+    # The ring's width from its own particles (volume over mean circumference), so rings of
+    # any width (run.sh WIDTH) are measured alike.
+    width = float(fr["volume_m3"].sum()) / (2 * math.pi * radius * thickness)
+    arc = fr["volume_m3"] / (width * thickness)
     with open(os.path.join(run, "summary.json")) as fh:
         summary = json.load(fh)
     res = {"run": name, "strain_rate_per_s": rate, "particles": int(summary["particles"]),
-           "particles_across_width": across, "end_time_s": t_end,
+           "particles_across_width": across, "ring_width_m": width, "end_time_s": t_end,
            "wall_s": round(summary["wall_s"] + summary["setup_wall_s"], 1),
            "fragments_all": int(len(count)), "fragments_kept": int(kept.sum()),
            "dust_mass_fraction": float(1.0 - fr["mass_kg"][kept].sum() / fr["mass_kg"].sum()),
@@ -121,7 +123,7 @@ def main(argv):
                      "Zhou-Molinari-Ramesh 2006 with PD's L0 = 9 delta/(4 pi)"))
     if "fitted_exponent" in report:
         ax.set_title(f"fitted exponent {report['fitted_exponent']:.2f} (Grady -0.67)", fontsize=9)
-    ax.axhline(2 * 3.015 * (WIDTH / runs[0]["particles_across_width"]) * 1e3,
+    ax.axhline(2 * 3.015 * (runs[0]["ring_width_m"] / runs[0]["particles_across_width"]) * 1e3,
                color="0.5", ls=":", label="2 x horizon")
     ax.set_xlabel("strain rate (1/s)")
     ax.set_ylabel("mean fragment size (mm)")

@@ -8,7 +8,9 @@
 #     Ramesh 2006; README.md "Softening bonds against Zhou, Molinari & Ramesh")
 # Each rate is case.yaml with its strain rate and end time given as --set (the standard rates are
 # also the case file's variants rate_5e2 ... rate_2e4).
-# Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
+# Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional);
+#   WIDTH (ring width, m, default 0.0005), RADIUS (zmr variants, m, default 0.05) and END_US
+#   (end time, us, instead of the rate's own) for studies.
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 source "$HERE/../../scripts/case_env.sh"
@@ -20,7 +22,7 @@ case "$VARIANT" in
     case "$VARIANT" in zmr) DX=0.0001 ;; zmr-fine) DX=0.00005 ;; *) DX=0.000025 ;; esac
     # A radius of ~30 cohesive lengths: the ring's kinetic energy is then (e R / L0)^2 >= 9
     # times the strain energy at the strength even at e = 0.1, so the rate holds until it breaks.
-    RADIUS=0.05
+    RADIUS=${RADIUS:-0.05}
     STRENGTH_MPA=${STRENGTH_MPA:-18}
     # e0 = c sigma_t^3 / (E^2 G0), c = sqrt(E / rho): the glass of case.yaml.
     RATES=${RATES:-$("$PYTHON" -c "
@@ -31,7 +33,7 @@ print(' '.join('%.4g' % (e * e0) for e in (0.1, 0.3, 1, 3, 10)))")} ;;
   *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full|test|zmr|zmr-fine|zmr-finest)" >&2; exit 2 ;;
 esac
 mkdir -p "$OUT"
-"$PYTHON" "$HERE/specimen.py" "$OUT/particles.h5" --radius "${RADIUS:-0.02}" --width 0.0005 --spacing "$DX" --thickness 0.001
+"$PYTHON" "$HERE/specimen.py" "$OUT/particles.h5" --radius "${RADIUS:-0.02}" --width "${WIDTH:-0.0005}" --spacing "$DX" --thickness 0.001
 RUNS=()
 for r in $RATES; do
   name="rate_$r"
@@ -39,8 +41,10 @@ for r in $RATES; do
   # (~7e-4 at dx 0.1 mm) is reached, counted three times over for the scatter.
   end_us=$("$PYTHON" -c "print(round(4 + 3 * 7e-4 / $r * 1e6, 2))")
   # Softening: 20 us (many release-wave transits of the largest fragment) after 6 times the
-  # time to reach the strength's strain.
+  # time to reach the strength's strain. At e >= 3 the sizes still fall after it (fragments
+  # split again for tens of us; README "Why e = 3 and 10 are off").
   [ -z "${STRENGTH_MPA:-}" ] || end_us=$("$PYTHON" -c "print(round(20 + 6 * $STRENGTH_MPA * 1e6 / 72e9 / $r * 1e6, 2))")
+  end_us=${END_US:-$end_us}
   options=(--set "initial[0].strain_rate=$r" --set "time.end=$end_us us")
   [ -z "${STRENGTH_MPA:-}" ] || options+=(--set "materials[0].tensile_strength=$STRENGTH_MPA MPa")
   echo "== $name (end $end_us us)"

@@ -152,11 +152,6 @@ CaseConfig parse_case_file(const std::string& path) {
     throw InputError(path, "model.horizon_factor", "value " + std::to_string(c.horizon_factor),
                      "a horizon of at least one particle spacing (typically 3.015)");
   c.surface_correction = model.choice("surface_correction", {"none", "energy"}, "none") == "energy";
-  // Silently running LPS uncorrected would let a user believe it was corrected.
-  if (c.surface_correction && c.model == PdModel::LPS)
-    throw InputError(path, "model.surface_correction", "energy with type: lps",
-                     "none for LPS (the energy correction is implemented for PMB; LPS's discrete weighted volume "
-                     "and dilatation are its own correction, docs/theory.md)");
   c.fracture = model.boolean("fracture", true);
   c.partial_volume = model.choice("partial_volume", {"sampled", "lammps"}, "sampled") == "lammps"
                          ? PartialVolume::Lammps

@@ -25,6 +25,7 @@
 #include "breccia/solver/particle_field.hpp"
 #include "breccia/solver/pd_system.hpp"
 #include "breccia/solver/step.hpp"
+#include "surface_correction.hpp"
 #include "surface_facets.hpp"
 
 namespace breccia::solver {
@@ -758,6 +759,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   s.weighted_volume.assign(n, 1.0);
   s.dilatation.assign(n, 0.0);
   if (lps) {
+    // surface_correction: energy shapes the bonds' weights here, before m is summed from them,
+    // and scales each particle's coefficients (surface_correction.hpp).
+    const std::vector<double> coefficient_scale =
+        c.surface_correction ? lps_surface_correction(s, elastic) : std::vector<double>(n, 1.0);
     s.lps.resize(n);
     for (size_t i = 0; i < n; ++i) {
       double m = 0.0;
@@ -768,6 +773,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
                          "a horizon that reaches other particles (about 3 spacings)");
       s.weighted_volume[i] = m;
       s.lps[i] = lps_coefficients(elastic[s.material[i]]);
+      s.lps[i].bulk_term *= coefficient_scale[i];
+      s.lps[i].shear_term *= coefficient_scale[i];
     }
     // 2D: critical stretch derived for the reweighted discrete family. Breaking particle i's half-bonds
     // across a plane of normal n costs (1/V_i) sum_k |xi_k . n| (shear/2m) w_k (s0 |xi_k|)^2;
@@ -923,15 +930,11 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
           double w[3] = {0, 0, 0};
           for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
             const int32_t j = s.neighbor[k];
-            double nrm[3] = {0, 0, 0}, inv2 = 0.0;
+            const double f = ellipsoid_bond_factor(s, axis_factor, i, k);
             for (int a = 0; a < dims; ++a) {
-              nrm[a] = (s.x0[3 * j + a] - s.x0[3 * i + a]) / s.xi_len[k];
-              const double g = 0.5 * (axis_factor[3 * i + a] + axis_factor[3 * j + a]);
-              inv2 += nrm[a] * nrm[a] / (g * g);
+              const double na = (s.x0[3 * j + a] - s.x0[3 * i + a]) / s.xi_len[k];
+              w[a] += f * pmb_energy_density(s.k_own[k], s.k_dual[k], s.state[k], na * na, s.xi_len[k]);
             }
-            const double f = 1.0 / std::sqrt(inv2);
-            for (int a = 0; a < dims; ++a)
-              w[a] += f * pmb_energy_density(s.k_own[k], s.k_dual[k], s.state[k], nrm[a] * nrm[a], s.xi_len[k]);
           }
           for (int a = 0; a < dims; ++a)
             if (w[a] > 0 && count[s.material[i]])
@@ -945,14 +948,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
 #pragma omp parallel for
     for (size_t i = 0; i < n; ++i)
       for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
-        const int32_t j = s.neighbor[k];
-        double inv2 = 0.0;
-        for (int a = 0; a < dims; ++a) {
-          const double na = (s.x0[3 * j + a] - s.x0[3 * i + a]) / s.xi_len[k];
-          const double g = 0.5 * (axis_factor[3 * i + a] + axis_factor[3 * j + a]);
-          inv2 += na * na / (g * g);
-        }
-        const double f = 1.0 / std::sqrt(inv2);
+        const double f = ellipsoid_bond_factor(s, axis_factor, i, k);
         s.k_own[k] *= f;
         s.k_dual[k] *= f;
       }

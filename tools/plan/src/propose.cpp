@@ -189,7 +189,8 @@ CaseConfig proposed_config(const CaseConfig& c, const Proposal& p) {
   out.horizon_m.reset();
   if (p.precision == "float32") out.precision = solver::CaseConfig::Precision::Float32;
   // The atlas measures PMB with the energy surface correction (tools/atlas, model_yaml):
-  // a PMB proposal must run as its rows ran to have their error. LPS has no correction.
+  // a PMB proposal must run as its rows ran to have their error. The atlas's LPS rows were
+  // measured without LPS's correction, so an LPS proposal runs without it too.
   if (p.from_atlas && p.model == "pmb") out.surface_correction = true;
   if (!c.lattice) return out;
   solver::LatticeSpec l = *c.lattice;

@@ -249,29 +249,23 @@ TEST(Gas, JwlIsentropeIsTheScaledPrincipalIsentrope) {
   EXPECT_NEAR(gas_local_gamma(1e5, 1e-4, law), 1 + kJwlOmega, 1e-9);
 }
 
-TEST(Gas, ClosedJwlChargeSettlesOnTheJwlIsentrope) {
-  PdSystem s = system_from_yaml(
-      "gas_adr_jwl", disc_case(", crack_entry: false", "time: {integrator: adr, adr_tolerance: 1e-6, adr_max_steps: 60000}\n",
-                               "{type: constant, value: 20 MPa}", kJwl));
+TEST(Gas, AJwlChargeFollowsTheJwlIsentropeAndItsWorkIsTheIntegral) {
+  // A closed JWL charge (the hole full of explosive: v = V / V0) suddenly at 20 MPa expands
+  // the disc for 200 steps (a dynamic run: the ADR settle of the two-gamma test takes
+  // minutes). The pressure is the scaled principal isentrope at the cavity's volume, and
+  // the gas work is its analytic integral p0 / p_s(1) V0 [P(v) - P(1)] whatever path the
+  // oscillating volume took.
+  PdSystem s = system_from_yaml("gas_jwl", disc_case(", crack_entry: false", "time: {steps: 200}\n",
+                                                      "{type: constant, value: 20 MPa}", kJwl));
   ASSERT_EQ(s.gas.law.kind, GasLaw::Kind::Jwl);
-  ASSERT_GT(relax_to_equilibrium(s, false), 0) << "ADR did not converge";
-  compute_external(s, 0.0);
-  // p = p0 jwl(v) / jwl(1), v = V / V0 (the hole is full: v_ref 1), V from Lame: bisection.
-  const auto law_at = [](double expansion) { return kP0 * jwl(expansion) / jwl(1.0); };
-  double lo = 0.0, hi = kP0;
-  for (int it = 0; it < 200; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (mid - law_at(lame_expansion(mid)) > 0 ? hi : lo) = mid;
-  }
-  const double p_exact = 0.5 * (lo + hi);
-  // 1%: as the two-gamma test (the discrete hole is 3% more compliant than Lame's).
-  EXPECT_NEAR(s.gas.pressure / p_exact, 1.0, 0.01) << "p " << s.gas.pressure << " Pa, Lame " << p_exact;
-  EXPECT_LT(s.gas.pressure, 0.95 * kP0) << "the expansion must matter in this test";
+  for (int k = 0; k < 200; ++k) cpu_step(s);
   const double v = s.gas.volume / s.gas.reference_volume;
-  EXPECT_NEAR(s.gas.pressure / law_at(v), 1.0, 1e-9);
-  // The work is the isentrope's integral of p dV, V = V0 v (1%: the trapezoid over the ADR path).
+  ASSERT_GT(v, 1.002) << "the expansion must matter in this test";
+  EXPECT_NEAR(s.gas.pressure / (kP0 * jwl(v) / jwl(1.0)), 1.0, 1e-9);  // round-off
+  // 1%: the bound for the work; the trapezoid over 200 steps is far closer.
   const double work = kP0 / jwl(1.0) * s.gas.reference_volume * (jwl_integral(v) - jwl_integral(1.0));
   EXPECT_NEAR(s.gas.work / work, 1.0, 0.01);
+  EXPECT_NEAR(s.external_work / s.gas.work, 1.0, 0.01);
 }
 
 TEST(Gas, VentAreaFromTheCrackOpeningIsOpeningTimesTraceLength) {
@@ -297,11 +291,13 @@ TEST(Gas, VentAreaFromTheCrackOpeningIsOpeningTimesTraceLength) {
   EXPECT_NEAR(s.gas.crack_vent_area / (delta * kThickness), 1.0, 0.10);
   EXPECT_NEAR(s.gas.crack_volume / (delta * (kB - kA) * kThickness), 1.0, 0.05);
   EXPECT_DOUBLE_EQ(s.gas.outflow_area(), s.gas.crack_vent_area) << "a closed hole: the cracks are the only vent";
-  // Opened twice as far, the mouth doubles (the law is linear in the opening).
+  // Opened twice as far, the mouth doubles: the law is linear in the openings, and a pair's
+  // opening is linear in delta up to a term of order delta / |xi| (2% at most here, for the
+  // shortest pairs across the crack).
   const double first = s.gas.crack_vent_area;
   for (size_t i = 0; i < s.n; ++i) s.u[3 * i + 1] *= 2.0;
   compute_external(s, 0.0);
-  EXPECT_NEAR(s.gas.crack_vent_area / first, 2.0, 1e-9);
+  EXPECT_NEAR(s.gas.crack_vent_area / first, 2.0, 0.02);
 }
 
 TEST(Gas, ACrackingChargeDoesTheWorkOfItsForces) {
@@ -318,4 +314,23 @@ TEST(Gas, ACrackingChargeDoesTheWorkOfItsForces) {
   // 1%: the bound (the first step of each joining entry is counted by the trapezoid
   // only, half a step's opening).
   EXPECT_NEAR(s.external_work / s.gas.work, 1.0, 0.01);
+}
+
+TEST(Gas, BadJwlAndVentAreaInputNamesTheField) {
+  const auto fails_with = [](const std::string& extra, const std::string& law, const std::string& needle) {
+    try {
+      system_from_yaml("gas_bad_jwl", disc_case(extra, "time: {steps: 1}\n", "{type: constant, value: 20 MPa}", law));
+      ADD_FAILURE() << "accepted: " << extra << " " << law;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  fails_with("", "eos: jwl, gas_density: 1128", "loads[0].jwl");                         // the block is required
+  fails_with("", "eos: jwl, gamma_high: 3, jwl: {A: 1 GPa}", "loads[0].gamma_high");     // two-gamma keys refused
+  fails_with("", "eos: jwl, jwl: {A: 1 GPa, B: 1 GPa, C: 1 GPa, R1: 4, R2: 1, omega: 0.3, explosive_density: 1000}",
+             "loads[0].gas_density");                                                    // v_ref needs it
+  fails_with("", "eos: jwl, gas_density: 1128, jwl: {A: -1 GPa, B: 1 GPa, C: 1 GPa, R1: 4, R2: 1, omega: 0.3, "
+             "explosive_density: 1000}", "loads[0].jwl.A");
+  fails_with(", gas_density: 1000, vent_area: crack_opening", kTwoGamma, "loads[0].vent_area");  // no vent surfaces
+  fails_with("", "eos: two_gamma, jwl: {A: 1 GPa}", "loads[0].jwl");
 }

@@ -351,7 +351,7 @@ CaseConfig parse_case_file(const std::string& path) {
   for (const Section& l : root.list("loads")) {
     const std::string type = l.choice("type", {"pressure", "traction", "body_force", "gas"});
     if (type == "gas")
-      l.allow_only({"type", "surface", "history", "gamma_high", "gamma_low", "switch_pressure", "stemming",
+      l.allow_only({"type", "surface", "history", "eos", "gamma_high", "gamma_low", "switch_pressure", "jwl", "stemming",
                     "vent_surfaces", "front_speed", "crack_entry", "gas_density", "vent_area", "ambient_pressure",
                     "cavity_volume"});
     else
@@ -362,19 +362,46 @@ CaseConfig parse_case_file(const std::string& path) {
       ls.surface = l.text("surface");
       ls.history = parse_history(l.section("history"), Quantity::Pressure);
       GasSpec& g = ls.gas;
-      g.gamma_high = l.number("gamma_high", Quantity::Dimensionless, g.gamma_high);
-      g.gamma_low = l.number("gamma_low", Quantity::Dimensionless, g.gamma_low);
-      for (const auto& [key, gamma] : {std::pair{"gamma_high", g.gamma_high}, std::pair{"gamma_low", g.gamma_low}})
-        if (!(gamma > 1.0))
-          throw InputError(path, l.field(key), short_number(gamma), "a ratio of specific heats above 1");
-      g.switch_pressure = l.positive("switch_pressure", Quantity::Pressure, g.switch_pressure);
+      g.law.kind = l.choice("eos", {"two_gamma", "jwl"}, "two_gamma") == "jwl" ? GasLaw::Kind::Jwl
+                                                                             : GasLaw::Kind::TwoGamma;
+      if (g.law.kind == GasLaw::Kind::TwoGamma) {
+        if (l.has("jwl"))
+          throw InputError(path, l.field("jwl"), "given with the two-gamma isentrope", "eos: jwl, or no jwl block");
+        g.law.gamma_high = l.number("gamma_high", Quantity::Dimensionless, g.law.gamma_high);
+        g.law.gamma_low = l.number("gamma_low", Quantity::Dimensionless, g.law.gamma_low);
+        for (const auto& [key, gamma] : {std::pair{"gamma_high", g.law.gamma_high}, std::pair{"gamma_low", g.law.gamma_low}})
+          if (!(gamma > 1.0))
+            throw InputError(path, l.field(key), short_number(gamma), "a ratio of specific heats above 1");
+        g.law.switch_pressure = l.positive("switch_pressure", Quantity::Pressure, g.law.switch_pressure);
+      } else {
+        for (const char* key : {"gamma_high", "gamma_low", "switch_pressure"})
+          if (l.has(key)) throw InputError(path, l.field(key), "given with eos: jwl", "the jwl block's coefficients");
+        const Section j = l.section("jwl");
+        j.allow_only({"A", "B", "C", "R1", "R2", "omega", "explosive_density"});
+        g.law.jwl_a = j.positive("A", Quantity::Pressure);
+        g.law.jwl_b = j.positive("B", Quantity::Pressure);
+        g.law.jwl_c = j.positive("C", Quantity::Pressure);
+        g.law.jwl_r1 = j.positive("R1", Quantity::Dimensionless);
+        g.law.jwl_r2 = j.positive("R2", Quantity::Dimensionless);
+        g.law.jwl_omega = j.positive("omega", Quantity::Dimensionless);
+        g.jwl_explosive_density = j.positive("explosive_density", Quantity::Density);
+        if (!l.has("gas_density"))
+          throw InputError(path, l.field("gas_density"), "missing (eos: jwl)",
+                           "the gas density in the reference cavity (kg/m3): with jwl.explosive_density it gives "
+                           "the products' relative volume there");
+      }
       g.stemming_open = l.choice("stemming", {"closed", "open"}, "closed") == "open";
       if (l.has("vent_surfaces")) g.vent_surfaces = l.texts("vent_surfaces");
       g.crack_entry = l.boolean("crack_entry", true);
       if (l.has("front_speed") && l.text("front_speed") != "escape")
         g.front_speed = l.positive("front_speed", Quantity::Velocity);
       if (l.has("gas_density")) g.density = l.positive("gas_density", Quantity::Density);
-      if (l.has("vent_area")) g.vent_area = l.positive("vent_area", Quantity::Area);
+      if (l.has("vent_area")) {
+        if (l.node()["vent_area"].IsScalar() && l.text("vent_area") == "crack_opening")
+          g.vent_crack_opening = true;  // the cracks' mouths on the vent surfaces (gas.hpp)
+        else
+          g.vent_area = l.positive("vent_area", Quantity::Area);
+      }
       g.ambient_pressure = l.number("ambient_pressure", Quantity::Pressure, g.ambient_pressure);
       if (g.ambient_pressure < 0)
         throw InputError(path, l.field("ambient_pressure"), short_number(g.ambient_pressure) + " Pa", "0 or more");
@@ -384,6 +411,10 @@ CaseConfig parse_case_file(const std::string& path) {
         throw InputError(path, l.field("gas_density"), "missing",
                          "the gas density in the reference cavity (kg/m3: the charge's mass over the hole's "
                          "volume), needed for the outflow once the gas vents and for the front's escape speed");
+      if (g.law.kind == GasLaw::Kind::Jwl) g.law.jwl_v_ref = g.jwl_explosive_density / g.density;
+      if (g.vent_crack_opening && g.vent_surfaces.empty())
+        throw InputError(path, l.field("vent_area"), "crack_opening without vent_surfaces",
+                         "vent_surfaces for the cracks to open on, or an area in m2");
       if (!g.crack_entry && !g.vent_surfaces.empty())
         throw InputError(path, l.field("vent_surfaces"), "given with crack_entry: false",
                          "no vent surfaces (the gas reaches them only through cracks)");

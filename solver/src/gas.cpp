@@ -17,13 +17,14 @@ double GasState::front_speed() const {
   // A gas expanding into an empty channel cannot move faster than its escape speed
   // 2 c / (gamma - 1) (the centred rarefaction of a gas released into vacuum).
   const double rho = reference_density * mass_fraction * reference_volume / std::max(volume, 1e-30);
-  const double gamma = gas_local_gamma(pressure_abs, law);
   if (rho <= 0.0 || pressure_abs <= 0.0) return 1e-30;
+  const double gamma = gas_local_gamma(pressure_abs, mass_fraction * reference_volume / volume, law);
   return 2.0 * std::sqrt(gamma * pressure_abs / rho) / (gamma - 1.0);
 }
 
-void GasState::advance(double wall, double crack, double crack_before, double vents, double t, double dt) {
-  if (!vented && vents > 0.0) {
+void GasState::advance(double wall, const GasSums& cracks, double t, double dt) {
+  const double crack = cracks.volume;
+  if (!vented && cracks.vents > 0.0) {
     vented = true;
     vent_time = t;
   }
@@ -32,9 +33,9 @@ void GasState::advance(double wall, double crack, double crack_before, double ve
   // Outflow over the step, explicit at the last state (its time scale V / (Gamma A c) is
   // hundreds of steps for a charge hole).
   if (vented && dt > 0.0 && pressure_abs > ambient && mass_fraction > 0.0) {
-    const double gamma = gas_local_gamma(pressure_abs, law);
+    const double gamma = gas_local_gamma(pressure_abs, mass_fraction * reference_volume / volume, law);
     const double rho = reference_density * mass_fraction * reference_volume / volume;
-    const double mdot = choked_flow_factor(gamma) * vent_area * std::sqrt(gamma * pressure_abs * rho);
+    const double mdot = choked_flow_factor(gamma) * outflow_area() * std::sqrt(gamma * pressure_abs * rho);
     mass_fraction = std::max(0.0, mass_fraction - dt * mdot / (reference_density * reference_volume));
   }
   const double p_ref = ambient + spec->history.at(t);
@@ -47,11 +48,14 @@ void GasState::advance(double wall, double crack, double crack_before, double ve
     gauge = 0.0;
   }
   // Work on the solid: the volume the motion made, without the crack the front just reached.
-  const double v_moved = std::max(reference_volume + wall + crack_before, 1e-6 * reference_volume);
-  work += 0.5 * (pressure + gauge) * (v_moved - volume);
+  const double v_moved = std::max(reference_volume + wall + cracks.volume_before, 1e-6 * reference_volume);
+  // and the entries that joined: their force starts now, over this step's displacement.
+  // The wall particles that left now: their last force over this step's displacement.
+  work += 0.5 * (pressure + gauge) * (v_moved - volume) + 0.5 * gauge * cracks.joined + 0.5 * pressure * cracks.left;
   volume = v_now;
   wall_volume = wall;
   crack_volume = crack;
+  crack_vent_area = cracks.vent_area;  // the mouths at this state: the next step's outflow
   pressure = gauge;
   pressure_abs = p;
 }
@@ -96,7 +100,7 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
   g.active = true;
   g.load = load_index;
   g.spec = &ls;
-  g.law = {spec.gamma_high, spec.gamma_low, spec.switch_pressure};
+  g.law = spec.law;
   g.reference_density = spec.density;
   g.ambient = spec.ambient_pressure;
   g.fixed_front_speed = spec.front_speed;
@@ -135,28 +139,33 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
                        short_number(v0) + " m3", "the wall of a cavity (normals pointing into it), or give cavity_volume");
     g.reference_volume = v0;
   }
-  g.vent_area = spec.vent_area > 0.0 ? spec.vent_area : open_surface ? mouth_area : 0.0;
+  // The fixed vent area: the case's, or the mouth's when it is open; with vent_area:
+  // crack_opening the cracks' mouths on the vent surfaces come on top (GasCrackSum).
+  g.vent_crack_opening = spec.vent_crack_opening;
+  const bool mouth_vents = open_surface && (spec.stemming_open || !g.vent_crack_opening);
+  g.vent_area = spec.vent_area > 0.0 ? spec.vent_area : mouth_vents ? mouth_area : 0.0;
   const bool can_vent = spec.stemming_open || !spec.vent_surfaces.empty();
-  if (can_vent && !(g.vent_area > 0.0))
+  if (can_vent && !(g.vent_area > 0.0) && !(g.vent_crack_opening && !spec.vent_surfaces.empty()))
     throw InputError(c.file, field + ".vent_area", "missing, and the cavity has no mouth to take it from",
-                     "the area through which the gas escapes once it vents (m2)");
+                     "the area through which the gas escapes once it vents (m2), or crack_opening");
 
   const size_t n = s.n;
-  g.vent_face.assign(n, 0);
+  g.vent_facet_area.assign(n, 0.0);
   for (size_t v = 0; v < spec.vent_surfaces.size(); ++v) {
     const SurfaceFacets* vent = s.particles.find_surface(spec.vent_surfaces[v]);
     if (!vent)
       throw InputError(c.file, field + ".vent_surfaces[" + std::to_string(v) + "]",
                        "'" + spec.vent_surfaces[v] + "' is not a surface of the particle file",
                        "the name of a boundary surface group");
-    for (int64_t p : vent->particle) g.vent_face[s.internal_index[p]] = 1;
+    for (size_t f = 0; f < vent->size(); ++f) g.vent_facet_area[s.internal_index[vent->particle[f]]] += vent->area_m2[f];
   }
   // Crack-face area factor kappa_i = 2 d / sum_j V_j |xi| (gas.hpp).
-  g.kappa.assign(n, 0.0);
+  g.kappa_volume.assign(2 * n, 0.0);
   for (size_t i = 0; i < n; ++i) {
     double mi = 0.0;
     for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) mi += s.volume[s.neighbor[k]] * s.xi_len[k];
-    g.kappa[i] = mi > 0.0 ? 2.0 * dim / mi : 0.0;
+    g.kappa_volume[2 * i] = mi > 0.0 ? 2.0 * dim / mi : 0.0;
+    g.kappa_volume[2 * i + 1] = s.volume[i];
   }
   if (g.crack_entry) {
     g.arrival.assign(n, std::numeric_limits<double>::infinity());
@@ -164,15 +173,18 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
     g.arrival_next = g.arrival;
     g.push.assign(3 * n, 0.0);
     g.front_done.assign(n, 0);
+    g.in_crack.assign(s.neighbor.size(), 0);
   }
   g.wall_dv.assign(s.facets.particle.size(), 0.0);
+  g.wall_left.assign(s.facets.particle.size(), 0.0);
+  g.wall_on.assign(s.facets.particle.size(), 1);
   g.vented = spec.stemming_open;
   g.vent_time = spec.stemming_open ? 0.0 : -1.0;
   g.volume = g.reference_volume;
   g.mass_fraction = 1.0;
   g.pressure_abs = g.ambient;
   g.pressure = 0.0;
-  g.advance(0.0, 0.0, 0.0, 0.0, s.time, 0.0);  // the state at the start, no work yet
+  g.advance(0.0, GasSums{}, s.time, 0.0);  // the state at the start, no work yet
   g.work = 0.0;
 }
 

@@ -284,7 +284,7 @@ HistoryWriter::HistoryWriter(const PdSystem& s, const std::string& out_dir, bool
     if (s.config.indenter.enabled) std::fprintf(file_, ",indenter_force_x_N,indenter_force_y_N,indenter_force_z_N");
     if (s.gas.active)
       std::fprintf(file_, ",gas_pressure_Pa,cavity_volume_m3,crack_gas_volume_m3,gas_work_J,gas_mass_fraction,"
-                          "gas_vented,gas_wetted_particles");
+                          "gas_vented,gas_wetted_particles,gas_vent_area_m2");
     const char* comp[2][3] = {{"ux", "uy", "uz"}, {"vx", "vy", "vz"}};
     for (size_t p = 0; p < probes_.size(); ++p)
       for (int d = 0; d < 3; ++d)
@@ -323,8 +323,8 @@ void HistoryWriter::write(const PdSystem& s, const Energies& e) {
     const GasState& g = s.gas;
     long long wetted = 0;
     for (double t : g.arrival) wetted += t < 1e300;
-    std::fprintf(file_, ",%.9e,%.9e,%.9e,%.9e,%.9e,%d,%lld", g.pressure, g.volume, g.crack_volume, g.work,
-                 g.mass_fraction, g.vented ? 1 : 0, wetted);
+    std::fprintf(file_, ",%.9e,%.9e,%.9e,%.9e,%.9e,%d,%lld,%.9e", g.pressure, g.volume, g.crack_volume, g.work,
+                 g.mass_fraction, g.vented ? 1 : 0, wetted, g.outflow_area());
   }
   for (const auto& [i, kind] : probes_) {
     const std::vector<double>& src = kind ? s.v : s.u;
@@ -365,10 +365,14 @@ void write_checkpoint(const PdSystem& s, const std::string& path) {
       const GasState& g = s.gas;
       const std::vector<double> scalars{g.volume,       g.wall_volume, g.crack_volume, g.pressure, g.pressure_abs,
                                         g.mass_fraction, g.work,        g.vented ? 1.0 : 0.0, g.vent_time,
-                                        g.peak_pressure, g.spent ? 1.0 : 0.0};
+                                        g.peak_pressure, g.spent ? 1.0 : 0.0, g.crack_vent_area};
       f.write("/gas/scalars", scalars, {scalars.size()});
       f.write("/gas/wall_dv", g.wall_dv, {g.wall_dv.size()});
-      if (g.crack_entry) f.write("/gas/arrival", g.arrival, {g.arrival.size()});
+      f.write("/gas/wall_on", g.wall_on, {g.wall_on.size()});
+      if (g.crack_entry) {
+        f.write("/gas/arrival", g.arrival, {g.arrival.size()});
+        f.write("/gas/in_crack", g.in_crack, {g.in_crack.size()});  // which cracks the work follows
+      }
     }
   }
   out.commit();
@@ -422,15 +426,25 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
       throw InputError(path, "/gas/scalars", "missing (written without a gas load)", "a checkpoint of this case");
     const auto sc = f.read_doubles("/gas/scalars");
     const auto wall = f.read_doubles("/gas/wall_dv");
-    if (sc.size() != 11 || wall.size() != g.wall_dv.size())
+    if (sc.size() != 12 || wall.size() != g.wall_dv.size())
       throw InputError(path, "/gas", "gas state of another cavity", "a checkpoint of this case");
     g.volume = sc[0], g.wall_volume = sc[1], g.crack_volume = sc[2], g.pressure = sc[3], g.pressure_abs = sc[4];
     g.mass_fraction = sc[5], g.work = sc[6], g.vented = sc[7] != 0.0, g.vent_time = sc[8];
-    g.peak_pressure = sc[9], g.spent = sc[10] != 0.0;
+    g.peak_pressure = sc[9], g.spent = sc[10] != 0.0, g.crack_vent_area = sc[11];
     g.wall_dv = wall;
+    if (!f.exists("/gas/wall_on"))
+      throw InputError(path, "/gas/wall_on", "missing (written by an older breccia-solve)",
+                       "a checkpoint of this case written by this version");
+    g.wall_on = f.read_uint8("/gas/wall_on");
     if (g.crack_entry) {
       g.arrival = f.read_doubles("/gas/arrival");
       g.arrival_next = g.arrival;
+      if (!f.exists("/gas/in_crack"))
+        throw InputError(path, "/gas/in_crack", "missing (written by an older breccia-solve)",
+                         "a checkpoint of this case written by this version");
+      g.in_crack = f.read_uint8("/gas/in_crack");
+      if (g.in_crack.size() != s.neighbor.size())
+        throw InputError(path, "/gas/in_crack", "sized for other families", "a checkpoint of this case");
     }
   }
   // Derived per-particle fields (damage, energy) at the restored state; no bond can break

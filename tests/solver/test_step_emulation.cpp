@@ -45,7 +45,7 @@ public:
   void contact(const StepArrays<Real>& a) const { host_.contact(a); }
   template <class Real>
   void gas(const StepArrays<Real>& a, PdSystem& sys, double t, double dt) const {
-    gas_update(*this, a.d, a.facets, sys.gas, t, dt);
+    gas_update(*this, a.d, a.facets, sys.gas, t, dt, dt > 0.0 ? static_cast<const Real*>(a.u_before) : nullptr);
   }
   template <class Real>
   void gas_crack_forces(const StepArrays<Real>& a, PdSystem& sys) const {

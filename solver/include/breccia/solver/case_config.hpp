@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "breccia/solver/gas_law.hpp"
 #include "breccia/solver/history.hpp"
 #include "breccia/solver/pd_physics.hpp"
 
@@ -37,14 +38,15 @@ struct MaterialSpec {
 
 // Explosive gas in a cavity (loads[].type: gas; gas.hpp, docs/case-format.md).
 struct GasSpec {
-  double gamma_high = 3.0, gamma_low = 1.3;
-  double switch_pressure = 0.1e9;      // Pa, where the isentrope changes gamma
+  GasLaw law;                          // the isentrope: two-gamma (default) or JWL (gas_law.hpp)
+  double jwl_explosive_density = 0.0;  // kg/m3, the unreacted explosive's (JWL's v = 1)
   bool stemming_open = false;          // mouth open: the gas vents from the start
   std::vector<std::string> vent_surfaces;  // the front reaching one of these vents the gas
   double front_speed = 0.0;            // m/s along open bonds; 0: escape speed 2c/(gamma-1)
   bool crack_entry = true;             // the gas enters cracks (false: stays in the hole)
   double density = 0.0;                // gas density in the reference cavity [kg/m3]
   double vent_area = 0.0;              // m2; 0: the mouth's area
+  bool vent_crack_opening = false;     // vent_area: crack_opening, the cracks' mouths on the vent surfaces
   double ambient_pressure = 101325.0;  // Pa
   double cavity_volume = 0.0;          // m3; 0: from the surface's facets
 };

@@ -23,43 +23,12 @@
 #include <limits>
 #include <vector>
 
+#include "breccia/solver/gas_law.hpp"
 #include "breccia/solver/hd.hpp"
 #include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_kernels.hpp"
 
 namespace breccia::solver {
-
-// Isentrope of the detonation or deflagration products: p rho^-gamma constant, gamma_high
-// above switch_pressure, gamma_low below (the two-gamma law of blasting practice).
-struct GasLaw {
-  double gamma_high = 3.0;
-  double gamma_low = 1.3;
-  double switch_pressure = 0.1e9;  // Pa, absolute
-};
-
-// Absolute pressure at relative density rho on the isentrope through (1, p_ref): rho is the
-// gas's density over its density in the reference cavity with all its mass.
-BRECCIA_HD double gas_isentrope_pressure(double p_ref, double rho, const GasLaw& g) {
-  if (p_ref <= 0.0 || rho <= 0.0) return 0.0;
-  if (p_ref >= g.switch_pressure) {
-    const double rho_switch = std::pow(g.switch_pressure / p_ref, 1.0 / g.gamma_high);  // <= 1
-    return rho >= rho_switch ? p_ref * std::pow(rho, g.gamma_high)
-                             : g.switch_pressure * std::pow(rho / rho_switch, g.gamma_low);
-  }
-  const double rho_switch = std::pow(g.switch_pressure / p_ref, 1.0 / g.gamma_low);  // > 1
-  return rho <= rho_switch ? p_ref * std::pow(rho, g.gamma_low)
-                           : g.switch_pressure * std::pow(rho / rho_switch, g.gamma_high);
-}
-
-BRECCIA_HD double gas_local_gamma(double p, const GasLaw& g) {
-  return p >= g.switch_pressure ? g.gamma_high : g.gamma_low;
-}
-
-// Choked (sonic) mass flux through an orifice: mdot = Gamma A sqrt(gamma p rho), with
-// Gamma = (2 / (gamma + 1))^((gamma + 1) / (2 (gamma - 1))) (isentropic nozzle flow).
-BRECCIA_HD double choked_flow_factor(double gamma) {
-  return std::pow(2.0 / (gamma + 1.0), (gamma + 1.0) / (2.0 * (gamma - 1.0)));
-}
 
 // Can the gas pass between the two ends of entry k? Only when no half-bond that exists is
 // intact (a bond carrying no force: broken, or cut by a pre-crack).
@@ -75,12 +44,20 @@ BRECCIA_HD bool gas_entry_open(const PdViewT<Real>& p, int64_t k) {
 struct GasView {
   int load = -1;                   // index of the gas among the surface loads (FacetView::load)
   double* wall_dv = nullptr;       // per facet particle: -sum A n.u of its gas facets (frozen once it detaches)
+  uint8_t* wall_on = nullptr;      // per facet particle: still on the wall (attached at the last update)
+  double* wall_left = nullptr;     // per facet particle: the dV of this step's motion of one that left now
   double* arrival = nullptr;       // per particle: time the gas reached it (+inf: dry); null: no crack entry
   double* arrival_next = nullptr;  // the front pass writes here, then copies back
-  const double* kappa = nullptr;   // per particle: 2 d / sum_j V_j |xi|
-  const uint8_t* vent_face = nullptr;  // per particle: owns a facet of a vent surface
+  // per particle: kappa_i = 2 d / sum_j V_j |xi| and V_i side by side (one cache line per
+  // partner in the crack pass)
+  const double* kappa_volume = nullptr;
+  const double* vent_area = nullptr;  // per particle: its facet area on vent surfaces [m2] (0: none)
   double* push = nullptr;          // 3 per particle: dV_crack/dy_i / V_i (the crack force is -p push)
   uint8_t* front_done = nullptr;   // per particle: wetted, and every partner is too (stops pushing)
+  // Per bond entry: 1 once the entry is open with both ends wetted at an update, so that its
+  // crack is in the gas's volume (for good: bonds do not heal and wetting is for good). The
+  // entries so marked skip the open and wetted checks, and the work counts only their motion.
+  uint8_t* in_crack = nullptr;
 };
 
 BRECCIA_HD bool gas_wetted(const GasView& g, int64_t i) { return g.arrival[i] < 1e300; }
@@ -88,7 +65,9 @@ BRECCIA_HD bool gas_wetted_next(const GasView& g, int64_t i) { return g.arrival_
 
 // Wall volume change of facet particle q: while the particle is attached its share follows
 // its displacement; when it loses its last bond it leaves the wall and its share is frozen
-// (the gas neither pushes it any more, SurfaceLoads, nor follows it).
+// (the gas neither pushes it any more, SurfaceLoads, nor follows it). At the update it
+// leaves, its force of the last update still acts in the step's work trapezoid over this
+// step's displacement: wall_left keeps that displacement's dV for the gas work.
 struct GasWallVolume {
   FacetView f;
   GasView g;
@@ -97,12 +76,19 @@ struct GasWallVolume {
   const uint8_t* state;
   BRECCIA_HD void operator()(int64_t q) const {
     const int64_t i = f.particle[q];
-    if (!particle_attached(offsets, state, i)) return;
+    const bool attached = particle_attached(offsets, state, i);
+    g.wall_left[q] = 0.0;
+    if (!attached && !g.wall_on[q]) return;
     double dv = 0.0;
     for (int64_t e = f.offsets[q]; e < f.offsets[q + 1]; ++e)
       if (f.load[e] == g.load)
         for (int d = 0; d < 3; ++d) dv -= f.area[e] * f.normal[3 * e + d] * u[3 * i + d];
-    g.wall_dv[q] = dv;
+    if (attached) {
+      g.wall_dv[q] = dv;
+    } else {  // leaves now
+      g.wall_left[q] = dv - g.wall_dv[q];
+      g.wall_on[q] = 0;
+    }
   }
 };
 
@@ -145,6 +131,7 @@ struct GasFront {
     if (!gas_wetted(g, i) || g.front_done[i]) return;
     bool dry_partner = false;
     for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
+      if (g.in_crack[k]) continue;  // both ends wetted
       const int32_t j = p.neighbor[k];
       if (gas_wetted(g, j)) continue;
       dry_partner = true;
@@ -176,53 +163,85 @@ BRECCIA_HD double gas_entry_opening(const PdView& p, int64_t i, int64_t k, doubl
 
 struct GasSums {
   double volume;         // m3
-  double volume_before;  // m3, of the cracks the gas filled before this step's front moved
+  double volume_before;  // m3, of the cracks that were in the volume at the last update
   double vents;          // crack-wetted particles on a vent surface
+  double vent_area;      // m2, the cracks' mouths on the vent surfaces (opening x trace length)
+  double joined;         // m3, -sum V_i a_k e_hat . du_i over the entries that joined this step
+  double left;           // m3, the dV of this step's motion of the wall particles that left it
 };
+
+BRECCIA_HD GasSums gas_sums_add(GasSums a, GasSums b) {
+  return {a.volume + b.volume, a.volume_before + b.volume_before, a.vents + b.vents, a.vent_area + b.vent_area,
+          a.joined + b.joined, a.left + b.left};
+}
 
 // Sum of the wall shares.
 struct GasWallSum {
   using Value = GasSums;
   const double* wall_dv;
-  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0}; }
-  BRECCIA_HD static Value combine(Value a, Value b) {
-    return {a.volume + b.volume, a.volume_before + b.volume_before, a.vents + b.vents};
-  }
-  BRECCIA_HD Value operator()(int64_t q) const { return {wall_dv[q], wall_dv[q], 0.0}; }
+  const double* wall_left;
+  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
+  BRECCIA_HD static Value combine(Value a, Value b) { return gas_sums_add(a, b); }
+  BRECCIA_HD Value operator()(int64_t q) const { return {wall_dv[q], wall_dv[q], 0.0, 0.0, 0.0, wall_left[q]}; }
 };
 
 // Crack volume the gas fills (each pair seen from both ends, hence the half) with the front
-// this step has reached (arrival_next) and with the one before it (arrival): the difference is
-// crack the gas has just spread into, a free expansion that does no work on the solid. And
-// whether the front stands on a vent surface: a wall particle (arrival 0) on a vent surface
-// does not vent; the gas has to get there through a crack. The same loop keeps each
-// particle's dV_crack/dy_i (push), so that the crack forces need no second pass over the
-// entries once the pressure is known.
+// this step has reached (arrival_next). The entries already in the volume at the last update
+// (in_crack) give volume_before: an entry that joins now (the front has just reached it, or
+// its bond has just broken between wetted particles) is crack the gas spreads into, a free
+// expansion that does no work on the solid. Its force starts now, and the step's work
+// trapezoid counts half of it over this step's displacement (u_before: the displacement at
+// the step's start; null outside a step): `joined` is that displacement's dV, so that the
+// gas work counts the same. Whether the front stands on a vent surface: a wall particle
+// (arrival 0) on a vent surface does not vent; the gas has to get there through a crack;
+// and the crack's mouth there: a vent particle's crack volume over its own volume (the
+// crack's volume density, opening x crack area per unit volume) times its facet area on the
+// vent surface sums, over the surface, to opening x trace length (docs/theory.md). The same
+// loop keeps each particle's dV_crack/dy_i (push), so that the crack forces need no second
+// pass over the entries once the pressure is known.
+template <class UBefore>
 struct GasCrackSum {
   using Value = GasSums;
   PdView p;
   GasView g;
-  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0}; }
-  BRECCIA_HD static Value combine(Value a, Value b) {
-    return {a.volume + b.volume, a.volume_before + b.volume_before, a.vents + b.vents};
-  }
+  const UBefore* u_before;
+  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
+  BRECCIA_HD static Value combine(Value a, Value b) { return gas_sums_add(a, b); }
   BRECCIA_HD Value operator()(int64_t i) const {
     if (!gas_wetted_next(g, i)) return identity();
-    const bool before_i = gas_wetted(g, i);
-    Value v{0.0, 0.0, g.vent_face[i] && g.arrival_next[i] > 0.0 ? 1.0 : 0.0};
+    const bool vent = g.vent_area[i] > 0.0 && g.arrival_next[i] > 0.0;
+    Value v{0.0, 0.0, vent ? 1.0 : 0.0, 0.0, 0.0, 0.0};
+    // The arrays as locals: the in_crack byte stores would otherwise make the compiler reload
+    // every pointer of the views after each one (a char store may alias anything).
+    const int32_t* neighbor = p.neighbor;
+    const double* kv = g.kappa_volume;
+    uint8_t* in_crack = g.in_crack;
+    const double kappa_i = kv[2 * i], volume_i = kv[2 * i + 1];
+    double du[3] = {0.0, 0.0, 0.0};
+    if (u_before)
+      for (int d = 0; d < 3; ++d) du[d] = p.u[3 * i + d] - double(u_before[3 * i + d]);
     double push[3] = {0.0, 0.0, 0.0};
-    for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
-      const int32_t j = p.neighbor[k];
-      if (!gas_wetted_next(g, j) || !gas_entry_open(p, k)) continue;
+    double density = 0.0;  // the particle's crack volume over its own volume
+    const int64_t end = p.offsets[i + 1];
+    for (int64_t k = p.offsets[i]; k < end; ++k) {
+      const bool counted = in_crack[k];
+      const int32_t j = neighbor[k];
+      if (!counted) {
+        if (!gas_entry_open(p, k) || !gas_wetted_next(g, j)) continue;
+        in_crack[k] = 1;  // only i writes its entries
+      }
       double dir[3];
       const double e = gas_entry_opening(p, i, k, dir);
       if (!(e > 0.0)) continue;
-      const double a_over_vi = 0.5 * (g.kappa[i] + g.kappa[j]) * p.volume[j];
-      const double share = a_over_vi * p.volume[i] * e * 0.5;
+      const double a_over_vi = 0.5 * (kappa_i + kv[2 * j]) * kv[2 * j + 1];
+      const double share = a_over_vi * volume_i * e * 0.5;
       v.volume += share;
-      if (before_i && gas_wetted(g, j)) v.volume_before += share;
+      if (counted) v.volume_before += share;
+      else v.joined -= volume_i * a_over_vi * (dir[0] * du[0] + dir[1] * du[1] + dir[2] * du[2]);
+      density += a_over_vi * e * 0.5;
       for (int d = 0; d < 3; ++d) push[d] += a_over_vi * dir[d];
     }
+    if (vent) v.vent_area = density * g.vent_area[i];
     for (int d = 0; d < 3; ++d) g.push[3 * i + d] = push[d];
     return v;
   }
@@ -252,13 +271,16 @@ struct GasState {
   const LoadSpec* spec = nullptr;
   GasLaw law;
   double reference_volume = 0.0;  // V0 [m3]
-  double vent_area = 0.0;         // [m2]
+  double vent_area = 0.0;         // [m2] fixed part: the mouth's (stemming open) or the case's
+  bool vent_crack_opening = false;  // add the cracks' mouths on the vent surfaces (GasCrackSum)
+  double crack_vent_area = 0.0;   // [m2] that part at the last update
   double reference_density = 0.0; // gas density in V0 with all its mass [kg/m3]
   double ambient = 0.0;           // [Pa]
   double fixed_front_speed = 0.0; // [m/s]; 0: the escape speed 2 c / (gamma - 1)
   bool crack_entry = false;
-  std::vector<double> wall_dv, arrival, arrival_next, kappa, push;
-  std::vector<uint8_t> vent_face, front_done;
+  std::vector<double> wall_dv, arrival, arrival_next, kappa_volume, push, vent_facet_area;
+  std::vector<uint8_t> front_done, in_crack, wall_on;
+  std::vector<double> wall_left;
   // evolving state (checkpointed with the particles')
   double volume = 0.0, wall_volume = 0.0, crack_volume = 0.0;
   double pressure = 0.0;          // gauge pressure applied [Pa]
@@ -277,38 +299,46 @@ struct GasState {
     GasView v;
     v.load = load;
     v.wall_dv = wall_dv.data();
+    v.wall_on = wall_on.data();
+    v.wall_left = wall_left.data();
     v.arrival = crack_entry ? arrival.data() : nullptr;
     v.arrival_next = crack_entry ? arrival_next.data() : nullptr;
-    v.kappa = kappa.data();
-    v.vent_face = vent_face.data();
+    v.kappa_volume = kappa_volume.data();
+    v.vent_area = vent_facet_area.data();
     v.push = push.data();
     v.front_done = front_done.data();
+    v.in_crack = in_crack.data();
     return v;
   }
+  // The area the gas escapes through once vented [m2]: the fixed part and the cracks' mouths.
+  double outflow_area() const { return vent_area + (vent_crack_opening ? crack_vent_area : 0.0); }
   // Speed of the gas front along open bonds now: the fixed one, or the speed of a gas
   // expanding into an empty channel, 2 c / (gamma - 1) with c = sqrt(gamma p / rho).
   double front_speed() const;
   // One update of the scalars from the summed wall and crack volumes at time t (dt: the
-  // step, 0 outside one: no outflow). crack_before: the cracks filled before the front's
-  // move this step, at the current positions (the work counts only the motion's dV).
-  void advance(double wall, double crack, double crack_before, double vents, double t, double dt);
+  // step, 0 outside one: no outflow). crack.volume_before: the cracks that were in the volume
+  // at the last update, at the current positions (the work counts only the motion's dV).
+  void advance(double wall, const GasSums& crack, double t, double dt);
 };
 
 // The gas at time t on the double arrays `d` (after the drift): front, volume, pressure.
-template <class Exec>
-void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, double t, double dt) {
+// u_before: the displacement at the step's start (null outside a step).
+template <class Exec, class UBefore>
+void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, double t, double dt,
+                const UBefore* u_before) {
   if (gas.spent) return;
   GasView g = gas.view();
   exec.for_each(f.particle_count, GasWallVolume{f, g, d.u, d.offsets, d.state}, "gas_wall_volume");
-  GasSums wall{0.0, 0.0, 0.0}, crack{0.0, 0.0, 0.0};
-  exec.reduce(f.particle_count, GasWallSum{g.wall_dv}, GasSumsInto{&wall}, "gas wall volume");
+  GasSums wall{}, crack{};
+  exec.reduce(f.particle_count, GasWallSum{g.wall_dv, g.wall_left}, GasSumsInto{&wall}, "gas wall volume");
   if (g.arrival) {
     exec.for_each(d.n, GasFrontCopy{g}, "gas_front_copy");
     exec.for_each(d.n, GasFront{d, g, t, gas.front_speed()}, "gas_front");
-    exec.reduce(d.n, GasCrackSum{d, g}, GasSumsInto{&crack}, "gas crack volume");
+    exec.reduce(d.n, GasCrackSum<UBefore>{d, g, u_before}, GasSumsInto{&crack}, "gas crack volume");
     exec.for_each(d.n, GasFrontCommit{g}, "gas_front_commit");
   }
-  gas.advance(wall.volume, crack.volume, crack.volume_before, crack.vents, t, dt);
+  crack.left = wall.left;
+  gas.advance(wall.volume, crack, t, dt);
 }
 
 // The gas's pressure on the crack faces it fills, added to `body` (after the surface loads).

@@ -96,7 +96,7 @@ struct PdSystem {
   long long step = 0;
   double time = 0.0;
   double dt = 0.0;
-  double stable_dt = 0.0;         // 2 / omega_max from power iteration (sharp)
+  double stable_dt = 0.0;         // 2 / omega_max (estimate_max_frequency, sharp)
   double silling_askari_dt = 0.0; // Silling & Askari 2005 bound (PMB), for reference
   int stable_step_passes = 0;     // force passes the stable-step estimate took
   double external_work = 0.0;
@@ -106,6 +106,9 @@ struct PdSystem {
   bool diagnostics = true;        // compute damage/energy in the next force pass
   // Wall time of each set-up phase, in order (setup_system; summary.json, progress line).
   std::vector<std::pair<std::string, double>> setup_phases;
+  // The same phases' process CPU time (all threads; std::clock, as the loop's loop_cpu_s):
+  // on a shared machine the ratio of set-up to step is measured in CPU time too.
+  std::vector<double> setup_phases_cpu;
   Float32State f32;               // model.precision: float32 (float32_state.hpp); inactive otherwise
 
   PdView view();
@@ -178,9 +181,11 @@ struct Energies {
 };
 Energies measure(const PdSystem& sys);
 
-// Largest angular frequency of the linearised system by power iteration (uses the force
-// kernel on a tiny displacement, so it is exact for the discretisation at hand). `forces`:
-// how each iteration's force pass runs (ForcePass); the result does not depend on it.
-double estimate_max_frequency(PdSystem& sys, int iterations = 60, const ForcePass& forces = {});
+// Largest angular frequency of the linearised system (times a 2% margin) by Lanczos in the
+// mass inner product, at most `max_passes` force passes (it stops earlier once converged;
+// sys.stable_step_passes says how many). The force kernel is applied on a tiny
+// displacement, so it is exact for the discretisation at hand. `forces`: how each pass runs
+// (ForcePass); the result does not depend on it.
+double estimate_max_frequency(PdSystem& sys, int max_passes = 60, const ForcePass& forces = {});
 
 }  // namespace breccia::solver

@@ -1193,7 +1193,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   if (c.check_stability) require_resolved_families(s);
   phase("state and start-up checks");
 
-  // Stable time step: sharp estimate by Lanczos (estimate_max_frequency); Silling & Askari (2005) for reference.
+  // Stable time step: sharp estimate by power iteration; Silling & Askari (2005) for reference.
   if (!lps) {
     double dt_min = 1e300;
     for (size_t i = 0; i < n; ++i) {

@@ -182,7 +182,7 @@ double largest_symmetric_eigenvalue(std::vector<double> a, size_t n) {
 
 class StableStepEstimate : public ::testing::TestWithParam<const char*> {};
 
-// The set-up's stable step (Lanczos, estimate_max_frequency) against the brute force: the
+// The Lanczos stable step (estimate_max_frequency_lanczos) against the brute force: the
 // whole matrix M^-1 K assembled column by column through the same force pass (a unit
 // displacement of one degree of freedom each), made symmetric by the mass (M^1/2 A M^-1/2)
 // and its largest eigenvalue found by Jacobi rotations, on a block small enough for that
@@ -198,7 +198,7 @@ TEST_P(StableStepEstimate, LargestFrequencyMatchesTheDenseEigenvalue) {
       "materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: " +
       (type == "pmb" ? "0.25" : "0.2") + "}]\ntime: {steps: 1}\n";
   PdSystem s = system_from_yaml("stable_step_" + type, yaml);
-  const double omega = estimate_max_frequency(s) / 1.02;  // without the safety margin
+  const double omega = estimate_max_frequency_lanczos(s) / 1.02;  // without the safety margin
   const int passes = s.stable_step_passes;
   const size_t dofs = 3 * s.n;
   std::vector<double> a(dofs * dofs);

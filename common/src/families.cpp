@@ -26,22 +26,40 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
   // reach(i, j) = max(h_i, h_j) + max(p_i, p_j) is the larger of the two "own" reaches
   // h_i + max(p_i, p_j) and h_j + max(p_i, p_j). Each particle searches its own reach; the
   // family is the union of what i found and what found i. With one horizon the own lists
-  // are already symmetric. Cells are sized to the smallest reach (at least 1/8 of the
-  // largest), so a fine region of a graded mesh with a 3x smaller horizon does not scan
+  // are already symmetric. Cells are sized to half the smallest reach (at least 1/8 of the
+  // largest reach), so a fine region of a graded mesh with a 3x smaller horizon does not scan
   // cells sized for the coarse one (that made a 291k-particle dual-horizon family build
   // take a minute).
   const double max_reach = max_horizon + max_pad;
-  const double cell = std::max({min_horizon + max_pad, max_reach / 8.0, 1e-300});
+  // Cells of half the smallest reach: a search scans (2 ring + 1)^3 cells, and halving the
+  // cell roughly halves the scanned volume around the reach's sphere (27 reach^3 with cells of
+  // one reach, 15.6 with half), and cells wholly beyond the reach are skipped by their box.
+  const double cell = std::max({0.5 * (min_horizon + max_pad), max_reach / 8.0, 1e-300});
   const CellList cells = sort_into_cells(CellGrid::covering(bounding_box(x), cell), x);
   const CellGrid& grid = cells.grid;
   // Own search of particle i: every j within h_i + max(p_i, p_j).
   auto visit = [&](size_t i, auto&& emit) {
     long long ci[3];
     for (int d = 0; d < 3; ++d) ci[d] = grid.coordinate(d, x[3 * i + d]);
-    const long long ring = static_cast<long long>(std::ceil((horizon[i] + max_pad) / cell));
-    for (long long az = std::max(0LL, ci[2] - ring); az <= std::min(grid.count[2] - 1, ci[2] + ring); ++az)
-      for (long long ay = std::max(0LL, ci[1] - ring); ay <= std::min(grid.count[1] - 1, ci[1] + ring); ++ay)
+    const double search = horizon[i] + max_pad;
+    const long long ring = static_cast<long long>(std::ceil(search / cell));
+    // A cell is skipped when its box lies beyond the search radius (with a margin for the
+    // rounding of a point's cell coordinate, so that no neighbour is ever lost).
+    const double skip2 = (search + 1e-9 * cell) * (search + 1e-9 * cell);
+    auto gap = [&](int d, long long a) {
+      const double lo = grid.origin[d] + static_cast<double>(a) * grid.cell[d], hi = lo + grid.cell[d];
+      const double v = x[3 * i + d];
+      return v < lo ? lo - v : (v > hi ? v - hi : 0.0);
+    };
+    for (long long az = std::max(0LL, ci[2] - ring); az <= std::min(grid.count[2] - 1, ci[2] + ring); ++az) {
+      const double gz = gap(2, az);
+      if (gz * gz > skip2) continue;
+      for (long long ay = std::max(0LL, ci[1] - ring); ay <= std::min(grid.count[1] - 1, ci[1] + ring); ++ay) {
+        const double gy = gap(1, ay);
+        if (gz * gz + gy * gy > skip2) continue;
         for (long long ax = std::max(0LL, ci[0] - ring); ax <= std::min(grid.count[0] - 1, ci[0] + ring); ++ax) {
+          const double gx = gap(0, ax);
+          if (gz * gz + gy * gy + gx * gx > skip2) continue;
           const long long c = grid.index(ax, ay, az);
           for (int64_t k = cells.start[c]; k < cells.start[c + 1]; ++k) {
             const size_t j = static_cast<size_t>(cells.members[k]);
@@ -55,26 +73,36 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
             if (r2 <= reach * reach) emit(j);
           }
         }
+      }
+    }
   };
-  // Two passes (count, fill) keep memory exact for 10^8 bonds.
+  // One search per particle: each block of particles fills a buffer of its own (sorted per
+  // particle), then the buffers are copied into place. The buffers hold what the list will,
+  // so the peak stays below the three lists of the merge further below.
   Families own;
   own.offsets.assign(n + 1, 0);
   {
+    constexpr size_t block = 512;
+    const size_t blocks = (n + block - 1) / block;
+    std::vector<std::vector<int32_t>> found(blocks);
     std::vector<int64_t> count(n, 0);
-#pragma omp parallel for schedule(dynamic, 256)
-    for (size_t i = 0; i < n; ++i) {
-      int64_t c = 0;
-      visit(i, [&](size_t) { ++c; });
-      count[i] = c;
+#pragma omp parallel for schedule(dynamic, 4)
+    for (size_t b = 0; b < blocks; ++b) {
+      std::vector<int32_t>& list = found[b];
+      for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i) {
+        const size_t first = list.size();
+        visit(i, [&](size_t j) { list.push_back(static_cast<int32_t>(j)); });
+        std::sort(list.begin() + static_cast<std::ptrdiff_t>(first), list.end());
+        count[i] = static_cast<int64_t>(list.size() - first);
+      }
     }
     for (size_t i = 0; i < n; ++i) own.offsets[i + 1] = own.offsets[i] + count[i];
-  }
-  own.neighbors.resize(static_cast<size_t>(own.offsets[n]));
-#pragma omp parallel for schedule(dynamic, 256)
-  for (size_t i = 0; i < n; ++i) {
-    int64_t k = own.offsets[i];
-    visit(i, [&](size_t j) { own.neighbors[k++] = static_cast<int32_t>(j); });
-    std::sort(own.neighbors.begin() + own.offsets[i], own.neighbors.begin() + own.offsets[i + 1]);
+    own.neighbors.resize(static_cast<size_t>(own.offsets[n]));
+#pragma omp parallel for schedule(dynamic, 4)
+    for (size_t b = 0; b < blocks; ++b) {
+      std::copy(found[b].begin(), found[b].end(), own.neighbors.begin() + own.offsets[b * block]);
+      std::vector<int32_t>().swap(found[b]);
+    }
   }
   if (uniform) return own;
   // Transpose (who found i), filled in ascending i, so each list comes out sorted.

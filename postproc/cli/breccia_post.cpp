@@ -157,6 +157,15 @@ int main(int argc, char** argv) {
     const breccia::postproc::PostOptions options = finish(g);
     const auto summary = breccia::postproc::run_post(options);
     std::fprintf(stderr, "breccia-post: wrote %zu files to %s\n", summary.written.size(), summary.post_dir.string().c_str());
+    if (o.progress) {  // where the time went (the whole-chain profile)
+      std::string phases;
+      for (const auto& [name, seconds] : summary.phases) {
+        char item[96];
+        std::snprintf(item, sizeof item, "%s%s %.2f s", phases.empty() ? "" : ", ", name.c_str(), seconds);
+        phases += item;
+      }
+      std::fprintf(stderr, "breccia-post: phases: %s\n", phases.c_str());
+    }
     for (const auto& f : summary.plot_failures) std::fprintf(stderr, "breccia-post: chart not drawn: %s\n", f.c_str());
     return 0;
   });

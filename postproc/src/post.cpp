@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -92,7 +93,14 @@ public:
   explicit Runner(const PostOptions& o) : opt_(o) {}
 
   PostSummary run() {
+    auto last = std::chrono::steady_clock::now();
+    auto phase = [&](const char* name) {
+      const auto now = std::chrono::steady_clock::now();
+      summary_.phases.emplace_back(name, std::chrono::duration<double>(now - last).count());
+      last = now;
+    };
     run_ = open_run(opt_.run_dir, opt_.particles_file);
+    phase("read run");
     if (run_.outputs.empty() && (opt_.cracks || opt_.fragments))
       throw InputError(run_.results_path.string(), "/@output_count", "0 outputs", "at least one output group");
     summary_.post_dir = opt_.run_dir / "post";
@@ -110,19 +118,24 @@ public:
           face_bond_[f] = bond_index(run_.bonds, faces_.particle_a[f], faces_.particle_b[f]);
       }
     }
+    phase("bond faces");
     if (!run_.outputs.empty() && need_faces) crack_history();
+    phase("crack history");
     for (size_t k = 0; k < analysed_.size(); ++k) {
       if (analysed_.size() > 1 && opt_.progress)
         std::fprintf(stderr, "[post] output %zu/%zu (step %lld)\n", k + 1, analysed_.size(), run_.outputs[analysed_[k]].step);
       analyse_output(analysed_[k], k + 1 == analysed_.size());
     }
     if (opt_.all_steps) write_collections();
+    phase("outputs (cracks, fragments, fields)");
     load_history();
     if (opt_.energy && history_ && energy_available_) energy();
     if (opt_.probes && history_) probes();
     if (opt_.energy && history_ && history_->find("gas_pressure_Pa") && opt_.plots)  // a gas load (solver gas.hpp)
       plot("plot_gas.py", "--history " + shell_quote(history_->path.string()), "gas.png");
+    phase("history (energy, probes)");
     write_json();
+    phase("summary");
     return summary_;
   }
 

@@ -1,5 +1,6 @@
 // The OpenMP backend: the step of step.hpp on the host's double arrays through OpenMpExec,
 // plus the host-side pieces outside a step (energies, the stable-step estimate).
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -108,6 +109,119 @@ Energies measure(const PdSystem& sys) {
   e.finite = bad < 0 && std::isfinite(ke) && std::isfinite(se);
   e.bad_particle = bad;
   return e;
+}
+
+namespace {
+// The largest eigenvalue of the symmetric tridiagonal matrix with diagonal alpha and
+// off-diagonal beta (beta[k] couples k and k + 1), by bisection on the Sturm count.
+double largest_tridiagonal_eigenvalue(const std::vector<double>& alpha, const std::vector<double>& beta) {
+  const size_t m = alpha.size();
+  double lo = 1e300, hi = -1e300;  // Gershgorin interval
+  for (size_t k = 0; k < m; ++k) {
+    const double r = (k > 0 ? std::fabs(beta[k - 1]) : 0.0) + (k + 1 < m ? std::fabs(beta[k]) : 0.0);
+    lo = std::min(lo, alpha[k] - r);
+    hi = std::max(hi, alpha[k] + r);
+  }
+  // Eigenvalues above x: sign changes of the LDL^T pivots of T - x I.
+  auto count_above = [&](double x) {
+    int above = 0;
+    double d = 1.0;
+    for (size_t k = 0; k < m; ++k) {
+      const double b2 = k > 0 ? beta[k - 1] * beta[k - 1] : 0.0;
+      d = alpha[k] - x - (k > 0 ? b2 / d : 0.0);
+      if (d == 0.0) d = -1e-300 * (std::fabs(alpha[k]) + 1.0);
+      above += d > 0.0;
+    }
+    return above;
+  };
+  for (int it = 0; it < 200 && hi - lo > 1e-15 * std::max(std::fabs(lo), std::fabs(hi)); ++it) {
+    const double mid = 0.5 * (lo + hi);
+    if (count_above(mid) > 0) lo = mid;
+    else hi = mid;
+  }
+  return hi;
+}
+}  // namespace
+
+double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const ForcePass& forces) {
+  // Lanczos on M^-1 K, self-adjoint in the mass inner product <x, y> = sum rho_i V_i x_i y_i,
+  // with K applied through the force kernel at a displacement small enough to be linear
+  // (fracture off, state restored afterwards). The largest Ritz value approaches omega_max^2
+  // from below, never slower than a power iteration from the same start (its iterate lies in
+  // the same Krylov space), and on PD spectra far faster: it stops once the value moves by
+  // less than 1e-4 (relative) over two passes. Measured against the 60 power iterations it
+  // replaced: 23 passes on the full concrete case, the stable step 0.37% smaller
+  // (docs/performance.md). No reorthogonalisation: lost orthogonality only repeats
+  // converged Ritz values, it does not move the largest.
+  const size_t n3 = 3 * sys.n;
+  const std::vector<double> u_saved(sys.u);
+  const std::vector<uint8_t> state_saved(sys.state);
+  const bool fracture = sys.config.fracture;
+  const double dissipated = sys.dissipated_energy;
+  // Strains of 1e-9 are below float's resolution: the estimate is always made in double.
+  const bool float32 = sys.f32.active;
+  sys.f32.active = false;
+  sys.config.fracture = false;
+  double length_scale = 0.0;
+  for (size_t i = 0; i < sys.n; ++i) length_scale = std::max(length_scale, 2.0 * sys.half_cell[i]);
+  const double amplitude = 1e-9 * length_scale;
+  const bool planar = sys.dimension == 2;  // z is no degree of freedom
+  std::vector<double> mass(n3);
+  for (size_t k = 0; k < n3; ++k) mass[k] = (planar && k % 3 == 2) ? 0.0 : sys.density[k / 3] * sys.volume[k / 3];
+  // Sums in one fixed order (no thread reduction): the stable step must not depend on the
+  // thread count, nor on how a distributed run shares the force passes.
+  auto dot = [&](const std::vector<double>& x, const std::vector<double>& y) {
+    double sum = 0.0;
+    for (size_t k = 0; k < n3; ++k) sum += mass[k] * x[k] * y[k];
+    return sum;
+  };
+  // y = M^-1 K x: the force pass at u = amplitude x / |x| (the same displacement scale
+  // whatever x's norm), scaled back.
+  auto apply = [&](const std::vector<double>& x, std::vector<double>& y) {
+    double norm = 0.0;
+    for (size_t k = 0; k < n3; ++k) norm += x[k] * x[k];
+    norm = std::sqrt(norm);
+    for (size_t k = 0; k < n3; ++k) sys.u[k] = amplitude * x[k] / norm;
+    if (forces) forces(sys);
+    else cpu_compute_forces(sys);
+    for (size_t k = 0; k < n3; ++k) y[k] = (planar && k % 3 == 2) ? 0.0 : -sys.force[k] / sys.density[k / 3] / amplitude * norm;
+  };
+  std::mt19937_64 rng(12345);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  std::vector<double> q(n3), q_prev(n3, 0.0), w(n3);
+  for (size_t k = 0; k < n3; ++k) q[k] = (planar && k % 3 == 2) ? 0.0 : uni(rng);
+  double q_norm = std::sqrt(dot(q, q));
+  for (double& qk : q) qk /= q_norm;
+  std::vector<double> alpha, beta;
+  double lambda = 0.0;
+  int calm = 0;  // consecutive passes that moved the estimate by less than the tolerance
+  sys.stable_step_passes = 0;
+  for (int pass = 0; pass < max_passes; ++pass) {
+    apply(q, w);
+    const double a = dot(w, q);
+    const double b_prev = beta.empty() ? 0.0 : beta.back();
+    for (size_t k = 0; k < n3; ++k) w[k] -= a * q[k] + b_prev * q_prev[k];
+    alpha.push_back(a);
+    const double estimate = largest_tridiagonal_eigenvalue(alpha, beta);
+    sys.stable_step_passes = pass + 1;
+    const bool moved = std::fabs(estimate - lambda) > 1e-4 * std::fabs(estimate);
+    lambda = std::max(lambda, estimate);
+    calm = moved ? 0 : calm + 1;
+    if (calm >= 2) break;
+    const double b = std::sqrt(dot(w, w));
+    if (!(b > 1e-12 * std::fabs(a))) break;  // an invariant subspace: the estimate is exact
+    beta.push_back(b);
+    q_prev.swap(q);
+    for (size_t k = 0; k < n3; ++k) q[k] = w[k] / b;
+  }
+  sys.u = u_saved;
+  sys.state = state_saved;
+  sys.config.fracture = fracture;
+  sys.dissipated_energy = dissipated;
+  sys.f32.active = float32;
+  cpu_compute_forces(sys);  // restore force/energy fields at the real displacement
+  // 2% margin keeps 'stable' honest: the estimate approaches omega_max^2 from below.
+  return std::sqrt(std::max(lambda, 1e-300)) * 1.02;
 }
 
 double estimate_max_frequency(PdSystem& sys, int iterations, const ForcePass& forces) {

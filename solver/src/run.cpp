@@ -59,6 +59,10 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   Json phases;  // where the set-up's time went (setup_system)
   for (const auto& [name, seconds] : s.setup_phases) phases[name] = seconds;
   j["setup_phases_s"] = phases;
+  Json phases_cpu;  // the same phases' process CPU time (all threads)
+  for (size_t k = 0; k < s.setup_phases.size() && k < s.setup_phases_cpu.size(); ++k)
+    phases_cpu[s.setup_phases[k].first] = s.setup_phases_cpu[k];
+  j["setup_phases_cpu_s"] = phases_cpu;
   j["stable_step_force_passes"] = s.stable_step_passes;
   number("wall_s", r.wall_s);
   number("bond_updates_per_s", r.bond_updates_per_s);

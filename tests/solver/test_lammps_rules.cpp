@@ -391,3 +391,50 @@ TEST(PartialVolume, PositiveTestEqualsTheQuadratureWithoutRunningIt) {
   EXPECT_GT(positive, checked / 10);
   EXPECT_LT(positive, checked);
 }
+
+TEST(PartialVolume, SampleCountEqualsThePointByPointQuadrature) {
+  // partial_volume_samples_inside squares each axis's 6 sample coordinates once and decides
+  // whole rows of z samples by their smallest and largest square; the count must equal the
+  // plain quadrature's (every point tested, the squares summed in the same order) exactly,
+  // points on the sphere included, or the bond coefficients would change.
+  auto brute_force = [](const double xi[3], double horizon, double half, int dimension) {
+    constexpr int n = 6;
+    const double h = 2.0 * half / n;
+    int inside = 0;
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b < n; ++b)
+        for (int c = 0; c < (dimension == 3 ? n : 1); ++c) {
+          const double px = xi[0] - half + (a + 0.5) * h;
+          const double py = xi[1] - half + (b + 0.5) * h;
+          const double pz = dimension == 3 ? xi[2] - half + (c + 0.5) * h : xi[2];
+          inside += (px * px + py * py + pz * pz <= horizon * horizon);
+        }
+    return inside;
+  };
+  uint64_t z = 11;
+  auto uniform = [&z] {
+    z += 0x9E3779B97F4A7C15ull;
+    uint64_t x = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return double((x ^ (x >> 31)) >> 11) / 9007199254740992.0;
+  };
+  int partial = 0;
+  for (int dimension : {2, 3})
+    for (int k = 0; k < 200000; ++k) {
+      const bool lattice = k % 5 == 0;  // sample points land exactly on the horizon
+      const double half = lattice ? 0.5 : 0.15 + 0.5 * uniform(), delta = 3.0;
+      double xi[3] = {(uniform() - 0.5) * 9.0, (uniform() - 0.5) * 9.0, dimension == 3 ? (uniform() - 0.5) * 9.0 : 0.0};
+      if (lattice)
+        for (int a = 0; a < dimension; ++a) xi[a] = std::round(xi[a] * 2.0) / 2.0;
+      // The early accept and reject by the cell's half diagonal are the plain quadrature's
+      // too (partial_volume_sampled's definition): compare past them only.
+      const double len = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
+      const double reach = half * (dimension == 3 ? std::sqrt(3.0) : std::sqrt(2.0));
+      if (len + reach <= delta || len - reach >= delta) continue;
+      const int expected = brute_force(xi, delta, half, dimension);
+      ASSERT_EQ(partial_volume_samples_inside(xi, delta, half, dimension), expected)
+          << xi[0] << " " << xi[1] << " " << xi[2] << " half " << half << " dimension " << dimension;
+      partial += expected > 0 && expected < partial_volume_sample_total(dimension);
+    }
+  EXPECT_GT(partial, 50000);  // the cases a row shortcut cannot settle alone are exercised
+}

@@ -2,7 +2,7 @@
 // Peridynamic families (bonds): for each particle i, every j != i whose reference distance is
 // within reach(i, j) = max(horizon_i, horizon_j) + max(pad_i, pad_j). Full lists (each
 // pair appears from both ends) so a particle sums its own force without atomics.
-// Built with a uniform cell list (cell_list.hpp) sized to the smallest reach (each particle
+// Built with a uniform cell list (cell_list.hpp) of half the smallest reach (each particle
 // scans the cells its own reach covers; the family is the union of both directions): O(N)
 // for bounded density contrast. Shared by the solver (set-up, breccia-plan's bond counts) and
 // post-processing (the bond list of results.h5 and its fragment graph), so that both see

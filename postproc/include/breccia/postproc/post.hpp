@@ -41,6 +41,8 @@ struct PostSummary {
   std::filesystem::path post_dir;
   std::vector<std::string> written;       // file names under post_dir
   std::vector<std::string> plot_failures; // "file: reason"
+  // Wall time of each phase of the run, in order (breccia-post prints them).
+  std::vector<std::pair<std::string, double>> phases;
 };
 
 PostSummary run_post(const PostOptions& options);

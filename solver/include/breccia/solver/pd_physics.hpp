@@ -41,25 +41,54 @@ BRECCIA_HD double partial_volume_fraction(double xi_len, double horizon, double 
 // The same fraction by quadrature: j's cell taken as an axis-aligned cube (square) of
 // j's own volume, sampled at n^d midpoints. Far more accurate than the ramp near the
 // horizon edge (it sees the cell's orientation to the bond), still lattice-free.
-inline double partial_volume_sampled(const double xi[3], double horizon, double half_cell_j, int dimension) {
+// partial_volume_samples_inside counts the sample points inside the horizon, out of
+// partial_volume_sample_total(dimension); the fraction is their ratio.
+inline constexpr int kPartialVolumeSamples = 6;  // per axis
+inline constexpr int partial_volume_sample_total(int dimension) {
+  return dimension == 3 ? kPartialVolumeSamples * kPartialVolumeSamples * kPartialVolumeSamples
+                        : kPartialVolumeSamples * kPartialVolumeSamples;
+}
+inline int partial_volume_samples_inside(const double xi[3], double horizon, double half_cell_j, int dimension) {
+  constexpr int n = kPartialVolumeSamples;
   const double reach = half_cell_j * (dimension == 3 ? 1.7320508075688772 : 1.4142135623730951);
   const double len = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
-  if (len + reach <= horizon) return 1.0;
-  if (len - reach >= horizon) return 0.0;
-  constexpr int n = 6;
+  if (len + reach <= horizon) return partial_volume_sample_total(dimension);
+  if (len - reach >= horizon) return 0;
   const double h = 2.0 * half_cell_j / n;
-  int inside = 0, total = 0;
+  // Each axis's squared sample coordinates once (6 per axis, not 216 per point); a point is
+  // inside when (px^2 + py^2) + pz^2 <= horizon^2, summed in that order. Floating-point
+  // addition is monotonic, so a row of z samples is all outside when its smallest square
+  // is, all inside when its largest is: the count is the point-by-point count exactly.
+  double sq[3][n];
+  for (int axis = 0; axis < 3; ++axis)
+    for (int a = 0; a < n; ++a) {
+      const double p = xi[axis] - half_cell_j + (a + 0.5) * h;
+      sq[axis][a] = p * p;
+    }
   const int nz = dimension == 3 ? n : 1;
+  if (dimension != 3) sq[2][0] = xi[2] * xi[2];
+  double z_min = sq[2][0], z_max = sq[2][0];
+  for (int c = 1; c < nz; ++c) {
+    z_min = sq[2][c] < z_min ? sq[2][c] : z_min;
+    z_max = sq[2][c] > z_max ? sq[2][c] : z_max;
+  }
+  const double r2 = horizon * horizon;
+  int inside = 0;
   for (int a = 0; a < n; ++a)
-    for (int b = 0; b < n; ++b)
-      for (int c = 0; c < nz; ++c) {
-        const double px = xi[0] - half_cell_j + (a + 0.5) * h;
-        const double py = xi[1] - half_cell_j + (b + 0.5) * h;
-        const double pz = dimension == 3 ? xi[2] - half_cell_j + (c + 0.5) * h : xi[2];
-        inside += (px * px + py * py + pz * pz <= horizon * horizon);
-        ++total;
+    for (int b = 0; b < n; ++b) {
+      const double s = sq[0][a] + sq[1][b];
+      if (s + z_min > r2) continue;
+      if (s + z_max <= r2) {
+        inside += nz;
+        continue;
       }
-  return static_cast<double>(inside) / total;
+      for (int c = 0; c < nz; ++c) inside += (s + sq[2][c] <= r2);
+    }
+  return inside;
+}
+inline double partial_volume_sampled(const double xi[3], double horizon, double half_cell_j, int dimension) {
+  return static_cast<double>(partial_volume_samples_inside(xi, horizon, half_cell_j, dimension)) /
+         partial_volume_sample_total(dimension);
 }
 
 // partial_volume_sampled(...) > 0 without the quadrature: some sample point lies inside iff

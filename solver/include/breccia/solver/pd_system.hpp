@@ -106,6 +106,9 @@ struct PdSystem {
   bool diagnostics = true;        // compute damage/energy in the next force pass
   // Wall time of each set-up phase, in order (setup_system; summary.json, progress line).
   std::vector<std::pair<std::string, double>> setup_phases;
+  // The same phases' process CPU time (all threads; std::clock, as the loop's loop_cpu_s):
+  // on a shared machine the ratio of set-up to step is measured in CPU time too.
+  std::vector<double> setup_phases_cpu;
   Float32State f32;               // model.precision: float32 (float32_state.hpp); inactive otherwise
 
   PdView view();
@@ -178,9 +181,16 @@ struct Energies {
 };
 Energies measure(const PdSystem& sys);
 
-// Largest angular frequency of the linearised system by power iteration (uses the force
-// kernel on a tiny displacement, so it is exact for the discretisation at hand). `forces`:
-// how each iteration's force pass runs (ForcePass); the result does not depend on it.
+// Largest angular frequency of the linearised system (times a 2% margin) by power iteration
+// (uses the force kernel on a tiny displacement, so it is exact for the discretisation at
+// hand); the set-up's stable step. `forces`: how each iteration's force pass runs
+// (ForcePass); the result does not depend on it.
 double estimate_max_frequency(PdSystem& sys, int iterations = 60, const ForcePass& forces = {});
+// The same by Lanczos in the mass inner product: at most `max_passes` force passes, fewer
+// once converged (sys.stable_step_passes says how many): 23 instead of 60 on the full
+// concrete case, within 0.4% of the power iteration on five models (docs/performance.md).
+// Not the set-up's default yet: a 0.04% smaller step flips the first-case regression test
+// (whether one bond path still joins the plate's halves at 100 us), see performance.md.
+double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes = 60, const ForcePass& forces = {});
 
 }  // namespace breccia::solver

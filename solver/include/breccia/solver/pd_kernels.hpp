@@ -193,15 +193,14 @@ BRECCIA_HD bool fast_bond_loop(const PdViewT<Real>& p) {
   return !p.min_stretch && !p.min_stretch_next && !p.bond_damage;
 }
 
-// One entry's term of the LPS first pass through gathered bond vectors: omega beta |xi| e V_j
-// (times 1 - d for a softening bond) for an intact own half, else +0.
+// One entry's term of the LPS first pass through gathered bond vectors, brittle bonds:
+// omega beta |xi| e V_j for an intact own half, else +0 (formed for every entry, then selected).
 template <class Real>
 BRECCIA_HD Real lps_dilatation_entry(const PdViewT<Real>& p, const BondOriginT<Real>& origin, int64_t k) {
   const int64_t j = p.neighbor[k];
   Real dx, dy, dz, len;
   const Real extension = origin.to(p, j, p.xi_len[k], dx, dy, dz, len);
-  const Real weight = p.bond_damage ? Real(1) - static_cast<Real>(p.bond_damage[k]) : Real(1);
-  const Real term = weight * p.k_own[k] * p.xi_len[k] * extension * p.volume[j];
+  const Real term = p.k_own[k] * p.xi_len[k] * extension * p.volume[j];
   return (p.state[k] & kOwnIntact) ? term : Real(0);
 }
 
@@ -212,7 +211,7 @@ BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
   const bool gather = has_bond_vectors(p);
   const BondOriginT<Real> origin = gather ? BondOriginT<Real>(p, i) : BondOriginT<Real>();
 #if !defined(__CUDA_ARCH__)
-  if (gather) {  // the fast loops' two stages (kBondChunk): every entry's term, then the sum in order
+  if (gather && !p.bond_damage) {  // the fast loops' two stages (kBondChunk): every term, then the sum in order
     Real term[kBondChunk];
     for (int64_t base = p.offsets[i]; base < p.offsets[i + 1]; base += kBondChunk) {
       const int m = static_cast<int>(p.offsets[i + 1] - base < kBondChunk ? p.offsets[i + 1] - base : kBondChunk);
@@ -257,13 +256,14 @@ BRECCIA_HD bool lps_fast_entry(const PdViewT<Real>& p, const BondOriginT<Real>& 
   const Real omega = p.k_own[k];
   const Real s0 = p.s0_own[k];
   const bool intact = p.state[k] != 0;
-  const bool breaks = p.fracture && intact && e > s0 * xi;
-  const bool pushes = intact && (!breaks || p.break_after_force);
+  const bool breaks = p.fracture & intact & (e > s0 * xi);  // bitwise: no branch (pmb_fast_entry)
+  const bool pushes = intact & (!breaks | p.break_after_force);
   const Real t = omega * ((a_i + p.lps_a[j]) * xi + (b_i + p.lps_b[j]) * e);
   const Real f = t * p.volume[j] / len;
-  cx = pushes ? f * dx : Real(0);
-  cy = pushes ? f * dy : Real(0);
-  cz = pushes ? f * dz : Real(0);
+  const Real fdx = f * dx, fdy = f * dy, fdz = f * dz;  // formed for every entry (pmb_fast_entry)
+  cx = pushes ? fdx : Real(0);
+  cy = pushes ? fdy : Real(0);
+  cz = pushes ? fdz : Real(0);
   return breaks;
 }
 
@@ -435,12 +435,16 @@ BRECCIA_HD bool pmb_fast_entry(const PdViewT<Real>& p, const BondOriginT<Real>& 
     over = extension > s0 * xi;
     f = k2 * extension / (xi * len);  // c s / |xi + eta|
   }
+  // Bitwise & and | (no short circuit): the loop stays free of branches the vectoriser refuses.
   const bool intact = p.state[k] != 0;
-  const bool breaks = p.fracture && intact && over;
-  const bool pushes = intact && (!breaks || p.break_after_force);
-  cx = pushes ? f * dx : Real(0);
-  cy = pushes ? f * dy : Real(0);
-  cz = pushes ? f * dz : Real(0);
+  const bool breaks = p.fracture & intact & over;
+  const bool pushes = intact & (!breaks | p.break_after_force);
+  // The products are formed for every entry and then selected: a product inside the
+  // condition is one GCC will not run for all lanes (it could trap), and it would not vectorise.
+  const Real fdx = f * dx, fdy = f * dy, fdz = f * dz;
+  cx = pushes ? fdx : Real(0);
+  cy = pushes ? fdy : Real(0);
+  cz = pushes ? fdz : Real(0);
   return breaks;
 }
 

@@ -293,6 +293,9 @@ BRECCIA_HD void lps_fast_force_loop(const PdViewT<Real>& p, int64_t i, const Bon
     fz += cz;
   }
 #else
+  // A local copy of the view: its pointers are then loop invariants GCC keeps in registers
+  // (read through `p` they are loads it will not vectorise).
+  const PdViewT<Real> v = p;
   Real cx[kBondChunk], cy[kBondChunk], cz[kBondChunk];
   bool breaks[kBondChunk];
   for (int64_t base = begin; base < end; base += kBondChunk) {
@@ -300,7 +303,7 @@ BRECCIA_HD void lps_fast_force_loop(const PdViewT<Real>& p, int64_t i, const Bon
     int breaking = 0;
 #pragma omp simd reduction(+ : breaking)
     for (int q = 0; q < m; ++q) {
-      breaks[q] = lps_fast_entry(p, origin, base + q, a_i, b_i, cx[q], cy[q], cz[q]);
+      breaks[q] = lps_fast_entry(v, origin, base + q, a_i, b_i, cx[q], cy[q], cz[q]);
       breaking += breaks[q] ? 1 : 0;
     }
     for (int q = 0; q < m; ++q) {
@@ -479,6 +482,9 @@ BRECCIA_HD void pmb_fast_force_loop(const PdViewT<Real>& p, int64_t i, const Bon
     fz += cz;
   }
 #else
+  // A local copy of the view: its pointers are then loop invariants GCC keeps in registers
+  // (read through `p` they are loads it will not vectorise).
+  const PdViewT<Real> v = p;
   Real cx[kBondChunk], cy[kBondChunk], cz[kBondChunk];
   bool breaks[kBondChunk];
   for (int64_t base = begin; base < end; base += kBondChunk) {
@@ -486,7 +492,7 @@ BRECCIA_HD void pmb_fast_force_loop(const PdViewT<Real>& p, int64_t i, const Bon
     int breaking = 0;
 #pragma omp simd reduction(+ : breaking)
     for (int q = 0; q < m; ++q) {
-      breaks[q] = pmb_fast_entry(p, origin, base + q, cx[q], cy[q], cz[q]);
+      breaks[q] = pmb_fast_entry(v, origin, base + q, cx[q], cy[q], cz[q]);
       breaking += breaks[q] ? 1 : 0;
     }
     for (int q = 0; q < m; ++q) {

@@ -519,7 +519,16 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
   const BondOriginT<Real> origin(p, i);
   // (The compressive enhancement and softening bonds take the scalar loop below: they read and
   // write per-bond and per-particle state the fast loop does not carry.)
-  if constexpr (!kDiagnostics) {
+  // Double on the portable build (SSE2: 2-wide, gathers emulated) keeps the scalar loop below,
+  // which skips broken entries: the two-stage loop measured no faster there
+  // (docs/performance.md). Float, and double where the build has AVX2's gathers
+  // (BRECCIA_NATIVE), take it; the results are the same bit for bit either way.
+#if defined(__AVX2__) || defined(__CUDA_ARCH__)
+  constexpr bool kTwoStage = true;
+#else
+  constexpr bool kTwoStage = BondOriginT<Real>::kRelative;
+#endif
+  if constexpr (!kDiagnostics && kTwoStage) {
     if (fast_bond_loop(p)) {
       pmb_fast_force_loop(p, i, origin);
       return;

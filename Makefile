@@ -6,6 +6,7 @@
 BUILD    ?= build
 JOBS     ?= $(shell nproc)
 CUDA     ?= AUTO
+NATIVE   ?= OFF
 PYTHON   ?= /usr/bin/python3
 QUICK    ?=
 export PYTHON
@@ -21,7 +22,7 @@ deps:
 	@bash scripts/install-deps.sh
 
 $(BUILD)/CMakeCache.txt:
-	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DBRECCIA_CUDA=$(CUDA)
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DBRECCIA_CUDA=$(CUDA) -DBRECCIA_NATIVE=$(NATIVE)
 
 configure: deps $(BUILD)/CMakeCache.txt
 

@@ -175,12 +175,52 @@ BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double uni
   return d;
 }
 
+// The fast bond loops between output steps (one constant horizon, brittle bonds, no
+// compressive enhancement) run in two stages over chunks of kBondChunk entries: a
+// branch-free stage that computes every entry's force contribution and whether it breaks
+// (broken and breaking entries masked to +0), which the compiler runs several entries at
+// once (SIMD: sqrt and division dominate the scalar loop), then a scalar stage that adds the
+// contributions in the entry order and marks the bonds that broke. The sums therefore keep
+// each particle's order, so the result is the scalar loop's bit for bit on any instruction
+// set, and the CUDA build (one entry per iteration, no buffer) agrees with it. Adding the +0
+// of a masked entry changes nothing: a sum that starts at +0 never becomes -0.
+inline constexpr int kBondChunk = 64;
+
+// Is particle i's PMB or LPS pass free of per-entry state beyond the intact flag (the fast
+// loops' condition)? Diagnostics are compiled out by the callers.
+template <class Real>
+BRECCIA_HD bool fast_bond_loop(const PdViewT<Real>& p) {
+  return !p.min_stretch && !p.min_stretch_next && !p.bond_damage;
+}
+
+// One entry's term of the LPS first pass through gathered bond vectors, brittle bonds:
+// omega beta |xi| e V_j for an intact own half, else +0 (formed for every entry, then selected).
+template <class Real>
+BRECCIA_HD Real lps_dilatation_entry(const PdViewT<Real>& p, const BondOriginT<Real>& origin, int64_t k) {
+  const int64_t j = p.neighbor[k];
+  Real dx, dy, dz, len;
+  const Real extension = origin.to(p, j, p.xi_len[k], dx, dy, dz, len);
+  const Real term = p.k_own[k] * p.xi_len[k] * extension * p.volume[j];
+  return (p.state[k] & kOwnIntact) ? term : Real(0);
+}
+
 // LPS first pass: theta_i = d/m_i * sum_j omega beta |xi| e V_j over intact own bonds.
 template <class Real>
 BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
   Real sum = Real(0);
   const bool gather = has_bond_vectors(p);
   const BondOriginT<Real> origin = gather ? BondOriginT<Real>(p, i) : BondOriginT<Real>();
+#if !defined(__CUDA_ARCH__)
+  if (gather && !p.bond_damage) {  // the fast loops' two stages (kBondChunk): every term, then the sum in order
+    Real term[kBondChunk];
+    for (int64_t base = p.offsets[i]; base < p.offsets[i + 1]; base += kBondChunk) {
+      const int m = static_cast<int>(p.offsets[i + 1] - base < kBondChunk ? p.offsets[i + 1] - base : kBondChunk);
+#pragma omp simd
+      for (int q = 0; q < m; ++q) term[q] = lps_dilatation_entry(p, origin, base + q);
+      for (int q = 0; q < m; ++q) sum += term[q];
+    }
+  } else
+#endif
   for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
     if (!(p.state[k] & kOwnIntact)) continue;
     const int64_t j = p.neighbor[k];
@@ -203,12 +243,95 @@ BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
   }
 }
 
+// One LPS entry of the fast loop (lps_symmetric_force_kernel between output steps): the force
+// contribution on i (+0 when broken, or breaking with break_check before_force) and whether it
+// breaks now.
+template <class Real>
+BRECCIA_HD bool lps_fast_entry(const PdViewT<Real>& p, const BondOriginT<Real>& origin, int64_t k, Real a_i, Real b_i,
+                               Real& cx, Real& cy, Real& cz) {
+  const int64_t j = p.neighbor[k];
+  const Real xi = p.xi_len[k];
+  Real dx, dy, dz, len;
+  const Real e = origin.to(p, j, xi, dx, dy, dz, len);
+  const Real omega = p.k_own[k];
+  const Real s0 = p.s0_own[k];
+  const bool intact = p.state[k] != 0;
+  const bool breaks = p.fracture & intact & (e > s0 * xi);  // bitwise: no branch (pmb_fast_entry)
+  const bool pushes = intact & (!breaks | p.break_after_force);
+  const Real t = omega * ((a_i + p.lps_a[j]) * xi + (b_i + p.lps_b[j]) * e);
+  const Real f = t * p.volume[j] / len;
+  const Real fdx = f * dx, fdy = f * dy, fdz = f * dz;  // formed for every entry (pmb_fast_entry)
+  cx = pushes ? fdx : Real(0);
+  cy = pushes ? fdy : Real(0);
+  cz = pushes ? fdz : Real(0);
+  return breaks;
+}
+
+// Entry k of particle i broke in the fast LPS loop: clear it and return the deviatoric energy
+// its pair part held at the critical extension.
+template <class Real>
+BRECCIA_HD double lps_fast_break(const PdViewT<Real>& p, int64_t i, int64_t k) {
+  p.state[k] = 0;
+  const Real xi = p.xi_len[k], omega = p.k_own[k], s0 = p.s0_own[k];
+  const Real b_i = p.lps_b[i], theta_i = p.dilatation[i], d = static_cast<Real>(p.lps[i].dilatation_factor);
+  const double dev = double(s0) * xi - double(theta_i) * xi / d;
+  return 0.5 * b_i * omega * dev * dev * p.volume[p.neighbor[k]] * p.volume[i];
+}
+
+template <class Real>
+BRECCIA_HD void lps_fast_force_loop(const PdViewT<Real>& p, int64_t i, const BondOriginT<Real>& origin) {
+  const Real a_i = p.lps_a[i], b_i = p.lps_b[i];
+  Real fx = Real(0), fy = Real(0), fz = Real(0);
+  double released = 0.0;
+  const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
+#if defined(__CUDA_ARCH__)
+  for (int64_t k = begin; k < end; ++k) {
+    Real cx, cy, cz;
+    if (lps_fast_entry(p, origin, k, a_i, b_i, cx, cy, cz)) released += lps_fast_break(p, i, k);
+    fx += cx;
+    fy += cy;
+    fz += cz;
+  }
+#else
+  // A local copy of the view: its pointers are then loop invariants GCC keeps in registers
+  // (read through `p` they are loads it will not vectorise).
+  const PdViewT<Real> v = p;
+  Real cx[kBondChunk], cy[kBondChunk], cz[kBondChunk];
+  bool breaks[kBondChunk];
+  for (int64_t base = begin; base < end; base += kBondChunk) {
+    const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
+    int breaking = 0;
+#pragma omp simd reduction(+ : breaking)
+    for (int q = 0; q < m; ++q) {
+      breaks[q] = lps_fast_entry(v, origin, base + q, a_i, b_i, cx[q], cy[q], cz[q]);
+      breaking += breaks[q] ? 1 : 0;
+    }
+    for (int q = 0; q < m; ++q) {
+      fx += cx[q];
+      fy += cy[q];
+      fz += cz[q];
+    }
+    if (breaking)
+      for (int q = 0; q < m; ++q)
+        if (breaks[q]) released += lps_fast_break(p, i, base + q);
+  }
+#endif
+  p.force[3 * i] = fx;
+  p.force[3 * i + 1] = fy;
+  p.force[3 * i + 2] = fz;
+  p.dissipated[i] = released;
+}
+
 // LPS with one constant horizon: the pair's force state is omega ((A_i + A_j)|xi| +
 // (B_i + B_j) e), the same algebra as lps_force_state summed over both ends.
 // Forces accumulate in Real; the diagnostics (energy, damage, released energy) in double.
 template <class Real>
 BRECCIA_HD void lps_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
   const BondOriginT<Real> origin(p, i);
+  if (!p.diagnostics && fast_bond_loop(p)) {
+    lps_fast_force_loop(p, i, origin);
+    return;
+  }
   const Real a_i = p.lps_a[i], b_i = p.lps_b[i];
   const Real theta_i = p.dilatation[i], d = static_cast<Real>(p.lps[i].dilatation_factor);
   Real fx = Real(0), fy = Real(0), fz = Real(0);
@@ -293,6 +416,101 @@ BRECCIA_HD uint8_t break_bonds(const PdViewT<Real>& p, int64_t k, SameReal<Real>
   return st;
 }
 
+// One PMB entry of the fast loop: the force contribution on i (+0 when the entry is broken,
+// or breaks in this pass with break_check before_force) and whether it breaks now. Double
+// takes the extension as |xi + eta| - |xi| (BondOriginT::to); float as num / den,
+// num = eta.(xi + (xi + eta)), den = |xi + eta| + |xi|, with one division per entry.
+template <class Real>
+BRECCIA_HD bool pmb_fast_entry(const PdViewT<Real>& p, const BondOriginT<Real>& origin, int64_t k, Real& cx,
+                               Real& cy, Real& cz) {
+  Real dx, dy, dz, len, f;
+  bool over;
+  const Real xi = p.xi_len[k];
+  const Real k2 = Real(2) * p.k_own[k];  // own + dual halves
+  const Real s0 = p.s0_own[k];
+  if constexpr (BondOriginT<Real>::kRelative) {
+    const Real num = origin.extension_numerator(p.x0, p.u, p.neighbor[k], dx, dy, dz, len);
+    const Real den = len + xi;
+    over = num > s0 * xi * den;
+    f = k2 * num / (xi * len * den);
+  } else {
+    const Real extension = origin.to(p, p.neighbor[k], xi, dx, dy, dz, len);
+    over = extension > s0 * xi;
+    f = k2 * extension / (xi * len);  // c s / |xi + eta|
+  }
+  // Bitwise & and | (no short circuit): the loop stays free of branches the vectoriser refuses.
+  const bool intact = p.state[k] != 0;
+  const bool breaks = p.fracture & intact & over;
+  const bool pushes = intact & (!breaks | p.break_after_force);
+  // The products are formed for every entry and then selected: a product inside the
+  // condition is one GCC will not run for all lanes (it could trap), and it would not vectorise.
+  const Real fdx = f * dx, fdy = f * dy, fdz = f * dz;
+  cx = pushes ? fdx : Real(0);
+  cy = pushes ? fdy : Real(0);
+  cz = pushes ? fdz : Real(0);
+  return breaks;
+}
+
+// Entry k of particle i broke in the fast PMB loop: clear it and return the energy it held at
+// its critical stretch (it broke somewhere inside this step, so its force never worked
+// against the stretch beyond s0).
+template <class Real>
+BRECCIA_HD double pmb_fast_break(const PdViewT<Real>& p, int64_t i, int64_t k) {
+  p.state[k] = 0;
+  const Real k2 = Real(2) * p.k_own[k];
+  if constexpr (BondOriginT<Real>::kRelative) {
+    const Real s0 = p.s0_own[k], xi = p.xi_len[k];
+    return p.volume[i] * Real(0.25) * k2 * s0 * s0 * xi;  // float, as the float loop sums it
+  } else {
+    const double s0 = p.s0_own[k];
+    return double(p.volume[i]) * 0.25 * k2 * s0 * s0 * p.xi_len[k];
+  }
+}
+
+template <class Real>
+BRECCIA_HD void pmb_fast_force_loop(const PdViewT<Real>& p, int64_t i, const BondOriginT<Real>& origin) {
+  using Released = std::conditional_t<BondOriginT<Real>::kRelative, Real, double>;
+  Real fx = Real(0), fy = Real(0), fz = Real(0);
+  Released released = Released(0);
+  const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
+#if defined(__CUDA_ARCH__)
+  for (int64_t k = begin; k < end; ++k) {
+    Real cx, cy, cz;
+    if (pmb_fast_entry(p, origin, k, cx, cy, cz)) released += static_cast<Released>(pmb_fast_break(p, i, k));
+    fx += cx;
+    fy += cy;
+    fz += cz;
+  }
+#else
+  // A local copy of the view: its pointers are then loop invariants GCC keeps in registers
+  // (read through `p` they are loads it will not vectorise).
+  const PdViewT<Real> v = p;
+  Real cx[kBondChunk], cy[kBondChunk], cz[kBondChunk];
+  bool breaks[kBondChunk];
+  for (int64_t base = begin; base < end; base += kBondChunk) {
+    const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
+    int breaking = 0;
+#pragma omp simd reduction(+ : breaking)
+    for (int q = 0; q < m; ++q) {
+      breaks[q] = pmb_fast_entry(v, origin, base + q, cx[q], cy[q], cz[q]);
+      breaking += breaks[q] ? 1 : 0;
+    }
+    for (int q = 0; q < m; ++q) {
+      fx += cx[q];
+      fy += cy[q];
+      fz += cz[q];
+    }
+    if (breaking)  // rare: in entry order, as the scalar loop sums the released energy
+      for (int q = 0; q < m; ++q)
+        if (breaks[q]) released += static_cast<Released>(pmb_fast_break(p, i, base + q));
+  }
+#endif
+  p.force[3 * i] = fx;
+  p.force[3 * i + 1] = fy;
+  p.force[3 * i + 2] = fz;
+  p.dissipated[i] = released;
+}
+
 // PMB with one constant horizon, the common production case: reads one modulus and one
 // critical stretch per entry; the diagnostics (energy, damage) are compiled out of the
 // loop between output steps.
@@ -300,52 +518,19 @@ template <bool kDiagnostics, class Real>
 BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
   const BondOriginT<Real> origin(p, i);
   // (The compressive enhancement and softening bonds take the scalar loop below: they read and
-  // write per-bond and per-particle state the masked SIMD loop does not carry.)
-  if constexpr (BondOriginT<Real>::kRelative && !kDiagnostics) {
-    if (!p.min_stretch_next && !p.bond_damage) {
-      // Float between output steps: no branch and one division per bond, so the compiler can
-      // run several bonds at once (SIMD); broken bonds are computed and masked. The extension
-      // e = (2 xi + eta).eta / (|xi + eta| + |xi|) enters as num / den (BondOriginT).
-      const Real* x0 = p.x0;
-      const Real* u = p.u;
-      Real fx = Real(0), fy = Real(0), fz = Real(0), released = Real(0);
-      int breaking = 0;
-      const Real vol_i = p.volume[i];
-      const bool fracture = p.fracture, after_force = p.break_after_force;
-      const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
-#if !defined(__CUDACC__)
-#pragma omp simd reduction(+ : fx, fy, fz, released, breaking)
+  // write per-bond and per-particle state the fast loop does not carry.)
+  // Double on the portable build (SSE2: 2-wide, gathers emulated) keeps the scalar loop below,
+  // which skips broken entries: the two-stage loop measured no faster there
+  // (docs/performance.md). Float, and double where the build has AVX2's gathers
+  // (BRECCIA_NATIVE), take it; the results are the same bit for bit either way.
+#if defined(__AVX2__) || defined(__CUDA_ARCH__)
+  constexpr bool kTwoStage = true;
+#else
+  constexpr bool kTwoStage = BondOriginT<Real>::kRelative;
 #endif
-      for (int64_t k = begin; k < end; ++k) {
-        Real dx, dy, dz, len;
-        const Real num = origin.extension_numerator(x0, u, p.neighbor[k], dx, dy, dz, len);
-        const Real xi = p.xi_len[k];
-        const Real den = len + xi;
-        const Real k2 = Real(2) * p.k_own[k];
-        const Real s0 = p.s0_own[k];
-        const bool intact = p.state[k] != 0;
-        const bool breaks = fracture && intact && num > s0 * xi * den;
-        const Real f = (intact && (!breaks || after_force)) ? k2 * num / (xi * len * den) : Real(0);
-        released += breaks ? vol_i * Real(0.25) * k2 * s0 * s0 * xi : Real(0);
-        breaking += breaks ? 1 : 0;
-        fx += f * dx;
-        fy += f * dy;
-        fz += f * dz;
-      }
-      // Rare: mark the bonds that broke by a second pass of the same arithmetic, so that the
-      // loop above never writes the bond state and stays a pure reduction.
-      if (breaking)
-        for (int64_t k = begin; k < end; ++k) {
-          if (!p.state[k]) continue;
-          Real dx, dy, dz, len;
-          const Real num = origin.extension_numerator(x0, u, p.neighbor[k], dx, dy, dz, len);
-          const Real xi = p.xi_len[k];
-          if (num > p.s0_own[k] * xi * (len + xi)) p.state[k] = 0;
-        }
-      p.force[3 * i] = fx;
-      p.force[3 * i + 1] = fy;
-      p.force[3 * i + 2] = fz;
-      p.dissipated[i] = released;
+  if constexpr (!kDiagnostics && kTwoStage) {
+    if (fast_bond_loop(p)) {
+      pmb_fast_force_loop(p, i, origin);
       return;
     }
   }

@@ -6,3 +6,15 @@
 #else
 #define BRECCIA_HD inline
 #endif
+
+// BRECCIA_SIMD / BRECCIA_SIMD_COUNT(n): the host bond loops' `omp simd` hints (the second with an
+// integer count summed over lanes, exact in any order). nvcc's host pass compiles the same
+// headers without OpenMP, so there the hints are left out rather than warned about.
+#define BRECCIA_PRAGMA(text) _Pragma(#text)
+#if defined(__CUDACC__)
+#define BRECCIA_SIMD
+#define BRECCIA_SIMD_COUNT(n)
+#else
+#define BRECCIA_SIMD BRECCIA_PRAGMA(omp simd)
+#define BRECCIA_SIMD_COUNT(n) BRECCIA_PRAGMA(omp simd reduction(+ : n))
+#endif

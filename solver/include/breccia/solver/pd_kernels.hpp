@@ -215,7 +215,7 @@ BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
     Real term[kBondChunk];
     for (int64_t base = p.offsets[i]; base < p.offsets[i + 1]; base += kBondChunk) {
       const int m = static_cast<int>(p.offsets[i + 1] - base < kBondChunk ? p.offsets[i + 1] - base : kBondChunk);
-#pragma omp simd
+BRECCIA_SIMD
       for (int q = 0; q < m; ++q) term[q] = lps_dilatation_entry(p, origin, base + q);
       for (int q = 0; q < m; ++q) sum += term[q];
     }
@@ -301,7 +301,7 @@ BRECCIA_HD void lps_fast_force_loop(const PdViewT<Real>& p, int64_t i, const Bon
   for (int64_t base = begin; base < end; base += kBondChunk) {
     const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
     int breaking = 0;
-#pragma omp simd reduction(+ : breaking)
+BRECCIA_SIMD_COUNT(breaking)
     for (int q = 0; q < m; ++q) {
       breaks[q] = lps_fast_entry(v, origin, base + q, a_i, b_i, cx[q], cy[q], cz[q]);
       breaking += breaks[q] ? 1 : 0;
@@ -490,7 +490,7 @@ BRECCIA_HD void pmb_fast_force_loop(const PdViewT<Real>& p, int64_t i, const Bon
   for (int64_t base = begin; base < end; base += kBondChunk) {
     const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
     int breaking = 0;
-#pragma omp simd reduction(+ : breaking)
+BRECCIA_SIMD_COUNT(breaking)
     for (int q = 0; q < m; ++q) {
       breaks[q] = pmb_fast_entry(v, origin, base + q, cx[q], cy[q], cz[q]);
       breaking += breaks[q] ? 1 : 0;

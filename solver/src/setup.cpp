@@ -988,13 +988,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     }
     s.calibration_factor.assign(n, bulk_factor);
     for (size_t i = 0; i < n; ++i) s.calibration_factor[i] = axis_factor[3 * i];
-#pragma omp parallel for
-    for (size_t i = 0; i < n; ++i)
-      for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
-        const double f = ellipsoid_bond_factor(s, axis_factor, i, k);
-        s.k_own[k] *= f;
-        s.k_dual[k] *= f;
-      }
+    scale_bonds_by_axis_factors(s, axis_factor);
   }
 
   phase("pmb calibration");

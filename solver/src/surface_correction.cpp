@@ -95,14 +95,18 @@ std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<Elasti
     for (int a = 0; a < dims; ++a) mean += energy[3 * i + a] / dims;
     if (mean > 0) coefficient_scale[i] = target[s.material[i]] / mean;
   }
+  scale_bonds_by_axis_factors(s, axis_factor);
+  return coefficient_scale;
+}
+
+void scale_bonds_by_axis_factors(PdSystem& s, const std::vector<double>& axis_factor) {
 #pragma omp parallel for
-  for (size_t i = 0; i < n; ++i)
+  for (size_t i = 0; i < s.n; ++i)
     for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
       const double f = ellipsoid_bond_factor(s, axis_factor, i, k);
       s.k_own[k] *= f;
       s.k_dual[k] *= f;
     }
-  return coefficient_scale;
 }
 
 }  // namespace breccia::solver

@@ -25,6 +25,10 @@ inline double ellipsoid_bond_factor(const PdSystem& s, const std::vector<double>
   return 1.0 / std::sqrt(inv2);
 }
 
+// Both halves of every entry's coefficient (k_own, k_dual) times its ellipsoidal factor: the
+// last step of either correction, once its axis factors are settled.
+void scale_bonds_by_axis_factors(PdSystem& s, const std::vector<double>& axis_factor);
+
 // LPS's energy surface correction (model.surface_correction: energy with type: lps). LPS
 // normalises each family by its own weighted volume m, so a factor common to a family's bonds
 // cancels in its weights: a truncated family errs in their shape (its bonds along a face are

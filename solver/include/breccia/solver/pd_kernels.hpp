@@ -278,16 +278,21 @@ BRECCIA_HD double lps_fast_break(const PdViewT<Real>& p, int64_t i, int64_t k) {
   return 0.5 * b_i * omega * dev * dev * p.volume[p.neighbor[k]] * p.volume[i];
 }
 
-template <class Real>
-BRECCIA_HD void lps_fast_force_loop(const PdViewT<Real>& p, int64_t i, const BondOriginT<Real>& origin) {
-  const Real a_i = p.lps_a[i], b_i = p.lps_b[i];
+// The fast loops' two stages, written once for PMB and LPS. `path.entry(view, k, cx, cy, cz)`
+// gives entry k's force contribution (+0 when it does not push) and whether it breaks now;
+// `path.release(view, i, k)` breaks it and returns the energy it held; the released energy is
+// summed in `Released`. On the host each chunk of kBondChunk entries is computed branch-free
+// first (the stage the compiler vectorises), then summed in the entry order, so the sums are
+// the scalar loop's and the CUDA build's (one entry per iteration) bit for bit.
+template <class Released, class Real, class Path>
+BRECCIA_HD void two_stage_force_loop(const PdViewT<Real>& p, int64_t i, const Path& path) {
   Real fx = Real(0), fy = Real(0), fz = Real(0);
-  double released = 0.0;
+  Released released = Released(0);
   const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
 #if defined(__CUDA_ARCH__)
   for (int64_t k = begin; k < end; ++k) {
     Real cx, cy, cz;
-    if (lps_fast_entry(p, origin, k, a_i, b_i, cx, cy, cz)) released += lps_fast_break(p, i, k);
+    if (path.entry(p, k, cx, cy, cz)) released += static_cast<Released>(path.release(p, i, k));
     fx += cx;
     fy += cy;
     fz += cz;
@@ -303,7 +308,7 @@ BRECCIA_HD void lps_fast_force_loop(const PdViewT<Real>& p, int64_t i, const Bon
     int breaking = 0;
 BRECCIA_SIMD_COUNT(breaking)
     for (int q = 0; q < m; ++q) {
-      breaks[q] = lps_fast_entry(v, origin, base + q, a_i, b_i, cx[q], cy[q], cz[q]);
+      breaks[q] = path.entry(v, base + q, cx[q], cy[q], cz[q]);
       breaking += breaks[q] ? 1 : 0;
     }
     for (int q = 0; q < m; ++q) {
@@ -311,15 +316,31 @@ BRECCIA_SIMD_COUNT(breaking)
       fy += cy[q];
       fz += cz[q];
     }
-    if (breaking)
+    if (breaking)  // rare: in entry order, as the scalar loop sums the released energy
       for (int q = 0; q < m; ++q)
-        if (breaks[q]) released += lps_fast_break(p, i, base + q);
+        if (breaks[q]) released += static_cast<Released>(path.release(p, i, base + q));
   }
 #endif
   p.force[3 * i] = fx;
   p.force[3 * i + 1] = fy;
   p.force[3 * i + 2] = fz;
   p.dissipated[i] = released;
+}
+
+// The fast LPS loop's entries (two_stage_force_loop).
+template <class Real>
+struct LpsFastPath {
+  BondOriginT<Real> origin;
+  Real a_i, b_i;
+  BRECCIA_HD bool entry(const PdViewT<Real>& v, int64_t k, Real& cx, Real& cy, Real& cz) const {
+    return lps_fast_entry(v, origin, k, a_i, b_i, cx, cy, cz);
+  }
+  BRECCIA_HD double release(const PdViewT<Real>& p, int64_t i, int64_t k) const { return lps_fast_break(p, i, k); }
+};
+
+template <class Real>
+BRECCIA_HD void lps_fast_force_loop(const PdViewT<Real>& p, int64_t i, const BondOriginT<Real>& origin) {
+  two_stage_force_loop<double>(p, i, LpsFastPath<Real>{origin, p.lps_a[i], p.lps_b[i]});
 }
 
 // LPS with one constant horizon: the pair's force state is omega ((A_i + A_j)|xi| +
@@ -467,48 +488,20 @@ BRECCIA_HD double pmb_fast_break(const PdViewT<Real>& p, int64_t i, int64_t k) {
   }
 }
 
+// The fast PMB loop's entries (two_stage_force_loop).
+template <class Real>
+struct PmbFastPath {
+  BondOriginT<Real> origin;
+  BRECCIA_HD bool entry(const PdViewT<Real>& v, int64_t k, Real& cx, Real& cy, Real& cz) const {
+    return pmb_fast_entry(v, origin, k, cx, cy, cz);
+  }
+  BRECCIA_HD double release(const PdViewT<Real>& p, int64_t i, int64_t k) const { return pmb_fast_break(p, i, k); }
+};
+
 template <class Real>
 BRECCIA_HD void pmb_fast_force_loop(const PdViewT<Real>& p, int64_t i, const BondOriginT<Real>& origin) {
   using Released = std::conditional_t<BondOriginT<Real>::kRelative, Real, double>;
-  Real fx = Real(0), fy = Real(0), fz = Real(0);
-  Released released = Released(0);
-  const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
-#if defined(__CUDA_ARCH__)
-  for (int64_t k = begin; k < end; ++k) {
-    Real cx, cy, cz;
-    if (pmb_fast_entry(p, origin, k, cx, cy, cz)) released += static_cast<Released>(pmb_fast_break(p, i, k));
-    fx += cx;
-    fy += cy;
-    fz += cz;
-  }
-#else
-  // A local copy of the view: its pointers are then loop invariants GCC keeps in registers
-  // (read through `p` they are loads it will not vectorise).
-  const PdViewT<Real> v = p;
-  Real cx[kBondChunk], cy[kBondChunk], cz[kBondChunk];
-  bool breaks[kBondChunk];
-  for (int64_t base = begin; base < end; base += kBondChunk) {
-    const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
-    int breaking = 0;
-BRECCIA_SIMD_COUNT(breaking)
-    for (int q = 0; q < m; ++q) {
-      breaks[q] = pmb_fast_entry(v, origin, base + q, cx[q], cy[q], cz[q]);
-      breaking += breaks[q] ? 1 : 0;
-    }
-    for (int q = 0; q < m; ++q) {
-      fx += cx[q];
-      fy += cy[q];
-      fz += cz[q];
-    }
-    if (breaking)  // rare: in entry order, as the scalar loop sums the released energy
-      for (int q = 0; q < m; ++q)
-        if (breaks[q]) released += static_cast<Released>(pmb_fast_break(p, i, base + q));
-  }
-#endif
-  p.force[3 * i] = fx;
-  p.force[3 * i + 1] = fy;
-  p.force[3 * i + 2] = fz;
-  p.dissipated[i] = released;
+  two_stage_force_loop<Released>(p, i, PmbFastPath<Real>{origin});
 }
 
 // PMB with one constant horizon, the common production case: reads one modulus and one

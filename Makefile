@@ -11,7 +11,7 @@ PYTHON   ?= /usr/bin/python3
 QUICK    ?=
 export PYTHON
 
-.PHONY: all deps configure build test demo bench clean help lammps-peri package check-package install
+.PHONY: all deps configure build test demo bench bench-pipeline clean help lammps-peri package check-package install
 
 all: build
 
@@ -55,6 +55,12 @@ check-package: build
 bench: build
 	bash scripts/bench.sh $(BUILD)
 	bash scripts/bench_mpi.sh $(BUILD)
+	bash scripts/bench_pipeline.sh $(BUILD)
+
+# make bench-pipeline: the concrete case from specimen to post-processing, each stage timed, at
+# the demo and full resolution (docs/performance.md, "The whole chain"); SIZES=demo for one
+bench-pipeline: build
+	bash scripts/bench_pipeline.sh $(BUILD)
 
 # make bench-mpi: strong scaling of a distributed run, 1 -> 2 ranks beside LAMMPS (docs/parallel.md)
 bench-mpi: build

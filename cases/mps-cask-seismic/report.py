@@ -7,8 +7,8 @@ floor_displacement_m and the energy columns). Measures, from the rigid container
   tilt    its rotation (deg);
   uplift  the higher bottom corner's height above the floor (m; 0 while both rest on it);
   sliding the base midpoint's horizontal displacement relative to the floor (m).
-Energy balance: kinetic + stress work + contact + gravity + friction dissipation - ground work,
-against the ground work. Writes OUT/report.json and OUT/cask_response.png.
+Energy balance: kinetic + stress work + hourglass + contact + gravity + friction dissipation
++ contact damping (the dashpots of a restitution below 1) - ground work, against the ground work. Writes OUT/report.json and OUT/cask_response.png.
 """
 import csv
 import json
@@ -49,7 +49,8 @@ def analyse(out, name):
     sliding = base_x - floor
     energy = {}
     if "ground_work_J" in rows[0]:
-        parts = ["kinetic_energy_J", "stress_work_J", "contact_energy_J", "gravity_energy_J", "friction_dissipation_J"]
+        parts = ["kinetic_energy_J", "stress_work_J", "contact_energy_J", "gravity_energy_J", "friction_dissipation_J",
+                 "contact_damping_J"]
         total = sum(col(k) for k in parts if k in rows[0]) + col("hourglass_energy_J") - col("ground_work_J")
         work = col("ground_work_J")
         energy = {"ground_work_J_end": float(work[-1]), "imbalance_J_end": float(total[-1] - total[0]),

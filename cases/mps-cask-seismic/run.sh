@@ -5,6 +5,8 @@
 #   VARIANT=full      : spacings 0.2 and 0.1 m (the convergence of the peak tilt), both gaps
 # SPACINGS, GAPS (optional): override the lists (e.g. SPACINGS=0.05 GAPS=0.05).
 # RECORD=path.csv (optional): any time_s,acceleration_g record instead of the synthetic one.
+# RESTITUTION=e (optional, 0 < e <= 1): the canister's impacts on the container get a normal
+# dashpot with this coefficient of restitution (contact.rigid_bodies[0].restitution; README).
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
@@ -21,6 +23,8 @@ if [ -z "${RECORD:-}" ]; then
   "$PYTHON" "$HERE/record.py" "$RECORD" --pga "${PGA:-0.9}" --duration "$DURATION" --seed 1995
 fi
 RECORD="$(cd "$(dirname "$RECORD")" && pwd)/$(basename "$RECORD")"
+EXTRA=()
+[ -n "${RESTITUTION:-}" ] && EXTRA+=(--set "contact.rigid_bodies[0].restitution=$RESTITUTION")
 RUNS=()
 for dx in $SPACINGS; do
   for gap in ${GAPS:-0 0.05}; do
@@ -38,7 +42,7 @@ print(f'{h:.8g} [{-c - h / 2:.8g}, {y0:.8g}, {c + h / 2:.8g}, {y0 + round(4.8 / 
     echo "== $name"
     "$BRECCIA_BIN/breccia-solve" "$HERE/case.yaml" -o "$OUT/$name" --set "specimen.bodies.spacing=$h" \
       --set "specimen.bodies.shapes[0].box=$box" --set "contact.floor.motion.history.file=$RECORD" \
-      --set "time.end=$DURATION" --backend cpu --threads "$THREADS" 2>&1 | tail -1
+      --set "time.end=$DURATION" "${EXTRA[@]}" --backend cpu --threads "$THREADS" 2>&1 | tail -1
     RUNS+=("$name")
   done
 done

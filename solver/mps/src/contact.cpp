@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include <omp.h>
 
@@ -251,6 +252,41 @@ void Contact::rigid_contact(long long i, long long slot, double depth, const dou
   rigid_friction(i, slot, normal_force, n, v_surface, law, s, dt, f);
 }
 
+bool Contact::damped() const {
+  return std::any_of(polygons_.begin(), polygons_.end(), [](const RigidPolygon& p) { return p.law.damping_ratio > 0.0; });
+}
+
+// The dashpot's m_eff is the reduced mass of the particle and the polygon at the contact
+// point along n: 1/m_eff = 1/m_i + 1/M + ((r x n)_z)^2 / I for a free polygon (r from its
+// centroid: a rigid body's effective mass at a point), m_i for a fixed one. Then the particle,
+// were it a rigid point on the polygon, would leave with the stated restitution.
+// Work booking (as friction's, coulomb_tangential_force): in the leapfrog the force of step
+// n does the work F_n . (v^n + v^n+1) dt / 2 on the relative motion; the first half,
+// -c (v_n^n)^2 dt / 2, is booked now, the second at the next step (settle_dashpot).
+void Contact::polygon_dashpot(long long i, long long slot, size_t p, double px, double py, const double n[3],
+                              const double v_rel[3], double dt, double f[3]) {
+  const RigidPolygon& poly = polygons_[p];
+  double inverse_mass = 1.0 / particle_mass_kg_[i];
+  if (!poly.fixed) {
+    const double arm = (px - body_[p].cx) * n[1] - (py - body_[p].cy) * n[0];
+    inverse_mass += 1.0 / poly.mass_kg + arm * arm / poly.inertia_kg_m2;
+  }
+  const double c = 2.0 * poly.law.damping_ratio * std::sqrt(poly.law.normal_stiffness_n_m / inverse_mass);
+  const double vn = v_rel[0] * n[0] + v_rel[1] * n[1];
+  const double force = -c * vn;  // along n: resists approach and separation alike
+  f[0] += force * n[0];
+  f[1] += force * n[1];
+  dashpot_force_n_[slot * static_cast<long long>(particle_mass_kg_.size()) + i] = {force * n[0], force * n[1]};
+  damping_dissipated_j_ -= 0.5 * force * vn * dt;
+}
+
+void Contact::settle_dashpot(long long index, const double v_rel[3], double dt) {
+  std::array<double, 2>& last = dashpot_force_n_[index];
+  if (last[0] == 0.0 && last[1] == 0.0) return;
+  damping_dissipated_j_ -= 0.5 * (last[0] * v_rel[0] + last[1] * v_rel[1]) * dt;
+  last = {0.0, 0.0};
+}
+
 void Contact::rigid_friction(long long i, long long slot, double normal_force, const double n[3],
                              const double v_surface[3], const RigidContactLaw& law, const ParticleStateView& s,
                              double dt, double f[3]) {
@@ -274,6 +310,11 @@ void Contact::obstacle_forces(const ParticleStateView& s, double dt) {
     const double* u = a == 0 ? s.u.x : (a == 1 ? s.u.y : s.u.z);
     return s.position_m[3 * i + a] + ((a < s.dimension) ? u[i] : 0.0);
   };
+  if (damped()) {
+    if (particle_mass_kg_.size() != static_cast<size_t>(n))
+      throw std::logic_error("Contact: a damped polygon contact needs the particle masses (set_particle_masses)");
+    if (dashpot_force_n_.size() != static_cast<size_t>(slots * n)) dashpot_force_n_.assign(slots * n, {0.0, 0.0});
+  }
   plane_reaction_n_.assign(half_spaces_.size(), {0.0, 0.0, 0.0});
   for (size_t h = 0; h < half_spaces_.size(); ++h) {
     const PlaneContact plane = plane_contact(half_spaces_[h]);
@@ -300,6 +341,7 @@ void Contact::obstacle_forces(const ParticleStateView& s, double dt) {
     const double x0 = *std::min_element(vx.begin(), vx.end()), x1 = *std::max_element(vx.begin(), vx.end());
     const double y0 = *std::min_element(vy.begin(), vy.end()), y1 = *std::max_element(vy.begin(), vy.end());
     const long long slot = static_cast<long long>(half_spaces_.size() + p);
+    const bool dashpot = poly.law.damping_ratio > 0.0;
     for (long long i = 0; i < n; ++i) {
       const double px = current(i, 0), py = current(i, 1);
       double normal2[2] = {0.0, 0.0};
@@ -307,8 +349,9 @@ void Contact::obstacle_forces(const ParticleStateView& s, double dt) {
                                ? 0.0
                                : polygon_penetration(vx.data(), vy.data(), static_cast<int>(vx.size()), px, py, normal2);
       const double v_surface[3] = {b.vx - b.omega * (py - b.cy), b.vy + b.omega * (px - b.cx), 0.0};
+      const double v_rel[3] = {s.v.x[i] - v_surface[0], s.v.y[i] - v_surface[1], 0.0};
+      if (dashpot) settle_dashpot(slot * n + i, v_rel, dt);
       if (depth <= 0.0) {
-        const double v_rel[3] = {s.v.x[i] - v_surface[0], s.v.y[i] - v_surface[1], 0.0};
         dissipated_j_ += release_friction_spring(friction_[slot * n + i], v_rel, dt, poly.law.tangential_stiffness_n_m);
         continue;
       }
@@ -316,6 +359,7 @@ void Contact::obstacle_forces(const ParticleStateView& s, double dt) {
       const double nrm[3] = {normal2[0], normal2[1], 0.0};
       double f[3] = {0.0, 0.0, 0.0};
       rigid_contact(i, slot, depth, nrm, v_surface, poly.law, s, dt, f);
+      if (dashpot) polygon_dashpot(i, slot, p, px, py, nrm, v_rel, dt, f);
       for (int a = 0; a < 3; ++a) force_n_[a][i] += f[a];
       // Equal and opposite reaction at the particle's position.
       b.fx -= f[0];

@@ -47,6 +47,7 @@ void configure_contact(const CaseSpec& spec, const std::vector<int>& body_id, So
     p.law.tangential_stiffness_n_m = r.friction.tangential_stiffness_factor * per_area * solid.shear_face_stiffness_n_m();
     p.law.static_friction = r.friction.static_friction;
     p.law.kinetic_friction = r.friction.kinetic_friction;
+    p.law.damping_ratio = damping_ratio_of_restitution(r.restitution);
     p.motion = r.motion;
     long long inside = 0;
     for (size_t i = 0; i < n; ++i) {
@@ -60,6 +61,11 @@ void configure_contact(const CaseSpec& spec, const std::vector<int>& body_id, So
                        "polygon '" + r.name + "' holds " + std::to_string(inside) + " particle(s) at the start",
                        "a rigid body clear of the particles at t = 0");
     solid.contact().add_polygon(std::move(p));
+  }
+  if (solid.contact().damped()) {  // the dashpots' m_eff: the particle masses
+    std::vector<double> mass(n);
+    for (size_t i = 0; i < n; ++i) mass[i] = solid.density_kg_m3() * solid.volume_m3()[i];
+    solid.contact().set_particle_masses(std::move(mass));
   }
 }
 

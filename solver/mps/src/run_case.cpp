@@ -120,6 +120,9 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
     if (!sim.contact().polygon(k).fixed) free_bodies.push_back(k);
   if (sim.contact().particle_contact()) history << ",contact_pairs";
   if (spec.energy && frictional) history << ",friction_dissipation_J";
+  // Normal dashpots (a polygon's restitution < 1): the energy they removed.
+  const bool damped = sim.contact().damped();
+  if (spec.energy && damped) history << ",contact_damping_J";
   for (size_t k : free_bodies) {
     const std::string& name = sim.contact().polygon(k).name;
     history << "," << name << "_x_m," << name << "_y_m," << name << "_angle_rad";
@@ -145,6 +148,7 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
               << fmt(sim.hourglass_energy_j()) << "," << fmt(sim.floor_energy_j()) << "," << fmt(sim.gravity_energy_j());
     if (sim.contact().particle_contact()) history << "," << sim.contact().contact_pairs();
     if (spec.energy && frictional) history << "," << fmt(sim.friction_dissipation_j());
+    if (spec.energy && damped) history << "," << fmt(sim.contact().contact_damping_j());
     for (size_t k : free_bodies) {
       const auto c = sim.contact().polygon_centroid_m(k);
       history << "," << fmt(c[0]) << "," << fmt(c[1]) << "," << fmt(sim.contact().polygon_angle_rad(k));
@@ -204,6 +208,7 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
   j["rigid_bodies"] = spec.rigid_bodies.size();
   j["contact_pairs"] = sim.contact().contact_pairs();
   j["friction_dissipation_j"] = json_number(sim.friction_dissipation_j());
+  if (damped) j["contact_damping_j"] = json_number(sim.contact().contact_damping_j());
   add_timing(j, sim, wall_s, loop_s);
   write_json_file(dir / "summary.json", j);
   report_timing(sim, wall_s, loop_s, out_dir);

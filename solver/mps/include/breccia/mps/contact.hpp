@@ -51,6 +51,9 @@ struct RigidContactLaw {
   double tangential_stiffness_n_m = 0.0;
   double static_friction = 0.0;   // mu_s
   double kinetic_friction = 0.0;  // mu_k <= mu_s
+  // Normal dashpot (polygons only): c = 2 zeta sqrt(k m_eff) per contacting particle, zeta
+  // from the stated restitution (damping_ratio_of_restitution); 0: undamped.
+  double damping_ratio = 0.0;
   bool frictional() const { return static_friction > 0.0 || kinetic_friction > 0.0; }
 };
 
@@ -146,6 +149,13 @@ public:
   // springs (as left by the last compute_forces()).
   double potential_energy_j(const ParticleStateView& s) const;
   double friction_dissipation_j() const { return dissipated_j_; }
+  // Particle masses (kg), needed by a damped polygon contact (its dashpot's m_eff).
+  void set_particle_masses(std::vector<double> mass_kg) { particle_mass_kg_ = std::move(mass_kg); }
+  // Some polygon has a normal dashpot (RigidContactLaw::damping_ratio > 0).
+  bool damped() const;
+  // Energy the normal dashpots have removed (J): the work of each step's dashpot force over
+  // the leapfrog's two half steps around it (obstacle_forces).
+  double contact_damping_j() const { return damping_dissipated_j_; }
   // With the contact run on a device (Solid::attach_device): the totals it reports replace
   // those compute_forces() would have left.
   void set_device_totals(double spring_energy_j, double dissipated_j, long long contact_pairs) {
@@ -199,6 +209,14 @@ private:
   double polygon_pairs(std::vector<std::array<double, 3>>* reactions) const;
   void rigid_contact(long long i, long long slot, double depth, const double n[3], const double v_surface[3],
                      const RigidContactLaw& law, const ParticleStateView& s, double dt, double f[3]);
+  // The normal dashpot of particle i on polygon p (law.damping_ratio > 0) at the particle's
+  // position (px, py): adds -c (v_rel . n) n to f, books the first half step of its work and
+  // keeps the force for the second (settle_dashpot at the next step).
+  void polygon_dashpot(long long i, long long slot, size_t p, double px, double py, const double n[3],
+                       const double v_rel[3], double dt, double f[3]);
+  // Books the work of particle slot's last dashpot force over the half step after it
+  // (velocity v_rel relative to the surface now) and clears it.
+  void settle_dashpot(long long index, const double v_rel[3], double dt);
   // The Coulomb part of rigid_contact (normal_force = the normal penalty's size).
   void rigid_friction(long long i, long long slot, double normal_force, const double n[3], const double v_surface[3],
                       const RigidContactLaw& law, const ParticleStateView& s, double dt, double f[3]);
@@ -218,6 +236,11 @@ private:
   std::vector<long long> pair_friction_key_;
   std::vector<FrictionState> pair_friction_;
   double spring_energy_j_ = 0.0, dissipated_j_ = 0.0;
+  // Normal dashpots: particle masses, the last step's dashpot force per particle and
+  // obstacle (x, y; as friction_), and the energy they removed.
+  std::vector<double> particle_mass_kg_;
+  std::vector<std::array<double, 2>> dashpot_force_n_;
+  double damping_dissipated_j_ = 0.0;
   long long contact_pairs_ = 0;
   // Reaction on each half-space (the force the particles and free bodies' vertices push it
   // with) from the last compute_forces(), and the work the moving obstacles have done.

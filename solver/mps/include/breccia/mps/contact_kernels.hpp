@@ -133,6 +133,18 @@ BRECCIA_HD inline double pair_normal_force(const PairContactGeometry& c, double 
   return 0.5 * stiffness * c.weight * c.gap * c.gap;
 }
 
+// Normal dashpot of a linear spring-dashpot contact with a stated coefficient of restitution
+// e (0 < e <= 1). A mass m_eff on a spring k and a dashpot c, F = k g + c dg/dt while the
+// penetration g > 0, is a damped oscillator; it leaves the contact (g back to 0) after half
+// a damped period with the speed ratio e = exp(-pi zeta / sqrt(1 - zeta^2)), zeta =
+// c / (2 sqrt(k m_eff)), independent of the impact speed (Schaefer, Dippel & Wolf 1996,
+// docs/references.md). Inverted: zeta = -ln e / sqrt(pi^2 + ln^2 e); e = 1 gives 0 (no dashpot).
+BRECCIA_HD inline double damping_ratio_of_restitution(double e) {
+  if (!(e < 1.0)) return 0.0;
+  const double pi = 3.14159265358979323846, l = std::log(e);
+  return -l / std::sqrt(pi * pi + l * l);
+}
+
 // Signed penetration of point (px, py) into a closed 2D polygon (vertices x[k], y[k],
 // k < count, either orientation): the distance to the nearest boundary point when inside,
 // 0 outside. normal: the unit direction from the point to that boundary point (pointing

@@ -75,6 +75,10 @@ struct RigidBodySpec {
   // k = factor (lambda + 2 mu) A / stiffness_length (and k_t likewise), so the polygon's
   // contact stiffness per unit area of a face does not change when the spacing is refined.
   double stiffness_length_m = 0.0;
+  // Coefficient of restitution of a particle's normal impact on the polygon, 0 < e <= 1: a
+  // normal dashpot in the penalty contact (contact_kernels.hpp,
+  // damping_ratio_of_restitution); 1 (the default): no dashpot.
+  double restitution = 1.0;
   FrictionSpec friction;
   std::optional<PrescribedMotion> motion;  // fixed bodies only
 };

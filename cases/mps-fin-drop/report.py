@@ -4,7 +4,8 @@ force and the energy balance at each inclination.
     report.py OUT RUN [RUN ...]
 
 Shape: the fin's centre line at the end (each station's mean current position), its curvature
-(the turning of the line between stations, smoothed over one fin thickness), and its bends:
+(the turning of the line between stations, less that of the initial line, which is not straight
+for a bowed fin (specimen.py --bow); smoothed over one fin thickness), and its bends:
 local maxima of |curvature| above 30% of the largest and 1 /m, at least two thicknesses
 apart; two bends of opposite sign are the S-shape of a double hinge, one bend a single hinge.
 Plastic hinges: along the fin (the particles of set `fin`, stations = rows of the reference lattice
@@ -14,7 +15,9 @@ profile above half the fin's largest strain and at least HINGE_MIN_STRAIN, separ
 next by at least two fin thicknesses (a hinge spreads over about one thickness). The ring's
 wall at the root counts as station 0 (the largest strain of the ring within one fin thickness
 of the root). Energy: kinetic + stress work (elastic + plastic) + hourglass + contact +
-gravity + friction dissipation against the initial kinetic energy (history.csv). Writes OUT/report.json,
+gravity + friction dissipation against the initial kinetic energy (history.csv). Tip slip: the
+tip row's mean displacement along the target (positive downhill, +x side), which tells a tip held
+by friction (a few mm) from one that slides. Writes OUT/report.json,
 OUT/fin_drop_plastic.png (deformed shapes coloured by plastic strain), OUT/fin_drop_profiles.png
 (plastic strain along the fin) and OUT/fin_drop_force.png (floor force against time).
 """
@@ -39,6 +42,9 @@ def analyse(out, name):
     run = os.path.join(out, name)
     angle = float(re.search(r"angle([0-9.]+)", name).group(1))
     text = open(os.path.join(run, "case_as_run.yaml")).read()
+    floor = re.search(r"floor:\s*\{([^}]*)\}", text).group(1)
+    normal = np.array([float(v) for v in re.search(r"normal:\s*\[([^\]]*)\]", floor).group(1).split(",")])
+    friction = float(re.search(r"static_friction:\s*([-0-9.eE+]+)", floor).group(1)) if "static_friction" in floor else 0.0
     particles = os.path.normpath(os.path.join(run, re.search(r"particles:\s*(\S+)", text).group(1)))
     with h5py.File(particles, "r") as f:
         fin = f["sets/fin"][:]
@@ -49,10 +55,11 @@ def analyse(out, name):
         ep = last["eq_plastic_strain"][:]
         t_end = float(last.attrs["time_s"])
     dx = float(np.min(np.diff(np.unique(np.round(x0[fin, 1], 9)))))
-    thickness = (np.max(x0[fin, 0]) - np.min(x0[fin, 0])) + dx
     rows = np.unique(np.round(x0[fin, 1], 9))[::-1]  # from the root (highest y) to the tip
+    in_row = [fin[np.abs(x0[fin, 1] - y) < 1e-9] for y in rows]
+    thickness = max(np.ptp(x0[r, 0]) for r in in_row) + dx  # per row: a bowed fin is no wider
     root_y = rows[0] + dx / 2
-    profile = np.array([ep[fin[np.abs(x0[fin, 1] - y) < 1e-9]].max() for y in rows])
+    profile = np.array([ep[r].max() for r in in_row])
     station = root_y - rows  # distance from the root
     ring_root = np.nonzero((np.abs(x0[:, 0]) < thickness) & (x0[:, 1] > root_y) & (x0[:, 1] < root_y + thickness))[0]
     prof = np.concatenate([[ep[ring_root].max() if len(ring_root) else 0.0], profile])
@@ -60,10 +67,16 @@ def analyse(out, name):
     # The fin's bent shape: each station's mean current position; its curvature from the
     # turning of the centre line between neighbouring stations, smoothed over one thickness.
     cur = x0 + u
-    centre = np.array([cur[fin[np.abs(x0[fin, 1] - y) < 1e-9]].mean(axis=0) for y in rows])
-    seg = np.diff(centre, axis=0)
-    ang = np.unwrap(np.arctan2(seg[:, 1], seg[:, 0]))
-    kappa = np.diff(ang) / dx  # 1/m, at the interior stations
+    centre = np.array([cur[r].mean(axis=0) for r in in_row])
+    centre0 = np.array([x0[r].mean(axis=0) for r in in_row])
+
+    def turning(line):
+        seg = np.diff(line, axis=0)
+        return np.diff(np.unwrap(np.arctan2(seg[:, 1], seg[:, 0]))) / dx  # 1/m, at the interior stations
+
+    kappa = turning(centre) - turning(centre0)
+    tangent = np.array([normal[1], -normal[0]])  # along the target, downhill (+x side)
+    tip_slip = float((centre[-1] - centre0[-1]) @ tangent)
     width = max(1, int(round(thickness / dx)))
     kappa = np.convolve(kappa, np.ones(width) / width, mode="same")
     kpos = station[1:-1]
@@ -100,7 +113,7 @@ def analyse(out, name):
     e0 = float(col("kinetic_energy_J")[0])
     force = col("floor_force_N") if "floor_force_N" in hist[0] else None
     res = {"run": name, "angle_deg": angle, "spacing_m": dx, "end_time_s": t_end,
-           "fin_thickness_m": thickness,
+           "fin_thickness_m": thickness, "friction": friction, "tip_slip_m": round(tip_slip, 5),
            "bend_count": len(bends), "bends_m_from_root": [round(float(p), 4) for p, _ in bends],
            "bend_curvatures_per_m": [round(float(c), 2) for _, c in bends],
            "shape": ("straight (crushed)" if not bends else "single bend" if len(bends) == 1
@@ -125,7 +138,7 @@ def main(argv):
         data.append(d)
         print(f"{n}: {r['shape']}: bends at {r['bends_m_from_root']} m from the root (curvature "
               f"{r['bend_curvatures_per_m']} 1/m); plastic hinges {r['hinge_count']} at {r['hinges_m_from_root']} m "
-              f"(strains {r['hinge_strains']}), energy error {r['energy_error_max_over_initial']:.2%}"
+              f"(strains {r['hinge_strains']}), tip slip {r['tip_slip_m'] * 1e3:.1f} mm, energy error {r['energy_error_max_over_initial']:.2%}"
               + (f", peak floor force {r['peak_floor_force_N_per_m'] / 1e6:.2f} MN/m" if r["peak_floor_force_N_per_m"] else ""))
     json.dump({"case": "mps-fin-drop", "runs": runs}, open(os.path.join(out, "report.json"), "w"), indent=1)
     fig, axs = plt.subplots(1, len(runs), figsize=(3.6 * len(runs), 4.2), squeeze=False)

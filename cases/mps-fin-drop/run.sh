@@ -17,12 +17,13 @@ ANGLES=${ANGLES:-"0 10 20 40"}
 # a quarter of its thickness (SPACINGS=0.00375).
 read -r FIN_LENGTH FIN_THICKNESS <<< "${FIN:-0.15 0.02}"
 MU=${MU:-0}   # friction between the fin and the target (0: frictionless)
+BOW=${BOW:-0} # the fin's initial lateral bow at mid-length, a fraction of its thickness (specimen.py)
 END=${END:-0.015}
 mkdir -p "$OUT"
 RUNS=()
 for dx in $SPACINGS; do
   "$PYTHON" "$HERE/specimen.py" "$OUT/particles_$dx.h5" --spacing "$dx" --fin-length "$FIN_LENGTH" \
-    --fin-thickness "$FIN_THICKNESS"
+    --fin-thickness "$FIN_THICKNESS" --bow "$BOW"
   for angle in $ANGLES; do
     name="dx${dx}_angle${angle}"
     # Target normal n = (sin a, cos a): the fin's axis (0, 1) makes the angle a with it; the

@@ -189,7 +189,7 @@ def main(argv):
     fig.tight_layout()
     fig.savefig(os.path.join(out, "fin_drop_profiles.png"), dpi=110)
     fig, ax = plt.subplots(figsize=(6, 4))
-    for r, (*_rest, t, force) in zip(runs, data):
+    for r, (*_rest, t, force, _fin, _normal, _point) in zip(runs, data):
         if force is not None:
             ax.plot(t * 1e3, force / 1e6, lw=0.8, label=f"{r['angle_deg']:g} deg")
     ax.set_xlabel("time (ms)")

@@ -51,7 +51,8 @@ SPECIMENS = {
     "kalthoff-winkler/case-full.yaml": [PLACE + " --lattice square --box 0,0,0.1,0.2 --spacing 0.002 --thickness 9mm -o {run}/particles.h5"],
     "mps-cask-seismic/case.yaml": ["{py} {case}/record.py {run}/record.csv --pga 0.9 --duration 6 --seed 1995"],
     "mps-fin-drop/case.yaml": [
-        "{py} {case}/specimen.py {run}/particles.h5 --spacing 0.005 --fin-length 0.15 --fin-thickness 0.02"],
+        "{py} {case}/specimen.py {run}/particles.h5 --spacing 0.00375 --fin-length 0.2 --fin-thickness 0.015 "
+        "--imperfection 0.1"],
     "mps-harmonics/case.yaml": [],  # a lattice in the case file
     "mps-ring-impact/case.yaml": [
         "{py} {case}/../grady-ring/specimen.py {run}/particles.h5 --radius 0.025 --width 0.005 --spacing 0.0005 --thickness 0.005"],

@@ -13,6 +13,10 @@
 #include <numeric>
 
 #include <omp.h>
+#if defined(__linux__)
+#include <sys/mman.h>
+#include <unistd.h>
+#endif
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/expression.hpp"
@@ -38,6 +42,24 @@ std::array<int64_t, 3> lattice_point_counts(const LatticeSpec& l) {
 }
 
 namespace {
+
+// v = `count` copies of `value`, its storage asked for transparent huge pages before the
+// first touch (a hint: where the system declines, the same values on ordinary pages). The
+// bond arrays are the run's largest (3.3 GB on the full concrete case); on the 4 KiB pages of
+// the virtual build machine their first-touch page faults cost about 3.5 CPU s per GB, on
+// 2 MiB pages 0.2-2 s (measured 2026-12-03: 1 GiB filled by 2 threads; docs/performance.md).
+template <class T>
+void assign_on_huge_pages(std::vector<T>& v, size_t count, T value = T{}) {
+  std::vector<T>().swap(v);  // fresh storage: nothing touched yet
+  v.reserve(count);
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  const auto page = static_cast<uintptr_t>(sysconf(_SC_PAGESIZE));
+  const uintptr_t begin = (reinterpret_cast<uintptr_t>(v.data()) + page - 1) & ~(page - 1);
+  const uintptr_t end = reinterpret_cast<uintptr_t>(v.data() + count) & ~(page - 1);
+  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+#endif
+  v.assign(count, value);
+}
 
 std::string list_names(const std::vector<std::string>& names) {
   std::string s;
@@ -622,17 +644,13 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     for (size_t i = 0; i < n; ++i) s.offsets[i + 1] = s.offsets[i] + keep_count[i];
   }
   const size_t nb = static_cast<size_t>(s.offsets[n]);
-  s.neighbor.resize(nb);
-  s.xi_len.resize(nb);
-  s.k_own.resize(nb);
-  s.k_dual.resize(nb);
-  s.vol_own.resize(nb);
-  s.s0_own.resize(nb);
-  s.s0_dual.resize(nb);
-  s.state.assign(nb, kOwnIntact | kDualIntact);
+  assign_on_huge_pages(s.neighbor, nb);
+  for (auto* a : {&s.xi_len, &s.k_own, &s.k_dual, &s.vol_own}) assign_on_huge_pages(*a, nb);
+  for (auto* a : {&s.s0_own, &s.s0_dual}) assign_on_huge_pages(*a, nb);
+  assign_on_huge_pages(s.state, nb, static_cast<uint8_t>(kOwnIntact | kDualIntact));
   if (c.softening) {
-    s.s_onset.assign(nb, FLT_MAX);
-    s.bond_damage.assign(nb, 0.0f);
+    assign_on_huge_pages(s.s_onset, nb, FLT_MAX);
+    assign_on_huge_pages(s.bond_damage, nb, 0.0f);
   }
   // Correspondence shares LPS's bond data: weights w = omega beta, no modulus per bond, LPS critical stretch.
   const bool lps = c.model == PdModel::LPS || c.model == PdModel::Correspondence;
@@ -1183,7 +1201,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   if (c.check_stability) require_resolved_families(s);
   phase("state and start-up checks");
 
-  // Stable time step: sharp estimate by power iteration; Silling & Askari (2005) for reference.
+  // Stable time step: sharp estimate by Lanczos (below); Silling & Askari (2005) for reference.
   if (!lps) {
     double dt_min = 1e300;
     for (size_t i = 0; i < n; ++i) {
@@ -1207,9 +1225,11 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     }
   }
   // The stable step is that of the bonds: the short-range forces act only under more than
-  // 10% compression, which a strain of 1e-9 never reaches (docs/theory.md).
+  // 10% compression, which a strain of 1e-9 never reaches (docs/theory.md). Lanczos: the
+  // power iteration's value within 0.4% (from below, so dt a little smaller) in 16-32 force
+  // passes instead of 60 (docs/performance.md).
   const double omega_max =
-      estimate_max_frequency(s, 60, hooks.stable_step_forces ? hooks.stable_step_forces(s) : ForcePass{});
+      estimate_max_frequency_lanczos(s, 60, hooks.stable_step_forces ? hooks.stable_step_forces(s) : ForcePass{});
   s.stable_dt = 2.0 / omega_max;
   // Compressive enhancement: no stretch seen before the first step (s_min = 0: s0 = s00).
   if (c.compressive_enhancement > 0.0 && c.fracture) {

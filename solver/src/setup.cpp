@@ -13,13 +13,10 @@
 #include <numeric>
 
 #include <omp.h>
-#if defined(__linux__)
-#include <sys/mman.h>
-#include <unistd.h>
-#endif
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/expression.hpp"
+#include "breccia/common/huge_pages.hpp"
 #include "breccia/common/units.hpp"
 #include "breccia/solver/boundary_field.hpp"
 #include "breccia/solver/calibration.hpp"
@@ -42,24 +39,6 @@ std::array<int64_t, 3> lattice_point_counts(const LatticeSpec& l) {
 }
 
 namespace {
-
-// v = `count` copies of `value`, its storage asked for transparent huge pages before the
-// first touch (a hint: where the system declines, the same values on ordinary pages). The
-// bond arrays are the run's largest (3.3 GB on the full concrete case); on the 4 KiB pages of
-// the virtual build machine their first-touch page faults cost about 3.5 CPU s per GB, on
-// 2 MiB pages 0.2-2 s (measured 2026-12-03: 1 GiB filled by 2 threads; docs/performance.md).
-template <class T>
-void assign_on_huge_pages(std::vector<T>& v, size_t count, T value = T{}) {
-  std::vector<T>().swap(v);  // fresh storage: nothing touched yet
-  v.reserve(count);
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-  const auto page = static_cast<uintptr_t>(sysconf(_SC_PAGESIZE));
-  const uintptr_t begin = (reinterpret_cast<uintptr_t>(v.data()) + page - 1) & ~(page - 1);
-  const uintptr_t end = reinterpret_cast<uintptr_t>(v.data() + count) & ~(page - 1);
-  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
-#endif
-  v.assign(count, value);
-}
 
 std::string list_names(const std::vector<std::string>& names) {
   std::string s;
@@ -594,7 +573,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   const bool sampled = c.partial_volume == PartialVolume::Sampled;
   std::vector<uint8_t> samples_inside;
   if (sampled) {
-    samples_inside.resize(fam.neighbors.size());
+    assign_on_huge_pages(samples_inside, fam.neighbors.size());
     const std::vector<int64_t> rows = share_rows(fam.offsets);
     const int64_t first = rows[shares > 1 ? share.rank : 0], last = rows[shares > 1 ? share.rank + 1 : 1];
 #pragma omp parallel for schedule(dynamic, 256)
@@ -644,6 +623,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     for (size_t i = 0; i < n; ++i) s.offsets[i + 1] = s.offsets[i] + keep_count[i];
   }
   const size_t nb = static_cast<size_t>(s.offsets[n]);
+  // The run's largest arrays (3.3 GB on the full concrete case): huge pages (huge_pages.hpp).
   assign_on_huge_pages(s.neighbor, nb);
   for (auto* a : {&s.xi_len, &s.k_own, &s.k_dual, &s.vol_own}) assign_on_huge_pages(*a, nb);
   for (auto* a : {&s.s0_own, &s.s0_dual}) assign_on_huge_pages(*a, nb);

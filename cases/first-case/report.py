@@ -18,6 +18,50 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 
+def bits(packed, count):
+    """The first `count` bits of a little-endian packed bit set (results.h5's bond flags)."""
+    return np.unpackbits(np.asarray(packed, dtype=np.uint8), bitorder="little")[:count].astype(bool)
+
+
+def halves_without_the_crack_bands(h5, last, damage_below=0.5):
+    """Mass fractions and reference centroid x of the two largest pieces left when the
+    particles that lost at least half their bonds (damage >= damage_below: the crack bands
+    and the debris) are taken out, the rest joined by intact bonds.
+
+    breccia-post's fragments join every particle with an intact bond left: at 2.5 mm, one chain
+    of debris particles holding 1-4% of their bonds (damage 0.96-0.99, loose in the crack band)
+    can join the halves or not depending on the last digit of dt (a 0.04% change flips it).
+    Without the crack bands the halves are the same piece of the plate whichever dt: each
+    39.6-39.9% and 37.9-38.2% of the mass at dt 0.78-0.825 us (eight runs, 2026-12-03)."""
+    offsets = h5["bonds/offsets"][:]
+    neighbors = h5["bonds/neighbors"][:]
+    intact = ~bits(last["broken"][:], len(neighbors))
+    if "within_horizon" in h5["bonds"]:
+        intact &= bits(h5["bonds/within_horizon"][:], len(neighbors))
+    damage = last["damage"][:]
+    owner = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+    kept = damage < damage_below
+    edge = intact & kept[owner] & kept[neighbors]
+    i, j = owner[edge], neighbors[edge].astype(np.int64)
+    # Connected components by label propagation with pointer jumping (numpy only).
+    label = np.arange(len(damage))
+    while True:
+        low = np.minimum(label[i], label[j])
+        new = label.copy()
+        np.minimum.at(new, i, low)
+        np.minimum.at(new, j, low)
+        new = new[new]
+        if np.array_equal(new, label):
+            break
+        label = new
+    mass = h5["particles/volume"][:] * h5["particles/density"][:]
+    piece_mass = np.bincount(label[kept], weights=mass[kept], minlength=len(damage))
+    largest = np.argsort(piece_mass)[::-1][:2]
+    x0 = h5["particles/position"][:, 0]
+    x = [float(np.average(x0[kept & (label == p)], weights=mass[kept & (label == p)])) for p in largest]
+    return [float(piece_mass[p] / mass.sum()) for p in largest], x
+
+
 def main(argv):
     out = argv[1]
     run = os.path.join(out, "run")
@@ -31,11 +75,15 @@ def main(argv):
         damage = last["damage"][:]
         cur = x0 + last["displacement"][:]
         t_end = float(last.attrs["time_s"])
+        core_share, core_x = halves_without_the_crack_bands(f, last)
     rep = {"case": "first-case", "particles": summary["particles"], "end_time_s": t_end,
            "fragments": int(len(share)), "fragments_over_1_percent": int(np.sum(share >= 0.01)),
            "largest_two_mass_fractions": [float(s) for s in share[:2]],
            # where the two largest pieces came from (reference centroid x; the hole is at 30 mm)
            "largest_two_reference_x_m": [float(v) for v in fr["reference_centroid_x_m"][np.argsort(fr["mass_kg"])[::-1][:2]]],
+           # the same with the crack bands left out (damage >= 0.5): halves_without_the_crack_bands
+           "largest_two_mass_fractions_without_crack_bands": core_share,
+           "largest_two_reference_x_m_without_crack_bands": core_x,
            "single_particle_fragments": int(np.sum(fr["particle_count"] == 1)),
            "crack_area_m2": post["cracks"]["smoothed_fracture_area_m2"],
            "dissipated_J": post["energy"]["dissipated_J"],

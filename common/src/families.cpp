@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "breccia/common/cell_list.hpp"
+#include "breccia/common/huge_pages.hpp"
 
 namespace breccia {
 
@@ -97,7 +98,7 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
       }
     }
     for (size_t i = 0; i < n; ++i) own.offsets[i + 1] = own.offsets[i] + count[i];
-    own.neighbors.resize(static_cast<size_t>(own.offsets[n]));
+    assign_on_huge_pages(own.neighbors, static_cast<size_t>(own.offsets[n]));
 #pragma omp parallel for schedule(dynamic, 4)
     for (size_t b = 0; b < blocks; ++b) {
       std::copy(found[b].begin(), found[b].end(), own.neighbors.begin() + own.offsets[b * block]);
@@ -109,7 +110,8 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
   std::vector<int64_t> t_offsets(n + 1, 0);
   for (int32_t j : own.neighbors) ++t_offsets[static_cast<size_t>(j) + 1];
   for (size_t i = 0; i < n; ++i) t_offsets[i + 1] += t_offsets[i];
-  std::vector<int32_t> t_neighbors(own.neighbors.size());
+  std::vector<int32_t> t_neighbors;
+  assign_on_huge_pages(t_neighbors, own.neighbors.size());
   {
     std::vector<int64_t> fill(t_offsets.begin(), t_offsets.end() - 1);
     for (size_t i = 0; i < n; ++i)
@@ -140,7 +142,7 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
     }
     for (size_t i = 0; i < n; ++i) fam.offsets[i + 1] = fam.offsets[i] + count[i];
   }
-  fam.neighbors.resize(static_cast<size_t>(fam.offsets[n]));
+  assign_on_huge_pages(fam.neighbors, static_cast<size_t>(fam.offsets[n]));
 #pragma omp parallel for schedule(dynamic, 256)
   for (size_t i = 0; i < n; ++i) {
     int64_t k = fam.offsets[i];

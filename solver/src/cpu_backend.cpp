@@ -193,8 +193,7 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
   // from below, never slower than a power iteration from the same start (its iterate lies in
   // the same Krylov space), and on PD spectra far faster: it stops once the value moves by
   // less than 1e-4 (relative) over two passes. Measured against the 60 power iterations: 23
-  // passes on the full concrete case, the stable step 0.37% smaller. The set-up still calls
-  // the power iteration: that small a change decides two chaotic regression cases
+  // passes on the full concrete case, the stable step 0.37% smaller; the set-up's default
   // (docs/performance.md). No reorthogonalisation: lost orthogonality only repeats
   // converged Ritz values, it does not move the largest.
   const size_t n3 = 3 * sys.n;

@@ -68,16 +68,25 @@ def glass_branching_3d(rep):
 
 def first_case(rep):
     # The tutorial's plate (STEP file, sets, a velocity field by expression): pulled from
-    # one grip, it must break through the hole into a piece on each grip. The hole's edge
-    # carries ~3x the mean stress, so the cracks start there and cut the 15 mm ligaments;
-    # the two halves held 53 / 46 % (test, 2.5 mm), 45 / 45 % (1.5 mm, two wedges cut out)
-    # and 50 / 49 % (1 mm): at least 35 % each allows for wedges and debris.
-    share = rep["largest_two_mass_fractions"]
-    check(len(share) == 2 and min(share) >= 0.35,
-          f"the two largest pieces hold {', '.join(f'{s:.1%}' for s in share)} (each >= 35 %)")
+    # one grip, it must break through the hole into a piece on each grip. The load is far from
+    # the plate's strength, not at it: by 100 us the grip has moved 2 mm over the 50 mm gauge
+    # (4% mean strain, against a critical stretch of about 0.5%), and the hole's edge carries ~3x
+    # the mean stress, so the cracks start there and cut both 15 mm ligaments by ~30 us.
+    # Measured on what is left without the crack bands (particles that lost half their bonds
+    # or more): breccia-post's fragments also join the halves through one chain of loose
+    # debris (damage 0.96-0.99) or not, depending on the last digits of dt (0.04% flips it:
+    # round-off, not physics). Without the bands the halves held 39.6-39.9% and 37.9-38.2%
+    # in eight runs, dt 0.78-0.825 us, both stable-step estimates (2026-12-03): at least 30%
+    # each allows for a different mesh or Weibull draw; an unbroken ligament would leave one
+    # piece of ~80% and fail.
+    share = rep["largest_two_mass_fractions_without_crack_bands"]
+    check(len(share) == 2 and min(share) >= 0.30,
+          f"without the crack bands the two largest pieces hold {', '.join(f'{s:.1%}' for s in share)} (each >= 30 %)")
     # One on each side of the hole (x = 30 mm): the break runs through it.
-    xs = sorted(x * 1e3 for x in rep["largest_two_reference_x_m"])
+    xs = sorted(x * 1e3 for x in rep["largest_two_reference_x_m_without_crack_bands"])
     check(len(xs) == 2 and xs[0] < 30.0 < xs[1], f"their reference centroids x = {xs} mm lie either side of the hole at 30 mm")
+    # For the record (not checked, see above): breccia-post's fragments, debris included.
+    print("breccia-post's two largest fragments: " + ", ".join(f"{s:.1%}" for s in rep["largest_two_mass_fractions"]))
 
 
 check_case.CHECKS.update({"homalite-branching": homalite_branching, "inclusion-plate": inclusion_plate,

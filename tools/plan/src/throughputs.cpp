@@ -85,10 +85,10 @@ Throughputs load_throughputs(const std::string& path) {
                              l.text("source", path)});
     }
   const Section setup = root.section("setup");
-  setup.allow_only({"bonds_per_core_s", "source", "power_iterations"});
+  setup.allow_only({"bonds_per_core_s", "source", "stable_step_passes"});
   t.setup_bonds_per_core_s = setup.positive("bonds_per_core_s", Quantity::Dimensionless);
   t.setup_source = setup.text("source", path);
-  t.power_iterations = static_cast<int>(setup.integer("power_iterations", 60));
+  t.stable_step_passes = static_cast<int>(setup.integer("stable_step_passes", t.stable_step_passes));
   const Section adr = root.section("adr");
   adr.allow_only({"iterations_per_cell_decade", "source"});
   t.adr_iterations_per_cell_decade = adr.positive("iterations_per_cell_decade", Quantity::Dimensionless);
@@ -171,10 +171,11 @@ Throughputs calibrate(const solver::CaseConfig& like, int threads, const Through
   // the proposal still need their rate).
   std::erase_if(t.loop, [&](const LoopRate& x) { return x.model == lr.model && (!f32 || x.precision == "float32"); });
   t.loop.push_back(lr);
-  // Set-up other than the power iteration; never below a tenth of the documented rate's
-  // cost share (a very short set-up can measure as ~0 on a coarse clock).
-  const double power_s = t.power_iterations * bonds / loop_rate;
-  const double rest_s = std::max(setup_cpu_s - power_s, 0.1 * setup_cpu_s);
+  // Set-up other than the stable-step estimate (its force passes as the set-up counted
+  // them); never below a tenth of the documented rate's cost share (a very short set-up can
+  // measure as ~0 on a coarse clock).
+  const double stable_step_s = s.stable_step_passes * bonds / loop_rate;
+  const double rest_s = std::max(setup_cpu_s - stable_step_s, 0.1 * setup_cpu_s);
   t.setup_bonds_per_core_s = bonds / rest_s;
   t.setup_source = "measured on this machine by --calibrate (" + what + ")";
   return t;

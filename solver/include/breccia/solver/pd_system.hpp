@@ -96,7 +96,7 @@ struct PdSystem {
   long long step = 0;
   double time = 0.0;
   double dt = 0.0;
-  double stable_dt = 0.0;         // 2 / omega_max from power iteration (sharp)
+  double stable_dt = 0.0;         // 2 / omega_max by Lanczos (sharp; setup_system)
   double silling_askari_dt = 0.0; // Silling & Askari 2005 bound (PMB), for reference
   int stable_step_passes = 0;     // force passes the stable-step estimate took
   double external_work = 0.0;
@@ -183,14 +183,14 @@ Energies measure(const PdSystem& sys);
 
 // Largest angular frequency of the linearised system (times a 2% margin) by power iteration
 // (uses the force kernel on a tiny displacement, so it is exact for the discretisation at
-// hand); the set-up's stable step. `forces`: how each iteration's force pass runs
-// (ForcePass); the result does not depend on it.
+// hand); the reference the Lanczos estimate below is checked against. `forces`: how each
+// iteration's force pass runs (ForcePass); the result does not depend on it.
 double estimate_max_frequency(PdSystem& sys, int iterations = 60, const ForcePass& forces = {});
 // The same by Lanczos in the mass inner product: at most `max_passes` force passes, fewer
 // once converged (sys.stable_step_passes says how many): 23 instead of 60 on the full
 // concrete case, within 0.4% of the power iteration on five models (docs/performance.md).
-// Not the set-up's default yet: a 0.04% smaller step flips the first-case regression test
-// (whether one bond path still joins the plate's halves at 100 us), see performance.md.
+// The set-up's stable step (setup_system): its dt is up to 0.4% smaller than the power
+// iteration's, as its Ritz value approaches omega_max^2 from below faster.
 double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes = 60, const ForcePass& forces = {});
 
 }  // namespace breccia::solver

@@ -25,11 +25,13 @@ struct LoopRate {
 
 struct Throughputs {
   std::vector<LoopRate> loop;
-  // Set-up work other than the power iteration (families, partial volumes, calibration),
+  // Set-up work other than the stable-step estimate (families, partial volumes, calibration),
   // in bond entries per core-second.
   double setup_bonds_per_core_s = 0.0;
   std::string setup_source;
-  int power_iterations = 60;  // estimate_max_frequency's default: 60 force passes
+  // Force passes of the set-up's stable-step estimate (Lanczos, estimate_max_frequency_lanczos:
+  // it stops when converged) where the plan cannot set the case up itself.
+  int stable_step_passes = 25;
   // ADR iterations ~ adr_iterations_per_cell x (cells along the longest side) x log10(1/tol).
   double adr_iterations_per_cell_decade = 0.0;
   std::string adr_source;

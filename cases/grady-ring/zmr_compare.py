@@ -65,7 +65,7 @@ def main(argv):
     ax.set_xlabel("e = strain rate / e0,  e0 = c sigma_t^3 / (E^2 G0)")
     ax.set_ylabel("mean fragment size (mm)")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7.5)
+    ax.legend(fontsize=7, loc="lower left")
     fig.tight_layout()
     fig.savefig(out_png, dpi=120)
 

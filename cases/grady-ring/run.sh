@@ -43,8 +43,9 @@ for r in $RATES; do
   # (~7e-4 at dx 0.1 mm) is reached, counted three times over for the scatter.
   end_us=$("$PYTHON" -c "print(round(4 + 3 * 7e-4 / $r * 1e6, 2))")
   # Softening: 20 us (many release-wave transits of the largest fragment) after 6 times the
-  # time to reach the strength's strain. At e >= 3 the sizes still fall after it (fragments
-  # split again for tens of us; README "Why e = 3 and 10 are off").
+  # time to reach the strength's strain. At e >= 3 the kept count still grows after it (the
+  # last bonds of early crack bands break for tens of us): those rates are run to a settled
+  # count with END_US and OUTPUT_EVERY, then zmr_settle.py (README "Runs to a settled count").
   [ -z "${STRENGTH_MPA:-}" ] || end_us=$("$PYTHON" -c "print(round(20 + 6 * $STRENGTH_MPA * 1e6 / 72e9 / $r * 1e6, 2))")
   end_us=${END_US:-$end_us}
   options=(--set "initial[0].strain_rate=$r" --set "time.end=$end_us us")

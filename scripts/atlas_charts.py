@@ -42,8 +42,8 @@ PROBLEMS = {
                          "error = |angle - 70 deg| / 70 deg (Kalthoff & Winkler 1988)"),
     "softening_strength": ("Quasi-brittle strength (softening bonds)",
                            "2D plane-stress bar 30 x 6 mm, E 30 GPa, G0 100 J/m2, tensile_strength 3 MPa, pulled "
-                           "at 0.05 m/s per end by grips two horizons deep (PMB with the energy surface correction, "
-                           "LPS without: it has none); error = |peak nominal stress / tensile_strength - 1|"),
+                           "at 0.05 m/s per end by grips two horizons deep (PMB and LPS with the energy surface "
+                           "correction); error = |peak nominal stress / tensile_strength - 1|"),
     "mps_wave_speed": ("MPS wave speed (stress solid)",
                        "MPS stress formulation (solver/mps Solid), 2D strip 100 x 10 mm in uniaxial strain (every "
                        "particle held in y), fundamental free-free mode, rock E 50 GPa, nu 0.25; error = "
@@ -879,10 +879,12 @@ def summary_text(by_problem, orders_all, stab):
         c1 = cheapest(by_problem["wave_speed_bar"], 0.01)
         out.append("- **Wave speed (thin strip)**: PMB, which has the energy surface correction, is off by "
                    + range_text("wave_speed_bar", model="pmb", particles_kind="lattice") + " on the lattice and "
-                   + range_text("wave_speed_bar", model="pmb", particles_kind="tet") + " on triangle centroids; LPS, "
-                   "which has no surface correction, is slow by " + range_text("wave_speed_bar", model="lps")
-                   + ": in a strip a few horizons wide every family is cut by the free sides, and a larger m makes "
-                   "that worse. For slender members use PMB (or LPS with many horizons across). Cheapest setting "
+                   + range_text("wave_speed_bar", model="pmb", particles_kind="tet") + " on triangle centroids; LPS, with its energy surface correction, by "
+                   + range_text("wave_speed_bar", model="lps", particles_kind="lattice") + " on the lattice and "
+                   + range_text("wave_speed_bar", model="lps", particles_kind="tet") + " on triangle centroids "
+                   "(without a correction every family in a strip a few horizons wide is cut by the free sides and "
+                   "the strip is slow by several per cent). Both models need their correction in slender "
+                   "members. Cheapest setting "
                    "within 1 % at every spacing: " + (describe(c1) if c1 else "none") + ".")
     if "quasi_static_bar" in by_problem:
         qs = by_problem["quasi_static_bar"]
@@ -895,7 +897,7 @@ def summary_text(by_problem, orders_all, stab):
         out.append("- **Quasi-static bar (ADR)**: PMB lattice "
                    + range_text("quasi_static_bar", model="pmb", particles_kind="lattice")
                    + ", LPS lattice " + range_text("quasi_static_bar", model="lps", particles_kind="lattice")
-                   + " (again the cut families at the free sides), triangle centroids "
+                   + " (both with the energy surface correction), triangle centroids "
                    + range_text("quasi_static_bar", particles_kind="tet") + " at one spacing. Cheapest setting within "
                    "1 % at every spacing: " + (describe(c1) if c1 else "none in this sweep") + ". ADR iterations on "
                    "the lattice: " + it_text + ".")

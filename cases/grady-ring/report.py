@@ -49,6 +49,25 @@ def zmr_e(rate, strength):
     return rate / (C_BAR * strength ** 3 / (E ** 2 * g0))
 
 
+def ring_geometry(x):
+    """Particles across the width (the polar lattice's circles) and the mean radius."""
+    radii = np.hypot(x[:, 0], x[:, 1])
+    return {"across": len(np.unique(np.round(radii, 9))), "radius": float(radii.mean())}
+
+
+def kept_fragments(csv_path, ring, thickness):
+    """breccia-post's fragments.csv -> (rows, particle counts, kept mask, arc lengths, ring width).
+    Kept: at least two particle columns long (>= 2 x the particles across the width)."""
+    fr = np.atleast_1d(np.genfromtxt(csv_path, delimiter=",", names=True))
+    count = fr["particle_count"]
+    kept = count >= 2 * ring["across"]
+    # The ring's width from its own particles (volume over mean circumference), so rings of
+    # any width (run.sh WIDTH) are measured alike.
+    width = float(fr["volume_m3"].sum()) / (2 * math.pi * ring["radius"] * thickness)
+    arc = fr["volume_m3"] / (width * thickness)
+    return fr, count, kept, arc, width
+
+
 def analyse(out, name):
     run = os.path.join(out, name)
     text = open(os.path.join(run, "case_as_run.yaml")).read()
@@ -62,17 +81,9 @@ def analyse(out, name):
         u = f["output"][last]["displacement"][:, :2]
         horizon = float(np.median(f["particles/horizon"][:]))
         t_end = float(f["output"][last].attrs["time_s"])
-    radii = np.hypot(x[:, 0], x[:, 1])
-    across = len(np.unique(np.round(radii, 9)))
-    radius = float(radii.mean())
-    fr = np.genfromtxt(os.path.join(run, "post", "fragments.csv"), delimiter=",", names=True)
-    fr = np.atleast_1d(fr)
-    count = fr["particle_count"]
-    kept = count >= 2 * across
-    # The ring's width from its own particles (volume over mean circumference), so rings of
-    # any width (run.sh WIDTH) are measured alike.
-    width = float(fr["volume_m3"].sum()) / (2 * math.pi * radius * thickness)
-    arc = fr["volume_m3"] / (width * thickness)
+    ring = ring_geometry(x)
+    across, radius = ring["across"], ring["radius"]
+    fr, count, kept, arc, width = kept_fragments(os.path.join(run, "post", "fragments.csv"), ring, thickness)
     with open(os.path.join(run, "summary.json")) as fh:
         summary = json.load(fh)
     res = {"run": name, "strain_rate_per_s": rate, "particles": int(summary["particles"]),

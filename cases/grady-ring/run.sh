@@ -10,7 +10,9 @@
 # also the case file's variants rate_5e2 ... rate_2e4).
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional);
 #   WIDTH (ring width, m, default 0.0005), RADIUS (zmr variants, m, default 0.05) and END_US
-#   (end time, us, instead of the rate's own) for studies.
+#   (end time, us, instead of the rate's own) for studies; OUTPUT_EVERY (steps): results.h5
+#   outputs along the way, each post-processed for fragments (breccia-post --all), so that
+#   zmr_settle.py can tell when the fragment count settled.
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 source "$HERE/../../scripts/case_env.sh"
@@ -41,15 +43,19 @@ for r in $RATES; do
   # (~7e-4 at dx 0.1 mm) is reached, counted three times over for the scatter.
   end_us=$("$PYTHON" -c "print(round(4 + 3 * 7e-4 / $r * 1e6, 2))")
   # Softening: 20 us (many release-wave transits of the largest fragment) after 6 times the
-  # time to reach the strength's strain. At e >= 3 the sizes still fall after it (fragments
-  # split again for tens of us; README "Why e = 3 and 10 are off").
+  # time to reach the strength's strain. At e >= 3 the kept count still grows after it (the
+  # last bonds of early crack bands break for tens of us): those rates are run to a settled
+  # count with END_US and OUTPUT_EVERY, then zmr_settle.py (README "Runs to a settled count").
   [ -z "${STRENGTH_MPA:-}" ] || end_us=$("$PYTHON" -c "print(round(20 + 6 * $STRENGTH_MPA * 1e6 / 72e9 / $r * 1e6, 2))")
   end_us=${END_US:-$end_us}
   options=(--set "initial[0].strain_rate=$r" --set "time.end=$end_us us")
   [ -z "${STRENGTH_MPA:-}" ] || options+=(--set "materials[0].tensile_strength=$STRENGTH_MPA MPa")
+  [ -z "${OUTPUT_EVERY:-}" ] || options+=(--set "output.every=$OUTPUT_EVERY")
   echo "== $name (end $end_us us)"
   "$BRECCIA_BIN/breccia-solve" "$HERE/case.yaml" -o "$OUT/$name" --set "specimen.particles=$OUT/particles.h5" "${options[@]}" \
     --threads "$THREADS" --quiet
+  # Every output (fragments_<step>.csv, for zmr_settle.py), then the last as report.py reads it.
+  [ -z "${OUTPUT_EVERY:-}" ] || "$BRECCIA_BIN/breccia-post" "$OUT/$name" --fragments --all --quiet --no-plots > "$OUT/$name/post_all.log"
   "$BRECCIA_BIN/breccia-post" "$OUT/$name" --fragments --quiet --no-plots > "$OUT/$name/post.log"
   RUNS+=("$name")
 done

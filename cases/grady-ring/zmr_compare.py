@@ -1,8 +1,11 @@
 """Softening ring against Zhou, Molinari & Ramesh (2006) at two or more resolutions.
 
     zmr_compare.py OUT_PNG LABEL=REPORT_JSON [LABEL=REPORT_JSON ...]
+    zmr_compare.py OUT_PNG --sizes zmr_sizes.json
 
-Each REPORT_JSON is report.py's output for one resolution of run.sh's zmr variants. Prints a
+Each REPORT_JSON is report.py's output for one resolution of run.sh's zmr variants;
+zmr_sizes.json holds the sizes the README's table quotes, gathered from several such reports
+(runs of different end times and dates: each entry says which). Prints a
 markdown table (mean fragment size against the ZMR formula at each e = rate / e0, and the
 change between consecutive resolutions) and draws size against e with the ZMR formula and
 Grady's 1982 energy balance.
@@ -21,9 +24,17 @@ from report import grady_size, zmr_size, zmr_e  # noqa: E402
 
 
 def main(argv):
-    out_png, pairs = argv[1], [a.split("=", 1) for a in argv[2:]]
+    out_png = argv[1]
     series = []
-    for label, path in pairs:
+    if argv[2] == "--sizes":
+        table = json.load(open(argv[3]))
+        for label, entries in table["series"].items():
+            runs = [{"strain_rate_per_s": e["rate_per_s"], "mean_size_m": e["size_mm"] * 1e-3,
+                     "tensile_strength_Pa": table["tensile_strength_Pa"],
+                     "zhou_molinari_ramesh_size_m": zmr_size(e["rate_per_s"], 0.0, table["tensile_strength_Pa"])}
+                    for e in entries]
+            series.append((label, sorted(runs, key=lambda r: r["strain_rate_per_s"])))
+    for label, path in (a.split("=", 1) for a in (argv[2:] if argv[2] != "--sizes" else [])):
         runs = [r for r in json.load(open(path))["runs"] if "mean_size_m" in r and r.get("tensile_strength_Pa")]
         runs.sort(key=lambda r: r["strain_rate_per_s"])
         series.append((label, runs))
@@ -54,7 +65,7 @@ def main(argv):
     ax.set_xlabel("e = strain rate / e0,  e0 = c sigma_t^3 / (E^2 G0)")
     ax.set_ylabel("mean fragment size (mm)")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7.5)
+    ax.legend(fontsize=7, loc="lower left")
     fig.tight_layout()
     fig.savefig(out_png, dpi=120)
 

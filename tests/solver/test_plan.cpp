@@ -195,8 +195,8 @@ namespace {
 
 // The two problems and their error measures as the atlas sweeps them
 // (tools/atlas/problems.cpp, wave_speed_bar and quasi_static_bar), so that rows measured
-// here mean what the atlas's rows mean: same strips, same settings (PMB with the energy
-// surface correction, LPS without), same measures.
+// here mean what the atlas's rows mean: same strips, same settings (PMB and LPS with the
+// energy surface correction), same measures.
 constexpr double kSteelE = 200e9, kSteelRho = 7850;
 
 // Wave-speed bar: plane-stress strip 100 x 10 mm; the fundamental free-free mode
@@ -208,7 +208,7 @@ constexpr const char* kWaveMeasure = "|c/c0-1| of the fundamental mode period; 2
 std::string model_line(const std::string& model, double m) {
   std::ostringstream y;
   y << "model: {type: " << model << ", planar: plane_stress, horizon_factor: " << m
-    << (model == "pmb" ? ", surface_correction: energy" : "") << "}\n";
+    << ", surface_correction: energy}\n";
   return y.str();
 }
 
@@ -340,7 +340,9 @@ output: {results: false}
   EXPECT_EQ(p.dimension, 2);
   const std::string proposed = temp_path("wave_proposed.yaml");
   write_proposed_case(user, p, proposed);
-  PdSystem s = solver::setup_system(solver::parse_case_file(proposed));
+  const CaseConfig back = solver::parse_case_file(proposed);
+  EXPECT_TRUE(back.surface_correction) << "the rows ran with the correction, so must the proposal (" << p.model << ")";
+  PdSystem s = solver::setup_system(back);
   const double error = wave_speed_error(s);
   std::printf("tolerance %.4g: proposed spacing %.4g m, measured error %.4g\n", tol, p.spacing_m, error);
   EXPECT_LE(error, tol);
@@ -363,7 +365,9 @@ TEST(PlanProposal, QuasiStaticBarProposalMeetsTheToleranceWhenRun) {
   ASSERT_TRUE(p.tolerance_met);
   const std::string proposed = temp_path("static_proposed.yaml");
   write_proposed_case(user, p, proposed);
-  PdSystem s = solver::setup_system(solver::parse_case_file(proposed));
+  const CaseConfig back = solver::parse_case_file(proposed);
+  EXPECT_TRUE(back.surface_correction) << "the rows ran with the correction, so must the proposal (" << p.model << ")";
+  PdSystem s = solver::setup_system(back);
   const double error = static_strain_error(s);
   std::printf("tolerance %.4g: proposed spacing %.4g m, measured error %.4g\n", tol, p.spacing_m, error);
   EXPECT_LE(error, tol);
@@ -648,6 +652,10 @@ time: {end: 10 us}
   write_proposed_case(c, p, proposed);
   const CaseConfig back = solver::parse_case_file(proposed);
   EXPECT_EQ(back.model, solver::PdModel::LPS);
+  // The atlas's LPS rows run with the energy surface correction (tools/atlas, model_yaml), so
+  // the LPS proposal must too, or it would not have their error.
+  EXPECT_TRUE(back.surface_correction);
+  EXPECT_NE(all.find("measures lps with the energy surface correction"), std::string::npos) << all;
 
   const std::string empty = temp_path("corr_empty_atlas.csv");
   std::ofstream(empty) << "problem,model,dimension,particles_kind,m,spacing_m,precision,backend,threads,particles,bonds,"

@@ -52,8 +52,8 @@ std::string model_yaml(const Settings& st, const std::string& planar, bool surfa
   std::string y = "model: {type: " + st.model + ", horizon_factor: " + std::to_string(horizon_factor(st.m));
   if (!planar.empty()) y += ", planar: " + planar;
   if (st.precision != "float64") y += ", precision: " + st.precision;
-  // The energy surface correction exists for PMB only (setup.cpp); LPS runs without it.
-  if (surface_correction && st.model == "pmb") y += ", surface_correction: energy";
+  // PMB and LPS have the energy surface correction (setup.cpp); correspondence has none.
+  if (surface_correction && st.model != "correspondence") y += ", surface_correction: energy";
   return y + "}\n";
 }
 
@@ -322,9 +322,7 @@ void softening_strength(const SweepPlan& plan, SpecimenMaker& maker, const RowSi
             r.steps = s.step;
             r.wall_s = seconds_since(t0);
             r.error = std::fabs(peak.stress_pa / sigma_t - 1.0);
-            r.error_measure = model == "pmb"
-                                  ? "|peak stress / tensile_strength - 1|; 2D plane stress bar 30x6 mm, surface correction"
-                                  : "|peak stress / tensile_strength - 1|; 2D plane stress bar 30x6 mm (LPS: no surface correction)";
+            r.error_measure = "|peak stress / tensile_strength - 1|; 2D plane stress bar 30x6 mm, surface correction";
             sink(r);
           });
         }

@@ -188,10 +188,9 @@ CaseConfig proposed_config(const CaseConfig& c, const Proposal& p) {
   out.horizon_factor = p.horizon_factor;
   out.horizon_m.reset();
   if (p.precision == "float32") out.precision = solver::CaseConfig::Precision::Float32;
-  // The atlas measures PMB with the energy surface correction (tools/atlas, model_yaml):
-  // a PMB proposal must run as its rows ran to have their error. The atlas's LPS rows were
-  // measured without LPS's correction, so an LPS proposal runs without it too.
-  if (p.from_atlas && p.model == "pmb") out.surface_correction = true;
+  // The atlas measures PMB and LPS with the energy surface correction where a free surface
+  // matters (tools/atlas, model_yaml): a proposal must run as its rows ran to have their error.
+  if (p.from_atlas && (p.model == "pmb" || p.model == "lps")) out.surface_correction = true;
   if (!c.lattice) return out;
   solver::LatticeSpec l = *c.lattice;
   l.spacing = p.spacing_m;
@@ -369,9 +368,8 @@ Proposal propose(const CaseConfig& c, const std::vector<AtlasRow>& atlas, double
     if (best.tolerance_met) {
       why.push_back("Chosen: the cheapest candidate that meets the tolerance (" +
                     describe(best.dimension, best.planar, best.model, best.horizon_factor, best.spacing_m) + ").");
-      if (best.model == "pmb")
-        why.push_back("The atlas measures PMB with the energy surface correction, so the proposal turns it on "
-                      "(model.surface_correction: energy).");
+      why.push_back("The atlas measures " + best.model + " with the energy surface correction, so the proposal "
+                    "turns it on (model.surface_correction: energy).");
       if (correspondence)
         why.push_back("Correspondence is replaced by " + best.model + ": the atlas shows it meets the tolerance, and "
                       "correspondence would cost " + (corr_cost ? fmt(*corr_cost) + "x LPS's time per bond entry" :

@@ -42,7 +42,12 @@ int64_t RankLayout::local_index(int64_t j) const {
 RankLayout rank_layout(const PdSystem& g, int ranks, int rank) {
   RankLayout L;
   try {
-    L.part = MortonRangePartitioner().partition(g.offsets, ranks);
+    // A distributed set-up cut the partition before its families existed (its global
+    // system holds this rank's rows only): the same cut, from the same family sizes.
+    if (!g.distributed_rows.empty() && static_cast<int>(g.distributed_rows.size()) == ranks + 1)
+      L.part.begin = g.distributed_rows;
+    else
+      L.part = MortonRangePartitioner().partition(g.offsets, ranks);
   } catch (const std::invalid_argument& e) {
     throw InputError(g.config.file, "mpirun -np", e.what(), "at most one rank per particle");
   }

@@ -285,7 +285,9 @@ std::shared_ptr<RankShare> g_setup_share;
 std::shared_ptr<RankShare> take_rank_share(const PdSystem& global, MPI_Comm comm) {
   std::shared_ptr<RankShare> sh = std::move(g_setup_share);
   g_setup_share.reset();
-  if (sh && sh->global_n == global.n && sh->global_bonds == global.bond_count()) {
+  // A distributed set-up's share was cut from its global system before the bonds left it
+  // (finish_distributed_setup): the bond count it saw was the rank's own.
+  if (sh && sh->global_n == global.n && (sh->global_bonds == global.bond_count() || !global.distributed_rows.empty())) {
     copy_rank_state(sh->local, global, sh->layout);
     return sh;
   }
@@ -476,6 +478,33 @@ RowShare mpi_row_share() {
     allgather_ranges(data, element_bytes, entry_begin, MPI_COMM_WORLD);
   };
   return share;
+}
+
+DistributedSetup mpi_distributed_setup() {
+  DistributedSetup d;
+  MPI_Comm_rank(MPI_COMM_WORLD, &d.rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &d.ranks);
+  d.concat = [](const void* data, size_t count, size_t element_bytes, bool everyone) {
+    int rank = 0, ranks = 1;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+    long long mine = static_cast<long long>(count);
+    std::vector<long long> counts(static_cast<size_t>(ranks));
+    MPI_Allgather(&mine, 1, MPI_LONG_LONG, counts.data(), 1, MPI_LONG_LONG, MPI_COMM_WORLD);
+    std::vector<int64_t> begin(static_cast<size_t>(ranks) + 1, 0);
+    for (int r = 0; r < ranks; ++r) begin[r + 1] = begin[r] + counts[r];
+    const ElementRanges e(element_bytes, begin);
+    std::vector<char> out;
+    if (everyone || rank == 0) out.resize(static_cast<size_t>(begin[ranks]) * element_bytes);
+    if (everyone)
+      MPI_Allgatherv(data, static_cast<int>(count), e.type, out.data(), e.counts.data(), e.displs.data(), e.type,
+                     MPI_COMM_WORLD);
+    else
+      MPI_Gatherv(data, static_cast<int>(count), e.type, out.data(), e.counts.data(), e.displs.data(), e.type, 0,
+                  MPI_COMM_WORLD);
+    return out;
+  };
+  return d;
 }
 
 long long mpi_relax(PdSystem& global, bool progress) {

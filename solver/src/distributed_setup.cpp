@@ -80,9 +80,18 @@ void gather_owned(const DistributedSetup& d, const DistributedRows& rows, std::v
 
 }  // namespace
 
+void release_cut_bonds(PdSystem& s) {
+  std::vector<double>().swap(s.xi_len);
+  std::vector<double>().swap(s.k_own);
+  for (auto* a : {&s.s0_own, &s.s0_dual, &s.s_onset}) std::vector<float>().swap(*a);
+  if (s.config.write_results) return;  // rank 0's writers read these (finish_distributed_setup)
+  for (auto* a : {&s.vol_own, &s.k_dual}) std::vector<double>().swap(*a);
+  std::vector<int32_t>().swap(s.neighbor);
+}
+
 void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const DistributedSetup& d) {
   if (!rows.active) return;
-  const size_t own_entries = s.neighbor.size();
+  const size_t own_entries = s.state.size();
   if (s.offsets[s.n] != static_cast<int64_t>(own_entries) ||
       rows.full_offsets[rows.end] - rows.full_offsets[rows.begin] != static_cast<int64_t>(own_entries))
     throw std::logic_error("distributed set-up: a rank's rows differ from the counted family sizes");
@@ -102,16 +111,11 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   // Collective: every rank takes the same branches (the case decides them, not the rank).
   gather_entries(d, s.state, true);
   if (s.config.softening) gather_entries(d, s.bond_damage, true);
-  std::vector<double>().swap(s.xi_len);
-  std::vector<double>().swap(s.k_own);
-  for (auto* a : {&s.s0_own, &s.s0_dual, &s.s_onset}) std::vector<float>().swap(*a);
+  release_cut_bonds(s);  // again, should no estimate have cut the rank's system
   if (writer_bonds) {
     gather_entries(d, s.neighbor, false);
     gather_entries(d, s.vol_own, false);
     gather_entries(d, s.k_dual, false);
-  } else {
-    for (auto* a : {&s.vol_own, &s.k_dual}) std::vector<double>().swap(*a);
-    std::vector<int32_t>().swap(s.neighbor);
   }
   s.offsets = rows.full_offsets;
   if (s.state.size() != s.bond_count()) throw std::logic_error("distributed set-up: the gathered bond states");

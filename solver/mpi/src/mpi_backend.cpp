@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "breccia/common/error.hpp"
+#include "breccia/solver/distributed_setup.hpp"
 #include "breccia/solver/exec_openmp.hpp"
 #include "breccia/solver/float32_state.hpp"
 #include "breccia/solver/mpi_launch.hpp"
@@ -449,6 +450,8 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
   // The rank's system, built here once and kept for the time loop's backend.
   auto sh = make_rank_share(global, MPI_COMM_WORLD);
   g_setup_share = sh;
+  // A distributed set-up's bonds now live in the rank's system: the global one lets them go.
+  if (!global.distributed_rows.empty()) release_cut_bonds(global);
   // Each rank computes its rows at the iteration's displacement and all gather the forces:
   // every rank then holds one process's force array, bit for bit, and takes the power
   // iteration's sums in its order, so the stable step is one process's to the last bit.
@@ -467,6 +470,16 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
     pd_force_pass(exec, a, true);
     std::copy(l.force.begin(), l.force.begin() + 3 * owned, g.force.begin() + 3 * b);
     allgather_ranges(g.force.data(), sizeof(double), particle_ranges(L.part, 3), MPI_COMM_WORLD);
+    if (!g.distributed_rows.empty()) {
+      // The global system holds no bonds to run the pass that ends the estimate (at the real
+      // displacement, fracture on): the owned fields and bond states come from this one,
+      // where finish_distributed_setup gathers them.
+      for (auto [from, to] : {std::pair{&l.energy_density, &g.energy_density}, {&l.damage, &g.damage},
+                              {&l.max_stretch, &g.max_stretch}, {&l.dissipated, &g.dissipated}})
+        std::copy(from->begin(), from->begin() + owned, to->begin() + b);
+      std::copy(l.state.begin(), l.state.end(), g.state.begin());
+      g.dissipated_energy = l.dissipated_energy;
+    }
   };
 }
 

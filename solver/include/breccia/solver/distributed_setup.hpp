@@ -50,6 +50,12 @@ std::vector<T> concat_over_ranks(const DistributedSetup& d, const std::vector<T>
   return out;
 }
 
+// Once the rank's own system is cut from the global one (the stable-step estimate,
+// solver/mpi/): drops the global system's per-entry coefficients, which only the rank's
+// system reads from then on (the bond states stay, and what the results' bond list reads
+// when results are written).
+void release_cut_bonds(PdSystem& s);
+
 // The global system as the time loop and the writers need it, its bonds now in the ranks'
 // own systems: the whole row offsets and bond states (and softening's bond damage) on every
 // rank; with results written, rank 0 also gathers the partners and the two half-bond

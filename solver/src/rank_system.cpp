@@ -147,6 +147,37 @@ PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) {
   return s;
 }
 
+PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
+  const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
+  if (g.distributed_rows.empty() || eb != 0 || ee != static_cast<int64_t>(g.neighbor.size())) return restrict_to_rank(g, L);
+  // The slices restrict_to_rank would copy are the whole arrays: take them, and restrict the
+  // rest (an empty array slices as empty).
+  std::vector<double> xi_len, k_own, k_dual, vol_own;
+  std::vector<float> s0_own, s0_dual, s_onset;
+  xi_len.swap(g.xi_len);
+  k_own.swap(g.k_own);
+  s0_own.swap(g.s0_own);
+  s0_dual.swap(g.s0_dual);
+  s_onset.swap(g.s_onset);
+  if (g.config.write_results) {  // rank 0's writers read them (finish_distributed_setup)
+    k_dual = g.k_dual;
+    vol_own = g.vol_own;
+  } else {
+    k_dual.swap(g.k_dual);
+    vol_own.swap(g.vol_own);
+  }
+  PdSystem s = restrict_to_rank(g, L);
+  s.xi_len = std::move(xi_len);
+  s.k_own = std::move(k_own);
+  s.k_dual = std::move(k_dual);
+  s.vol_own = std::move(vol_own);
+  s.s0_own = std::move(s0_own);
+  s.s0_dual = std::move(s0_dual);
+  s.s_onset = std::move(s_onset);
+  if (!g.config.write_results) std::vector<int32_t>().swap(g.neighbor);  // renumbered in s
+  return s;
+}
+
 void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
   const std::vector<int32_t> ids = local_to_global(L);
   const size_t n = g.n;

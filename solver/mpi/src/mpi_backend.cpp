@@ -13,7 +13,6 @@
 #include <vector>
 
 #include "breccia/common/error.hpp"
-#include "breccia/solver/distributed_setup.hpp"
 #include "breccia/solver/exec_openmp.hpp"
 #include "breccia/solver/float32_state.hpp"
 #include "breccia/solver/mpi_launch.hpp"
@@ -264,13 +263,15 @@ struct RankShare {
   size_t global_n = 0, global_bonds = 0;  // of the system it was cut from
 };
 
-std::shared_ptr<RankShare> make_rank_share(const PdSystem& global, MPI_Comm comm) {
+// take_bonds: a distributed set-up's global system, whose bonds are the rank's own: they move
+// into the rank's system instead of being copied (release_cut_bonds, distributed_setup.hpp).
+std::shared_ptr<RankShare> make_rank_share(const PdSystem& global, MPI_Comm comm, PdSystem* take_bonds = nullptr) {
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
   auto sh = std::make_shared<RankShare>();
   sh->layout = rank_layout(global, size, rank);
-  sh->local = restrict_to_rank(global, sh->layout);
+  sh->local = take_bonds ? restrict_to_rank_taking_bonds(*take_bonds, sh->layout) : restrict_to_rank(global, sh->layout);
   sh->halo = std::make_unique<HaloExchange>(sh->layout, comm);
   sh->global_n = global.n;
   sh->global_bonds = global.bond_count();
@@ -448,10 +449,9 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   if (size == 1) return {};
   // The rank's system, built here once and kept for the time loop's backend.
-  auto sh = make_rank_share(global, MPI_COMM_WORLD);
+  // A distributed set-up's bonds move into the rank's system: the global one lets them go.
+  auto sh = make_rank_share(global, MPI_COMM_WORLD, global.distributed_rows.empty() ? nullptr : &global);
   g_setup_share = sh;
-  // A distributed set-up's bonds now live in the rank's system: the global one lets them go.
-  if (!global.distributed_rows.empty()) release_cut_bonds(global);
   // Each rank computes its rows at the iteration's displacement and all gather the forces:
   // every rank then holds one process's force array, bit for bit, and takes the power
   // iteration's sums in its order, so the stable step is one process's to the last bit.

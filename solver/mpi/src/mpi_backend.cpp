@@ -298,7 +298,20 @@ std::shared_ptr<RankShare> take_rank_share(const PdSystem& global, MPI_Comm comm
 
 class MpiBackend final : public StepBackend {
 public:
-  MpiBackend(PdSystem& global, MPI_Comm comm) : comm_(comm), share_(supported_share(global, comm)) {}
+  MpiBackend(PdSystem& global, MPI_Comm comm) : comm_(comm), share_(supported_share(global, comm)) {
+    if (global.derived_fields_pending) {
+      // read_checkpoint's pass at the restored state, on the rank's particles (no bond
+      // breaks: the stretches are the checkpointed step's); forces and the dissipated
+      // energy stay the checkpoint's.
+      const double dissipated = local_.dissipated_energy;
+      const std::vector<double> force = local_.force;
+      local_.diagnostics = true;
+      force_pass(local_);
+      local_.dissipated_energy = dissipated;
+      local_.force = force;
+      global.derived_fields_pending = false;
+    }
+  }
 
   void step(PdSystem& g) override {
     local_.diagnostics = g.diagnostics;

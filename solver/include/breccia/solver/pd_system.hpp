@@ -113,6 +113,9 @@ struct PdSystem {
   // A distributed set-up's partition (ranks + 1 row offsets, cut before any family existed;
   // distributed_setup.hpp): the ranks' layouts take it. Empty: every rank built everything.
   std::vector<int64_t> distributed_rows;
+  // A checkpoint was read into such a system: the derived fields (damage, energies) of the
+  // restored state are still to be computed, by the ranks' systems (read_checkpoint).
+  bool derived_fields_pending = false;
 
   PdView view();
   // The bond entries of the whole system: the CSR's, since a distributed set-up's global

@@ -16,7 +16,6 @@ std::string distributed_setup_refusal(const PdSystem& s) {
   if (c.variable_horizon) return "model.variable_horizon (dual horizon: the families' transposed search)";
   if (c.surface_correction) return "model.surface_correction (the ghosts' axis factors)";
   if (s.dimension == 2) return "a 2D model (the family reweighting reads the ghosts' (a, b))";
-  if (c.softening) return "materials[].tensile_strength (softening bonds)";
   if (c.precision == CaseConfig::Precision::Float32) return "model.precision: float32";
   if (c.quasi_static) return "time.integrator: adr";
   if (c.short_range_forces) return "model.short_range_forces";
@@ -80,15 +79,6 @@ void gather_owned(const DistributedSetup& d, const DistributedRows& rows, std::v
 
 }  // namespace
 
-void release_cut_bonds(PdSystem& s) {
-  std::vector<double>().swap(s.xi_len);
-  std::vector<double>().swap(s.k_own);
-  for (auto* a : {&s.s0_own, &s.s0_dual, &s.s_onset}) std::vector<float>().swap(*a);
-  if (s.config.write_results) return;  // rank 0's writers read these (finish_distributed_setup)
-  for (auto* a : {&s.vol_own, &s.k_dual}) std::vector<double>().swap(*a);
-  std::vector<int32_t>().swap(s.neighbor);
-}
-
 void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const DistributedSetup& d) {
   if (!rows.active) return;
   const size_t own_entries = s.state.size();
@@ -111,7 +101,10 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   // Collective: every rank takes the same branches (the case decides them, not the rank).
   gather_entries(d, s.state, true);
   if (s.config.softening) gather_entries(d, s.bond_damage, true);
-  release_cut_bonds(s);  // again, should no estimate have cut the rank's system
+  // The stable-step estimate cut the rank's system and took the coefficients with it
+  // (restrict_to_rank_taking_bonds): without that hook the ranks would have no bonds.
+  if (!s.xi_len.empty())
+    throw std::logic_error("distributed set-up without the stable-step hook that cuts the rank's system");
   if (writer_bonds) {
     gather_entries(d, s.neighbor, false);
     gather_entries(d, s.vol_own, false);

@@ -264,7 +264,7 @@ struct RankShare {
 };
 
 // take_bonds: a distributed set-up's global system, whose bonds are the rank's own: they move
-// into the rank's system instead of being copied (release_cut_bonds, distributed_setup.hpp).
+// into the rank's system instead of being copied (restrict_to_rank_taking_bonds).
 std::shared_ptr<RankShare> make_rank_share(const PdSystem& global, MPI_Comm comm, PdSystem* take_bonds = nullptr) {
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
@@ -491,6 +491,7 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
                               {&l.max_stretch, &g.max_stretch}, {&l.dissipated, &g.dissipated}})
         std::copy(from->begin(), from->begin() + owned, to->begin() + b);
       std::copy(l.state.begin(), l.state.end(), g.state.begin());
+      std::copy(l.bond_damage.begin(), l.bond_damage.end(), g.bond_damage.begin());  // softening bonds
       g.dissipated_energy = l.dissipated_energy;
     }
   };

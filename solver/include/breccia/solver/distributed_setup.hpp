@@ -12,8 +12,9 @@
 // other rows or every particle (listed at each call in setup.cpp) come through
 // DistributedSetup::concat. Every value is computed by the same code as on one process, so
 // the run is byte-identical to it. The rank's own system (rank_system.hpp) is cut from this
-// one by the stable-step estimate as before; finish_distributed_setup then drops the bonds
-// from the global system, which keeps what the time loop and the files need.
+// one by the stable-step estimate as before, and the bonds move into it rather than being
+// copied (restrict_to_rank_taking_bonds); finish_distributed_setup then leaves the global
+// system what the time loop and the files need.
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -49,12 +50,6 @@ std::vector<T> concat_over_ranks(const DistributedSetup& d, const std::vector<T>
   if (!bytes.empty()) std::memcpy(static_cast<void*>(out.data()), bytes.data(), bytes.size());
   return out;
 }
-
-// Once the rank's own system is cut from the global one (the stable-step estimate,
-// solver/mpi/): drops the global system's per-entry coefficients, which only the rank's
-// system reads from then on (the bond states stay, and what the results' bond list reads
-// when results are written).
-void release_cut_bonds(PdSystem& s);
 
 // The global system as the time loop and the writers need it, its bonds now in the ranks'
 // own systems: the whole row offsets and bond states (and softening's bond damage) on every

@@ -10,9 +10,12 @@
 namespace breccia {
 
 Families build_families(std::span<const double> x, std::span<const double> horizon,
-                        std::span<const double> pad) {
+                        std::span<const double> pad, int64_t row_begin, int64_t row_end) {
   const size_t n = horizon.size();
   if (x.size() != 3 * n) throw std::invalid_argument("build_families: position must be 3N");
+  if (row_end < 0) row_end = static_cast<int64_t>(n);
+  if (row_begin < 0 || row_begin > row_end || row_end > static_cast<int64_t>(n))
+    throw std::invalid_argument("build_families: rows outside [0, N]");
   Families fam;
   fam.offsets.assign(n + 1, 0);
   if (n == 0) return fam;
@@ -24,6 +27,8 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
     max_horizon = std::max(max_horizon, horizon[i]);
   }
   const bool uniform = min_horizon == max_horizon;
+  const bool all_rows = row_begin == 0 && row_end == static_cast<int64_t>(n);
+  if (!all_rows && !uniform) throw std::invalid_argument("build_families: a row range needs one horizon");
   // reach(i, j) = max(h_i, h_j) + max(p_i, p_j) is the larger of the two "own" reaches
   // h_i + max(p_i, p_j) and h_j + max(p_i, p_j). Each particle searches its own reach; the
   // family is the union of what i found and what found i. With one horizon the own lists
@@ -91,6 +96,7 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
     for (size_t b = 0; b < blocks; ++b) {
       std::vector<int32_t>& list = found[b];
       for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i) {
+        if (static_cast<int64_t>(i) < row_begin || static_cast<int64_t>(i) >= row_end) continue;  // left empty
         const size_t first = list.size();
         visit(i, [&](size_t j) { list.push_back(static_cast<int32_t>(j)); });
         std::sort(list.begin() + static_cast<std::ptrdiff_t>(first), list.end());

@@ -165,7 +165,10 @@ class LinearForceProbe {
     sys_.config.fracture = fracture_;
     sys_.dissipated_energy = dissipated_;
     sys_.f32.active = float32_;
-    cpu_compute_forces(sys_);
+    // A distributed set-up's global system has handed its bonds to the rank's own system
+    // (distributed_setup.hpp): the distributed pass fills its owned fields instead.
+    if (forces_ && !sys_.distributed_rows.empty()) forces_(sys_);
+    else cpu_compute_forces(sys_);
   }
   // The forces at u = amplitude x / norm (the same displacement scale whatever x's norm).
   void push(const std::vector<double>& x, double norm) {

@@ -447,6 +447,12 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
         throw InputError(path, "/gas/in_crack", "sized for other families", "a checkpoint of this case");
     }
   }
+  // A distributed set-up's global system holds no bonds: each rank's system makes this pass
+  // on its particles when the time loop's backend takes it (mpi_backend.cpp).
+  if (!s.distributed_rows.empty()) {
+    s.derived_fields_pending = true;
+    return;
+  }
   // Derived per-particle fields (damage, energy) at the restored state; no bond can break
   // here because the stretches are those already checked at the checkpointed step.
   const double dissipated = s.dissipated_energy;

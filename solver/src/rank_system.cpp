@@ -42,7 +42,12 @@ int64_t RankLayout::local_index(int64_t j) const {
 RankLayout rank_layout(const PdSystem& g, int ranks, int rank) {
   RankLayout L;
   try {
-    L.part = MortonRangePartitioner().partition(g.offsets, ranks);
+    // A distributed set-up cut the partition before its families existed (its global
+    // system holds this rank's rows only): the same cut, from the same family sizes.
+    if (!g.distributed_rows.empty() && static_cast<int>(g.distributed_rows.size()) == ranks + 1)
+      L.part.begin = g.distributed_rows;
+    else
+      L.part = MortonRangePartitioner().partition(g.offsets, ranks);
   } catch (const std::invalid_argument& e) {
     throw InputError(g.config.file, "mpirun -np", e.what(), "at most one rank per particle");
   }
@@ -139,6 +144,37 @@ PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) {
     s.constraints.push_back(std::move(rc));
   }
   copy_rank_state(s, g, L);
+  return s;
+}
+
+PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
+  const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
+  if (g.distributed_rows.empty() || eb != 0 || ee != static_cast<int64_t>(g.neighbor.size())) return restrict_to_rank(g, L);
+  // The slices restrict_to_rank would copy are the whole arrays: take them, and restrict the
+  // rest (an empty array slices as empty).
+  std::vector<double> xi_len, k_own, k_dual, vol_own;
+  std::vector<float> s0_own, s0_dual, s_onset;
+  xi_len.swap(g.xi_len);
+  k_own.swap(g.k_own);
+  s0_own.swap(g.s0_own);
+  s0_dual.swap(g.s0_dual);
+  s_onset.swap(g.s_onset);
+  if (g.config.write_results) {  // rank 0's writers read them (finish_distributed_setup)
+    k_dual = g.k_dual;
+    vol_own = g.vol_own;
+  } else {
+    k_dual.swap(g.k_dual);
+    vol_own.swap(g.vol_own);
+  }
+  PdSystem s = restrict_to_rank(g, L);
+  s.xi_len = std::move(xi_len);
+  s.k_own = std::move(k_own);
+  s.k_dual = std::move(k_dual);
+  s.vol_own = std::move(vol_own);
+  s.s0_own = std::move(s0_own);
+  s.s0_dual = std::move(s0_dual);
+  s.s_onset = std::move(s_onset);
+  if (!g.config.write_results) std::vector<int32_t>().swap(g.neighbor);  // renumbered in s
   return s;
 }
 

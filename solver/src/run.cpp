@@ -44,6 +44,8 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   j["precision"] = s.f32.active ? "float32" : "float64";
   j["threads"] = omp_get_max_threads();
   j["ranks"] = o.ranks;
+  // Whether each rank built only its own bonds (distributed_setup.hpp) or the whole system.
+  j["distributed_setup"] = !s.distributed_rows.empty();
   j["dimension"] = s.dimension;
   j["particles"] = s.n;
   j["bonds"] = s.bond_count();

@@ -21,6 +21,7 @@
 #include "breccia/solver/boundary_field.hpp"
 #include "breccia/solver/calibration.hpp"
 #include "breccia/solver/correspondence.hpp"
+#include "breccia/solver/distributed_setup.hpp"
 #include "breccia/solver/family.hpp"
 #include "breccia/solver/family_check.hpp"
 #include "breccia/solver/graded_check.hpp"
@@ -533,10 +534,14 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   }
 
   phase("morton order and horizons");
+  // A distributed set-up builds this rank's rows only; the other rows stay empty
+  // (distributed_setup.hpp; `dist` marks each place that reads beyond the rank's rows).
+  const DistributedSetup& dist = hooks.distributed;
+  const DistributedRows dist_rows = plan_distributed_rows(s, dist);
   // Families and per-bond coefficients.
   std::vector<double> pad(n);  // a neighbour's cell corner may reach into the horizon
   for (size_t k = 0; k < n; ++k) pad[k] = s.half_cell[k] * std::sqrt(static_cast<double>(s.dimension));
-  Families fam = build_families(s.x0, s.horizon, pad);
+  Families fam = build_families(s.x0, s.horizon, pad, dist_rows.begin, dist_rows.end);
   phase("families");
   std::vector<ElasticInput> elastic;
   for (const auto& m : c.materials) elastic.push_back(elastic_input(s, m));
@@ -557,7 +562,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // A distributed run shares the two passes over the candidate bonds below between its
   // processes (RowShare): equal shares of rows, gathered by all.
   const RowShare& share = hooks.coefficients;
-  const int shares = share.gather ? std::max(1, share.ranks) : 1;
+  const int shares = share.gather && !dist_rows.active ? std::max(1, share.ranks) : 1;
   auto share_rows = [&](const std::vector<int64_t>& offsets) {
     std::vector<int64_t> begin(static_cast<size_t>(shares) + 1, 0);
     begin[shares] = static_cast<int64_t>(n);
@@ -599,7 +604,12 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     const int32_t j = fam.neighbors[k];
     if (sampled) {
       beta_own = samples_inside[k] / sample_total;
-      beta_dual = samples_inside[reverse_entry(i, j)] / sample_total;
+      if (dist_rows.active) {  // dist: j's row may be another rank's; the same count, from this end
+        const double xm[3] = {s.x0[3 * i] - s.x0[3 * j], s.x0[3 * i + 1] - s.x0[3 * j + 1], s.x0[3 * i + 2] - s.x0[3 * j + 2]};
+        beta_dual = partial_volume_samples_inside(xm, s.horizon[j], s.half_cell[i], s.dimension) / sample_total;
+      } else {
+        beta_dual = samples_inside[reverse_entry(i, j)] / sample_total;
+      }
       return;
     }
     const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1], s.x0[3 * j + 2] - s.x0[3 * i + 2]};
@@ -906,6 +916,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         const double d = dims;
         bulk_iso.push_back(0.5 * d * d * dimensional_bulk_modulus(elastic[s.material[i]]) / iso[i]);
       }
+    if (dist_rows.active) bulk_iso = concat_over_ranks(dist, bulk_iso);  // dist: a median over every complete family
     double bulk_factor = 1.0;
     double virtual_uniaxial = 0.0;  // reference uniaxial energy when no family is complete
     if (!bulk_iso.empty()) {
@@ -1036,6 +1047,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         if (fi < fj) pairs[static_cast<size_t>(omp_get_thread_num())].emplace_back(fi, fj);
       }
     for (const auto& list : pairs) s.precrack_pairs.insert(s.precrack_pairs.end(), list.begin(), list.end());
+    if (dist_rows.active) s.precrack_pairs = concat_over_ranks(dist, s.precrack_pairs);  // dist: every rank's cuts
     std::sort(s.precrack_pairs.begin(), s.precrack_pairs.end());
   }
 
@@ -1161,6 +1173,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     for (size_t k = 0; k < s.state.size() && same; ++k)
       same = s.k_own[k] == s.k_dual[k] && s.s0_own[k] == s.s0_dual[k] &&
              (s.state[k] == 0 || s.state[k] == (kOwnIntact | kDualIntact));
+    if (dist_rows.active) {  // dist: an AND over every entry
+      const std::vector<uint8_t> all = concat_over_ranks(dist, std::vector<uint8_t>{static_cast<uint8_t>(same)});
+      same = std::find(all.begin(), all.end(), 0) == all.end();
+    }
     s.symmetric_halves = same;
     if (lps && same) {
       s.lps_a.assign(n, 0.0);
@@ -1188,6 +1204,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       double sum = 0.0;
       for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) sum += (s.k_own[k] + s.k_dual[k]) / s.xi_len[k];
       if (sum > 0) dt_min = std::min(dt_min, std::sqrt(2.0 * s.density[i] / sum));
+    }
+    if (dist_rows.active) {  // dist: the smallest over every rank (a minimum: exact in any order)
+      const std::vector<double> all = concat_over_ranks(dist, std::vector<double>{dt_min});
+      dt_min = *std::min_element(all.begin(), all.end());
     }
     s.silling_askari_dt = dt_min;
   }
@@ -1233,6 +1253,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     float32_enable(s);
     phase("float32 state");
   }
+  // The bonds now live in the rank's own system (cut by the stable-step estimate).
+  finish_distributed_setup(s, dist_rows, dist);
   return s;
 }
 

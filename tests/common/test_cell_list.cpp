@@ -63,3 +63,32 @@ TEST(Families, MatchBruteForceWithGradedHorizonsAndPads) {
         << "particle " << i;
   }
 }
+
+// A row range (the distributed set-up's own rows) gives those rows exactly as the whole
+// build does and leaves the others empty; a range with more than one horizon is refused
+// (the transposed search reads every row).
+TEST(Families, RowRangeBuildsThoseRowsAsTheWholeBuild) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const size_t n = 600;
+  std::vector<double> x(3 * n), h(n, 0.12), pad(n);
+  for (size_t i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) x[3 * i + d] = u(rng);
+    pad[i] = 0.02 * u(rng);
+  }
+  const Families whole = build_families(x, h, pad);
+  const int64_t b = 150, e = 420;
+  const Families part = build_families(x, h, pad, b, e);
+  ASSERT_EQ(part.offsets.size(), n + 1);
+  for (size_t i = 0; i < n; ++i) {
+    const bool own = static_cast<int64_t>(i) >= b && static_cast<int64_t>(i) < e;
+    const std::vector<int32_t> got(part.neighbors.begin() + part.offsets[i], part.neighbors.begin() + part.offsets[i + 1]);
+    const std::vector<int32_t> want = own ? std::vector<int32_t>(whole.neighbors.begin() + whole.offsets[i],
+                                                                 whole.neighbors.begin() + whole.offsets[i + 1])
+                                          : std::vector<int32_t>{};
+    EXPECT_EQ(got, want) << "particle " << i;
+  }
+  EXPECT_GT(part.bond_count(), 0u);
+  h[0] = 0.2;
+  EXPECT_THROW(build_families(x, h, pad, b, e), std::invalid_argument);
+}

@@ -263,13 +263,15 @@ struct RankShare {
   size_t global_n = 0, global_bonds = 0;  // of the system it was cut from
 };
 
-std::shared_ptr<RankShare> make_rank_share(const PdSystem& global, MPI_Comm comm) {
+// take_bonds: a distributed set-up's global system, whose bonds are the rank's own: they move
+// into the rank's system instead of being copied (restrict_to_rank_taking_bonds).
+std::shared_ptr<RankShare> make_rank_share(const PdSystem& global, MPI_Comm comm, PdSystem* take_bonds = nullptr) {
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
   auto sh = std::make_shared<RankShare>();
   sh->layout = rank_layout(global, size, rank);
-  sh->local = restrict_to_rank(global, sh->layout);
+  sh->local = take_bonds ? restrict_to_rank_taking_bonds(*take_bonds, sh->layout) : restrict_to_rank(global, sh->layout);
   sh->halo = std::make_unique<HaloExchange>(sh->layout, comm);
   sh->global_n = global.n;
   sh->global_bonds = global.bond_count();
@@ -285,7 +287,9 @@ std::shared_ptr<RankShare> g_setup_share;
 std::shared_ptr<RankShare> take_rank_share(const PdSystem& global, MPI_Comm comm) {
   std::shared_ptr<RankShare> sh = std::move(g_setup_share);
   g_setup_share.reset();
-  if (sh && sh->global_n == global.n && sh->global_bonds == global.bond_count()) {
+  // A distributed set-up's share was cut from its global system before the bonds left it
+  // (finish_distributed_setup): the bond count it saw was the rank's own.
+  if (sh && sh->global_n == global.n && (sh->global_bonds == global.bond_count() || !global.distributed_rows.empty())) {
     copy_rank_state(sh->local, global, sh->layout);
     return sh;
   }
@@ -294,7 +298,20 @@ std::shared_ptr<RankShare> take_rank_share(const PdSystem& global, MPI_Comm comm
 
 class MpiBackend final : public StepBackend {
 public:
-  MpiBackend(PdSystem& global, MPI_Comm comm) : comm_(comm), share_(supported_share(global, comm)) {}
+  MpiBackend(PdSystem& global, MPI_Comm comm) : comm_(comm), share_(supported_share(global, comm)) {
+    if (global.derived_fields_pending) {
+      // read_checkpoint's pass at the restored state, on the rank's particles (no bond
+      // breaks: the stretches are the checkpointed step's); forces and the dissipated
+      // energy stay the checkpoint's.
+      const double dissipated = local_.dissipated_energy;
+      const std::vector<double> force = local_.force;
+      local_.diagnostics = true;
+      force_pass(local_);
+      local_.dissipated_energy = dissipated;
+      local_.force = force;
+      global.derived_fields_pending = false;
+    }
+  }
 
   void step(PdSystem& g) override {
     local_.diagnostics = g.diagnostics;
@@ -445,7 +462,8 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   if (size == 1) return {};
   // The rank's system, built here once and kept for the time loop's backend.
-  auto sh = make_rank_share(global, MPI_COMM_WORLD);
+  // A distributed set-up's bonds move into the rank's system: the global one lets them go.
+  auto sh = make_rank_share(global, MPI_COMM_WORLD, global.distributed_rows.empty() ? nullptr : &global);
   g_setup_share = sh;
   // Each rank computes its rows at the iteration's displacement and all gather the forces:
   // every rank then holds one process's force array, bit for bit, and takes the power
@@ -465,6 +483,17 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
     pd_force_pass(exec, a, true);
     std::copy(l.force.begin(), l.force.begin() + 3 * owned, g.force.begin() + 3 * b);
     allgather_ranges(g.force.data(), sizeof(double), particle_ranges(L.part, 3), MPI_COMM_WORLD);
+    if (!g.distributed_rows.empty()) {
+      // The global system holds no bonds to run the pass that ends the estimate (at the real
+      // displacement, fracture on): the owned fields and bond states come from this one,
+      // where finish_distributed_setup gathers them.
+      for (auto [from, to] : {std::pair{&l.energy_density, &g.energy_density}, {&l.damage, &g.damage},
+                              {&l.max_stretch, &g.max_stretch}, {&l.dissipated, &g.dissipated}})
+        std::copy(from->begin(), from->begin() + owned, to->begin() + b);
+      std::copy(l.state.begin(), l.state.end(), g.state.begin());
+      std::copy(l.bond_damage.begin(), l.bond_damage.end(), g.bond_damage.begin());  // softening bonds
+      g.dissipated_energy = l.dissipated_energy;
+    }
   };
 }
 
@@ -476,6 +505,33 @@ RowShare mpi_row_share() {
     allgather_ranges(data, element_bytes, entry_begin, MPI_COMM_WORLD);
   };
   return share;
+}
+
+DistributedSetup mpi_distributed_setup() {
+  DistributedSetup d;
+  MPI_Comm_rank(MPI_COMM_WORLD, &d.rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &d.ranks);
+  d.concat = [](const void* data, size_t count, size_t element_bytes, bool everyone) {
+    int rank = 0, ranks = 1;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+    long long mine = static_cast<long long>(count);
+    std::vector<long long> counts(static_cast<size_t>(ranks));
+    MPI_Allgather(&mine, 1, MPI_LONG_LONG, counts.data(), 1, MPI_LONG_LONG, MPI_COMM_WORLD);
+    std::vector<int64_t> begin(static_cast<size_t>(ranks) + 1, 0);
+    for (int r = 0; r < ranks; ++r) begin[r + 1] = begin[r] + counts[r];
+    const ElementRanges e(element_bytes, begin);
+    std::vector<char> out;
+    if (everyone || rank == 0) out.resize(static_cast<size_t>(begin[ranks]) * element_bytes);
+    if (everyone)
+      MPI_Allgatherv(data, static_cast<int>(count), e.type, out.data(), e.counts.data(), e.displs.data(), e.type,
+                     MPI_COMM_WORLD);
+    else
+      MPI_Gatherv(data, static_cast<int>(count), e.type, out.data(), e.counts.data(), e.displs.data(), e.type, 0,
+                  MPI_COMM_WORLD);
+    return out;
+  };
+  return d;
 }
 
 long long mpi_relax(PdSystem& global, bool progress) {

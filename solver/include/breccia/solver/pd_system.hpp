@@ -110,9 +110,17 @@ struct PdSystem {
   // on a shared machine the ratio of set-up to step is measured in CPU time too.
   std::vector<double> setup_phases_cpu;
   Float32State f32;               // model.precision: float32 (float32_state.hpp); inactive otherwise
+  // A distributed set-up's partition (ranks + 1 row offsets, cut before any family existed;
+  // distributed_setup.hpp): the ranks' layouts take it. Empty: every rank built everything.
+  std::vector<int64_t> distributed_rows;
+  // A checkpoint was read into such a system: the derived fields (damage, energies) of the
+  // restored state are still to be computed, by the ranks' systems (read_checkpoint).
+  bool derived_fields_pending = false;
 
   PdView view();
-  size_t bond_count() const { return neighbor.size(); }
+  // The bond entries of the whole system: the CSR's, since a distributed set-up's global
+  // system keeps the offsets but not the partners (distributed_setup.hpp).
+  size_t bond_count() const { return offsets.empty() ? neighbor.size() : static_cast<size_t>(offsets.back()); }
   // Any load at all? Without one the body force stays zero and a step skips the loads.
   bool loads_vary() const { return !surface_loads.empty() || !body_loads.empty() || config.indenter.enabled; }
   double total_mass() const;
@@ -136,10 +144,21 @@ struct RowShare {
   std::function<void(void* data, size_t element_bytes, const std::vector<int64_t>& entry_begin)> gather;
 };
 
+// A distributed set-up's one collective (solver/mpi/): every rank's `count` elements of
+// `element_bytes` at `data`, concatenated in rank order, returned on every rank (everyone)
+// or on rank 0 only (the others get nothing). With it each rank builds the bonds of the
+// particles it owns only (distributed_setup.hpp); inactive on one process.
+struct DistributedSetup {
+  int rank = 0, ranks = 1;
+  std::function<std::vector<char>(const void* data, size_t count, size_t element_bytes, bool everyone)> concat;
+  bool active() const { return ranks > 1 && static_cast<bool>(concat); }
+};
+
 // What a distributed run changes in the set-up (solver/mpi/); empty: one process.
 struct SetupHooks {
   ForcePassFactory stable_step_forces;
   RowShare coefficients;
+  DistributedSetup distributed;
 };
 
 // Points per axis of a `specimen: {lattice: ...}` box (1 on the axes it does not have).

@@ -41,6 +41,12 @@ RankLayout rank_layout(const PdSystem& global, int ranks, int rank);
 // Load specs still point into `global.config`: the global system must outlive it.
 PdSystem restrict_to_rank(const PdSystem& global, const RankLayout& layout);
 
+// restrict_to_rank for a distributed set-up's global system (distributed_setup.hpp), whose
+// only rows are this rank's: the per-entry coefficients move from it into the rank's system
+// instead of being copied (the peak of set-up memory); what the results' bond list reads
+// (vol_own, k_dual) is copied when results are written. Any other system: restrict_to_rank.
+PdSystem restrict_to_rank_taking_bonds(PdSystem& global, const RankLayout& layout);
+
 // The state part of restrict_to_rank again (displacements, velocities, forces, bond states,
 // damage, the LPS / correspondence / compressive fields, step, time, dt, the accumulators,
 // the float state): what the set-up sets after its stable-step estimate and a checkpoint

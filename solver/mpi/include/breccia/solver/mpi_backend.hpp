@@ -55,6 +55,9 @@ ForcePass mpi_stable_step_forces(PdSystem& global);
 // between the ranks of MPI_COMM_WORLD, gathered by all.
 RowShare mpi_row_share();
 
+// The distributed set-up's collective (pd_system.hpp, DistributedSetup) over MPI_COMM_WORLD.
+DistributedSetup mpi_distributed_setup();
+
 // RunOptions::relax for a distributed run: dynamic relaxation on every rank's share, the
 // state gathered into `global` on rank 0; returns the iterations (-1: not converged).
 long long mpi_relax(PdSystem& global, bool progress);

@@ -1,0 +1,61 @@
+#pragma once
+// The distributed set-up (docs/parallel.md, Memory): under mpirun each rank builds the bonds
+// of the particles it owns only, so the bond arrays, the set-up's and the run's largest,
+// fall as 1/ranks. What every rank still holds whole is per particle (positions, volumes,
+// materials, horizons, the state arrays: a few hundred bytes each) plus the bond states
+// (1 B per entry, which checkpoints and restarts read in the file's layout).
+//
+// How: the family sizes are counted from the positions alone (family_sizes, partition.hpp),
+// which gives the whole system's row offsets and the partition before any family exists.
+// The set-up then runs as on one process on a system whose rows outside the rank's range are
+// empty: every per-entry loop covers the rank's rows, and the few values a row reads from
+// other rows or every particle (listed at each call in setup.cpp) come through
+// DistributedSetup::concat. Every value is computed by the same code as on one process, so
+// the run is byte-identical to it. The rank's own system (rank_system.hpp) is cut from this
+// one by the stable-step estimate as before, and the bonds move into it rather than being
+// copied (restrict_to_rank_taking_bonds); finish_distributed_setup then leaves the global
+// system what the time loop and the files need.
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "breccia/solver/partition.hpp"
+#include "breccia/solver/pd_system.hpp"
+
+namespace breccia::solver {
+
+// Which rows this rank builds. inactive: all of them (one process, or a case the
+// distributed set-up does not cover yet: the whole system on every rank, as before).
+struct DistributedRows {
+  bool active = false;
+  int64_t begin = 0, end = 0;          // the rank's rows (internal order)
+  std::vector<int64_t> full_offsets;   // the whole system's row offsets (n + 1), from the family sizes
+};
+
+// Why this case takes the set-up that builds the whole system on every rank (the case key
+// or feature, one line), or "" when it can take the distributed one.
+std::string distributed_setup_refusal(const PdSystem& s);
+
+// Called once the internal order and horizons are set: decides, counts the family sizes,
+// cuts the partition (s.distributed_rows) and returns the rank's rows. A refused case gets a
+// note on stderr (rank 0's) and inactive rows. Throws InputError for more ranks than particles.
+DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d);
+
+// Every rank's elements of `mine`, concatenated in rank order, on every rank.
+template <class T>
+std::vector<T> concat_over_ranks(const DistributedSetup& d, const std::vector<T>& mine) {
+  const std::vector<char> bytes = d.concat(mine.data(), mine.size(), sizeof(T), true);
+  std::vector<T> out(bytes.size() / sizeof(T));
+  if (!bytes.empty()) std::memcpy(static_cast<void*>(out.data()), bytes.data(), bytes.size());
+  return out;
+}
+
+// The global system as the time loop and the writers need it, its bonds now in the ranks'
+// own systems: the whole row offsets and bond states (and softening's bond damage) on every
+// rank; with results written, rank 0 also gathers the partners and the two half-bond
+// volumes and moduli the results' bond list reads (outputs.cpp); every other per-entry
+// array is dropped.
+void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const DistributedSetup& d);
+
+}  // namespace breccia::solver

@@ -1,0 +1,117 @@
+#include "breccia/solver/distributed_setup.hpp"
+
+#include <cstdio>
+#include <stdexcept>
+
+#include "breccia/common/error.hpp"
+
+namespace breccia::solver {
+
+std::string distributed_setup_refusal(const PdSystem& s) {
+  const CaseConfig& c = s.config;
+  // Each of these reads, per particle, values summed over other particles' families (the
+  // ghosts' own rows: a second layer), or runs a pass over every family at set-up.
+  if (c.model == PdModel::LPS) return "model.type: lps (the weighted volume of the ghosts)";
+  if (c.model == PdModel::Correspondence) return "model.type: correspondence (the ghosts' shape tensors)";
+  if (c.variable_horizon) return "model.variable_horizon (dual horizon: the families' transposed search)";
+  if (c.surface_correction) return "model.surface_correction (the ghosts' axis factors)";
+  if (s.dimension == 2) return "a 2D model (the family reweighting reads the ghosts' (a, b))";
+  if (c.precision == CaseConfig::Precision::Float32) return "model.precision: float32";
+  if (c.quasi_static) return "time.integrator: adr";
+  if (c.short_range_forces) return "model.short_range_forces";
+  for (const auto& l : c.loads)
+    if (l.kind == LoadSpec::Kind::Gas) return "loads[].type: gas";
+  // The energy-scatter check (family_check.hpp) runs a force pass over every family.
+  if (c.check_stability && s.particles.nodes_per_cell != 0)
+    return "time.check_stability on mesh-derived particles (the energy-scatter check)";
+  return "";
+}
+
+DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d) {
+  DistributedRows rows;
+  rows.end = static_cast<int64_t>(s.n);
+  if (!d.active()) return rows;
+  if (const std::string why = distributed_setup_refusal(s); !why.empty()) {
+    std::fprintf(stderr, "note: set-up: %s: every rank builds the whole system (docs/parallel.md)\n", why.c_str());
+    return rows;
+  }
+  // The row lengths the set-up will build, counted without a bond stored: the whole
+  // system's offsets and the partition MortonRangePartitioner cuts from them (the one the
+  // whole-system set-up's ranks cut).
+  const std::vector<int64_t> sizes = family_sizes(s.x0, s.horizon, s.half_cell, s.dimension, s.config.partial_volume);
+  rows.full_offsets.assign(s.n + 1, 0);
+  for (size_t i = 0; i < s.n; ++i) rows.full_offsets[i + 1] = rows.full_offsets[i] + sizes[i];
+  Partition part;
+  try {
+    part = MortonRangePartitioner().partition(rows.full_offsets, d.ranks);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(s.config.file, "mpirun -np", e.what(), "at most one rank per particle");
+  }
+  rows.active = true;
+  rows.begin = part.begin[d.rank];
+  rows.end = part.begin[d.rank + 1];
+  s.distributed_rows = part.begin;
+  return rows;
+}
+
+namespace {
+
+// Every rank's entries of a per-entry array (its rows are one run of the whole system's
+// entries, in rank order), on every rank or on rank 0 only.
+template <class T>
+void gather_entries(const DistributedSetup& d, std::vector<T>& a, bool everyone) {
+  std::vector<char> bytes = d.concat(a.data(), a.size(), sizeof(T), everyone);
+  std::vector<T> whole(bytes.size() / sizeof(T));
+  if (!bytes.empty()) std::memcpy(static_cast<void*>(whole.data()), bytes.data(), bytes.size());
+  a.swap(whole);
+}
+
+// Every rank's owned range of a per-particle array of `width` values each, on every rank.
+template <class T>
+void gather_owned(const DistributedSetup& d, const DistributedRows& rows, std::vector<T>& a, size_t width) {
+  if (a.empty()) return;  // held on every rank or on none (the case decides)
+  const std::vector<T> mine(a.begin() + static_cast<int64_t>(width) * rows.begin,
+                            a.begin() + static_cast<int64_t>(width) * rows.end);
+  std::vector<T> whole = concat_over_ranks(d, mine);
+  if (whole.size() != a.size()) throw std::logic_error("distributed set-up: a gathered per-particle array");
+  a.swap(whole);
+}
+
+}  // namespace
+
+void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const DistributedSetup& d) {
+  if (!rows.active) return;
+  const size_t own_entries = s.state.size();
+  if (s.offsets[s.n] != static_cast<int64_t>(own_entries) ||
+      rows.full_offsets[rows.end] - rows.full_offsets[rows.begin] != static_cast<int64_t>(own_entries))
+    throw std::logic_error("distributed set-up: a rank's rows differ from the counted family sizes");
+  // Rank 0's writers read the bond list of results.h5 (partners, and which halves exist).
+  const bool writer_bonds = s.config.write_results;
+  // The force pass that ended the stable-step estimate filled the fields of this rank's
+  // particles only (the others' rows are empty here): the owners' values, which the first
+  // output writes (a pre-crack's damage) and the ranks' systems start from.
+  for (auto* a : {&s.energy_density, &s.damage, &s.max_stretch, &s.dissipated}) gather_owned(d, rows, *a, 1);
+  gather_owned(d, rows, s.force, 3);
+  {
+    const std::vector<double> all = concat_over_ranks(d, std::vector<double>{s.dissipated_energy});
+    double sum = 0.0;  // bonds broken by that pass: in rank order (one process sums in its own)
+    for (const double v : all) sum += v;
+    s.dissipated_energy = sum;
+  }
+  // Collective: every rank takes the same branches (the case decides them, not the rank).
+  gather_entries(d, s.state, true);
+  if (s.config.softening) gather_entries(d, s.bond_damage, true);
+  // The stable-step estimate cut the rank's system and took the coefficients with it
+  // (restrict_to_rank_taking_bonds): without that hook the ranks would have no bonds.
+  if (!s.xi_len.empty())
+    throw std::logic_error("distributed set-up without the stable-step hook that cuts the rank's system");
+  if (writer_bonds) {
+    gather_entries(d, s.neighbor, false);
+    gather_entries(d, s.vol_own, false);
+    gather_entries(d, s.k_dual, false);
+  }
+  s.offsets = rows.full_offsets;
+  if (s.state.size() != s.bond_count()) throw std::logic_error("distributed set-up: the gathered bond states");
+}
+
+}  // namespace breccia::solver

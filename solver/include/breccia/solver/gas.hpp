@@ -31,13 +31,11 @@
 namespace breccia::solver {
 
 // Can the gas pass between the two ends of entry k? Only when no half-bond that exists is
-// intact (a bond carrying no force: broken, or cut by a pre-crack).
-template <class Real>
-BRECCIA_HD bool gas_entry_open(const PdViewT<Real>& p, int64_t k) {
-  const uint8_t st = p.state[k];
-  const bool own = p.vol_own[k] > Real(0) && (st & kOwnIntact);
-  const bool dual = p.k_dual[k] > Real(0) && (st & kDualIntact);
-  return !own && !dual;
+// intact (a bond carrying no force: broken, or cut by a pre-crack). `halves`: per entry, the
+// intact bits of the halves that exist (kOwnIntact: j in i's horizon, vol_own > 0;
+// kDualIntact: i in j's, k_dual > 0; setup_gas), so the test reads two bytes, not two doubles.
+BRECCIA_HD bool gas_entry_open(const uint8_t* state, const uint8_t* halves, int64_t k) {
+  return (state[k] & halves[k]) == 0;
 }
 
 // Device-side arrays of the gas (GasState below holds them on the host).
@@ -52,6 +50,8 @@ struct GasView {
   // partner in the crack pass)
   const double* kappa_volume = nullptr;
   const double* vent_area = nullptr;  // per particle: its facet area on vent surfaces [m2] (0: none)
+  const uint8_t* halves = nullptr; // per bond entry: the halves that exist (gas_entry_open)
+  double* position = nullptr;      // 3 per particle: x0 + u at this update (one gather per partner)
   double* push = nullptr;          // 3 per particle: dV_crack/dy_i / V_i (the crack force is -p push)
   uint8_t* front_done = nullptr;   // per particle: wetted, and every partner is too (stops pushing)
   // Per bond entry: 1 once the entry is open with both ends wetted at an update, so that its
@@ -135,7 +135,7 @@ struct GasFront {
       const int32_t j = p.neighbor[k];
       if (gas_wetted(g, j)) continue;
       dry_partner = true;
-      if (!gas_entry_open(p, k)) continue;
+      if (!gas_entry_open(p.state, g.halves, k)) continue;
       const double reached = g.arrival[i] + p.xi_len[k] / speed;
       if (reached <= t) atomic_min(&g.arrival_next[j], reached);
     }
@@ -147,19 +147,6 @@ struct GasFrontCommit {
   GasView g;
   BRECCIA_HD void operator()(int64_t i) const { g.arrival[i] = g.arrival_next[i]; }
 };
-
-// Opening and unit direction of entry k (i -> j) in the current configuration.
-BRECCIA_HD double gas_entry_opening(const PdView& p, int64_t i, int64_t k, double dir[3]) {
-  const int64_t j = p.neighbor[k];
-  double len2 = 0.0;
-  for (int d = 0; d < 3; ++d) {
-    dir[d] = (p.x0[3 * j + d] + p.u[3 * j + d]) - (p.x0[3 * i + d] + p.u[3 * i + d]);
-    len2 += dir[d] * dir[d];
-  }
-  const double len = std::sqrt(len2);
-  for (int d = 0; d < 3; ++d) dir[d] = len > 0 ? dir[d] / len : 0.0;
-  return len - p.xi_len[k];
-}
 
 struct GasSums {
   double volume;         // m3
@@ -185,6 +172,23 @@ struct GasWallSum {
   BRECCIA_HD Value operator()(int64_t q) const { return {wall_dv[q], wall_dv[q], 0.0, 0.0, 0.0, wall_left[q]}; }
 };
 
+// Entry k of particle i (at x_i) in the current configuration: returns its opening
+// |y| - |xi|, with the unit direction (ux, uy, uz) from i to j and a_k / V_i, the crack-face
+// area over i's volume, a_k = (kappa_i + kappa_j)/2 V_i V_j. Branch-free, so that the host
+// computes a chunk of entries at once (SIMD: the square root and divisions are its cost).
+BRECCIA_HD double gas_entry_opening(const GasView& g, const int32_t* neighbor, const double* xi_len, double kappa_i,
+                                    double xx, double xy, double xz, int64_t k, double& ux, double& uy, double& uz,
+                                    double& a_over_vi) {
+  const int64_t j = neighbor[k];
+  const double dx = g.position[3 * j] - xx, dy = g.position[3 * j + 1] - xy, dz = g.position[3 * j + 2] - xz;
+  const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+  ux = len > 0 ? dx / len : 0.0;
+  uy = len > 0 ? dy / len : 0.0;
+  uz = len > 0 ? dz / len : 0.0;
+  a_over_vi = 0.5 * (kappa_i + g.kappa_volume[2 * j]) * g.kappa_volume[2 * j + 1];
+  return len - xi_len[k];
+}
+
 // Crack volume the gas fills (each pair seen from both ends, hence the half) with the front
 // this step has reached (arrival_next). The entries already in the volume at the last update
 // (in_crack) give volume_before: an entry that joins now (the front has just reached it, or
@@ -199,6 +203,11 @@ struct GasWallSum {
 // vent surface sums, over the surface, to opening x trace length (docs/theory.md). The same
 // loop keeps each particle's dV_crack/dy_i (push), so that the crack forces need no second
 // pass over the entries once the pressure is known.
+//
+// On the host each chunk of kBondChunk entries runs in three stages: pick the entries in the
+// volume (in entry order; marking those that join), compute their openings branch-free (the
+// stage the compiler vectorises), then add them up in entry order. The sums are therefore the
+// one-entry-at-a-time loop's (the CUDA build's) bit for bit.
 template <class UBefore>
 struct GasCrackSum {
   using Value = GasSums;
@@ -207,43 +216,81 @@ struct GasCrackSum {
   const UBefore* u_before;
   BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
   BRECCIA_HD static Value combine(Value a, Value b) { return gas_sums_add(a, b); }
+
+  // Particle i's running sums over its entries in the volume, added in entry order.
+  struct Particle {
+    Value v;
+    double volume_i, du[3], push[3], density;
+    // One entry at opening e, direction (ux, uy, uz), a_k / V_i; `joined`: it joined now.
+    BRECCIA_HD void add(double e, double ux, double uy, double uz, double a_over_vi, bool joined) {
+      if (!(e > 0.0)) return;
+      const double share = a_over_vi * volume_i * e * 0.5;
+      v.volume += share;
+      if (!joined) v.volume_before += share;
+      else v.joined -= volume_i * a_over_vi * (ux * du[0] + uy * du[1] + uz * du[2]);
+      density += a_over_vi * e * 0.5;
+      push[0] += a_over_vi * ux;
+      push[1] += a_over_vi * uy;
+      push[2] += a_over_vi * uz;
+    }
+  };
+
   BRECCIA_HD Value operator()(int64_t i) const {
     if (!gas_wetted_next(g, i)) return identity();
     const bool vent = g.vent_area[i] > 0.0 && g.arrival_next[i] > 0.0;
-    Value v{0.0, 0.0, vent ? 1.0 : 0.0, 0.0, 0.0, 0.0};
+    Particle s{{0.0, 0.0, vent ? 1.0 : 0.0, 0.0, 0.0, 0.0}, g.kappa_volume[2 * i + 1], {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, 0.0};
+    if (u_before)
+      for (int d = 0; d < 3; ++d) s.du[d] = p.u[3 * i + d] - double(u_before[3 * i + d]);
     // The arrays as locals: the in_crack byte stores would otherwise make the compiler reload
     // every pointer of the views after each one (a char store may alias anything).
+    const GasView gv = g;
     const int32_t* neighbor = p.neighbor;
-    const double* kv = g.kappa_volume;
-    uint8_t* in_crack = g.in_crack;
-    const double kappa_i = kv[2 * i], volume_i = kv[2 * i + 1];
-    double du[3] = {0.0, 0.0, 0.0};
-    if (u_before)
-      for (int d = 0; d < 3; ++d) du[d] = p.u[3 * i + d] - double(u_before[3 * i + d]);
-    double push[3] = {0.0, 0.0, 0.0};
-    double density = 0.0;  // the particle's crack volume over its own volume
-    const int64_t end = p.offsets[i + 1];
-    for (int64_t k = p.offsets[i]; k < end; ++k) {
+    const double* xi_len = p.xi_len;
+    const uint8_t* state = p.state;
+    uint8_t* in_crack = gv.in_crack;
+    const double kappa_i = gv.kappa_volume[2 * i];
+    const double xx = gv.position[3 * i], xy = gv.position[3 * i + 1], xz = gv.position[3 * i + 2];
+    const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
+#if defined(__CUDA_ARCH__)
+    for (int64_t k = begin; k < end; ++k) {
       const bool counted = in_crack[k];
-      const int32_t j = neighbor[k];
       if (!counted) {
-        if (!gas_entry_open(p, k) || !gas_wetted_next(g, j)) continue;
+        if (!gas_entry_open(state, gv.halves, k) || !gas_wetted_next(gv, neighbor[k])) continue;
         in_crack[k] = 1;  // only i writes its entries
       }
-      double dir[3];
-      const double e = gas_entry_opening(p, i, k, dir);
-      if (!(e > 0.0)) continue;
-      const double a_over_vi = 0.5 * (kappa_i + kv[2 * j]) * kv[2 * j + 1];
-      const double share = a_over_vi * volume_i * e * 0.5;
-      v.volume += share;
-      if (counted) v.volume_before += share;
-      else v.joined -= volume_i * a_over_vi * (dir[0] * du[0] + dir[1] * du[1] + dir[2] * du[2]);
-      density += a_over_vi * e * 0.5;
-      for (int d = 0; d < 3; ++d) push[d] += a_over_vi * dir[d];
+      double ux, uy, uz, a;
+      const double e = gas_entry_opening(gv, neighbor, xi_len, kappa_i, xx, xy, xz, k, ux, uy, uz, a);
+      s.add(e, ux, uy, uz, a, !counted);
     }
-    if (vent) v.vent_area = density * g.vent_area[i];
-    for (int d = 0; d < 3; ++d) g.push[3 * i + d] = push[d];
-    return v;
+#else
+    int32_t pick[kBondChunk];
+    bool joined[kBondChunk];
+    double e[kBondChunk], ux[kBondChunk], uy[kBondChunk], uz[kBondChunk], a[kBondChunk];
+    for (int64_t base = begin; base < end; base += kBondChunk) {
+      const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
+      int count = 0;
+      for (int q = 0; q < m; ++q) {
+        const int64_t k = base + q;
+        const bool counted = in_crack[k];
+        if (!counted) {
+          if (!gas_entry_open(state, gv.halves, k) || !gas_wetted_next(gv, neighbor[k])) continue;
+          in_crack[k] = 1;  // only i writes its entries
+        }
+        pick[count] = q;
+        joined[count] = !counted;
+        ++count;
+      }
+      const int32_t* chunk_neighbor = neighbor + base;
+      const double* chunk_xi = xi_len + base;
+BRECCIA_SIMD
+      for (int c = 0; c < count; ++c)
+        e[c] = gas_entry_opening(gv, chunk_neighbor, chunk_xi, kappa_i, xx, xy, xz, pick[c], ux[c], uy[c], uz[c], a[c]);
+      for (int c = 0; c < count; ++c) s.add(e[c], ux[c], uy[c], uz[c], a[c], joined[c]);
+    }
+#endif
+    if (vent) s.v.vent_area = s.density * gv.vent_area[i];
+    for (int d = 0; d < 3; ++d) gv.push[3 * i + d] = s.push[d];
+    return s.v;
   }
 };
 
@@ -280,6 +327,8 @@ struct GasState {
   bool crack_entry = false;
   std::vector<double> wall_dv, arrival, arrival_next, kappa_volume, push, vent_facet_area;
   std::vector<uint8_t> front_done, in_crack, wall_on;
+  std::vector<uint8_t> halves;    // per bond entry (gas_entry_open; set-up, not checkpointed)
+  std::vector<double> position;   // 3 per particle: the crack pass's x0 + u
   std::vector<double> wall_left;
   // evolving state (checkpointed with the particles')
   double volume = 0.0, wall_volume = 0.0, crack_volume = 0.0;
@@ -305,6 +354,8 @@ struct GasState {
     v.arrival_next = crack_entry ? arrival_next.data() : nullptr;
     v.kappa_volume = kappa_volume.data();
     v.vent_area = vent_facet_area.data();
+    v.halves = halves.data();
+    v.position = position.data();
     v.push = push.data();
     v.front_done = front_done.data();
     v.in_crack = in_crack.data();
@@ -332,6 +383,7 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
   GasSums wall{}, crack{};
   exec.reduce(f.particle_count, GasWallSum{g.wall_dv, g.wall_left}, GasSumsInto{&wall}, "gas wall volume");
   if (g.arrival) {
+    exec.for_each(3 * d.n, CurrentPositions{d.x0, d.u, g.position}, "gas_positions");
     exec.for_each(d.n, GasFrontCopy{g}, "gas_front_copy");
     exec.for_each(d.n, GasFront{d, g, t, gas.front_speed()}, "gas_front");
     exec.reduce(d.n, GasCrackSum<UBefore>{d, g, u_before}, GasSumsInto{&crack}, "gas crack volume");

@@ -132,10 +132,14 @@ struct GasFront {
     bool dry_partner = false;
     for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
       if (g.in_crack[k]) continue;  // both ends wetted
+      const bool open = gas_entry_open(p.state, g.halves, k);
+      // A closed entry only tells whether a partner is still dry: once one is known, its
+      // partner's arrival time (a read from anywhere in memory) is not needed.
+      if (!open && dry_partner) continue;
       const int32_t j = p.neighbor[k];
       if (gas_wetted(g, j)) continue;
       dry_partner = true;
-      if (!gas_entry_open(p.state, g.halves, k)) continue;
+      if (!open) continue;
       const double reached = g.arrival[i] + p.xi_len[k] / speed;
       if (reached <= t) atomic_min(&g.arrival_next[j], reached);
     }
@@ -176,16 +180,18 @@ struct GasWallSum {
 // |y| - |xi|, with the unit direction (ux, uy, uz) from i to j and a_k / V_i, the crack-face
 // area over i's volume, a_k = (kappa_i + kappa_j)/2 V_i V_j. Branch-free, so that the host
 // computes a chunk of entries at once (SIMD: the square root and divisions are its cost).
-BRECCIA_HD double gas_entry_opening(const GasView& g, const int32_t* neighbor, const double* xi_len, double kappa_i,
-                                    double xx, double xy, double xz, int64_t k, double& ux, double& uy, double& uz,
-                                    double& a_over_vi) {
+// (The arrays come as pointers, not in the GasView: a pointer read from a struct in memory
+// inside the loop is one the vectoriser will not hoist past the stores of the terms.)
+BRECCIA_HD double gas_entry_opening(const double* position, const double* kappa_volume, const int32_t* neighbor,
+                                    const double* xi_len, double kappa_i, double xx, double xy, double xz, int64_t k,
+                                    double& ux, double& uy, double& uz, double& a_over_vi) {
   const int64_t j = neighbor[k];
-  const double dx = g.position[3 * j] - xx, dy = g.position[3 * j + 1] - xy, dz = g.position[3 * j + 2] - xz;
+  const double dx = position[3 * j] - xx, dy = position[3 * j + 1] - xy, dz = position[3 * j + 2] - xz;
   const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
   ux = len > 0 ? dx / len : 0.0;
   uy = len > 0 ? dy / len : 0.0;
   uz = len > 0 ? dz / len : 0.0;
-  a_over_vi = 0.5 * (kappa_i + g.kappa_volume[2 * j]) * g.kappa_volume[2 * j + 1];
+  a_over_vi = 0.5 * (kappa_i + kappa_volume[2 * j]) * kappa_volume[2 * j + 1];
   return len - xi_len[k];
 }
 
@@ -205,8 +211,8 @@ BRECCIA_HD double gas_entry_opening(const GasView& g, const int32_t* neighbor, c
 // pass over the entries once the pressure is known.
 //
 // On the host each chunk of kBondChunk entries runs in three stages: pick the entries in the
-// volume (in entry order; marking those that join), compute their openings branch-free (the
-// stage the compiler vectorises), then add them up in entry order. The sums are therefore the
+// volume (in entry order; marking those that join), compute their openings (the stage the
+// compiler vectorises: square root and divisions), then add their terms in entry order. The sums are therefore the
 // one-entry-at-a-time loop's (the CUDA build's) bit for bit.
 template <class UBefore>
 struct GasCrackSum {
@@ -217,30 +223,42 @@ struct GasCrackSum {
   BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
   BRECCIA_HD static Value combine(Value a, Value b) { return gas_sums_add(a, b); }
 
-  // Particle i's running sums over its entries in the volume, added in entry order.
+  // One entry's terms of the sums, +0 where it adds nothing (closed: e <= 0), so that they are
+  // formed branch-free. Adding +0 changes no sum: one that starts at +0 never becomes -0.
+  struct Terms {
+    double volume, volume_before, joined, density, push[3];
+  };
+  // Entry at opening e, direction u (i -> j), a_k / V_i; `joined`: it joined the volume now.
+  BRECCIA_HD static Terms entry_terms(double e, double ux, double uy, double uz, double a_over_vi, bool joined,
+                                      double volume_i, const double du[3]) {
+    const bool open = e > 0.0;
+    const double share = a_over_vi * volume_i * e * 0.5;
+    const double moved = volume_i * a_over_vi * (ux * du[0] + uy * du[1] + uz * du[2]);
+    const double density = a_over_vi * e * 0.5;
+    const double px = a_over_vi * ux, py = a_over_vi * uy, pz = a_over_vi * uz;
+    return {open ? share : 0.0,        open & !joined ? share : 0.0, open & joined ? moved : 0.0,
+            open ? density : 0.0,      {open ? px : 0.0, open ? py : 0.0, open ? pz : 0.0}};
+  }
+  // Particle i's running sums, added in entry order.
   struct Particle {
     Value v;
-    double volume_i, du[3], push[3], density;
-    // One entry at opening e, direction (ux, uy, uz), a_k / V_i; `joined`: it joined now.
-    BRECCIA_HD void add(double e, double ux, double uy, double uz, double a_over_vi, bool joined) {
-      if (!(e > 0.0)) return;
-      const double share = a_over_vi * volume_i * e * 0.5;
-      v.volume += share;
-      if (!joined) v.volume_before += share;
-      else v.joined -= volume_i * a_over_vi * (ux * du[0] + uy * du[1] + uz * du[2]);
-      density += a_over_vi * e * 0.5;
-      push[0] += a_over_vi * ux;
-      push[1] += a_over_vi * uy;
-      push[2] += a_over_vi * uz;
+    double push[3], density;
+    BRECCIA_HD void add(const Terms& t) {
+      v.volume += t.volume;
+      v.volume_before += t.volume_before;
+      v.joined -= t.joined;
+      density += t.density;
+      for (int d = 0; d < 3; ++d) push[d] += t.push[d];
     }
   };
 
   BRECCIA_HD Value operator()(int64_t i) const {
     if (!gas_wetted_next(g, i)) return identity();
     const bool vent = g.vent_area[i] > 0.0 && g.arrival_next[i] > 0.0;
-    Particle s{{0.0, 0.0, vent ? 1.0 : 0.0, 0.0, 0.0, 0.0}, g.kappa_volume[2 * i + 1], {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, 0.0};
+    Particle s{{0.0, 0.0, vent ? 1.0 : 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, 0.0};
+    double du[3] = {0.0, 0.0, 0.0};
     if (u_before)
-      for (int d = 0; d < 3; ++d) s.du[d] = p.u[3 * i + d] - double(u_before[3 * i + d]);
+      for (int d = 0; d < 3; ++d) du[d] = p.u[3 * i + d] - double(u_before[3 * i + d]);
     // The arrays as locals: the in_crack byte stores would otherwise make the compiler reload
     // every pointer of the views after each one (a char store may alias anything).
     const GasView gv = g;
@@ -248,8 +266,10 @@ struct GasCrackSum {
     const double* xi_len = p.xi_len;
     const uint8_t* state = p.state;
     uint8_t* in_crack = gv.in_crack;
-    const double kappa_i = gv.kappa_volume[2 * i];
-    const double xx = gv.position[3 * i], xy = gv.position[3 * i + 1], xz = gv.position[3 * i + 2];
+    const double* position = gv.position;
+    const double* kv = gv.kappa_volume;
+    const double kappa_i = kv[2 * i], volume_i = kv[2 * i + 1];
+    const double xx = position[3 * i], xy = position[3 * i + 1], xz = position[3 * i + 2];
     const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
 #if defined(__CUDA_ARCH__)
     for (int64_t k = begin; k < end; ++k) {
@@ -259,8 +279,8 @@ struct GasCrackSum {
         in_crack[k] = 1;  // only i writes its entries
       }
       double ux, uy, uz, a;
-      const double e = gas_entry_opening(gv, neighbor, xi_len, kappa_i, xx, xy, xz, k, ux, uy, uz, a);
-      s.add(e, ux, uy, uz, a, !counted);
+      const double e = gas_entry_opening(position, kv, neighbor, xi_len, kappa_i, xx, xy, xz, k, ux, uy, uz, a);
+      s.add(entry_terms(e, ux, uy, uz, a, !counted, volume_i, du));
     }
 #else
     int32_t pick[kBondChunk];
@@ -284,19 +304,14 @@ struct GasCrackSum {
       const double* chunk_xi = xi_len + base;
 BRECCIA_SIMD
       for (int c = 0; c < count; ++c)
-        e[c] = gas_entry_opening(gv, chunk_neighbor, chunk_xi, kappa_i, xx, xy, xz, pick[c], ux[c], uy[c], uz[c], a[c]);
-      for (int c = 0; c < count; ++c) s.add(e[c], ux[c], uy[c], uz[c], a[c], joined[c]);
+        e[c] = gas_entry_opening(position, kv, chunk_neighbor, chunk_xi, kappa_i, xx, xy, xz, pick[c], ux[c], uy[c], uz[c], a[c]);
+      for (int c = 0; c < count; ++c) s.add(entry_terms(e[c], ux[c], uy[c], uz[c], a[c], joined[c], volume_i, du));
     }
 #endif
     if (vent) s.v.vent_area = s.density * gv.vent_area[i];
     for (int d = 0; d < 3; ++d) gv.push[3 * i + d] = s.push[d];
     return s.v;
   }
-};
-
-struct GasSumsInto {
-  GasSums* out;
-  BRECCIA_HD void operator()(GasSums s) const { *out = s; }
 };
 
 // Gas pressure on the faces of the cracks it fills: -p a_k e_hat on i for each open wetted
@@ -308,6 +323,28 @@ struct GasCrackPressure {
   BRECCIA_HD void operator()(int64_t i) const {
     if (!gas_wetted(g, i)) return;
     for (int d = 0; d < 3; ++d) body[3 * i + d] -= pressure * g.push[3 * i + d];
+  }
+};
+
+// A sum over [0, n) in a fixed order whatever the thread count: fixed blocks of kGasBlock
+// indices, each summed in index order, their sums then added in block order on the host
+// (gas_fixed_order_sum). The blocks are dealt out in a scrambled order (block = c x stride
+// mod blocks, stride coprime to the block count), so that the run of them a thread takes
+// under a static schedule comes from all over the body and two threads share the reached
+// particles evenly.
+inline constexpr int64_t kGasBlock = 256;
+
+template <class Load>
+struct GasBlockSum {
+  Load load;
+  int64_t n, blocks, stride;
+  typename Load::Value* sums;
+  BRECCIA_HD void operator()(int64_t c) const {
+    const int64_t b = (c * stride) % blocks;
+    const int64_t end = (b + 1) * kGasBlock < n ? (b + 1) * kGasBlock : n;
+    typename Load::Value acc = Load::identity();
+    for (int64_t i = b * kGasBlock; i < end; ++i) acc = Load::combine(acc, load(i));
+    sums[b] = acc;
   }
 };
 
@@ -329,6 +366,7 @@ struct GasState {
   std::vector<uint8_t> front_done, in_crack, wall_on;
   std::vector<uint8_t> halves;    // per bond entry (gas_entry_open; set-up, not checkpointed)
   std::vector<double> position;   // 3 per particle: the crack pass's x0 + u
+  std::vector<GasSums> block_sums;  // gas_fixed_order_sum's per-block sums
   std::vector<double> wall_left;
   // evolving state (checkpointed with the particles')
   double volume = 0.0, wall_volume = 0.0, crack_volume = 0.0;
@@ -343,6 +381,7 @@ struct GasState {
   // pushes no more (a pulverised block would otherwise pay a bond pass per step for nothing).
   bool spent = false;
   double wall_s = 0.0;            // wall time spent in the gas's passes (not checkpointed)
+  double cpu_s = 0.0;             // their process CPU time, all threads (robust to other load)
 
   GasView view() {
     GasView v;
@@ -374,19 +413,36 @@ struct GasState {
 
 // The gas at time t on the double arrays `d` (after the drift): front, volume, pressure.
 // u_before: the displacement at the step's start (null outside a step).
+// The sum of load(i) over [0, n) in a fixed order (GasBlockSum): the same on any number of
+// threads, so the gas's volume, and the motion it drives, do not depend on it.
+template <class Exec, class Load>
+GasSums gas_fixed_order_sum(Exec& exec, int64_t n, const Load& load, GasState& gas, const char* name) {
+  const int64_t blocks = (n + kGasBlock - 1) / kGasBlock;
+  if (blocks == 0) return Load::identity();
+  int64_t stride = (blocks * 5 + 4) / 8;  // about 0.62 of the count (the golden section spreads best)
+  auto gcd = [](int64_t a, int64_t b) { while (b) { const int64_t r = a % b; a = b; b = r; } return a; };
+  while (stride > 1 && gcd(stride, blocks) != 1) --stride;
+  if (stride < 1) stride = 1;
+  gas.block_sums.resize(blocks);
+  exec.for_each(blocks, GasBlockSum<Load>{load, n, blocks, stride, gas.block_sums.data()}, name);
+  GasSums total = Load::identity();
+  for (int64_t b = 0; b < blocks; ++b) total = Load::combine(total, gas.block_sums[b]);
+  return total;
+}
+
 template <class Exec, class UBefore>
 void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, double t, double dt,
                 const UBefore* u_before) {
   if (gas.spent) return;
   GasView g = gas.view();
   exec.for_each(f.particle_count, GasWallVolume{f, g, d.u, d.offsets, d.state}, "gas_wall_volume");
-  GasSums wall{}, crack{};
-  exec.reduce(f.particle_count, GasWallSum{g.wall_dv, g.wall_left}, GasSumsInto{&wall}, "gas wall volume");
+  GasSums crack{};
+  const GasSums wall = gas_fixed_order_sum(exec, f.particle_count, GasWallSum{g.wall_dv, g.wall_left}, gas, "gas wall volume");
   if (g.arrival) {
     exec.for_each(3 * d.n, CurrentPositions{d.x0, d.u, g.position}, "gas_positions");
     exec.for_each(d.n, GasFrontCopy{g}, "gas_front_copy");
     exec.for_each(d.n, GasFront{d, g, t, gas.front_speed()}, "gas_front");
-    exec.reduce(d.n, GasCrackSum<UBefore>{d, g, u_before}, GasSumsInto{&crack}, "gas crack volume");
+    crack = gas_fixed_order_sum(exec, d.n, GasCrackSum<UBefore>{d, g, u_before}, gas, "gas crack volume");
     exec.for_each(d.n, GasFrontCommit{g}, "gas_front_commit");
   }
   crack.left = wall.left;

@@ -116,9 +116,15 @@ BRECCIA_HD void atomic_min(double* a, double value) {
 // Pushed from the wetted particles (few, in a case that does not pulverise) rather than
 // pulled by every dry one: arrival_next starts as a copy of arrival (GasFrontCopy), and each
 // wetted particle lowers its dry partners' arrival times.
+// The same pass forms the crack pass's current positions (one pass over the particles, not two).
 struct GasFrontCopy {
   GasView g;
-  BRECCIA_HD void operator()(int64_t i) const { g.arrival_next[i] = g.arrival[i]; }
+  const double* x0;
+  const double* u;
+  BRECCIA_HD void operator()(int64_t i) const {
+    g.arrival_next[i] = g.arrival[i];
+    for (int d = 0; d < 3; ++d) g.position[3 * i + d] = x0[3 * i + d] + u[3 * i + d];
+  }
 };
 
 // A wetted particle all of whose partners are wetted has nothing left to push (wetting is
@@ -145,11 +151,6 @@ struct GasFront {
     }
     if (!dry_partner) g.front_done[i] = 1;
   }
-};
-
-struct GasFrontCommit {
-  GasView g;
-  BRECCIA_HD void operator()(int64_t i) const { g.arrival[i] = g.arrival_next[i]; }
 };
 
 struct GasSums {
@@ -253,6 +254,8 @@ struct GasCrackSum {
   };
 
   BRECCIA_HD Value operator()(int64_t i) const {
+    // The front's commit: nothing in this pass reads `arrival`, only arrival_next.
+    g.arrival[i] = g.arrival_next[i];
     if (!gas_wetted_next(g, i)) return identity();
     const bool vent = g.vent_area[i] > 0.0 && g.arrival_next[i] > 0.0;
     Particle s{{0.0, 0.0, vent ? 1.0 : 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, 0.0};
@@ -333,6 +336,27 @@ struct GasCrackPressure {
 // under a static schedule comes from all over the body and two threads share the reached
 // particles evenly.
 inline constexpr int64_t kGasBlock = 256;
+
+inline int64_t gas_blocks(int64_t n) { return (n + kGasBlock - 1) / kGasBlock; }
+// About 0.62 of the block count (the golden section spreads a run best), coprime to it.
+inline int64_t gas_block_stride(int64_t blocks) {
+  int64_t stride = (blocks * 5 + 4) / 8;
+  auto gcd = [](int64_t a, int64_t b) { while (b) { const int64_t r = a % b; a = b; b = r; } return a; };
+  while (stride > 1 && gcd(stride, blocks) != 1) --stride;
+  return stride < 1 ? 1 : stride;
+}
+
+// f(i) over [0, n) by the same scrambled blocks (the front: balanced between threads).
+template <class F>
+struct GasBlocks {
+  F f;
+  int64_t n, blocks, stride;
+  BRECCIA_HD void operator()(int64_t c) const {
+    const int64_t b = (c * stride) % blocks;
+    const int64_t end = (b + 1) * kGasBlock < n ? (b + 1) * kGasBlock : n;
+    for (int64_t i = b * kGasBlock; i < end; ++i) f(i);
+  }
+};
 
 template <class Load>
 struct GasBlockSum {
@@ -417,14 +441,10 @@ struct GasState {
 // threads, so the gas's volume, and the motion it drives, do not depend on it.
 template <class Exec, class Load>
 GasSums gas_fixed_order_sum(Exec& exec, int64_t n, const Load& load, GasState& gas, const char* name) {
-  const int64_t blocks = (n + kGasBlock - 1) / kGasBlock;
+  const int64_t blocks = gas_blocks(n);
   if (blocks == 0) return Load::identity();
-  int64_t stride = (blocks * 5 + 4) / 8;  // about 0.62 of the count (the golden section spreads best)
-  auto gcd = [](int64_t a, int64_t b) { while (b) { const int64_t r = a % b; a = b; b = r; } return a; };
-  while (stride > 1 && gcd(stride, blocks) != 1) --stride;
-  if (stride < 1) stride = 1;
   gas.block_sums.resize(blocks);
-  exec.for_each(blocks, GasBlockSum<Load>{load, n, blocks, stride, gas.block_sums.data()}, name);
+  exec.for_each(blocks, GasBlockSum<Load>{load, n, blocks, gas_block_stride(blocks), gas.block_sums.data()}, name);
   GasSums total = Load::identity();
   for (int64_t b = 0; b < blocks; ++b) total = Load::combine(total, gas.block_sums[b]);
   return total;
@@ -439,11 +459,10 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
   GasSums crack{};
   const GasSums wall = gas_fixed_order_sum(exec, f.particle_count, GasWallSum{g.wall_dv, g.wall_left}, gas, "gas wall volume");
   if (g.arrival) {
-    exec.for_each(3 * d.n, CurrentPositions{d.x0, d.u, g.position}, "gas_positions");
-    exec.for_each(d.n, GasFrontCopy{g}, "gas_front_copy");
-    exec.for_each(d.n, GasFront{d, g, t, gas.front_speed()}, "gas_front");
+    exec.for_each(d.n, GasFrontCopy{g, d.x0, d.u}, "gas_front_copy");
+    exec.for_each(gas_blocks(d.n), GasBlocks<GasFront>{GasFront{d, g, t, gas.front_speed()}, d.n, gas_blocks(d.n),
+                                                        gas_block_stride(gas_blocks(d.n))}, "gas_front");
     crack = gas_fixed_order_sum(exec, d.n, GasCrackSum<UBefore>{d, g, u_before}, gas, "gas crack volume");
-    exec.for_each(d.n, GasFrontCommit{g}, "gas_front_commit");
   }
   crack.left = wall.left;
   gas.advance(wall.volume, crack, t, dt);

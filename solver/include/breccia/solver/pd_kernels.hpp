@@ -127,15 +127,6 @@ struct BondOriginT {
   }
 };
 
-// Current positions x = x0 + u, one component per call (k over 3N): the double force pass
-// and the gas's crack pass form them once and gather one array per partner.
-struct CurrentPositions {
-  const double* x0;
-  const double* u;
-  double* x;
-  BRECCIA_HD void operator()(int64_t k) const { x[k] = x0[k] + u[k]; }
-};
-
 // Can the fast paths gather bond vectors? Double needs the current positions x; float
 // always can (reference positions and displacements).
 template <class Real>

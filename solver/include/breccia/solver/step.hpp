@@ -151,6 +151,13 @@ struct Convert {
   BRECCIA_HD void operator()(int64_t k) const { to[k] = static_cast<To>(from[k]); }
 };
 
+struct CurrentPositions {
+  const double* x0;
+  const double* u;
+  double* x;
+  BRECCIA_HD void operator()(int64_t k) const { x[k] = x0[k] + u[k]; }
+};
+
 template <class Real>
 struct Dilatation {
   PdViewT<Real> p;

@@ -174,6 +174,11 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
     g.push.assign(3 * n, 0.0);
     g.front_done.assign(n, 0);
     g.in_crack.assign(s.neighbor.size(), 0);
+    g.position.assign(3 * n, 0.0);
+    // The halves each entry has (gas_entry_open), so the open test reads two bytes.
+    g.halves.resize(s.neighbor.size());
+    for (size_t k = 0; k < s.neighbor.size(); ++k)
+      g.halves[k] = static_cast<uint8_t>((s.vol_own[k] > 0.0 ? kOwnIntact : 0) | (s.k_dual[k] > 0.0 ? kDualIntact : 0));
   }
   g.wall_dv.assign(s.facets.particle.size(), 0.0);
   g.wall_left.assign(s.facets.particle.size(), 0.0);

@@ -83,6 +83,8 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
     j["gas_vented"] = s.gas.vented;
     number("gas_wall_s", s.gas.wall_s);
     number("gas_share_of_loop", r.wall_s > 0 ? s.gas.wall_s / r.wall_s : 0.0);
+    number("gas_cpu_s", s.gas.cpu_s);  // the same share in process CPU time: not inflated by other load
+    number("gas_cpu_share_of_loop", r.cpu_s > 0 ? s.gas.cpu_s / r.cpu_s : 0.0);
   }
   j["broken_bonds"] = r.final_energies.broken_half_bonds / 2;
   j["non_finite"] = non_finite;

@@ -31,13 +31,11 @@
 namespace breccia::solver {
 
 // Can the gas pass between the two ends of entry k? Only when no half-bond that exists is
-// intact (a bond carrying no force: broken, or cut by a pre-crack).
-template <class Real>
-BRECCIA_HD bool gas_entry_open(const PdViewT<Real>& p, int64_t k) {
-  const uint8_t st = p.state[k];
-  const bool own = p.vol_own[k] > Real(0) && (st & kOwnIntact);
-  const bool dual = p.k_dual[k] > Real(0) && (st & kDualIntact);
-  return !own && !dual;
+// intact (a bond carrying no force: broken, or cut by a pre-crack). `halves`: per entry, the
+// intact bits of the halves that exist (kOwnIntact: j in i's horizon, vol_own > 0;
+// kDualIntact: i in j's, k_dual > 0; setup_gas), so the test reads two bytes, not two doubles.
+BRECCIA_HD bool gas_entry_open(const uint8_t* state, const uint8_t* halves, int64_t k) {
+  return (state[k] & halves[k]) == 0;
 }
 
 // Device-side arrays of the gas (GasState below holds them on the host).
@@ -52,6 +50,8 @@ struct GasView {
   // partner in the crack pass)
   const double* kappa_volume = nullptr;
   const double* vent_area = nullptr;  // per particle: its facet area on vent surfaces [m2] (0: none)
+  const uint8_t* halves = nullptr; // per bond entry: the halves that exist (gas_entry_open)
+  double* position = nullptr;      // 3 per particle: x0 + u at this update (one gather per partner)
   double* push = nullptr;          // 3 per particle: dV_crack/dy_i / V_i (the crack force is -p push)
   uint8_t* front_done = nullptr;   // per particle: wetted, and every partner is too (stops pushing)
   // Per bond entry: 1 once the entry is open with both ends wetted at an update, so that its
@@ -116,9 +116,15 @@ BRECCIA_HD void atomic_min(double* a, double value) {
 // Pushed from the wetted particles (few, in a case that does not pulverise) rather than
 // pulled by every dry one: arrival_next starts as a copy of arrival (GasFrontCopy), and each
 // wetted particle lowers its dry partners' arrival times.
+// The same pass forms the crack pass's current positions (one pass over the particles, not two).
 struct GasFrontCopy {
   GasView g;
-  BRECCIA_HD void operator()(int64_t i) const { g.arrival_next[i] = g.arrival[i]; }
+  const double* x0;
+  const double* u;
+  BRECCIA_HD void operator()(int64_t i) const {
+    g.arrival_next[i] = g.arrival[i];
+    for (int d = 0; d < 3; ++d) g.position[3 * i + d] = x0[3 * i + d] + u[3 * i + d];
+  }
 };
 
 // A wetted particle all of whose partners are wetted has nothing left to push (wetting is
@@ -132,34 +138,20 @@ struct GasFront {
     bool dry_partner = false;
     for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
       if (g.in_crack[k]) continue;  // both ends wetted
+      const bool open = gas_entry_open(p.state, g.halves, k);
+      // A closed entry only tells whether a partner is still dry: once one is known, its
+      // partner's arrival time (a read from anywhere in memory) is not needed.
+      if (!open && dry_partner) continue;
       const int32_t j = p.neighbor[k];
       if (gas_wetted(g, j)) continue;
       dry_partner = true;
-      if (!gas_entry_open(p, k)) continue;
+      if (!open) continue;
       const double reached = g.arrival[i] + p.xi_len[k] / speed;
       if (reached <= t) atomic_min(&g.arrival_next[j], reached);
     }
     if (!dry_partner) g.front_done[i] = 1;
   }
 };
-
-struct GasFrontCommit {
-  GasView g;
-  BRECCIA_HD void operator()(int64_t i) const { g.arrival[i] = g.arrival_next[i]; }
-};
-
-// Opening and unit direction of entry k (i -> j) in the current configuration.
-BRECCIA_HD double gas_entry_opening(const PdView& p, int64_t i, int64_t k, double dir[3]) {
-  const int64_t j = p.neighbor[k];
-  double len2 = 0.0;
-  for (int d = 0; d < 3; ++d) {
-    dir[d] = (p.x0[3 * j + d] + p.u[3 * j + d]) - (p.x0[3 * i + d] + p.u[3 * i + d]);
-    len2 += dir[d] * dir[d];
-  }
-  const double len = std::sqrt(len2);
-  for (int d = 0; d < 3; ++d) dir[d] = len > 0 ? dir[d] / len : 0.0;
-  return len - p.xi_len[k];
-}
 
 struct GasSums {
   double volume;         // m3
@@ -185,6 +177,25 @@ struct GasWallSum {
   BRECCIA_HD Value operator()(int64_t q) const { return {wall_dv[q], wall_dv[q], 0.0, 0.0, 0.0, wall_left[q]}; }
 };
 
+// Entry k of particle i (at x_i) in the current configuration: returns its opening
+// |y| - |xi|, with the unit direction (ux, uy, uz) from i to j and a_k / V_i, the crack-face
+// area over i's volume, a_k = (kappa_i + kappa_j)/2 V_i V_j. Branch-free, so that the host
+// computes a chunk of entries at once (SIMD: the square root and divisions are its cost).
+// (The arrays come as pointers, not in the GasView: a pointer read from a struct in memory
+// inside the loop is one the vectoriser will not hoist past the stores of the terms.)
+BRECCIA_HD double gas_entry_opening(const double* position, const double* kappa_volume, const int32_t* neighbor,
+                                    const double* xi_len, double kappa_i, double xx, double xy, double xz, int64_t k,
+                                    double& ux, double& uy, double& uz, double& a_over_vi) {
+  const int64_t j = neighbor[k];
+  const double dx = position[3 * j] - xx, dy = position[3 * j + 1] - xy, dz = position[3 * j + 2] - xz;
+  const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+  ux = len > 0 ? dx / len : 0.0;
+  uy = len > 0 ? dy / len : 0.0;
+  uz = len > 0 ? dz / len : 0.0;
+  a_over_vi = 0.5 * (kappa_i + kappa_volume[2 * j]) * kappa_volume[2 * j + 1];
+  return len - xi_len[k];
+}
+
 // Crack volume the gas fills (each pair seen from both ends, hence the half) with the front
 // this step has reached (arrival_next). The entries already in the volume at the last update
 // (in_crack) give volume_before: an entry that joins now (the front has just reached it, or
@@ -199,6 +210,11 @@ struct GasWallSum {
 // vent surface sums, over the surface, to opening x trace length (docs/theory.md). The same
 // loop keeps each particle's dV_crack/dy_i (push), so that the crack forces need no second
 // pass over the entries once the pressure is known.
+//
+// On the host each chunk of kBondChunk entries runs in three stages: pick the entries in the
+// volume (in entry order; marking those that join), compute their openings (the stage the
+// compiler vectorises: square root and divisions), then add their terms in entry order. The sums are therefore the
+// one-entry-at-a-time loop's (the CUDA build's) bit for bit.
 template <class UBefore>
 struct GasCrackSum {
   using Value = GasSums;
@@ -207,49 +223,98 @@ struct GasCrackSum {
   const UBefore* u_before;
   BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
   BRECCIA_HD static Value combine(Value a, Value b) { return gas_sums_add(a, b); }
+
+  // One entry's terms of the sums, +0 where it adds nothing (closed: e <= 0), so that they are
+  // formed branch-free. Adding +0 changes no sum: one that starts at +0 never becomes -0.
+  struct Terms {
+    double volume, volume_before, joined, density, push[3];
+  };
+  // Entry at opening e, direction u (i -> j), a_k / V_i; `joined`: it joined the volume now.
+  BRECCIA_HD static Terms entry_terms(double e, double ux, double uy, double uz, double a_over_vi, bool joined,
+                                      double volume_i, const double du[3]) {
+    const bool open = e > 0.0;
+    const double share = a_over_vi * volume_i * e * 0.5;
+    const double moved = volume_i * a_over_vi * (ux * du[0] + uy * du[1] + uz * du[2]);
+    const double density = a_over_vi * e * 0.5;
+    const double px = a_over_vi * ux, py = a_over_vi * uy, pz = a_over_vi * uz;
+    return {open ? share : 0.0,        open & !joined ? share : 0.0, open & joined ? moved : 0.0,
+            open ? density : 0.0,      {open ? px : 0.0, open ? py : 0.0, open ? pz : 0.0}};
+  }
+  // Particle i's running sums, added in entry order.
+  struct Particle {
+    Value v;
+    double push[3], density;
+    BRECCIA_HD void add(const Terms& t) {
+      v.volume += t.volume;
+      v.volume_before += t.volume_before;
+      v.joined -= t.joined;
+      density += t.density;
+      for (int d = 0; d < 3; ++d) push[d] += t.push[d];
+    }
+  };
+
   BRECCIA_HD Value operator()(int64_t i) const {
+    // The front's commit: nothing in this pass reads `arrival`, only arrival_next.
+    g.arrival[i] = g.arrival_next[i];
     if (!gas_wetted_next(g, i)) return identity();
     const bool vent = g.vent_area[i] > 0.0 && g.arrival_next[i] > 0.0;
-    Value v{0.0, 0.0, vent ? 1.0 : 0.0, 0.0, 0.0, 0.0};
-    // The arrays as locals: the in_crack byte stores would otherwise make the compiler reload
-    // every pointer of the views after each one (a char store may alias anything).
-    const int32_t* neighbor = p.neighbor;
-    const double* kv = g.kappa_volume;
-    uint8_t* in_crack = g.in_crack;
-    const double kappa_i = kv[2 * i], volume_i = kv[2 * i + 1];
+    Particle s{{0.0, 0.0, vent ? 1.0 : 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, 0.0};
     double du[3] = {0.0, 0.0, 0.0};
     if (u_before)
       for (int d = 0; d < 3; ++d) du[d] = p.u[3 * i + d] - double(u_before[3 * i + d]);
-    double push[3] = {0.0, 0.0, 0.0};
-    double density = 0.0;  // the particle's crack volume over its own volume
-    const int64_t end = p.offsets[i + 1];
-    for (int64_t k = p.offsets[i]; k < end; ++k) {
+    // The arrays as locals: the in_crack byte stores would otherwise make the compiler reload
+    // every pointer of the views after each one (a char store may alias anything).
+    const GasView gv = g;
+    const int32_t* neighbor = p.neighbor;
+    const double* xi_len = p.xi_len;
+    const uint8_t* state = p.state;
+    uint8_t* in_crack = gv.in_crack;
+    const double* position = gv.position;
+    const double* kv = gv.kappa_volume;
+    const double kappa_i = kv[2 * i], volume_i = kv[2 * i + 1];
+    const double xx = position[3 * i], xy = position[3 * i + 1], xz = position[3 * i + 2];
+    const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
+#if defined(__CUDA_ARCH__)
+    for (int64_t k = begin; k < end; ++k) {
       const bool counted = in_crack[k];
-      const int32_t j = neighbor[k];
       if (!counted) {
-        if (!gas_entry_open(p, k) || !gas_wetted_next(g, j)) continue;
+        if (!gas_entry_open(state, gv.halves, k) || !gas_wetted_next(gv, neighbor[k])) continue;
         in_crack[k] = 1;  // only i writes its entries
       }
-      double dir[3];
-      const double e = gas_entry_opening(p, i, k, dir);
-      if (!(e > 0.0)) continue;
-      const double a_over_vi = 0.5 * (kappa_i + kv[2 * j]) * kv[2 * j + 1];
-      const double share = a_over_vi * volume_i * e * 0.5;
-      v.volume += share;
-      if (counted) v.volume_before += share;
-      else v.joined -= volume_i * a_over_vi * (dir[0] * du[0] + dir[1] * du[1] + dir[2] * du[2]);
-      density += a_over_vi * e * 0.5;
-      for (int d = 0; d < 3; ++d) push[d] += a_over_vi * dir[d];
+      double ux, uy, uz, a;
+      const double e = gas_entry_opening(position, kv, neighbor, xi_len, kappa_i, xx, xy, xz, k, ux, uy, uz, a);
+      s.add(entry_terms(e, ux, uy, uz, a, !counted, volume_i, du));
     }
-    if (vent) v.vent_area = density * g.vent_area[i];
-    for (int d = 0; d < 3; ++d) g.push[3 * i + d] = push[d];
-    return v;
+#else
+    int32_t pick[kBondChunk];
+    bool joined[kBondChunk];
+    double e[kBondChunk], ux[kBondChunk], uy[kBondChunk], uz[kBondChunk], a[kBondChunk];
+    for (int64_t base = begin; base < end; base += kBondChunk) {
+      const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
+      int count = 0;
+      for (int q = 0; q < m; ++q) {
+        const int64_t k = base + q;
+        const bool counted = in_crack[k];
+        if (!counted) {
+          if (!gas_entry_open(state, gv.halves, k) || !gas_wetted_next(gv, neighbor[k])) continue;
+          in_crack[k] = 1;  // only i writes its entries
+        }
+        pick[count] = q;
+        joined[count] = !counted;
+        ++count;
+      }
+      const int32_t* chunk_neighbor = neighbor + base;
+      const double* chunk_xi = xi_len + base;
+BRECCIA_SIMD
+      for (int c = 0; c < count; ++c)
+        e[c] = gas_entry_opening(position, kv, chunk_neighbor, chunk_xi, kappa_i, xx, xy, xz, pick[c], ux[c], uy[c], uz[c], a[c]);
+      for (int c = 0; c < count; ++c) s.add(entry_terms(e[c], ux[c], uy[c], uz[c], a[c], joined[c], volume_i, du));
+    }
+#endif
+    if (vent) s.v.vent_area = s.density * gv.vent_area[i];
+    for (int d = 0; d < 3; ++d) gv.push[3 * i + d] = s.push[d];
+    return s.v;
   }
-};
-
-struct GasSumsInto {
-  GasSums* out;
-  BRECCIA_HD void operator()(GasSums s) const { *out = s; }
 };
 
 // Gas pressure on the faces of the cracks it fills: -p a_k e_hat on i for each open wetted
@@ -261,6 +326,49 @@ struct GasCrackPressure {
   BRECCIA_HD void operator()(int64_t i) const {
     if (!gas_wetted(g, i)) return;
     for (int d = 0; d < 3; ++d) body[3 * i + d] -= pressure * g.push[3 * i + d];
+  }
+};
+
+// A sum over [0, n) in a fixed order whatever the thread count: fixed blocks of kGasBlock
+// indices, each summed in index order, their sums then added in block order on the host
+// (gas_fixed_order_sum). The blocks are dealt out in a scrambled order (block = c x stride
+// mod blocks, stride coprime to the block count), so that the run of them a thread takes
+// under a static schedule comes from all over the body and two threads share the reached
+// particles evenly.
+inline constexpr int64_t kGasBlock = 256;
+
+inline int64_t gas_blocks(int64_t n) { return (n + kGasBlock - 1) / kGasBlock; }
+// About 0.62 of the block count (the golden section spreads a run best), coprime to it.
+inline int64_t gas_block_stride(int64_t blocks) {
+  int64_t stride = (blocks * 5 + 4) / 8;
+  auto gcd = [](int64_t a, int64_t b) { while (b) { const int64_t r = a % b; a = b; b = r; } return a; };
+  while (stride > 1 && gcd(stride, blocks) != 1) --stride;
+  return stride < 1 ? 1 : stride;
+}
+
+// f(i) over [0, n) by the same scrambled blocks (the front: balanced between threads).
+template <class F>
+struct GasBlocks {
+  F f;
+  int64_t n, blocks, stride;
+  BRECCIA_HD void operator()(int64_t c) const {
+    const int64_t b = (c * stride) % blocks;
+    const int64_t end = (b + 1) * kGasBlock < n ? (b + 1) * kGasBlock : n;
+    for (int64_t i = b * kGasBlock; i < end; ++i) f(i);
+  }
+};
+
+template <class Load>
+struct GasBlockSum {
+  Load load;
+  int64_t n, blocks, stride;
+  typename Load::Value* sums;
+  BRECCIA_HD void operator()(int64_t c) const {
+    const int64_t b = (c * stride) % blocks;
+    const int64_t end = (b + 1) * kGasBlock < n ? (b + 1) * kGasBlock : n;
+    typename Load::Value acc = Load::identity();
+    for (int64_t i = b * kGasBlock; i < end; ++i) acc = Load::combine(acc, load(i));
+    sums[b] = acc;
   }
 };
 
@@ -280,6 +388,9 @@ struct GasState {
   bool crack_entry = false;
   std::vector<double> wall_dv, arrival, arrival_next, kappa_volume, push, vent_facet_area;
   std::vector<uint8_t> front_done, in_crack, wall_on;
+  std::vector<uint8_t> halves;    // per bond entry (gas_entry_open; set-up, not checkpointed)
+  std::vector<double> position;   // 3 per particle: the crack pass's x0 + u
+  std::vector<GasSums> block_sums;  // gas_fixed_order_sum's per-block sums
   std::vector<double> wall_left;
   // evolving state (checkpointed with the particles')
   double volume = 0.0, wall_volume = 0.0, crack_volume = 0.0;
@@ -294,6 +405,7 @@ struct GasState {
   // pushes no more (a pulverised block would otherwise pay a bond pass per step for nothing).
   bool spent = false;
   double wall_s = 0.0;            // wall time spent in the gas's passes (not checkpointed)
+  double cpu_s = 0.0;             // their process CPU time, all threads (robust to other load)
 
   GasView view() {
     GasView v;
@@ -305,6 +417,8 @@ struct GasState {
     v.arrival_next = crack_entry ? arrival_next.data() : nullptr;
     v.kappa_volume = kappa_volume.data();
     v.vent_area = vent_facet_area.data();
+    v.halves = halves.data();
+    v.position = position.data();
     v.push = push.data();
     v.front_done = front_done.data();
     v.in_crack = in_crack.data();
@@ -323,19 +437,32 @@ struct GasState {
 
 // The gas at time t on the double arrays `d` (after the drift): front, volume, pressure.
 // u_before: the displacement at the step's start (null outside a step).
+// The sum of load(i) over [0, n) in a fixed order (GasBlockSum): the same on any number of
+// threads, so the gas's volume, and the motion it drives, do not depend on it.
+template <class Exec, class Load>
+GasSums gas_fixed_order_sum(Exec& exec, int64_t n, const Load& load, GasState& gas, const char* name) {
+  const int64_t blocks = gas_blocks(n);
+  if (blocks == 0) return Load::identity();
+  gas.block_sums.resize(blocks);
+  exec.for_each(blocks, GasBlockSum<Load>{load, n, blocks, gas_block_stride(blocks), gas.block_sums.data()}, name);
+  GasSums total = Load::identity();
+  for (int64_t b = 0; b < blocks; ++b) total = Load::combine(total, gas.block_sums[b]);
+  return total;
+}
+
 template <class Exec, class UBefore>
 void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, double t, double dt,
                 const UBefore* u_before) {
   if (gas.spent) return;
   GasView g = gas.view();
   exec.for_each(f.particle_count, GasWallVolume{f, g, d.u, d.offsets, d.state}, "gas_wall_volume");
-  GasSums wall{}, crack{};
-  exec.reduce(f.particle_count, GasWallSum{g.wall_dv, g.wall_left}, GasSumsInto{&wall}, "gas wall volume");
+  GasSums crack{};
+  const GasSums wall = gas_fixed_order_sum(exec, f.particle_count, GasWallSum{g.wall_dv, g.wall_left}, gas, "gas wall volume");
   if (g.arrival) {
-    exec.for_each(d.n, GasFrontCopy{g}, "gas_front_copy");
-    exec.for_each(d.n, GasFront{d, g, t, gas.front_speed()}, "gas_front");
-    exec.reduce(d.n, GasCrackSum<UBefore>{d, g, u_before}, GasSumsInto{&crack}, "gas crack volume");
-    exec.for_each(d.n, GasFrontCommit{g}, "gas_front_commit");
+    exec.for_each(d.n, GasFrontCopy{g, d.x0, d.u}, "gas_front_copy");
+    exec.for_each(gas_blocks(d.n), GasBlocks<GasFront>{GasFront{d, g, t, gas.front_speed()}, d.n, gas_blocks(d.n),
+                                                        gas_block_stride(gas_blocks(d.n))}, "gas_front");
+    crack = gas_fixed_order_sum(exec, d.n, GasCrackSum<UBefore>{d, g, u_before}, gas, "gas crack volume");
   }
   crack.left = wall.left;
   gas.advance(wall.volume, crack, t, dt);

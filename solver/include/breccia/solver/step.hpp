@@ -24,6 +24,7 @@
 // the displacement before a force pass, the LPS and correspondence fields between their
 // two passes, the minimum stretches when they are committed).
 #include <chrono>
+#include <ctime>
 #include <cstdint>
 #include <type_traits>
 #include <utility>
@@ -288,10 +289,13 @@ template <class Exec, class Real>
 void pd_external(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t, double dt = 0.0) {
   const PdView& d = a.d;
   const int64_t n = d.n;
-  // The gas's own cost is timed (summary.json gas_wall_s; the issue bounds it at 5% of a step).
+  // The gas's own cost is timed (summary.json gas_wall_s, and gas_cpu_s, which other load on
+  // the machine does not inflate; the requirement bounds it at 5% of a step).
   const auto gas_start = std::chrono::steady_clock::now();
+  const std::clock_t gas_cpu_start = sys.gas.active ? std::clock() : 0;
   if (sys.gas.active) exec.gas(a, sys, t, dt);
   const auto gas_mid = std::chrono::steady_clock::now();
+  const std::clock_t gas_cpu_mid = sys.gas.active ? std::clock() : 0;
   exec.for_each(3 * n, ClearArray{const_cast<double*>(d.body)}, "clear body forces");
   double* body = const_cast<double*>(d.body);
   if (a.facets.particle_count > 0) {
@@ -304,9 +308,11 @@ void pd_external(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t,
   }
   if (sys.gas.active) {
     const auto crack_start = std::chrono::steady_clock::now();
+    const std::clock_t crack_cpu_start = std::clock();
     exec.gas_crack_forces(a, sys);
     sys.gas.wall_s += std::chrono::duration<double>(gas_mid - gas_start).count() +
                       std::chrono::duration<double>(std::chrono::steady_clock::now() - crack_start).count();
+    sys.gas.cpu_s += static_cast<double>((gas_cpu_mid - gas_cpu_start) + (std::clock() - crack_cpu_start)) / CLOCKS_PER_SEC;
   }
   for (size_t b = 0; b < sys.body_loads.size(); ++b) {
     const LoadSpec& spec = *sys.body_loads[b].spec;

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "breccia/solver/cuda_device.hpp"
+#include "cli_command.hpp"
 
 namespace {
 
@@ -27,7 +28,7 @@ struct Command {
 Command run_atlas(const std::string& args, const std::string& dir) {
   std::filesystem::create_directories(dir);
   const std::string log = dir + "/atlas.log";
-  const std::string cmd = std::string(BRECCIA_ATLAS_EXE) + " " + args + " > " + log + " 2>&1";
+  const std::string cmd = breccia::cuda_test::cli_command("BRECCIA_ATLAS_EXE", BRECCIA_ATLAS_EXE) + " " + args + " > " + log + " 2>&1";
   const int status = std::system(cmd.c_str());
   std::ifstream in(log);
   std::stringstream text;

@@ -19,6 +19,7 @@
 #include <tuple>
 #include <vector>
 
+#include "cli_command.hpp"
 #include "cpu_gpu_compare.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/json_file.hpp"
@@ -374,7 +375,7 @@ struct Command {
 // time, and one shared log file let one test read the other's output.
 Command run_solve(const std::string& args, const std::string& out) {
   const std::string log = out + ".log";
-  const std::string cmd = std::string(BRECCIA_SOLVE_EXE) + " " + args + " > " + log + " 2>&1";
+  const std::string cmd = breccia::cuda_test::cli_command("BRECCIA_SOLVE_EXE", BRECCIA_SOLVE_EXE) + " " + args + " > " + log + " 2>&1";
   const int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_text(log)};
 }

@@ -1,27 +1,37 @@
 #!/usr/bin/env bash
-# The GPU session's one command (docs/cuda.md, "How to verify on a GPU"): CPU/GPU agreement
-# tests of the PD and MPS launchers, then the GPU figures docs/performance.md and
-# cases/mps-harmonics need (PD PMB/LPS bond-updates/s, MPS harmonics at 0.125 mm CPU vs GPU).
+# The GPU session's one command (docs/cuda.md, "How to verify on a GPU"): ONE device call of at
+# most 7 minutes. The checks run most important first, each with its own time cap, the caps
+# summing to BUDGET_S (420 s):
+#   agreement tests   test_solver_cuda 60, test_mps_cuda 40, test_mps_solid_cuda 30, test_atlas_backends 15
+#   PD throughput     PMB and LPS on an 81^3 lattice, GPU 25 + CPU 25 each
+#   float32           PMB and LPS float32, GPU 15 each
+#   MPS harmonics     0.125 mm, GPU 20 + CPU 35, histories compared
+#   Taylor bar        32 across, GPU 35
+#   sanitizer         compute-sanitizer memcheck: PD agreement tests on small plates 35, MPS 20
+#   the rest          correspondence GPU/CPU, atlas GPU rows: only in the time the others left
+# A check may use what earlier checks left unused (each must end by the sum of the caps so far),
+# so a slow check never eats a later check's own cap; a check with no time left is skipped and
+# listed as skipped. After every check $OUT/results.json is rewritten, a row is appended to
+# $OUT/summary.md and $OUT/results.tar.gz is repacked, so a run cut short returns what it
+# measured. $OUT holds 4 files: results.json, summary.md, results.tar.gz (every log, deck,
+# summary, history and gtest XML report; no results.h5), device-check.log (written live).
 #
 #   1. Here, on the CPU machine (no device time):
 #        scripts/device-check.sh prepare
-#      builds breccia-solve, test_solver_cuda and test_mps_cuda for sm_90 in build-device/ and
-#      packs them with the shared libraries they load into build-device/kit (~25 MB). The
-#      device machine has nvcc but no HDF5, yaml-cpp or GoogleTest headers (nothing can be
-#      installed there), so the binaries travel instead of being built there.
+#      builds breccia-solve, breccia-atlas and the four CUDA test executables for sm_90 in
+#      build-device/ and packs them with the shared libraries they load and the case files the
+#      run reads into build-device/kit. The device machine has nvcc but no HDF5, yaml-cpp or
+#      GoogleTest headers (nothing can be installed there), so the binaries travel instead.
 #        BRECCIA_DEVICE_DRY=1 scripts/device-check.sh
-#      rehearses everything but the GPU runs here (small sizes, OUT=/tmp/device-check-dry).
+#      rehearses everything here with the "GPU" legs on the CPU (small sizes,
+#      OUT=/tmp/device-check-dry); the sanitizer skips (no GPU).
 #   2. On the device machine, through the device tool's run:
-#        command: bash scripts/device-check.sh     carry: ["build-device/kit"]     timeout_s: 540
-#      Everything it measures lands in $OUT (results.json, summary.md, logs), written as it
-#      goes, so a run cut short still returns what it finished.
+#        command: bash scripts/device-check.sh     carry: ["build-device/kit"]     timeout_s: 480
 #
-# ONLY=tests,mps,taylor,pd,atlas runs only the named sections (the device's 15 minutes need two
-# calls: e.g. ONLY=tests,pd then ONLY=mps,taylor,atlas).
-# Environment: OUT (results folder), BRECCIA_DEVICE_DRY=1 (no GPU runs), PD_N (lattice edge,
+# Environment: OUT (results folder), BRECCIA_DEVICE_DRY=1 (no GPU runs), BUDGET_S (420),
+# ONLY=tests,pd,float32,mps,taylor,sanitizer,rest (run only these groups), PD_N (lattice edge,
 # default 81: 531k particles, 6.5e7 bond entries), PD_GPU_STEPS (500), PD_CPU_STEPS (20),
-# MPS_SPACING (0.125 mm), SANITIZER=0 to skip compute-sanitizer, BUDGET_S (480: no new check
-# starts after this many seconds).
+# MPS_SPACING (0.125 mm), MPS_END (30 us), TAYLOR_ACROSS (32), SANITIZER=0 (skip it).
 set -uo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 KIT="$ROOT/build-device/kit"
@@ -30,14 +40,18 @@ if [ "${1:-}" = prepare ]; then
   set -e
   BUILD="$ROOT/build-device"
   LAUNCHER=()
-  command -v ccache >/dev/null && LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_CUDA_COMPILER_LAUNCHER=ccache)
+  # ccache for the C++ only: with nvcc it once replayed a stale object after a header change,
+  # and a stale kernel in the kit would cost a GPU session.
+  command -v ccache >/dev/null && LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_CUDA_COMPILER_LAUNCHER=)
   cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DBRECCIA_STAGES=solver -DBRECCIA_CUDA=ON \
     -DCMAKE_CUDA_ARCHITECTURES=90 "${LAUNCHER[@]}" >"$BUILD.configure.log" 2>&1 || { cat "$BUILD.configure.log"; exit 1; }
-  nice -n 10 cmake --build "$BUILD" -j"${JOBS:-2}" --target breccia-solve breccia-atlas test_solver_cuda test_mps_cuda test_mps_solid_cuda test_atlas_backends
+  # Every executable the run starts (the CLI tests start breccia-solve and breccia-atlas: the
+  # run points them at the kit's copies through BRECCIA_SOLVE_EXE and BRECCIA_ATLAS_EXE).
+  EXES=(breccia-solve breccia-atlas test_solver_cuda test_mps_cuda test_mps_solid_cuda test_atlas_backends)
+  nice -n 10 cmake --build "$BUILD" -j"${JOBS:-2}" --target "${EXES[@]}"
   rm -rf "$KIT"
   mkdir -p "$KIT/bin" "$KIT/lib" "$KIT/runtime" "$KIT/glibc" "$KIT/cases"
-  cp "$BUILD/bin/breccia-solve" "$BUILD/bin/breccia-atlas" "$BUILD/bin/test_solver_cuda" "$BUILD/bin/test_mps_cuda" \
-    "$BUILD/bin/test_mps_solid_cuda" "$BUILD/bin/test_atlas_backends" "$KIT/bin/"
+  for exe in "${EXES[@]}"; do cp "$BUILD/bin/$exe" "$KIT/bin/"; done
   # Libraries by layer: lib/ (HDF5, yaml-cpp and what they load) always; runtime/ (the GCC
   # runtime) only if the device's own is missing or older; glibc/ with its loader as a last resort.
   for exe in "$KIT"/bin/*; do ldd "$exe"; done | awk '$3 ~ /^\// {print $3} $1 ~ /^\/.*ld-linux/ {print $1}' | sort -u |
@@ -55,6 +69,7 @@ if [ "${1:-}" = prepare ]; then
     echo "built: $(date -u +%FT%TZ) on $(hostname)"
     echo "commit: $(git -C "$ROOT" rev-parse HEAD 2>/dev/null) (+ uncommitted changes: $(git -C "$ROOT" status --porcelain 2>/dev/null | wc -l) paths)"
     /usr/local/cuda/bin/nvcc --version 2>/dev/null | tail -2
+    (cd "$KIT" && find . -type f ! -name MANIFEST | sort)
   } >"$KIT/MANIFEST"
   du -sh "$KIT"
   echo "kit ready: carry [\"build-device/kit\"] and run 'bash scripts/device-check.sh' on the device"
@@ -64,15 +79,13 @@ fi
 DRY=${BRECCIA_DEVICE_DRY:-0}
 if [ "$DRY" = 1 ]; then OUT=${OUT:-/tmp/device-check-dry}; else OUT=${OUT:-$ROOT/runs/device-check}; fi
 mkdir -p "$OUT"
+rm -f "$OUT/results.json" "$OUT/summary.md" "$OUT/results.tar.gz" "$OUT/device-check.log"
 WORK=$(mktemp -d /tmp/device-check.XXXXXX)
 exec > >(tee -a "$OUT/device-check.log") 2>&1
 START=$(date +%s)
+BUDGET=${BUDGET_S:-420}
 step() { echo; echo "== [$(($(date +%s) - START)) s] $*"; }
-# A check starts only before BUDGET_S (default 480 s of the device tool's 540 s timeout) and
-# is cut off by BUDGET_S + 40 s, so the results files are always written.
-limit() { local left=$((${BUDGET_S:-480} + 40 - ($(date +%s) - START))); echo $((left < $1 ? (left > 10 ? left : 10) : $1)); }
-in_budget() { [ $(($(date +%s) - START)) -lt "${BUDGET_S:-480}" ] || { echo "skipped: $1 (budget ${BUDGET_S:-480} s spent)"; result "skipped_$1" 1; false; }; }
-RESULTS="$OUT/results.txt"  # key=value as measured; results.json and summary.md are made from it on exit
+RESULTS="$WORK/results.txt"  # key=value as measured; results.json is made from it after every check
 : >"$RESULTS"
 result() { echo "$1=$2" >>"$RESULTS"; }
 THREADS=$(nproc)
@@ -80,61 +93,61 @@ PYTHON=${PYTHON:-python3}  # the device's python3 has numpy; here /usr/bin/pytho
 "$PYTHON" -c "import numpy" 2>/dev/null || PYTHON=/usr/bin/python3
 if [ "$DRY" = 1 ]; then
   PD_N=${PD_N:-21}; PD_GPU_STEPS=${PD_GPU_STEPS:-20}; PD_CPU_STEPS=${PD_CPU_STEPS:-10}
-  MPS_SPACING=${MPS_SPACING:-0.25}; MPS_END="3 us"
+  MPS_SPACING=${MPS_SPACING:-0.25}; MPS_END=${MPS_END:-3 us}; TAYLOR_ACROSS=${TAYLOR_ACROSS:-4}
 else
   PD_N=${PD_N:-81}; PD_GPU_STEPS=${PD_GPU_STEPS:-500}; PD_CPU_STEPS=${PD_CPU_STEPS:-20}
-  MPS_SPACING=${MPS_SPACING:-0.125}; MPS_END="30 us"
+  MPS_SPACING=${MPS_SPACING:-0.125}; MPS_END=${MPS_END:-30 us}; TAYLOR_ACROSS=${TAYLOR_ACROSS:-32}
 fi
 GPU_BACKEND=cuda
 [ "$DRY" = 1 ] && GPU_BACKEND=cpu  # the rehearsal runs the "GPU" legs on the CPU to test the plumbing
 
-finish() {
-  step "results"
-  "$PYTHON" - "$RESULTS" "$OUT" <<'PY'
-import json, sys
-res = {}
+# results.txt -> results.json (flat key: value, plus "skipped": {check: reason}), written to a
+# temporary name and moved so a cut-off never leaves half a file; then the archive, repacked.
+publish() {
+  "$PYTHON" - "$RESULTS" "$OUT/results.json" <<'PY'
+import json, os, sys
+res, skipped = {}, {}
 for line in open(sys.argv[1]):
-    if "=" in line:
-        k, v = line.rstrip("\n").split("=", 1)
-        try: v = float(v) if ("." in v or "e" in v.lower()) else int(v)
-        except ValueError: pass
-        res[k] = v
-json.dump(res, open(sys.argv[2] + "/results.json", "w"), indent=1, sort_keys=True)
-def g(k, f="{}"):
-    return f.format(res[k]) if k in res else "-"
-rows = [
-  "# device-check results" + (" (DRY: no GPU runs)" if res.get("dry") == 1 else ""),
-  "", f"device: {g('device')}; binaries: {g('binaries')}; elapsed {g('elapsed_s')} s", "",
-  "| check | result |", "|---|---|",
-  f"| test_mps_cuda | {g('test_mps_cuda')} |", f"| test_mps_solid_cuda | {g('test_mps_solid_cuda')} |",
-  f"| test_solver_cuda | {g('test_solver_cuda')} |", f"| test_atlas_backends | {g('test_atlas_backends')} |",
-  f"| atlas GPU rows (wave speed bar, Kalthoff-Winkler; lattice, m = 3) | {g('atlas_rows')} rows in atlas_gpu.csv, rc {g('atlas_rc')} |",
-  f"| compute-sanitizer memcheck (MPS) | {g('sanitizer_mps')} |",
-  f"| MPS harmonics history GPU vs CPU (max rel. diff) | {g('mps_history_max_rel_diff', '{:.3e}')} |",
-  "", "| run | particles | steps | loop wall (s) | rate |", "|---|---|---|---|---|",
-]
-for leg in ("gpu", "cpu"):
-    k = f"mps_{leg}"
-    rows.append(f"| MPS harmonics {g('mps_spacing_mm')} mm, {leg} ({g(k + '_backend')}) | {g(k + '_particles')} | "
-                f"{g(k + '_steps')} | {g(k + '_loop_s')} | {g(k + '_particle_steps_per_s', '{:.3g}')} particle-steps/s |")
-rows.append(f"| MPS Taylor bar {g('taylor_across')} across, gpu ({g('taylor_backend')}) | {g('taylor_particles')} | "
-            f"{g('taylor_steps')} (max {g('taylor_max_substeps')} substeps) | {g('taylor_loop_s')} | "
-            f"{g('taylor_particle_steps_per_s', '{:.3g}')} particle-steps/s; length {g('taylor_length_mm', '{:.2f}')} mm, "
-            f"face radius {g('taylor_radius_mm', '{:.2f}')} mm |")
-for model in ("pmb", "lps", "correspondence", "pmb32", "lps32"):
-    for leg in ("gpu", "cpu"):
-        k = f"pd_{model}_{leg}"
-        rows.append(f"| PD {model} lattice {g('pd_n')}^3, {leg} ({g(k + '_backend')}, {g(k + '_threads')} threads) | "
-                    f"{g(k + '_particles')} | {g(k + '_steps')} | {g(k + '_wall_s')} | {g(k + '_bond_updates_per_s', '{:.3g}')} bond-updates/s |")
-open(sys.argv[2] + "/summary.md", "w").write("\n".join(rows) + "\n")
-print("\n".join(rows))
+    if "=" not in line:
+        continue
+    k, v = line.rstrip("\n").split("=", 1)
+    try: v = float(v) if ("." in v or "e" in v.lower()) else int(v)
+    except ValueError: pass
+    res[k] = v
+    if k.startswith("skipped_"):
+        skipped[k[len("skipped_"):]] = v
+res["skipped"] = skipped
+json.dump(res, open(sys.argv[2] + ".tmp", "w"), indent=1, sort_keys=True)
+os.replace(sys.argv[2] + ".tmp", sys.argv[2])
 PY
-  # Logs, decks, summaries and histories; no results.h5 (tens of MB at 0.125 mm, over the 16 MB a file may bring back).
-  tar -czf "$OUT/runs.tar.gz" --exclude='*.h5' -C "$WORK" . 2>/dev/null
+  # Logs, decks, summaries, histories, gtest XML; no results.h5 (tens of MB at 0.125 mm).
+  tar -czf "$OUT/results.tar.gz.tmp" --exclude='*.h5' -C "$WORK" . 2>/dev/null && mv "$OUT/results.tar.gz.tmp" "$OUT/results.tar.gz"
+}
+FINISHED=0
+finish() {
+  [ "$FINISHED" = 1 ] && return
+  FINISHED=1
+  result elapsed_s $(($(date +%s) - START))
+  step "results (elapsed $(($(date +%s) - START)) s)"
+  {
+    echo
+    echo "elapsed: $(($(date +%s) - START)) s of a $BUDGET s check budget"
+    echo
+    echo "skipped: $(grep '^skipped_' "$RESULTS" | sed 's/^skipped_//; s/=/ (/; s/$/)/' | paste -sd ';' - | sed 's/;/; /g')"
+  } >>"$OUT/summary.md"
+  publish
+  cat "$OUT/summary.md"
+  ls -l "$OUT"
   rm -rf "$WORK"
 }
-trap 'result elapsed_s $(($(date +%s) - START)); finish' EXIT
+trap finish EXIT
+trap 'echo "signal: stopping, packing what was measured"; exit 143' TERM INT HUP
 result dry "$DRY"
+result budget_s "$BUDGET"
+{
+  echo "# device-check results$([ "$DRY" = 1 ] && echo " (DRY: no GPU; the GPU legs ran on the CPU)")"
+  echo
+} >"$OUT/summary.md"
 
 step "machine"
 uname -a; grep PRETTY_NAME /etc/os-release; echo "cores: $THREADS"
@@ -194,13 +207,62 @@ fi
 echo "binaries: $BIN (library mode: $MODE)"
 DEVICE=$(command -v nvidia-smi >/dev/null && nvidia-smi --query-gpu=name --format=csv,noheader | head -1)
 result device "${DEVICE:-none}"
+HAVE_GPU=0
+[ -n "$DEVICE" ] && [ "$DEVICE" != none ] && HAVE_GPU=1
+SANITIZER_EXE=$(command -v compute-sanitizer || ls /usr/local/cuda/bin/compute-sanitizer 2>/dev/null)
+# The CLI tests (test_mps_cuda, test_atlas_backends) start breccia-solve and breccia-atlas: the
+# build's paths compiled into them do not exist here, so they take the kit's (with the loader
+# in front where the kit's glibc is used; LD_LIBRARY_PATH reaches them through the environment).
+export BRECCIA_SOLVE_EXE="${LOADP[*]:+${LOADP[*]} }$BIN/breccia-solve"
+export BRECCIA_ATLAS_EXE="${LOADP[*]:+${LOADP[*]} }$BIN/breccia-atlas"
+{
+  echo "device: ${DEVICE:-none}; binaries: $MODE ($BIN); $THREADS cores; $(cat "$KIT/MANIFEST" 2>/dev/null | head -2 | paste -sd ';' -)"
+  echo
+  echo "| check | status | s | results |"
+  echo "|---|---|---|---|"
+} >>"$OUT/summary.md"
 
-# gtest: PASSED/FAILED/SKIPPED counts into the results, the XML report into $OUT.
-run_tests() {  # run_tests NAME TIMEOUT [gtest args]
-  local name=$1 limit=$2; shift 2
-  step "$name"
-  BRECCIA_CUDA_SYNC=1 timeout "$(limit "$limit")" "${ENVP[@]}" "${LOADP[@]}" "$BIN/$name" --gtest_output=xml:"$OUT/$name.xml" "$@" \
-    >"$WORK/$name.log" 2>&1
+# check GROUP NAME CAP FUNCTION [ARGS]: FUNCTION runs with T, its seconds: up to the sum of the
+# caps so far (CAP 0: only the time the others left, at least 20 s), never past the budget.
+CHECK_T0=$(date +%s)
+PLANNED=0
+wanted() { [ -z "${ONLY:-}" ] || [[ ",$ONLY," == *",$1,"* ]]; }
+skip() { result "skipped_$CHECK" "$1"; echo "skipped: $CHECK ($1)"; SKIPPED=1; }
+check() {
+  local group=$1 name=$2 cap=$3; shift 3
+  CHECK=$name SKIPPED=0
+  PLANNED=$((PLANNED + cap))
+  local now=$(($(date +%s) - CHECK_T0)) deadline=$((PLANNED < BUDGET ? PLANNED : BUDGET)) least=5
+  [ "$cap" = 0 ] && deadline=$BUDGET least=20
+  T=$((deadline - now))
+  if ! wanted "$group"; then
+    skip "not in ONLY=$ONLY"
+  elif [ "$T" -lt "$least" ]; then
+    skip "budget spent: $now of $BUDGET s used"
+  fi
+  local status took=0 mark
+  mark=$(wc -l <"$RESULTS")
+  if [ "$SKIPPED" = 0 ]; then
+    step "$name (up to $T s)"
+    local t0=$(date +%s)
+    "$@"
+    local rc=$?
+    took=$(($(date +%s) - t0))
+    result "${name}_s" "$took"
+    status="rc $rc"
+    [ "$rc" = 124 ] && status="cut off at $T s" && result "${name}_cut_off_s" "$T"
+  fi
+  [ "$SKIPPED" = 1 ] && status=skipped
+  # The row: what this check added to the results (its skip reason included).
+  echo "| $name | $status | $took | $(tail -n +$((mark + 1)) "$RESULTS" | grep -v "^${name}_s=" | paste -sd ';' - | sed 's/;/; /g') |" >>"$OUT/summary.md"
+  publish
+}
+run_bin_t() { timeout "$T" "${ENVP[@]}" "${LOADP[@]}" "$@"; }
+
+# gtest: PASSED/FAILED/SKIPPED counts into the results, the XML report into the archive.
+run_tests() {  # run_tests NAME [gtest args]
+  local name=$1; shift
+  BRECCIA_CUDA_SYNC=1 run_bin_t "$BIN/$name" --gtest_output=xml:"$WORK/$name.xml" "$@" >"$WORK/$name.log" 2>&1
   local rc=$?
   grep -E "^\[ +(OK|FAILED|SKIPPED) +\]|\[(mps )?cuda\]|Failure|error" "$WORK/$name.log" | head -80
   local passed failed skipped
@@ -208,29 +270,60 @@ run_tests() {  # run_tests NAME TIMEOUT [gtest args]
   skipped=$(grep -c "^\[  SKIPPED \] [A-Za-z0-9_]*\.[A-Za-z0-9_]* (" "$WORK/$name.log")
   result "$name" "rc $rc: $passed passed, $failed failed, $skipped skipped"
   echo "$name: rc $rc: $passed passed, $failed failed, $skipped skipped"
+  return $rc
 }
-wanted() { [ -z "${ONLY:-}" ] || [[ ",$ONLY," == *",$1,"* ]]; }
-if wanted tests; then
-  run_tests test_mps_cuda 180
-  in_budget test_mps_solid_cuda && run_tests test_mps_solid_cuda 150
-  in_budget test_solver_cuda && run_tests test_solver_cuda 240
-  in_budget test_atlas_backends && run_tests test_atlas_backends 60
-fi
+# A GPU leg needs a GPU, except in the rehearsal (which runs it on the CPU).
+gpu_leg_possible() { [ "$1" != gpu ] || [ "$DRY" = 1 ] || [ "$HAVE_GPU" = 1 ] || { skip "no GPU"; false; }; }
 
-# MPS: the harmonics case at one spacing, GPU then CPU on every core; histories compared.
-step "MPS harmonics at $MPS_SPACING mm"
+# PD: bond-updates/s on a cubic lattice (the bench.sh case, larger). MODEL: pmb, lps,
+# correspondence, or pmb32/lps32 (model.precision float32, the GPU's float path).
+PD_L=$(awk -v n="$PD_N" 'BEGIN{printf "%.6g", n*0.0005}')
+result pd_n "$PD_N"
+pd_leg() {  # pd_leg MODEL gpu|cpu
+  local model=$1 leg=$2 backend=$GPU_BACKEND steps=$PD_GPU_STEPS model_line
+  gpu_leg_possible "$leg" || return 0
+  [ "$leg" = cpu ] && backend=cpu steps=$PD_CPU_STEPS
+  case $model in
+    correspondence) model_line="{type: correspondence, horizon_factor: 3.015, stabilisation: {type: penalty, coefficient: 1}}" ;;
+    *32) model_line="{type: ${model%32}, horizon_factor: 3.015, precision: float32}" ;;
+    *) model_line="{type: $model, horizon_factor: 3.015}" ;;
+  esac
+  local k="pd_${model}_$leg" dir="$WORK/pd_${model}_$leg"
+  cat >"$WORK/$k.yaml" <<YAML
+name: device-bench-$model
+specimen: {lattice: {dimension: 3, box: [0, 0, 0, $PD_L, $PD_L, $PD_L], spacing: 0.0005}}
+model: $model_line
+materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, fracture_energy: 1e6}]
+initial: [{type: radial_velocity, center: [0, 0, 0], strain_rate: 10}]
+time: {steps: $steps}
+output: {every: 1000000, history_every: 1000000, results: false}
+YAML
+  run_bin_t "$BIN/breccia-solve" "$WORK/$k.yaml" -o "$dir" --backend "$backend" --threads "$THREADS" --quiet >"$WORK/$k.log" 2>&1
+  local rc=$?
+  tail -2 "$WORK/$k.log"
+  [ -f "$dir/summary.json" ] && "$PYTHON" - "$dir/summary.json" "$k" >>"$RESULTS" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1])); k = sys.argv[2]
+for f in ("backend", "threads", "particles", "setup_wall_s", "wall_s", "bond_updates_per_s"):
+    print(f"{k}_{f}={s[f]}")
+print(f"{k}_steps={s['steps_this_run']}")
+PY
+  return $rc
+}
+
+# MPS: the harmonics case at MPS_SPACING, GPU then CPU on every core; histories compared.
 sed -e "s/spacing: 0.25 mm/spacing: $MPS_SPACING mm/" -e "s/time: {end: 30 us/time: {end: $MPS_END/" \
   "$KIT/cases/mps-harmonics.yaml" >"$WORK/harmonics.yaml" 2>/dev/null ||
   sed -e "s/spacing: 0.25 mm/spacing: $MPS_SPACING mm/" -e "s/time: {end: 30 us/time: {end: $MPS_END/" \
     "$ROOT/cases/mps-harmonics/case.yaml" >"$WORK/harmonics.yaml"
 result mps_spacing_mm "$MPS_SPACING"
-mps_leg() {  # mps_leg gpu|cpu BACKEND
-  local leg=$1 backend=$2 dir="$WORK/mps_$1"
-  timeout "$(limit 240)" "${ENVP[@]}" "${LOADP[@]}" "$BIN/breccia-solve" "$WORK/harmonics.yaml" -o "$dir" --backend "$backend" \
-    --threads "$THREADS" >"$WORK/mps_$leg.log" 2>&1
+mps_leg() {  # mps_leg gpu|cpu
+  local leg=$1 backend=$GPU_BACKEND dir="$WORK/mps_$1"
+  gpu_leg_possible "$leg" || return 0
+  [ "$leg" = cpu ] && backend=cpu
+  run_bin_t "$BIN/breccia-solve" "$WORK/harmonics.yaml" -o "$dir" --backend "$backend" --threads "$THREADS" >"$WORK/mps_$leg.log" 2>&1
   local rc=$?
-  grep -E "^mps:|error|warning" "$WORK/mps_$leg.log"
-  result "mps_${leg}_rc" "$rc"
+  grep -E "^mps:|error|warning" "$WORK/mps_$leg.log" | tail -4
   [ -f "$dir/summary.json" ] && "$PYTHON" - "$dir/summary.json" "mps_$leg" >>"$RESULTS" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1])); k = sys.argv[2]
@@ -239,11 +332,8 @@ for f in ("particles", "steps", "wall_time_s", "particle_steps_per_s", "max_slip
 print(f"{k}_loop_s={s['step_loop_s']}")
 print(f"{k}_backend={s.get('backend', '?')}")
 PY
-}
-wanted mps && in_budget mps_gpu && mps_leg gpu "$GPU_BACKEND"
-wanted mps && in_budget mps_cpu && mps_leg cpu cpu
-if [ -f "$WORK/mps_gpu/history.csv" ] && [ -f "$WORK/mps_cpu/history.csv" ]; then
-  "$PYTHON" - "$WORK/mps_gpu/history.csv" "$WORK/mps_cpu/history.csv" >>"$RESULTS" <<'PY'
+  [ "$leg" = cpu ] && [ -f "$WORK/mps_gpu/history.csv" ] && [ -f "$WORK/mps_cpu/history.csv" ] &&
+    "$PYTHON" - "$WORK/mps_gpu/history.csv" "$WORK/mps_cpu/history.csv" >>"$RESULTS" <<'PY'
 import sys
 import numpy as np
 g = np.loadtxt(sys.argv[1], delimiter=",", skiprows=1, ndmin=2)
@@ -254,27 +344,24 @@ else:
     scale = np.maximum(np.abs(c).max(axis=0), 1e-300)  # per column: probes pass through zero
     print(f"mps_history_max_rel_diff={float((np.abs(g - c) / scale).max()):.6e}")
 PY
-  grep mps_history "$RESULTS"
-fi
+  return $rc
+}
 
-# MPS stress formulation: the Taylor bar at TAYLOR_ACROSS particles across (default 32: about
-# 130k particles, finer than any CPU run), GPU only; length and face radius at 80 us as
+# MPS stress formulation: the Taylor bar at TAYLOR_ACROSS particles across (32: about 130k
+# particles, finer than any CPU run), GPU only; length and face radius at the end as
 # cases/mps-taylor-bar/report.py measures them (where h5py is present).
-TAYLOR_ACROSS=${TAYLOR_ACROSS:-32}
-[ "$DRY" = 1 ] && TAYLOR_ACROSS=4
-if wanted taylor && in_budget taylor; then
-  step "MPS Taylor bar, $TAYLOR_ACROSS across"
-  TAYLOR_CASE="$KIT/cases/mps-taylor-bar.yaml"
-  [ -f "$TAYLOR_CASE" ] || TAYLOR_CASE="$ROOT/cases/mps-taylor-bar/case.yaml"
-  read -r H < <("$PYTHON" -c "print(repr(6.4e-3 / $TAYLOR_ACROSS))")
-  sed -e "s/spacing: 0.8 mm .*/spacing: $H/" -e "s/every: 100000 .*/every: 1000000/" -e "s/end: 80 us/end: ${TAYLOR_END:-80 us}/" \
-    "$TAYLOR_CASE" >"$WORK/taylor.yaml"
+taylor() {
+  gpu_leg_possible gpu || return 0
+  local case_file="$KIT/cases/mps-taylor-bar.yaml" h
+  [ -f "$case_file" ] || case_file="$ROOT/cases/mps-taylor-bar/case.yaml"
+  read -r h < <("$PYTHON" -c "print(repr(6.4e-3 / $TAYLOR_ACROSS))")
+  sed -e "s/spacing: 0.8 mm .*/spacing: $h/" -e "s/every: 100000 .*/every: 1000000/" -e "s/end: 80 us/end: ${TAYLOR_END:-80 us}/" \
+    "$case_file" >"$WORK/taylor.yaml"
   result taylor_across "$TAYLOR_ACROSS"
-  timeout "$(limit 200)" "${ENVP[@]}" "${LOADP[@]}" "$BIN/breccia-solve" "$WORK/taylor.yaml" -o "$WORK/taylor" \
-    --backend "$GPU_BACKEND" --threads "$THREADS" >"$WORK/taylor.log" 2>&1
-  result taylor_rc "$?"
+  run_bin_t "$BIN/breccia-solve" "$WORK/taylor.yaml" -o "$WORK/taylor" --backend "$GPU_BACKEND" --threads "$THREADS" >"$WORK/taylor.log" 2>&1
+  local rc=$?
   grep -E "^mps|error" "$WORK/taylor.log" | tail -4
-  [ -f "$WORK/taylor/summary.json" ] && "$PYTHON" - "$WORK/taylor" "$H" >>"$RESULTS" <<'PY'
+  [ -f "$WORK/taylor/summary.json" ] && "$PYTHON" - "$WORK/taylor" "$h" >>"$RESULTS" <<'PY'
 import json, sys
 d, h = sys.argv[1], float(sys.argv[2])
 s = json.load(open(d + "/summary.json"))
@@ -291,71 +378,57 @@ try:
 except Exception as e:  # no h5py here: the wall time still counts
     print(f"taylor_shape=not measured ({type(e).__name__})")
 PY
-  grep taylor_ "$RESULTS"
-fi
+  return $rc
+}
 
-# PD: bond-updates/s of PMB and LPS on a cubic lattice (the bench.sh case, larger), GPU vs CPU.
-L=$(awk -v n="$PD_N" 'BEGIN{printf "%.6g", n*0.0005}')
-result pd_n "$PD_N"
-# pmb32 / lps32: the same with model.precision float32 (the GPU's float path, docs/cuda.md).
-for model in pmb lps correspondence pmb32 lps32; do
-  wanted pd || break
-  step "PD $model, lattice $PD_N^3"
-  case $model in
-    correspondence) MODEL_LINE="{type: correspondence, horizon_factor: 3.015, stabilisation: {type: penalty, coefficient: 1}}" ;;
-    *32) MODEL_LINE="{type: ${model%32}, horizon_factor: 3.015, precision: float32}" ;;
-    *) MODEL_LINE="{type: $model, horizon_factor: 3.015}" ;;
-  esac
-  for leg in gpu cpu; do
-    in_budget "pd_${model}_$leg" || continue
-    backend=$GPU_BACKEND steps=$PD_GPU_STEPS
-    [ $leg = cpu ] && backend=cpu steps=$PD_CPU_STEPS
-    cat >"$WORK/pd_$model.yaml" <<YAML
-name: device-bench-$model
-specimen: {lattice: {dimension: 3, box: [0, 0, 0, $L, $L, $L], spacing: 0.0005}}
-model: $MODEL_LINE
-materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, fracture_energy: 1e6}]
-initial: [{type: radial_velocity, center: [0, 0, 0], strain_rate: 10}]
-time: {steps: $steps}
-output: {every: 1000000, history_every: 1000000, results: false}
-YAML
-    dir="$WORK/pd_${model}_$leg"
-    timeout "$(limit 200)" "${ENVP[@]}" "${LOADP[@]}" "$BIN/breccia-solve" "$WORK/pd_$model.yaml" -o "$dir" --backend "$backend" \
-      --threads "$THREADS" --quiet >"$WORK/pd_${model}_$leg.log" 2>&1
-    result "pd_${model}_${leg}_rc" "$?"
-    tail -2 "$WORK/pd_${model}_$leg.log"
-    [ -f "$dir/summary.json" ] && "$PYTHON" - "$dir/summary.json" "pd_${model}_$leg" >>"$RESULTS" <<'PY'
-import json, sys
-s = json.load(open(sys.argv[1])); k = sys.argv[2]
-for f in ("backend", "threads", "particles", "mean_family_size", "setup_wall_s", "wall_s", "bond_updates_per_s"):
-    print(f"{k}_{f}={s[f]}")
-print(f"{k}_steps={s['steps_this_run']}")
-PY
-  done
-done
+# compute-sanitizer memcheck (out-of-bounds and misaligned accesses, device-side errors) of
+# agreement tests on small cases: PD on the 800-particle plates and the 567-particle LPS block
+# (crack growth, pressure, indenter, the load kernels), MPS on its crack cases.
+sanitize() {  # sanitize NAME EXE FILTER
+  local name=$1 exe=$2 filter=$3
+  [ "${SANITIZER:-1}" = 1 ] || { skip "SANITIZER=0"; return 0; }
+  [ "$DRY" = 1 ] && { skip "no GPU (rehearsal)"; return 0; }
+  [ "$HAVE_GPU" = 1 ] || { skip "no GPU"; return 0; }
+  [ -n "$SANITIZER_EXE" ] || { skip "compute-sanitizer absent"; return 0; }
+  timeout "$T" "${ENVP[@]}" "$SANITIZER_EXE" --tool memcheck --error-exitcode 9 "${LOADP[@]}" "$BIN/$exe" \
+    --gtest_filter="$filter" >"$WORK/$name.log" 2>&1
+  local rc=$?
+  tail -5 "$WORK/$name.log"
+  result "$name" "rc $rc: $(grep -c "^\[       OK \]" "$WORK/$name.log") tests passed, $(grep -c "Invalid\|Race\|Misaligned\|Error:" "$WORK/$name.log") reports"
+  return $rc
+}
 
-# The atlas's time-stepping problems on both backends (breccia-atlas --backends cpu,cuda), lattice,
-# m = 3: rows for docs/atlas/atlas.csv (append them with --append on the CPU machine's copy).
-if wanted atlas && in_budget atlas; then
-  step "atlas rows, CPU and GPU"
-  ATLAS_BACKENDS=cpu,cuda
-  [ "$DRY" = 1 ] && ATLAS_BACKENDS=cpu
-  timeout "$(limit 200)" "${ENVP[@]}" "${LOADP[@]}" "$BIN/breccia-atlas" --problems wave_speed_bar,kalthoff_winkler \
-    --kinds lattice --m 3 --no-stability --backends "$ATLAS_BACKENDS" --threads "$THREADS" $([ "$DRY" = 1 ] && echo --quick) \
-    --work "$WORK/atlas" --csv "$OUT/atlas_gpu.csv" >"$WORK/atlas.log" 2>&1
-  result atlas_rc "$?"
-  result atlas_rows "$(($(wc -l <"$OUT/atlas_gpu.csv" 2>/dev/null || echo 1) - 1))"
+# The atlas's time-stepping problems on both backends (lattice, m = 3): rows for
+# docs/atlas/atlas.csv (append them with --append on the CPU machine's copy).
+atlas_rows() {
+  gpu_leg_possible gpu || return 0
+  local backends=cpu,cuda
+  [ "$DRY" = 1 ] && backends=cpu
+  run_bin_t "$BIN/breccia-atlas" --problems wave_speed_bar,kalthoff_winkler --kinds lattice --m 3 --no-stability \
+    --backends "$backends" --threads "$THREADS" $([ "$DRY" = 1 ] && echo --quick) --work "$WORK/atlas" --csv "$WORK/atlas_gpu.csv" >"$WORK/atlas.log" 2>&1
+  local rc=$?
+  result atlas_rows "$(($(wc -l <"$WORK/atlas_gpu.csv" 2>/dev/null || echo 1) - 1))"
   tail -5 "$WORK/atlas.log"
-fi
+  return $rc
+}
 
-# Last, as it is the slowest and optional: out-of-bounds and race checks of the MPS kernels.
-if [ "${SANITIZER:-1}" = 1 ] && [ "$DRY" != 1 ] && command -v compute-sanitizer >/dev/null && in_budget sanitizer; then
-  step "compute-sanitizer memcheck (test_mps_cuda, crack cases)"
-  timeout "$(limit 150)" "${ENVP[@]}" compute-sanitizer --tool memcheck --error-exitcode 9 "${LOADP[@]}" "$BIN/test_mps_cuda" \
-    --gtest_filter='MpsCuda.Sliding*:MpsCuda.Navier*Verlet*' >"$WORK/sanitizer.log" 2>&1
-  rc=$?
-  tail -5 "$WORK/sanitizer.log"
-  result sanitizer_mps "rc $rc ($(grep -c "Invalid\|Race" "$WORK/sanitizer.log") reports)"
-else
-  result sanitizer_mps "not run"
-fi
+# Most important first; the caps sum to 420 s (the default BUDGET_S).
+check tests test_solver_cuda 60 run_tests test_solver_cuda
+check tests test_mps_cuda 40 run_tests test_mps_cuda
+check tests test_mps_solid_cuda 30 run_tests test_mps_solid_cuda
+check tests test_atlas_backends 15 run_tests test_atlas_backends
+check pd pd_pmb_gpu 25 pd_leg pmb gpu
+check pd pd_pmb_cpu 25 pd_leg pmb cpu
+check pd pd_lps_gpu 25 pd_leg lps gpu
+check pd pd_lps_cpu 25 pd_leg lps cpu
+check float32 pd_pmb32_gpu 15 pd_leg pmb32 gpu
+check float32 pd_lps32_gpu 15 pd_leg lps32 gpu
+check mps mps_gpu 20 mps_leg gpu
+check mps mps_cpu 35 mps_leg cpu
+check taylor taylor 35 taylor
+check sanitizer sanitizer_pd 35 sanitize sanitizer_pd test_solver_cuda \
+  'CudaBackend.PmbCrackBreaksTheSameBondsAsOnTheCpu:CudaBackend.LpsBlockWithPressureAndIndenterMatchesTheCpuOver1000Steps:LoadKernels.*'
+check sanitizer sanitizer_mps 20 sanitize sanitizer_mps test_mps_cuda 'MpsCuda.Sliding*:MpsCuda.Navier*Verlet*'
+check rest pd_correspondence_gpu 0 pd_leg correspondence gpu
+check rest pd_correspondence_cpu 0 pd_leg correspondence cpu
+check rest atlas_rows 0 atlas_rows

@@ -133,7 +133,9 @@ finish() {
     echo
     echo "elapsed: $(($(date +%s) - START)) s of a $BUDGET s check budget"
     echo
-    echo "skipped: $(grep '^skipped_' "$RESULTS" | sed 's/^skipped_//; s/=/ (/; s/$/)/' | paste -sd ';' - | sed 's/;/; /g')"
+    local skipped
+    skipped=$(grep '^skipped_' "$RESULTS" | sed 's/^skipped_//; s/=/ (/; s/$/)/' | paste -sd ';' - | sed 's/;/; /g')
+    echo "skipped: ${skipped:-none}"
   } >>"$OUT/summary.md"
   publish
   cat "$OUT/summary.md"
@@ -141,7 +143,13 @@ finish() {
   rm -rf "$WORK"
 }
 trap finish EXIT
-trap 'echo "signal: stopping, packing what was measured"; exit 143' TERM INT HUP
+# A signal may have stopped tee too (a killer of the process group): the log is then appended
+# to directly, and a write to the dead pipe must not end the packing.
+trap '' PIPE
+trap 'trap "" TERM INT HUP; exec >>"$OUT/device-check.log" 2>&1; echo "signal: stopping the running check, packing what was measured"
+      [ -n "${CHILD:-}" ] && kill -TERM "$CHILD" 2>/dev/null
+      [ -n "${CHECK:-}" ] && result stopped_during "$CHECK" && echo "| $CHECK | stopped by a signal | | |" >>"$OUT/summary.md"
+      exit 143' TERM INT HUP
 result dry "$DRY"
 result budget_s "$BUDGET"
 {
@@ -216,7 +224,7 @@ SANITIZER_EXE=$(command -v compute-sanitizer || ls /usr/local/cuda/bin/compute-s
 export BRECCIA_SOLVE_EXE="${LOADP[*]:+${LOADP[*]} }$BIN/breccia-solve"
 export BRECCIA_ATLAS_EXE="${LOADP[*]:+${LOADP[*]} }$BIN/breccia-atlas"
 {
-  echo "device: ${DEVICE:-none}; binaries: $MODE ($BIN); $THREADS cores; $(cat "$KIT/MANIFEST" 2>/dev/null | head -2 | paste -sd ';' -)"
+  echo "device: ${DEVICE:-none}; binaries: $MODE ($BIN); $THREADS cores; $(cat "$KIT/MANIFEST" 2>/dev/null | head -2 | paste -sd ';' - | sed 's/;/; /')"
   echo
   echo "| check | status | s | results |"
   echo "|---|---|---|---|"
@@ -224,7 +232,7 @@ export BRECCIA_ATLAS_EXE="${LOADP[*]:+${LOADP[*]} }$BIN/breccia-atlas"
 
 # check GROUP NAME CAP FUNCTION [ARGS]: FUNCTION runs with T, its seconds: up to the sum of the
 # caps so far (CAP 0: only the time the others left, at least 20 s), never past the budget.
-CHECK_T0=$(date +%s)
+CHECK_T0=$(date +%s) CHECK=
 PLANNED=0
 wanted() { [ -z "${ONLY:-}" ] || [[ ",$ONLY," == *",$1,"* ]]; }
 skip() { result "skipped_$CHECK" "$1"; echo "skipped: $CHECK ($1)"; SKIPPED=1; }
@@ -235,13 +243,13 @@ check() {
   local now=$(($(date +%s) - CHECK_T0)) deadline=$((PLANNED < BUDGET ? PLANNED : BUDGET)) least=5
   [ "$cap" = 0 ] && deadline=$BUDGET least=20
   T=$((deadline - now))
+  local status took=0 mark
+  mark=$(wc -l <"$RESULTS")
   if ! wanted "$group"; then
     skip "not in ONLY=$ONLY"
   elif [ "$T" -lt "$least" ]; then
     skip "budget spent: $now of $BUDGET s used"
   fi
-  local status took=0 mark
-  mark=$(wc -l <"$RESULTS")
   if [ "$SKIPPED" = 0 ]; then
     step "$name (up to $T s)"
     local t0=$(date +%s)
@@ -255,14 +263,19 @@ check() {
   [ "$SKIPPED" = 1 ] && status=skipped
   # The row: what this check added to the results (its skip reason included).
   echo "| $name | $status | $took | $(tail -n +$((mark + 1)) "$RESULTS" | grep -v "^${name}_s=" | paste -sd ';' - | sed 's/;/; /g') |" >>"$OUT/summary.md"
+  CHECK=
   publish
 }
-run_bin_t() { timeout "$T" "${ENVP[@]}" "${LOADP[@]}" "$@"; }
+# A check's command runs in the background and the script waits for it: bash handles a TERM
+# only between commands, and wait is one it interrupts, so a stopped run packs at once.
+CHILD=
+timed() { timeout "$T" "$@" & CHILD=$!; wait "$CHILD"; local rc=$?; CHILD=; return $rc; }
+run_bin_t() { timed "${ENVP[@]}" "${LOADP[@]}" "$@"; }
 
 # gtest: PASSED/FAILED/SKIPPED counts into the results, the XML report into the archive.
 run_tests() {  # run_tests NAME [gtest args]
   local name=$1; shift
-  BRECCIA_CUDA_SYNC=1 run_bin_t "$BIN/$name" --gtest_output=xml:"$WORK/$name.xml" "$@" >"$WORK/$name.log" 2>&1
+  timed env BRECCIA_CUDA_SYNC=1 "${ENVP[@]}" "${LOADP[@]}" "$BIN/$name" --gtest_output=xml:"$WORK/$name.xml" "$@" >"$WORK/$name.log" 2>&1
   local rc=$?
   grep -E "^\[ +(OK|FAILED|SKIPPED) +\]|\[(mps )?cuda\]|Failure|error" "$WORK/$name.log" | head -80
   local passed failed skipped
@@ -390,7 +403,7 @@ sanitize() {  # sanitize NAME EXE FILTER
   [ "$DRY" = 1 ] && { skip "no GPU (rehearsal)"; return 0; }
   [ "$HAVE_GPU" = 1 ] || { skip "no GPU"; return 0; }
   [ -n "$SANITIZER_EXE" ] || { skip "compute-sanitizer absent"; return 0; }
-  timeout "$T" "${ENVP[@]}" "$SANITIZER_EXE" --tool memcheck --error-exitcode 9 "${LOADP[@]}" "$BIN/$exe" \
+  timed "${ENVP[@]}" "$SANITIZER_EXE" --tool memcheck --error-exitcode 9 "${LOADP[@]}" "$BIN/$exe" \
     --gtest_filter="$filter" >"$WORK/$name.log" 2>&1
   local rc=$?
   tail -5 "$WORK/$name.log"

@@ -49,7 +49,12 @@ if [ "${1:-}" = prepare ]; then
   # run points them at the kit's copies through BRECCIA_SOLVE_EXE and BRECCIA_ATLAS_EXE).
   EXES=(breccia-solve breccia-atlas test_solver_cuda test_mps_cuda test_mps_solid_cuda test_atlas_backends)
   nice -n 10 cmake --build "$BUILD" -j"${JOBS:-2}" --target "${EXES[@]}"
-  rm -rf "$KIT"
+  # The kit's files are staged in $STAGE and travel as one gzip archive (about 21 MB against
+  # 54 MB unpacked): the carry limit (64 MiB) counts the working tree (about 11 MB) as well.
+  STAGE="$BUILD/kit-files"
+  rm -rf "$KIT" "$STAGE"
+  mkdir -p "$KIT"
+  KIT_OUT=$KIT KIT=$STAGE
   mkdir -p "$KIT/bin" "$KIT/lib" "$KIT/runtime" "$KIT/glibc" "$KIT/cases"
   for exe in "${EXES[@]}"; do cp "$BUILD/bin/$exe" "$KIT/bin/"; done
   # Libraries by layer: lib/ (HDF5, yaml-cpp and what they load) always; runtime/ (the GCC
@@ -72,6 +77,9 @@ if [ "${1:-}" = prepare ]; then
     (cd "$KIT" && find . -type f ! -name MANIFEST | sort)
   } >"$KIT/MANIFEST"
   du -sh "$KIT"
+  tar -czf "$KIT_OUT/kit.tar.gz" -C "$KIT" .
+  cp "$KIT/MANIFEST" "$KIT_OUT/MANIFEST"
+  du -sh "$KIT_OUT"
   echo "kit ready: carry [\"build-device/kit\"] and run 'bash scripts/device-check.sh' on the device"
   exit 0
 fi
@@ -81,6 +89,12 @@ if [ "$DRY" = 1 ]; then OUT=${OUT:-/tmp/device-check-dry}; else OUT=${OUT:-$ROOT
 mkdir -p "$OUT"
 rm -f "$OUT/results.json" "$OUT/summary.md" "$OUT/results.tar.gz" "$OUT/device-check.log"
 WORK=$(mktemp -d /tmp/device-check.XXXXXX)
+# The carried kit is one archive (prepare above): unpacked outside WORK, which is packed back.
+KIT_FILES=
+if [ -f "$KIT/kit.tar.gz" ]; then
+  KIT_FILES=$(mktemp -d /tmp/device-kit.XXXXXX)
+  tar -xzf "$KIT/kit.tar.gz" -C "$KIT_FILES" && KIT=$KIT_FILES
+fi
 exec > >(tee -a "$OUT/device-check.log") 2>&1
 START=$(date +%s)
 BUDGET=${BUDGET_S:-420}
@@ -140,7 +154,7 @@ finish() {
   publish
   cat "$OUT/summary.md"
   ls -l "$OUT"
-  rm -rf "$WORK"
+  rm -rf "$WORK" ${KIT_FILES:+"$KIT_FILES"}
 }
 trap finish EXIT
 # A signal may have stopped tee too (a killer of the process group): the log is then appended

@@ -142,17 +142,20 @@ double largest_tridiagonal_eigenvalue(const std::vector<double>& alpha, const st
   return hi;
 }
 // What both stable-step estimates do to the system: K applied through the force kernel at a
-// displacement small enough to be linear, in double, with fracture off; everything a probe
+// displacement small enough to be linear, in double, with fracture off and without the
+// diagnostics (energy density, damage, max stretch: no probe reads them, and the force
+// kernels compute the same forces with or without them, bit for bit); everything a probe
 // changes is put back when it ends, and the force and energy fields recomputed at the real
 // displacement.
 class LinearForceProbe {
  public:
   LinearForceProbe(PdSystem& sys, const ForcePass& forces)
       : sys_(sys), forces_(forces), u_saved_(sys.u), state_saved_(sys.state), fracture_(sys.config.fracture),
-        dissipated_(sys.dissipated_energy), float32_(sys.f32.active) {
+        dissipated_(sys.dissipated_energy), float32_(sys.f32.active), diagnostics_(sys.diagnostics) {
     // Strains of 1e-9 are below float's resolution: the estimate is always made in double.
     sys.f32.active = false;
     sys.config.fracture = false;
+    sys.diagnostics = false;
     double length_scale = 0.0;
     for (size_t i = 0; i < sys.n; ++i) length_scale = std::max(length_scale, 2.0 * sys.half_cell[i]);
     amplitude = 1e-9 * length_scale;
@@ -165,6 +168,7 @@ class LinearForceProbe {
     sys_.config.fracture = fracture_;
     sys_.dissipated_energy = dissipated_;
     sys_.f32.active = float32_;
+    sys_.diagnostics = diagnostics_;
     // A distributed set-up's global system has handed its bonds to the rank's own system
     // (distributed_setup.hpp): the distributed pass fills its owned fields instead.
     if (forces_ && !sys_.distributed_rows.empty()) forces_(sys_);
@@ -186,6 +190,7 @@ class LinearForceProbe {
   const bool fracture_;
   const double dissipated_;
   const bool float32_;
+  const bool diagnostics_;
 };
 }  // namespace
 

@@ -644,6 +644,48 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   }
   // Correspondence shares LPS's bond data: weights w = omega beta, no modulus per bond, LPS critical stretch.
   const bool lps = c.model == PdModel::LPS || c.model == PdModel::Correspondence;
+  // Critical stretches (and softening onsets) of entry `out` = (i -> j) from the bond's
+  // fracture energy, Weibull per bond: the draw is a function of the pair (bond_uniform is
+  // symmetric in its ids) and the weaker material, so (j -> i)'s values are (i -> j)'s with
+  // own and dual swapped whenever both ends pick the same weaker material (a tie in fracture
+  // energy between two materials picks the entry's own end's).
+  auto weak_material = [&](int64_t i, int64_t j) {
+    return c.materials[s.material[i]].fracture_energy <= c.materials[s.material[j]].fracture_energy ? s.material[i]
+                                                                                                    : s.material[j];
+  };
+  auto strengths_shared = [&](int64_t i, int64_t j) { return weak_material(i, j) == weak_material(j, i); };
+  auto fill_strengths = [&](int64_t i, int64_t j, int64_t out) {
+    const int weak = weak_material(i, j);
+    const MaterialSpec& wm = c.materials[weak];
+    double G0 = wm.fracture_energy;
+    double strength_draw = wm.fracture_energy;  // the strength scales as this over the mean G0
+    if (G0 > 0 && wm.weibull_modulus > 0) {
+      const double U = bond_uniform(static_cast<uint64_t>(s.original_index[i]), static_cast<uint64_t>(s.original_index[j]),
+                                    static_cast<uint64_t>(wm.weibull_seed));
+      // The draw of G0 (mean G0); weibull.scales says what it scatters (both by default, the
+      // strength by the same ratio to the mean).
+      const double scale = G0 / std::tgamma(1.0 + 1.0 / wm.weibull_modulus);
+      const double drawn = scale * std::pow(-std::log(U), 1.0 / wm.weibull_modulus);
+      if (wm.weibull_scales != MaterialSpec::WeibullScales::FractureEnergy) strength_draw = drawn;
+      if (wm.weibull_scales != MaterialSpec::WeibullScales::TensileStrength) G0 = drawn;
+    }
+    auto s0 = [&](double delta) {
+      if (!c.fracture || G0 <= 0 || no_fail[i] || no_fail[j]) return FLT_MAX;
+      const double v = lps ? lps_critical_stretch(elastic[weak], c.influence, delta, G0)
+                           : pmb_critical_stretch(elastic[weak], c.influence, delta, G0);
+      return static_cast<float>(v);
+    };
+    s.s0_own[out] = s0(s.horizon[i]);
+    s.s0_dual[out] = s0(s.horizon[j]);
+    if (c.softening) {
+      // Onset stretch of the weaker material, scattered as weibull.scales says;
+      // s0 becomes the ultimate stretch in convert_to_softening.
+      const double strength = wm.fracture_energy > 0 ? wm.tensile_strength * strength_draw / wm.fracture_energy : 0.0;
+      s.s_onset[out] = strength > 0 ? static_cast<float>(onset_per_strength[weak] * strength) : FLT_MAX;
+    }
+  };
+  // A distributed set-up holds only its own rows (the reverse entry may be another rank's).
+  const bool copy_strengths = !dist_rows.active;
   // This process's rows (all on one process; equal entries each in a distributed run).
   const std::vector<int64_t> row_begin = share_rows(s.offsets);
   const int64_t rows_begin = row_begin[shares > 1 ? share.rank : 0], rows_end = row_begin[shares > 1 ? share.rank + 1 : 1];
@@ -674,37 +716,9 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       }
       if (beta_own <= 0) s.state[out] &= static_cast<uint8_t>(~kOwnIntact);
       if (beta_dual <= 0) s.state[out] &= static_cast<uint8_t>(~kDualIntact);
-      // Critical stretch per half-bond from the bond's fracture energy (Weibull per bond).
-      const int weak = c.materials[s.material[i]].fracture_energy <= c.materials[s.material[j]].fracture_energy
-                           ? s.material[i] : s.material[j];
-      const MaterialSpec& wm = c.materials[weak];
-      double G0 = wm.fracture_energy;
-      double strength_draw = wm.fracture_energy;  // the strength scales as this over the mean G0
-      if (G0 > 0 && wm.weibull_modulus > 0) {
-        const double U = bond_uniform(static_cast<uint64_t>(s.original_index[i]),
-                                      static_cast<uint64_t>(s.original_index[j]),
-                                      static_cast<uint64_t>(wm.weibull_seed));
-        // The draw of G0 (mean G0); weibull.scales says what it scatters (both by default, the
-        // strength by the same ratio to the mean).
-        const double scale = G0 / std::tgamma(1.0 + 1.0 / wm.weibull_modulus);
-        const double drawn = scale * std::pow(-std::log(U), 1.0 / wm.weibull_modulus);
-        if (wm.weibull_scales != MaterialSpec::WeibullScales::FractureEnergy) strength_draw = drawn;
-        if (wm.weibull_scales != MaterialSpec::WeibullScales::TensileStrength) G0 = drawn;
-      }
-      auto s0 = [&](double delta) {
-        if (!c.fracture || G0 <= 0 || no_fail[i] || no_fail[j]) return FLT_MAX;
-        const double v = lps ? lps_critical_stretch(elastic[weak], c.influence, delta, G0)
-                             : pmb_critical_stretch(elastic[weak], c.influence, delta, G0);
-        return static_cast<float>(v);
-      };
-      s.s0_own[out] = s0(s.horizon[i]);
-      s.s0_dual[out] = s0(s.horizon[j]);
-      if (c.softening) {
-        // Onset stretch of the weaker material, scattered as weibull.scales says;
-        // s0 becomes the ultimate stretch in convert_to_softening.
-        const double strength = wm.fracture_energy > 0 ? wm.tensile_strength * strength_draw / wm.fracture_energy : 0.0;
-        s.s_onset[out] = strength > 0 ? static_cast<float>(onset_per_strength[weak] * strength) : FLT_MAX;
-      }
+      // The strengths of a pair shared by both its entries are drawn at one (the entry of
+      // the lower row); the other's are copied below.
+      if (!copy_strengths || j > i || !strengths_shared(i, j)) fill_strengths(i, j, out);
       ++out;
     }
   }
@@ -716,6 +730,26 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     for (auto* a : {&s.s0_own, &s.s0_dual}) share.gather(a->data(), sizeof(float), entry_begin);
     share.gather(s.state.data(), sizeof(uint8_t), entry_begin);
     if (c.softening) share.gather(s.s_onset.data(), sizeof(float), entry_begin);
+  }
+  if (copy_strengths) {  // the other entry of each shared pair: its reverse's values, own and dual swapped
+#pragma omp parallel for schedule(dynamic, 256)
+    for (int64_t i = 0; i < static_cast<int64_t>(n); ++i)
+      for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
+        const int32_t j = s.neighbor[k];
+        if (j > i || !strengths_shared(i, j)) continue;
+        // Kept entries are symmetric (beta_own > 0 || beta_dual > 0 reads the same two counts
+        // from either end) and rows stay sorted, so the reverse entry is in j's row.
+        const auto row_end = s.neighbor.begin() + s.offsets[j + 1];
+        const auto it = std::lower_bound(s.neighbor.begin() + s.offsets[j], row_end, static_cast<int32_t>(i));
+        if (it == row_end || *it != i) {
+          fill_strengths(i, j, k);
+          continue;
+        }
+        const int64_t r = it - s.neighbor.begin();
+        s.s0_own[k] = s.s0_dual[r];
+        s.s0_dual[k] = s.s0_own[r];
+        if (c.softening) s.s_onset[k] = s.s_onset[r];
+      }
   }
   fam = Families{};
   samples_inside = {};

@@ -2,8 +2,11 @@
 // balance of forces and wave transmission through a 2:1 resolution change.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <vector>
 
 #include "breccia/common/particle_file.hpp"
 #include "helpers.hpp"
@@ -123,4 +126,89 @@ TEST(DualHorizon, WaveCrossesATwoToOneResolutionChangeWithLittleReflection) {
   // coarse horizon: NaN (failing) if the pulse carried no energy.
   const double reflected = breccia::atlas::reflected_pulse_energy(s, L / 2, 0.07, 0.012, cp);
   EXPECT_LT(reflected, 0.05) << "reflected energy fraction " << reflected;
+}
+
+namespace {
+std::string graded_weibull_case(const std::string& particles, const std::string& model) {
+  return "specimen: {particles: " + particles + "}\n"
+         "model: {type: " + model + ", planar: plane_strain, variable_horizon: true, horizon_factor: 3.015}\n"
+         "materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25, fracture_energy: 20,"
+         " weibull: {modulus: 3, seed: 5}}]\n"
+         "time: {steps: 1}\n";
+}
+}  // namespace
+
+// Passes without diagnostics (between output steps, the stable step's probe) skip the energy
+// density, damage and max stretch; the forces, breaks and released energy must be the
+// diagnostic pass's bit for bit (the stable step and the run depend on it). On the graded
+// strip (variable horizons: the general loop) and a lattice (one horizon: the PMB and LPS
+// symmetric loops), from one random displacement that breaks some bonds.
+TEST(DiagnosticsOff, ForcesBreaksAndReleasedEnergyEqualTheDiagnosticPassBitForBit) {
+  const std::string strip = graded_strip("graded_diagnostics", 0.02, 0.01, 0.5e-3);
+  for (const std::string model : {"pmb", "lps"})
+    for (const bool graded : {true, false}) {
+      const std::string deck =
+          graded ? graded_weibull_case(strip, model)
+                 : "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.004, 0.004], spacing: 0.5 mm}}\n"
+                   "model: {type: " + model + ", horizon_factor: 3.015}\n"
+                   "materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, fracture_energy: 2}]\n"
+                   "time: {steps: 1}\n";
+      PdSystem s = setup_system(parse_case_file(write_case("diagnostics_" + model + (graded ? "_graded" : "_lattice"), deck)));
+      ASSERT_EQ(s.symmetric_halves, !graded) << model;
+      uint64_t z = 99;
+      auto uniform = [&z] {  // splitmix64: a fixed field, any platform
+        z += 0x9E3779B97F4A7C15ull;
+        uint64_t x = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+        return double((x ^ (x >> 31)) >> 11) / 9007199254740992.0 - 0.5;
+      };
+      for (size_t k = 0; k < 3 * s.n; ++k) s.u[k] = (s.dimension == 2 && k % 3 == 2) ? 0.0 : 2e-6 * uniform();
+      const std::vector<uint8_t> state0 = s.state;
+      s.diagnostics = false;
+      cpu_compute_forces(s);
+      const std::vector<double> force_off = s.force, released_off = s.dissipated;
+      const std::vector<uint8_t> state_off = s.state;
+      s.state = state0;
+      s.diagnostics = true;
+      cpu_compute_forces(s);
+      long long broken = 0;
+      for (size_t k = 0; k < s.state.size(); ++k) broken += s.state[k] != state0[k];
+      EXPECT_GT(broken, 0) << model << ": the field should break some bonds";
+      EXPECT_TRUE(state_off == s.state) << model << (graded ? " graded" : " lattice");
+      ASSERT_EQ(force_off.size(), s.force.size());
+      EXPECT_EQ(0, std::memcmp(force_off.data(), s.force.data(), s.force.size() * sizeof(double)))
+          << model << (graded ? " graded" : " lattice");
+      EXPECT_EQ(0, std::memcmp(released_off.data(), s.dissipated.data(), s.n * sizeof(double)))
+          << model << (graded ? " graded" : " lattice");
+    }
+}
+
+// The Weibull draw (and the critical stretches from it) is computed once per bond and copied
+// to the reverse entry, own and dual swapped. Check every entry against its reverse on the
+// graded strip, where own and dual horizons differ (so the swap matters), and that the draw
+// scatters the strengths at all.
+TEST(WeibullPerBond, ReverseEntriesHoldTheSameDrawWithOwnAndDualSwapped) {
+  const std::string strip = graded_strip("graded_weibull", 0.02, 0.01, 0.5e-3);
+  for (const std::string model : {"pmb", "lps"}) {
+    PdSystem s = setup_system(parse_case_file(write_case("weibull_per_bond_" + model, graded_weibull_case(strip, model))));
+    long long differ = 0, checked = 0;
+    std::vector<float> values;
+    for (size_t i = 0; i < s.n; ++i)
+      for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
+        const int32_t j = s.neighbor[k];
+        const auto row_end = s.neighbor.begin() + s.offsets[j + 1];
+        const auto it = std::lower_bound(s.neighbor.begin() + s.offsets[j], row_end, static_cast<int32_t>(i));
+        ASSERT_TRUE(it != row_end && *it == static_cast<int32_t>(i)) << "entry " << i << " -> " << j << " has no reverse";
+        const int64_t r = it - s.neighbor.begin();
+        ASSERT_EQ(s.s0_own[k], s.s0_dual[r]) << model << " entry " << k;
+        ASSERT_EQ(s.s0_dual[k], s.s0_own[r]) << model << " entry " << k;
+        differ += s.s0_own[k] != s.s0_dual[k];
+        ++checked;
+        values.push_back(s.s0_own[k]);
+      }
+    EXPECT_GT(differ, 0) << model << ": own and dual horizons differ somewhere on the graded strip";
+    std::sort(values.begin(), values.end());
+    const long long distinct = std::unique(values.begin(), values.end()) - values.begin();
+    EXPECT_GT(distinct, checked / 20) << model << ": the Weibull draw should scatter the critical stretches";
+  }
 }

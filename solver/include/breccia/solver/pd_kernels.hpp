@@ -595,17 +595,12 @@ BRECCIA_HD void pmb_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
   else pmb_symmetric_force_loop<false>(p, i);
 }
 
-// Internal force density, strain-energy density, damage and breaking for particle i.
-template <class Real>
-BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
-  if (p.symmetric_halves && has_bond_vectors(p) && p.model == static_cast<int>(PdModel::PMB)) {
-    pmb_symmetric_force_kernel(p, i);
-    return;
-  }
-  if (p.symmetric_halves && p.lps_a && has_bond_vectors(p)) {
-    lps_symmetric_force_kernel(p, i);
-    return;
-  }
+// The general loop (variable horizons: own and dual halves differ). Without kDiagnostics the
+// energy density, damage and max stretch are neither summed nor written (passes between
+// output steps, the stable step's probe): the force arithmetic is the same code in the same
+// order, so the forces, breaks and released energy are the diagnostic pass's bit for bit.
+template <bool kDiagnostics, class Real>
+BRECCIA_HD void general_force_loop(const PdViewT<Real>& p, int64_t i) {
   Real fx = Real(0), fy = Real(0), fz = Real(0);
   double w = 0.0, released = 0.0, smax = 0.0, smin = 1e300;
   double intact_vol = 0.0, total_vol = 0.0;
@@ -618,14 +613,14 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
     theta_i = p.dilatation[i];
   }
   for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
-    total_vol += p.vol_own[k];
+    if (kDiagnostics) total_vol += p.vol_own[k];
     uint8_t st = p.state[k];
     if (!st) continue;
     const uint8_t state_before = st;
     const int64_t j = p.neighbor[k];
     const Real xi = p.xi_len[k];
     const BondGeometryT<Real> g = bond_geometry(p.x0, p.u, i, j, xi);
-    if (g.stretch > smax) smax = g.stretch;
+    if (kDiagnostics && g.stretch > smax) smax = g.stretch;
     if (p.min_stretch_next) {
       any = true;
       if (double(g.stretch) < smin) smin = g.stretch;
@@ -663,7 +658,7 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
         p.state[k] = st;
       }
     }
-    if (st & kOwnIntact) intact_vol += keep * p.vol_own[k];
+    if (kDiagnostics && (st & kOwnIntact)) intact_vol += keep * p.vol_own[k];
     // The halves that push this pass: those intact now, or with break_after_force those
     // intact when it began (the energy of the ones that broke is in `released`).
     const uint8_t active = p.break_after_force ? state_before : st;
@@ -675,7 +670,7 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
       Real t = Real(0);
       if (active & kOwnIntact) {
         t += lps_force_state(p.lps[i], m_i, theta_i, p.k_own[k], xi, e);
-        if (st & kOwnIntact) {
+        if (kDiagnostics && (st & kOwnIntact)) {
           const double dev = double(e) - double(theta_i) * xi / p.lps[i].dilatation_factor;
           dev_sum += keep * p.k_own[k] * dev * dev * p.volume[j];
         }
@@ -685,22 +680,40 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
       scalar = static_cast<Real>(keep) * t * p.volume[j];
     } else {
       scalar = static_cast<Real>(keep) * pmb_force_scalar(p.k_own[k], p.k_dual[k], active, g.stretch);
-      w += keep * pmb_energy_density<double>(p.k_own[k], p.k_dual[k], st, g.stretch, xi);
+      if (kDiagnostics) w += keep * pmb_energy_density<double>(p.k_own[k], p.k_dual[k], st, g.stretch, xi);
     }
     const Real inv_len = Real(1) / g.length;
     fx += scalar * g.dx * inv_len;
     fy += scalar * g.dy * inv_len;
     fz += scalar * g.dz * inv_len;
   }
-  if (lps) w = lps_bulk_energy(p.lps[i], double(theta_i)) + 0.5 * (p.lps[i].shear_term / m_i) * dev_sum;
   store_min_stretch(p, i, smin, any);
   p.force[3 * i] = fx;
   p.force[3 * i + 1] = fy;
   p.force[3 * i + 2] = fz;
-  p.energy_density[i] = w;
   p.dissipated[i] = released;
-  p.damage[i] = total_vol > 0.0 ? 1.0 - intact_vol / total_vol : 0.0;
-  if (p.max_stretch) p.max_stretch[i] = smax;
+  if (kDiagnostics) {
+    if (lps) w = lps_bulk_energy(p.lps[i], double(theta_i)) + 0.5 * (p.lps[i].shear_term / m_i) * dev_sum;
+    p.energy_density[i] = w;
+    p.damage[i] = total_vol > 0.0 ? 1.0 - intact_vol / total_vol : 0.0;
+    if (p.max_stretch) p.max_stretch[i] = smax;
+  }
+}
+
+// Internal force density, strain-energy density, damage and breaking for particle i (the
+// diagnostics only when p.diagnostics asks for them).
+template <class Real>
+BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
+  if (p.symmetric_halves && has_bond_vectors(p) && p.model == static_cast<int>(PdModel::PMB)) {
+    pmb_symmetric_force_kernel(p, i);
+    return;
+  }
+  if (p.symmetric_halves && p.lps_a && has_bond_vectors(p)) {
+    lps_symmetric_force_kernel(p, i);
+    return;
+  }
+  if (p.diagnostics) general_force_loop<true>(p, i);
+  else general_force_loop<false>(p, i);
 }
 
 // Short-range forces (model.short_range_forces): LAMMPS PERI's contact term (PairPeriPMB and

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -79,6 +80,18 @@ materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 
 precracks: [{type: segment, from: [0, 0.005], to: [0.01, 0.005]}]
 loads: [{type: traction, surface: ymax, value: [0, 20 MPa, 0]}, {type: traction, surface: ymin, value: [0, -20 MPa, 0]}]
 )";
+
+// A fixed pseudo-random field, the same on any platform: splitmix64, mapped to [-0.5, 0.5).
+// The tests that compare two force paths bit for bit displace every particle by it.
+struct SplitMixUniform {
+  uint64_t z;
+  double operator()() {
+    z += 0x9E3779B97F4A7C15ull;
+    uint64_t x = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return double((x ^ (x >> 31)) >> 11) / 9007199254740992.0 - 0.5;
+  }
+};
 
 // Internal index of the particle nearest to a point.
 inline int64_t nearest(const PdSystem& s, double x, double y, double z) {

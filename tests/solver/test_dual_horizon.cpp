@@ -155,13 +155,7 @@ TEST(DiagnosticsOff, ForcesBreaksAndReleasedEnergyEqualTheDiagnosticPassBitForBi
                    "time: {steps: 1}\n";
       PdSystem s = setup_system(parse_case_file(write_case("diagnostics_" + model + (graded ? "_graded" : "_lattice"), deck)));
       ASSERT_EQ(s.symmetric_halves, !graded) << model;
-      uint64_t z = 99;
-      auto uniform = [&z] {  // splitmix64: a fixed field, any platform
-        z += 0x9E3779B97F4A7C15ull;
-        uint64_t x = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-        return double((x ^ (x >> 31)) >> 11) / 9007199254740992.0 - 0.5;
-      };
+      SplitMixUniform uniform{99};
       for (size_t k = 0; k < 3 * s.n; ++k) s.u[k] = (s.dimension == 2 && k % 3 == 2) ? 0.0 : 2e-6 * uniform();
       const std::vector<uint8_t> state0 = s.state;
       s.diagnostics = false;

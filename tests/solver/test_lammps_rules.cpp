@@ -328,13 +328,7 @@ TEST_P(FastAndGeneralPaths, AgreeOnForcesBreaksAndDiagnostics) {
   PdSystem general = system_from_yaml(std::string("general_") + model + precision, deck);
   ASSERT_TRUE(fast.symmetric_halves);
   general.symmetric_halves = false;  // the same system through force_kernel's general loop
-  uint64_t z = 12345;
-  auto uniform = [&z] {  // splitmix64: a fixed field, any platform
-    z += 0x9E3779B97F4A7C15ull;
-    uint64_t x = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-    return double((x ^ (x >> 31)) >> 11) / 9007199254740992.0 - 0.5;
-  };
+  SplitMixUniform uniform{12345};
   for (size_t k = 0; k < 3 * fast.n; ++k) fast.u[k] = general.u[k] = 2e-3 * 0.5e-3 * uniform();  // strains ~4e-3
   for (bool diagnostics : {false, true}) {
     fast.diagnostics = general.diagnostics = diagnostics;

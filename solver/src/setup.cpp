@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 #include <numeric>
+#include <stdexcept>
 
 #include <omp.h>
 
@@ -174,6 +175,50 @@ std::vector<int32_t> internal_particles(const PdSystem& s, const std::vector<int
 double median(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
   return v[v.size() / 2];
+}
+
+// Calls f(i, k, r) for every entry k = (i -> j) of rows [first, last) of a symmetric CSR with
+// sorted rows, r being its reverse entry (j -> i), threaded over blocks of rows. No search per
+// entry: the rows that hold j, met in ascending order, are j's own entries in ascending order,
+// so a block keeps a cursor per row j it meets, placed by one binary search at the first meeting
+// and advanced by one at each later one. Each thread's cursors live in two arrays of N, made
+// once per thread; a block's stamp marks the cursors it has placed.
+template <class F>
+void for_each_entry_with_reverse(const std::vector<int64_t>& offsets, const std::vector<int32_t>& neighbors,
+                                 int64_t first, int64_t last, F&& f) {
+  const int64_t n = static_cast<int64_t>(offsets.size()) - 1;
+  constexpr int64_t block = 1024;  // rows: a block meets about its own rows plus a halo of a horizon
+  const int64_t blocks = last > first ? (last - first + block - 1) / block : 0;
+  bool asymmetric = false;
+#pragma omp parallel reduction(|| : asymmetric)
+  {
+    std::vector<int64_t> cursor;
+    std::vector<int64_t> stamp;
+#pragma omp for schedule(dynamic, 1)
+    for (int64_t b = 0; b < blocks; ++b) {
+      if (cursor.empty()) {
+        cursor.assign(static_cast<size_t>(n), 0);
+        stamp.assign(static_cast<size_t>(n), -1);
+      }
+      const int64_t row_end = std::min(last, first + (b + 1) * block);
+      for (int64_t i = first + b * block; i < row_end; ++i)
+        for (int64_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+          const int32_t j = neighbors[k];
+          if (stamp[j] != b) {
+            stamp[j] = b;
+            cursor[j] = std::lower_bound(neighbors.begin() + offsets[j], neighbors.begin() + offsets[j + 1],
+                                         static_cast<int32_t>(i)) - neighbors.begin();
+          }
+          const int64_t r = cursor[j]++;
+          if (r >= offsets[j + 1] || neighbors[r] != i) {
+            asymmetric = true;  // never so for the families set-up builds; refused below
+            continue;
+          }
+          f(i, k, r);
+        }
+    }
+  }
+  if (asymmetric) throw std::logic_error("for_each_entry_with_reverse: the bond lists are not symmetric");
 }
 
 }  // namespace
@@ -573,74 +618,101 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // Partial volumes: one quadrature per candidate entry. Entry (i -> j) counts j's cell's
   // samples inside i's horizon (its own half-bond); its dual half-bond is entry (j -> i)'s own
   // count, bit for bit, since x_i - x_j = -(x_j - x_i) exactly in floating point. Families
-  // are symmetric and sorted, so the reverse entry is a binary search in j's row. The
-  // counts (at most 216) fit a byte: the fraction count / 216 is the quadrature's exactly.
+  // are symmetric and sorted, so the reverse entry is found by for_each_entry_with_reverse's
+  // cursors (no search per entry), and the dual counts are copied once into their own bytes.
+  // The counts (at most 216) fit a byte: the fraction count / 216 is the quadrature's exactly.
+  // A distributed set-up holds only its own rows: there the dual is counted from this end.
   const bool sampled = c.partial_volume == PartialVolume::Sampled;
-  std::vector<uint8_t> samples_inside;
-  if (sampled) {
-    assign_on_huge_pages(samples_inside, fam.neighbors.size());
+  const bool dual_by_reverse = sampled && !dist_rows.active;
+  std::vector<uint8_t> samples_inside, dual_inside;
+  std::vector<int64_t> keep_count(n, 0);
+  {
     const std::vector<int64_t> rows = share_rows(fam.offsets);
     const int64_t first = rows[shares > 1 ? share.rank : 0], last = rows[shares > 1 ? share.rank + 1 : 1];
+    std::vector<int64_t> entry_begin(rows.size());
+    for (size_t r = 0; r < rows.size(); ++r) entry_begin[r] = fam.offsets[rows[r]];
+    if (sampled) {
+      assign_on_huge_pages(samples_inside, fam.neighbors.size());
 #pragma omp parallel for schedule(dynamic, 256)
-    for (int64_t i = first; i < last; ++i)
-      for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
-        const int32_t j = fam.neighbors[k];
-        const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1], s.x0[3 * j + 2] - s.x0[3 * i + 2]};
-        samples_inside[k] = static_cast<uint8_t>(partial_volume_samples_inside(xv, s.horizon[i], s.half_cell[j], s.dimension));
-      }
-    if (shares > 1) {
-      std::vector<int64_t> entry_begin(rows.size());
-      for (size_t r = 0; r < rows.size(); ++r) entry_begin[r] = fam.offsets[rows[r]];
-      share.gather(samples_inside.data(), sizeof(uint8_t), entry_begin);
+      for (int64_t i = first; i < last; ++i)
+        for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
+          const int32_t j = fam.neighbors[k];
+          const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1], s.x0[3 * j + 2] - s.x0[3 * i + 2]};
+          samples_inside[k] = static_cast<uint8_t>(partial_volume_samples_inside(xv, s.horizon[i], s.half_cell[j], s.dimension));
+        }
+      if (shares > 1) share.gather(samples_inside.data(), sizeof(uint8_t), entry_begin);
     }
+    // Kept entries (a half-bond with some volume either way), counted per row; with the
+    // sampled rule the same pass copies each entry's dual count from its reverse entry.
+    if (dual_by_reverse) {
+      assign_on_huge_pages(dual_inside, fam.neighbors.size());
+      for_each_entry_with_reverse(fam.offsets, fam.neighbors, first, last, [&](int64_t i, int64_t k, int64_t r) {
+        dual_inside[k] = samples_inside[r];
+        keep_count[i] += samples_inside[k] > 0 || samples_inside[r] > 0;
+      });
+      if (shares > 1) share.gather(dual_inside.data(), sizeof(uint8_t), entry_begin);
+    } else {
+#pragma omp parallel for schedule(dynamic, 256)
+      for (int64_t i = first; i < last; ++i)
+        for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
+          const int32_t j = fam.neighbors[k];
+          const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1], s.x0[3 * j + 2] - s.x0[3 * i + 2]};
+          const double xm[3] = {-xv[0], -xv[1], -xv[2]};
+          bool keep;
+          if (sampled) {  // dist: j's row may be another rank's; the same count, from this end
+            keep = samples_inside[k] > 0 || partial_volume_samples_inside(xm, s.horizon[j], s.half_cell[i], s.dimension) > 0;
+          } else {
+            keep = partial_volume(c.partial_volume, xv, s.horizon[i], s.half_cell[j], s.dimension) > 0 ||
+                   partial_volume(c.partial_volume, xm, s.horizon[j], s.half_cell[i], s.dimension) > 0;
+          }
+          keep_count[i] += keep;
+        }
+    }
+    if (shares > 1) share.gather(keep_count.data(), sizeof(int64_t), rows);  // rows as the elements
   }
   const double sample_total = partial_volume_sample_total(s.dimension);
-  auto reverse_entry = [&](int64_t i, int32_t j) {
-    const auto row_begin = fam.neighbors.begin() + fam.offsets[j], row_end = fam.neighbors.begin() + fam.offsets[j + 1];
-    return static_cast<int64_t>(std::lower_bound(row_begin, row_end, static_cast<int32_t>(i)) - fam.neighbors.begin());
-  };
   // beta of entry k = (i -> j): its own half-bond (j's cell in i's horizon) and its dual (i's cell in j's).
   auto beta_own_dual = [&](int64_t i, int64_t k, double& beta_own, double& beta_dual) {
     const int32_t j = fam.neighbors[k];
-    if (sampled) {
+    if (dual_by_reverse) {
       beta_own = samples_inside[k] / sample_total;
-      if (dist_rows.active) {  // dist: j's row may be another rank's; the same count, from this end
-        const double xm[3] = {s.x0[3 * i] - s.x0[3 * j], s.x0[3 * i + 1] - s.x0[3 * j + 1], s.x0[3 * i + 2] - s.x0[3 * j + 2]};
-        beta_dual = partial_volume_samples_inside(xm, s.horizon[j], s.half_cell[i], s.dimension) / sample_total;
-      } else {
-        beta_dual = samples_inside[reverse_entry(i, j)] / sample_total;
-      }
+      beta_dual = dual_inside[k] / sample_total;
       return;
     }
     const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1], s.x0[3 * j + 2] - s.x0[3 * i + 2]};
     const double xm[3] = {-xv[0], -xv[1], -xv[2]};
+    if (sampled) {  // dist: j's row may be another rank's; the same count, from this end
+      beta_own = samples_inside[k] / sample_total;
+      beta_dual = partial_volume_samples_inside(xm, s.horizon[j], s.half_cell[i], s.dimension) / sample_total;
+      return;
+    }
     beta_own = partial_volume(c.partial_volume, xv, s.horizon[i], s.half_cell[j], s.dimension);
     beta_dual = partial_volume(c.partial_volume, xm, s.horizon[j], s.half_cell[i], s.dimension);
   };
   s.offsets.assign(n + 1, 0);
-  {
-    std::vector<int64_t> keep_count(n, 0);
-    const std::vector<int64_t> rows = share_rows(fam.offsets);
-    const int64_t first = rows[shares > 1 ? share.rank : 0], last = rows[shares > 1 ? share.rank + 1 : 1];
-#pragma omp parallel for schedule(dynamic, 256)
-    for (int64_t i = first; i < last; ++i)
-      for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
-        double beta_own, beta_dual;
-        beta_own_dual(i, k, beta_own, beta_dual);
-        if (beta_own > 0 || beta_dual > 0) ++keep_count[i];
-      }
-    if (shares > 1) share.gather(keep_count.data(), sizeof(int64_t), rows);  // rows as the elements
-    for (size_t i = 0; i < n; ++i) s.offsets[i + 1] = s.offsets[i] + keep_count[i];
-  }
+  for (size_t i = 0; i < n; ++i) s.offsets[i + 1] = s.offsets[i] + keep_count[i];
+  keep_count = {};
   const size_t nb = static_cast<size_t>(s.offsets[n]);
   // The run's largest arrays (3.3 GB on the full concrete case): huge pages (huge_pages.hpp).
-  assign_on_huge_pages(s.neighbor, nb);
-  for (auto* a : {&s.xi_len, &s.k_own, &s.k_dual, &s.vol_own}) assign_on_huge_pages(*a, nb);
-  for (auto* a : {&s.s0_own, &s.s0_dual}) assign_on_huge_pages(*a, nb);
-  assign_on_huge_pages(s.state, nb, static_cast<uint8_t>(kOwnIntact | kDualIntact));
-  if (c.softening) {
-    assign_on_huge_pages(s.s_onset, nb, FLT_MAX);
-    assign_on_huge_pages(s.bond_damage, nb, 0.0f);
+  // Their first touch (the kernel zeroes each page) is most of their cost: the arrays are
+  // touched side by side, one per thread.
+  {
+    const int arrays = c.softening ? 10 : 8;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int a = 0; a < arrays; ++a) {
+      switch (a) {
+        case 0: assign_on_huge_pages(s.k_own, nb); break;
+        case 1: assign_on_huge_pages(s.k_dual, nb); break;
+        case 2: assign_on_huge_pages(s.xi_len, nb); break;
+        case 3: assign_on_huge_pages(s.vol_own, nb); break;
+        case 4: assign_on_huge_pages(s.neighbor, nb); break;
+        case 5: assign_on_huge_pages(s.s0_own, nb); break;
+        case 6: assign_on_huge_pages(s.s0_dual, nb); break;
+        case 7: assign_on_huge_pages(s.state, nb, static_cast<uint8_t>(kOwnIntact | kDualIntact)); break;
+        case 8: assign_on_huge_pages(s.s_onset, nb, FLT_MAX); break;
+        case 9: assign_on_huge_pages(s.bond_damage, nb, 0.0f); break;
+      }
+    }
   }
   // Correspondence shares LPS's bond data: weights w = omega beta, no modulus per bond, LPS critical stretch.
   const bool lps = c.model == PdModel::LPS || c.model == PdModel::Correspondence;
@@ -654,6 +726,11 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
                                                                                                     : s.material[j];
   };
   auto strengths_shared = [&](int64_t i, int64_t j) { return weak_material(i, j) == weak_material(j, i); };
+  // The Weibull scale of each material's G0 draw (the same expression as per bond, once).
+  std::vector<double> weibull_scale(c.materials.size(), 0.0);
+  for (size_t m = 0; m < c.materials.size(); ++m)
+    if (c.materials[m].weibull_modulus > 0)
+      weibull_scale[m] = c.materials[m].fracture_energy / std::tgamma(1.0 + 1.0 / c.materials[m].weibull_modulus);
   auto fill_strengths = [&](int64_t i, int64_t j, int64_t out) {
     const int weak = weak_material(i, j);
     const MaterialSpec& wm = c.materials[weak];
@@ -664,8 +741,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
                                     static_cast<uint64_t>(wm.weibull_seed));
       // The draw of G0 (mean G0); weibull.scales says what it scatters (both by default, the
       // strength by the same ratio to the mean).
-      const double scale = G0 / std::tgamma(1.0 + 1.0 / wm.weibull_modulus);
-      const double drawn = scale * std::pow(-std::log(U), 1.0 / wm.weibull_modulus);
+      const double drawn = weibull_scale[weak] * std::pow(-std::log(U), 1.0 / wm.weibull_modulus);
       if (wm.weibull_scales != MaterialSpec::WeibullScales::FractureEnergy) strength_draw = drawn;
       if (wm.weibull_scales != MaterialSpec::WeibullScales::TensileStrength) G0 = drawn;
     }
@@ -693,13 +769,13 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   for (int64_t i = rows_begin; i < rows_end; ++i) {
     int64_t out = s.offsets[i];
     for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
+      double beta_own, beta_dual;
+      beta_own_dual(i, k, beta_own, beta_dual);
+      if (beta_own <= 0 && beta_dual <= 0) continue;
       const int32_t j = fam.neighbors[k];
       double r2 = 0;
       for (int d = 0; d < 3; ++d) r2 += std::pow(s.x0[3 * j + d] - s.x0[3 * i + d], 2);
       const double xi = std::sqrt(r2);
-      double beta_own, beta_dual;
-      beta_own_dual(i, k, beta_own, beta_dual);
-      if (beta_own <= 0 && beta_dual <= 0) continue;
       const double w_own = beta_own > 0 ? influence(c.influence, xi / s.horizon[i]) * beta_own : 0.0;
       const double w_dual = beta_dual > 0 ? influence(c.influence, xi / s.horizon[j]) * beta_dual : 0.0;
       s.neighbor[out] = j;
@@ -731,28 +807,21 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     share.gather(s.state.data(), sizeof(uint8_t), entry_begin);
     if (c.softening) share.gather(s.s_onset.data(), sizeof(float), entry_begin);
   }
-  if (copy_strengths) {  // the other entry of each shared pair: its reverse's values, own and dual swapped
-#pragma omp parallel for schedule(dynamic, 256)
-    for (int64_t i = 0; i < static_cast<int64_t>(n); ++i)
-      for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
-        const int32_t j = s.neighbor[k];
-        if (j > i || !strengths_shared(i, j)) continue;
-        // Kept entries are symmetric (beta_own > 0 || beta_dual > 0 reads the same two counts
-        // from either end) and rows stay sorted, so the reverse entry is in j's row.
-        const auto row_end = s.neighbor.begin() + s.offsets[j + 1];
-        const auto it = std::lower_bound(s.neighbor.begin() + s.offsets[j], row_end, static_cast<int32_t>(i));
-        if (it == row_end || *it != i) {
-          fill_strengths(i, j, k);
-          continue;
-        }
-        const int64_t r = it - s.neighbor.begin();
-        s.s0_own[k] = s.s0_dual[r];
-        s.s0_dual[k] = s.s0_own[r];
-        if (c.softening) s.s_onset[k] = s.s_onset[r];
-      }
-  }
   fam = Families{};
   samples_inside = {};
+  dual_inside = {};
+  if (copy_strengths) {
+    // The other entry of each shared pair: its reverse's values, own and dual swapped. Kept
+    // entries are symmetric (beta_own > 0 || beta_dual > 0 reads the same two counts from
+    // either end) and rows stay sorted, so the kept lists have reverse entries too.
+    for_each_entry_with_reverse(s.offsets, s.neighbor, 0, static_cast<int64_t>(n), [&](int64_t i, int64_t k, int64_t r) {
+      const int32_t j = s.neighbor[k];
+      if (j > i || !strengths_shared(i, j)) return;
+      s.s0_own[k] = s.s0_dual[r];
+      s.s0_dual[k] = s.s0_own[r];
+      if (c.softening) s.s_onset[k] = s.s_onset[r];
+    });
+  }
 
   // 2D: make each family's fourth-order moment isotropic. A square lattice at m = 3 has a
   // cos(4 theta) anisotropy of a few percent (uniaxial and shear energies differ by ~4%);

@@ -233,28 +233,6 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
     std::vector<double> q(n3), q_prev(n3, 0.0), w(n3);
     for (size_t k = 0; k < n3; ++k) q[k] = (planar && k % 3 == 2) ? 0.0 : uni(rng);
-    // The highest modes live where the local frequency, wave speed over spacing, is highest
-    // (the finest particles of a graded mesh): the random start is weighted by that
-    // frequency's 4th power relative to the largest, omega_i^4 = (E_i / (rho_i h_i^2))^2,
-    // so its component along the top mode is larger and Lanczos converges in fewer passes
-    // (demo concrete case: 14 passes instead of 20 to the same 1e-4; docs/performance.md).
-    // Every weight is exactly 1 where all particles share spacing and material (lattices):
-    // the start, and so the estimate, is then the unweighted one bit for bit.
-    {
-      std::vector<double> omega2(sys.n, 0.0);
-      double omega2_max = 0.0;
-      for (size_t i = 0; i < sys.n; ++i) {
-        const double h = sys.half_cell[i];
-        const double E = sys.material.empty() ? 0.0 : sys.config.materials[sys.material[i]].youngs_modulus;
-        omega2[i] = E / (sys.density[i] * h * h);
-        if (std::isfinite(omega2[i])) omega2_max = std::max(omega2_max, omega2[i]);
-      }
-      if (omega2_max > 0.0 && std::isfinite(omega2_max))
-        for (size_t k = 0; k < n3; ++k) {
-          const double r = omega2[k / 3] / omega2_max;
-          if (r > 0.0 && r <= 1.0) q[k] *= r * r;
-        }
-    }
     double q_norm = std::sqrt(dot(q, q));
     for (double& qk : q) qk /= q_norm;
     std::vector<double> alpha, beta;

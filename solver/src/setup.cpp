@@ -849,14 +849,27 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     const std::vector<double> coefficient_scale =
         c.surface_correction ? lps_surface_correction(s, elastic) : std::vector<double>(n, 1.0);
     s.lps.resize(n);
-    for (size_t i = 0; i < n; ++i) {
+    // dist: each rank sums its own rows; the ghosts' m (which their bonds read) come from
+    // their owners, and the first particle without neighbours is found over every rank
+    // (all ranks stop with one process's message, none waits in a collective).
+    int64_t lonely = -1;
+    for (int64_t i = dist_rows.begin; i < dist_rows.end && lonely < 0; ++i) {
       double m = 0.0;
       for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k)
         m += s.k_own[k] * s.xi_len[k] * s.xi_len[k] * s.volume[s.neighbor[k]];
-      if (!(m > 0))
-        throw InputError(c.file, "model.horizon", "particle " + std::to_string(s.original_index[i]) + " has no neighbours",
-                         "a horizon that reaches other particles (about 3 spacings)");
+      if (!(m > 0)) lonely = i;
       s.weighted_volume[i] = m;
+    }
+    if (dist_rows.active) {
+      const std::vector<int64_t> all = concat_over_ranks(dist, std::vector<int64_t>{lonely});
+      const auto first = std::find_if(all.begin(), all.end(), [](int64_t i) { return i >= 0; });
+      lonely = first == all.end() ? -1 : *first;  // ranks own ascending ranges
+      gather_owned(dist, dist_rows, s.weighted_volume, 1);
+    }
+    if (lonely >= 0)
+      throw InputError(c.file, "model.horizon", "particle " + std::to_string(s.original_index[lonely]) + " has no neighbours",
+                       "a horizon that reaches other particles (about 3 spacings)");
+    for (size_t i = 0; i < n; ++i) {
       s.lps[i] = lps_coefficients(elastic[s.material[i]]);
       s.lps[i].bulk_term *= coefficient_scale[i];
       s.lps[i].shear_term *= coefficient_scale[i];
@@ -1225,7 +1238,14 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // One horizon over a graded arrangement under-resolves its coarse part, and dual horizon
   // over steep grading reflects waves (docs/atlas.md, stability map, graded_check.hpp).
   if (c.check_stability) require_graded_horizon(s);
-  if (const std::string w = graded_horizon_warning(s); !w.empty()) std::fprintf(stderr, "%s\n", w.c_str());
+  if (c.variable_horizon) {
+    HorizonGrading g = horizon_grading(s);
+    if (dist_rows.active) {  // dist: the largest jump over every rank's rows (a maximum: exact in any order)
+      const std::vector<double> all = concat_over_ranks(dist, std::vector<double>{g.max_neighbour_jump});
+      g.max_neighbour_jump = *std::max_element(all.begin(), all.end());
+    }
+    if (const std::string w = graded_horizon_warning(s, g); !w.empty()) std::fprintf(stderr, "%s\n", w.c_str());
+  }
   // A horizon too small for irregular particles makes each particle's stiffness random
   // (docs/atlas.md, stability map): refuse it before the run.
   if (c.check_stability) require_resolved_families(s);

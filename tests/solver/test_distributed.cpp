@@ -328,7 +328,7 @@ static std::string read_text(const std::string& path) {
 // the bonds of the particles it owns only, and the answer is still one process's, byte for
 // byte: a lattice with a pre-crack expanding until bonds break, on 2 and 3 ranks, and its
 // checkpoint of 2 ranks finished on 3; softening bonds with Weibull draws on 2 ranks. A case the new set-up does not
-// cover (correspondence) says so in one note and builds the whole system on every rank, with the same answer.
+// cover (the surface correction) says so in one note and builds the whole system on every rank, with the same answer.
 TEST(DistributedSetup, PmbBuildsEachRanksOwnBondsWithOneProcessAnswer) {
   const std::string body =
       "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.008, 0.004, 0.003], spacing: 0.5 mm}}\n"
@@ -374,13 +374,14 @@ TEST(DistributedSetup, PmbBuildsEachRanksOwnBondsWithOneProcessAnswer) {
     for (const char* file : {"/results.h5", "/checkpoint.h5"})
       EXPECT_EQ(differing(base + "_soft_whole" + file, base + "_soft_np2" + file), std::vector<std::string>{}) << file;
   }
-  const std::string corr = write_case("mpi_dist_corr", "model: {type: correspondence, horizon_factor: 3.015}\n" + brittle + body);
-  ASSERT_EQ(solve(corr, base + "_corr_whole", 1, 1).exit_code, 0);
-  const Outcome o = solve(corr, base + "_corr_np2", 2, 1);
+  const std::string sc =
+      write_case("mpi_dist_sc", "model: {type: pmb, horizon_factor: 3.015, surface_correction: energy}\n" + brittle + body);
+  ASSERT_EQ(solve(sc, base + "_sc_whole", 1, 1).exit_code, 0);
+  const Outcome o = solve(sc, base + "_sc_np2", 2, 1);
   ASSERT_EQ(o.exit_code, 0) << o.err;
-  EXPECT_NE(o.err.find("note: set-up: model.type: correspondence"), std::string::npos) << o.err;
-  EXPECT_FALSE(summary(base + "_corr_np2")["distributed_setup"].get<bool>());
-  EXPECT_EQ(differing(base + "_corr_whole/checkpoint.h5", base + "_corr_np2/checkpoint.h5"), std::vector<std::string>{});
+  EXPECT_NE(o.err.find("note: set-up: model.surface_correction"), std::string::npos) << o.err;
+  EXPECT_FALSE(summary(base + "_sc_np2")["distributed_setup"].get<bool>());
+  EXPECT_EQ(differing(base + "_sc_whole/checkpoint.h5", base + "_sc_np2/checkpoint.h5"), std::vector<std::string>{});
 }
 
 // The distributed set-up beyond PMB: LPS (each rank sums the weighted volume of its own rows,

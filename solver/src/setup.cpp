@@ -847,7 +847,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     // surface_correction: energy shapes the bonds' weights here, before m is summed from them,
     // and scales each particle's coefficients (surface_correction.hpp).
     const std::vector<double> coefficient_scale =
-        c.surface_correction ? lps_surface_correction(s, elastic) : std::vector<double>(n, 1.0);
+        c.surface_correction ? lps_surface_correction(s, elastic, dist, dist_rows) : std::vector<double>(n, 1.0);
     s.lps.resize(n);
     // dist: each rank sums its own rows; the ghosts' m (which their bonds read) come from
     // their owners, and the first particle without neighbours is found over every rank
@@ -1001,14 +1001,26 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     if (c.surface_correction) {
       // Each material's bulk uniaxial energy per unit factor: uniaxial energy scales with
       // the micro-modulus, so compare with a bulk particle of the same material.
+      // The complete families' values in index order (dist: every rank's, in rank order, so
+      // the sums run in one process's order).
+      std::vector<int32_t> complete_material;
+      std::vector<double> complete_uni;
+      for (size_t i = 0; i < n; ++i)
+        if (complete[i]) {
+          complete_material.push_back(s.material[i]);
+          complete_uni.insert(complete_uni.end(), &uni[3 * i], &uni[3 * i] + 3);
+        }
+      if (dist_rows.active) {
+        complete_material = concat_over_ranks(dist, complete_material);
+        complete_uni = concat_over_ranks(dist, complete_uni);
+      }
       std::vector<double> bulk_uni_by_material(c.materials.size(), 0.0);
       std::vector<int> count(c.materials.size(), 0);
-      for (size_t i = 0; i < n; ++i)
-        if (complete[i])
-          for (int a = 0; a < dims; ++a) {
-            bulk_uni_by_material[s.material[i]] += uni[3 * i + a];
-            ++count[s.material[i]];
-          }
+      for (size_t q = 0; q < complete_material.size(); ++q)
+        for (int a = 0; a < dims; ++a) {
+          bulk_uni_by_material[complete_material[q]] += complete_uni[3 * q + a];
+          ++count[complete_material[q]];
+        }
       for (size_t m = 0; m < c.materials.size(); ++m)
         if (count[m]) bulk_uni_by_material[m] /= count[m];
       if (bulk_iso.empty()) {
@@ -1019,6 +1031,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         for (int a = 0; a < dims; ++a)
           if (uni[3 * i + a] > 0 && count[s.material[i]])
             axis_factor[3 * i + a] = bulk_factor * bulk_uni_by_material[s.material[i]] / uni[3 * i + a];
+      gather_owned(dist, dist_rows, axis_factor, 3);  // dist: the ghosts' factors, which their bonds blend
       // The ellipsoidal blend over-stiffens oblique bonds of a truncated family; a few
       // fixed-point sweeps make each particle's uniaxial energies (with the blended bond
       // factors) hit their targets exactly.
@@ -1040,6 +1053,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
               next[3 * i + a] = axis_factor[3 * i + a] * bulk_factor * bulk_uni_by_material[s.material[i]] / w[a];
         }
         axis_factor.swap(next);
+        gather_owned(dist, dist_rows, axis_factor, 3);
       }
     }
     s.calibration_factor.assign(n, bulk_factor);

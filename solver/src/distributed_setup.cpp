@@ -12,7 +12,6 @@ std::string distributed_setup_refusal(const PdSystem& s) {
   // Each of these reads, per particle, values summed over other particles' families (the
   // ghosts' own rows: a second layer), or runs a pass over every family at set-up.
   if (c.model == PdModel::Correspondence) return "model.type: correspondence (the ghosts' shape tensors)";
-  if (s.dimension == 2) return "a 2D model (the family reweighting reads the ghosts' (a, b))";
   if (c.quasi_static) return "time.integrator: adr";
   if (c.short_range_forces) return "model.short_range_forces";
   for (const auto& l : c.loads)

@@ -797,6 +797,9 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       ca[i] = std::clamp((-sc * sss + ss * scs) / det, -0.5, 0.5);
       cb[i] = std::clamp((-ss * scc + sc * scs) / det, -0.5, 0.5);
     }
+    // dist: each rank's rows give its particles' (a, b); a bond reads both ends'.
+    gather_owned(dist, dist_rows, ca, 1);
+    gather_owned(dist, dist_rows, cb, 1);
     // LPS: a family cut by a surface has a 4 theta moment of its own, which is not the
     // lattice's: it takes the mean (a, b) of the complete families among its members (else
     // none). Without this a bulk particle's bonds to surface neighbours carried their large
@@ -810,6 +813,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) family_volume += s.vol_own[k];
         complete[i] = family_volume >= 0.99 * M_PI * s.horizon[i] * s.horizon[i] * s.thickness;
       }
+      gather_owned(dist, dist_rows, complete, 1);  // dist: the ghosts' completeness
       std::vector<double> ca_in(ca), cb_in(cb);
 #pragma omp parallel for
       for (size_t i = 0; i < n; ++i) {
@@ -826,6 +830,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         ca[i] = count > 0 ? sa / count : 0.0;
         cb[i] = count > 0 ? sb / count : 0.0;
       }
+      gather_owned(dist, dist_rows, ca, 1);  // dist: the owners' means (other rows are empty here)
+      gather_owned(dist, dist_rows, cb, 1);
     }
 #pragma omp parallel for
     for (size_t i = 0; i < n; ++i)
@@ -903,6 +909,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         const double continuum = h * influence_moment(c.influence, d + 2) / influence_moment(c.influence, d + 1);
         if (complete[i]) scale[i] = std::sqrt(continuum / (cube_sum / s.weighted_volume[i]));
       }
+      gather_owned(dist, dist_rows, complete, 1);  // dist: the ghosts' completeness and scales
+      gather_owned(dist, dist_rows, scale, 1);
       std::vector<double> own_scale(scale);
 #pragma omp parallel for
       for (size_t i = 0; i < n; ++i) {
@@ -916,6 +924,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
           }
         scale[i] = count > 0 ? sum / count : 1.0;
       }
+      gather_owned(dist, dist_rows, scale, 1);  // dist: s0_dual reads the partner's
 #pragma omp parallel for
       for (size_t i = 0; i < n; ++i)
         for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {

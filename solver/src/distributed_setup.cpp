@@ -63,6 +63,29 @@ void gather_entries(const DistributedSetup& d, std::vector<T>& a, bool everyone)
 
 }  // namespace
 
+MaterialSums sum_marked_by_material(const DistributedSetup& d, const DistributedRows& rows,
+                                    const std::vector<uint8_t>& marked, const std::vector<int32_t>& material,
+                                    const std::vector<double>& values, int dims, size_t materials) {
+  std::vector<int32_t> which;  // the marked particles' materials and values, in index order
+  std::vector<double> value;
+  for (size_t i = 0; i < marked.size(); ++i)
+    if (marked[i]) {
+      which.push_back(material[i]);
+      value.insert(value.end(), &values[3 * i], &values[3 * i] + 3);
+    }
+  if (rows.active) {
+    which = concat_over_ranks(d, which);
+    value = concat_over_ranks(d, value);
+  }
+  MaterialSums out{std::vector<double>(materials, 0.0), std::vector<int>(materials, 0)};
+  for (size_t q = 0; q < which.size(); ++q)
+    for (int a = 0; a < dims; ++a) {
+      out.sum[which[q]] += value[3 * q + a];
+      ++out.count[which[q]];
+    }
+  return out;
+}
+
 void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const DistributedSetup& d) {
   if (!rows.active) return;
   const size_t own_entries = s.state.size();

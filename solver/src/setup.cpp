@@ -1010,26 +1010,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     if (c.surface_correction) {
       // Each material's bulk uniaxial energy per unit factor: uniaxial energy scales with
       // the micro-modulus, so compare with a bulk particle of the same material.
-      // The complete families' values in index order (dist: every rank's, in rank order, so
-      // the sums run in one process's order).
-      std::vector<int32_t> complete_material;
-      std::vector<double> complete_uni;
-      for (size_t i = 0; i < n; ++i)
-        if (complete[i]) {
-          complete_material.push_back(s.material[i]);
-          complete_uni.insert(complete_uni.end(), &uni[3 * i], &uni[3 * i] + 3);
-        }
-      if (dist_rows.active) {
-        complete_material = concat_over_ranks(dist, complete_material);
-        complete_uni = concat_over_ranks(dist, complete_uni);
-      }
-      std::vector<double> bulk_uni_by_material(c.materials.size(), 0.0);
-      std::vector<int> count(c.materials.size(), 0);
-      for (size_t q = 0; q < complete_material.size(); ++q)
-        for (int a = 0; a < dims; ++a) {
-          bulk_uni_by_material[complete_material[q]] += complete_uni[3 * q + a];
-          ++count[complete_material[q]];
-        }
+      // dist: over every rank's complete families, in one process's order.
+      MaterialSums bulk = sum_marked_by_material(dist, dist_rows, complete, s.material, uni, dims, c.materials.size());
+      std::vector<double>& bulk_uni_by_material = bulk.sum;
+      std::vector<int>& count = bulk.count;
       for (size_t m = 0; m < c.materials.size(); ++m)
         if (count[m]) bulk_uni_by_material[m] /= count[m];
       if (bulk_iso.empty()) {

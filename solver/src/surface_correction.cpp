@@ -52,29 +52,18 @@ std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<Elasti
   // bulk, lattice sums included, as PMB's correction takes); with none complete (a specimen
   // thinner than two horizons), the continuum's (lambda_d + 2 mu) / 2, which LPS's
   // coefficients give for a complete continuous family.
-  // The complete families' energies in index order (distributed: every rank's own rows, in
-  // rank order, so the sums run in one process's order; the other rows are empty here).
-  std::vector<int32_t> complete_material;
-  std::vector<double> complete_energy;
+  std::vector<uint8_t> complete(n, 0);
   for (size_t i = 0; i < n; ++i) {
     double family_volume = s.volume[i];  // the horizon's ball (disc) holds the particle's own cell too
     for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) family_volume += s.vol_own[k];
     const double h = s.horizon[i];
     const double horizon_volume = dims == 3 ? 4.0 / 3.0 * M_PI * h * h * h : M_PI * h * h * s.thickness;
-    if (family_volume < 0.99 * horizon_volume) continue;
-    complete_material.push_back(s.material[i]);
-    complete_energy.insert(complete_energy.end(), &energy[3 * i], &energy[3 * i] + 3);
+    complete[i] = family_volume >= 0.99 * horizon_volume;
   }
-  if (rows.active) {
-    complete_material = concat_over_ranks(dist, complete_material);
-    complete_energy = concat_over_ranks(dist, complete_energy);
-  }
-  std::vector<double> target(elastic.size(), 0.0);
-  std::vector<int> count(elastic.size(), 0);
-  for (size_t q = 0; q < complete_material.size(); ++q) {
-    for (int a = 0; a < dims; ++a) target[complete_material[q]] += complete_energy[3 * q + a];
-    count[complete_material[q]] += dims;
-  }
+  // Distributed: over every rank's complete families (its own rows), in one process's order.
+  MaterialSums bulk = sum_marked_by_material(dist, rows, complete, s.material, energy, dims, elastic.size());
+  std::vector<double>& target = bulk.sum;
+  const std::vector<int>& count = bulk.count;
   for (size_t m = 0; m < elastic.size(); ++m) {
     if (count[m]) {
       target[m] /= count[m];

@@ -66,6 +66,19 @@ void gather_owned(const DistributedSetup& d, const DistributedRows& rows, std::v
   a.swap(whole);
 }
 
+// Per material: the sum of the first `dims` of each marked particle's 3 `values`, taken in
+// particle index order, and how many values were summed (the surface correction's bulk
+// targets over the complete families). A distributed set-up marks its own rows only: every
+// rank's marked values are concatenated in rank order first, so the sums run in one
+// process's order, bit for bit. Collective when rows are active.
+struct MaterialSums {
+  std::vector<double> sum;
+  std::vector<int> count;
+};
+MaterialSums sum_marked_by_material(const DistributedSetup& d, const DistributedRows& rows,
+                                    const std::vector<uint8_t>& marked, const std::vector<int32_t>& material,
+                                    const std::vector<double>& values, int dims, size_t materials);
+
 // The global system as the time loop and the writers need it, its bonds now in the ranks'
 // own systems: the whole row offsets and bond states (and softening's bond damage) on every
 // rank; with results written, rank 0 also gathers the partners and the two half-bond

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# Peak memory per rank of a distributed run (docs/parallel.md, Memory): a PMB box lattice of
+# Peak memory per rank of a distributed run (docs/parallel.md, Memory): a box lattice (PMB by default) of
 # N^3 particles (m = 3.015) run for a few steps on 1, 2 and 4 ranks of one thread each; each
 # rank's peak resident set (VmHWM, GNU time's %M) in MB, beside summary.json's figures.
 # Usage: scripts/mem_mpi.sh BUILD_DIR [N=30] [RANKS="1 2 4"]   (OUT=runs/mem-mpi)
+# MODEL: the model keys (default "type: pmb"; e.g. "type: lps", "type: pmb, precision: float32").
 set -euo pipefail
-BUILD=${1:-build}; N=${2:-30}; RANKS=${3:-"1 2 4"}
+BUILD=${1:-build}; N=${2:-30}; RANKS=${3:-"1 2 4"}; MODEL=${MODEL:-"type: pmb"}
 BIN="$(cd "$BUILD" && pwd)/bin"
 OUT="${OUT:-$(pwd)/runs/mem-mpi}"
 mkdir -p "$OUT"
@@ -14,7 +15,7 @@ L=$(awk -v n="$N" -v dx="$DX" 'BEGIN{printf "%.6g", n*dx}')
 cat > "$OUT/case.yaml" <<YAML
 name: memory-per-rank
 specimen: {lattice: {dimension: 3, box: [0, 0, 0, $L, $L, $L], spacing: $DX}}
-model: {type: pmb, horizon_factor: 3.015}
+model: {$MODEL, horizon_factor: 3.015}
 materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, fracture_energy: 1e6}]
 initial: [{type: radial_velocity, center: [0, 0, 0], strain_rate: 10}]
 time: {steps: 5}

@@ -28,7 +28,11 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
   }
   const bool uniform = min_horizon == max_horizon;
   const bool all_rows = row_begin == 0 && row_end == static_cast<int64_t>(n);
-  if (!all_rows && !uniform) throw std::invalid_argument("build_families: a row range needs one horizon");
+  // A row range with several horizons cannot take the transpose (it reads every row): each
+  // of its rows searches the largest reach instead and keeps j when either end's own test
+  // holds. Both tests read the same r2 (x_i - x_j = -(x_j - x_i) exactly), so the row is the
+  // merged union's, bit for bit.
+  const bool both_ends = !uniform && !all_rows;
   // reach(i, j) = max(h_i, h_j) + max(p_i, p_j) is the larger of the two "own" reaches
   // h_i + max(p_i, p_j) and h_j + max(p_i, p_j). Each particle searches its own reach; the
   // family is the union of what i found and what found i. With one horizon the own lists
@@ -47,7 +51,7 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
   auto visit = [&](size_t i, auto&& emit) {
     long long ci[3];
     for (int d = 0; d < 3; ++d) ci[d] = grid.coordinate(d, x[3 * i + d]);
-    const double search = horizon[i] + max_pad;
+    const double search = (both_ends ? max_horizon : horizon[i]) + max_pad;
     const long long ring = static_cast<long long>(std::ceil(search / cell));
     // A cell is skipped when its box lies beyond the search radius (with a margin for the
     // rounding of a point's cell coordinate, so that no neighbour is ever lost).
@@ -70,13 +74,15 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
           for (int64_t k = cells.start[c]; k < cells.start[c + 1]; ++k) {
             const size_t j = static_cast<size_t>(cells.members[k]);
             if (j == i) continue;
-            const double reach = horizon[i] + std::max(pad_of(i), pad_of(j));
+            const double p = std::max(pad_of(i), pad_of(j));
+            const double reach = horizon[i] + p;
             double r2 = 0.0;
             for (int d = 0; d < 3; ++d) {
               const double e = x[3 * j + d] - x[3 * i + d];
               r2 += e * e;
             }
-            if (r2 <= reach * reach) emit(j);
+            const double reach_j = horizon[j] + p;  // j's own test of i (both_ends only)
+            if (r2 <= reach * reach || (both_ends && r2 <= reach_j * reach_j)) emit(j);
           }
         }
       }
@@ -111,7 +117,7 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
       std::vector<int32_t>().swap(found[b]);
     }
   }
-  if (uniform) return own;
+  if (uniform || both_ends) return own;
   // Transpose (who found i), filled in ascending i, so each list comes out sorted.
   std::vector<int64_t> t_offsets(n + 1, 0);
   for (int32_t j : own.neighbors) ++t_offsets[static_cast<size_t>(j) + 1];

@@ -11,12 +11,7 @@ std::string distributed_setup_refusal(const PdSystem& s) {
   const CaseConfig& c = s.config;
   // Each of these reads, per particle, values summed over other particles' families (the
   // ghosts' own rows: a second layer), or runs a pass over every family at set-up.
-  if (c.model == PdModel::LPS) return "model.type: lps (the weighted volume of the ghosts)";
   if (c.model == PdModel::Correspondence) return "model.type: correspondence (the ghosts' shape tensors)";
-  if (c.variable_horizon) return "model.variable_horizon (dual horizon: the families' transposed search)";
-  if (c.surface_correction) return "model.surface_correction (the ghosts' axis factors)";
-  if (s.dimension == 2) return "a 2D model (the family reweighting reads the ghosts' (a, b))";
-  if (c.precision == CaseConfig::Precision::Float32) return "model.precision: float32";
   if (c.quasi_static) return "time.integrator: adr";
   if (c.short_range_forces) return "model.short_range_forces";
   for (const auto& l : c.loads)
@@ -66,18 +61,30 @@ void gather_entries(const DistributedSetup& d, std::vector<T>& a, bool everyone)
   a.swap(whole);
 }
 
-// Every rank's owned range of a per-particle array of `width` values each, on every rank.
-template <class T>
-void gather_owned(const DistributedSetup& d, const DistributedRows& rows, std::vector<T>& a, size_t width) {
-  if (a.empty()) return;  // held on every rank or on none (the case decides)
-  const std::vector<T> mine(a.begin() + static_cast<int64_t>(width) * rows.begin,
-                            a.begin() + static_cast<int64_t>(width) * rows.end);
-  std::vector<T> whole = concat_over_ranks(d, mine);
-  if (whole.size() != a.size()) throw std::logic_error("distributed set-up: a gathered per-particle array");
-  a.swap(whole);
-}
-
 }  // namespace
+
+MaterialSums sum_marked_by_material(const DistributedSetup& d, const DistributedRows& rows,
+                                    const std::vector<uint8_t>& marked, const std::vector<int32_t>& material,
+                                    const std::vector<double>& values, int dims, size_t materials) {
+  std::vector<int32_t> which;  // the marked particles' materials and values, in index order
+  std::vector<double> value;
+  for (size_t i = 0; i < marked.size(); ++i)
+    if (marked[i]) {
+      which.push_back(material[i]);
+      value.insert(value.end(), &values[3 * i], &values[3 * i] + 3);
+    }
+  if (rows.active) {
+    which = concat_over_ranks(d, which);
+    value = concat_over_ranks(d, value);
+  }
+  MaterialSums out{std::vector<double>(materials, 0.0), std::vector<int>(materials, 0)};
+  for (size_t q = 0; q < which.size(); ++q)
+    for (int a = 0; a < dims; ++a) {
+      out.sum[which[q]] += value[3 * q + a];
+      ++out.count[which[q]];
+    }
+  return out;
+}
 
 void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const DistributedSetup& d) {
   if (!rows.active) return;
@@ -90,7 +97,10 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   // The force pass that ended the stable-step estimate filled the fields of this rank's
   // particles only (the others' rows are empty here): the owners' values, which the first
   // output writes (a pre-crack's damage) and the ranks' systems start from.
-  for (auto* a : {&s.energy_density, &s.damage, &s.max_stretch, &s.dissipated}) gather_owned(d, rows, *a, 1);
+  // LPS: the dilatation (and the fast path's two factors) that pass left, which the ranks'
+  // systems start from as one process's would.
+  for (auto* a : {&s.energy_density, &s.damage, &s.max_stretch, &s.dissipated, &s.dilatation, &s.lps_a, &s.lps_b})
+    gather_owned(d, rows, *a, 1);
   gather_owned(d, rows, s.force, 3);
   {
     const std::vector<double> all = concat_over_ranks(d, std::vector<double>{s.dissipated_energy});

@@ -43,6 +43,13 @@ void float32_enable(PdSystem& s, const double* origin) {
     }
     f.origin[d] = held ? 0.5 * (lo + hi) : 0.0;
   }
+  if (!s.distributed_rows.empty()) {
+    // A distributed set-up's global system holds no bonds (they live in the ranks' systems):
+    // it keeps the flag and the origin, with which each rank's system converts its own
+    // particles and bonds (copy_rank_state), so no whole-system float copy is made.
+    f.active = true;
+    return;
+  }
   f.x0.resize(3 * held);
   for (size_t k = 0; k < 3 * held; ++k) f.x0[k] = static_cast<float>(s.x0[k] - f.origin[k % 3]);
   convert(s.volume, f.volume);

@@ -87,7 +87,11 @@ void require_graded_horizon(const PdSystem& s) {
 
 std::string graded_horizon_warning(const PdSystem& s) {
   if (!s.config.variable_horizon) return "";
-  const HorizonGrading g = horizon_grading(s);
+  return graded_horizon_warning(s, horizon_grading(s));
+}
+
+std::string graded_horizon_warning(const PdSystem& s, const HorizonGrading& g) {
+  if (!s.config.variable_horizon) return "";
   const GradedLimits& lim = graded_limits(s.config.model);
   if (g.max_neighbour_jump < lim.warn_jump) return "";
   std::ostringstream w;

@@ -866,6 +866,9 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       ca[i] = std::clamp((-sc * sss + ss * scs) / det, -0.5, 0.5);
       cb[i] = std::clamp((-ss * scc + sc * scs) / det, -0.5, 0.5);
     }
+    // dist: each rank's rows give its particles' (a, b); a bond reads both ends'.
+    gather_owned(dist, dist_rows, ca, 1);
+    gather_owned(dist, dist_rows, cb, 1);
     // LPS: a family cut by a surface has a 4 theta moment of its own, which is not the
     // lattice's: it takes the mean (a, b) of the complete families among its members (else
     // none). Without this a bulk particle's bonds to surface neighbours carried their large
@@ -879,6 +882,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) family_volume += s.vol_own[k];
         complete[i] = family_volume >= 0.99 * M_PI * s.horizon[i] * s.horizon[i] * s.thickness;
       }
+      gather_owned(dist, dist_rows, complete, 1);  // dist: the ghosts' completeness
       std::vector<double> ca_in(ca), cb_in(cb);
 #pragma omp parallel for
       for (size_t i = 0; i < n; ++i) {
@@ -895,6 +899,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         ca[i] = count > 0 ? sa / count : 0.0;
         cb[i] = count > 0 ? sb / count : 0.0;
       }
+      gather_owned(dist, dist_rows, ca, 1);  // dist: the owners' means (other rows are empty here)
+      gather_owned(dist, dist_rows, cb, 1);
     }
 #pragma omp parallel for
     for (size_t i = 0; i < n; ++i)
@@ -916,16 +922,29 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     // surface_correction: energy shapes the bonds' weights here, before m is summed from them,
     // and scales each particle's coefficients (surface_correction.hpp).
     const std::vector<double> coefficient_scale =
-        c.surface_correction ? lps_surface_correction(s, elastic) : std::vector<double>(n, 1.0);
+        c.surface_correction ? lps_surface_correction(s, elastic, dist, dist_rows) : std::vector<double>(n, 1.0);
     s.lps.resize(n);
-    for (size_t i = 0; i < n; ++i) {
+    // dist: each rank sums its own rows; the ghosts' m (which their bonds read) come from
+    // their owners, and the first particle without neighbours is found over every rank
+    // (all ranks stop with one process's message, none waits in a collective).
+    int64_t lonely = -1;
+    for (int64_t i = dist_rows.begin; i < dist_rows.end && lonely < 0; ++i) {
       double m = 0.0;
       for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k)
         m += s.k_own[k] * s.xi_len[k] * s.xi_len[k] * s.volume[s.neighbor[k]];
-      if (!(m > 0))
-        throw InputError(c.file, "model.horizon", "particle " + std::to_string(s.original_index[i]) + " has no neighbours",
-                         "a horizon that reaches other particles (about 3 spacings)");
+      if (!(m > 0)) lonely = i;
       s.weighted_volume[i] = m;
+    }
+    if (dist_rows.active) {
+      const std::vector<int64_t> all = concat_over_ranks(dist, std::vector<int64_t>{lonely});
+      const auto first = std::find_if(all.begin(), all.end(), [](int64_t i) { return i >= 0; });
+      lonely = first == all.end() ? -1 : *first;  // ranks own ascending ranges
+      gather_owned(dist, dist_rows, s.weighted_volume, 1);
+    }
+    if (lonely >= 0)
+      throw InputError(c.file, "model.horizon", "particle " + std::to_string(s.original_index[lonely]) + " has no neighbours",
+                       "a horizon that reaches other particles (about 3 spacings)");
+    for (size_t i = 0; i < n; ++i) {
       s.lps[i] = lps_coefficients(elastic[s.material[i]]);
       s.lps[i].bulk_term *= coefficient_scale[i];
       s.lps[i].shear_term *= coefficient_scale[i];
@@ -959,6 +978,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         const double continuum = h * influence_moment(c.influence, d + 2) / influence_moment(c.influence, d + 1);
         if (complete[i]) scale[i] = std::sqrt(continuum / (cube_sum / s.weighted_volume[i]));
       }
+      gather_owned(dist, dist_rows, complete, 1);  // dist: the ghosts' completeness and scales
+      gather_owned(dist, dist_rows, scale, 1);
       std::vector<double> own_scale(scale);
 #pragma omp parallel for
       for (size_t i = 0; i < n; ++i) {
@@ -972,6 +993,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
           }
         scale[i] = count > 0 ? sum / count : 1.0;
       }
+      gather_owned(dist, dist_rows, scale, 1);  // dist: s0_dual reads the partner's
 #pragma omp parallel for
       for (size_t i = 0; i < n; ++i)
         for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
@@ -1057,14 +1079,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     if (c.surface_correction) {
       // Each material's bulk uniaxial energy per unit factor: uniaxial energy scales with
       // the micro-modulus, so compare with a bulk particle of the same material.
-      std::vector<double> bulk_uni_by_material(c.materials.size(), 0.0);
-      std::vector<int> count(c.materials.size(), 0);
-      for (size_t i = 0; i < n; ++i)
-        if (complete[i])
-          for (int a = 0; a < dims; ++a) {
-            bulk_uni_by_material[s.material[i]] += uni[3 * i + a];
-            ++count[s.material[i]];
-          }
+      // dist: over every rank's complete families, in one process's order.
+      MaterialSums bulk = sum_marked_by_material(dist, dist_rows, complete, s.material, uni, dims, c.materials.size());
+      std::vector<double>& bulk_uni_by_material = bulk.sum;
+      std::vector<int>& count = bulk.count;
       for (size_t m = 0; m < c.materials.size(); ++m)
         if (count[m]) bulk_uni_by_material[m] /= count[m];
       if (bulk_iso.empty()) {
@@ -1075,6 +1093,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         for (int a = 0; a < dims; ++a)
           if (uni[3 * i + a] > 0 && count[s.material[i]])
             axis_factor[3 * i + a] = bulk_factor * bulk_uni_by_material[s.material[i]] / uni[3 * i + a];
+      gather_owned(dist, dist_rows, axis_factor, 3);  // dist: the ghosts' factors, which their bonds blend
       // The ellipsoidal blend over-stiffens oblique bonds of a truncated family; a few
       // fixed-point sweeps make each particle's uniaxial energies (with the blended bond
       // factors) hit their targets exactly.
@@ -1096,6 +1115,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
               next[3 * i + a] = axis_factor[3 * i + a] * bulk_factor * bulk_uni_by_material[s.material[i]] / w[a];
         }
         axis_factor.swap(next);
+        gather_owned(dist, dist_rows, axis_factor, 3);
       }
     }
     s.calibration_factor.assign(n, bulk_factor);
@@ -1294,7 +1314,14 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // One horizon over a graded arrangement under-resolves its coarse part, and dual horizon
   // over steep grading reflects waves (docs/atlas.md, stability map, graded_check.hpp).
   if (c.check_stability) require_graded_horizon(s);
-  if (const std::string w = graded_horizon_warning(s); !w.empty()) std::fprintf(stderr, "%s\n", w.c_str());
+  if (c.variable_horizon) {
+    HorizonGrading g = horizon_grading(s);
+    if (dist_rows.active) {  // dist: the largest jump over every rank's rows (a maximum: exact in any order)
+      const std::vector<double> all = concat_over_ranks(dist, std::vector<double>{g.max_neighbour_jump});
+      g.max_neighbour_jump = *std::max_element(all.begin(), all.end());
+    }
+    if (const std::string w = graded_horizon_warning(s, g); !w.empty()) std::fprintf(stderr, "%s\n", w.c_str());
+  }
   // A horizon too small for irregular particles makes each particle's stiffness random
   // (docs/atlas.md, stability map): refuse it before the run.
   if (c.check_stability) require_resolved_families(s);

@@ -35,7 +35,8 @@ void uniaxial_energies(const PdSystem& s, const std::vector<double>& axis_factor
 }
 }  // namespace
 
-std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<ElasticInput>& elastic) {
+std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<ElasticInput>& elastic,
+                                           const DistributedSetup& dist, const DistributedRows& rows) {
   const size_t n = s.n;
   const int dims = s.dimension;
   std::vector<LpsCoefficients> coefficients(elastic.size());
@@ -51,17 +52,18 @@ std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<Elasti
   // bulk, lattice sums included, as PMB's correction takes); with none complete (a specimen
   // thinner than two horizons), the continuum's (lambda_d + 2 mu) / 2, which LPS's
   // coefficients give for a complete continuous family.
-  std::vector<double> target(elastic.size(), 0.0);
-  std::vector<int> count(elastic.size(), 0);
+  std::vector<uint8_t> complete(n, 0);
   for (size_t i = 0; i < n; ++i) {
     double family_volume = s.volume[i];  // the horizon's ball (disc) holds the particle's own cell too
     for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) family_volume += s.vol_own[k];
     const double h = s.horizon[i];
     const double horizon_volume = dims == 3 ? 4.0 / 3.0 * M_PI * h * h * h : M_PI * h * h * s.thickness;
-    if (family_volume < 0.99 * horizon_volume) continue;
-    for (int a = 0; a < dims; ++a) target[s.material[i]] += energy[3 * i + a];
-    count[s.material[i]] += dims;
+    complete[i] = family_volume >= 0.99 * horizon_volume;
   }
+  // Distributed: over every rank's complete families (its own rows), in one process's order.
+  MaterialSums bulk = sum_marked_by_material(dist, rows, complete, s.material, energy, dims, elastic.size());
+  std::vector<double>& target = bulk.sum;
+  const std::vector<int>& count = bulk.count;
   for (size_t m = 0; m < elastic.size(); ++m) {
     if (count[m]) {
       target[m] /= count[m];
@@ -86,6 +88,7 @@ std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<Elasti
       }
       for (int a = 0; a < dims; ++a) axis_factor[3 * i + a] /= std::exp(log_mean);
     }
+    gather_owned(dist, rows, axis_factor, 3);  // the ghosts' factors, which their bonds blend
     measure();
   }
   // The coefficient scale makes the mean of the particle's uniaxial energies the target.
@@ -95,6 +98,7 @@ std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<Elasti
     for (int a = 0; a < dims; ++a) mean += energy[3 * i + a] / dims;
     if (mean > 0) coefficient_scale[i] = target[s.material[i]] / mean;
   }
+  gather_owned(dist, rows, coefficient_scale, 1);  // the ghosts' LPS coefficients carry it
   scale_bonds_by_axis_factors(s, axis_factor);
   return coefficient_scale;
 }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "breccia/solver/calibration.hpp"
+#include "breccia/solver/distributed_setup.hpp"
 #include "breccia/solver/pd_system.hpp"
 
 namespace breccia::solver {
@@ -38,6 +39,9 @@ void scale_bonds_by_axis_factors(PdSystem& s, const std::vector<double>& axis_fa
 // of its LPS coefficients (returned, one per particle), chosen so that its LPS energy under
 // unit uniaxial strain along each axis is the bulk value. m, the dilatation and the critical
 // stretches are then computed from the corrected weights as before (run it before them).
-std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<ElasticInput>& elastic);
+// A distributed set-up (rows active) computes its own rows and takes the ghosts' factors and
+// the complete families' energies from every rank (distributed_setup.hpp): one process's bits.
+std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<ElasticInput>& elastic,
+                                           const DistributedSetup& dist, const DistributedRows& rows);
 
 }  // namespace breccia::solver

@@ -311,6 +311,9 @@ public:
       local_.force = force;
       global.derived_fields_pending = false;
     }
+    // float32: one process's first measure leaves the float-rounded kinematics in its system,
+    // which the first output writes (run_time_loop); later outputs download first anyway.
+    if (local_.f32.active) download_kinematics(global);
   }
 
   void step(PdSystem& g) override {
@@ -488,8 +491,9 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
       // displacement, fracture on): the owned fields and bond states come from this one,
       // where finish_distributed_setup gathers them.
       for (auto [from, to] : {std::pair{&l.energy_density, &g.energy_density}, {&l.damage, &g.damage},
-                              {&l.max_stretch, &g.max_stretch}, {&l.dissipated, &g.dissipated}})
-        std::copy(from->begin(), from->begin() + owned, to->begin() + b);
+                              {&l.max_stretch, &g.max_stretch}, {&l.dissipated, &g.dissipated},
+                              {&l.dilatation, &g.dilatation}, {&l.lps_a, &g.lps_a}, {&l.lps_b, &g.lps_b}})
+        if (!from->empty()) std::copy(from->begin(), from->begin() + owned, to->begin() + b);  // LPS's: held or not
       std::copy(l.state.begin(), l.state.end(), g.state.begin());
       std::copy(l.bond_damage.begin(), l.bond_damage.end(), g.bond_damage.begin());  // softening bonds
       g.dissipated_energy = l.dissipated_energy;

@@ -23,8 +23,10 @@ struct Families {
 // position: 3N (x, y, z interleaved); horizon_m, pad_m: N (pad may be empty = 0).
 // The pad lets partial-volume rules include neighbours whose cell straddles the horizon.
 // rows [row_begin, row_end) only (default: all): the other rows are left empty, so a
-// distributed set-up builds the families of the particles it owns alone. A row range needs
-// one horizon (the union with the transposed search of a dual horizon reads every row).
+// distributed set-up builds the families of the particles it owns alone. With several
+// horizons (dual horizon) a row of a range searches the largest reach and tests both ends
+// (the whole build takes the union with the transposed search, which reads every row):
+// the same rows, in the same order.
 Families build_families(std::span<const double> position, std::span<const double> horizon_m,
                         std::span<const double> pad_m = {}, int64_t row_begin = 0, int64_t row_end = -1);
 

@@ -17,6 +17,7 @@
 // system what the time loop and the files need.
 #include <cstdint>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,33 @@ std::vector<T> concat_over_ranks(const DistributedSetup& d, const std::vector<T>
   if (!bytes.empty()) std::memcpy(static_cast<void*>(out.data()), bytes.data(), bytes.size());
   return out;
 }
+
+// Every rank's owned range of a per-particle array of `width` values each (computed there
+// from the rank's own rows), on every rank: the ghosts' values a later pass reads, e.g.
+// LPS's weighted volume. Collective; an empty array (the feature is off, on every rank
+// alike) stays empty.
+template <class T>
+void gather_owned(const DistributedSetup& d, const DistributedRows& rows, std::vector<T>& a, size_t width) {
+  if (a.empty() || !rows.active) return;
+  const std::vector<T> mine(a.begin() + static_cast<int64_t>(width) * rows.begin,
+                            a.begin() + static_cast<int64_t>(width) * rows.end);
+  std::vector<T> whole = concat_over_ranks(d, mine);
+  if (whole.size() != a.size()) throw std::logic_error("distributed set-up: a gathered per-particle array");
+  a.swap(whole);
+}
+
+// Per material: the sum of the first `dims` of each marked particle's 3 `values`, taken in
+// particle index order, and how many values were summed (the surface correction's bulk
+// targets over the complete families). A distributed set-up marks its own rows only: every
+// rank's marked values are concatenated in rank order first, so the sums run in one
+// process's order, bit for bit. Collective when rows are active.
+struct MaterialSums {
+  std::vector<double> sum;
+  std::vector<int> count;
+};
+MaterialSums sum_marked_by_material(const DistributedSetup& d, const DistributedRows& rows,
+                                    const std::vector<uint8_t>& marked, const std::vector<int32_t>& material,
+                                    const std::vector<double>& values, int dims, size_t materials);
 
 // The global system as the time loop and the writers need it, its bonds now in the ranks'
 // own systems: the whole row offsets and bond states (and softening's bond damage) on every

@@ -38,6 +38,7 @@ struct Float32State {
 // Build the float state from the double one (after set-up: the stable step is estimated in
 // double, since its power iteration uses strains of 1e-9, below float's resolution).
 // `origin`: the point float coordinates are relative to (default: the bounding box centre).
+// A distributed set-up's global system (no bonds held) takes the flag and origin only.
 void float32_enable(PdSystem& sys, const double* origin = nullptr);
 PdViewT<float> float32_view(PdSystem& sys);
 // Double -> float: displacement, velocity, acceleration, external force density.

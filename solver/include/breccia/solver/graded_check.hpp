@@ -90,5 +90,8 @@ void require_graded_horizon(const PdSystem& s);
 // Empty, or a warning (printed by setup_system) that bonded neighbours differ in spacing by
 // more than the model's warn_jump: waves reflect at the change (docs/atlas.md).
 std::string graded_horizon_warning(const PdSystem& s);
+// The same from a grading already measured (a distributed set-up takes the largest jump over
+// every rank's rows: each holds its own).
+std::string graded_horizon_warning(const PdSystem& s, const HorizonGrading& g);
 
 }  // namespace breccia::solver

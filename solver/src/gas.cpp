@@ -173,10 +173,7 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
     g.arrival_next = g.arrival;
     g.push.assign(3 * n, 0.0);
     g.front_done.assign(n, 0);
-    g.dry_hint.assign(n, -1);
     g.in_crack.assign(s.neighbor.size(), 0);
-    g.crack_list.assign(s.neighbor.size(), 0);
-    g.crack_count.assign(n, -1);
     g.position.assign(3 * n, 0.0);
     // The halves each entry has (gas_entry_open), so the open test reads two bytes.
     g.halves.resize(s.neighbor.size());

@@ -443,7 +443,6 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
         throw InputError(path, "/gas/in_crack", "missing (written by an older breccia-solve)",
                          "a checkpoint of this case written by this version");
       g.in_crack = f.read_uint8("/gas/in_crack");
-      std::fill(g.crack_count.begin(), g.crack_count.end(), -1);  // the crack lists follow in_crack
       if (g.in_crack.size() != s.neighbor.size())
         throw InputError(path, "/gas/in_crack", "sized for other families", "a checkpoint of this case");
     }

@@ -54,18 +54,10 @@ struct GasView {
   double* position = nullptr;      // 3 per particle: x0 + u at this update (one gather per partner)
   double* push = nullptr;          // 3 per particle: dV_crack/dy_i / V_i (the crack force is -p push)
   uint8_t* front_done = nullptr;   // per particle: wetted, and every partner is too (stops pushing)
-  int32_t* dry_hint = nullptr;     // per particle: offset in its row of a partner last seen dry (-1: none)
   // Per bond entry: 1 once the entry is open with both ends wetted at an update, so that its
   // crack is in the gas's volume (for good: bonds do not heal and wetting is for good). The
   // entries so marked skip the open and wetted checks, and the work counts only their motion.
-  // (2 for the step it joins, set back to 1 by the crack pass that counts it.)
   uint8_t* in_crack = nullptr;
-  // Per particle, the entries in the crack as offsets in its row, in entry order (a list of
-  // capacity the row's length at crack_list + offsets[i]), and their count (-1: not built yet,
-  // built from in_crack by the next crack pass: after the set-up and a restart). The crack pass
-  // then visits only these entries, and scans the rest only while some are not in the crack.
-  uint32_t* crack_list = nullptr;
-  int32_t* crack_count = nullptr;
 };
 
 BRECCIA_HD bool gas_wetted(const GasView& g, int64_t i) { return g.arrival[i] < 1e300; }
@@ -143,12 +135,8 @@ struct GasFront {
   double t, speed;
   BRECCIA_HD void operator()(int64_t i) const {
     if (!gas_wetted(g, i) || g.front_done[i]) return;
-    // The partner found dry at the last pass: while it stays dry the particle is known to have
-    // one from the start, and only the open entries' partners are read.
-    const int64_t begin = p.offsets[i];
-    const int32_t hint = g.dry_hint[i];
-    bool dry_partner = hint >= 0 && !gas_wetted(g, p.neighbor[begin + hint]);
-    for (int64_t k = begin; k < p.offsets[i + 1]; ++k) {
+    bool dry_partner = false;
+    for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
       if (g.in_crack[k]) continue;  // both ends wetted
       const bool open = gas_entry_open(p.state, g.halves, k);
       // A closed entry only tells whether a partner is still dry: once one is known, its
@@ -156,7 +144,6 @@ struct GasFront {
       if (!open && dry_partner) continue;
       const int32_t j = p.neighbor[k];
       if (gas_wetted(g, j)) continue;
-      if (!dry_partner) g.dry_hint[i] = static_cast<int32_t>(k - begin);
       dry_partner = true;
       if (!open) continue;
       const double reached = g.arrival[i] + p.xi_len[k] / speed;
@@ -224,13 +211,10 @@ BRECCIA_HD double gas_entry_opening(const double* position, const double* kappa_
 // loop keeps each particle's dV_crack/dy_i (push), so that the crack forces need no second
 // pass over the entries once the pressure is known.
 //
-// The entries in the volume are kept per particle as a list in entry order (crack_list), so
-// the pass visits only them; the others are scanned for joins only while the particle has
-// some, and a chunk of them none of which is open is passed over after a branch-free test.
-// On the host each chunk of kBondChunk listed entries runs in two stages: compute their
-// openings (the stage the compiler vectorises: square root and divisions), then add their
-// terms in entry order. The sums are therefore the one-entry-at-a-time loop's (the CUDA
-// build's) bit for bit.
+// On the host each chunk of kBondChunk entries runs in three stages: pick the entries in the
+// volume (in entry order; marking those that join), compute their openings (the stage the
+// compiler vectorises: square root and divisions), then add their terms in entry order. The sums are therefore the
+// one-entry-at-a-time loop's (the CUDA build's) bit for bit.
 template <class UBefore>
 struct GasCrackSum {
   using Value = GasSums;
@@ -267,14 +251,6 @@ struct GasCrackSum {
       density += t.density;
       for (int d = 0; d < 3; ++d) push[d] += t.push[d];
     }
-    // add() for an entry already in the volume: volume_before takes what volume does, and
-    // joined takes nothing.
-    BRECCIA_HD void add_counted(const Terms& t) {
-      v.volume += t.volume;
-      v.volume_before += t.volume;
-      density += t.density;
-      for (int d = 0; d < 3; ++d) push[d] += t.push[d];
-    }
   };
 
   BRECCIA_HD Value operator()(int64_t i) const {
@@ -292,72 +268,47 @@ struct GasCrackSum {
     const int32_t* neighbor = p.neighbor;
     const double* xi_len = p.xi_len;
     const uint8_t* state = p.state;
-    const uint8_t* halves = gv.halves;
     uint8_t* in_crack = gv.in_crack;
     const double* position = gv.position;
     const double* kv = gv.kappa_volume;
     const double kappa_i = kv[2 * i], volume_i = kv[2 * i + 1];
     const double xx = position[3 * i], xy = position[3 * i + 1], xz = position[3 * i + 2];
     const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
-    const int32_t row = static_cast<int32_t>(end - begin);
-    uint32_t* list = gv.crack_list + begin;
-    int32_t count = gv.crack_count[i];
-    // Entries not yet in the crack: one that is open with its partner reached joins now
-    // (in_crack 2 for this pass). Each chunk is first tested branch-free for an entry that is
-    // open and not in the crack (rare outside the front), only then entry by entry.
-    bool joins = false;
-    if (count != row) {
-      for (int64_t base = begin; base < end; base += kBondChunk) {
-        const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
-        int candidates = 0;
-        for (int q = 0; q < m; ++q)
-          candidates |= (in_crack[base + q] == 0) & ((state[base + q] & halves[base + q]) == 0);
-        if (!candidates) continue;
-        for (int64_t k = base; k < base + m; ++k) {
-          if (in_crack[k] || !gas_entry_open(state, halves, k) || !gas_wetted_next(gv, neighbor[k])) continue;
-          in_crack[k] = 2;  // only i writes its entries
-          joins = true;
-        }
-      }
-      if (joins || count < 0) {  // the list again, in entry order
-        count = 0;
-        for (int32_t q = 0; q < row; ++q) {  // branch-free: most entries are in, or most out
-          list[count] = static_cast<uint32_t>(q);
-          count += in_crack[begin + q] != 0;
-        }
-        gv.crack_count[i] = count;
-      }
-    }
-    const int32_t* row_neighbor = neighbor + begin;
-    const double* row_xi = xi_len + begin;
-    uint8_t* row_in_crack = in_crack + begin;
-    // Each chunk of the list: the openings (on the host the stage the compiler vectorises:
-    // square root and divisions), then the terms added in entry order.
 #if defined(__CUDA_ARCH__)
-    for (int32_t c = 0; c < count; ++c) {
+    for (int64_t k = begin; k < end; ++k) {
+      const bool counted = in_crack[k];
+      if (!counted) {
+        if (!gas_entry_open(state, gv.halves, k) || !gas_wetted_next(gv, neighbor[k])) continue;
+        in_crack[k] = 1;  // only i writes its entries
+      }
       double ux, uy, uz, a;
-      const double e = gas_entry_opening(position, kv, row_neighbor, row_xi, kappa_i, xx, xy, xz, list[c], ux, uy, uz, a);
-      const bool joined = joins && row_in_crack[list[c]] == 2;
-      if (joined) row_in_crack[list[c]] = 1;
-      s.add(entry_terms(e, ux, uy, uz, a, joined, volume_i, du));
+      const double e = gas_entry_opening(position, kv, neighbor, xi_len, kappa_i, xx, xy, xz, k, ux, uy, uz, a);
+      s.add(entry_terms(e, ux, uy, uz, a, !counted, volume_i, du));
     }
 #else
+    int32_t pick[kBondChunk];
+    bool joined[kBondChunk];
     double e[kBondChunk], ux[kBondChunk], uy[kBondChunk], uz[kBondChunk], a[kBondChunk];
-    for (int32_t base = 0; base < count; base += kBondChunk) {
-      const int m = count - base < kBondChunk ? count - base : static_cast<int>(kBondChunk);
-      const uint32_t* pick = list + base;
-BRECCIA_SIMD
-      for (int c = 0; c < m; ++c)
-        e[c] = gas_entry_opening(position, kv, row_neighbor, row_xi, kappa_i, xx, xy, xz, pick[c], ux[c], uy[c], uz[c], a[c]);
-      if (joins) {
-        for (int c = 0; c < m; ++c) {
-          const bool joined = row_in_crack[pick[c]] == 2;
-          if (joined) row_in_crack[pick[c]] = 1;
-          s.add(entry_terms(e[c], ux[c], uy[c], uz[c], a[c], joined, volume_i, du));
+    for (int64_t base = begin; base < end; base += kBondChunk) {
+      const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
+      int count = 0;
+      for (int q = 0; q < m; ++q) {
+        const int64_t k = base + q;
+        const bool counted = in_crack[k];
+        if (!counted) {
+          if (!gas_entry_open(state, gv.halves, k) || !gas_wetted_next(gv, neighbor[k])) continue;
+          in_crack[k] = 1;  // only i writes its entries
         }
-      } else {  // none joined: the same sums without the joined terms (adding +0 changes none)
-        for (int c = 0; c < m; ++c) s.add_counted(entry_terms(e[c], ux[c], uy[c], uz[c], a[c], false, volume_i, du));
+        pick[count] = q;
+        joined[count] = !counted;
+        ++count;
       }
+      const int32_t* chunk_neighbor = neighbor + base;
+      const double* chunk_xi = xi_len + base;
+BRECCIA_SIMD
+      for (int c = 0; c < count; ++c)
+        e[c] = gas_entry_opening(position, kv, chunk_neighbor, chunk_xi, kappa_i, xx, xy, xz, pick[c], ux[c], uy[c], uz[c], a[c]);
+      for (int c = 0; c < count; ++c) s.add(entry_terms(e[c], ux[c], uy[c], uz[c], a[c], joined[c], volume_i, du));
     }
 #endif
     if (vent) s.v.vent_area = s.density * gv.vent_area[i];
@@ -438,9 +389,6 @@ struct GasState {
   std::vector<double> wall_dv, arrival, arrival_next, kappa_volume, push, vent_facet_area;
   std::vector<uint8_t> front_done, in_crack, wall_on;
   std::vector<uint8_t> halves;    // per bond entry (gas_entry_open; set-up, not checkpointed)
-  std::vector<uint32_t> crack_list;  // per bond entry: the crack lists (GasView; rebuilt from in_crack)
-  std::vector<int32_t> crack_count;  // per particle (-1: to be built)
-  std::vector<int32_t> dry_hint;     // per particle (GasView; not checkpointed: a hint only)
   std::vector<double> position;   // 3 per particle: the crack pass's x0 + u
   std::vector<GasSums> block_sums;  // gas_fixed_order_sum's per-block sums
   std::vector<double> wall_left;
@@ -473,10 +421,7 @@ struct GasState {
     v.position = position.data();
     v.push = push.data();
     v.front_done = front_done.data();
-    v.dry_hint = dry_hint.data();
     v.in_crack = in_crack.data();
-    v.crack_list = crack_list.data();
-    v.crack_count = crack_count.data();
     return v;
   }
   // The area the gas escapes through once vented [m2]: the fixed part and the cracks' mouths.

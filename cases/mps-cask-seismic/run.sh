@@ -7,6 +7,8 @@
 # RECORD=path.csv (optional): any time_s,acceleration_g record instead of the synthetic one.
 # RESTITUTION=e (optional, 0 < e <= 1): the canister's impacts on the container get a normal
 # dashpot with this coefficient of restitution (contact.rigid_bodies[0].restitution; README).
+# FLOOR_RESTITUTION=e (optional): the container's corners on the floor get one too
+# (contact.rigid_bodies[0].floor_restitution; README).
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
@@ -25,6 +27,7 @@ fi
 RECORD="$(cd "$(dirname "$RECORD")" && pwd)/$(basename "$RECORD")"
 EXTRA=()
 [ -n "${RESTITUTION:-}" ] && EXTRA+=(--set "contact.rigid_bodies[0].restitution=$RESTITUTION")
+[ -n "${FLOOR_RESTITUTION:-}" ] && EXTRA+=(--set "contact.rigid_bodies[0].floor_restitution=$FLOOR_RESTITUTION")
 RUNS=()
 for dx in $SPACINGS; do
   for gap in ${GAPS:-0 0.05}; do

@@ -252,8 +252,13 @@ void Contact::rigid_contact(long long i, long long slot, double depth, const dou
   rigid_friction(i, slot, normal_force, n, v_surface, law, s, dt, f);
 }
 
-bool Contact::damped() const {
+bool Contact::particle_dashpots() const {
   return std::any_of(polygons_.begin(), polygons_.end(), [](const RigidPolygon& p) { return p.law.damping_ratio > 0.0; });
+}
+
+bool Contact::damped() const {
+  return particle_dashpots() ||
+         std::any_of(polygons_.begin(), polygons_.end(), [](const RigidPolygon& p) { return p.floor_damping_ratio > 0.0; });
 }
 
 // The dashpot's m_eff is the reduced mass of the particle and the polygon at the contact
@@ -310,7 +315,7 @@ void Contact::obstacle_forces(const ParticleStateView& s, double dt) {
     const double* u = a == 0 ? s.u.x : (a == 1 ? s.u.y : s.u.z);
     return s.position_m[3 * i + a] + ((a < s.dimension) ? u[i] : 0.0);
   };
-  if (damped()) {
+  if (particle_dashpots()) {
     if (particle_mass_kg_.size() != static_cast<size_t>(n))
       throw std::logic_error("Contact: a damped polygon contact needs the particle masses (set_particle_masses)");
     if (dashpot_force_n_.size() != static_cast<size_t>(slots * n)) dashpot_force_n_.assign(slots * n, {0.0, 0.0});
@@ -429,6 +434,8 @@ void Contact::free_bodies_on_half_spaces(double dt) {
   for (const auto& poly : polygons_) vertices += poly.x_m.size();
   if (vertex_friction_.size() != half_spaces_.size() * vertices)
     vertex_friction_.assign(half_spaces_.size() * vertices, FrictionState{});
+  if (vertex_dashpot_force_n_.size() != half_spaces_.size() * vertices)
+    vertex_dashpot_force_n_.assign(half_spaces_.size() * vertices, {0.0, 0.0});
   std::vector<double> vx, vy;
   size_t first = 0;
   for (size_t p = 0; p < polygons_.size(); first += polygons_[p].x_m.size(), ++p) {
@@ -445,12 +452,31 @@ void Contact::free_bodies_on_half_spaces(double dt) {
         // Relative to the plane (which may be moving: ground motion).
         const double v_vertex[3] = {b.vx - b.omega * (vy[m] - b.cy) - plane.velocity[0],
                                     b.vy + b.omega * (vx[m] - b.cx) - plane.velocity[1], -plane.velocity[2]};
+        // The second half step of the last dashpot force's work (as settle_dashpot).
+        std::array<double, 2>& last = vertex_dashpot_force_n_[h * vertices + first + m];
+        if (last[0] != 0.0 || last[1] != 0.0) {
+          damping_dissipated_j_ -= 0.5 * (last[0] * v_vertex[0] + last[1] * v_vertex[1]) * dt;
+          last = {0.0, 0.0};
+        }
         if (height >= 0.0) {
           dissipated_j_ += release_friction_spring(st, v_vertex, dt, hs.law.tangential_stiffness_n_m);
           continue;
         }
         const double normal_force = -hs.law.normal_stiffness_n_m * height;
         double f[3] = {normal_force * hs.normal[0], normal_force * hs.normal[1], normal_force * hs.normal[2]};
+        if (polygons_[p].floor_damping_ratio > 0.0) {
+          // The vertex's normal dashpot, c = 2 zeta sqrt(k m_eff) with the body's effective
+          // mass at the vertex along n, 1/m_eff = 1/M + ((r x n)_z)^2 / I: the vertex striking
+          // the floor alone leaves it with the stated restitution. Friction's N stays k g.
+          const double arm = (vx[m] - b.cx) * hs.normal[1] - (vy[m] - b.cy) * hs.normal[0];
+          const double inverse_mass = 1.0 / polygons_[p].mass_kg + arm * arm / polygons_[p].inertia_kg_m2;
+          const double c = 2.0 * polygons_[p].floor_damping_ratio * std::sqrt(hs.law.normal_stiffness_n_m / inverse_mass);
+          const double vn = v_vertex[0] * hs.normal[0] + v_vertex[1] * hs.normal[1] + v_vertex[2] * hs.normal[2];
+          const double force = -c * vn;
+          for (int a = 0; a < 3; ++a) f[a] += force * hs.normal[a];
+          last = {force * hs.normal[0], force * hs.normal[1]};
+          damping_dissipated_j_ -= 0.5 * force * vn * dt;
+        }
         if (hs.law.frictional()) {
           dissipated_j_ += coulomb_tangential_force(st, hs.normal.data(), v_vertex, dt, normal_force,
                                                     hs.law.tangential_stiffness_n_m, hs.law.static_friction,

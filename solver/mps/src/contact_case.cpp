@@ -48,6 +48,7 @@ void configure_contact(const CaseSpec& spec, const std::vector<int>& body_id, So
     p.law.static_friction = r.friction.static_friction;
     p.law.kinetic_friction = r.friction.kinetic_friction;
     p.law.damping_ratio = damping_ratio_of_restitution(r.restitution);
+    p.floor_damping_ratio = damping_ratio_of_restitution(r.floor_restitution);
     p.motion = r.motion;
     long long inside = 0;
     for (size_t i = 0; i < n; ++i) {
@@ -62,7 +63,7 @@ void configure_contact(const CaseSpec& spec, const std::vector<int>& body_id, So
                        "a rigid body clear of the particles at t = 0");
     solid.contact().add_polygon(std::move(p));
   }
-  if (solid.contact().damped()) {  // the dashpots' m_eff: the particle masses
+  if (solid.contact().damped()) {  // the particle dashpots' m_eff: the particle masses
     std::vector<double> mass(n);
     for (size_t i = 0; i < n; ++i) mass[i] = solid.density_kg_m3() * solid.volume_m3()[i];
     solid.contact().set_particle_masses(std::move(mass));

@@ -160,7 +160,7 @@ PrescribedMotion parse_motion(const Section& s) {
 
 RigidBodySpec parse_rigid_body(const Section& s, size_t index, int dimension) {
   std::vector<std::string> keys{"name",           "vertices",         "fixed",  "density", "velocity",
-                                "angular_velocity", "stiffness_factor", "stiffness_length", "restitution", "motion"};
+                                "angular_velocity", "stiffness_factor", "stiffness_length", "restitution", "floor_restitution", "motion"};
   for (const auto& k : friction_keys()) keys.push_back(k);
   s.allow_only(keys);
   RigidBodySpec r;
@@ -225,13 +225,20 @@ RigidBodySpec parse_rigid_body(const Section& s, size_t index, int dimension) {
   }
   r.stiffness_factor = s.positive("stiffness_factor", Quantity::Dimensionless, 1.0);
   if (s.has("stiffness_length")) r.stiffness_length_m = s.positive("stiffness_length", Quantity::Length, 0.0);
-  if (s.has("restitution")) {
-    r.restitution = s.number("restitution", Quantity::Dimensionless, 1.0);
-    if (!(r.restitution > 0.0 && r.restitution <= 1.0))
-      fail(s, "restitution", text_of(r.restitution),
+  // A coefficient of restitution: 0 < e <= 1 (1, the default: no dashpot).
+  auto restitution = [&](const char* key) {
+    if (!s.has(key)) return 1.0;
+    const double e = s.number(key, Quantity::Dimensionless, 1.0);
+    if (!(e > 0.0 && e <= 1.0))
+      fail(s, key, text_of(e),
            "a coefficient of restitution 0 < e <= 1 (1: elastic, no dashpot; 0 would be a perfectly plastic impact, "
            "which a spring-dashpot cannot give)");
-  }
+    return e;
+  };
+  r.restitution = restitution("restitution");
+  r.floor_restitution = restitution("floor_restitution");
+  if (r.fixed && s.has("floor_restitution"))
+    fail(s, "floor_restitution", "given for a fixed body", "fixed: false (a free body's vertices rest on the floor)");
   r.friction = parse_friction(s);
   return r;
 }

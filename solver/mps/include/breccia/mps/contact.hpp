@@ -93,6 +93,9 @@ struct RigidPolygon {
   std::array<double, 2> velocity_m_s{0.0, 0.0};
   double angular_velocity_rad_s = 0.0;
   RigidContactLaw law;
+  // Free bodies: damping ratio of the normal dashpot of each vertex on the half-spaces (from
+  // the stated floor_restitution, damping_ratio_of_restitution); 0: undamped.
+  double floor_damping_ratio = 0.0;
   std::optional<PrescribedMotion> motion;  // fixed bodies only: ground motion (translation)
 };
 
@@ -151,10 +154,11 @@ public:
   double friction_dissipation_j() const { return dissipated_j_; }
   // Particle masses (kg), needed by a damped polygon contact (its dashpot's m_eff).
   void set_particle_masses(std::vector<double> mass_kg) { particle_mass_kg_ = std::move(mass_kg); }
-  // Some polygon has a normal dashpot (RigidContactLaw::damping_ratio > 0).
+  // Some polygon has a normal dashpot: on the particles (RigidContactLaw::damping_ratio > 0)
+  // or on its vertices' floor contacts (floor_damping_ratio > 0).
   bool damped() const;
   // Energy the normal dashpots have removed (J): the work of each step's dashpot force over
-  // the leapfrog's two half steps around it (obstacle_forces).
+  // the leapfrog's two half steps around it (obstacle_forces, free_bodies_on_half_spaces).
   double contact_damping_j() const { return damping_dissipated_j_; }
   // With the contact run on a device (Solid::attach_device): the totals it reports replace
   // those compute_forces() would have left.
@@ -217,6 +221,8 @@ private:
   // Books the work of particle slot's last dashpot force over the half step after it
   // (velocity v_rel relative to the surface now) and clears it.
   void settle_dashpot(long long index, const double v_rel[3], double dt);
+  // Some polygon has a dashpot on its particle contacts (needs the particle masses).
+  bool particle_dashpots() const;
   // The Coulomb part of rigid_contact (normal_force = the normal penalty's size).
   void rigid_friction(long long i, long long slot, double normal_force, const double n[3], const double v_surface[3],
                       const RigidContactLaw& law, const ParticleStateView& s, double dt, double f[3]);
@@ -240,6 +246,8 @@ private:
   // obstacle (x, y; as friction_), and the energy they removed.
   std::vector<double> particle_mass_kg_;
   std::vector<std::array<double, 2>> dashpot_force_n_;
+  // The last step's dashpot force per free polygon vertex and half-space (as vertex_friction_).
+  std::vector<std::array<double, 2>> vertex_dashpot_force_n_;
   double damping_dissipated_j_ = 0.0;
   long long contact_pairs_ = 0;
   // Reaction on each half-space (the force the particles and free bodies' vertices push it

@@ -79,6 +79,10 @@ struct RigidBodySpec {
   // normal dashpot in the penalty contact (contact_kernels.hpp,
   // damping_ratio_of_restitution); 1 (the default): no dashpot.
   double restitution = 1.0;
+  // Free bodies: coefficient of restitution of the polygon's vertices on the floor (the
+  // half-spaces), 0 < e <= 1: a normal dashpot in the vertex contact, c = 2 zeta sqrt(k m_eff)
+  // with m_eff the body's effective mass at the vertex; 1 (the default): no dashpot.
+  double floor_restitution = 1.0;
   FrictionSpec friction;
   std::optional<PrescribedMotion> motion;  // fixed bodies only
 };

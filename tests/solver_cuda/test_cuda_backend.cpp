@@ -276,6 +276,35 @@ TEST(CudaBackend, LpsCrackBreaksTheSameBondsAsOnTheCpu) {
   expect_same_cracks(r, "LPS");
 }
 
+// model.cuda_layout: sell (docs/cuda.md, "SELL-C-sigma"): the fast passes over the layout, one
+// thread per slice lane. They run only between output steps (diagnostics off), so both
+// backends turn the diagnostics on every 10th step only, as the run loop does; the diagnostic
+// steps take the CSR passes and refresh the layout's state from the CSR's.
+TEST(CudaBackend, SellLayoutCracksMatchTheCpu) {
+  if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
+  for (const char* yaml : {kPmbPlateFracture, kLpsPlateFracture}) {
+    std::string deck = yaml;
+    const std::string line = "horizon_factor: 3.015";
+    deck.replace(deck.find(line), line.size(), line + ", cuda_layout: sell");
+    Pair r{system_from_yaml("sell_crack", deck), system_from_yaml("sell_crack", deck), {}, {}};
+    ASSERT_TRUE(r.cpu.config.cuda_sell_layout);
+    CudaSystem device(r.gpu);
+    for (int k = 0; k < kSteps; ++k) {
+      r.cpu.diagnostics = r.gpu.diagnostics = k % 10 == 9;
+      cpu_step(r.cpu);
+      device.step(r.gpu);
+    }
+    r.cpu_e = measure(r.cpu);
+    r.gpu_e = device.measure(r.gpu);
+    device.download(r.gpu);
+    const bool pmb = r.cpu.config.model == PdModel::PMB;
+    std::printf("  [cuda sell] %s: u identical to the bit: %s, bond states identical: %s\n", pmb ? "PMB" : "LPS",
+                r.gpu.u == r.cpu.u ? "yes" : "no", r.gpu.state == r.cpu.state ? "yes" : "no");
+    expect_same_motion_and_energies(r);
+    expect_same_cracks(r, pmb ? "PMB, SELL layout" : "LPS, SELL layout");
+  }
+}
+
 // LAMMPS's fracture rules (docs/lammps-peri.md) on the device: the compressive enhancement's
 // s_min buffers swapped per step, and the after-force break order, in double and float32.
 std::string with_lammps_rules(std::string yaml, const std::string& model_line, bool float32) {

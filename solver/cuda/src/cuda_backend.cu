@@ -493,6 +493,13 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   }
   if (s.config.cuda_sell_layout) {
     // The fast passes over SELL-C-sigma (step.hpp pd_force_pass): one thread per slice lane.
+    // Only they read the layout; a case that never takes them would pay its state refresh
+    // after every pass for nothing.
+    const bool fast = s.symmetric_halves && s.bond_damage.empty() && s.min_stretch.empty() &&
+                      (s.config.model == PdModel::PMB || (s.config.model == PdModel::LPS && s.lps_a.size() == s.n));
+    if (!fast)
+      throw RunError("CUDA backend: model.cuda_layout: sell serves the fast bond passes only (PMB or LPS with one "
+                     "constant horizon, brittle bonds, no compressive enhancement); use model.cuda_layout: csr");
     const SellLayout layout = build_sell_layout(s.offsets, kSellChunk, kSellSigma);
     m.sell_slice_offset.upload(layout.slice_offset, "SELL slice offsets");
     m.sell_csr_entry.upload(layout.csr_entry, "SELL CSR entries");

@@ -280,12 +280,40 @@ TEST(CudaBackend, LpsCrackBreaksTheSameBondsAsOnTheCpu) {
 // thread per slice lane. They run only between output steps (diagnostics off), so both
 // backends turn the diagnostics on every 10th step only, as the run loop does; the diagnostic
 // steps take the CSR passes and refresh the layout's state from the CSR's.
+// LPS takes the fast paths only in 3D (2D LPS with fracture rescales each family's s0, so its
+// halves differ): a glass block pulled until bonds break (test_sell_layout.cpp's).
+const char* kLpsBlockFracture = R"(
+specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.004, 0.002], spacing: 0.5 mm}}
+model: {type: lps, horizon_factor: 3.015}
+materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.25, fracture_energy: 3.8, weibull: {modulus: 5, seed: 3}}]
+loads:
+  - {type: traction, surface: ymax, value: [0, 120 MPa, 0], history: {type: ramp, value: 1, ramp_time: 10 us}}
+boundary:
+  - {type: fixed, set: ymin}
+time: {steps: 1000}
+)";
+
+std::string with_sell_layout(std::string deck) {
+  const std::string line = "horizon_factor: 3.015";
+  return deck.replace(deck.find(line), line.size(), line + ", cuda_layout: sell");
+}
+
+TEST(CudaBackend, SellLayoutIsRefusedWhereTheFastPassesNeverApply) {
+  if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
+  PdSystem s = system_from_yaml("sell_lps_2d", with_sell_layout(kLpsPlateFracture));
+  ASSERT_FALSE(s.symmetric_halves);
+  try {
+    CudaSystem device(s);
+    ADD_FAILURE() << "a 2D LPS case with fracture has no fast passes: the layout should be refused";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("model.cuda_layout"), std::string::npos) << e.what();
+  }
+}
+
 TEST(CudaBackend, SellLayoutCracksMatchTheCpu) {
   if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
-  for (const char* yaml : {kPmbPlateFracture, kLpsPlateFracture}) {
-    std::string deck = yaml;
-    const std::string line = "horizon_factor: 3.015";
-    deck.replace(deck.find(line), line.size(), line + ", cuda_layout: sell");
+  for (const char* yaml : {kPmbPlateFracture, kLpsBlockFracture}) {
+    const std::string deck = with_sell_layout(yaml);
     Pair r{system_from_yaml("sell_crack", deck), system_from_yaml("sell_crack", deck), {}, {}};
     ASSERT_TRUE(r.cpu.config.cuda_sell_layout);
     CudaSystem device(r.gpu);

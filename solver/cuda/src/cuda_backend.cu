@@ -29,9 +29,9 @@ namespace {
 
 constexpr int kBlock = 256;
 constexpr int kMaxReduceBlocks = 1024;  // partial sums per reduction: fixed, so results are reproducible
-// model.cuda_layout: sell: a slice is a warp; rows sorted by length within 8 slices (docs/cuda.md).
+// model.cuda_layout: sell: a slice is a warp; rows sorted by length within 32 slices (docs/cuda.md).
 constexpr int kSellChunk = 32;
-constexpr int kSellSigma = 256;
+constexpr int kSellSigma = 1024;
 
 using cuda::check;
 using cuda::check_launch;

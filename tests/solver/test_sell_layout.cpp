@@ -321,3 +321,19 @@ TEST(SellKernels, HostSliceFormMatchesTheLaneForm) {
     EXPECT_EQ(h.bonds.state, hs.bonds.state) << model;
   }
 }
+
+TEST(SellLayout, CaseKeyModelCudaLayout) {
+  const std::string deck = plate("pmb");
+  EXPECT_FALSE(parse_case_file(write_case("sell_key_default", deck)).cuda_sell_layout) << "csr by default";
+  std::string sell = deck;
+  sell.replace(sell.find("horizon_factor: 3.015"), 21, "horizon_factor: 3.015, cuda_layout: sell");
+  EXPECT_TRUE(parse_case_file(write_case("sell_key_sell", sell)).cuda_sell_layout);
+  std::string bad = deck;
+  bad.replace(bad.find("horizon_factor: 3.015"), 21, "horizon_factor: 3.015, cuda_layout: ell");
+  try {
+    parse_case_file(write_case("sell_key_bad", bad));
+    ADD_FAILURE() << "an unknown layout should be refused";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("model.cuda_layout"), std::string::npos) << e.what();
+  }
+}

@@ -307,7 +307,8 @@ run_tests() {  # run_tests NAME [gtest args]
 gpu_leg_possible() { [ "$1" != gpu ] || [ "$DRY" = 1 ] || [ "$HAVE_GPU" = 1 ] || { skip "no GPU"; false; }; }
 
 # PD: bond-updates/s on a cubic lattice (the bench.sh case, larger). MODEL: pmb, lps,
-# correspondence, or pmb32/lps32 (model.precision float32, the GPU's float path).
+# correspondence, pmb32/lps32 (model.precision float32, the GPU's float path) or
+# pmbsell/lpssell (model.cuda_layout: sell).
 PD_L=$(awk -v n="$PD_N" 'BEGIN{printf "%.6g", n*0.0005}')
 result pd_n "$PD_N"
 pd_leg() {  # pd_leg MODEL gpu|cpu
@@ -317,6 +318,7 @@ pd_leg() {  # pd_leg MODEL gpu|cpu
   case $model in
     correspondence) model_line="{type: correspondence, horizon_factor: 3.015, stabilisation: {type: penalty, coefficient: 1}}" ;;
     *32) model_line="{type: ${model%32}, horizon_factor: 3.015, precision: float32}" ;;
+    *sell) model_line="{type: ${model%sell}, horizon_factor: 3.015, cuda_layout: sell}" ;;  # SELL-C-sigma bonds
     *) model_line="{type: $model, horizon_factor: 3.015}" ;;
   esac
   local k="pd_${model}_$leg" dir="$WORK/pd_${model}_$leg"
@@ -463,3 +465,7 @@ check sanitizer sanitizer_mps 20 sanitize sanitizer_mps test_mps_cuda 'MpsCuda.S
 check rest pd_correspondence_gpu 0 pd_leg correspondence gpu
 check rest pd_correspondence_cpu 0 pd_leg correspondence cpu
 check rest atlas_rows 0 atlas_rows
+# The SELL-C-sigma bond layout (model.cuda_layout: sell; docs/cuda.md): the same lattice as
+# pd_pmb_gpu and pd_lps_gpu, its rate against theirs.
+check rest pd_pmbsell_gpu 0 pd_leg pmbsell gpu
+check rest pd_lpssell_gpu 0 pd_leg lpssell gpu

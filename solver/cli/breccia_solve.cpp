@@ -18,6 +18,7 @@
 #include "breccia/common/yaml_input.hpp"
 #include "breccia/solver/mpi_launch.hpp"
 #include "breccia/solver/partition.hpp"
+#include "breccia/solver/sell_layout.hpp"
 #include "breccia/solver/run.hpp"
 #ifdef BRECCIA_WITH_MPS
 #include "breccia/mps/run_case.hpp"
@@ -212,6 +213,10 @@ int main(int argc, char** argv) {
       solver::PdSystem s = solver::setup_system(config);
       std::printf("# %s: %zu particles, %zu bond entries, %s; halo bytes at %g B per ghost per step\n", case_file.c_str(),
                   s.n, s.bond_count(), config.model_name.c_str(), bytes_per_ghost);
+      // The padding of the CUDA backend's SELL-C-sigma layout on these families (docs/cuda.md).
+      for (const int sigma : {1, 256, 1024, 4096})
+        std::printf("# SELL-C-sigma C = 32, sigma = %d: %.4f padded entries per bond entry\n", sigma,
+                    solver::build_sell_layout(s.offsets, 32, sigma).padding_factor());
       std::printf("%s", header);
       for (const int ranks_here : rank_counts) {
         solver::Partition p;

@@ -134,7 +134,7 @@ CaseConfig parse_case_file(const std::string& path) {
   model.allow_only({"type", "planar", "influence", "horizon", "horizon_factor", "variable_horizon",
                     "surface_correction", "fracture", "no_fail", "precision",
                     "stabilisation", "partial_volume", "compressive_enhancement", "short_range_forces",
-                    "pmb_calibration", "break_check"});
+                    "pmb_calibration", "break_check", "cuda_layout"});
   c.model_name = model.choice("type", {"pmb", "lps", "mps", "correspondence"});
   c.model = c.model_name == "lps" ? PdModel::LPS : PdModel::PMB;
   if (c.model_name == "correspondence") c.model = PdModel::Correspondence;
@@ -176,6 +176,8 @@ CaseConfig parse_case_file(const std::string& path) {
                      "type: pmb or lps (the rule is implemented for bond and LPS forces)");
   c.short_range_forces = model.boolean("short_range_forces", false);
   c.break_after_force = model.choice("break_check", {"before_force", "after_force"}, "before_force") == "after_force";
+  // The CUDA backend's bond layout (docs/cuda.md, "SELL-C-sigma"); the CPU backend ignores it.
+  c.cuda_sell_layout = model.choice("cuda_layout", {"csr", "sell"}, "csr") == "sell";
   if (c.break_after_force && c.model == PdModel::Correspondence)
     throw InputError(path, "model.break_check", "after_force with type: correspondence", "before_force, or type: pmb or lps");
   if (c.short_range_forces && c.model == PdModel::Correspondence)

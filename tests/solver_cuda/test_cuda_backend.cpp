@@ -276,6 +276,63 @@ TEST(CudaBackend, LpsCrackBreaksTheSameBondsAsOnTheCpu) {
   expect_same_cracks(r, "LPS");
 }
 
+// model.cuda_layout: sell (docs/cuda.md, "SELL-C-sigma"): the fast passes over the layout, one
+// thread per slice lane. They run only between output steps (diagnostics off), so both
+// backends turn the diagnostics on every 10th step only, as the run loop does; the diagnostic
+// steps take the CSR passes and refresh the layout's state from the CSR's.
+// LPS takes the fast paths only in 3D (2D LPS with fracture rescales each family's s0, so its
+// halves differ): a glass block pulled until bonds break (test_sell_layout.cpp's).
+const char* kLpsBlockFracture = R"(
+specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.004, 0.002], spacing: 0.5 mm}}
+model: {type: lps, horizon_factor: 3.015}
+materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.25, fracture_energy: 3.8, weibull: {modulus: 5, seed: 3}}]
+loads:
+  - {type: traction, surface: ymax, value: [0, 120 MPa, 0], history: {type: ramp, value: 1, ramp_time: 10 us}}
+boundary:
+  - {type: fixed, set: ymin}
+time: {steps: 1000}
+)";
+
+std::string with_sell_layout(std::string deck) {
+  const std::string line = "horizon_factor: 3.015";
+  return deck.replace(deck.find(line), line.size(), line + ", cuda_layout: sell");
+}
+
+TEST(CudaBackend, SellLayoutIsRefusedWhereTheFastPassesNeverApply) {
+  if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
+  PdSystem s = system_from_yaml("sell_lps_2d", with_sell_layout(kLpsPlateFracture));
+  ASSERT_FALSE(s.symmetric_halves);
+  try {
+    CudaSystem device(s);
+    ADD_FAILURE() << "a 2D LPS case with fracture has no fast passes: the layout should be refused";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("model.cuda_layout"), std::string::npos) << e.what();
+  }
+}
+
+TEST(CudaBackend, SellLayoutCracksMatchTheCpu) {
+  if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
+  for (const char* yaml : {kPmbPlateFracture, kLpsBlockFracture}) {
+    const std::string deck = with_sell_layout(yaml);
+    Pair r{system_from_yaml("sell_crack", deck), system_from_yaml("sell_crack", deck), {}, {}};
+    ASSERT_TRUE(r.cpu.config.cuda_sell_layout);
+    CudaSystem device(r.gpu);
+    for (int k = 0; k < kSteps; ++k) {
+      r.cpu.diagnostics = r.gpu.diagnostics = k % 10 == 9;
+      cpu_step(r.cpu);
+      device.step(r.gpu);
+    }
+    r.cpu_e = measure(r.cpu);
+    r.gpu_e = device.measure(r.gpu);
+    device.download(r.gpu);
+    const bool pmb = r.cpu.config.model == PdModel::PMB;
+    std::printf("  [cuda sell] %s: u identical to the bit: %s, bond states identical: %s\n", pmb ? "PMB" : "LPS",
+                r.gpu.u == r.cpu.u ? "yes" : "no", r.gpu.state == r.cpu.state ? "yes" : "no");
+    expect_same_motion_and_energies(r);
+    expect_same_cracks(r, pmb ? "PMB, SELL layout" : "LPS, SELL layout");
+  }
+}
+
 // LAMMPS's fracture rules (docs/lammps-peri.md) on the device: the compressive enhancement's
 // s_min buffers swapped per step, and the after-force break order, in double and float32.
 std::string with_lammps_rules(std::string yaml, const std::string& model_line, bool float32) {

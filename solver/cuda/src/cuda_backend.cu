@@ -21,6 +21,7 @@
 #include "breccia/solver/float32_state.hpp"
 #include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_kernels.hpp"
+#include "breccia/solver/sell_layout.hpp"
 #include "breccia/solver/step.hpp"
 
 namespace breccia::solver {
@@ -28,6 +29,9 @@ namespace {
 
 constexpr int kBlock = 256;
 constexpr int kMaxReduceBlocks = 1024;  // partial sums per reduction: fixed, so results are reproducible
+// model.cuda_layout: sell: a slice is a warp; rows sorted by length within 32 slices (docs/cuda.md).
+constexpr int kSellChunk = 32;
+constexpr int kSellSigma = 1024;
 
 using cuda::check;
 using cuda::check_launch;
@@ -168,6 +172,13 @@ struct CudaSystem::Impl {
   DeviceArray<float> s_onset, bond_damage;  // softening bonds (pd_kernels.hpp)
   DeviceArray<double> short_range_k, spacing;
   DeviceArray<float> fshort_range_k, fspacing;
+  // model.cuda_layout: sell (sell_layout.hpp): the layout and, in its order, the per-entry
+  // arrays of the fast passes (double and float copies of the lengths and moduli)
+  DeviceArray<int64_t> sell_slice_offset, sell_csr_entry;
+  DeviceArray<int32_t> sell_particle, sell_row_length, sell_neighbor;
+  DeviceArray<double> sell_xi_len, sell_k_own;
+  DeviceArray<float> sell_fxi_len, sell_fk_own, sell_s0_own;
+  DeviceArray<uint8_t> sell_state;
   // step scratch
   DeviceArray<double> u_before, f_before;
   // loads and constraints (index lists uploaded once)
@@ -479,6 +490,39 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   if (m.f32) {
     fill(m.farrays);
     m.farrays.u_before = m.fu_before.get();
+  }
+  if (s.config.cuda_sell_layout) {
+    // The fast passes over SELL-C-sigma (step.hpp pd_force_pass): one thread per slice lane.
+    // Only they read the layout; a case that never takes them would pay its state refresh
+    // after every pass for nothing.
+    const bool fast = s.symmetric_halves && s.bond_damage.empty() && s.min_stretch.empty() &&
+                      (s.config.model == PdModel::PMB || (s.config.model == PdModel::LPS && s.lps_a.size() == s.n));
+    if (!fast)
+      throw RunError("CUDA backend: model.cuda_layout: sell serves the fast bond passes only (PMB or LPS with one "
+                     "constant horizon, brittle bonds, no compressive enhancement); use model.cuda_layout: csr");
+    const SellLayout layout = build_sell_layout(s.offsets, kSellChunk, kSellSigma);
+    m.sell_slice_offset.upload(layout.slice_offset, "SELL slice offsets");
+    m.sell_csr_entry.upload(layout.csr_entry, "SELL CSR entries");
+    m.sell_particle.upload(layout.particle, "SELL lane particles");
+    m.sell_row_length.upload(layout.row_length, "SELL row lengths");
+    const SellBondArrays<double> b = gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state);
+    m.sell_neighbor.upload(b.neighbor, "SELL neighbours");
+    m.sell_xi_len.upload(b.xi_len, "SELL bond lengths");
+    m.sell_k_own.upload(b.k_own, "SELL moduli");
+    m.sell_s0_own.upload(b.s0_own, "SELL critical stretches");
+    m.sell_state.upload(b.state, "SELL bond states");
+    const SellView view{layout.lanes(), kSellChunk, m.sell_slice_offset.get(), m.sell_particle.get(),
+                        m.sell_row_length.get(), m.sell_csr_entry.get(), m.state.get()};
+    m.arrays.sell = view;
+    m.arrays.sell_entries = {m.sell_neighbor.get(), m.sell_xi_len.get(), m.sell_k_own.get(), m.sell_s0_own.get(),
+                             m.sell_state.get()};
+    if (m.f32) {
+      m.sell_fxi_len.upload(layout.gather(s.f32.xi_len, 1.0f), "SELL float bond lengths");
+      m.sell_fk_own.upload(layout.gather(s.f32.k_own, 0.0f), "SELL float moduli");
+      m.farrays.sell = view;
+      m.farrays.sell_entries = {m.sell_neighbor.get(), m.sell_fxi_len.get(), m.sell_fk_own.get(), m.sell_s0_own.get(),
+                                m.sell_state.get()};
+    }
   }
   m.refresh_step_views();
 }

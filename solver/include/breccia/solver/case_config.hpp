@@ -158,6 +158,9 @@ struct CaseConfig {
   // When a bond found past its critical stretch stops pushing: at once (before_force, the
   // default) or after this pass (after_force, LAMMPS PERI's order; docs/lammps-peri.md).
   bool break_after_force = false;
+  // model.cuda_layout: sell: the CUDA backend's fast bond passes walk a SELL-C-sigma copy of
+  // the bonds (coalesced loads; sell_layout.hpp). Default csr: one thread per CSR row.
+  bool cuda_sell_layout = false;
   bool softening = false;  // some material has a tensile_strength (bilinear softening bonds)
   // Working precision of the bond loop and the state it streams (docs/theory.md, Precision).
   enum class Precision { Float64, Float32 } precision = Precision::Float64;

@@ -204,6 +204,19 @@ BRECCIA_HD Real lps_dilatation_entry(const PdViewT<Real>& p, const BondOriginT<R
   return (p.state[k] & kOwnIntact) ? term : Real(0);
 }
 
+// The end of LPS's first pass, from the sum over particle i's intact own bonds (the CSR loop
+// below and the SELL lanes of sell_kernels.hpp): theta_i and the fast path's factors.
+template <class Real>
+BRECCIA_HD void lps_store_dilatation(const PdViewT<Real>& p, int64_t i, Real sum) {
+  const Real theta = static_cast<Real>(p.lps[i].dilatation_factor) * sum / p.weighted_volume[i];
+  p.dilatation[i] = theta;
+  if (p.lps_a) {
+    const LpsCoefficients& c = p.lps[i];
+    p.lps_a[i] = theta * static_cast<Real>(c.bulk_term - c.shear_term / c.dilatation_factor) / p.weighted_volume[i];
+    p.lps_b[i] = static_cast<Real>(c.shear_term) / p.weighted_volume[i];
+  }
+}
+
 // LPS first pass: theta_i = d/m_i * sum_j omega beta |xi| e V_j over intact own bonds.
 template <class Real>
 BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
@@ -234,13 +247,7 @@ BRECCIA_SIMD
     const Real weight = p.bond_damage ? Real(1) - static_cast<Real>(p.bond_damage[k]) : Real(1);
     sum += weight * p.k_own[k] * p.xi_len[k] * extension * p.volume[j];
   }
-  const Real theta = static_cast<Real>(p.lps[i].dilatation_factor) * sum / p.weighted_volume[i];
-  p.dilatation[i] = theta;
-  if (p.lps_a) {
-    const LpsCoefficients& c = p.lps[i];
-    p.lps_a[i] = theta * static_cast<Real>(c.bulk_term - c.shear_term / c.dilatation_factor) / p.weighted_volume[i];
-    p.lps_b[i] = static_cast<Real>(c.shear_term) / p.weighted_volume[i];
-  }
+  lps_store_dilatation(p, i, sum);
 }
 
 // One LPS entry of the fast loop (lps_symmetric_force_kernel between output steps): the force
@@ -284,20 +291,48 @@ BRECCIA_HD double lps_fast_break(const PdViewT<Real>& p, int64_t i, int64_t k) {
 // summed in `Released`. On the host each chunk of kBondChunk entries is computed branch-free
 // first (the stage the compiler vectorises), then summed in the entry order, so the sums are
 // the scalar loop's and the CUDA build's (one entry per iteration) bit for bit.
-template <class Released, class Real, class Path>
-BRECCIA_HD void two_stage_force_loop(const PdViewT<Real>& p, int64_t i, const Path& path) {
+//
+// ordered_fast_loop is the one-entry-at-a-time form (the device's): particle i's `count`
+// entries in row order, the q-th at index `at(q)`; `broke(k)` is told of each break after
+// `path.release`. The CSR row (CsrRow) and a SELL lane (sell_kernels.hpp) both run it.
+struct CsrRow {
+  int64_t begin;
+  BRECCIA_HD int64_t operator()(int64_t q) const { return begin + q; }
+};
+struct NoBreakHook {
+  BRECCIA_HD void operator()(int64_t) const {}
+};
+
+template <class Released, class Real, class Path, class At, class Broke>
+BRECCIA_HD void ordered_fast_loop(const PdViewT<Real>& p, int64_t i, int64_t count, const Path& path, const At& at,
+                                  const Broke& broke) {
   Real fx = Real(0), fy = Real(0), fz = Real(0);
   Released released = Released(0);
-  const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
-#if defined(__CUDA_ARCH__)
-  for (int64_t k = begin; k < end; ++k) {
+  for (int64_t q = 0; q < count; ++q) {
+    const int64_t k = at(q);
     Real cx, cy, cz;
-    if (path.entry(p, k, cx, cy, cz)) released += static_cast<Released>(path.release(p, i, k));
+    if (path.entry(p, k, cx, cy, cz)) {
+      released += static_cast<Released>(path.release(p, i, k));
+      broke(k);
+    }
     fx += cx;
     fy += cy;
     fz += cz;
   }
+  p.force[3 * i] = fx;
+  p.force[3 * i + 1] = fy;
+  p.force[3 * i + 2] = fz;
+  p.dissipated[i] = released;
+}
+
+template <class Released, class Real, class Path>
+BRECCIA_HD void two_stage_force_loop(const PdViewT<Real>& p, int64_t i, const Path& path) {
+  const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
+#if defined(__CUDA_ARCH__)
+  ordered_fast_loop<Released>(p, i, end - begin, path, CsrRow{begin}, NoBreakHook{});
 #else
+  Real fx = Real(0), fy = Real(0), fz = Real(0);
+  Released released = Released(0);
   // A local copy of the view: its pointers are then loop invariants GCC keeps in registers
   // (read through `p` they are loads it will not vectorise).
   const PdViewT<Real> v = p;
@@ -320,11 +355,11 @@ BRECCIA_SIMD_COUNT(breaking)
       for (int q = 0; q < m; ++q)
         if (breaks[q]) released += static_cast<Released>(path.release(p, i, base + q));
   }
-#endif
   p.force[3 * i] = fx;
   p.force[3 * i + 1] = fy;
   p.force[3 * i + 2] = fz;
   p.dissipated[i] = released;
+#endif
 }
 
 // The fast LPS loop's entries (two_stage_force_loop).
@@ -498,10 +533,14 @@ struct PmbFastPath {
   BRECCIA_HD double release(const PdViewT<Real>& p, int64_t i, int64_t k) const { return pmb_fast_break(p, i, k); }
 };
 
+// The fast PMB loop sums the released energy in double, and float in float (as the float
+// loop always has).
+template <class Real>
+using PmbReleased = std::conditional_t<BondOriginT<Real>::kRelative, Real, double>;
+
 template <class Real>
 BRECCIA_HD void pmb_fast_force_loop(const PdViewT<Real>& p, int64_t i, const BondOriginT<Real>& origin) {
-  using Released = std::conditional_t<BondOriginT<Real>::kRelative, Real, double>;
-  two_stage_force_loop<Released>(p, i, PmbFastPath<Real>{origin});
+  two_stage_force_loop<PmbReleased<Real>>(p, i, PmbFastPath<Real>{origin});
 }
 
 // PMB with one constant horizon, the common production case: reads one modulus and one

@@ -35,6 +35,7 @@
 #include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_kernels.hpp"
 #include "breccia/solver/pd_system.hpp"
+#include "breccia/solver/sell_kernels.hpp"
 
 namespace breccia::solver {
 
@@ -266,6 +267,11 @@ struct StepArrays {
   // A distributed run's ghosts: held after the p.n owned particles, their values arrive by
   // exchange_halo (never computed here). Zero on one process.
   int64_t ghosts = 0;
+  // The SELL-C-sigma layout of the bonds (sell_layout.hpp; lanes 0: none, the CSR passes run):
+  // the fast passes then walk `sell_entries`, and every break is also written to the CSR's
+  // state (sell.csr_state, the state in `p`), which the other passes read.
+  SellView sell{};
+  SellEntriesT<Real> sell_entries{};
 };
 
 // exec.exchange(a, field) where the execution space has one (a distributed run's); nothing
@@ -378,11 +384,22 @@ void pd_force_pass(Exec& exec, const StepArrays<Real>& a, bool sum_released) {
     }
   }
   if (p.model != static_cast<int>(PdModel::Correspondence)) {
+    // The layout's passes where the fast paths apply; otherwise the CSR's, after which the
+    // layout's state is refreshed from the CSR's (those passes break bonds there only).
+    const bool sell = a.sell.lanes > 0 && sell_fast_pass(p);
+    const PdViewT<Real> e = sell ? sell_entry_view(p, a.sell_entries) : p;
     if (p.model == static_cast<int>(PdModel::LPS)) {
-      exec.for_each(n, Dilatation<Real>{p}, "lps_dilatation_kernel");
+      if (sell) exec.for_each(a.sell.lanes, SellDilatation<Real>{e, a.sell}, "sell_dilatation_kernel");
+      else exec.for_each(n, Dilatation<Real>{p}, "lps_dilatation_kernel");
       exchange_halo(exec, a, HaloField::Lps);
     }
-    exec.for_each(n, BondForces<Real>{p}, "force_kernel");
+    if (sell) {
+      exec.for_each(a.sell.lanes, SellBondForces<Real>{e, a.sell}, "sell_force_kernel");
+    } else {
+      exec.for_each(n, BondForces<Real>{p}, "force_kernel");
+      if (a.sell.lanes > 0)
+        exec.for_each(a.sell.lanes, SellStateFromCsr{a.sell, a.sell_entries.state}, "sell_state_from_csr");
+    }
     if (p.short_range_k) {
       exec.for_each(n, FamilyShortRange<Real>{p}, "short_range_kernel");
       exec.contact(a);

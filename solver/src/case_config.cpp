@@ -205,7 +205,8 @@ CaseConfig parse_case_file(const std::string& path) {
                      "float64 (the correspondence kernels exist in double precision only)");
 
   for (const Section& m : root.list("materials")) {
-    m.allow_only({"name", "density", "youngs_modulus", "poisson_ratio", "fracture_energy", "tensile_strength", "weibull"});
+    m.allow_only({"name", "density", "youngs_modulus", "poisson_ratio", "fracture_energy", "tensile_strength", "weibull",
+                  "strength_rate"});
     MaterialSpec ms;
     ms.name = m.text("name", "default");
     ms.density = m.positive("density", Quantity::Density);
@@ -221,6 +222,13 @@ CaseConfig parse_case_file(const std::string& path) {
       if (!(ms.fracture_energy > 0))
         throw InputError(path, m.field("tensile_strength"), "given without a fracture_energy",
                          "fracture_energy > 0 too (the softening law takes both: strength and G0)");
+    }
+    if (m.has("strength_rate")) {  // docs/theory.md "Rate-dependent strength"
+      const std::string law = m.choice("strength_rate", {"none", "fib_mc2010"});
+      ms.strength_rate = law == "fib_mc2010" ? StrengthRateLaw::FibMC2010 : StrengthRateLaw::None;
+      if (ms.strength_rate != StrengthRateLaw::None && !(ms.tensile_strength > 0))
+        throw InputError(path, m.field("strength_rate"), "'" + law + "' for a material without a tensile_strength",
+                         "a tensile_strength too (the law raises the softening bonds' strength), or none");
     }
     if (auto w = m.optional_section("weibull")) {
       w->allow_only({"modulus", "seed", "scales"});
@@ -240,6 +248,17 @@ CaseConfig parse_case_file(const std::string& path) {
   }
   if (c.materials.empty())
     throw InputError(path, "materials", "missing or empty", "a list with at least one material");
+  // One rate law per case: the force pass holds one (pd_kernels.hpp), not one per bond.
+  for (size_t k = 0; k < c.materials.size(); ++k) {
+    const StrengthRateLaw law = c.materials[k].strength_rate;
+    if (law == StrengthRateLaw::None) continue;
+    for (size_t q = 0; q < c.materials.size(); ++q)
+      if (c.materials[q].tensile_strength > 0 && c.materials[q].strength_rate != law)
+        throw InputError(path, "materials[" + std::to_string(q) + "].strength_rate",
+                         "differs from materials[" + std::to_string(k) + "].strength_rate",
+                         "the same strength_rate for every material with a tensile_strength (one law per case)");
+    c.strength_rate = law;
+  }
   for (size_t k = 0; k < c.materials.size(); ++k) {
     if (!(c.materials[k].tensile_strength > 0)) continue;
     c.softening = true;
@@ -511,6 +530,12 @@ CaseConfig parse_case_file(const std::string& path) {
   c.adr_max_steps = time.integer("adr_max_steps", 100000);
   if (!c.end_time && !c.steps && !c.quasi_static)
     throw InputError(path, "time", "neither 'end' nor 'steps' given", "time.end (e.g. 700 us) or time.steps");
+  if (c.quasi_static && c.strength_rate != StrengthRateLaw::None)
+    for (size_t k = 0; k < c.materials.size(); ++k)
+      if (c.materials[k].strength_rate != StrengthRateLaw::None)
+        throw InputError(path, "materials[" + std::to_string(k) + "].strength_rate",
+                         "a rate law with time.integrator: adr",
+                         "none (relaxation's velocities are not the body's: it has no strain rate)");
   if (c.quasi_static)  // relaxation finds one equilibrium: a boundary value in time has no meaning there
     for (size_t b = 0; b < c.boundaries.size(); ++b)
       for (size_t d = 0; d < c.boundaries[b].expression.size(); ++d)

@@ -105,6 +105,7 @@ PdViewT<float> float32_view(PdSystem& s) {
   if (!s.bond_damage.empty()) {  // float in both views: shared
     p.s_onset = s.s_onset.data();
     p.bond_damage = s.bond_damage.data();
+    p.strength_rate = static_cast<int>(s.config.strength_rate);
   }
   if (!f.short_range_k.empty() && s.n) {
     p.short_range_k = f.short_range_k.data();

@@ -355,6 +355,8 @@ void write_checkpoint(const PdSystem& s, const std::string& path) {
     f.write("/body", s.body, {n, 3});
     f.write("/bond_state", s.state, {s.state.size()});
     if (!s.bond_damage.empty()) f.write("/bond_damage", std::vector<double>(s.bond_damage.begin(), s.bond_damage.end()), {s.bond_damage.size()});
+    if (s.config.strength_rate != StrengthRateLaw::None)  // the onsets softening bonds were given at their rate
+      f.write("/bond_onset", std::vector<double>(s.s_onset.begin(), s.s_onset.end()), {s.s_onset.size()});
     if (!s.min_stretch.empty()) {  // compressive enhancement: the s_min this step's pass read, and its own
       f.write("/min_stretch_previous", std::vector<double>(s.min_stretch.begin(), s.min_stretch.end()), {s.n});
       f.write("/min_stretch", std::vector<double>(s.min_stretch_next.begin(), s.min_stretch_next.end()), {s.n});
@@ -407,6 +409,15 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
     const auto damage = f.read_doubles("/bond_damage");
     s.bond_damage.assign(damage.begin(), damage.end());
   }
+  if (s.config.strength_rate != StrengthRateLaw::None) {
+    if (!f.exists("/bond_onset"))
+      throw InputError(path, "/bond_onset", "missing (written without materials[].strength_rate)",
+                       "a checkpoint of this case with the same materials");
+    const auto onset = f.read_doubles("/bond_onset");
+    if (onset.size() != s.s_onset.size())
+      throw InputError(path, "/bond_onset", "sized for other families", "a checkpoint of this case");
+    s.s_onset.assign(onset.begin(), onset.end());
+  }
   if (!s.min_stretch.empty()) {
     if (!f.exists("/min_stretch_previous"))
       throw InputError(path, "/min_stretch_previous", "missing (written without model.compressive_enhancement)",
@@ -455,9 +466,17 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
   }
   // Derived per-particle fields (damage, energy) at the restored state; no bond can break
   // here because the stretches are those already checked at the checkpointed step.
+  // With a rate law the velocities here are the full step's, not the half step's the straight
+  // run's pass saw: a bond near its dynamic onset could soften here and not there, so the
+  // bond state is kept as checkpointed.
   const double dissipated = s.dissipated_energy;
   const std::vector<double> force = s.force;
+  const bool keep_bonds = s.config.strength_rate != StrengthRateLaw::None;
+  std::vector<uint8_t> state;
+  std::vector<float> damage, onset;
+  if (keep_bonds) state = s.state, damage = s.bond_damage, onset = s.s_onset;
   cpu_compute_forces(s);
+  if (keep_bonds) s.state = std::move(state), s.bond_damage = std::move(damage), s.s_onset = std::move(onset);
   s.dissipated_energy = dissipated;
   s.force = force;
 }

@@ -61,6 +61,11 @@ std::string distributed_unsupported(const PdSystem& g) {
   // positions, the cavity's whole wall).
   if (g.config.short_range_forces) return "model.short_range_forces";
   if (g.gas.active) return "loads[].type: gas";
+  // The rate law reads the ghosts' velocities (bond_stretch_rate) and keeps per-entry onsets
+  // that the ranks' gathers and checkpoints do not carry yet.
+  for (size_t k = 0; k < g.config.materials.size(); ++k)
+    if (g.config.materials[k].strength_rate != StrengthRateLaw::None)
+      return "materials[" + std::to_string(k) + "].strength_rate";
   return "";
 }
 

@@ -468,6 +468,7 @@ PdView PdSystem::view() {
   if (!bond_damage.empty()) {
     p.s_onset = s_onset.data();
     p.bond_damage = bond_damage.data();
+    p.strength_rate = static_cast<int>(config.strength_rate);
   }
   if (!short_range_k.empty() && n) {
     p.short_range_k = short_range_k.data();

@@ -377,3 +377,11 @@ TEST(SolverCli, DecompositionOfALatticePrintsOneRowPerRankCount) {
   EXPECT_GE(std::stod(cell), 1.0) << o.output;
   expect_bad_input(run_solver(kBase + kMaterial + kTime, "decomposition_bad", "--decomposition 2,x"), {"--decomposition", "'x'"});
 }
+
+TEST(SolverCli, UnknownStrengthRateLawIsNamedWithTheChoices) {
+  const std::string material =
+      "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 10, "
+      "tensile_strength: 1 MPa, strength_rate: ccb}]\n";
+  expect_bad_input(run_solver(kBase + material + kTime, "bad_strength_rate"),
+                   {"case.yaml", "materials[0].strength_rate", "fib_mc2010"});
+}

@@ -317,6 +317,13 @@ TEST(Distributed, WhatIsNotDistributedYetIsRefusedByItsKey) {
                  "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25}]\n"
                  "time: {steps: 5}\n",
                  2, "model.short_range_forces");
+  // The rate law reads the ghosts' velocities and keeps raised onsets per bond (not carried yet).
+  expect_refused("mpi_rate", "[0, 0, 0, 0.004, 0.004, 0.004], spacing: 1 mm}}\n"
+                 "model: {type: pmb, horizon_factor: 3.015}\n"
+                 "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, "
+                 "fracture_energy: 100, tensile_strength: 3 MPa, strength_rate: fib_mc2010}]\n"
+                 "time: {steps: 5}\n",
+                 2, "materials[0].strength_rate");
 }
 
 static std::string read_text(const std::string& path) {

@@ -263,3 +263,117 @@ TEST(SofteningBarMeasurement, DISABLED_PrintsPeakStresses) {
   bar_peak_stress("lps", 2, 0.5e-3, "3 MPa", false);
   bar_peak_stress("lps", 2, 0.25e-3, "3 MPa", false);
 }
+
+// Rate-dependent strength (materials[].strength_rate: fib_mc2010; pd_physics.hpp strength_dif).
+// The law itself: fib Model Code 2010 (fib 2013), concrete under impact, tension:
+// (rate/1e-6)^0.018 up to 10 /s, 0.0062 (rate/1e-6)^(1/3) above; 1 below 1e-6 /s or shortening.
+TEST(StrengthRate, FibModelCode2010Factor) {
+  const int fib = static_cast<int>(StrengthRateLaw::FibMC2010);
+  EXPECT_EQ(strength_dif(fib, -5.0), 1.0);
+  EXPECT_EQ(strength_dif(fib, 1e-7), 1.0);
+  EXPECT_NEAR(strength_dif(fib, 1.0), std::pow(1e6, 0.018), 1e-12);           // 1.282
+  EXPECT_NEAR(strength_dif(fib, 100.0), 0.0062 * std::cbrt(1e8), 1e-12);      // 2.878
+  // The branches meet at 10 /s to 0.07% (1.3366 and 1.3357): no jump worth a bond's notice.
+  EXPECT_NEAR(strength_dif(fib, 10.0) / strength_dif(fib, 10.000001), 1.0, 1e-3);
+  EXPECT_EQ(strength_dif(static_cast<int>(StrengthRateLaw::None), 100.0), 1.0);
+}
+
+namespace {
+// A bar 30 mm long, 6 x 6 mm, LPS with its surface correction (the static bar above is within
+// 5% of sigma_t with it), stretched at a constant strain rate from the start: every particle
+// starts on the homogeneous uniaxial-stress motion v = rate (x - L/2, -nu (y - W/2), -nu (z - W/2))
+// and the grips (two horizons deep, x prescribed) keep their particles on it (rigid grips would
+// launch a wave of rho c rate x grip depth from their inner faces), so the whole bar sees the one
+// strain rate until a crack localises. Peak of the force on one grip over the section.
+breccia::atlas::PeakStress rate_bar_peak_stress(double rate, double end_s, const char* law) {
+  using breccia::atlas::SofteningBar;
+  const double L = SofteningBar::length_m, W = SofteningBar::width_m, dx = 1e-3, nu = 0.25;
+  const double grip = 2.05 * 3.015 * dx;
+  auto num = [](double v) {
+    char b[40];
+    std::snprintf(b, sizeof b, "%.12g", v);
+    return std::string(b);
+  };
+  const std::string v_x = "\"" + num(rate) + " * (x - " + num(0.5 * L) + ")\"";
+  const std::string deck =
+      "specimen: {lattice: {dimension: 3, box: [0, 0, 0, " + num(L) + ", " + num(W) + ", " + num(W) + "], spacing: " +
+      num(dx) + "}}\n"
+      "model: {type: lps, horizon_factor: 3.015, surface_correction: energy}\n"
+      "materials: [{name: c, density: 2400, youngs_modulus: 30 GPa, poisson_ratio: 0.25, fracture_energy: 100, "
+      "tensile_strength: 3 MPa, strength_rate: " + law + "}]\n"
+      "sets: [{name: grip_lo, box: [-1, -1, -1, " + num(grip) + ", 1, 1]}, {name: grip_hi, box: [" + num(L - grip) +
+      ", -1, -1, 1, 1, 1]}]\n"
+      "boundary: [{type: velocity, set: grip_lo, expression: [" + v_x + ", \"0\", \"0\"], components: [x]},\n"
+      "           {type: velocity, set: grip_hi, expression: [" + v_x + ", \"0\", \"0\"], components: [x]}]\n"
+      "initial: [{type: velocity, expression: [" + v_x + ", \"" + num(-nu * rate) +
+      " * (y - " + num(0.5 * W) + ")\", \"" + num(-nu * rate) + " * (z - " + num(0.5 * W) + ")\"]}]\n"
+      "time: {end: " + num(end_s) + "}\n";
+  PdSystem s = system_from_yaml(std::string("rate_bar_") + law, deck);
+  const breccia::atlas::PeakStress run = breccia::atlas::pulled_bar_peak_stress(s, 1, W * W, end_s);
+  std::printf("rate bar %s at %g /s: peak %.4g MPa at %.2f us (%zu particles)\n", law, rate, run.stress_pa / 1e6,
+              run.time_s * 1e6, s.n);
+  return run;
+}
+}  // namespace
+
+// Without the law the homogeneous bar at 100 /s peaks at sigma_t (5%: the static bar's
+// tolerance above; measured 0.979): the harness itself adds no rate effect.
+TEST(StrengthRate, HomogeneousBarWithoutTheLawPeaksAtTheStaticStrength) {
+  const auto run = rate_bar_peak_stress(100.0, 5.0 * 3e6 / 30e9 / 100.0, "none");
+  EXPECT_NEAR(run.stress_pa / 3e6, 1.0, 0.05);
+}
+
+// The target: the bar pulled at a constant strain rate peaks within 5% of DIF(rate) x
+// tensile_strength, DIF from fib Model Code 2010 (strength_dif), on each branch of the law:
+// 3.3 /s (DIF 1.31) and 100 /s (DIF 2.88). NOT MET by the present rule (DIF on each bond's
+// onset at its own stretch rate, ultimate stretch kept): measured 0.906 at 3.3 /s (still rising
+// at the end of the run) and 0.784 at 100 /s (docs/theory.md "Rate-dependent strength": the
+// raised onset lowers s_u/s_t, so the bonds' homogeneous peak Phi grows less than the onset,
+// and oblique bonds see a lower rate). Kept as a measurement that fails until the rule is
+// calibrated: run with --gtest_also_run_disabled_tests --gtest_filter='StrengthRate.*'.
+TEST(StrengthRate, DISABLED_BarPeakStressIsTheDynamicStrengthOnBothBranches) {
+  const int fib = static_cast<int>(StrengthRateLaw::FibMC2010);
+  for (const double rate : {3.3, 100.0}) {
+    const double dif = strength_dif(fib, rate);
+    // The static bar peaks near 8 sigma_t / E (the homogeneous curve's flat top); run to
+    // 6 DIF sigma_t / E.
+    const double end = 6.0 * dif * 3e6 / 30e9 / rate;
+    const auto run = rate_bar_peak_stress(rate, end, "fib_mc2010");
+    EXPECT_NEAR(run.stress_pa / (dif * 3e6), 1.0, 0.05) << rate << " /s, DIF " << dif;
+    EXPECT_LT(run.time_s, 0.95 * end) << "the peak must be reached before the run ends";
+  }
+}
+
+// With the rate law the onsets of the bonds that began to soften are state: a restart from a
+// checkpoint reproduces the straight run bit for bit (the checkpoint carries /bond_onset).
+TEST(StrengthRate, RestartWithRaisedOnsetsIsBitIdentical) {
+  std::string deck = kPrecrackedGlassPlateDeck;
+  const std::string g0 = "fracture_energy: 3.8";
+  deck.replace(deck.find(g0), g0.size(), g0 + ", tensile_strength: 8 MPa, strength_rate: fib_mc2010");
+  const CaseConfig config = parse_case_file(
+      write_case("rate_restart", deck + "time: {steps: 400}\noutput: {every: 100, history_every: 20}\n"));
+  const PdSystem fresh = setup_system(config);
+  auto [straight, second] = straight_and_restarted(config, "rate_restart", 190);
+  int raised = 0;
+  for (size_t k = 0; k < straight.s_onset.size(); ++k) raised += straight.s_onset[k] > fresh.s_onset[k];
+  ASSERT_GT(raised, 0) << "the case should raise some bonds' onsets";
+  ASSERT_EQ(second.step, straight.step);
+  EXPECT_EQ(0, std::memcmp(second.u.data(), straight.u.data(), straight.u.size() * sizeof(double)));
+  EXPECT_EQ(second.state, straight.state);
+  EXPECT_EQ(second.bond_damage, straight.bond_damage);
+  EXPECT_EQ(second.s_onset, straight.s_onset);
+}
+
+TEST(StrengthRate, BadInputNamesTheKey) {
+  auto expect_error = [](const std::string& material, const std::string& extra, const char* what) {
+    try {
+      system_from_yaml("rate_bad", block_deck("lps", material) + extra);
+      FAIL() << "expected an InputError for " << material;
+    } catch (const breccia::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("materials[0].strength_rate"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  expect_error(", tensile_strength: 3 MPa, strength_rate: malvar", "", "fib_mc2010");
+  expect_error(", strength_rate: fib_mc2010", "", "without a tensile_strength");
+}

@@ -412,6 +412,7 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   p.break_after_force = s.config.break_after_force;
   p.s_onset = m.s_onset.get();
   p.bond_damage = m.bond_damage.get();
+  p.strength_rate = m.bond_damage.size() > 0 ? static_cast<int>(s.config.strength_rate) : 0;
   p.lps = m.lps.get();
   p.weighted_volume = m.weighted_volume.get(); p.dilatation = m.dilatation.get();
   p.lps_a = m.lps_a.get(); p.lps_b = m.lps_b.get();
@@ -431,6 +432,7 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
     q.break_after_force = p.break_after_force;
     q.s_onset = p.s_onset;
     q.bond_damage = p.bond_damage;
+    q.strength_rate = p.strength_rate;
     q.short_range_k = m.fshort_range_k.get(); q.spacing = m.fspacing.get();
     q.weighted_volume = m.fweighted_volume.get(); q.dilatation = m.fdilatation.get();
     q.lps_a = m.flps_a.get(); q.lps_b = m.flps_b.get();
@@ -603,6 +605,7 @@ void CudaSystem::download(PdSystem& sys) {
   m.dilatation.download(sys.dilatation, "dilatation");
   m.state.download(sys.state, "state");
   m.bond_damage.download(sys.bond_damage, "bond_damage");
+  if (sys.config.strength_rate != StrengthRateLaw::None) m.s_onset.download(sys.s_onset, "s_onset");  // state with a rate law
   m.min_stretch.download(sys.min_stretch, "min_stretch");
   m.min_stretch_next.download(sys.min_stretch_next, "min_stretch_next");
   std::vector<DeviceScalars> host;

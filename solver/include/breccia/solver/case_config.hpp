@@ -34,6 +34,8 @@ struct MaterialSpec {
   // What the Weibull draw scales (softening materials): both G0 and the strength by the same
   // ratio to the mean (default), or only one of them.
   enum class WeibullScales { Both, FractureEnergy, TensileStrength } weibull_scales = WeibullScales::Both;
+  // Rate-dependent strength of the softening bonds (pd_physics.hpp strength_dif); None: static.
+  StrengthRateLaw strength_rate = StrengthRateLaw::None;
 };
 
 // Explosive gas in a cavity (loads[].type: gas; gas.hpp, docs/case-format.md).
@@ -162,6 +164,8 @@ struct CaseConfig {
   // the bonds (coalesced loads; sell_layout.hpp). Default csr: one thread per CSR row.
   bool cuda_sell_layout = false;
   bool softening = false;  // some material has a tensile_strength (bilinear softening bonds)
+  // The materials' strength_rate (one law per case); not None: s_onset is per-entry state.
+  StrengthRateLaw strength_rate = StrengthRateLaw::None;
   // Working precision of the bond loop and the state it streams (docs/theory.md, Precision).
   enum class Precision { Float64, Float32 } precision = Precision::Float64;
   std::vector<std::string> no_fail_sets;

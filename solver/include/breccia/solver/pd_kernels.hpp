@@ -55,8 +55,12 @@ struct PdViewT {
   float* min_stretch_next = nullptr;
   // Softening bonds (pd_physics.hpp softening_damage): per entry the onset stretch (s0_own is
   // then the ultimate one) and the damage, written by the entry's owner. Null: brittle.
-  const float* s_onset = nullptr;
+  // With a strength rate law (StrengthRateLaw, materials[].strength_rate) the onset of an entry
+  // that has not begun to soften is the static one times strength_dif at its stretch rate, and
+  // the owner writes that dynamic onset into s_onset when it begins to soften (soften()).
+  float* s_onset = nullptr;
   float* bond_damage = nullptr;
+  int strength_rate = 0;  // StrengthRateLaw; None: the onset is s_onset as set up
   // model.break_check: after_force (LAMMPS PERI's order) lets a bond that breaks in this pass
   // carry its force once more; before_force (default) drops it from this pass on.
   bool break_after_force = false;
@@ -159,19 +163,56 @@ BRECCIA_HD bool softens(const PdViewT<Real>& p, int64_t k) {
   return p.bond_damage && p.s_onset[k] < FLT_MAX;
 }
 
+// What a softening entry's stretch rate needs: its ends and its deformed vector j - i (length
+// len, reference length xi), as the force loops have them.
+template <class Real>
+struct BondMotionT {
+  int64_t i, j;
+  Real dx, dy, dz, len, xi;
+};
+
+// The bond's stretch rate ds/dt = (v_j - v_i) . n / |xi|, n the deformed direction. The force
+// pass runs after the drift, so v is the half-step velocity (x^{n+1} - x^n) / dt: this is the
+// stretch change since the previous step over dt (to first order in the step), without storing
+// a stretch per entry. (A distributed run's ghosts carry displacements only: the rate law is
+// refused under mpirun, rank_system.cpp distributed_unsupported.)
+template <class Real>
+BRECCIA_HD double bond_stretch_rate(const PdViewT<Real>& p, const BondMotionT<Real>& b) {
+  const Real* v = p.v;
+  const double dvx = double(v[3 * b.j]) - double(v[3 * b.i]), dvy = double(v[3 * b.j + 1]) - double(v[3 * b.i + 1]),
+               dvz = double(v[3 * b.j + 2]) - double(v[3 * b.i + 2]);
+  return (dvx * double(b.dx) + dvy * double(b.dy) + dvz * double(b.dz)) / (double(b.len) * double(b.xi));
+}
+
 // One softening bond entry at stretch s this pass (softens(p, k)): the damage it reaches
 // (never below what it had), stored unless fracture is off, and the energy that dissipated,
 // `unit` x (D(d) - D(d_old)) with unit the entry's energy per unit stretch squared (a PMB
 // half-bond: V_i k2 |xi| / 4). Returns d; d = 1 means broken (the caller clears the state).
+// Rate law (p.strength_rate): while the entry is undamaged its onset is the static one times
+// strength_dif at its stretch rate now, capped at the ultimate stretch (there the bond breaks
+// brittle, holding what it dissipates); the rate is only formed once s passes the static onset
+// (DIF >= 1, so below it nothing can soften). The onset the entry has when it begins to soften
+// is written into s_onset and kept: the law of a softening bond is then fixed, so D(d) stays
+// the energy it dissipates. The ultimate stretch is kept, so the bond's fracture energy scales
+// with the DIF as its strength does (docs/theory.md "Rate-dependent strength").
 template <class Real>
-BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double unit, double& released) {
+BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double unit, double& released,
+                         const BondMotionT<Real>& motion) {
   const double d_old = p.bond_damage[k];
   if (!p.fracture) return d_old;
-  const double onset = p.s_onset[k], ultimate = p.s0_own[k];
+  double onset = p.s_onset[k];
+  const double ultimate = p.s0_own[k];
+  const bool dynamic_onset = p.strength_rate && d_old <= 0.0 && s > onset;
+  if (dynamic_onset) {
+    const double raised = onset * strength_dif(p.strength_rate, bond_stretch_rate(p, motion));
+    onset = raised < ultimate ? static_cast<double>(static_cast<float>(raised)) : ultimate;
+  }
   const double d = softening_damage<double>(s, onset, ultimate);
   if (d <= d_old) return d_old;
   released += unit * (softening_dissipation(d, onset, ultimate) - softening_dissipation(d_old, onset, ultimate));
-  p.bond_damage[k] = static_cast<float>(d);
+  const float stored = static_cast<float>(d);
+  p.bond_damage[k] = stored;
+  if (dynamic_onset && stored > 0.0f) p.s_onset[k] = static_cast<float>(onset);  // fixed while d > 0 is stored
   return d;
 }
 
@@ -412,7 +453,7 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
     bool breaking = false;
     if (softens(p, k)) {
       const double dmg = soften(p, k, double(e) / xi, 0.5 * double(b_i) * omega * double(p.volume[j]) * p.volume[i] * double(xi) * xi,
-                                released);
+                                released, BondMotionT<Real>{i, j, dx, dy, dz, len, xi});
       if (dmg >= 1.0) {
         p.state[k] = 0;
         continue;
@@ -587,7 +628,8 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
     double share = 1.0;
     bool breaking = false;
     if (softens(p, k)) {
-      const double dmg = soften(p, k, double(extension) / xi, 0.25 * double(p.volume[i]) * double(k2) * xi, released);
+      const double dmg = soften(p, k, double(extension) / xi, 0.25 * double(p.volume[i]) * double(k2) * xi, released,
+                                BondMotionT<Real>{i, j, dx, dy, dz, len, xi});
       if (dmg >= 1.0) {
         p.state[k] = 0;
         continue;
@@ -668,7 +710,7 @@ BRECCIA_HD void general_force_loop(const PdViewT<Real>& p, int64_t i) {
     if (softens(p, k)) {
       const double unit = lps ? 0.5 * (p.lps[i].shear_term / m_i) * p.k_own[k] * double(p.volume[j]) * p.volume[i] * double(xi) * xi
                               : 0.25 * double(p.volume[i]) * (double(p.k_own[k]) + double(p.k_dual[k])) * xi;
-      keep = 1.0 - soften(p, k, double(g.stretch), unit, released);
+      keep = 1.0 - soften(p, k, double(g.stretch), unit, released, BondMotionT<Real>{i, j, g.dx, g.dy, g.dz, g.length, xi});
       if (keep <= 0.0) {
         p.state[k] = 0;
         continue;

@@ -257,6 +257,24 @@ BRECCIA_HD double softening_dissipation(double d, double onset, double ultimate)
   return work - (1.0 - d) * s * s;
 }
 
+// Rate-dependent tensile strength of softening bonds (materials[].strength_rate; docs/theory.md
+// "Rate-dependent strength"): the dynamic increase factor DIF = f_ct,imp / f_ct that multiplies
+// a bond's onset stretch at the stretch rate it has when it first reaches it.
+enum class StrengthRateLaw : int { None = 0, FibMC2010 = 1 };
+
+// fib Model Code 2010 (fib 2013), section 5.1.11 "concrete under impact", tensile strength
+// (docs/references.md [fib 2013]; the equation numbers are not checked: we do not hold the text):
+//   f_ct,imp / f_ct = (rate / rate0)^0.018            for rate <= 10 s^-1
+//                   = 0.0062 (rate / rate0)^(1/3)      for rate >  10 s^-1,   rate0 = 1e-6 s^-1.
+// (The two branches meet at 10 s^-1 to 0.07%.) Below rate0, and for a bond that shortens, 1:
+// the static strength is the floor.
+BRECCIA_HD double strength_dif(int law, double rate) {
+  if (law != static_cast<int>(StrengthRateLaw::FibMC2010)) return 1.0;
+  constexpr double rate0 = 1e-6;
+  if (!(rate > rate0)) return 1.0;
+  return rate <= 10.0 ? std::pow(rate / rate0, 0.018) : 0.0062 * std::cbrt(rate / rate0);
+}
+
 // Borehole pressure ([Fukuda PD], eq. 12): P0 (e^-at - e^-bt) / (e^-a t0 - e^-b t0), with a and b
 // from the rise time t0 and the ratio r = b/a: t0 = ln(r) / (b - a).
 BRECCIA_HD double double_exponential_pressure(double peak, double rise_time, double ratio, double t) {

@@ -466,27 +466,38 @@ TEST(MpsGroundMotion, PolygonDashpotGivesTheStatedRestitution) {
   }
 }
 
-// A restitution outside (0, 1] is refused, naming the file and the key.
-TEST(MpsGroundMotion, RestitutionOutsideZeroOneIsRefused) {
-  for (const char* value : {"0", "-0.5", "1.2"}) {
-    try {
-      parse_case_text(std::string(R"(specimen:
+namespace {
+
+// Parses a 2D stress case whose one rigid polygon carries `body_keys` and expects the InputError
+// to name the file and `key` (and `expected`, where given).
+void expect_rigid_body_refused(const std::string& body_keys, const std::string& file, const std::string& key,
+                               const std::string& expected = "") {
+  try {
+    parse_case_text(std::string(R"(specimen:
   lattice: {dimension: 2, box: [0, 0, 1, 0.5], spacing: 0.1, thickness: 1}
 model: {type: mps, formulation: stress}
 materials: [{name: m, density: 1000, lambda: 1 GPa, mu: 1 GPa}]
 contact:
   rigid_bodies:
-    - {name: wall, vertices: [[2, 0], [3, 0], [3, 1], [2, 1]], restitution: )") + value + R"(}
+    - {name: box, vertices: [[2, 0], [3, 0], [3, 1], [2, 1]], )") + body_keys + R"(}
 time: {end: 1 ms}
-)", "bad_restitution.yaml");
-      FAIL() << "expected an InputError for restitution " << value;
-    } catch (const breccia::InputError& e) {
-      const std::string m = e.what();
-      EXPECT_NE(m.find("bad_restitution.yaml"), std::string::npos) << m;
-      EXPECT_NE(m.find("contact.rigid_bodies[0].restitution"), std::string::npos) << m;
-      EXPECT_NE(m.find("0 < e <= 1"), std::string::npos) << m;
-    }
+)", file);
+    FAIL() << "expected an InputError for " << body_keys;
+  } catch (const breccia::InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find(file), std::string::npos) << m;
+    EXPECT_NE(m.find(key), std::string::npos) << m;
+    if (!expected.empty()) EXPECT_NE(m.find(expected), std::string::npos) << m;
   }
+}
+
+}  // namespace
+
+// A restitution outside (0, 1] is refused, naming the file and the key.
+TEST(MpsGroundMotion, RestitutionOutsideZeroOneIsRefused) {
+  for (const char* value : {"0", "-0.5", "1.2"})
+    expect_rigid_body_refused(std::string("restitution: ") + value, "bad_restitution.yaml", "contact.rigid_bodies[0].restitution",
+                              "0 < e <= 1");
 }
 
 namespace {
@@ -568,22 +579,6 @@ TEST(MpsGroundMotion, FloorDashpotOfAFreePolygonsVertexGivesTheStatedRestitution
 // A floor_restitution outside (0, 1], or on a fixed body, is refused, naming the file and the key.
 TEST(MpsGroundMotion, FloorRestitutionOutsideZeroOneOrOnAFixedBodyIsRefused) {
   for (const char* body : {"fixed: false, density: 1000, floor_restitution: 0", "fixed: false, density: 1000, floor_restitution: 1.5",
-                           "floor_restitution: 0.5"}) {
-    try {
-      parse_case_text(std::string(R"(specimen:
-  lattice: {dimension: 2, box: [0, 0, 1, 0.5], spacing: 0.1, thickness: 1}
-model: {type: mps, formulation: stress}
-materials: [{name: m, density: 1000, lambda: 1 GPa, mu: 1 GPa}]
-contact:
-  rigid_bodies:
-    - {name: box, vertices: [[2, 0], [3, 0], [3, 1], [2, 1]], )") + body + R"(}
-time: {end: 1 ms}
-)", "bad_floor_restitution.yaml");
-      FAIL() << "expected an InputError for " << body;
-    } catch (const breccia::InputError& e) {
-      const std::string m = e.what();
-      EXPECT_NE(m.find("bad_floor_restitution.yaml"), std::string::npos) << m;
-      EXPECT_NE(m.find("contact.rigid_bodies[0].floor_restitution"), std::string::npos) << m;
-    }
-  }
+                           "floor_restitution: 0.5"})
+    expect_rigid_body_refused(body, "bad_floor_restitution.yaml", "contact.rigid_bodies[0].floor_restitution");
 }

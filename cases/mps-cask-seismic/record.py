@@ -2,6 +2,7 @@
 thesis used is not in our sources; any CSV in the same format can replace it).
 
     record.py OUT.csv [--pga 0.7] [--duration 8] [--dt 0.005] [--seed 1995]
+              [--perturb 0.001 --perturb-seed 1]
 
 Generation, seeded so that it repeats: Gaussian white noise at dt, band-passed to 0.5-8 Hz
 (its Fourier components outside the band set to zero: no phase shift), shaped by a trapezoidal
@@ -10,10 +11,35 @@ Ang's form of a nonstationary record), its mean velocity removed by a baseline c
 (a least-squares straight line fitted to the integrated velocity, differentiated back into
 the acceleration) so that the ground ends near rest, scaled to the peak ground acceleration
 `pga` (in g). Writes `time_s,acceleration_g` rows.
+
+--perturb eps --perturb-seed s: a member of an ensemble of records that differ from the seed's
+by less than any measurement of a record could tell: a second record made the same way from
+`s` (same band, envelope and baseline correction), times eps of the first one's peak, is added
+before the scaling to `pga` (README, "An ensemble over perturbed records").
 """
 import argparse
 
 import numpy as np
+
+
+def shaped(t, dt, duration, seed):
+    """Band-passed, enveloped, baseline-corrected noise from `seed`, scaled to a peak of 1."""
+    n = len(t)
+    rng = np.random.default_rng(seed)
+    noise = rng.standard_normal(n)
+    spectrum = np.fft.rfft(noise)
+    f = np.fft.rfftfreq(n, dt)
+    spectrum[(f < 0.5) | (f > 8.0)] = 0.0
+    acc = np.fft.irfft(spectrum, n)
+    rise, strong = 1.0, 0.4 * duration
+    env = np.where(t < rise, t / rise, np.where(t < strong, 1.0, np.maximum(0.0, (duration - t) / (duration - strong))))
+    acc *= env
+    # Baseline: remove the straight line that fits the velocity best.
+    vel = np.concatenate([[0.0], np.cumsum(0.5 * (acc[1:] + acc[:-1]) * dt)])
+    slope, _ = np.polyfit(t, vel, 1)
+    acc -= slope
+    acc[0] = 0.0
+    return acc / np.max(np.abs(acc))
 
 
 def main():
@@ -23,22 +49,14 @@ def main():
     ap.add_argument("--duration", type=float, default=8.0)
     ap.add_argument("--dt", type=float, default=0.005)
     ap.add_argument("--seed", type=int, default=1995)
+    ap.add_argument("--perturb", type=float, default=0.0)
+    ap.add_argument("--perturb-seed", type=int, default=1)
     a = ap.parse_args()
     n = int(round(a.duration / a.dt)) + 1
     t = np.arange(n) * a.dt
-    rng = np.random.default_rng(a.seed)
-    noise = rng.standard_normal(n)
-    spectrum = np.fft.rfft(noise)
-    f = np.fft.rfftfreq(n, a.dt)
-    spectrum[(f < 0.5) | (f > 8.0)] = 0.0
-    acc = np.fft.irfft(spectrum, n)
-    rise, strong = 1.0, 0.4 * a.duration
-    env = np.where(t < rise, t / rise, np.where(t < strong, 1.0, np.maximum(0.0, (a.duration - t) / (a.duration - strong))))
-    acc *= env
-    # Baseline: remove the straight line that fits the velocity best.
-    vel = np.concatenate([[0.0], np.cumsum(0.5 * (acc[1:] + acc[:-1]) * a.dt)])
-    slope, _ = np.polyfit(t, vel, 1)
-    acc -= slope
+    acc = shaped(t, a.dt, a.duration, a.seed)
+    if a.perturb > 0.0:
+        acc = acc + a.perturb * shaped(t, a.dt, a.duration, a.perturb_seed)
     acc[0] = 0.0
     acc *= a.pga / np.max(np.abs(acc))
     with open(a.out, "w") as f:

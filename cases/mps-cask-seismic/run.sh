@@ -9,11 +9,15 @@
 # dashpot with this coefficient of restitution (contact.rigid_bodies[0].restitution; README).
 # FLOOR_RESTITUTION=e (optional): the container's corners on the floor get one too
 # (contact.rigid_bodies[0].floor_restitution; README).
+# END=t (optional): stop the runs at t s of the DURATION-s record (the record is the same).
+# HISTORY_EVERY=n (optional): a history row every n steps (case.yaml: 200, i.e. 4.4 ms at 0.2 m).
+# SETS="key=value ..." (optional): further --set options for every run (README's studies).
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 source "$HERE/../../scripts/case_env.sh"
 DURATION=${DURATION:-6}
+END=${END:-$DURATION}
 case "$VARIANT" in
   quick|demo|test) SPACINGS=${SPACINGS:-"0.2"} ;;
   full)            SPACINGS=${SPACINGS:-"0.2 0.1"} ;;
@@ -27,7 +31,10 @@ fi
 RECORD="$(cd "$(dirname "$RECORD")" && pwd)/$(basename "$RECORD")"
 EXTRA=()
 [ -n "${RESTITUTION:-}" ] && EXTRA+=(--set "contact.rigid_bodies[0].restitution=$RESTITUTION")
+[ -n "${HISTORY_EVERY:-}" ] && EXTRA+=(--set "output.history_every=$HISTORY_EVERY")
 [ -n "${FLOOR_RESTITUTION:-}" ] && EXTRA+=(--set "contact.rigid_bodies[0].floor_restitution=$FLOOR_RESTITUTION")
+read -r -a SET_LIST <<< "${SETS:-}"   # (split on blanks, no globbing of the [k] in keys)
+for kv in "${SET_LIST[@]}"; do EXTRA+=(--set "$kv"); done
 RUNS=()
 for dx in $SPACINGS; do
   for gap in ${GAPS:-0 0.05}; do
@@ -45,7 +52,7 @@ print(f'{h:.8g} [{-c - h / 2:.8g}, {y0:.8g}, {c + h / 2:.8g}, {y0 + round(4.8 / 
     echo "== $name"
     "$BRECCIA_BIN/breccia-solve" "$HERE/case.yaml" -o "$OUT/$name" --set "specimen.bodies.spacing=$h" \
       --set "specimen.bodies.shapes[0].box=$box" --set "contact.floor.motion.history.file=$RECORD" \
-      --set "time.end=$DURATION" "${EXTRA[@]}" --backend cpu --threads "$THREADS" 2>&1 | tail -1
+      --set "time.end=$END" "${EXTRA[@]}" --backend cpu --threads "$THREADS" 2>&1 | tail -1
     RUNS+=("$name")
   done
 done

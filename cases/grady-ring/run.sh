@@ -3,8 +3,8 @@
 #   VARIANT=quick|demo: dx = 0.1 mm  (6,285 particles), rates 5e2 ... 1e4 /s
 #   VARIANT=full      : dx = 0.05 mm (25,130 particles), rates 5e2 ... 2e4 /s
 #   VARIANT=test      : dx = 0.1 mm, rates 1e3 and 1e4 /s (the CTest regression run)
-#   VARIANT=zmr | zmr-fine | zmr-finest: softening bonds, tensile_strength 18 MPa (STRENGTH_MPA),
-#     dx = 0.1 | 0.05 | 0.025 mm, ring radius 50 mm, at e = rate / e0 = 0.1, 0.3, 1, 3, 10 (Zhou, Molinari &
+#   VARIANT=zmr | zmr-fine | zmr-finest | zmr-finest2: softening bonds, tensile_strength 18 MPa
+#     (STRENGTH_MPA), dx = 0.1 | 0.05 | 0.025 | 0.0125 mm, ring radius 50 mm, at e = rate / e0 = 0.1, 0.3, 1, 3, 10 (Zhou, Molinari &
 #     Ramesh 2006; README.md "Softening bonds against Zhou, Molinari & Ramesh")
 # Each rate is case.yaml with its strain rate and end time given as --set (the standard rates are
 # also the case file's variants rate_5e2 ... rate_2e4).
@@ -20,8 +20,8 @@ case "$VARIANT" in
   quick|demo) DX=0.0001;  RATES=${RATES:-"5e2 1e3 2e3 5e3 1e4"} ;;
   full)       DX=0.00005; RATES=${RATES:-"5e2 1e3 2e3 5e3 1e4 2e4"} ;;
   test)       DX=0.0001;  RATES="1e3 1e4" ;;
-  zmr|zmr-fine|zmr-finest)
-    case "$VARIANT" in zmr) DX=0.0001 ;; zmr-fine) DX=0.00005 ;; *) DX=0.000025 ;; esac
+  zmr|zmr-fine|zmr-finest|zmr-finest2)
+    case "$VARIANT" in zmr) DX=0.0001 ;; zmr-fine) DX=0.00005 ;; zmr-finest) DX=0.000025 ;; *) DX=0.0000125 ;; esac
     # A radius of ~30 cohesive lengths: the ring's kinetic energy is then (e R / L0)^2 >= 9
     # times the strain energy at the strength even at e = 0.1, so the rate holds until it breaks.
     RADIUS=${RADIUS:-0.05}
@@ -32,7 +32,7 @@ import math
 E, rho, G0, st = 72e9, 2440.0, 7.8125, $STRENGTH_MPA * 1e6
 e0 = math.sqrt(E / rho) * st**3 / (E**2 * G0)
 print(' '.join('%.4g' % (e * e0) for e in (0.1, 0.3, 1, 3, 10)))")} ;;
-  *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full|test|zmr|zmr-fine|zmr-finest)" >&2; exit 2 ;;
+  *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full|test|zmr|zmr-fine|zmr-finest|zmr-finest2)" >&2; exit 2 ;;
 esac
 mkdir -p "$OUT"
 "$PYTHON" "$HERE/specimen.py" "$OUT/particles.h5" --radius "${RADIUS:-0.02}" --width "${WIDTH:-0.0005}" --spacing "$DX" --thickness 0.001

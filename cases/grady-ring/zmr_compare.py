@@ -59,13 +59,13 @@ def main(argv):
     ax.loglog(e, [zmr_size(x * e0, 0.0, strength) * 1e3 for x in e], "k--",
               label=f"Zhou, Molinari & Ramesh 2006 (sigma_t {strength / 1e6:g} MPa)")
     ax.loglog(e, [grady_size(x * e0) * 1e3 for x in e], "k-", lw=1, label="Grady 1982 energy balance (upper bound)")
-    for (label, rs), marker in zip(series, "osd^"):
+    for (label, rs), marker in zip(series, "osd^v<>"):
         ax.loglog([zmr_e(r["strain_rate_per_s"], strength) for r in rs], [r["mean_size_m"] * 1e3 for r in rs],
                   marker, label=f"Breccia, softening bonds, {label}")
     ax.set_xlabel("e = strain rate / e0,  e0 = c sigma_t^3 / (E^2 G0)")
     ax.set_ylabel("mean fragment size (mm)")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7, loc="lower left")
+    ax.legend(fontsize=6.5, loc="upper right", framealpha=0.85)
     fig.tight_layout()
     fig.savefig(out_png, dpi=120)
 

@@ -10,6 +10,7 @@
 
 #include "breccia/common/particle_file.hpp"
 #include "breccia/solver/calibration.hpp"
+#include "breccia/solver/run.hpp"
 #include "helpers.hpp"
 
 using namespace breccia;
@@ -53,20 +54,24 @@ TEST(Loads, PressureInABlindHoleOfAMeshPushesOnlyOnTheHoleBottom) {
 
 namespace {
 
+// Particles at the centroids of a gmsh mesh of the body in `specimen` (a breccia-mesh
+// specimen file's text), meshed once per process under `name`; empty if meshing failed.
+std::string meshed_particles(const std::string& name, const std::string& specimen, const std::string& place_options) {
+  const std::string dir = breccia::solver::testing::process_temp_dir() + "/" + name;
+  if (std::filesystem::exists(dir + "/particles.h5")) return dir + "/particles.h5";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/specimen.yaml") << specimen;
+  const std::string cmd = std::string(BRECCIA_MESH_EXE) + " " + dir + "/specimen.yaml -o " + dir +
+                          "/specimen.msh --quiet > /dev/null 2>&1 && " + BRECCIA_PLACE_EXE + " " + dir +
+                          "/specimen.msh -o " + dir + "/particles.h5 " + place_options + " > /dev/null 2>&1";
+  if (std::system(cmd.c_str()) != 0) return std::string();
+  return dir + "/particles.h5";
+}
+
 // Particles at the centroids of a uniform gmsh tet mesh of a 100 mm cube (~10,000 tets).
 std::string tet_cube_particles() {
-  static const std::string path = [] {
-    const std::string dir = breccia::solver::testing::process_temp_dir() + "/tet_cube";
-    std::filesystem::create_directories(dir);
-    std::ofstream(dir + "/box.yaml") << "dimension: 3\nbody: {shape: box, name: solid, origin: [0, 0, 0], "
-                                        "size: [100 mm, 100 mm, 100 mm]}\nmesh: {size: 8 mm}\n";
-    const std::string cmd = std::string(BRECCIA_MESH_EXE) + " " + dir + "/box.yaml -o " + dir +
-                            "/box.msh --quiet > /dev/null 2>&1 && " + BRECCIA_PLACE_EXE + " " + dir + "/box.msh -o " +
-                            dir + "/particles.h5 > /dev/null 2>&1";
-    if (std::system(cmd.c_str()) != 0) return std::string();
-    return dir + "/particles.h5";
-  }();
-  return path;
+  return meshed_particles("tet_cube", "dimension: 3\nbody: {shape: box, name: solid, origin: [0, 0, 0], "
+                                      "size: [100 mm, 100 mm, 100 mm]}\nmesh: {size: 8 mm}\n", "");
 }
 
 // Volume-weighted mean relative error of the strain-energy density over particles more
@@ -163,4 +168,51 @@ TEST(Precracks, ASegmentEndingOnABondLineCutsBothHalvesOfEveryPair) {
       }
     EXPECT_EQ(one_sided, 0u) << "tip at x = " << tip << " m";
   }
+}
+
+// LPS with the energy surface correction on coarse triangle centroids: the quasi-static strip
+// of docs/atlas.md "Quasi-static bar" (100 x 20 mm, plane stress, 100 MPa end traction, the
+// atlas's triangle mesh at dx 2 mm: 538 particles, ~10 across the width). At m = 5 the horizon
+// is half the width, so no family is complete. Analytic answer: uniform uniaxial stress, strain
+// sigma / E away from the ends (Saint-Venant). Measured (2026-12-04): the gauge strain
+// (least-squares slope of u_x over 30 <= x <= 70 mm, every particle) is -0.55 % (m = 3) and
+// -0.22 % (m = 5) off sigma / E with the correction, -12.5 % and -14.0 % (too stiff: the
+// truncated families' fourth moment along the faces) without it. Tolerance 1.5 %: LPS's own
+// calibration error on tet centroids, the homogeneous strain energy 0.18-1.4 % at m = 5
+// (docs/atlas.md, "Homogeneous strain energy"). The end-to-end displacement the atlas reports
+// (21 % at m = 5) is another thing: the pull-out of the single loaded (and held) particle
+// layer over one horizon at each end, the same with and without the correction (docs/atlas.md).
+namespace {
+double coarse_strip_gauge_strain_error(const std::string& correction, double m) {
+  const std::string file =
+      meshed_particles("tri_strip", "dimension: 2\nbody: {shape: rectangle, name: solid, origin: [0, 0], "
+                                    "size: [0.1, 0.02]}\nmesh: {size: 0.00303030303}\n", "--thickness 0.001");
+  EXPECT_FALSE(file.empty()) << "could not mesh the strip";
+  if (file.empty()) return 1.0;
+  PdSystem s = system_from_yaml("tri_strip_" + correction,
+      "specimen: {particles: " + file + "}\nmodel: {type: lps, planar: plane_stress, horizon_factor: " +
+      std::to_string(m + 0.015) + ", surface_correction: " + correction + "}\n"
+      "materials: [{name: steel, density: 7850, youngs_modulus: 200 GPa, poisson_ratio: 0.3333333333333333}]\n"
+      "boundary: [{type: fixed, set: xmin, components: [x]}]\n"
+      "loads: [{type: traction, surface: xmax, value: [100 MPa, 0, 0]}]\n"
+      "time: {integrator: adr, adr_tolerance: 1e-7, adr_max_steps: 400000}\n");
+  s.fixed_dof[nearest(s, 0, 0, 0)] |= 2u;  // no sideways drift
+  const long long iterations = relax_to_equilibrium(s, false);
+  EXPECT_GT(iterations, 0) << "ADR did not converge";
+  double n = 0, sx = 0, su = 0, sxx = 0, sxu = 0;
+  for (size_t i = 0; i < s.n; ++i) {
+    const double x = s.x0[3 * i], u = s.u[3 * i];
+    if (x < 0.03 || x > 0.07) continue;
+    n += 1, sx += x, su += u, sxx += x * x, sxu += x * u;
+  }
+  const double slope = (n * sxu - sx * su) / (n * sxx - sx * sx);
+  return slope / (100e6 / 200e9) - 1.0;
+}
+}  // namespace
+
+TEST(QuasiStatic, LpsWithSurfaceCorrectionOnCoarseTriangleCentroidsHasTheBulkStrainInTheGauge) {
+  // m = 5, the atlas's worst end-to-end error (m = 3 measured as well, above).
+  const double error = coarse_strip_gauge_strain_error("energy", 5.0);
+  std::printf("LPS coarse triangle strip, m = 5: gauge strain / (sigma / E) - 1 = %+.4f\n", error);
+  EXPECT_NEAR(error, 0.0, 0.015);
 }

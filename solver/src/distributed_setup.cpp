@@ -14,9 +14,6 @@ std::string distributed_setup_refusal(const PdSystem& s) {
   if (c.short_range_forces) return "model.short_range_forces";
   for (const auto& l : c.loads)
     if (l.kind == LoadSpec::Kind::Gas) return "loads[].type: gas";
-  // The energy-scatter check (family_check.hpp) runs a force pass over every family.
-  if (c.check_stability && s.particles.nodes_per_cell != 0)
-    return "time.check_stability on mesh-derived particles (the energy-scatter check)";
   return "";
 }
 

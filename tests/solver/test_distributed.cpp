@@ -180,6 +180,7 @@ TEST_P(SameAnswer, AtOneToFourRanksAndOneOrTwoThreads) {
       EXPECT_EQ(differing(base + "_np1_t1" + f, out + f), std::vector<std::string>{}) << out << f;
     const nlohmann::json s = summary(out);
     EXPECT_EQ(s["ranks"], v.ranks);
+    EXPECT_EQ(s["distributed_setup"], v.ranks > 1) << out;  // each rank built its own bonds
     expect_same_energies(s_ref, s, out);
   }
 }
@@ -344,8 +345,8 @@ static std::string graded_notch() {
 }
 
 // The graded block pulled apart at its ends with the dual horizon, the notch pre-cracked.
-// check_stability: the energy-scatter check of mesh-derived particles, which is not
-// distributed yet (it takes the whole-system set-up).
+// check_stability: the start-up checks, among them the energy-scatter check of mesh-derived
+// particles (a force pass over every family, family_check.hpp).
 static std::string graded_case(const std::string& particles, const std::string& model, int steps, bool check_stability) {
   return "specimen: {particles: " + particles + "}\n"
          "model: {type: " + model + ", horizon_factor: 3.015, variable_horizon: true}\n"
@@ -386,9 +387,7 @@ static void expect_distributed_setup_gives_one_process_answer(const std::string&
 // The distributed set-up (distributed_setup.hpp): under mpirun a PMB case builds on each rank
 // the bonds of the particles it owns only, and the answer is still one process's, byte for
 // byte: a lattice with a pre-crack expanding until bonds break, on 2 and 3 ranks, and its
-// checkpoint of 2 ranks finished on 3; softening bonds with Weibull draws on 2 ranks. A case the new set-up does not
-// cover (the energy-scatter check of mesh-derived particles) says so in one note and builds the whole system on every
-// rank, with the same answer.
+// checkpoint of 2 ranks finished on 3; softening bonds with Weibull draws on 2 ranks.
 TEST(DistributedSetup, PmbBuildsEachRanksOwnBondsWithOneProcessAnswer) {
   const std::string body =
       "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.008, 0.004, 0.003], spacing: 0.5 mm}}\n"
@@ -434,17 +433,6 @@ TEST(DistributedSetup, PmbBuildsEachRanksOwnBondsWithOneProcessAnswer) {
     for (const char* file : {"/results.h5", "/checkpoint.h5"})
       EXPECT_EQ(differing(base + "_soft_whole" + file, base + "_soft_np2" + file), std::vector<std::string>{}) << file;
   }
-  // The fallback: the energy-scatter check runs a force pass over every family (not distributed yet).
-  const std::string graded = graded_notch();
-  ASSERT_FALSE(graded.empty()) << "could not mesh the graded block";
-  const std::string fallback = write_case("mpi_dist_fallback", graded_case(graded, "pmb", 10, true));
-  ASSERT_EQ(solve(fallback, base + "_fallback_whole", 1, 1).exit_code, 0);
-  const Outcome o = solve(fallback, base + "_fallback_np2", 2, 1);
-  ASSERT_EQ(o.exit_code, 0) << o.err;
-  EXPECT_NE(o.err.find("note: set-up: time.check_stability on mesh-derived particles"), std::string::npos) << o.err;
-  EXPECT_FALSE(summary(base + "_fallback_np2")["distributed_setup"].get<bool>());
-  for (const char* f : {"/results.h5", "/checkpoint.h5"})
-    EXPECT_EQ(differing(base + "_fallback_whole" + f, base + "_fallback_np2" + f), std::vector<std::string>{}) << f;
 }
 
 // The distributed set-up beyond PMB: LPS (each rank sums the weighted volume of its own rows,
@@ -497,14 +485,35 @@ TEST(DistributedSetup, LpsFloat32SurfaceCorrection2dAndDualHorizonBuildEachRanks
 // set-up: each rank builds its own bonds, and results.h5, checkpoint.h5 and history.csv
 // are one process's byte for byte (the bound for ADR is 1e-12; bytes hold).
 // Correspondence on the graded, notched tet block with the dual horizon (2, 3 and 4
-// ranks), and on a pre-cracked lattice expanding (correspondence grows zero-energy modes
+// ranks, with the start-up checks: the energy-scatter check's force pass runs on each
+// rank's rows and its sums over every rank's sampled particles in one process's order), and
+// on a pre-cracked lattice expanding (correspondence grows zero-energy modes
 // there after about 40 steps: 20 are compared); ADR with LPS and with correspondence
 // (penalty stabilisation) on a pre-cracked bar under end pressure (they converge in a few
 // hundred to a few thousand iterations; the cap of 10,000 makes a broken exchange fail fast).
 TEST(DistributedSetup, CorrespondenceAndDynamicRelaxationBuildEachRanksOwnBondsWithOneProcessAnswer) {
   const std::string graded = graded_notch();
   ASSERT_FALSE(graded.empty()) << "could not mesh the graded block";
-  expect_distributed_setup_gives_one_process_answer("dual_corr", graded_case(graded, "correspondence", 40, false), {2, 3, 4});
+  expect_distributed_setup_gives_one_process_answer("dual_corr", graded_case(graded, "correspondence", 40, true), {2, 3, 4});
+  // The energy-scatter check refusing a horizon too small for the tets (m = 1.5: 32 % RMS
+  // against the 20 % limit, family_check.hpp): on 3 ranks the one process's message (the
+  // same scatter, count and worst particle), once, exit code 2.
+  {
+    std::string yaml = graded_case(graded, "lps", 40, true);
+    yaml.replace(yaml.find("horizon_factor: 3.015"), 21, "horizon_factor: 1.5");
+    const std::string file = write_case("mpi_dist_scatter", yaml);
+    const Outcome one = solve(file, process_temp_dir() + "/dist_scatter_np1", 1, 1);
+    const Outcome three = solve(file, process_temp_dir() + "/dist_scatter_np3", 3, 1);
+    EXPECT_EQ(one.exit_code, 2) << one.err;
+    EXPECT_EQ(three.exit_code, 2) << three.err;
+    const auto error_line = [](const std::string& err) {
+      const size_t at = err.find("error:");
+      return at == std::string::npos ? std::string() : err.substr(at, err.find('\n', at) - at);
+    };
+    EXPECT_NE(error_line(one.err).find("model.horizon_factor: per-particle strain energy"), std::string::npos) << one.err;
+    EXPECT_EQ(error_line(one.err), error_line(three.err));
+    EXPECT_EQ(three.err.find("error:", three.err.find("error:") + 1), std::string::npos) << "more than one error: " << three.err;
+  }
   expect_distributed_setup_gives_one_process_answer(
       "corr",
       "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.008, 0.004, 0.003], spacing: 0.5 mm}}\n"

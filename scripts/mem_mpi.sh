@@ -4,8 +4,9 @@
 # rank's peak resident set (VmHWM, GNU time's %M) in MB, beside summary.json's figures.
 # Usage: scripts/mem_mpi.sh BUILD_DIR [N=30] [RANKS="1 2 4"]   (OUT=runs/mem-mpi)
 # MODEL: the model keys (default "type: pmb"; e.g. "type: lps", "type: pmb, precision: float32").
+# TIME: the time keys (default "steps: 5"; e.g. "integrator: adr, adr_tolerance: 1": a dozen iterations).
 set -euo pipefail
-BUILD=${1:-build}; N=${2:-30}; RANKS=${3:-"1 2 4"}; MODEL=${MODEL:-"type: pmb"}
+BUILD=${1:-build}; N=${2:-30}; RANKS=${3:-"1 2 4"}; MODEL=${MODEL:-"type: pmb"}; TIME=${TIME:-"steps: 5"}
 BIN="$(cd "$BUILD" && pwd)/bin"
 OUT="${OUT:-$(pwd)/runs/mem-mpi}"
 mkdir -p "$OUT"
@@ -18,7 +19,7 @@ specimen: {lattice: {dimension: 3, box: [0, 0, 0, $L, $L, $L], spacing: $DX}}
 model: {$MODEL, horizon_factor: 3.015}
 materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, fracture_energy: 1e6}]
 initial: [{type: radial_velocity, center: [0, 0, 0], strain_rate: 10}]
-time: {steps: 5}
+time: {$TIME}
 output: {every: 1000000, history_every: 1000000, results: false}
 YAML
 echo "ranks,particles,bond_entries,peak_rss_mb_per_rank (rank 0 first),peak_rss_mb_max,peak_rss_mb_sum"

@@ -11,14 +11,9 @@ std::string distributed_setup_refusal(const PdSystem& s) {
   const CaseConfig& c = s.config;
   // Each of these reads, per particle, values summed over other particles' families (the
   // ghosts' own rows: a second layer), or runs a pass over every family at set-up.
-  if (c.model == PdModel::Correspondence) return "model.type: correspondence (the ghosts' shape tensors)";
-  if (c.quasi_static) return "time.integrator: adr";
   if (c.short_range_forces) return "model.short_range_forces";
   for (const auto& l : c.loads)
     if (l.kind == LoadSpec::Kind::Gas) return "loads[].type: gas";
-  // The energy-scatter check (family_check.hpp) runs a force pass over every family.
-  if (c.check_stability && s.particles.nodes_per_cell != 0)
-    return "time.check_stability on mesh-derived particles (the energy-scatter check)";
   return "";
 }
 
@@ -99,8 +94,9 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   // output writes (a pre-crack's damage) and the ranks' systems start from.
   // LPS: the dilatation (and the fast path's two factors) that pass left, which the ranks'
   // systems start from as one process's would.
-  for (auto* a : {&s.energy_density, &s.damage, &s.max_stretch, &s.dissipated, &s.dilatation, &s.lps_a, &s.lps_b})
-    gather_owned(d, rows, *a, 1);
+  // Correspondence: its deformation gradient, force tensor and non-affine energy
+  // (kForcePassFields).
+  for (const auto& [field, width] : kForcePassFields) gather_owned(d, rows, s.*field, static_cast<size_t>(width));
   gather_owned(d, rows, s.force, 3);
   {
     const std::vector<double> all = concat_over_ranks(d, std::vector<double>{s.dissipated_energy});

@@ -10,7 +10,7 @@
 
 namespace breccia::solver {
 
-EnergyScatter energy_scatter(PdSystem& s) {
+EnergyScatter energy_scatter(PdSystem& s, const DistributedSetup& d, const DistributedRows& rows) {
   EnergyScatter out;
   const size_t n = s.n;
   // A lattice's interior families are all alike: nothing to scatter, and a small block's
@@ -59,36 +59,43 @@ EnergyScatter energy_scatter(PdSystem& s) {
     const double horizon_volume = s.dimension == 3 ? 4.0 / 3.0 * M_PI * h * h * h : M_PI * h * h * s.thickness;
     if (one_material) fill[i] = family_volume / horizon_volume;
   }
+  // A distributed set-up's rows outside the rank's range are empty here (fill 0): each rank
+  // samples its own particles.
   const double complete_fill = 0.95;
-  std::vector<double> ratio(n, NAN);
-  double sum = 0.0;
+  std::vector<int64_t> sampled;  // in index order, with their ratios
+  std::vector<double> ratio;
   for (size_t i = 0; i < n; ++i) {
     if (fill[i] < complete_fill) continue;
     const MaterialSpec& m = s.config.materials[s.material[i]];
     const ElasticInput in{s.dimension, s.config.planar, m.youngs_modulus, m.poisson_ratio, s.thickness};
-    ratio[i] = energy[i] / classical_energy_density(in, eps);
-    sum += ratio[i];
-    ++out.sampled;
+    sampled.push_back(static_cast<int64_t>(i));
+    ratio.push_back(energy[i] / classical_energy_density(in, eps));
   }
+  if (rows.active) {  // every rank's, in rank order: the ranks own consecutive index ranges
+    sampled = concat_over_ranks(d, sampled);
+    ratio = concat_over_ranks(d, ratio);
+  }
+  double sum = 0.0;
+  for (const double r : ratio) sum += r;
+  out.sampled = ratio.size();
   // Scatter about the mean, not about 1: a lattice's mean offset at small m is a calibration
   // error shared by every particle (the atlas measures it), not a random stiffness.
   const double mean = out.sampled ? sum / out.sampled : 1.0;
   double sum2 = 0.0;
-  for (size_t i = 0; i < n; ++i) {
-    if (std::isnan(ratio[i])) continue;
-    const double deviation = ratio[i] / mean - 1.0;
+  for (size_t q = 0; q < ratio.size(); ++q) {
+    const double deviation = ratio[q] / mean - 1.0;
     sum2 += deviation * deviation;
     if (std::fabs(deviation) > out.worst) {
       out.worst = std::fabs(deviation);
-      out.worst_particle = static_cast<int64_t>(i);
+      out.worst_particle = sampled[q];
     }
   }
   out.rms = out.sampled ? std::sqrt(sum2 / out.sampled) : 0.0;
   return out;
 }
 
-void require_resolved_families(PdSystem& s) {
-  const EnergyScatter e = energy_scatter(s);
+void require_resolved_families(PdSystem& s, const DistributedSetup& d, const DistributedRows& rows) {
+  const EnergyScatter e = energy_scatter(s, d, rows);
   if (e.sampled < kMinScatterSample || e.rms <= kMaxEnergyScatter) return;
   const int64_t i = e.worst_particle;
   std::ostringstream found;

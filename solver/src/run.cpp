@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
+#include <tuple>
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/json_file.hpp"
@@ -330,11 +331,16 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
   RunResult r;
   if (s.config.quasi_static) {
     const auto t0 = std::chrono::steady_clock::now();
-    const long long iters = o.relax ? o.relax(s, o.progress) : relax_to_equilibrium(s, o.progress);
+    long long iters = 0;
+    if (o.relax) {
+      std::tie(iters, r.final_energies) = o.relax(s, o.progress);
+    } else {
+      iters = relax_to_equilibrium(s, o.progress);
+      r.final_energies = measure(s);
+    }
     r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     r.steps = iters < 0 ? s.config.adr_max_steps : iters;
     r.status = iters < 0 ? "not_converged" : "converged";
-    r.final_energies = measure(s);
     if (iters < 0) r.message = "ADR did not reach the tolerance within time.adr_max_steps";
     if (history) history->write(s, r.final_energies);
     if (results) results->write(s);

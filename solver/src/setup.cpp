@@ -1325,7 +1325,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   }
   // A horizon too small for irregular particles makes each particle's stiffness random
   // (docs/atlas.md, stability map): refuse it before the run.
-  if (c.check_stability) require_resolved_families(s);
+  if (c.check_stability) require_resolved_families(s, dist, dist_rows);  // dist: the sampled ratios of every rank
   phase("state and start-up checks");
 
   // Stable time step: sharp estimate by Lanczos (below); Silling & Askari (2005) for reference.

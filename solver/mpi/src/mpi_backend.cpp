@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "breccia/common/error.hpp"
+#include "breccia/solver/distributed_setup.hpp"
 #include "breccia/solver/exec_openmp.hpp"
 #include "breccia/solver/float32_state.hpp"
 #include "breccia/solver/mpi_launch.hpp"
@@ -388,7 +389,7 @@ public:
   // (load norm, residual, the damping's Rayleigh quotient) are taken over ranks,
   // reproducibly (reproducible_sum.hpp), so every rank and one process take the same
   // decisions from the same bits; then the state is gathered as for an output.
-  long long relax(PdSystem& g, bool progress) {
+  std::pair<long long, Energies> relax(PdSystem& g, bool progress) {
     RelaxHooks hooks;
     hooks.forces = [this](PdSystem& l) {
       l.diagnostics = true;
@@ -405,10 +406,10 @@ public:
       MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_MAX, comm_);
     };
     const long long iterations = relax_to_equilibrium(local_, progress, hooks);
-    measure(g);  // the accumulators
+    const Energies e = measure(g);  // and the accumulators
     download(g);
     g.step = local_.step;
-    return iterations;
+    return {iterations, e};
   }
 
   bool any(bool flag) override {
@@ -490,10 +491,12 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
       // The global system holds no bonds to run the pass that ends the estimate (at the real
       // displacement, fracture on): the owned fields and bond states come from this one,
       // where finish_distributed_setup gathers them.
-      for (auto [from, to] : {std::pair{&l.energy_density, &g.energy_density}, {&l.damage, &g.damage},
-                              {&l.max_stretch, &g.max_stretch}, {&l.dissipated, &g.dissipated},
-                              {&l.dilatation, &g.dilatation}, {&l.lps_a, &g.lps_a}, {&l.lps_b, &g.lps_b}})
-        if (!from->empty()) std::copy(from->begin(), from->begin() + owned, to->begin() + b);  // LPS's: held or not
+      // Correspondence's deformation gradient, force tensor and non-affine energy too (9, 9
+      // and 1 per particle): the owned values the first output's zero-energy check and the
+      // ranks' systems start from, as the whole system's pass leaves them on one process.
+      for (const auto& [field, width] : kForcePassFields)
+        if (!(l.*field).empty())  // LPS's and correspondence's: held or not
+          std::copy((l.*field).begin(), (l.*field).begin() + width * owned, (g.*field).begin() + width * b);
       std::copy(l.state.begin(), l.state.end(), g.state.begin());
       std::copy(l.bond_damage.begin(), l.bond_damage.end(), g.bond_damage.begin());  // softening bonds
       g.dissipated_energy = l.dissipated_energy;
@@ -538,7 +541,7 @@ DistributedSetup mpi_distributed_setup() {
   return d;
 }
 
-long long mpi_relax(PdSystem& global, bool progress) {
+std::pair<long long, Energies> mpi_relax(PdSystem& global, bool progress) {
   MpiBackend backend(global, MPI_COMM_WORLD);
   try {
     return backend.relax(global, progress);

@@ -79,6 +79,23 @@ MaterialSums sum_marked_by_material(const DistributedSetup& d, const Distributed
                                     const std::vector<uint8_t>& marked, const std::vector<int32_t>& material,
                                     const std::vector<double>& values, int dims, size_t materials);
 
+// The per-particle fields the stable-step estimate's last force pass fills (at the real
+// displacement, fracture on), with their values per particle. Under the distributed set-up
+// that pass runs on the ranks' systems: each copies its owned rows into the global system
+// (mpi_stable_step_forces) and finish_distributed_setup gathers them, so every rank starts
+// from one process's fields. LPS's dilatation and fast-path factors, and correspondence's
+// deformation gradient, force tensor (sigma K^-1) and non-affine energy, are empty when the
+// model has none (on every rank alike).
+struct ForcePassField {
+  std::vector<double> PdSystem::*field;
+  int64_t width;
+};
+inline constexpr ForcePassField kForcePassFields[] = {
+    {&PdSystem::energy_density, 1}, {&PdSystem::damage, 1},           {&PdSystem::max_stretch, 1},
+    {&PdSystem::dissipated, 1},     {&PdSystem::dilatation, 1},       {&PdSystem::lps_a, 1},
+    {&PdSystem::lps_b, 1},          {&PdSystem::corr_deformation, 9}, {&PdSystem::corr_force_tensor, 9},
+    {&PdSystem::corr_nonaffine, 1}};
+
 // The global system as the time loop and the writers need it, its bonds now in the ranks'
 // own systems: the whole row offsets and bond states (and softening's bond damage) on every
 // rank; with results written, rank 0 also gathers the partners and the two half-bond

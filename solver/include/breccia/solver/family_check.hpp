@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <string>
 
+#include "breccia/solver/distributed_setup.hpp"
 #include "breccia/solver/pd_system.hpp"
 
 namespace breccia::solver {
@@ -30,13 +31,18 @@ struct EnergyScatter {
 // classical value, over particles whose intact family fills 95 % of their horizon and holds one
 // material (surfaces, cracks and interfaces change energies legitimately). Leaves u and the
 // force fields zeroed as set-up had them.
-EnergyScatter energy_scatter(PdSystem& s);
+// Under the distributed set-up (rows active) the system holds the rank's rows only: a
+// particle's energy density reads its own row alone (its bonds, LPS's dilatation, the
+// correspondence deformation gradient), so each rank samples its own particles, and the
+// sampled ratios of every rank, concatenated in rank (= index) order, give one process's
+// sums, bit for bit. Collective when rows are active.
+EnergyScatter energy_scatter(PdSystem& s, const DistributedSetup& d = {}, const DistributedRows& rows = {});
 
 // Fewer sampled particles than this give no verdict (a specimen too small for its horizon).
 inline constexpr size_t kMinScatterSample = 20;
 
 // Throws InputError (model.horizon_factor) when the scatter exceeds kMaxEnergyScatter.
 // setup_system calls it unless time.check_stability is false.
-void require_resolved_families(PdSystem& s);
+void require_resolved_families(PdSystem& s, const DistributedSetup& d = {}, const DistributedRows& rows = {});
 
 }  // namespace breccia::solver

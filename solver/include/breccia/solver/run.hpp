@@ -4,6 +4,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "breccia/solver/pd_system.hpp"
 
@@ -31,8 +32,10 @@ struct RunOptions {
   // What a distributed run shares of the set-up (its stable step's force passes, its bond
   // coefficients) between the ranks.
   SetupHooks setup_hooks;
-  // A backend's dynamic relaxation (a distributed run's); empty: relax_to_equilibrium here.
-  std::function<long long(PdSystem&, bool progress)> relax;
+  // A backend's dynamic relaxation (a distributed run's): the iterations (-1: not converged)
+  // and the final state's energies, which the backend measures (a distributed set-up's global
+  // system holds no bonds to measure them with). Empty: relax_to_equilibrium here.
+  std::function<std::pair<long long, Energies>(PdSystem&, bool progress)> relax;
 };
 
 struct RunResult {

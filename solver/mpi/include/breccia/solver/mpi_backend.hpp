@@ -59,8 +59,9 @@ RowShare mpi_row_share();
 DistributedSetup mpi_distributed_setup();
 
 // RunOptions::relax for a distributed run: dynamic relaxation on every rank's share, the
-// state gathered into `global` on rank 0; returns the iterations (-1: not converged).
-long long mpi_relax(PdSystem& global, bool progress);
+// state gathered into `global` on rank 0; returns the iterations (-1: not converged) and the
+// final energies summed over ranks.
+std::pair<long long, Energies> mpi_relax(PdSystem& global, bool progress);
 
 // RunOptions::backend_loop for a distributed run.
 RunResult mpi_time_loop(PdSystem& global, const RunOptions& options, ResultsWriter* results,

@@ -100,7 +100,11 @@ double softening_onset_stretch(const ElasticInput& in, double tensile_strength) 
 // <g(n) n (x) n>. s(n) = ex n_x^2 + el (1 - n_x^2). Uniaxial stress: el solves sigma_yy = 0,
 // which is linear in el once the damage is fixed, so each strain step iterates (el, damage) to
 // a fixed point, the damage never decreasing along the path.
-double homogeneous_tension_peak(const ElasticInput& in, PdModel model, double onset, double ultimate) {
+namespace {
+// sign +1: uniaxial tension (the strain ex grows); -1: uniaxial compression (ex falls), the bonds
+// crushing past crush_ratio x onset when crush_ratio > 0. Returns sign x the first peak of sigma_xx.
+double homogeneous_uniaxial_peak(const ElasticInput& in, PdModel model, double onset, double ultimate, double sign,
+                                 double crush_ratio) {
   const int d = in.dimension;
   const bool lps = model != PdModel::PMB;
   const LpsCoefficients lc = lps_coefficients(in);
@@ -135,28 +139,46 @@ double homogeneous_tension_peak(const ElasticInput& in, PdModel model, double on
     syy *= lateral_share / nq;
     return sxx / nq;
   };
+  // Damage of a bond at stretch s: the tension law, and in compression the crushing law.
+  auto law = [&](double s) {
+    const double t = softening_damage<double>(s, onset, ultimate);
+    if (!(crush_ratio > 0.0) || s >= 0.0) return t;
+    return std::max(t, softening_damage<double>(-s, crush_ratio * onset, crush_ratio * ultimate));
+  };
   double el = 0.0, peak = 0.0;
   const double step = onset / 400.0;
-  for (double ex = onset; ex < 4.0 * ultimate + onset; ex += step) {
+  const double reach = (sign > 0.0 ? 4.0 : 4.0 * std::max(1.0, crush_ratio)) * ultimate + onset;
+  for (double mag = sign > 0.0 ? onset : step; mag < reach; mag += step) {
+    const double ex = sign * mag;
     for (int it = 0; it < 100; ++it) {
       for (int q = 0; q < nq; ++q)
-        trial[q] = std::max(dmg[q], softening_damage<double>(ex * cx2[q] + el * (1.0 - cx2[q]), onset, ultimate));
+        trial[q] = std::max(dmg[q], law(ex * cx2[q] + el * (1.0 - cx2[q])));
       double s0y, s1y;
       stress(ex, 0.0, trial, s0y);
       stress(ex, onset, trial, s1y);
       const double next = -s0y * onset / (s1y - s0y);
-      const bool settled = std::fabs(next - el) <= 1e-12 * ex;
+      const bool settled = std::fabs(next - el) <= 1e-12 * mag;
       el = next;
       if (settled) break;
     }
     for (int q = 0; q < nq; ++q)
-      dmg[q] = std::max(dmg[q], softening_damage<double>(ex * cx2[q] + el * (1.0 - cx2[q]), onset, ultimate));
+      dmg[q] = std::max(dmg[q], law(ex * cx2[q] + el * (1.0 - cx2[q])));
     double syy;
-    const double sxx = stress(ex, el, dmg, syy);
+    const double sxx = sign * stress(ex, el, dmg, syy);
     if (sxx < peak) break;  // the first maximum: where a bar starts to localise
     peak = sxx;
   }
   return peak;
+}
+}  // namespace
+
+double homogeneous_tension_peak(const ElasticInput& in, PdModel model, double onset, double ultimate) {
+  return homogeneous_uniaxial_peak(in, model, onset, ultimate, 1.0, 0.0);
+}
+
+double homogeneous_compression_peak(const ElasticInput& in, PdModel model, double onset, double ultimate,
+                                    double crush_ratio) {
+  return homogeneous_uniaxial_peak(in, model, onset, ultimate, -1.0, crush_ratio);
 }
 
 double calibrated_onset_stretch(const ElasticInput& in, PdModel model, double tensile_strength, double brittle_stretch) {

@@ -206,7 +206,7 @@ CaseConfig parse_case_file(const std::string& path) {
 
   for (const Section& m : root.list("materials")) {
     m.allow_only({"name", "density", "youngs_modulus", "poisson_ratio", "fracture_energy", "tensile_strength", "weibull",
-                  "strength_rate"});
+                  "strength_rate", "compressive_strength"});
     MaterialSpec ms;
     ms.name = m.text("name", "default");
     ms.density = m.positive("density", Quantity::Density);
@@ -229,6 +229,15 @@ CaseConfig parse_case_file(const std::string& path) {
       if (ms.strength_rate != StrengthRateLaw::None && !(ms.tensile_strength > 0))
         throw InputError(path, m.field("strength_rate"), "'" + law + "' for a material without a tensile_strength",
                          "a tensile_strength too (the law raises the softening bonds' strength), or none");
+    }
+    if (m.has("compressive_strength")) {  // docs/theory.md "Crushing"
+      ms.compressive_strength = m.positive("compressive_strength", Quantity::Pressure);
+      if (!(ms.tensile_strength > 0))
+        throw InputError(path, m.field("compressive_strength"), "given without a tensile_strength",
+                         "a tensile_strength too (crushing scales the softening bonds' law)");
+      if (!(ms.compressive_strength >= ms.tensile_strength))
+        throw InputError(path, m.field("compressive_strength"), "below the tensile_strength",
+                         "compressive_strength >= tensile_strength");
     }
     if (auto w = m.optional_section("weibull")) {
       w->allow_only({"modulus", "seed", "scales"});
@@ -258,6 +267,20 @@ CaseConfig parse_case_file(const std::string& path) {
                          "differs from materials[" + std::to_string(k) + "].strength_rate",
                          "the same strength_rate for every material with a tensile_strength (one law per case)");
     c.strength_rate = law;
+  }
+  // One crushing ratio per case: the force pass holds one scalar (pd_kernels.hpp crush_ratio).
+  for (size_t k = 0; k < c.materials.size(); ++k) {
+    const MaterialSpec& mk = c.materials[k];
+    if (!(mk.compressive_strength > 0)) continue;
+    const double ratio = mk.compressive_strength / mk.tensile_strength;
+    for (size_t q = 0; q < c.materials.size(); ++q) {
+      const MaterialSpec& mq = c.materials[q];
+      if (mq.tensile_strength > 0 && !(mq.compressive_strength / mq.tensile_strength == ratio))
+        throw InputError(path, "materials[" + std::to_string(q) + "].compressive_strength",
+                         "compressive_strength / tensile_strength differs from materials[" + std::to_string(k) + "]'s",
+                         "the same ratio for every material with a tensile_strength (one crushing ratio per case)");
+    }
+    c.crush_ratio = ratio;
   }
   for (size_t k = 0; k < c.materials.size(); ++k) {
     if (!(c.materials[k].tensile_strength > 0)) continue;

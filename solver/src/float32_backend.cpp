@@ -106,6 +106,7 @@ PdViewT<float> float32_view(PdSystem& s) {
     p.s_onset = s.s_onset.data();
     p.bond_damage = s.bond_damage.data();
     p.strength_rate = static_cast<int>(s.config.strength_rate);
+    p.crush_ratio = static_cast<float>(s.config.crush_ratio);
   }
   if (!f.short_range_k.empty() && s.n) {
     p.short_range_k = f.short_range_k.data();

@@ -469,6 +469,7 @@ PdView PdSystem::view() {
     p.s_onset = s_onset.data();
     p.bond_damage = bond_damage.data();
     p.strength_rate = static_cast<int>(config.strength_rate);
+    p.crush_ratio = static_cast<float>(config.crush_ratio);
   }
   if (!short_range_k.empty() && n) {
     p.short_range_k = short_range_k.data();

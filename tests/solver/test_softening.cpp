@@ -11,6 +11,7 @@
 #include <string>
 
 #include "breccia/common/error.hpp"
+#include "breccia/solver/calibration.hpp"
 #include "helpers.hpp"
 #include "measures.hpp"
 
@@ -285,7 +286,9 @@ namespace {
 // and the grips (two horizons deep, x prescribed) keep their particles on it (rigid grips would
 // launch a wave of rho c rate x grip depth from their inner faces), so the whole bar sees the one
 // strain rate until a crack localises. Peak of the force on one grip over the section.
-breccia::atlas::PeakStress rate_bar_peak_stress(double rate, double end_s, const char* law) {
+// A negative rate shortens it (uniaxial compression); `extra` adds keys to the material.
+breccia::atlas::PeakStress rate_bar_peak_stress(double rate, double end_s, const char* law,
+                                                const std::string& extra = "", PdSystem* keep = nullptr) {
   using breccia::atlas::SofteningBar;
   const double L = SofteningBar::length_m, W = SofteningBar::width_m, dx = 1e-3, nu = 0.25;
   const double grip = 2.05 * 3.015 * dx;
@@ -300,7 +303,7 @@ breccia::atlas::PeakStress rate_bar_peak_stress(double rate, double end_s, const
       num(dx) + "}}\n"
       "model: {type: lps, horizon_factor: 3.015, surface_correction: energy}\n"
       "materials: [{name: c, density: 2400, youngs_modulus: 30 GPa, poisson_ratio: 0.25, fracture_energy: 100, "
-      "tensile_strength: 3 MPa, strength_rate: " + law + "}]\n"
+      "tensile_strength: 3 MPa, strength_rate: " + law + extra + "}]\n"
       "sets: [{name: grip_lo, box: [-1, -1, -1, " + num(grip) + ", 1, 1]}, {name: grip_hi, box: [" + num(L - grip) +
       ", -1, -1, 1, 1, 1]}]\n"
       "boundary: [{type: velocity, set: grip_lo, expression: [" + v_x + ", \"0\", \"0\"], components: [x]},\n"
@@ -310,8 +313,9 @@ breccia::atlas::PeakStress rate_bar_peak_stress(double rate, double end_s, const
       "time: {end: " + num(end_s) + "}\n";
   PdSystem s = system_from_yaml(std::string("rate_bar_") + law, deck);
   const breccia::atlas::PeakStress run = breccia::atlas::pulled_bar_peak_stress(s, 1, W * W, end_s);
-  std::printf("rate bar %s at %g /s: peak %.4g MPa at %.2f us (%zu particles)\n", law, rate, run.stress_pa / 1e6,
-              run.time_s * 1e6, s.n);
+  std::printf("rate bar %s%s at %g /s: peak %.4g MPa at %.2f us (%zu particles)\n", law, extra.c_str(), rate,
+              run.stress_pa / 1e6, run.time_s * 1e6, s.n);
+  if (keep) *keep = std::move(s);
   return run;
 }
 }  // namespace
@@ -376,4 +380,91 @@ TEST(StrengthRate, BadInputNamesTheKey) {
   };
   expect_error(", tensile_strength: 3 MPa, strength_rate: malvar", "", "fib_mc2010");
   expect_error(", strength_rate: fib_mc2010", "", "without a tensile_strength");
+}
+
+// Crushing (materials[].compressive_strength; pd_kernels.hpp soften, docs/theory.md "Crushing").
+// The law of one bond: in compression the bilinear law with onset and ultimate scaled by
+// r_c = f_c / sigma_t, one damage for both signs; what it dissipates to break is r_c^2 s_t s_u
+// (the compressive triangle), and a bond crushed to d softens in tension from d on.
+TEST(Crushing, OneBondFollowsTheScaledLawInCompression) {
+  const double st = 1e-4, su = 1.1e-3, rc = 4.0, unit = 2.5;
+  std::vector<float> onset{static_cast<float>(st)}, ultimate{static_cast<float>(su)}, damage{0.0f};
+  PdView p;
+  p.s_onset = onset.data(); p.s0_own = ultimate.data(); p.bond_damage = damage.data();
+  p.crush_ratio = static_cast<float>(rc);
+  const BondMotionT<double> motion{0, 0, 0, 0, 0, 1, 1};
+  double released = 0.0;
+  EXPECT_EQ(soften(p, 0, -0.99 * rc * double(onset[0]), unit, released, motion), 0.0);  // below the crushing onset
+  const double s_mid = -rc * 0.5 * (double(onset[0]) + double(ultimate[0]));
+  const double d_mid = soften(p, 0, s_mid, unit, released, motion);
+  EXPECT_NEAR(d_mid, softening_damage<double>(-s_mid, rc * double(onset[0]), rc * double(ultimate[0])), 1e-7);
+  EXPECT_GT(d_mid, 0.0);
+  // Force (1 - d) s on the envelope: the law's, f = r_c s_t (s_u r_c - |s|)/(r_c (s_u - s_t)) at |s|.
+  const double on = rc * double(onset[0]), ul = rc * double(ultimate[0]);
+  EXPECT_NEAR((1.0 - d_mid) * -s_mid, on * (ul + s_mid) / (ul - on), 1e-6 * on);
+  // Pulled back to tension below the tensile law's damage d_mid: nothing more is lost.
+  EXPECT_EQ(soften(p, 0, 0.5 * double(onset[0]), unit, released, motion), double(damage[0]));
+  EXPECT_NEAR(damage[0], d_mid, 1e-7);
+  EXPECT_EQ(soften(p, 0, -1.01 * ul, unit, released, motion), 1.0);
+  EXPECT_NEAR(released, unit * on * ul, 1e-6 * unit * on * ul);
+  // Off (crush_ratio 0): elastic in compression, as before.
+  damage[0] = 0.0f;
+  p.crush_ratio = 0.0f;
+  double none = 0.0;
+  EXPECT_EQ(soften(p, 0, -1e3 * ul, unit, none, motion), 0.0);
+  EXPECT_EQ(none, 0.0);
+}
+
+namespace {
+// The LPS rate bar above, shortened at 100 /s (homogeneous uniaxial stress from the start), and
+// the peak compressive stress its interior bonds give at one homogeneously strained point
+// (homogeneous_compression_peak, with the bar's calibrated onset and ultimate stretch).
+struct CompressionBar { double measured, expected; };
+CompressionBar compression_bar(const std::string& extra, double crush_ratio, double end_s) {
+  PdSystem s;
+  const auto run = rate_bar_peak_stress(-100.0, end_s, "none", extra, &s);
+  ElasticInput in;
+  in.youngs_modulus = 30e9;
+  in.poisson_ratio = 0.25;
+  const double expected = homogeneous_compression_peak(in, PdModel::LPS, s.s_onset.at(0), s.s0_own.at(0), crush_ratio);
+  std::printf("compression bar%s: peak %.4g MPa, homogeneous %.4g MPa (onset %.4g, ultimate %.4g)\n", extra.c_str(),
+              run.stress_pa / 1e6, expected / 1e6, double(s.s_onset.at(0)), double(s.s0_own.at(0)));
+  return {run.stress_pa, expected};
+}
+}  // namespace
+
+// With f_c = 2 sigma_t the bonds crush before the lateral ones soften in tension: the bar's
+// compressive peak is the homogeneous point's within 5% (the tensile bars' tolerance above;
+// the homogeneous value is an independent continuum quadrature, not the particle sum), and
+// about 2 sigma_t.
+TEST(Crushing, BarInCompressionPeaksWhereTheHomogeneousPointDoes) {
+  const auto run = compression_bar(", compressive_strength: 6 MPa", 2.0, 8.0 * 3e6 / 30e9 / 100.0);
+  EXPECT_NEAR(run.measured / run.expected, 1.0, 0.05);
+  EXPECT_LT(run.measured, 0.8 * 4.0 * 3e6) << "crushing must set it, below the lateral splitting without it";
+}
+
+// A measurement that fails (docs/theory.md "Crushing"): without crushing the model still has
+// a compressive strength, set by the lateral bonds that the Poisson expansion stretches and
+// softens in tension. Target: the bar's compressive peak is the homogeneous point's within 5%.
+// Measured: 44.78 MPa at 34 us against 36.12 MPa (1.24) at this bar's s_u / s_t = 294 (the
+// homogeneous peak is reached at a strain 12 times the onset; the bar's discrete families and
+// its lateral inertia at 100 /s are not in the quadrature). Not understood yet: run with
+// --gtest_also_run_disabled_tests --gtest_filter='Crushing.*'.
+TEST(Crushing, DISABLED_BarInCompressionWithoutCrushingPeaksWhereTheHomogeneousPointDoes) {
+  const auto run = compression_bar("", 0.0, 40.0 * 3e6 / 30e9 / 100.0);
+  EXPECT_NEAR(run.measured / run.expected, 1.0, 0.05);
+}
+
+TEST(Crushing, BadInputNamesTheKey) {
+  auto expect_error = [](const std::string& material, const char* what) {
+    try {
+      system_from_yaml("crush_bad", block_deck("lps", material));
+      FAIL() << "expected an InputError for " << material;
+    } catch (const breccia::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("materials[0].compressive_strength"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  expect_error(", compressive_strength: 30 MPa", "without a tensile_strength");
+  expect_error(", tensile_strength: 3 MPa, compressive_strength: 2 MPa", "below the tensile_strength");
 }

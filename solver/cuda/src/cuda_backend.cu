@@ -413,6 +413,7 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   p.s_onset = m.s_onset.get();
   p.bond_damage = m.bond_damage.get();
   p.strength_rate = m.bond_damage.size() > 0 ? static_cast<int>(s.config.strength_rate) : 0;
+  p.crush_ratio = m.bond_damage.size() > 0 ? static_cast<float>(s.config.crush_ratio) : 0.0f;
   p.lps = m.lps.get();
   p.weighted_volume = m.weighted_volume.get(); p.dilatation = m.dilatation.get();
   p.lps_a = m.lps_a.get(); p.lps_b = m.lps_b.get();
@@ -433,6 +434,7 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
     q.s_onset = p.s_onset;
     q.bond_damage = p.bond_damage;
     q.strength_rate = p.strength_rate;
+    q.crush_ratio = p.crush_ratio;
     q.short_range_k = m.fshort_range_k.get(); q.spacing = m.fspacing.get();
     q.weighted_volume = m.fweighted_volume.get(); q.dilatation = m.fdilatation.get();
     q.lps_a = m.flps_a.get(); q.lps_b = m.flps_b.get();

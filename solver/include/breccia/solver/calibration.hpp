@@ -41,6 +41,12 @@ double softening_onset_stretch(const ElasticInput& in, double tensile_strength);
 // still load while the aligned ones soften, so it exceeds E' x onset). Continuum angular
 // quadrature; linear in onset at a fixed ultimate / onset.
 double homogeneous_tension_peak(const ElasticInput& in, PdModel model, double onset, double ultimate);
+// The same point shortened in uniaxial stress: the peak compressive stress |sigma_xx| (> 0),
+// its bonds softening in tension as above and, with crush_ratio > 0, crushing in compression
+// at crush_ratio x onset to crush_ratio x ultimate (pd_kernels.hpp soften, one damage for both
+// signs). Without crushing the lateral bonds' tension sets it (docs/theory.md "Crushing").
+double homogeneous_compression_peak(const ElasticInput& in, PdModel model, double onset, double ultimate,
+                                    double crush_ratio);
 // The onset stretch whose homogeneous peak (above) is the tensile strength, the ultimate
 // stretch being brittle_stretch^2 / onset (G0 kept): the law's calibration. Returns the
 // uncalibrated sigma_t / E' when brittle_stretch is below it (the horizon is too large).

@@ -36,6 +36,8 @@ struct MaterialSpec {
   enum class WeibullScales { Both, FractureEnergy, TensileStrength } weibull_scales = WeibullScales::Both;
   // Rate-dependent strength of the softening bonds (pd_physics.hpp strength_dif); None: static.
   StrengthRateLaw strength_rate = StrengthRateLaw::None;
+  // > 0: the softening bonds also crush in compression (docs/theory.md "Crushing"); 0: elastic.
+  double compressive_strength = 0.0;
 };
 
 // Explosive gas in a cavity (loads[].type: gas; gas.hpp, docs/case-format.md).
@@ -166,6 +168,8 @@ struct CaseConfig {
   bool softening = false;  // some material has a tensile_strength (bilinear softening bonds)
   // The materials' strength_rate (one law per case); not None: s_onset is per-entry state.
   StrengthRateLaw strength_rate = StrengthRateLaw::None;
+  // The materials' compressive_strength / tensile_strength (one ratio per case); 0: no crushing.
+  double crush_ratio = 0.0;
   // Working precision of the bond loop and the state it streams (docs/theory.md, Precision).
   enum class Precision { Float64, Float32 } precision = Precision::Float64;
   std::vector<std::string> no_fail_sets;

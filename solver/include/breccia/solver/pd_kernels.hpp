@@ -61,6 +61,10 @@ struct PdViewT {
   float* s_onset = nullptr;
   float* bond_damage = nullptr;
   int strength_rate = 0;  // StrengthRateLaw; None: the onset is s_onset as set up
+  // Crushing (materials[].compressive_strength): a softening entry shortened past
+  // crush_ratio x its onset follows the same bilinear law in compression, onset and ultimate
+  // both scaled by crush_ratio = f_c / sigma_t (one per case); 0: elastic in compression.
+  float crush_ratio = 0.0f;
   // model.break_check: after_force (LAMMPS PERI's order) lets a bond that breaks in this pass
   // carry its force once more; before_force (default) drops it from this pass on.
   bool break_after_force = false;
@@ -202,6 +206,15 @@ BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double uni
   if (!p.fracture) return d_old;
   double onset = p.s_onset[k];
   const double ultimate = p.s0_own[k];
+  if (s < 0.0) {  // crushing: one damage for both signs, so D(d) of the law in force stays exact
+    if (!(p.crush_ratio > 0.0f)) return d_old;
+    const double c_onset = double(p.crush_ratio) * onset, c_ultimate = double(p.crush_ratio) * ultimate;
+    const double d = softening_damage<double>(-s, c_onset, c_ultimate);
+    if (d <= d_old) return d_old;
+    released += unit * (softening_dissipation(d, c_onset, c_ultimate) - softening_dissipation(d_old, c_onset, c_ultimate));
+    p.bond_damage[k] = static_cast<float>(d);
+    return d;
+  }
   const bool dynamic_onset = p.strength_rate && d_old <= 0.0 && s > onset;
   if (dynamic_onset) {
     const double raised = onset * strength_dif(p.strength_rate, bond_stretch_rate(p, motion));

@@ -688,13 +688,13 @@ BRECCIA_HD void pmb_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
 // asked for (fracture off, no diagnostics, no per-entry state beyond the intact bits: the
 // stable-step estimate's passes): each entry's term of the scalar loop below, the same
 // expressions in the same order (a half not intact adds nothing, an entry with none +0), for
-// two_stage_force_loop, whose first stage runs several entries at once (LPS with the
-// neighbours' factors of the dilatation pass, PdViewT::lps_factors). The bond vector comes
+// two_stage_force_loop, whose first stage runs several entries at once. The bond vector comes
 // from the current positions x = x0 + u (BondOriginT), which gives bond_geometry's bits.
-template <class Real, bool kLps>
+template <class Real>
 struct GeneralUnbrokenPath {
   BondOriginT<Real> origin;
-  LpsForceFactors<Real> own;  // particle i's (LPS); each neighbour's from PdViewT::lps_factors
+  LpsForceFactors<Real> own;  // particle i's (LPS)
+  bool lps;
   BRECCIA_HD bool entry(const PdViewT<Real>& v, int64_t k, Real& cx, Real& cy, Real& cz) const {
     const int64_t j = v.neighbor[k];
     const Real xi = v.xi_len[k];
@@ -702,9 +702,11 @@ struct GeneralUnbrokenPath {
     Real dx, dy, dz, len;
     const Real e = origin.to(v, j, xi, dx, dy, dz, len);
     Real scalar;
-    if constexpr (kLps) {
+    if (lps) {
       const Real own_t = lps_force_state(own, v.k_own[k], xi, e);
-      const Real dual_t = lps_force_state(v.lps_factors[j], v.k_dual[k], xi, e);
+      const Real dual_t = lps_force_state(v.lps_factors ? v.lps_factors[j]
+                                                        : lps_force_factors(v.lps[j], v.weighted_volume[j], v.dilatation[j]),
+                                          v.k_dual[k], xi, e);
       Real t = Real(0);
       t += (st & kOwnIntact) ? own_t : Real(0);
       t += (st & kDualIntact) ? dual_t : Real(0);
@@ -739,14 +741,8 @@ BRECCIA_HD void general_force_loop(const PdViewT<Real>& p, int64_t i) {
   }
 #if !defined(__CUDA_ARCH__)
   if (!kDiagnostics && !p.fracture && fast_bond_loop(p) && has_bond_vectors(p)) {
-    if (!lps) {
-      two_stage_force_loop<double>(p, i, GeneralUnbrokenPath<Real, false>{BondOriginT<Real>(p, i), own_factors});
-      return;
-    }
-    if (p.lps_factors) {
-      two_stage_force_loop<double>(p, i, GeneralUnbrokenPath<Real, true>{BondOriginT<Real>(p, i), own_factors});
-      return;
-    }
+    two_stage_force_loop<double>(p, i, GeneralUnbrokenPath<Real>{BondOriginT<Real>(p, i), own_factors, lps});
+    return;
   }
 #endif
   for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {

@@ -7,6 +7,10 @@
 #include "breccia/common/cell_list.hpp"
 #include "breccia/common/huge_pages.hpp"
 
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
+
 namespace breccia {
 
 Families build_families(std::span<const double> x, std::span<const double> horizon,
@@ -118,17 +122,52 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
     }
   }
   if (uniform || both_ends) return own;
-  // Transpose (who found i), filled in ascending i, so each list comes out sorted.
+  // Transpose (who found i), each list in ascending i, so it comes out sorted. A counting
+  // sort by column over row chunks: chunk c counts its columns, its entries of column j go
+  // after those of the chunks before it, and each chunk fills in ascending i, so every list
+  // holds what one pass in ascending i would write, in the same order, with the chunks
+  // filled side by side (the scatter over the whole list is what costs). The chunks'
+  // counts take chunks x N x 4 bytes, so their number stays small.
+  const size_t own_entries = own.neighbors.size();
+#if defined(_OPENMP)
+  const size_t chunks = static_cast<size_t>(std::clamp(omp_get_max_threads(), 1, 8));
+#else
+  const size_t chunks = 1;
+#endif
+  std::vector<size_t> chunk_row(chunks + 1, n);  // rows [chunk_row[c], chunk_row[c + 1]): about equal entries
+  chunk_row[0] = 0;
+  for (size_t c = 1; c < chunks; ++c) {
+    const int64_t target = static_cast<int64_t>(own_entries * c / chunks);
+    chunk_row[c] = static_cast<size_t>(std::lower_bound(own.offsets.begin(), own.offsets.end(), target) - own.offsets.begin());
+    chunk_row[c] = std::clamp(chunk_row[c], chunk_row[c - 1], n);
+  }
+  std::vector<std::vector<int32_t>> place(chunks);  // per chunk: count of column j, then its place within j's list
+#pragma omp parallel for schedule(static, 1)
+  for (size_t c = 0; c < chunks; ++c) {
+    place[c].assign(n, 0);
+    for (int64_t k = own.offsets[chunk_row[c]]; k < own.offsets[chunk_row[c + 1]]; ++k) ++place[c][static_cast<size_t>(own.neighbors[k])];
+  }
   std::vector<int64_t> t_offsets(n + 1, 0);
-  for (int32_t j : own.neighbors) ++t_offsets[static_cast<size_t>(j) + 1];
-  for (size_t i = 0; i < n; ++i) t_offsets[i + 1] += t_offsets[i];
+  for (size_t j = 0; j < n; ++j) {
+    int32_t before = 0;
+    for (size_t c = 0; c < chunks; ++c) {
+      const int32_t count = place[c][j];
+      place[c][j] = before;
+      before += count;
+    }
+    t_offsets[j + 1] = t_offsets[j] + before;
+  }
   std::vector<int32_t> t_neighbors;
-  assign_on_huge_pages(t_neighbors, own.neighbors.size());
-  {
-    std::vector<int64_t> fill(t_offsets.begin(), t_offsets.end() - 1);
-    for (size_t i = 0; i < n; ++i)
-      for (int64_t k = own.offsets[i]; k < own.offsets[i + 1]; ++k)
-        t_neighbors[fill[own.neighbors[k]]++] = static_cast<int32_t>(i);
+  assign_on_huge_pages(t_neighbors, own_entries);
+#pragma omp parallel for schedule(static, 1)
+  for (size_t c = 0; c < chunks; ++c) {
+    std::vector<int32_t>& at = place[c];
+    for (size_t i = chunk_row[c]; i < chunk_row[c + 1]; ++i)
+      for (int64_t k = own.offsets[i]; k < own.offsets[i + 1]; ++k) {
+        const size_t j = static_cast<size_t>(own.neighbors[k]);
+        t_neighbors[static_cast<size_t>(t_offsets[j]) + static_cast<size_t>(at[j]++)] = static_cast<int32_t>(i);
+      }
+    std::vector<int32_t>().swap(at);
   }
   auto merged = [&](size_t i, auto&& emit) {
     int64_t a = own.offsets[i], b = t_offsets[i];

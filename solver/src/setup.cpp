@@ -478,6 +478,7 @@ PdView PdSystem::view() {
   p.lps = lps.empty() ? nullptr : lps.data();
   p.weighted_volume = weighted_volume.data(); p.dilatation = dilatation.data();
   p.lps_a = !lps_a.empty() ? lps_a.data() : nullptr; p.lps_b = !lps_b.empty() ? lps_b.data() : nullptr;
+  p.lps_factors = lps_factors.size() == n && n ? lps_factors.data() : nullptr;
   p.energy_density = energy_density.data(); p.dissipated = dissipated.data();
   p.damage = damage.data(); p.max_stretch = max_stretch.data();
   p.diagnostics = diagnostics;
@@ -1307,6 +1308,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       s.lps_a.assign(n, 0.0);
       s.lps_b.assign(n, 0.0);
     }
+    if (lps && !same) s.lps_factors.assign(n, LpsForceFactors<double>{});
   }
 
   // Correspondence's moduli and tensors before the checks below, which run force passes

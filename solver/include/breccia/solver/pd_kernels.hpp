@@ -80,6 +80,9 @@ struct PdViewT {
   // A_i = theta_i (c_b - c_s/d) / m_i, B_i = c_s / m_i (filled by the dilatation pass).
   Real* lps_a = nullptr;
   Real* lps_b = nullptr;
+  // Optional per-particle lps_force_factors (pd_physics.hpp), written by the dilatation pass
+  // with theta_i: the general force loop reads a neighbour's instead of dividing per bond.
+  LpsForceFactors<Real>* lps_factors = nullptr;
   // per-particle outputs
   double* energy_density = nullptr;   // W_i [J/m3]
   double* dissipated = nullptr;       // energy released by bonds broken this step, per particle [J]
@@ -264,6 +267,7 @@ template <class Real>
 BRECCIA_HD void lps_store_dilatation(const PdViewT<Real>& p, int64_t i, Real sum) {
   const Real theta = static_cast<Real>(p.lps[i].dilatation_factor) * sum / p.weighted_volume[i];
   p.dilatation[i] = theta;
+  if (p.lps_factors) p.lps_factors[i] = lps_force_factors(p.lps[i], p.weighted_volume[i], theta);
   if (p.lps_a) {
     const LpsCoefficients& c = p.lps[i];
     p.lps_a[i] = theta * static_cast<Real>(c.bulk_term - c.shear_term / c.dilatation_factor) / p.weighted_volume[i];
@@ -693,6 +697,46 @@ BRECCIA_HD void pmb_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
 // energy density, damage and max stretch are neither summed nor written (passes between
 // output steps, the stable step's probe): the force arithmetic is the same code in the same
 // order, so the forces, breaks and released energy are the diagnostic pass's bit for bit.
+// The general loop's entries where no bond can break or soften and nothing but the force is
+// asked for (fracture off, no diagnostics, no per-entry state beyond the intact bits: the
+// stable-step estimate's passes): each entry's term of the scalar loop below, the same
+// expressions in the same order (a half not intact adds nothing, an entry with none +0), for
+// two_stage_force_loop, whose first stage runs several entries at once. The bond vector comes
+// from the current positions x = x0 + u (BondOriginT), which gives bond_geometry's bits.
+template <class Real>
+struct GeneralUnbrokenPath {
+  BondOriginT<Real> origin;
+  LpsForceFactors<Real> own;  // particle i's (LPS)
+  bool lps;
+  BRECCIA_HD bool entry(const PdViewT<Real>& v, int64_t k, Real& cx, Real& cy, Real& cz) const {
+    const int64_t j = v.neighbor[k];
+    const Real xi = v.xi_len[k];
+    const uint8_t st = v.state[k];
+    Real dx, dy, dz, len;
+    const Real e = origin.to(v, j, xi, dx, dy, dz, len);
+    Real scalar;
+    if (lps) {
+      const Real own_t = lps_force_state(own, v.k_own[k], xi, e);
+      const Real dual_t = lps_force_state(v.lps_factors ? v.lps_factors[j]
+                                                        : lps_force_factors(v.lps[j], v.weighted_volume[j], v.dilatation[j]),
+                                          v.k_dual[k], xi, e);
+      Real t = Real(0);
+      t += (st & kOwnIntact) ? own_t : Real(0);
+      t += (st & kDualIntact) ? dual_t : Real(0);
+      scalar = t * v.volume[j];
+    } else {
+      scalar = pmb_force_scalar(v.k_own[k], v.k_dual[k], st, e / xi);
+    }
+    const Real inv_len = Real(1) / len;
+    const Real fdx = scalar * dx * inv_len, fdy = scalar * dy * inv_len, fdz = scalar * dz * inv_len;
+    cx = st ? fdx : Real(0);
+    cy = st ? fdy : Real(0);
+    cz = st ? fdz : Real(0);
+    return false;
+  }
+  BRECCIA_HD double release(const PdViewT<Real>&, int64_t, int64_t) const { return 0.0; }
+};
+
 template <bool kDiagnostics, class Real>
 BRECCIA_HD void general_force_loop(const PdViewT<Real>& p, int64_t i) {
   Real fx = Real(0), fy = Real(0), fz = Real(0);
@@ -701,11 +745,19 @@ BRECCIA_HD void general_force_loop(const PdViewT<Real>& p, int64_t i) {
   bool any = false;
   const bool lps = p.model == static_cast<int>(PdModel::LPS);
   Real m_i = Real(0), theta_i = Real(0);
+  LpsForceFactors<Real> own_factors;
   double dev_sum = 0.0;
   if (lps) {
     m_i = p.weighted_volume[i];
     theta_i = p.dilatation[i];
+    own_factors = lps_force_factors(p.lps[i], m_i, theta_i);
   }
+#if !defined(__CUDA_ARCH__)
+  if (!kDiagnostics && !p.fracture && fast_bond_loop(p) && has_bond_vectors(p)) {
+    two_stage_force_loop<double>(p, i, GeneralUnbrokenPath<Real>{BondOriginT<Real>(p, i), own_factors, lps});
+    return;
+  }
+#endif
   for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
     if (kDiagnostics) total_vol += p.vol_own[k];
     uint8_t st = p.state[k];
@@ -763,14 +815,16 @@ BRECCIA_HD void general_force_loop(const PdViewT<Real>& p, int64_t i) {
       const int64_t jj = j;
       Real t = Real(0);
       if (active & kOwnIntact) {
-        t += lps_force_state(p.lps[i], m_i, theta_i, p.k_own[k], xi, e);
+        t += lps_force_state(own_factors, p.k_own[k], xi, e);
         if (kDiagnostics && (st & kOwnIntact)) {
           const double dev = double(e) - double(theta_i) * xi / p.lps[i].dilatation_factor;
           dev_sum += keep * p.k_own[k] * dev * dev * p.volume[j];
         }
       }
       if (active & kDualIntact)
-        t += lps_force_state(p.lps[jj], p.weighted_volume[jj], p.dilatation[jj], p.k_dual[k], xi, e);
+        t += lps_force_state(p.lps_factors ? p.lps_factors[jj]
+                                           : lps_force_factors(p.lps[jj], p.weighted_volume[jj], p.dilatation[jj]),
+                             p.k_dual[k], xi, e);
       scalar = static_cast<Real>(keep) * t * p.volume[j];
     } else {
       scalar = static_cast<Real>(keep) * pmb_force_scalar(p.k_own[k], p.k_dual[k], active, g.stretch);

@@ -209,16 +209,36 @@ struct LpsCoefficients {
   double shear_term;         // 15 mu (3D) or 8 mu (2D)
 };
 
+// lps_force_state's per-particle factors, bulk theta / m and shear / m with theta and d: the
+// general force loop forms its own particle's once per pass and reads each neighbour's from
+// the dilatation pass (PdViewT::lps_factors) instead of three divisions per bond and end.
+// The same operations in the same order, so the same bits as forming them per bond.
+template <class Real>
+struct LpsForceFactors {
+  Real bulk_theta_m = Real(0), shear_m = Real(0), theta = Real(0), d = Real(1);
+};
+
+template <class Real>
+BRECCIA_HD LpsForceFactors<Real> lps_force_factors(const LpsCoefficients& c, Real m, SameReal<Real> theta) {
+  const Real d = static_cast<Real>(c.dilatation_factor);
+  const Real bulk = static_cast<Real>(c.bulk_term), shear = static_cast<Real>(c.shear_term);
+  return LpsForceFactors<Real>{bulk * theta / m, shear / m, theta, d};
+}
+
 // Scalar force state t<xi> of one bond seen from a particle with weighted volume m and
 // dilatation theta; w = omega * beta * V_neighbour is carried separately by the caller.
 // (The coefficients stay double per particle; they enter in the working precision.)
 template <class Real>
+BRECCIA_HD Real lps_force_state(const LpsForceFactors<Real>& f, SameReal<Real> omega, SameReal<Real> xi_len,
+                                SameReal<Real> extension) {
+  const Real deviatoric_extension = extension - f.theta * xi_len / f.d;
+  return f.bulk_theta_m * omega * xi_len + f.shear_m * omega * deviatoric_extension;
+}
+
+template <class Real>
 BRECCIA_HD Real lps_force_state(const LpsCoefficients& c, Real m, SameReal<Real> theta, SameReal<Real> omega,
                                 SameReal<Real> xi_len, SameReal<Real> extension) {
-  const Real d = static_cast<Real>(c.dilatation_factor);
-  const Real bulk = static_cast<Real>(c.bulk_term), shear = static_cast<Real>(c.shear_term);
-  const Real deviatoric_extension = extension - theta * xi_len / d;
-  return (bulk * theta / m) * omega * xi_len + (shear / m) * omega * deviatoric_extension;
+  return lps_force_state(lps_force_factors(c, m, theta), omega, xi_len, extension);
 }
 
 // Strain energy density of an LPS particle: K_d theta^2 / 2 + (shear/(2m)) sum w e_d^2 V.

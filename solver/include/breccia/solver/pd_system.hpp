@@ -44,6 +44,7 @@ struct PdSystem {
   std::vector<uint8_t> fixed_dof;
   std::vector<double> energy_density, dissipated, damage, max_stretch, dilatation, weighted_volume;
   std::vector<double> lps_a, lps_b;  // fast LPS path factors (pd_kernels.hpp)
+  std::vector<LpsForceFactors<double>> lps_factors;  // N: the general LPS loop's (PdViewT::lps_factors)
   std::vector<LpsCoefficients> lps;
   std::vector<double> calibration_factor;  // PMB: classical / discrete energy (docs/theory.md)
   // Correspondence (correspondence_kernels.hpp): 5 moduli, F (9), sigma K^-1 - G h F (9), non-affine energy

@@ -286,13 +286,12 @@ BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
     Real term[kBondChunk];
     for (int64_t base = p.offsets[i]; base < p.offsets[i + 1]; base += kBondChunk) {
       const int m = static_cast<int>(p.offsets[i + 1] - base < kBondChunk ? p.offsets[i + 1] - base : kBondChunk);
-      if (chunk_intact(p, base, m)) {
+      const auto stage = [&](auto check_state) {  // with or without the state test (chunk_intact)
 BRECCIA_SIMD
-        for (int q = 0; q < m; ++q) term[q] = lps_dilatation_entry<false>(p, origin, base + q);
-      } else {
-BRECCIA_SIMD
-        for (int q = 0; q < m; ++q) term[q] = lps_dilatation_entry(p, origin, base + q);
-      }
+        for (int q = 0; q < m; ++q) term[q] = lps_dilatation_entry<decltype(check_state)::value>(p, origin, base + q);
+      };
+      if (chunk_intact(p, base, m)) stage(std::false_type{});
+      else stage(std::true_type{});
       for (int q = 0; q < m; ++q) sum += term[q];
     }
   } else
@@ -403,20 +402,17 @@ BRECCIA_HD void two_stage_force_loop(const PdViewT<Real>& p, int64_t i, const Pa
   bool breaks[kBondChunk];
   for (int64_t base = begin; base < end; base += kBondChunk) {
     const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
-    int breaking = 0;
-    if (chunk_intact(v, base, m)) {
+    // The branch-free stage, with or without the state test (chunk_intact).
+    const auto stage = [&](auto check_state) {
+      int breaking = 0;
 BRECCIA_SIMD_COUNT(breaking)
       for (int q = 0; q < m; ++q) {
-        breaks[q] = path.template entry<false>(v, base + q, cx[q], cy[q], cz[q]);
+        breaks[q] = path.template entry<decltype(check_state)::value>(v, base + q, cx[q], cy[q], cz[q]);
         breaking += breaks[q] ? 1 : 0;
       }
-    } else {
-BRECCIA_SIMD_COUNT(breaking)
-      for (int q = 0; q < m; ++q) {
-        breaks[q] = path.entry(v, base + q, cx[q], cy[q], cz[q]);
-        breaking += breaks[q] ? 1 : 0;
-      }
-    }
+      return breaking;
+    };
+    const int breaking = chunk_intact(v, base, m) ? stage(std::false_type{}) : stage(std::true_type{});
     for (int q = 0; q < m; ++q) {
       fx += cx[q];
       fy += cy[q];

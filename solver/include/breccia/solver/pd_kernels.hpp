@@ -243,6 +243,22 @@ BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double uni
 // of a masked entry changes nothing: a sum that starts at +0 never becomes -0.
 inline constexpr int kBondChunk = 64;
 
+// Are all m entries of a chunk from `base` intact? Then the host's two stages run a copy of
+// the entry without its state test (kCheckState false): in a run most chunks have no broken
+// entry, and the test (a byte widened to a lane mask and a select per entry) measured 11 % of
+// LPS's loop (docs/performance.md, "Bond state in bits"). The AND of the state bytes is
+// nonzero only if every byte shares a set bit, so "nonzero" proves every entry intact (the
+// converse need not hold: then the chunk takes the checked copy, as before). The results are
+// the checked copy's bit for bit: an intact entry's test is true. A bit per entry would make
+// this test one word per chunk, but the byte test is a few vector ANDs per 64 entries, and
+// every other reader of the state (checkpoints, outputs, the general loops) keeps its bytes.
+template <class Real>
+BRECCIA_HD bool chunk_intact(const PdViewT<Real>& p, int64_t base, int m) {
+  uint8_t all = 0xff;
+  for (int q = 0; q < m; ++q) all &= p.state[base + q];
+  return all != 0;
+}
+
 // Is particle i's PMB or LPS pass free of per-entry state beyond the intact flag (the fast
 // loops' condition)? Diagnostics are compiled out by the callers.
 template <class Real>
@@ -252,12 +268,13 @@ BRECCIA_HD bool fast_bond_loop(const PdViewT<Real>& p) {
 
 // One entry's term of the LPS first pass through gathered bond vectors, brittle bonds:
 // omega beta |xi| e V_j for an intact own half, else +0 (formed for every entry, then selected).
-template <class Real>
+template <bool kCheckState = true, class Real>
 BRECCIA_HD Real lps_dilatation_entry(const PdViewT<Real>& p, const BondOriginT<Real>& origin, int64_t k) {
   const int64_t j = p.neighbor[k];
   Real dx, dy, dz, len;
   const Real extension = origin.to(p, j, p.xi_len[k], dx, dy, dz, len);
   const Real term = p.k_own[k] * p.xi_len[k] * extension * p.volume[j];
+  if constexpr (!kCheckState) return term;  // chunk_intact
   return (p.state[k] & kOwnIntact) ? term : Real(0);
 }
 
@@ -286,8 +303,12 @@ BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
     Real term[kBondChunk];
     for (int64_t base = p.offsets[i]; base < p.offsets[i + 1]; base += kBondChunk) {
       const int m = static_cast<int>(p.offsets[i + 1] - base < kBondChunk ? p.offsets[i + 1] - base : kBondChunk);
+      const auto stage = [&](auto check_state) {  // with or without the state test (chunk_intact)
 BRECCIA_SIMD
-      for (int q = 0; q < m; ++q) term[q] = lps_dilatation_entry(p, origin, base + q);
+        for (int q = 0; q < m; ++q) term[q] = lps_dilatation_entry<decltype(check_state)::value>(p, origin, base + q);
+      };
+      if (chunk_intact(p, base, m)) stage(std::false_type{});
+      else stage(std::true_type{});
       for (int q = 0; q < m; ++q) sum += term[q];
     }
   } else
@@ -311,7 +332,7 @@ BRECCIA_SIMD
 // One LPS entry of the fast loop (lps_symmetric_force_kernel between output steps): the force
 // contribution on i (+0 when broken, or breaking with break_check before_force) and whether it
 // breaks now.
-template <class Real>
+template <bool kCheckState = true, class Real>
 BRECCIA_HD bool lps_fast_entry(const PdViewT<Real>& p, const BondOriginT<Real>& origin, int64_t k, Real a_i, Real b_i,
                                Real& cx, Real& cy, Real& cz) {
   const int64_t j = p.neighbor[k];
@@ -320,7 +341,7 @@ BRECCIA_HD bool lps_fast_entry(const PdViewT<Real>& p, const BondOriginT<Real>& 
   const Real e = origin.to(p, j, xi, dx, dy, dz, len);
   const Real omega = p.k_own[k];
   const Real s0 = p.s0_own[k];
-  const bool intact = p.state[k] != 0;
+  const bool intact = !kCheckState || p.state[k] != 0;  // chunk_intact
   const bool breaks = p.fracture & intact & (e > s0 * xi);  // bitwise: no branch (pmb_fast_entry)
   const bool pushes = intact & (!breaks | p.break_after_force);
   const Real t = omega * ((a_i + p.lps_a[j]) * xi + (b_i + p.lps_b[j]) * e);
@@ -398,12 +419,17 @@ BRECCIA_HD void two_stage_force_loop(const PdViewT<Real>& p, int64_t i, const Pa
   bool breaks[kBondChunk];
   for (int64_t base = begin; base < end; base += kBondChunk) {
     const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
-    int breaking = 0;
+    // The branch-free stage, with or without the state test (chunk_intact).
+    const auto stage = [&](auto check_state) {
+      int breaking = 0;
 BRECCIA_SIMD_COUNT(breaking)
-    for (int q = 0; q < m; ++q) {
-      breaks[q] = path.entry(v, base + q, cx[q], cy[q], cz[q]);
-      breaking += breaks[q] ? 1 : 0;
-    }
+      for (int q = 0; q < m; ++q) {
+        breaks[q] = path.template entry<decltype(check_state)::value>(v, base + q, cx[q], cy[q], cz[q]);
+        breaking += breaks[q] ? 1 : 0;
+      }
+      return breaking;
+    };
+    const int breaking = chunk_intact(v, base, m) ? stage(std::false_type{}) : stage(std::true_type{});
     for (int q = 0; q < m; ++q) {
       fx += cx[q];
       fy += cy[q];
@@ -425,8 +451,9 @@ template <class Real>
 struct LpsFastPath {
   BondOriginT<Real> origin;
   Real a_i, b_i;
+  template <bool kCheckState = true>
   BRECCIA_HD bool entry(const PdViewT<Real>& v, int64_t k, Real& cx, Real& cy, Real& cz) const {
-    return lps_fast_entry(v, origin, k, a_i, b_i, cx, cy, cz);
+    return lps_fast_entry<kCheckState>(v, origin, k, a_i, b_i, cx, cy, cz);
   }
   BRECCIA_HD double release(const PdViewT<Real>& p, int64_t i, int64_t k) const { return lps_fast_break(p, i, k); }
 };
@@ -534,7 +561,7 @@ BRECCIA_HD uint8_t break_bonds(const PdViewT<Real>& p, int64_t k, SameReal<Real>
 // or breaks in this pass with break_check before_force) and whether it breaks now. Double
 // takes the extension as |xi + eta| - |xi| (BondOriginT::to); float as num / den,
 // num = eta.(xi + (xi + eta)), den = |xi + eta| + |xi|, with one division per entry.
-template <class Real>
+template <bool kCheckState = true, class Real>
 BRECCIA_HD bool pmb_fast_entry(const PdViewT<Real>& p, const BondOriginT<Real>& origin, int64_t k, Real& cx,
                                Real& cy, Real& cz) {
   Real dx, dy, dz, len, f;
@@ -553,7 +580,7 @@ BRECCIA_HD bool pmb_fast_entry(const PdViewT<Real>& p, const BondOriginT<Real>& 
     f = k2 * extension / (xi * len);  // c s / |xi + eta|
   }
   // Bitwise & and | (no short circuit): the loop stays free of branches the vectoriser refuses.
-  const bool intact = p.state[k] != 0;
+  const bool intact = !kCheckState || p.state[k] != 0;  // chunk_intact
   const bool breaks = p.fracture & intact & over;
   const bool pushes = intact & (!breaks | p.break_after_force);
   // The products are formed for every entry and then selected: a product inside the
@@ -585,8 +612,9 @@ BRECCIA_HD double pmb_fast_break(const PdViewT<Real>& p, int64_t i, int64_t k) {
 template <class Real>
 struct PmbFastPath {
   BondOriginT<Real> origin;
+  template <bool kCheckState = true>
   BRECCIA_HD bool entry(const PdViewT<Real>& v, int64_t k, Real& cx, Real& cy, Real& cz) const {
-    return pmb_fast_entry(v, origin, k, cx, cy, cz);
+    return pmb_fast_entry<kCheckState>(v, origin, k, cx, cy, cz);
   }
   BRECCIA_HD double release(const PdViewT<Real>& p, int64_t i, int64_t k) const { return pmb_fast_break(p, i, k); }
 };

@@ -57,15 +57,9 @@ namespace {
 // Particles at the centroids of a gmsh mesh of the body in `specimen` (a breccia-mesh
 // specimen file's text), meshed once per process under `name`; empty if meshing failed.
 std::string meshed_particles(const std::string& name, const std::string& specimen, const std::string& place_options) {
-  const std::string dir = breccia::solver::testing::process_temp_dir() + "/" + name;
-  if (std::filesystem::exists(dir + "/particles.h5")) return dir + "/particles.h5";
-  std::filesystem::create_directories(dir);
-  std::ofstream(dir + "/specimen.yaml") << specimen;
-  const std::string cmd = std::string(BRECCIA_MESH_EXE) + " " + dir + "/specimen.yaml -o " + dir +
-                          "/specimen.msh --quiet > /dev/null 2>&1 && " + BRECCIA_PLACE_EXE + " " + dir +
-                          "/specimen.msh -o " + dir + "/particles.h5 " + place_options + " > /dev/null 2>&1";
-  if (std::system(cmd.c_str()) != 0) return std::string();
-  return dir + "/particles.h5";
+  const std::string path = breccia::solver::testing::process_temp_dir() + "/" + name + "/particles.h5";
+  if (std::filesystem::exists(path)) return path;
+  return breccia::solver::testing::mesh_and_place(name, specimen, place_options);
 }
 
 // Particles at the centroids of a uniform gmsh tet mesh of a 100 mm cube (~10,000 tets).

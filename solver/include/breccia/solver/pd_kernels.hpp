@@ -736,6 +736,9 @@ struct GeneralUnbrokenPath {
   BondOriginT<Real> origin;
   LpsForceFactors<Real> own;  // particle i's (LPS)
   bool lps;
+  // kCheckState is two_stage_force_loop's permission to skip the state test in an intact
+  // chunk; this path reads the state anyway, since its bits choose the halves that count.
+  template <bool kCheckState = true>
   BRECCIA_HD bool entry(const PdViewT<Real>& v, int64_t k, Real& cx, Real& cy, Real& cz) const {
     const int64_t j = v.neighbor[k];
     const Real xi = v.xi_len[k];

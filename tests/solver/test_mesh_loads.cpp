@@ -96,7 +96,7 @@ double interior_energy_error(const char* model, double nu, const double eps[9]) 
 
 }  // namespace
 
-// 3% on tet-centroid particles (issue 3, test 1, the looser case): an irregular family is
+// 3% on tet-centroid particles (looser than on a lattice): an irregular family is
 // not isotropic particle by particle; averaged over the interior its fourth-order moment
 // deviates by up to a few percent from isotropy at m = 3 (measured here: PMB -0.9%,
 // LPS +0.2% for uniaxial strain, shear and expansion), while the

@@ -731,6 +731,13 @@ BRECCIA_HD void pmb_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
 // expressions in the same order (a half not intact adds nothing, an entry with none +0), for
 // two_stage_force_loop, whose first stage runs several entries at once. The bond vector comes
 // from the current positions x = x0 + u (BondOriginT), which gives bond_geometry's bits.
+// Particle j's lps_force_factors: stored by the dilatation pass where the system holds them,
+// else formed here (the same operations, so the same bits).
+template <class Real>
+BRECCIA_HD LpsForceFactors<Real> neighbour_lps_factors(const PdViewT<Real>& p, int64_t j) {
+  return p.lps_factors ? p.lps_factors[j] : lps_force_factors(p.lps[j], p.weighted_volume[j], p.dilatation[j]);
+}
+
 template <class Real>
 struct GeneralUnbrokenPath {
   BondOriginT<Real> origin;
@@ -748,9 +755,7 @@ struct GeneralUnbrokenPath {
     Real scalar;
     if (lps) {
       const Real own_t = lps_force_state(own, v.k_own[k], xi, e);
-      const Real dual_t = lps_force_state(v.lps_factors ? v.lps_factors[j]
-                                                        : lps_force_factors(v.lps[j], v.weighted_volume[j], v.dilatation[j]),
-                                          v.k_dual[k], xi, e);
+      const Real dual_t = lps_force_state(neighbour_lps_factors(v, j), v.k_dual[k], xi, e);
       Real t = Real(0);
       t += (st & kOwnIntact) ? own_t : Real(0);
       t += (st & kDualIntact) ? dual_t : Real(0);
@@ -853,9 +858,7 @@ BRECCIA_HD void general_force_loop(const PdViewT<Real>& p, int64_t i) {
         }
       }
       if (active & kDualIntact)
-        t += lps_force_state(p.lps_factors ? p.lps_factors[jj]
-                                           : lps_force_factors(p.lps[jj], p.weighted_volume[jj], p.dilatation[jj]),
-                             p.k_dual[k], xi, e);
+        t += lps_force_state(neighbour_lps_factors(p, jj), p.k_dual[k], xi, e);
       scalar = static_cast<Real>(keep) * t * p.volume[j];
     } else {
       scalar = static_cast<Real>(keep) * pmb_force_scalar(p.k_own[k], p.k_dual[k], active, g.stretch);

@@ -41,15 +41,22 @@ void cpu_compute_forces(PdSystem& sys) {
 
 namespace {
 template <class Real>
-void contact_pass(PdSystem& sys, const PdViewT<Real>& p, const double* x_now) {
-  sys.contact_cells.build(x_now, p.n, sys.contact_cell_edge);
+void contact_pass(PdSystem& sys, const PdViewT<Real>& p, const double* x_now, std::span<const int32_t> members,
+                  int64_t indices, const int32_t* key) {
+  sys.contact_cells.build(x_now, members.empty() ? p.n : indices, sys.contact_cell_edge, members, key);
   const ContactCellsView g = sys.contact_cells.view();
   for_each_particle(p.n, [&](int64_t i) { short_range_contact_kernel(p, g, i); });
 }
 }  // namespace
 
-void short_range_contact(PdSystem& sys, const PdViewT<double>& p, const double* x_now) { contact_pass(sys, p, x_now); }
-void short_range_contact(PdSystem& sys, const PdViewT<float>& p, const double* x_now) { contact_pass(sys, p, x_now); }
+void short_range_contact(PdSystem& sys, const PdViewT<double>& p, const double* x_now, std::span<const int32_t> members,
+                         int64_t indices, const int32_t* key) {
+  contact_pass(sys, p, x_now, members, indices, key);
+}
+void short_range_contact(PdSystem& sys, const PdViewT<float>& p, const double* x_now, std::span<const int32_t> members,
+                         int64_t indices, const int32_t* key) {
+  contact_pass(sys, p, x_now, members, indices, key);
+}
 
 void commit_min_stretch(PdSystem& sys) {
   if (!sys.min_stretch.empty()) sys.min_stretch.swap(sys.min_stretch_next);

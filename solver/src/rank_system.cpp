@@ -57,9 +57,9 @@ RankLayout rank_layout(const PdSystem& g, int ranks, int rank) {
 }
 
 std::string distributed_unsupported(const PdSystem& g) {
-  // Each of these reads particles that are not bond partners (a cell grid of the current
-  // positions, the cavity's whole wall).
-  if (g.config.short_range_forces) return "model.short_range_forces";
+  // The gas load reads particles that are not bond partners (the cavity's whole wall).
+  // (The short-range forces' pairs outside the families come by their own exchange,
+  // ContactExchange in solver/mpi/.)
   if (g.gas.active) return "loads[].type: gas";
   // The rate law reads the ghosts' velocities (bond_stretch_rate) and keeps per-entry onsets
   // that the ranks' gathers and checkpoints do not carry yet.

@@ -10,6 +10,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <initializer_list>
+#include <stdexcept>
+#include <type_traits>
 #include <vector>
 
 #include "breccia/common/error.hpp"
@@ -172,10 +174,194 @@ private:
   std::vector<MPI_Request> requests_;
 };
 
+// The short-range forces' partners on other ranks (model.short_range_forces;
+// contact_cells.hpp). The contact pairs are particles outside each other's family that come
+// within reach as the body deforms: not the halo's ghosts, and not known before the pass. So
+// at every force pass each rank sends every other rank the particles it owns that lie within
+// that rank's bounding box of owned current positions grown by 1.5 x the grid's cell edge
+// (the largest reach is one cell edge; the half more covers float's rounding), with what the
+// contact kernel reads of them: a superset of every partner within reach, since a particle
+// that is not a partner adds nothing. The receiver places them beside its own (a family
+// ghost at its ghost index, so the family test still knows it; another after the ghosts)
+// and builds the grid over its owned particles and the received ones listed in global
+// order. Every rank owns one contiguous range of that order and sends in it, so the list is
+// the received from lower ranks, the owned, the received from higher ranks: each cell is
+// walked in one process's order, and an owned particle's force is one process's, bit for
+// bit, at any rank count (and rank 1 and one process build the same grid).
+class ContactExchange {
+public:
+  ContactExchange(const RankLayout& L, MPI_Comm comm, double cell_edge)
+      : comm_(comm), rank_(L.rank), ranks_(L.part.ranks()), owned_(L.owned()), ghosts_(L.ghosts()),
+        margin_(1.5 * cell_edge), layout_(L) {}
+
+  // The contact forces on the owned particles of `p` (the step's view: owned, then ghosts),
+  // x: the owned particles' current positions in double (OpenMpExec::contact_positions).
+  template <class Real>
+  void pass(PdSystem& local, const PdViewT<Real>& p, const double* x) {
+    constexpr size_t kReals = 9;  // x0, u, volume, spacing, short_range_k
+    const size_t record = sizeof(int64_t) + 3 * sizeof(double) + kReals * sizeof(Real);
+    // Every rank's box of owned current positions.
+    double box[6] = {1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
+    for (int64_t i = 0; i < owned_; ++i)
+      for (int d = 0; d < 3; ++d) {
+        box[d] = std::min(box[d], x[3 * i + d]);
+        box[3 + d] = std::max(box[3 + d], x[3 * i + d]);
+      }
+    boxes_.resize(6 * static_cast<size_t>(ranks_));
+    MPI_Allgather(box, 6, MPI_DOUBLE, boxes_.data(), 6, MPI_DOUBLE, comm_);
+    // The owned particles near each other rank's box, in ascending order, with their values.
+    std::vector<int>& send_counts = counts_[0];
+    send_counts.assign(static_cast<size_t>(ranks_), 0);
+    send_.clear();
+    for (int r = 0; r < ranks_; ++r) {
+      if (r == rank_) continue;
+      const double* b = &boxes_[6 * static_cast<size_t>(r)];
+      for (int64_t i = 0; i < owned_; ++i) {
+        bool near = true;
+        for (int d = 0; d < 3 && near; ++d)
+          near = x[3 * i + d] >= b[d] - margin_ && x[3 * i + d] <= b[3 + d] + margin_;
+        if (!near) continue;
+        const size_t at = send_.size();
+        send_.resize(at + record);
+        char* out = send_.data() + at;
+        const int64_t global = layout_.begin() + i;
+        put(out, &global, 1);
+        put(out, &x[3 * i], 3);
+        put(out, &p.x0[3 * i], 3);
+        put(out, &p.u[3 * i], 3);
+        put(out, &p.volume[i], 1);
+        put(out, &p.spacing[i], 1);
+        put(out, &p.short_range_k[i], 1);
+        ++send_counts[r];
+      }
+    }
+    std::vector<int>& recv_counts = counts_[1];
+    recv_counts.assign(static_cast<size_t>(ranks_), 0);
+    MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, comm_);
+    std::vector<int>& send_displs = counts_[2];
+    std::vector<int>& recv_displs = counts_[3];
+    send_displs.assign(static_cast<size_t>(ranks_), 0);
+    recv_displs.assign(static_cast<size_t>(ranks_), 0);
+    for (int r = 1; r < ranks_; ++r) {
+      send_displs[r] = send_displs[r - 1] + send_counts[r - 1];
+      recv_displs[r] = recv_displs[r - 1] + recv_counts[r - 1];
+    }
+    const int64_t received = recv_displs[ranks_ - 1] + recv_counts[ranks_ - 1];
+    recv_.resize(static_cast<size_t>(received) * record);
+    MPI_Datatype type;
+    MPI_Type_contiguous(static_cast<int>(record), MPI_BYTE, &type);
+    MPI_Type_commit(&type);
+    MPI_Alltoallv(send_.data(), send_counts.data(), send_displs.data(), type, recv_.data(), recv_counts.data(),
+                  recv_displs.data(), type, comm_);
+    MPI_Type_free(&type);
+
+    // The rank's particles (owned, then ghosts) and the received ones after them.
+    Scratch<Real>& sc = scratch<Real>();
+    const int64_t base = owned_ + ghosts_;
+    int64_t extra = 0;
+    std::vector<int64_t>& where = where_;
+    where.resize(static_cast<size_t>(received));
+    for (int64_t q = 0; q < received; ++q) {
+      int64_t global = 0;
+      std::memcpy(&global, recv_.data() + static_cast<size_t>(q) * record, sizeof(global));
+      const int64_t l = layout_.local_index(global);
+      where[q] = l >= 0 ? l : base + extra++;
+    }
+    const int64_t total = base + extra;
+    // The family test's keys: every index's global one (the rows are sorted by them).
+    keys_.resize(static_cast<size_t>(total));
+    for (int64_t i = 0; i < owned_; ++i) keys_[i] = static_cast<int32_t>(layout_.begin() + i);
+    std::copy(layout_.halo.ghosts.begin(), layout_.halo.ghosts.end(), keys_.begin() + owned_);
+    for (int64_t q = 0; q < received; ++q)
+      if (where[q] >= base) {
+        int64_t global = 0;
+        std::memcpy(&global, recv_.data() + static_cast<size_t>(q) * record, sizeof(global));
+        keys_[where[q]] = static_cast<int32_t>(global);
+      }
+    sc.x.resize(3 * static_cast<size_t>(total));
+    std::copy(x, x + 3 * owned_, sc.x.begin());
+    for (std::vector<Real>* v : {&sc.x0, &sc.u}) v->resize(3 * static_cast<size_t>(total));
+    for (std::vector<Real>* v : {&sc.volume, &sc.spacing, &sc.k}) v->resize(static_cast<size_t>(total));
+    std::copy(p.x0, p.x0 + 3 * base, sc.x0.begin());
+    std::copy(p.u, p.u + 3 * base, sc.u.begin());
+    std::copy(p.volume, p.volume + base, sc.volume.begin());
+    std::copy(p.spacing, p.spacing + base, sc.spacing.begin());
+    std::copy(p.short_range_k, p.short_range_k + base, sc.k.begin());
+    for (int64_t q = 0; q < received; ++q) {
+      const char* in = recv_.data() + static_cast<size_t>(q) * record + sizeof(int64_t);
+      const size_t l = static_cast<size_t>(where[q]);
+      get(in, &sc.x[3 * l], 3);
+      get(in, &sc.x0[3 * l], 3);
+      get(in, &sc.u[3 * l], 3);
+      get(in, &sc.volume[l], 1);
+      get(in, &sc.spacing[l], 1);
+      get(in, &sc.k[l], 1);
+    }
+    // The grid's members in global order: from lower ranks, the owned, from higher ranks.
+    members_.clear();
+    const int64_t lower = recv_displs[rank_];
+    for (int64_t q = 0; q < lower; ++q) members_.push_back(static_cast<int32_t>(where[q]));
+    for (int64_t i = 0; i < owned_; ++i) members_.push_back(static_cast<int32_t>(i));
+    for (int64_t q = lower; q < received; ++q) members_.push_back(static_cast<int32_t>(where[q]));
+
+    PdViewT<Real> c = p;  // forces and energy densities: the rank's own arrays
+    if constexpr (std::is_same_v<Real, double>) c.x = sc.x.data();  // double reads x, float x0 and u
+    c.x0 = sc.x0.data();
+    c.u = sc.u.data();
+    c.volume = sc.volume.data();
+    c.spacing = sc.spacing.data();
+    c.short_range_k = sc.k.data();
+    short_range_contact(local, c, sc.x.data(), members_, total, keys_.data());
+  }
+
+private:
+  template <class Real>
+  struct Scratch {
+    std::vector<double> x;
+    std::vector<Real> x0, u, volume, spacing, k;
+  };
+  template <class Real>
+  Scratch<Real>& scratch() {
+    if constexpr (std::is_same_v<Real, double>) return double_;
+    else return float_;
+  }
+  template <class T>
+  static void put(char*& out, const T* values, size_t count) {
+    std::memcpy(out, values, count * sizeof(T));
+    out += count * sizeof(T);
+  }
+  template <class T>
+  static void get(const char*& in, T* values, size_t count) {
+    std::memcpy(values, in, count * sizeof(T));
+    in += count * sizeof(T);
+  }
+
+  MPI_Comm comm_;
+  int rank_, ranks_;
+  int64_t owned_, ghosts_;
+  double margin_;
+  const RankLayout& layout_;
+  std::vector<double> boxes_;
+  std::vector<int> counts_[4];
+  std::vector<char> send_, recv_;
+  std::vector<int64_t> where_;
+  std::vector<int32_t> members_, keys_;
+  Scratch<double> double_;
+  Scratch<float> float_;
+};
+
 // The CPU's execution space plus the exchanges a distributed step needs (step.hpp).
 class MpiExec : public OpenMpExec {
 public:
-  MpiExec(PdSystem& local, HaloExchange& halo) : OpenMpExec(local), local_(local), halo_(halo) {}
+  MpiExec(PdSystem& local, HaloExchange& halo, ContactExchange* contact)
+      : OpenMpExec(local), local_(local), halo_(halo), contact_(contact) {}
+
+  // The short-range forces with the other ranks' particles near this rank's (ContactExchange).
+  template <class Real>
+  void contact(const StepArrays<Real>& a) const {
+    if (!contact_) throw std::logic_error("distributed run: short-range forces without their exchange");
+    contact_->pass(local_, a.p, contact_positions(a));
+  }
 
   // The minimum stretches the coming pass reads: the owners' values of the last pass.
   template <class Real>
@@ -203,6 +389,7 @@ public:
 private:
   PdSystem& local_;
   HaloExchange& halo_;
+  ContactExchange* contact_;
 };
 
 // Each rank's elements [begin[r], begin[r + 1]) of an array, in elements of `bytes` (a
@@ -261,6 +448,7 @@ struct RankShare {
   RankLayout layout;
   PdSystem local;
   std::unique_ptr<HaloExchange> halo;
+  std::unique_ptr<ContactExchange> contact;  // model.short_range_forces only
   size_t global_n = 0, global_bonds = 0;  // of the system it was cut from
 };
 
@@ -274,6 +462,8 @@ std::shared_ptr<RankShare> make_rank_share(const PdSystem& global, MPI_Comm comm
   sh->layout = rank_layout(global, size, rank);
   sh->local = take_bonds ? restrict_to_rank_taking_bonds(*take_bonds, sh->layout) : restrict_to_rank(global, sh->layout);
   sh->halo = std::make_unique<HaloExchange>(sh->layout, comm);
+  if (!sh->local.short_range_k.empty())
+    sh->contact = std::make_unique<ContactExchange>(sh->layout, comm, sh->local.contact_cell_edge);
   sh->global_n = global.n;
   sh->global_bonds = global.bond_count();
   return sh;
@@ -319,7 +509,7 @@ public:
 
   void step(PdSystem& g) override {
     local_.diagnostics = g.diagnostics;
-    MpiExec exec(local_, *halo_);
+    MpiExec exec(local_, *halo_, share_->contact.get());
     with_step_arrays(local_, [&](auto& a) { pd_step(exec, a, local_); });
     g.time = local_.time;
     g.step = local_.step;
@@ -444,7 +634,7 @@ private:
   }
 
   void force_pass(PdSystem& l) {
-    MpiExec exec(l, *halo_);
+    MpiExec exec(l, *halo_, share_->contact.get());
     with_step_arrays(l, [&](auto& a) { pd_force_pass(exec, a, true); });
   }
 
@@ -481,7 +671,7 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
       std::copy_n(g.u.begin() + 3 * static_cast<int64_t>(L.halo.ghosts[q]), 3, l.u.begin() + 3 * (owned + q));
     l.config.fracture = g.config.fracture;  // the estimate turns fracture off
     l.diagnostics = g.diagnostics;
-    MpiExec exec(l, *sh->halo);
+    MpiExec exec(l, *sh->halo, sh->contact.get());
     StepArrays<double> a = cpu_step_arrays(l);
     a.ghosts = L.ghosts();
     pd_force_pass(exec, a, true);

@@ -56,17 +56,24 @@ public:
   // on a cell grid of the current positions in double.
   template <class Real>
   void contact(const StepArrays<Real>& a) const {
-    const double* x = a.x;
-    if constexpr (!std::is_same_v<Real, double>) {
+    short_range_contact(sys_, a.p, contact_positions(a));
+  }
+
+  // The current positions the contact grid is built on: absolute, in double (3 per particle,
+  // at least the n the system steps).
+  template <class Real>
+  const double* contact_positions(const StepArrays<Real>& a) const {
+    if constexpr (std::is_same_v<Real, double>) {
+      return a.x;
+    } else {
       // Float keeps positions relative to the body's centre: the grid wants them absolute.
       sys_.x.resize(3 * sys_.n);
       const int64_t n3 = static_cast<int64_t>(3 * sys_.n);
       const Float32State& f = sys_.f32;
 #pragma omp parallel for schedule(static)
       for (int64_t k = 0; k < n3; ++k) sys_.x[k] = f.origin[k % 3] + double(f.x0[k]) + double(f.u[k]);
-      x = sys_.x.data();
+      return sys_.x.data();
     }
-    short_range_contact(sys_, a.p, x);
   }
 
   // The gas load (gas.hpp) on the double arrays.

@@ -185,9 +185,15 @@ void cpu_compute_forces(PdSystem& sys);
 void commit_min_stretch(PdSystem& sys);
 // The short-range forces between particles outside each other's family (model.
 // short_range_forces; the family pairs are short_range_kernel's): the pairs a cell grid on
-// the current positions finds (x_now: 3N, double). Host only.
-void short_range_contact(PdSystem& sys, const PdViewT<double>& p, const double* x_now);
-void short_range_contact(PdSystem& sys, const PdViewT<float>& p, const double* x_now);
+// the current positions finds (x_now: 3N, double). Host only. `members`: the grid holds
+// these particles only, listed in the order a cell is walked, out of `indices` that p and
+// x_now address (ContactCells::build; a distributed run's owned and nearby particles), and
+// `key` the global index of each (ContactCellsView::key); the forces are those of p's first
+// p.n particles.
+void short_range_contact(PdSystem& sys, const PdViewT<double>& p, const double* x_now,
+                         std::span<const int32_t> members = {}, int64_t indices = 0, const int32_t* key = nullptr);
+void short_range_contact(PdSystem& sys, const PdViewT<float>& p, const double* x_now,
+                         std::span<const int32_t> members = {}, int64_t indices = 0, const int32_t* key = nullptr);
 // External force density at time t (pressure, traction, body force, indenter).
 void compute_external(PdSystem& sys, double t);
 // Impose prescribed displacement/velocity at time t on constrained components.

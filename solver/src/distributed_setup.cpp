@@ -11,7 +11,6 @@ std::string distributed_setup_refusal(const PdSystem& s) {
   const CaseConfig& c = s.config;
   // Each of these reads, per particle, values summed over other particles' families (the
   // ghosts' own rows: a second layer), or runs a pass over every family at set-up.
-  if (c.short_range_forces) return "model.short_range_forces";
   for (const auto& l : c.loads)
     if (l.kind == LoadSpec::Kind::Gas) return "loads[].type: gas";
   return "";

@@ -327,55 +327,6 @@ static std::string read_text(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
-// Short-range forces between particles that were never in one family, owned by different
-// ranks (ContactExchange, mpi_backend.cpp). A lattice block cut through at x = 6 mm by a
-// pre-crack; its right half is moved 2 mm along y (more than the 1.5 mm horizon), so the
-// particles facing each other across the cut are not family members, and 0.2 mm along x, so
-// they start 0.7 mm apart, just outside the 0.675 mm reach (1.35 x the spacing). The halves
-// then close at 20 m/s and collide through those pairs only. Two ranks cut the block at the
-// pre-crack, so every such pair has its ends on two ranks (a run whose ranks send none of
-// them ends, measured, as one process without the pass over those pairs). What must hold: the one-process files, byte
-// for byte, at 2 and 3 ranks; and the collision must be there (without short-range forces
-// the halves pass through each other: a different answer).
-TEST(Distributed, ShortRangeForcesBetweenRanksGiveTheOneProcessAnswer) {
-  for (const std::string model : {"type: pmb", "type: lps", "type: pmb, precision: float32"}) {
-    auto deck = [&](bool contact) {
-      return std::string("specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.012, 0.006, 0.003], spacing: 0.5 mm}}\n") +
-             "model: {" + model + ", horizon_factor: 3.015" + (contact ? ", short_range_forces: true" : "") + "}\n"
-             "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 50}]\n"
-             "sets: [{name: left, box: [-0.001, -0.001, -0.001, 0.006, 0.007, 0.004]},\n"
-             "       {name: right, box: [0.006, -0.001, -0.001, 0.013, 0.007, 0.004]}]\n"
-             "precracks: [{type: polygon, points: [[0.006, -0.001, -0.001], [0.006, 0.007, -0.001], "
-             "[0.006, 0.007, 0.004], [0.006, -0.001, 0.004]]}]\n"
-             "initial:\n"
-             "  - {type: velocity, set: left, value: [10, 0, 0]}\n"
-             "  - {type: velocity, set: right, value: [-10, 0, 0]}\n"
-             "  - {type: displacement, set: right, value: [0.2 mm, 2 mm, 0]}\n"
-             "time: {steps: 80}\n"
-             "output: {every: 40, history_every: 10, fields: [damage, displacement, velocity]}\n";
-    };
-    const std::string tag = model.find("lps") != std::string::npos ? "lps" : model.find("float32") != std::string::npos ? "f32" : "pmb";
-    const std::string file = write_case("mpi_contact_" + tag, deck(true));
-    const std::string base = process_temp_dir() + "/contact_" + tag;
-    const Outcome ref = solve(file, base + "_np1", 1, 1);
-    ASSERT_EQ(ref.exit_code, 0) << ref.err;
-    const Outcome plain = solve(write_case("mpi_no_contact_" + tag, deck(false)), base + "_off", 1, 1);
-    ASSERT_EQ(plain.exit_code, 0) << plain.err;
-    EXPECT_NE(read_text(base + "_np1/history.csv"), read_text(base + "_off/history.csv"))
-        << model << ": the short-range forces changed nothing: no collision to check";
-    for (const int ranks : {2, 3}) {
-      const std::string out = base + "_np" + std::to_string(ranks);
-      const Outcome o = solve(file, out, ranks, 1);
-      ASSERT_EQ(o.exit_code, 0) << out << ": " << o.err;
-      for (const char* f : {"/results.h5", "/checkpoint.h5"})
-        EXPECT_EQ(differing(base + "_np1" + f, out + f), std::vector<std::string>{}) << out << f;
-      EXPECT_EQ(read_text(base + "_np1/history.csv"), read_text(out + "/history.csv")) << out;
-      expect_same_energies(summary(base + "_np1"), summary(out), out);
-    }
-  }
-}
-
-
 // A graded, notched tet block (meshed once per test process): 0.4 mm tets at the notch
 // grading to 1 mm, horizons differing by 3x between bonded particles, 3,369 particles.
 static std::string graded_notch() {
@@ -580,4 +531,62 @@ TEST(DistributedSetup, CorrespondenceAndDynamicRelaxationBuildEachRanksOwnBondsW
   expect_distributed_setup_gives_one_process_answer("adr_lps", bar("type: lps", "0.012, 0.006, 0.004", "1e-10"));
   expect_distributed_setup_gives_one_process_answer(
       "adr_corr", bar("type: correspondence, stabilisation: {type: penalty, coefficient: 1}", "0.012, 0.006, 0.004", "1e-8"));
+}
+
+// Short-range forces between particles that were never in one family, owned by different
+// ranks (ContactExchange, mpi_backend.cpp). A lattice block cut through at x = 6 mm by a
+// pre-crack; its right half is moved 2 mm along y (more than the 1.5 mm horizon), so the
+// particles facing each other across the cut are not family members, and 0.2 mm along x, so
+// they start 0.7 mm apart, just outside the 0.675 mm reach (1.35 x the spacing). The halves
+// then close at 20 m/s and collide through those pairs only. Two ranks cut the block at the
+// pre-crack, so every such pair has its ends on two ranks (a run whose ranks send none of
+// them ends, measured, as one process without the pass over those pairs). What must hold: the one-process files, byte
+// for byte, at 2 and 3 ranks, each rank building its own bonds (the distributed set-up); and
+// the collision must be there (without short-range forces
+// the halves pass through each other: a different answer).
+TEST(Distributed, ShortRangeForcesBetweenRanksGiveTheOneProcessAnswer) {
+  for (const std::string model : {"type: pmb", "type: lps", "type: pmb, precision: float32"}) {
+    auto deck = [&](bool contact) {
+      return std::string("specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.012, 0.006, 0.003], spacing: 0.5 mm}}\n") +
+             "model: {" + model + ", horizon_factor: 3.015" + (contact ? ", short_range_forces: true" : "") + "}\n"
+             "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 50}]\n"
+             "sets: [{name: left, box: [-0.001, -0.001, -0.001, 0.006, 0.007, 0.004]},\n"
+             "       {name: right, box: [0.006, -0.001, -0.001, 0.013, 0.007, 0.004]}]\n"
+             "precracks: [{type: polygon, points: [[0.006, -0.001, -0.001], [0.006, 0.007, -0.001], "
+             "[0.006, 0.007, 0.004], [0.006, -0.001, 0.004]]}]\n"
+             "initial:\n"
+             "  - {type: velocity, set: left, value: [10, 0, 0]}\n"
+             "  - {type: velocity, set: right, value: [-10, 0, 0]}\n"
+             "  - {type: displacement, set: right, value: [0.2 mm, 2 mm, 0]}\n"
+             "time: {steps: 80}\n"
+             "output: {every: 40, history_every: 10, fields: [damage, displacement, velocity]}\n";
+    };
+    const std::string tag = model.find("lps") != std::string::npos ? "lps" : model.find("float32") != std::string::npos ? "f32" : "pmb";
+    const std::string file = write_case("mpi_contact_" + tag, deck(true));
+    const std::string base = process_temp_dir() + "/contact_" + tag;
+    const Outcome ref = solve(file, base + "_np1", 1, 1);
+    ASSERT_EQ(ref.exit_code, 0) << ref.err;
+    const Outcome plain = solve(write_case("mpi_no_contact_" + tag, deck(false)), base + "_off", 1, 1);
+    ASSERT_EQ(plain.exit_code, 0) << plain.err;
+    EXPECT_NE(read_text(base + "_np1/history.csv"), read_text(base + "_off/history.csv"))
+        << model << ": the short-range forces changed nothing: no collision to check";
+    for (const int ranks : {2, 3}) {
+      const std::string out = base + "_np" + std::to_string(ranks);
+      const Outcome o = solve(file, out, ranks, 1);
+      ASSERT_EQ(o.exit_code, 0) << out << ": " << o.err;
+      for (const char* f : {"/results.h5", "/checkpoint.h5"})
+        EXPECT_EQ(differing(base + "_np1" + f, out + f), std::vector<std::string>{}) << out << f;
+      EXPECT_EQ(read_text(base + "_np1/history.csv"), read_text(out + "/history.csv")) << out;
+      expect_same_energies(summary(base + "_np1"), summary(out), out);
+      EXPECT_TRUE(summary(out)["distributed_setup"].get<bool>()) << out << " built the whole system";
+      EXPECT_EQ(o.err.find("note: set-up"), std::string::npos) << out << ": " << o.err;
+    }
+  }
+  // Mesh-derived particles with the start-up checks (the energy-scatter check's force pass
+  // runs the short-range forces too) and the dual horizon: the graded, notched block pulled
+  // apart, at 2 and 3 ranks with the distributed set-up.
+  std::string graded = graded_case(graded_notch(), "pmb", 40, true);
+  const std::string key = "variable_horizon: true";
+  graded.replace(graded.find(key), key.size(), key + ", short_range_forces: true");
+  expect_distributed_setup_gives_one_process_answer("dual_pmb_short_range", graded);
 }

@@ -187,7 +187,8 @@ private:
 // order. Every rank owns one contiguous range of that order and sends in it, so the list is
 // the received from lower ranks, the owned, the received from higher ranks: each cell is
 // walked in one process's order, and an owned particle's force is one process's, bit for
-// bit, at any rank count (and rank 1 and one process build the same grid).
+// bit, at any rank count. The family test compares global indices (ContactCellsView::key):
+// a rank's rows are sorted by them, and its ghosts' local indices do not follow them.
 class ContactExchange {
 public:
   ContactExchange(const RankLayout& L, MPI_Comm comm, double cell_edge)
@@ -259,7 +260,7 @@ public:
     Scratch<Real>& sc = scratch<Real>();
     const int64_t base = owned_ + ghosts_;
     int64_t extra = 0;
-    std::vector<int64_t>& where = where_;
+    std::vector<int64_t>& where = where_;  // each received particle's index here
     where.resize(static_cast<size_t>(received));
     for (int64_t q = 0; q < received; ++q) {
       int64_t global = 0;
@@ -278,6 +279,8 @@ public:
         std::memcpy(&global, recv_.data() + static_cast<size_t>(q) * record, sizeof(global));
         keys_[where[q]] = static_cast<int32_t>(global);
       }
+    // The arrays the contact kernel reads, over those indices (x: the grid's positions and
+    // double's bond vectors; a ghost that was not received is neither in the grid nor read).
     sc.x.resize(3 * static_cast<size_t>(total));
     std::copy(x, x + 3 * owned_, sc.x.begin());
     for (std::vector<Real>* v : {&sc.x0, &sc.u}) v->resize(3 * static_cast<size_t>(total));

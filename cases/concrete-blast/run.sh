@@ -3,6 +3,7 @@
 # Environment (scripts/run_case.sh): BRECCIA_BIN, OUT, VARIANT (quick|demo|mid|full), PYTHON.
 # PEAKS="1000 300 100" (MPa): the pressure study instead of one run: the same case with the
 # closed-cavity peak pressure scaled, one run each, a row each in $OUT/study.csv.
+# END_TIME="500 us": end the runs there instead of the case's time.end (a shorter study).
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 PYTHON=${PYTHON:-/usr/bin/python3}
@@ -25,7 +26,7 @@ one_run() {
   local dir="$1" peak="${2:-}"
   echo "== 3/4 solve ($VARIANT${peak:+, closed-cavity peak $peak MPa})"
   "$BRECCIA_BIN/breccia-solve" "$HERE/case.yaml" -o "$dir" --set "specimen.particles=$OUT/particles.h5" "${OPTIONS[@]}" \
-    ${peak:+--set "loads[0].history.peak=$peak MPa"}
+    ${peak:+--set "loads[0].history.peak=$peak MPa"} ${END_TIME:+--set "time.end=$END_TIME"}
   if [ ! -x "$BRECCIA_BIN/breccia-post" ]; then echo "(postproc not built: stopping after solve)"; return 0; fi
   echo "== 4/4 post-process"
   "$BRECCIA_BIN/breccia-post" "$dir" --particles "$OUT/particles.h5"

@@ -8,6 +8,10 @@ Radial cracks: particles in the ring 40-80 mm from the hole axis and 20-130 mm b
 face are binned by angle (72 bins of 5 degrees); a crack is a run of consecutive bins whose mean
 damage exceeds 0.5 between bins below it. A ring damaged all round counts as 'all' (no
 distinct crack: crushed).
+Radial cracks on the side faces: the same count along the four side faces unrolled into one
+1.2 m loop (particles within 10 mm of a side face, 20-130 mm below the top face, 120 bins of
+10 mm): the cracks that have reached the side faces. A crack that runs into a corner is one
+run of bins across the corner.
 """
 import argparse
 import csv
@@ -20,6 +24,49 @@ import numpy as np
 HOLE_AXIS = (0.15, 0.15)   # m, the specimen's hole axis (specimen*.yaml)
 TOP = 0.30                 # m, the top face
 SIZE = 0.30                # m, the cube's edge
+
+
+def count_cracks(mean):
+    """Runs of bins with mean damage above 0.5 round a closed loop of bins: 'all' if every
+    bin is damaged (no distinct crack), else the number of damaged runs."""
+    cracked = np.asarray(mean) > 0.5
+    if cracked.all():
+        return "all"
+    start = int(np.argmin(cracked))  # an undamaged bin: count rises from there round the loop
+    c = np.roll(cracked, -start)
+    return int(np.sum(c[1:] & ~c[:-1]) + (1 if c[0] else 0))
+
+
+def binned_mean(values, bins, count):
+    """Mean of values per bin (0 where a bin is empty)."""
+    total = np.bincount(bins, weights=values, minlength=count)
+    n = np.bincount(bins, minlength=count)
+    return np.where(n > 0, total / np.maximum(n, 1), 0.0)
+
+
+def ring_cracks(x, damage):
+    """Radial cracks crossing the ring 40-80 mm from the hole axis, 20-130 mm below the top."""
+    dx, dy = x[:, 0] - HOLE_AXIS[0], x[:, 1] - HOLE_AXIS[1]
+    rad = np.hypot(dx, dy)
+    depth = TOP - x[:, 2]
+    ring = (rad > 0.04) & (rad < 0.08) & (depth > 0.02) & (depth < 0.13)
+    ang = (np.degrees(np.arctan2(dy[ring], dx[ring])) + 360.0) % 360.0
+    bins = np.minimum((ang / 5.0).astype(int), 71)
+    return count_cracks(binned_mean(damage[ring], bins, 72))
+
+
+def side_face_cracks(x, damage, strip=0.01, bin_width=0.01):
+    """Cracks that reach the side faces: the four faces within `strip` of them, 20-130 mm below
+    the top, unrolled into one loop (xmin: y, ymax: x, xmax: 300 mm - y, ymin: 300 mm - x,
+    each face's particles by their nearest face) and binned along it."""
+    dist = np.stack([x[:, 0], SIZE - x[:, 1], SIZE - x[:, 0], x[:, 1]])  # xmin, ymax, xmax, ymin
+    face = np.argmin(dist, axis=0)
+    depth = TOP - x[:, 2]
+    near = (dist.min(axis=0) < strip) & (depth > 0.02) & (depth < 0.13)
+    along = np.choose(face, [x[:, 1], x[:, 0], SIZE - x[:, 1], SIZE - x[:, 0]]) + face * SIZE
+    count = int(round(4 * SIZE / bin_width))
+    bins = np.minimum((along[near] / bin_width).astype(int), count - 1)
+    return count_cracks(binned_mean(damage[near], bins, count))
 
 
 def main():
@@ -43,20 +90,7 @@ def main():
         last = sorted(r["output"].keys())[-1]
         damage = r[f"output/{last}/damage"][:]
         time_s = float(r[f"output/{last}"].attrs.get("time_s", float("nan")))
-    dx, dy = x[:, 0] - HOLE_AXIS[0], x[:, 1] - HOLE_AXIS[1]
-    rad = np.hypot(dx, dy)
-    depth = TOP - x[:, 2]
-    ring = (rad > 0.04) & (rad < 0.08) & (depth > 0.02) & (depth < 0.13)
-    ang = (np.degrees(np.arctan2(dy[ring], dx[ring])) + 360.0) % 360.0
-    bins = np.minimum((ang / 5.0).astype(int), 71)
-    mean = np.array([damage[ring][bins == b].mean() if np.any(bins == b) else 0.0 for b in range(72)])
-    cracked = mean > 0.5
-    if cracked.all():
-        radial = "all"
-    else:
-        start = int(np.argmin(cracked))  # an undamaged bin: count rises from there round the ring
-        c = np.roll(cracked, -start)
-        radial = int(np.sum(c[1:] & ~c[:-1]) + (1 if c[0] else 0))
+    radial = ring_cracks(x, damage)
     side = (np.minimum.reduce([x[:, 0], SIZE - x[:, 0], x[:, 1], SIZE - x[:, 1]]) < 0.01)
     out = {
         "label": a.label,
@@ -67,6 +101,7 @@ def main():
         "largest_share": float(masses.max() / total),
         "debris_share_under_1g": float(debris.sum() / total),
         "radial_cracks_ring": radial,
+        "radial_cracks_side_faces": side_face_cracks(x, damage),
         "side_face_damaged_share": float(np.mean(damage[side] > 0.5)),
     }
     print(", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}" for k, v in out.items()))

@@ -14,12 +14,11 @@ namespace breccia::solver {
 
 double GasState::front_speed() const {
   if (fixed_front_speed > 0.0) return fixed_front_speed;
-  // A gas expanding into an empty channel cannot move faster than its escape speed
-  // 2 c / (gamma - 1) (the centred rarefaction of a gas released into vacuum).
+  // A gas expanding into an empty channel cannot move faster than its escape speed (the
+  // centred rarefaction of a gas released into vacuum; gas_law.hpp).
   const double rho = reference_density * mass_fraction * reference_volume / std::max(volume, 1e-30);
   if (rho <= 0.0 || pressure_abs <= 0.0) return 1e-30;
-  const double gamma = gas_local_gamma(pressure_abs, mass_fraction * reference_volume / volume, law);
-  return 2.0 * std::sqrt(gamma * pressure_abs / rho) / (gamma - 1.0);
+  return gas_escape_speed(pressure_abs, rho, mass_fraction * reference_volume / volume, law);
 }
 
 void GasState::advance(double wall, const GasSums& cracks, double t, double dt) {

@@ -46,7 +46,7 @@ struct GasSpec {
   double jwl_explosive_density = 0.0;  // kg/m3, the unreacted explosive's (JWL's v = 1)
   bool stemming_open = false;          // mouth open: the gas vents from the start
   std::vector<std::string> vent_surfaces;  // the front reaching one of these vents the gas
-  double front_speed = 0.0;            // m/s along open bonds; 0: escape speed 2c/(gamma-1)
+  double front_speed = 0.0;            // m/s along open bonds; 0: the escape speed (gas_escape_speed)
   bool crack_entry = true;             // the gas enters cracks (false: stays in the hole)
   double density = 0.0;                // gas density in the reference cavity [kg/m3]
   double vent_area = 0.0;              // m2; 0: the mouth's area

@@ -384,7 +384,7 @@ struct GasState {
   double crack_vent_area = 0.0;   // [m2] that part at the last update
   double reference_density = 0.0; // gas density in V0 with all its mass [kg/m3]
   double ambient = 0.0;           // [Pa]
-  double fixed_front_speed = 0.0; // [m/s]; 0: the escape speed 2 c / (gamma - 1)
+  double fixed_front_speed = 0.0; // [m/s]; 0: the escape speed (gas_escape_speed)
   bool crack_entry = false;
   std::vector<double> wall_dv, arrival, arrival_next, kappa_volume, push, vent_facet_area;
   std::vector<uint8_t> front_done, in_crack, wall_on;
@@ -427,7 +427,7 @@ struct GasState {
   // The area the gas escapes through once vented [m2]: the fixed part and the cracks' mouths.
   double outflow_area() const { return vent_area + (vent_crack_opening ? crack_vent_area : 0.0); }
   // Speed of the gas front along open bonds now: the fixed one, or the speed of a gas
-  // expanding into an empty channel, 2 c / (gamma - 1) with c = sqrt(gamma p / rho).
+  // expanding into an empty channel (gas_escape_speed, gas_law.hpp).
   double front_speed() const;
   // One update of the scalars from the summed wall and crack volumes at time t (dt: the
   // step, 0 outside one: no outflow). crack.volume_before: the cracks that were in the volume

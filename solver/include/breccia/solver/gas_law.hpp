@@ -53,10 +53,47 @@ BRECCIA_HD double gas_isentrope_pressure(double p_ref, double rho, const GasLaw&
 }
 
 // The isentrope's local exponent -d ln p / d ln V at pressure p and relative density rho
-// (the gamma of the outflow and of the front's escape speed).
+// (the gamma of the outflow).
 BRECCIA_HD double gas_local_gamma(double p, double rho, const GasLaw& g) {
   if (g.kind == GasLaw::Kind::Jwl) return jwl_exponent(g, g.jwl_v_ref / rho);
   return p >= g.switch_pressure ? g.gamma_high : g.gamma_low;
+}
+
+// Escape speed of the gas at absolute pressure p and density rho_kg [kg/m3] (relative density
+// rho, as above): the largest speed a gas released into an empty channel reaches, the
+// Riemann invariant integral of c d(ln rho) from zero density up along the isentrope
+// (Courant & Friedrichs 1948, the centred rarefaction into vacuum). For a single gamma it is
+// 2 c / (gamma - 1); the local gamma alone misses the rest of the isentrope below, which for
+// the two-gamma law is most of it (gamma_high 3 gives 2 c / 2 at the state, the gamma_low 1.3
+// branch below the switch adds 2 c_switch / 0.3): two-gamma in closed form, JWL by quadrature.
+BRECCIA_HD double gas_escape_speed(double p, double rho_kg, double rho, const GasLaw& g) {
+  if (!(p > 0.0) || !(rho_kg > 0.0) || !(rho > 0.0)) return 0.0;
+  if (g.kind == GasLaw::Kind::TwoGamma) {
+    // Below the switch, written as before the high branch was added (bit-identical runs).
+    if (p < g.switch_pressure) return 2.0 * std::sqrt(g.gamma_low * p / rho_kg) / (g.gamma_low - 1.0);
+    // The high branch through (p, rho_kg) meets the switch at rho_s, then the low branch.
+    const double rho_s = rho_kg * std::pow(g.switch_pressure / p, 1.0 / g.gamma_high);
+    return 2.0 / (g.gamma_high - 1.0) *
+               (std::sqrt(g.gamma_high * p / rho_kg) - std::sqrt(g.gamma_high * g.switch_pressure / rho_s)) +
+           2.0 * std::sqrt(g.gamma_low * g.switch_pressure / rho_s) / (g.gamma_low - 1.0);
+  }
+  // JWL, v = v_ref / rho: the integral of c dv'/v' from v out to where the exponential terms
+  // are below e^-50 of theirs (Simpson in ln v'), then the C term's ideal-gas tail 2 c / omega.
+  const double v = g.jwl_v_ref / rho, ps = jwl_isentrope(g, v);
+  double v_end = v;
+  if (g.jwl_a != 0.0 && g.jwl_r1 > 0.0) v_end = std::fmax(v_end, 50.0 / g.jwl_r1);
+  if (g.jwl_b != 0.0 && g.jwl_r2 > 0.0) v_end = std::fmax(v_end, 50.0 / g.jwl_r2);
+  const auto c = [&](double vv) {  // sound speed at v' on the isentrope through (v, p)
+    return std::sqrt(jwl_exponent(g, vv) * p * jwl_isentrope(g, vv) / ps / (rho_kg * v / vv));
+  };
+  const int n = 512;  // even; Simpson's error at this n is below 1e-8 of the result (test)
+  const double h = std::log(v_end / v) / n;
+  double sum = 0.0;
+  if (h > 0.0) {
+    for (int i = 0; i <= n; ++i) sum += (i == 0 || i == n ? 1.0 : i % 2 ? 4.0 : 2.0) * c(v * std::exp(i * h));
+    sum *= h / 3.0;
+  }
+  return sum + 2.0 * c(v_end) / (jwl_exponent(g, v_end) - 1.0);
 }
 
 // Choked (sonic) mass flux through an orifice: mdot = Gamma A sqrt(gamma p rho), with

@@ -1,0 +1,89 @@
+#!/usr/bin/python3
+"""Where the concrete-blast block's damage and the gas's work come from, in time (after
+breccia-solve; history.csv and results.h5 of one run).
+
+Usage: diagnose.py RUN_DIR PARTICLES_H5 [--json OUT]
+Prints, from history.csv: the gas work by the time the gas vents and at the end, the part done
+on the hole's wall (the integral of p dV over the wall's own volume change, cavity less crack
+volume, trapezoid over the history samples) against the rest (on crack faces), and the
+wetted particles; from each output of results.h5: the share of particles softening
+(0.05 < damage < 0.5) and broken (damage >= 0.5) in rings about the hole axis, and the radial
+cracks on the ring and on the side faces (measures.py). Last, the block's expansion rate from
+its final velocities (least squares v_r = rate r about the hole axis) and Grady's (1982)
+fragment size for it, s = (sqrt(24) K_Ic / (rho c rate))^(2/3), K_Ic = sqrt(E G0), c = sqrt(E/rho)
+(docs/references.md [Grady 1982]; the material of case.yaml).
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import sys
+
+import h5py
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import measures  # noqa: E402
+
+E, RHO, G0 = 34.2e9, 2320.0, 25.0  # case.yaml
+BLOCK_MASS = 62.6  # kg, the meshed block (README)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("run")
+    ap.add_argument("particles")
+    ap.add_argument("--json")
+    a = ap.parse_args()
+    h = list(csv.DictReader(open(f"{a.run}/history.csv")))
+    col = lambda k: np.array([float(r[k]) for r in h])  # noqa: E731
+    t, p, work = col("time_s") * 1e6, col("gas_pressure_Pa"), col("gas_work_J")
+    wall = col("cavity_volume_m3") - col("crack_gas_volume_m3")
+    wall_work = np.concatenate([[0.0], np.cumsum(0.5 * (p[1:] + p[:-1]) * np.diff(wall))])
+    vented = col("gas_vented") > 0
+    iv = int(np.argmax(vented)) if vented.any() else len(t) - 1
+    out = {"vent_us": float(t[iv]) if vented.any() else None,
+           "gas_work_at_vent_J": float(work[iv]), "gas_work_end_J": float(work[-1]),
+           "wall_work_end_J": float(wall_work[-1]), "end_us": float(t[-1]),
+           "wetted_at_vent": int(col("gas_wetted_particles")[iv]),
+           "gas_mass_fraction_end": float(col("gas_mass_fraction")[-1])}
+    print(f"gas work {work[-1]:.0f} J at {t[-1]:.0f} us; at the vent ({t[iv]:.1f} us) {work[iv]:.0f} J "
+          f"({work[iv] / work[-1]:.0%}); on the wall {wall_work[-1]:.0f} J ({wall_work[-1] / work[-1]:.1%}), "
+          f"the rest on crack faces; wetted at the vent {out['wetted_at_vent']}; gas mass left {out['gas_mass_fraction_end']:.3f}")
+    with h5py.File(a.particles) as f:
+        x = f["particles/position"][:]
+        vol = f["particles/volume"][:] if "particles/volume" in f else None
+    rad = np.hypot(x[:, 0] - measures.HOLE_AXIS[0], x[:, 1] - measures.HOLE_AXIS[1])
+    depth = measures.TOP - x[:, 2]
+    band = (depth > 0.02) & (depth < 0.13)
+    rings = [(0.01, 0.03), (0.03, 0.06), (0.06, 0.10), (0.10, 0.15)]
+    out["outputs"] = []
+    with h5py.File(f"{a.run}/results.h5") as r:
+        keys = sorted(r["output"].keys(), key=lambda k: float(r[f"output/{k}"].attrs["time_s"]))
+        print("t [us] | softening / broken share, r = 10-30, 30-60, 60-100, 100-150 mm | cracks ring, side faces")
+        for k in keys:
+            d = r[f"output/{k}/damage"][:]
+            tk = float(r[f"output/{k}"].attrs["time_s"]) * 1e6
+            shares = [(float(np.mean((d[m] > 0.05) & (d[m] < 0.5))), float(np.mean(d[m] >= 0.5)))
+                      for m in [(rad > lo) & (rad < hi) & band for lo, hi in rings]]
+            ring, faces = measures.ring_cracks(x, d), measures.side_face_cracks(x, d)
+            out["outputs"].append({"t_us": tk, "softening_broken": shares, "ring": ring, "side_faces": faces})
+            print(f"{tk:6.1f} | " + "  ".join(f"{s:.2f}/{b:.2f}" for s, b in shares) + f" | {ring}, {faces}")
+        v = r[f"output/{keys[-1]}/velocity"][:]
+    er = np.stack([x[:, 0] - measures.HOLE_AXIS[0], x[:, 1] - measures.HOLE_AXIS[1]], axis=1) / np.maximum(rad, 1e-9)[:, None]
+    vr = np.sum(v[:, :2] * er, axis=1)
+    w = vol if vol is not None else np.ones(len(x))
+    rate = float(np.sum(w * vr * rad) / np.sum(w * rad * rad))
+    k_ic, c = math.sqrt(E * G0), math.sqrt(E / RHO)
+    s = (math.sqrt(24) * k_ic / (RHO * c * rate)) ** (2 / 3) if rate > 0 else float("inf")
+    out.update({"expansion_rate_per_s": rate, "grady_size_m": s, "grady_cube_mass_share": RHO * s ** 3 / BLOCK_MASS})
+    print(f"expansion rate {rate:.0f} /s at the end: Grady's fragment size {s * 1e3:.0f} mm "
+          f"(a cube of it: {RHO * s ** 3 / BLOCK_MASS:.2%} of the block; a large piece is > 2%)")
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump(out, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()

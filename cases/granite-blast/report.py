@@ -57,6 +57,34 @@ def cracks_at(r, theta, damaged, radius, dx):
     return int(np.sum(gaps > 2 * dx / radius))
 
 
+def hole_connected_reach(x, damaged, dx, hole_radius):
+    """Radius reached by the damage that connects to the hole: the damaged particles joined to
+    the hole wall through damaged neighbours (8 neighbours on the square lattice), and the
+    largest radius among them (the hole radius when no wall particle is damaged). The tip of
+    the longest radial crack that starts at the hole lies at this radius; damage that formed
+    away from the hole (e.g. under the reflected wave) does not count until it joins."""
+    ij = np.round((x - x.min(axis=0)) / dx).astype(int)
+    grid = -np.ones(ij.max(axis=0) + 1, dtype=int)
+    grid[ij[:, 0], ij[:, 1]] = np.arange(len(x))
+    r = np.hypot(x[:, 0], x[:, 1])
+    seen = np.zeros(len(x), dtype=bool)
+    stack = list(np.nonzero(damaged & (r < hole_radius + dx))[0])
+    seen[stack] = True
+    reach = hole_radius
+    while stack:
+        p = stack.pop()
+        reach = max(reach, float(r[p]))
+        for di in (-1, 0, 1):
+            for dj in (-1, 0, 1):
+                a, b = ij[p, 0] + di, ij[p, 1] + dj
+                if 0 <= a < grid.shape[0] and 0 <= b < grid.shape[1]:
+                    q = grid[a, b]
+                    if q >= 0 and damaged[q] and not seen[q]:
+                        seen[q] = True
+                        stack.append(q)
+    return reach
+
+
 def analyse(out, name):
     run = os.path.join(out, name)
     x, times, damage, summary = case_report.load_damage_history(run)
@@ -71,6 +99,7 @@ def analyse(out, name):
         dmg = damage[k] > DAMAGE_THRESHOLD
         snap = {"time_s": float(times[k]), "crushed_radius_m": crushed_radius(r, dmg, dx),
                 "max_damaged_radius_m": float(r[dmg].max()) if dmg.any() else 0.0,
+                "hole_connected_reach_m": hole_connected_reach(x, dmg, dx, HOLE_RADIUS),
                 "cracks_at_radius_mm": {str(q): cracks_at(r, theta, dmg, q * 1e-3, dx) for q in COUNT_RADII_MM},
                 "outer_rim_damaged_fraction": float(dmg[r > OUTER_RADIUS - 3 * dx].mean())}
         res["snapshots"].append(snap)

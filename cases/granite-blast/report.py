@@ -6,7 +6,9 @@ Damaged particle: damage > 0.35. Crushed zone: rings of width dx around the hole
 outwards from the hole wall while at least half of a ring's particles are damaged; its
 radius is the outer edge of the last such ring. Radial cracks at radius r: particles in the
 ring r +- dx sorted by angle; a crack is a run of damaged particles, runs separated by an
-angular gap larger than 2 dx / r. Writes OUT/report.json, OUT/damage_<RUN>.png, OUT/cracks_vs_radius.png.
+angular gap larger than 2 dx / r. Reach: the largest radius of the damaged particles joined to the
+hole wall through damaged neighbours (the tip of the longest radial crack from the hole).
+Writes OUT/report.json, OUT/damage_<RUN>.png, OUT/cracks_vs_radius.png.
 """
 import json
 import math
@@ -136,7 +138,8 @@ def main(argv):
         f = res["final"]
         print(f"{name}: particles {res['particles']}, wall {res['wall_s']} s, crushed radius "
               f"{f['crushed_radius_m'] * 1e3:.2f} mm ({res['crushed_radius_over_hole_radius']:.1f} x hole), "
-              f"cracks at radius {f['cracks_at_radius_mm']}, max damaged radius {f['max_damaged_radius_m'] * 1e3:.1f} mm")
+              f"cracks at radius {f['cracks_at_radius_mm']}, max damaged radius {f['max_damaged_radius_m'] * 1e3:.1f} mm, "
+              f"reach from the hole {f['hole_connected_reach_m'] * 1e3:.2f} mm")
     ax_c.set_xlabel("radius (mm)")
     ax_c.set_ylabel("radial cracks crossing the circle")
     ax_c.grid(alpha=0.3)

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <numbers>
 
+#include "breccia/common/error.hpp"
 #include "breccia/common/particle_file.hpp"
 #include "breccia/solver/calibration.hpp"
 #include "breccia/solver/run.hpp"
@@ -284,4 +285,23 @@ TEST(Loads, TractionDepthSpreadsTheSurfaceForceUniformlyOverTheLayer) {
   EXPECT_EQ(loaded, 3u * 20u);  // x = 19.75, 19.25, 18.75 mm: within 1.5075 mm of the face
   for (size_t i = 0; i < deep.n; ++i)
     if (deep.body[3 * i] != 0.0) EXPECT_NEAR(deep.body[3 * i], body / layer_volume, 1e-9 * body / layer_volume);
+}
+
+// `depth` belongs to traction loads; elsewhere it is bad input naming the field.
+TEST(Loads, TractionDepthOnAPressureLoadOrNotALengthIsAnInputErrorNamingTheField) {
+  const std::string base =
+      "specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.01], spacing: 0.5 mm, thickness: 1 mm}}\n"
+      "model: {type: pmb, planar: plane_stress, horizon_factor: 3.015}\n"
+      "materials: [{name: steel, density: 7850, youngs_modulus: 200 GPa, poisson_ratio: 0.3333333333333333}]\n"
+      "time: {steps: 1}\n";
+  for (const std::string load : {"{type: pressure, surface: xmax, history: {type: constant, value: 1 MPa}, depth: 1 mm}",
+                                 "{type: traction, surface: xmax, value: [1 MPa, 0, 0], depth: deep}",
+                                 "{type: traction, surface: xmax, value: [1 MPa, 0, 0], depth: -1 mm}"}) {
+    try {
+      system_from_yaml("depth_bad", base + "loads: [" + load + "]\n");
+      ADD_FAILURE() << "accepted " << load;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), "loads[0].depth") << e.what();
+    }
+  }
 }

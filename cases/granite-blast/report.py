@@ -6,7 +6,9 @@ Damaged particle: damage > 0.35. Crushed zone: rings of width dx around the hole
 outwards from the hole wall while at least half of a ring's particles are damaged; its
 radius is the outer edge of the last such ring. Radial cracks at radius r: particles in the
 ring r +- dx sorted by angle; a crack is a run of damaged particles, runs separated by an
-angular gap larger than 2 dx / r. Writes OUT/report.json, OUT/damage_<RUN>.png, OUT/cracks_vs_radius.png.
+angular gap larger than 2 dx / r. Reach: the largest radius of the damaged particles joined to the
+hole wall through damaged neighbours (the tip of the longest radial crack from the hole).
+Writes OUT/report.json, OUT/damage_<RUN>.png, OUT/cracks_vs_radius.png.
 """
 import json
 import math
@@ -57,6 +59,34 @@ def cracks_at(r, theta, damaged, radius, dx):
     return int(np.sum(gaps > 2 * dx / radius))
 
 
+def hole_connected_reach(x, damaged, dx, hole_radius):
+    """Radius reached by the damage that connects to the hole: the damaged particles joined to
+    the hole wall through damaged neighbours (8 neighbours on the square lattice), and the
+    largest radius among them (the hole radius when no wall particle is damaged). The tip of
+    the longest radial crack that starts at the hole lies at this radius; damage that formed
+    away from the hole (e.g. under the reflected wave) does not count until it joins."""
+    ij = np.round((x - x.min(axis=0)) / dx).astype(int)
+    grid = -np.ones(ij.max(axis=0) + 1, dtype=int)
+    grid[ij[:, 0], ij[:, 1]] = np.arange(len(x))
+    r = np.hypot(x[:, 0], x[:, 1])
+    seen = np.zeros(len(x), dtype=bool)
+    stack = list(np.nonzero(damaged & (r < hole_radius + dx))[0])
+    seen[stack] = True
+    reach = hole_radius
+    while stack:
+        p = stack.pop()
+        reach = max(reach, float(r[p]))
+        for di in (-1, 0, 1):
+            for dj in (-1, 0, 1):
+                a, b = ij[p, 0] + di, ij[p, 1] + dj
+                if 0 <= a < grid.shape[0] and 0 <= b < grid.shape[1]:
+                    q = grid[a, b]
+                    if q >= 0 and damaged[q] and not seen[q]:
+                        seen[q] = True
+                        stack.append(q)
+    return reach
+
+
 def analyse(out, name):
     run = os.path.join(out, name)
     x, times, damage, summary = case_report.load_damage_history(run)
@@ -71,6 +101,7 @@ def analyse(out, name):
         dmg = damage[k] > DAMAGE_THRESHOLD
         snap = {"time_s": float(times[k]), "crushed_radius_m": crushed_radius(r, dmg, dx),
                 "max_damaged_radius_m": float(r[dmg].max()) if dmg.any() else 0.0,
+                "hole_connected_reach_m": hole_connected_reach(x, dmg, dx, HOLE_RADIUS),
                 "cracks_at_radius_mm": {str(q): cracks_at(r, theta, dmg, q * 1e-3, dx) for q in COUNT_RADII_MM},
                 "outer_rim_damaged_fraction": float(dmg[r > OUTER_RADIUS - 3 * dx].mean())}
         res["snapshots"].append(snap)
@@ -107,7 +138,8 @@ def main(argv):
         f = res["final"]
         print(f"{name}: particles {res['particles']}, wall {res['wall_s']} s, crushed radius "
               f"{f['crushed_radius_m'] * 1e3:.2f} mm ({res['crushed_radius_over_hole_radius']:.1f} x hole), "
-              f"cracks at radius {f['cracks_at_radius_mm']}, max damaged radius {f['max_damaged_radius_m'] * 1e3:.1f} mm")
+              f"cracks at radius {f['cracks_at_radius_mm']}, max damaged radius {f['max_damaged_radius_m'] * 1e3:.1f} mm, "
+              f"reach from the hole {f['hole_connected_reach_m'] * 1e3:.2f} mm")
     ax_c.set_xlabel("radius (mm)")
     ax_c.set_ylabel("radial cracks crossing the circle")
     ax_c.grid(alpha=0.3)

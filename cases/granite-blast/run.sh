@@ -3,7 +3,8 @@
 #   VARIANT=quick|demo: dx = 0.5 mm  (16,000 particles)
 #   VARIANT=full      : dx = 0.25 mm (65,000 particles; the seed's spacing)
 #   VARIANT=test      : dx = 0.5 mm, 25 us (the CTest regression run)
-# Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
+# Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional),
+# OUTPUT_EVERY (optional: steps between outputs, for a finer crack-length history).
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 source "$HERE/../../scripts/case_env.sh"
@@ -13,6 +14,7 @@ case "$VARIANT" in
   test)       DX=0.0005;  OPTIONS=(--set "time.end=25 us") ;;
   *) echo "run.sh: unknown VARIANT '$VARIANT' (quick|demo|full|test)" >&2; exit 2 ;;
 esac
+[ -z "${OUTPUT_EVERY:-}" ] || OPTIONS+=(--set "output.every=$OUTPUT_EVERY")
 mkdir -p "$OUT"
 "$PYTHON" "$HERE/specimen.py" "$OUT/particles.h5" --outer 0.036 --inner 0.0012875 --spacing "$DX" --thickness 0.001
 # Runs, each a variant of case.yaml: g0_200 (as shipped: G0 = 200 J/m2, the textbook critical

@@ -399,7 +399,9 @@ CaseConfig parse_case_file(const std::string& path) {
                     "vent_surfaces", "front_speed", "crack_entry", "gas_density", "vent_area", "ambient_pressure",
                     "cavity_volume"});
     else
-      l.allow_only({"type", "surface", "set", "value", "history"});
+      l.allow_only({"type", "surface", "set", "value", "history", "depth"});
+    if (type != "traction" && type != "gas" && l.has("depth"))
+      throw InputError(path, l.field("depth"), "given with a " + type + " load", "depth only on a traction load");
     LoadSpec ls;
     if (type == "gas") {
       ls.kind = LoadSpec::Kind::Gas;
@@ -471,6 +473,12 @@ CaseConfig parse_case_file(const std::string& path) {
       ls.surface = l.text("surface");
       ls.vector = l.vec3("value", Quantity::Pressure);
       if (l.has("history")) ls.history = parse_history(l.section("history"), Quantity::Dimensionless);
+      if (l.has("depth")) {
+        if (l.node()["depth"].IsScalar() && l.text("depth") == "horizon")
+          ls.depth_horizon = true;
+        else
+          ls.depth = l.positive("depth", Quantity::Length);
+      }
     } else {
       ls.kind = LoadSpec::Kind::BodyForce;
       ls.set = l.text("set", "");

@@ -418,6 +418,43 @@ static void add_case_sets(ParticleModel& pm, const CaseConfig& c) {
   }
 }
 
+// A traction over a boundary layer: the surface's total facet area passes to the particles
+// whose reference position lies within `depth` of its facets, each taking the share of its
+// volume, so the body force sigma A / V_layer is uniform over the layer and the total force is
+// the surface's. Applying a load on a single particle layer pulls that layer out of a
+// nonlocal body; spread over about a horizon it acts on whole families (docs/theory.md "Loads
+// over a boundary layer"). The facets keep the surface's mean normal (a traction does not read it).
+static std::vector<PressureFacet> spread_over_layer(const PdSystem& s, const LoadSpec& ls,
+                                                    const std::vector<PressureFacet>& facets, const std::string& field) {
+  double area = 0, normal[3] = {0, 0, 0}, depth = ls.depth;
+  for (const auto& f : facets) {
+    area += f.area;
+    for (int d = 0; d < 3; ++d) normal[d] += f.area * f.normal[d];
+    if (ls.depth_horizon) depth = std::max(depth, s.horizon[static_cast<size_t>(f.particle)]);
+  }
+  const double len = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+  for (double& c : normal) c = len > 0 ? c / len : 0.0;
+  RegionSetSpec layer;
+  layer.kind = RegionSetSpec::Kind::NearSurface;
+  layer.surface = ls.surface;
+  layer.distance = depth;
+  layer.field = field + ".depth";
+  std::vector<int32_t> particles;
+  double volume = 0;
+  for (const int64_t f : near_surface_set(s.particles, layer, s.config.file)) {
+    const int32_t i = s.internal_index[static_cast<size_t>(f)];
+    particles.push_back(i);
+    volume += s.volume[static_cast<size_t>(i)];
+  }
+  if (particles.empty() || !(volume > 0))
+    throw InputError(s.config.file, field + ".depth", "no particle within " + short_number(depth) + " m of surface '" +
+                     ls.surface + "'", "a depth of at least half the particle spacing");
+  std::vector<PressureFacet> out;
+  for (const int32_t i : particles)
+    out.push_back({i, area * s.volume[static_cast<size_t>(i)] / volume, {normal[0], normal[1], normal[2]}});
+  return out;
+}
+
 // The surface loads' facets grouped by particle (CSR); a stable sort keeps compute_external's
 // (load, facet) order within a particle, so every backend sums a particle's loads alike.
 FacetLayout group_facets_by_particle(const PdSystem& s) {
@@ -1195,6 +1232,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     for (size_t f = 0; f < sf.size(); ++f)
       sl.facets.push_back({s.internal_index[sf.particle[f]], sf.area_m2[f],
                            {sf.normal[3 * f], sf.normal[3 * f + 1], sf.normal[3 * f + 2]}});
+    if (ls.kind == LoadSpec::Kind::Traction && (ls.depth > 0 || ls.depth_horizon))
+      sl.facets = spread_over_layer(s, ls, sl.facets, field);
     s.surface_loads.push_back(std::move(sl));
   }
   if (s.surface_loads.size() > static_cast<size_t>(kMaxSurfaceLoads))

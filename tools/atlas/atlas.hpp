@@ -3,6 +3,7 @@
 // accuracy) and the measured stability map. docs/atlas.md explains every measure; the CSV
 // columns are a contract read by breccia-plan (docs/atlas/atlas.csv).
 #include <chrono>
+#include <cstdio>
 #include <functional>
 #include <string>
 #include <vector>
@@ -74,6 +75,13 @@ solver::PdSystem system_from_yaml(const std::string& work_dir, const std::string
 // Horizon factor handed to the solver for a nominal m: the lattice tests' 3.015 rule, so
 // a lattice point at exactly m spacings is inside.
 inline double horizon_factor(double m) { return m + 0.015; }
+
+// A number for the YAML the sweeps write, to 9 significant digits.
+inline std::string num(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.9g", v);
+  return b;
+}
 
 using RowSink = std::function<void(const AtlasRow&)>;
 

@@ -45,15 +45,36 @@ double fundamental_mode_speed_error(solver::PdSystem& s, double length_m, double
   return t_quarter > 0 ? std::fabs(L / (2.0 * t_quarter) / c0_m_s - 1.0) : 1.0;
 }
 
-double bar_end_displacement_error(solver::PdSystem& s, double traction_pa, double youngs_modulus_pa,
-                                  long long* iterations) {
+namespace {
+// Holds the particle nearest the origin in y (no rigid sideways drift) and relaxes by ADR;
+// false when ADR did not converge.
+bool relax_bar(solver::PdSystem& s, long long* iterations) {
   size_t corner = 0;
   for (size_t i = 0; i < s.n; ++i)
     if (std::hypot(s.x0[3 * i], s.x0[3 * i + 1]) < std::hypot(s.x0[3 * corner], s.x0[3 * corner + 1])) corner = i;
   s.fixed_dof[corner] |= 2u;
   const long long done = solver::relax_to_equilibrium(s, false);
   if (iterations) *iterations = done;
-  if (done < 0) return -1.0;
+  return done >= 0;
+}
+}  // namespace
+
+double bar_span_strain_error(solver::PdSystem& s, double traction_pa, double youngs_modulus_pa, double x_lo,
+                             double x_hi, long long* iterations) {
+  if (!relax_bar(s, iterations)) return -1.0;
+  double n = 0, sx = 0, su = 0, sxx = 0, sxu = 0;
+  for (size_t i = 0; i < s.n; ++i) {
+    const double x = s.x0[3 * i], u = s.u[3 * i];
+    if (x < x_lo || x > x_hi) continue;
+    n += 1, sx += x, su += u, sxx += x * x, sxu += x * u;
+  }
+  const double slope = (n * sxu - sx * su) / (n * sxx - sx * sx);
+  return std::fabs(slope / (traction_pa / youngs_modulus_pa) - 1.0);
+}
+
+double bar_end_displacement_error(solver::PdSystem& s, double traction_pa, double youngs_modulus_pa,
+                                  long long* iterations) {
+  if (!relax_bar(s, iterations)) return -1.0;
   auto layer_mean = [&](const char* set, const std::vector<double>& field) {
     double sum = 0, vol = 0;
     for (auto f : s.particles.find_set(set)->indices) {

@@ -28,6 +28,14 @@ double fundamental_mode_speed_error(solver::PdSystem& s, double length_m, double
 double bar_end_displacement_error(solver::PdSystem& s, double traction_pa, double youngs_modulus_pa,
                                   long long* iterations = nullptr);
 
+// Quasi-static bar relaxed by ADR, loaded and held over boundary layers (the traction spread
+// over `depth: horizon`, the grip a layer as deep): the strain of the span between the layers,
+// the least-squares slope of u_x over x_lo <= x <= x_hi (every particle), against sigma / E.
+// Holds the particle nearest the origin in y as well. Returns |slope / (sigma / E) - 1|, or a
+// negative value when ADR did not converge.
+double bar_span_strain_error(solver::PdSystem& s, double traction_pa, double youngs_modulus_pa, double x_lo,
+                             double x_hi, long long* iterations = nullptr);
+
 // Peak nominal stress of a bar pulled by a velocity constraint (the grip): the force on the
 // grip's particles (`s.constraints[grip]`) over `area_m2`, the maximum over explicit CPU steps
 // until `end_s`. The quasi-brittle test and the atlas's softening_strength rows share it.

@@ -13,12 +13,6 @@
 namespace breccia::atlas {
 namespace {
 
-std::string num(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.9g", v);
-  return b;
-}
-
 std::string box_list(int dimension, const double lo[3], const double hi[3]) {
   std::string s = "[";
   for (int k = 0; k < dimension; ++k) s += num(lo[k]) + ", ";

@@ -63,6 +63,12 @@ struct LoadSpec {
   HistorySpec history;  // Pressure: the pressure itself; Gas: the closed-cavity gauge pressure
                         // at the reference volume; others: a multiplier (default 1)
   GasSpec gas;
+  // Traction: spread the surface's total force over the particles within this distance of it,
+  // in proportion to their volume (a boundary layer, docs/theory.md "Loads over a boundary
+  // layer"); 0: on the particles that carry the surface's facets. depth_horizon: the largest
+  // horizon of those particles.
+  double depth = 0.0;
+  bool depth_horizon = false;
 };
 
 struct BoundarySpec {

@@ -72,7 +72,7 @@ HalfBondList half_bond_list(const PdSystem& s) {
   HalfBondList h;
   h.offsets.assign(n + 1, 0);
   for (size_t i = 0; i < n; ++i) {
-    const int32_t fi = s.original_index[i];
+    const int64_t fi = s.original_index[i];
     for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k)
       if (fi < s.original_index[s.neighbor[k]]) ++h.offsets[fi + 1];
   }
@@ -83,9 +83,9 @@ HalfBondList half_bond_list(const PdSystem& s) {
   {
     std::vector<int64_t> fill(h.offsets.begin(), h.offsets.end() - 1);
     for (size_t i = 0; i < n; ++i) {
-      const int32_t fi = s.original_index[i];
+      const int64_t fi = s.original_index[i];
       for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
-        const int32_t fj = s.original_index[s.neighbor[k]];
+        const int64_t fj = s.original_index[s.neighbor[k]];
         if (fi >= fj) continue;
         const int64_t at = fill[fi]++;
         h.neighbors[at] = fj;
@@ -95,7 +95,7 @@ HalfBondList half_bond_list(const PdSystem& s) {
   }
 #pragma omp parallel
   {
-    std::vector<std::pair<int32_t, int64_t>> row;
+    std::vector<std::pair<int64_t, int64_t>> row;
 #pragma omp for schedule(dynamic, 1024)
     for (size_t i = 0; i < n; ++i) {
       row.clear();

@@ -15,7 +15,7 @@ PACKAGES=(
   libcli11-dev                # every tool's command line (common/cli.hpp): --help, --version, exit 2 on usage errors
   libgtest-dev                # tests
   openmpi-bin libopenmpi-dev  # distributed runs: mpirun -np N breccia-solve (docs/parallel.md)
-  libhdf5-openmpi-dev         # parallel HDF5, for collective writes of one results file
+  libhdf5-openmpi-dev         # parallel HDF5: with MPI the whole build links it; results.h5 / checkpoint.h5 written collectively
   python3-meshio python3-h5py python3-numpy python3-matplotlib python3-yaml  # converters, charts
 )
 missing=()

@@ -46,7 +46,26 @@ File::File(const std::string& path, Mode mode) : path_(path) {
   }
 }
 
+#ifdef BRECCIA_PARALLEL_HDF5
+File::File(const std::string& path, Mode mode, MPI_Comm comm) : path_(path) {
+  Handle access{H5Pcreate(H5P_FILE_ACCESS), H5Pclose};
+  H5Pset_fapl_mpio(access.id, comm, MPI_INFO_NULL);
+  switch (mode) {
+    case Mode::Read: id_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, access.id); break;
+    case Mode::ReadWrite: id_ = H5Fopen(path.c_str(), H5F_ACC_RDWR, access.id); break;
+    case Mode::Create: id_ = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access.id); break;
+  }
+  if (id_ < 0) {
+    if (mode == Mode::Create) throw RunError("cannot create HDF5 file " + path + " (collectively, MPI-IO)");
+    throw InputError(path, "", "cannot be opened as an HDF5 file", "an HDF5 file written by Breccia");
+  }
+  transfer_ = H5Pcreate(H5P_DATASET_XFER);
+  H5Pset_dxpl_mpio(transfer_, H5FD_MPIO_COLLECTIVE);
+}
+#endif
+
 File::~File() {
+  if (transfer_ >= 0) H5Pclose(transfer_);
   if (id_ >= 0) H5Fclose(id_);
 }
 
@@ -89,13 +108,16 @@ std::vector<std::string> File::children(const std::string& group_path) const {
   return names;
 }
 
+// Rows [first, first + rows) of a dataset of shape dims, from data; every row when one process
+// writes it (transfer < 0), else each process of a collective file its own (transfer: the
+// collective transfer list; a process with no rows selects none and still takes part).
 template <class T>
-static void write_impl(const File& f, const std::string& path, const std::vector<T>& data,
-                       std::vector<hsize_t> dims) {
+static void write_impl(const File& f, const std::string& path, const T* data, hsize_t first, hsize_t rows,
+                       std::vector<hsize_t> dims, hid_t transfer) {
   hsize_t total = 1;
   for (auto d : dims) total *= d;
-  if (total != data.size())
-    throw std::logic_error("h5 write " + path + ": dims do not match data size");
+  if (dims.empty() || first > dims[0] || rows > dims[0] - first || (transfer < 0 && rows != dims[0]))
+    throw std::logic_error("h5 write " + path + ": rows outside the dataset's");
   f.create_group(parent_of(path));
   if (f.exists(path)) H5Ldelete(f.id(), path.c_str(), H5P_DEFAULT);
   Handle space{H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose};
@@ -110,15 +132,62 @@ static void write_impl(const File& f, const std::string& path, const std::vector
   Handle ds{H5Dcreate2(f.id(), path.c_str(), mem_type<T>(), space.id, H5P_DEFAULT, plist.id, H5P_DEFAULT),
             H5Dclose};
   if (ds.id < 0) throw RunError(f.path() + ": cannot create dataset " + path);
-  if (total > 0 && H5Dwrite(ds.id, mem_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()) < 0)
-    throw RunError(f.path() + ": cannot write dataset " + path);
+  if (total == 0) return;
+  herr_t written = 0;
+  if (transfer < 0) {
+    written = H5Dwrite(ds.id, mem_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
+  } else {
+    Handle file_space{H5Dget_space(ds.id), H5Sclose};
+    std::vector<hsize_t> start(dims.size(), 0), block(dims);
+    start[0] = first;
+    block[0] = rows;
+    hsize_t one = 1;
+    Handle mem_space{rows > 0 ? H5Screate_simple(static_cast<int>(block.size()), block.data(), nullptr)
+                              : H5Screate_simple(1, &one, nullptr),
+                     H5Sclose};
+    if (rows > 0) {
+      H5Sselect_hyperslab(file_space.id, H5S_SELECT_SET, start.data(), nullptr, block.data(), nullptr);
+    } else {
+      H5Sselect_none(file_space.id);
+      H5Sselect_none(mem_space.id);
+    }
+    written = H5Dwrite(ds.id, mem_type<T>(), mem_space.id, file_space.id, transfer, data);
+  }
+  if (written < 0) throw RunError(f.path() + ": cannot write dataset " + path);
 }
 
-void File::write(const std::string& p, const std::vector<double>& d, std::vector<hsize_t> dims) const { write_impl(*this, p, d, dims); }
-void File::write(const std::string& p, const std::vector<float>& d, std::vector<hsize_t> dims) const { write_impl(*this, p, d, dims); }
-void File::write(const std::string& p, const std::vector<int64_t>& d, std::vector<hsize_t> dims) const { write_impl(*this, p, d, dims); }
-void File::write(const std::string& p, const std::vector<int32_t>& d, std::vector<hsize_t> dims) const { write_impl(*this, p, d, dims); }
-void File::write(const std::string& p, const std::vector<uint8_t>& d, std::vector<hsize_t> dims) const { write_impl(*this, p, d, dims); }
+template <class T>
+static void write_whole(const File& f, const std::string& path, const std::vector<T>& data, std::vector<hsize_t> dims,
+                        hid_t transfer) {
+  hsize_t total = 1;
+  for (auto d : dims) total *= d;
+  if (total != data.size()) throw std::logic_error("h5 write " + path + ": dims do not match data size");
+  // On a collective file every process writes the whole array, the same values.
+  write_impl(f, path, data.data(), 0, dims.empty() ? 0 : dims[0], dims, transfer);
+}
+
+void File::write(const std::string& p, const std::vector<double>& d, std::vector<hsize_t> dims) const {
+  write_whole(*this, p, d, dims, transfer_);
+}
+void File::write(const std::string& p, const std::vector<float>& d, std::vector<hsize_t> dims) const {
+  write_whole(*this, p, d, dims, transfer_);
+}
+void File::write(const std::string& p, const std::vector<int64_t>& d, std::vector<hsize_t> dims) const {
+  write_whole(*this, p, d, dims, transfer_);
+}
+void File::write(const std::string& p, const std::vector<int32_t>& d, std::vector<hsize_t> dims) const {
+  write_whole(*this, p, d, dims, transfer_);
+}
+void File::write(const std::string& p, const std::vector<uint8_t>& d, std::vector<hsize_t> dims) const {
+  write_whole(*this, p, d, dims, transfer_);
+}
+
+void File::write_rows(const std::string& p, const double* d, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const {
+  write_impl(*this, p, d, first, rows, dims, transfer_);
+}
+void File::write_rows(const std::string& p, const uint8_t* d, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const {
+  write_impl(*this, p, d, first, rows, dims, transfer_);
+}
 
 void File::write_strings(const std::string& path, const std::vector<std::string>& values) const {
   create_group(parent_of(path));

@@ -8,7 +8,7 @@
 namespace breccia {
 
 OutputFile::OutputFile(std::filesystem::path final_path)
-    : final_(std::move(final_path)), temp_(final_.string() + ".partial") {
+    : final_(std::move(final_path)), temp_(temp_path_of(final_)) {
   if (final_.has_parent_path()) std::filesystem::create_directories(final_.parent_path());
 }
 
@@ -17,6 +17,10 @@ OutputFile::~OutputFile() {
     std::error_code ec;
     std::filesystem::remove(temp_, ec);
   }
+}
+
+std::filesystem::path OutputFile::temp_path_of(const std::filesystem::path& final_path) {
+  return final_path.string() + ".partial";
 }
 
 void OutputFile::commit() {

@@ -72,7 +72,7 @@ HalfBondList half_bond_list(const PdSystem& s) {
   HalfBondList h;
   h.offsets.assign(n + 1, 0);
   for (size_t i = 0; i < n; ++i) {
-    const int32_t fi = s.original_index[i];
+    const int64_t fi = s.original_index[i];
     for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k)
       if (fi < s.original_index[s.neighbor[k]]) ++h.offsets[fi + 1];
   }
@@ -83,9 +83,9 @@ HalfBondList half_bond_list(const PdSystem& s) {
   {
     std::vector<int64_t> fill(h.offsets.begin(), h.offsets.end() - 1);
     for (size_t i = 0; i < n; ++i) {
-      const int32_t fi = s.original_index[i];
+      const int64_t fi = s.original_index[i];
       for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
-        const int32_t fj = s.original_index[s.neighbor[k]];
+        const int64_t fj = s.original_index[s.neighbor[k]];
         if (fi >= fj) continue;
         const int64_t at = fill[fi]++;
         h.neighbors[at] = fj;
@@ -95,7 +95,7 @@ HalfBondList half_bond_list(const PdSystem& s) {
   }
 #pragma omp parallel
   {
-    std::vector<std::pair<int32_t, int64_t>> row;
+    std::vector<std::pair<int64_t, int64_t>> row;
 #pragma omp for schedule(dynamic, 1024)
     for (size_t i = 0; i < n; ++i) {
       row.clear();
@@ -221,30 +221,73 @@ ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool
   f.flush();
 }
 
+std::vector<ResultsField> results_fields(const PdSystem& s) {
+  std::vector<ResultsField> out{{"displacement", 3, &PdSystem::u}, {"velocity", 3, &PdSystem::v}, {"damage", 1, &PdSystem::damage}};
+  const ResultsField optional[] = {{"stretch", 1, &PdSystem::max_stretch},
+                                   {"dilatation", 1, &PdSystem::dilatation},
+                                   {"strain_energy_density", 1, &PdSystem::energy_density}};
+  for (const ResultsField& f : optional)
+    if (std::find(s.config.fields.begin(), s.config.fields.end(), f.name) != s.config.fields.end()) out.push_back(f);
+  return out;
+}
+
+namespace {
+std::vector<hsize_t> field_dims(size_t n, int components) {
+  return components == 1 ? std::vector<hsize_t>{n} : std::vector<hsize_t>{n, static_cast<hsize_t>(components)};
+}
+}  // namespace
+
 void ResultsWriter::write(const PdSystem& s) {
+  if (!file_) file_ = std::make_unique<h5::File>(dir_ + "/results.h5", h5::File::Mode::ReadWrite);
   h5::File& f = *file_;
   const std::string g = results_output_group(count_);
   const size_t n = s.n;
-  const auto& fields = s.config.fields;
-  auto wants = [&](const char* name) { return std::find(fields.begin(), fields.end(), name) != fields.end(); };
-  f.write(g + "/displacement", to_file_order3(s, s.u), {n, 3});
-  f.write(g + "/velocity", to_file_order3(s, s.v), {n, 3});
-  f.write(g + "/damage", to_file_order(s, s.damage), {n});
-  if (wants("stretch")) f.write(g + "/stretch", to_file_order(s, s.max_stretch), {n});
-  if (wants("dilatation")) f.write(g + "/dilatation", to_file_order(s, s.dilatation), {n});
-  if (wants("strain_energy_density")) f.write(g + "/strain_energy_density", to_file_order(s, s.energy_density), {n});
+  for (const ResultsField& field : results_fields(s))
+    f.write(g + "/" + field.name, field.components == 3 ? to_file_order3(s, s.*field.values) : to_file_order(s, s.*field.values),
+            field_dims(n, field.components));
   int64_t broken_count = 0;
   const std::vector<uint8_t> broken = broken_bits(s, bonds_, &broken_count);
   finish_results_output(f, count_, static_cast<long long>(s.step), s.time, broken, broken_count);
+  count_output(s);
+}
+
+void ResultsWriter::count_output(const PdSystem& s) {
   ++count_;
   times_.push_back(s.time);
   write_xdmf(s);
 }
 
+#ifdef BRECCIA_PARALLEL_HDF5
+void ResultsWriter::write_together(const PdSystem& s, ResultsWriter* w, const std::string& out_dir, size_t file_first,
+                                   size_t file_count, const std::vector<std::vector<double>>& rows, MPI_Comm comm) {
+  // The root: the group's index and the broken bits (from the bond states it gathered), then
+  // its own handle closed, since the ranks open the file together (one open per process).
+  long long meta[3] = {0, 0, 0};  // index, broken count, broken bytes
+  std::vector<uint8_t> broken;
+  if (w) {
+    int64_t count = 0;
+    broken = broken_bits(s, w->bonds_, &count);
+    meta[0] = w->count_, meta[1] = count, meta[2] = static_cast<long long>(broken.size());
+    w->file_.reset();
+  }
+  MPI_Bcast(meta, 3, MPI_LONG_LONG, 0, comm);
+  broken.resize(static_cast<size_t>(meta[2]));
+  MPI_Bcast(broken.data(), static_cast<int>(broken.size()), MPI_BYTE, 0, comm);  // b / 8 bytes
+  {
+    h5::File f(out_dir + "/results.h5", h5::File::Mode::ReadWrite, comm);
+    const std::string g = results_output_group(static_cast<int>(meta[0]));
+    const std::vector<ResultsField> fields = results_fields(s);
+    for (size_t k = 0; k < fields.size(); ++k)
+      f.write_rows(g + "/" + fields[k].name, rows[k].data(), file_first, file_count, field_dims(s.n, fields[k].components));
+    finish_results_output(f, static_cast<int>(meta[0]), static_cast<long long>(s.step), s.time, broken, meta[1]);
+  }
+  if (w) w->count_output(s);
+}
+#endif
+
 void ResultsWriter::write_xdmf(const PdSystem& s) const {
-  std::vector<XdmfField> fields{{"displacement", 3}, {"velocity", 3}, {"damage", 1}};
-  for (const char* v : {"stretch", "dilatation", "strain_energy_density"})
-    if (std::find(s.config.fields.begin(), s.config.fields.end(), v) != s.config.fields.end()) fields.push_back({v, 1});
+  std::vector<XdmfField> fields;
+  for (const ResultsField& f : results_fields(s)) fields.push_back({f.name, f.components});
   write_results_xdmf(dir_ + "/results.xdmf", s.n, times_, fields);
 }
 
@@ -334,10 +377,18 @@ void HistoryWriter::write(const PdSystem& s, const Energies& e) {
   std::fflush(file_);
 }
 
-void write_checkpoint(const PdSystem& s, const std::string& path) {
-  OutputFile out(path);
+namespace {
+
+// The doubles of elements [first, first + count) of a float or double array.
+template <class T> std::vector<double> doubles_of(const std::vector<T>& a, size_t first, size_t count) {
+  return std::vector<double>(a.begin() + static_cast<std::ptrdiff_t>(first),
+                             a.begin() + static_cast<std::ptrdiff_t>(first + count));
+}
+
+// checkpoint.h5's content: the scalars and small arrays from s, the per-particle and per-entry
+// arrays row by row from `mine` (the whole arrays when one process writes).
+void write_checkpoint_content(const h5::File& f, const PdSystem& s, const CheckpointRows& mine) {
   {
-    h5::File f(out.temp_path().string(), h5::File::Mode::Create);
     f.set_attr("/", "format", std::string("breccia-checkpoint"));
     f.set_attr("/", "particles_content_id", s.particles.content_id);
     f.set_attr("/", "case_file", s.config.file);
@@ -348,18 +399,21 @@ void write_checkpoint(const PdSystem& s, const std::string& path) {
     f.set_attr("/", "dissipated_J", s.dissipated_energy);
     f.set_attr("/", "bond_count", static_cast<long long>(s.bond_count()));
     const size_t n = s.n;
-    f.write("/u", s.u, {n, 3});
-    f.write("/v", s.v, {n, 3});
-    f.write("/a", s.a, {n, 3});
-    f.write("/force", s.force, {n, 3});
-    f.write("/body", s.body, {n, 3});
-    f.write("/bond_state", s.state, {s.state.size()});
-    if (!s.bond_damage.empty()) f.write("/bond_damage", std::vector<double>(s.bond_damage.begin(), s.bond_damage.end()), {s.bond_damage.size()});
+    const PdSystem& r = *mine.rows;
+    const size_t p0 = mine.particle_first, pc = mine.particle_count, e0 = mine.entry_first, ec = mine.entry_count;
+    f.write_rows("/u", r.u.data(), p0, pc, {n, 3});
+    f.write_rows("/v", r.v.data(), p0, pc, {n, 3});
+    f.write_rows("/a", r.a.data(), p0, pc, {n, 3});
+    f.write_rows("/force", r.force.data(), p0, pc, {n, 3});
+    f.write_rows("/body", r.body.data(), p0, pc, {n, 3});
+    f.write_rows("/bond_state", r.state.data(), e0, ec, {s.state.size()});
+    if (!s.bond_damage.empty())
+      f.write_rows("/bond_damage", doubles_of(r.bond_damage, 0, ec).data(), e0, ec, {s.bond_damage.size()});
     if (s.config.strength_rate != StrengthRateLaw::None)  // the onsets softening bonds were given at their rate
-      f.write("/bond_onset", std::vector<double>(s.s_onset.begin(), s.s_onset.end()), {s.s_onset.size()});
+      f.write_rows("/bond_onset", doubles_of(r.s_onset, 0, ec).data(), e0, ec, {s.s_onset.size()});
     if (!s.min_stretch.empty()) {  // compressive enhancement: the s_min this step's pass read, and its own
-      f.write("/min_stretch_previous", std::vector<double>(s.min_stretch.begin(), s.min_stretch.end()), {s.n});
-      f.write("/min_stretch", std::vector<double>(s.min_stretch_next.begin(), s.min_stretch_next.end()), {s.n});
+      f.write_rows("/min_stretch_previous", doubles_of(r.min_stretch, 0, pc).data(), p0, pc, {s.n});
+      f.write_rows("/min_stretch", doubles_of(r.min_stretch_next, 0, pc).data(), p0, pc, {s.n});
     }
     std::vector<double> ind(s.indenter_position, s.indenter_position + 3);
     f.write("/indenter_position", ind, {3});
@@ -377,8 +431,31 @@ void write_checkpoint(const PdSystem& s, const std::string& path) {
       }
     }
   }
+}
+
+}  // namespace
+
+void write_checkpoint(const PdSystem& s, const std::string& path) {
+  OutputFile out(path);
+  {
+    h5::File f(out.temp_path().string(), h5::File::Mode::Create);
+    write_checkpoint_content(f, s, {&s, 0, s.n, 0, s.state.size()});
+  }
   out.commit();
 }
+
+#ifdef BRECCIA_PARALLEL_HDF5
+void write_checkpoint(const PdSystem& s, const std::string& path, const CheckpointRows& mine, MPI_Comm comm,
+                      bool root) {
+  std::unique_ptr<OutputFile> out;  // the root's: it alone renames (or, failing, removes) the file
+  if (root) out = std::make_unique<OutputFile>(path);
+  {
+    h5::File f(OutputFile::temp_path_of(path).string(), h5::File::Mode::Create, comm);
+    write_checkpoint_content(f, s, mine);
+  }  // closing is collective: every rank's rows are in the file before the root renames it
+  if (out) out->commit();
+}
+#endif
 
 void read_checkpoint(PdSystem& s, const std::string& path) {
   if (!std::filesystem::exists(path)) throw InputError(path, "", "checkpoint file does not exist", "a checkpoint.h5");

@@ -30,7 +30,7 @@ void on_sigint(int) { g_interrupted = true; }
 void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, double setup_s) {
   const double bytes_per_particle =
       (s.bond_count() * (sizeof(int32_t) + 4 * sizeof(double) + 2 * sizeof(float) + 1) +
-       s.n * (13 * sizeof(double) + 2 * sizeof(int32_t) + 1)) / std::max<double>(1.0, s.n);
+       s.n * (13 * sizeof(double) + sizeof(int64_t) + sizeof(int32_t) + 1)) / std::max<double>(1.0, s.n);
   // json_file.hpp escapes the strings (a message may quote a path); a value that is not
   // finite (a run stopped for blowing up) is written as null and named in non_finite, so
   // the file stays JSON that any strict parser reads.
@@ -229,6 +229,16 @@ long long total_steps_of(const PdSystem& s, const RunOptions& o) {
 
 }  // namespace
 
+void StepBackend::checkpoint(PdSystem& s, const std::string& path, bool root, bool downloaded) {
+  if (!downloaded) download(s);
+  if (root) write_checkpoint(s, path);
+}
+
+void StepBackend::output(PdSystem& s, ResultsWriter* results, const std::string&) {
+  download(s);
+  if (results) results->write(s);
+}
+
 RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, ResultsWriter* results,
                         HistoryWriter* history) {
   RunResult r;
@@ -265,15 +275,12 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
         if (root) r.message = instability_message(s, e, supplied);
         break;
       }
-      if (output_due) backend.download(s);
+      if (output_due) backend.output(s, results, o.out_dir);
       else if (!s.config.probes.empty() || s.config.indenter.enabled) backend.download_kinematics(s);
       if (history_due && root) history->write(s, e);
-      if (output_due && results) results->write(s);
     }
-    if (s.config.checkpoint_every > 0 && s.step % s.config.checkpoint_every == 0) {
-      backend.download(s);
-      if (root) write_checkpoint(s, o.out_dir + "/checkpoint.h5");
-    }
+    if (s.config.checkpoint_every > 0 && s.step % s.config.checkpoint_every == 0)
+      backend.checkpoint(s, o.out_dir + "/checkpoint.h5", root);
     if (backend.any(g_interrupted)) {
       r.status = "interrupted";
       r.message = "interrupted by the user at step " + std::to_string(s.step) + "; continue with --restart " +
@@ -284,8 +291,8 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
       if (root) {
         history->write(s, e);
         if (results) results->write(s);
-        write_checkpoint(s, o.out_dir + "/checkpoint.h5");
       }
+      backend.checkpoint(s, o.out_dir + "/checkpoint.h5", root, true);
       break;
     }
     if (o.progress) {
@@ -305,7 +312,7 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
   if (r.status == "completed") {
     r.final_energies = backend.measure(s);
     backend.download(s);
-    if (root) write_checkpoint(s, o.out_dir + "/checkpoint.h5");
+    backend.checkpoint(s, o.out_dir + "/checkpoint.h5", root, true);
   } else {
     r.final_energies = e;
   }

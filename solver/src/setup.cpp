@@ -584,7 +584,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
 
   // Internal (Morton) order.
   const std::vector<int32_t> order = morton_order(pm.position_m);
-  s.original_index = order;
+  s.original_index.assign(order.begin(), order.end());
   s.internal_index.assign(n, 0);
   for (size_t k = 0; k < n; ++k) s.internal_index[order[k]] = static_cast<int32_t>(k);
   s.x0.resize(3 * n);

@@ -19,6 +19,7 @@
 #include "breccia/solver/exec_openmp.hpp"
 #include "breccia/solver/float32_state.hpp"
 #include "breccia/solver/mpi_launch.hpp"
+#include "breccia/solver/outputs.hpp"
 #include "breccia/solver/rank_system.hpp"
 #include "breccia/solver/step.hpp"
 
@@ -570,6 +571,76 @@ public:
     gather_ranges(local_.state, g.state, entries, r, comm_);
     gather_ranges(local_.bond_damage, g.bond_damage, entries, r, comm_);
   }
+
+#ifdef BRECCIA_PARALLEL_HDF5
+  // Every rank writes rows of results.h5's output group: the file's rows are cut into one
+  // contiguous block per rank, and the owned particles' values travel to the rank whose block
+  // holds their file index (one all-to-all). The root gathers the bond states (its broken
+  // bits read them: 1 byte per entry) and, for probes and the indenter, u and v.
+  void output(PdSystem& g, ResultsWriter* results, const std::string& out_dir) override {
+    if (!g.config.write_results) return StepBackend::output(g, results, out_dir);
+    if (local_.f32.active) float32_download(local_);
+    const int r = layout_.rank;
+    gather_ranges(local_.state, g.state, entry_ranges(layout_.part, g.offsets), r, comm_);
+    if (!g.config.probes.empty() || g.config.indenter.enabled) download_kinematics(g);
+    const std::vector<ResultsField> fields = results_fields(g);
+    size_t width = 1;  // per particle: its file index, then every field's components
+    for (const ResultsField& f : fields) width += static_cast<size_t>(f.components);
+    int size = 1;
+    MPI_Comm_size(comm_, &size);
+    auto block_begin = [&](int q) { return static_cast<int64_t>(g.n) * q / size; };
+    auto block_of = [&](int64_t fi) {  // the rank whose block holds file row fi
+      int q = static_cast<int>(fi * size / static_cast<int64_t>(g.n));
+      while (q + 1 < size && block_begin(q + 1) <= fi) ++q;
+      while (q > 0 && block_begin(q) > fi) --q;
+      return q;
+    };
+    const int64_t first = layout_.begin(), owned = layout_.owned();
+    std::vector<int> send_counts(size, 0), recv_counts(size), send_displs(size + 1, 0), recv_displs(size + 1, 0);
+    for (int64_t k = 0; k < owned; ++k) send_counts[block_of(g.original_index[first + k])] += static_cast<int>(width);
+    MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, comm_);
+    for (int q = 0; q < size; ++q) {
+      send_displs[q + 1] = send_displs[q] + send_counts[q];
+      recv_displs[q + 1] = recv_displs[q] + recv_counts[q];
+    }
+    std::vector<double> send(static_cast<size_t>(send_displs[size])), recv(static_cast<size_t>(recv_displs[size]));
+    {
+      std::vector<int> at(send_displs.begin(), send_displs.end() - 1);
+      for (int64_t k = 0; k < owned; ++k) {
+        const int64_t fi = g.original_index[first + k];
+        double* out = send.data() + at[block_of(fi)];
+        at[block_of(fi)] += static_cast<int>(width);
+        *out++ = static_cast<double>(fi);  // exact: file indices stay below 2^53
+        for (const ResultsField& f : fields)
+          for (int c = 0; c < f.components; ++c) *out++ = (local_.*f.values)[static_cast<size_t>(f.components * k + c)];
+      }
+    }
+    MPI_Alltoallv(send.data(), send_counts.data(), send_displs.data(), MPI_DOUBLE, recv.data(), recv_counts.data(),
+                  recv_displs.data(), MPI_DOUBLE, comm_);
+    const int64_t file_first = block_begin(r), file_count = block_begin(r + 1) - file_first;
+    std::vector<std::vector<double>> rows(fields.size());
+    for (size_t f = 0; f < fields.size(); ++f) rows[f].resize(static_cast<size_t>(file_count * fields[f].components));
+    for (size_t at = 0; at < recv.size(); at += width) {
+      const int64_t row = static_cast<int64_t>(recv[at]) - file_first;
+      size_t c0 = at + 1;
+      for (size_t f = 0; f < fields.size(); ++f)
+        for (int c = 0; c < fields[f].components; ++c) rows[f][static_cast<size_t>(fields[f].components * row + c)] = recv[c0++];
+    }
+    ResultsWriter::write_together(g, results, out_dir, static_cast<size_t>(file_first), static_cast<size_t>(file_count),
+                                  rows, comm_);
+  }
+
+  // Every rank writes its own rows of checkpoint.h5 (collective I/O): nothing is gathered.
+  // The rows are the gathered file's (internal order: rank r's particles and its rows' bond
+  // entries are one contiguous range of each array), so the file is the same.
+  void checkpoint(PdSystem& g, const std::string& path, bool root, bool downloaded) override {
+    if (local_.f32.active && !downloaded) float32_download(local_);
+    const int64_t first = layout_.begin(), owned = layout_.owned();
+    const CheckpointRows mine{&local_, static_cast<size_t>(first), static_cast<size_t>(owned),
+                              static_cast<size_t>(g.offsets[first]), static_cast<size_t>(local_.offsets[owned])};
+    write_checkpoint(g, path, mine, comm_, root);
+  }
+#endif
 
   void download_kinematics(PdSystem& g) override {
     if (local_.f32.active) float32_download_kinematics(local_);

@@ -137,7 +137,7 @@ void MpsResultsWriter::open(const std::string& h5_path, const CaseSpec& spec, co
   for (size_t i = 0; i < n_; ++i)
     for (int64_t b = bonds_.offsets[i]; b < bonds_.offsets[i + 1]; ++b) {
       set_bit(bonds_.within_horizon, b);
-      if (&reference != &current && !has_pair(current, static_cast<long long>(i), bonds_.neighbors[b])) {
+      if (&reference != &current && !has_pair(current, static_cast<long long>(i), static_cast<int>(bonds_.neighbors[b]))) {
         set_bit(bonds_.precrack, b);
         precrack.push_back(static_cast<int64_t>(i));
         precrack.push_back(bonds_.neighbors[b]);

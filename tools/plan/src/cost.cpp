@@ -192,14 +192,14 @@ long long lattice_bond_count(const std::array<long long, 3>& count, int dimensio
 // pd_system.hpp, PdSystem fields, in bytes per particle: 3-vectors x0 u v a force body x
 // (7 x 3 doubles); volume density horizon half_cell energy_density dissipated damage
 // max_stretch dilatation weighted_volume (10 doubles); PMB calibration_factor (1 double) or
-// LPS coefficients (3 doubles) plus lps_a, lps_b (2); original_index internal_index
-// material (3 int32); fixed_dof (1 byte); offsets (1 int64); and the ParticleModel copy it
-// keeps (position 3, volume, spacing: 5 doubles; material_id: 1 int32).
+// LPS coefficients (3 doubles) plus lps_a, lps_b (2); original_index (1 int64: a file index),
+// internal_index material (2 int32); fixed_dof (1 byte); offsets (1 int64); and the
+// ParticleModel copy it keeps (position 3, volume, spacing: 5 doubles; material_id: 1 int32).
 // Correspondence keeps LPS's arrays plus its moduli (5), F and the force tensor (9 + 9) and
 // the non-affine energy (1) per particle (correspondence.cpp, setup_correspondence).
 double bytes_per_particle(int dimension, PdModel model) {
   const double doubles = 21 + 10 + (model == PdModel::PMB ? 1 : 5) + 5 + (model == PdModel::Correspondence ? 24 : 0);
-  return doubles * sizeof(double) + 4 * sizeof(int32_t) + sizeof(uint8_t) + sizeof(int64_t);
+  return doubles * sizeof(double) + 3 * sizeof(int32_t) + sizeof(uint8_t) + 2 * sizeof(int64_t);
 }
 
 // Per bond entry: neighbor (int32); xi_len k_own k_dual vol_own (4 doubles); s0_own

@@ -13,10 +13,19 @@ class File {
 public:
   enum class Mode { Read, Create, ReadWrite };
   File(const std::string& path, Mode mode);
+#ifdef BRECCIA_PARALLEL_HDF5
+  // Every process of `comm` opens the one file together (the MPI-IO driver); from here every
+  // call that changes the file (datasets, groups, attributes) is collective: all of them make
+  // it, with the same arguments, and write_rows writes each one's rows with collective I/O.
+  File(const std::string& path, Mode mode, MPI_Comm comm);
+#endif
   ~File();
   File(const File&) = delete;
   File& operator=(const File&) = delete;
-  File(File&& o) noexcept : id_(o.id_), path_(std::move(o.path_)) { o.id_ = -1; }
+  File(File&& o) noexcept : id_(o.id_), transfer_(o.transfer_), path_(std::move(o.path_)) {
+    o.id_ = -1;
+    o.transfer_ = -1;
+  }
 
   hid_t id() const { return id_; }
   const std::string& path() const { return path_; }
@@ -33,6 +42,13 @@ public:
   void write(const std::string& path, const std::vector<int32_t>& data, std::vector<hsize_t> dims) const;
   void write(const std::string& path, const std::vector<uint8_t>& data, std::vector<hsize_t> dims) const;
   void write_strings(const std::string& path, const std::vector<std::string>& values) const;
+  // Rows [first, first + rows) of the dataset `path` of shape dims (its first dimension; every
+  // other dimension whole), from data (rows x the other dimensions): the processes that opened
+  // the file together each write their own rows, all with the same dims, and the dataset is the
+  // one write() makes of the whole array (same type, chunks, compression). A file opened by one
+  // process: first 0 and every row, which is write().
+  void write_rows(const std::string& path, const double* data, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const;
+  void write_rows(const std::string& path, const uint8_t* data, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const;
 
   std::vector<hsize_t> dims(const std::string& path) const;
   std::vector<double> read_doubles(const std::string& path) const;
@@ -59,6 +75,7 @@ public:
 
 private:
   hid_t id_ = -1;
+  hid_t transfer_ = -1;  // a collective file's transfer property list (H5FD_MPIO_COLLECTIVE); else none
   std::string path_;
 };
 

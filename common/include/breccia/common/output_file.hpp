@@ -17,6 +17,8 @@ public:
   const std::filesystem::path& temp_path() const { return temp_; }
   const std::filesystem::path& final_path() const { return final_; }
   void commit();  // atomic rename onto the final name
+  // The partial file's name: processes that write one file together all open this one.
+  static std::filesystem::path temp_path_of(const std::filesystem::path& final_path);
 
 private:
   std::filesystem::path final_, temp_;

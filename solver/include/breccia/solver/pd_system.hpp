@@ -33,7 +33,7 @@ struct PdSystem {
   int dimension = 3;
   double thickness = 1.0;
   size_t n = 0;
-  std::vector<int32_t> original_index;  // internal -> file index
+  std::vector<int64_t> original_index;  // internal -> file index (a global id: files past 2^31 particles)
   std::vector<int32_t> internal_index;  // file -> internal index
 
   // per particle (internal order)

@@ -23,7 +23,7 @@ constexpr long long kResultsFormatVersion = 2;
 // then only needs one bit per bond.
 struct HalfBondList {
   std::vector<int64_t> offsets;       // N + 1, file order
-  std::vector<int32_t> neighbors;     // partners j > i, ascending within a row
+  std::vector<int64_t> neighbors;     // partners j > i, ascending within a row (file indices: int64)
   std::vector<int64_t> entry;         // bond b -> the solver's bond entry (PD: row of i, internal order; MPS: CSR index)
   std::vector<uint8_t> within_horizon;  // bits: |xi| <= max(horizon_i, horizon_j) (the fragment graph)
   std::vector<uint8_t> precrack;        // bits: removed at start by a pre-crack
@@ -78,9 +78,9 @@ HalfBondList half_bond_list_of(const std::vector<Offset>& offsets, const std::ve
   HalfBondList h;
   h.offsets.assign(n + 1, 0);
   for (size_t i = 0; i < n; ++i) {
-    std::vector<std::pair<int32_t, int64_t>> row;
+    std::vector<std::pair<int64_t, int64_t>> row;
     for (Offset k = offsets[i]; k < offsets[i + 1]; ++k)
-      if (static_cast<size_t>(neighbors[k]) > i) row.emplace_back(static_cast<int32_t>(neighbors[k]), static_cast<int64_t>(k));
+      if (static_cast<size_t>(neighbors[k]) > i) row.emplace_back(static_cast<int64_t>(neighbors[k]), static_cast<int64_t>(k));
     std::sort(row.begin(), row.end());
     for (const auto& [j, k] : row) {
       h.neighbors.push_back(j);

@@ -58,6 +58,14 @@ public:
   virtual void compute_forces(PdSystem& s) = 0;  // refresh forces and diagnostics in place
   virtual void download(PdSystem&) {}            // whole state to the host (outputs, checkpoint)
   virtual void download_kinematics(PdSystem&) {} // u and v only (probes)
+  // checkpoint.h5 at the current step (every process calls it; `downloaded`: download ran
+  // since the last step). Here: the whole state to the host, written by the root alone; a
+  // distributed backend with parallel HDF5 writes every rank's rows together instead.
+  virtual void checkpoint(PdSystem& s, const std::string& path, bool root, bool downloaded = false);
+  // An output step of the time loop: the whole state to the host, and the root's writer (the
+  // only one; null elsewhere) writes the output group. A distributed backend with parallel
+  // HDF5 has every rank write its rows together and gathers only what the root still reads.
+  virtual void output(PdSystem& s, ResultsWriter* results, const std::string& out_dir);
   // A decision every process must take together (stop on Ctrl-C, on a blow-up): true if it
   // is true on any of them. One process: the flag itself.
   virtual bool any(bool flag) { return flag; }

@@ -179,6 +179,10 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
     for (size_t k = 0; k < s.neighbor.size(); ++k)
       g.halves[k] = static_cast<uint8_t>((s.vol_own[k] > 0.0 ? kOwnIntact : 0) | (s.k_dual[k] > 0.0 ? kDualIntact : 0));
   }
+  // gas_fixed_order_sum's block sums, for the walls' and the particles' sums alike: sized
+  // once here, so that no step allocates.
+  g.block_sums.assign(gas_blocks(std::max<int64_t>(static_cast<int64_t>(n), static_cast<int64_t>(s.facets.particle.size()))),
+                      GasSums{});
   g.wall_dv.assign(s.facets.particle.size(), 0.0);
   g.wall_left.assign(s.facets.particle.size(), 0.0);
   g.wall_on.assign(s.facets.particle.size(), 1);

@@ -12,49 +12,12 @@
 #include "breccia/solver/exec_openmp.hpp"
 #include "breccia/solver/step.hpp"
 #include "helpers.hpp"
+#include "reverse_block_exec.hpp"
 
 using namespace breccia::solver;
 using namespace breccia::solver::testing;
 
 namespace {
-
-class ReverseBlockExec {
-public:
-  explicit ReverseBlockExec(PdSystem& sys) : host_(sys) {}
-  template <class F>
-  void for_each(int64_t n, const F& f, const char*) const {
-    for (int64_t i = n - 1; i >= 0; --i) f(i);
-  }
-  // Partial sums over grid-stride blocks of 256, folded in block order (the device's pattern).
-  template <class Load, class Finish>
-  void reduce(int64_t n, const Load& load, const Finish& finish, const char*) const {
-    using Value = typename Load::Value;
-    constexpr int64_t kBlocks = 7, kThreads = 256;
-    Value total = Load::identity();
-    for (int64_t b = 0; b < kBlocks; ++b) {
-      Value block = Load::identity();
-      for (int64_t t = 0; t < kThreads; ++t)
-        for (int64_t k = b * kThreads + t; k < n; k += kBlocks * kThreads) block = Load::combine(block, load(k));
-      total = Load::combine(total, block);
-    }
-    finish(total);
-  }
-  template <class Real>
-  void commit_min_stretch(StepArrays<Real>& a) const { host_.commit_min_stretch(a); }
-  template <class Real>
-  void contact(const StepArrays<Real>& a) const { host_.contact(a); }
-  template <class Real>
-  void gas(const StepArrays<Real>& a, PdSystem& sys, double t, double dt) const {
-    gas_update(*this, a.d, a.facets, sys.gas, t, dt, dt > 0.0 ? static_cast<const Real*>(a.u_before) : nullptr);
-  }
-  template <class Real>
-  void gas_crack_forces(const StepArrays<Real>& a, PdSystem& sys) const {
-    breccia::solver::gas_crack_forces(*this, a.d, sys.gas, const_cast<double*>(a.d.body));
-  }
-
-private:
-  OpenMpExec host_;
-};
 
 void expect_same_state(const PdSystem& a, const PdSystem& b, bool energies_exact) {
   ASSERT_EQ(a.step, b.step);

@@ -189,6 +189,14 @@ struct CudaSystem::Impl {
   std::vector<DeviceArray<int32_t>> body_load_particles;   // one per sys.body_loads entry
   std::vector<DeviceArray<int32_t>> constraint_particles;  // one per sys.constraints entry
   std::vector<DeviceArray<double>> constraint_values;      // per entry: a field's values (boundary_field.hpp)
+  // the gas load (gas.hpp): device copies of GasState's arrays, and the partial sums of its
+  // fixed-order sums (GasBuffers' device path); the scalars stay on the host
+  DeviceArray<double> gas_wall_dv, gas_wall_left, gas_arrival, gas_arrival_next, gas_kappa_volume, gas_vent_area;
+  DeviceArray<double> gas_position, gas_push;
+  DeviceArray<uint8_t> gas_wall_on, gas_halves, gas_front_done, gas_in_crack;
+  DeviceArray<GasSums> gas_block_sums, gas_particle_sums;
+  GasBuffers gas{};
+  void upload_gas(const GasState& g, int64_t n);
   // reductions
   DeviceArray<StepSums> step_partial;
   DeviceArray<MeasureSums> measure_partial;
@@ -276,13 +284,15 @@ public:
   void contact(const StepArrays<Real>&) const {
     throw RunError("CUDA backend: model.short_range_forces needs the contact search of the CPU; use --backend cpu");
   }
-  // The gas load's sums are read on the host every step; not ported yet.
-  template <class Real>
-  void gas(const StepArrays<Real>&, PdSystem&, double, double) const {
-    throw RunError("CUDA backend: loads of type gas run on the CPU backend so far; use --backend cpu");
+  // The gas load (gas.hpp): its passes on the device copies; its block sums (a few per 256
+  // particles) come back to the host each step, where its scalars are updated.
+  GasBuffers gas_buffers(GasState&) const { return m_.gas; }
+  const GasSums* gas_block_sums_on_host(GasState& gas, const GasSums* sums, int64_t blocks) const {
+    gas.block_sums.resize(static_cast<size_t>(blocks));
+    check(cudaMemcpy(gas.block_sums.data(), sums, blocks * sizeof(GasSums), cudaMemcpyDeviceToHost),
+          "copy of the gas's block sums");
+    return gas.block_sums.data();
   }
-  template <class Real>
-  void gas_crack_forces(const StepArrays<Real>&, PdSystem&) const {}
   // A boundary by expression: the host's refreshed values into the device copy the step reads.
   void upload_boundary_values(size_t c, const std::vector<double>& values) const {
     m_.constraint_values[c].copy_in(values, "boundary values");
@@ -297,8 +307,6 @@ private:
 CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   if (!cuda_device_available())
     throw RunError("CUDA backend: no CUDA device is available (no GPU, or no NVIDIA driver); use --backend cpu");
-  if (s.gas.active)
-    throw RunError("CUDA backend: loads of type gas run on the CPU backend so far; use --backend cpu");
   check(cudaSetDevice(0), "cudaSetDevice(0)");
   Impl& m = *impl_;
   const char* sync = std::getenv("BRECCIA_CUDA_SYNC");
@@ -460,6 +468,8 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   m.constraint_values = std::vector<DeviceArray<double>>(s.constraints.size());
   for (size_t c = 0; c < s.constraints.size(); ++c) m.constraint_values[c].upload(s.constraints[c].values, "boundary values");
 
+  if (s.gas.active) m.upload_gas(s.gas, static_cast<int64_t>(s.n));
+
   m.step_partial.allocate(kMaxReduceBlocks, "step partial sums");
   m.measure_partial.allocate(kMaxReduceBlocks, "measure partial sums");
   const std::vector<DeviceScalars> scalars{{s.external_work, s.dissipated_energy, {0.0, 0.0, 0.0, 0, -1}}};
@@ -531,6 +541,43 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   m.refresh_step_views();
 }
 
+// The gas's arrays as the host has them (set-up, or a restart's state), and the view of them.
+void CudaSystem::Impl::upload_gas(const GasState& g, int64_t n) {
+  gas_wall_dv.upload(g.wall_dv, "gas wall_dv");
+  gas_wall_left.upload(g.wall_left, "gas wall_left");
+  gas_wall_on.upload(g.wall_on, "gas wall_on");
+  gas_kappa_volume.upload(g.kappa_volume, "gas kappa_volume");
+  gas_vent_area.upload(g.vent_facet_area, "gas vent_facet_area");
+  GasView& v = gas.view;
+  v.load = g.load;
+  v.wall_dv = gas_wall_dv.get();
+  v.wall_left = gas_wall_left.get();
+  v.wall_on = gas_wall_on.get();
+  v.kappa_volume = gas_kappa_volume.get();
+  v.vent_area = gas_vent_area.get();
+  if (g.crack_entry) {  // the front and the cracks (GasView's arrival is null without them)
+    gas_arrival.upload(g.arrival, "gas arrival");
+    gas_arrival_next.upload(g.arrival_next, "gas arrival_next");
+    gas_halves.upload(g.halves, "gas halves");
+    gas_position.upload(g.position, "gas positions");
+    gas_push.upload(g.push, "gas push");
+    gas_front_done.upload(g.front_done, "gas front_done");
+    gas_in_crack.upload(g.in_crack, "gas in_crack");
+    v.arrival = gas_arrival.get();
+    v.arrival_next = gas_arrival_next.get();
+    v.halves = gas_halves.get();
+    v.position = gas_position.get();
+    v.push = gas_push.get();
+    v.front_done = gas_front_done.get();
+    v.in_crack = gas_in_crack.get();
+  }
+  const int64_t count = std::max<int64_t>(n, static_cast<int64_t>(g.wall_dv.size()));
+  gas_particle_sums.allocate(static_cast<size_t>(std::max<int64_t>(count, 1)), "gas per-particle sums");
+  gas_block_sums.allocate(static_cast<size_t>(std::max<int64_t>(gas_blocks(count), 1)), "gas block sums");
+  gas.particle_sums = gas_particle_sums.get();
+  gas.block_sums = gas_block_sums.get();
+}
+
 CudaSystem::~CudaSystem() = default;
 
 // cpu_compute_forces / float32_compute_forces on the device: the force pass of step.hpp.
@@ -566,6 +613,8 @@ Energies CudaSystem::measure(PdSystem& sys) {
            "measure reduction", m.sync_after_launch);
   std::vector<DeviceScalars> host;
   m.scalars.download(host, "energy sums");  // synchronises with the default stream
+  // The history row counts the particles the gas has reached.
+  if (sys.gas.active && sys.gas.crack_entry) m.gas_arrival.download(sys.gas.arrival, "gas arrival");
   // The zero-energy-mode detector (zero_energy_mode_message) reads the non-affine energy.
   if (m.corr_nonaffine.size() > 0) m.corr_nonaffine.download(sys.corr_nonaffine, "correspondence non-affine energy");
   const DeviceScalars& s = host[0];
@@ -610,6 +659,14 @@ void CudaSystem::download(PdSystem& sys) {
   if (sys.config.strength_rate != StrengthRateLaw::None) m.s_onset.download(sys.s_onset, "s_onset");  // state with a rate law
   m.min_stretch.download(sys.min_stretch, "min_stretch");
   m.min_stretch_next.download(sys.min_stretch_next, "min_stretch_next");
+  if (sys.gas.active) {  // what a checkpoint keeps of the gas (outputs.cpp)
+    m.gas_wall_dv.download(sys.gas.wall_dv, "gas wall_dv");
+    m.gas_wall_on.download(sys.gas.wall_on, "gas wall_on");
+    if (sys.gas.crack_entry) {
+      m.gas_arrival.download(sys.gas.arrival, "gas arrival");
+      m.gas_in_crack.download(sys.gas.in_crack, "gas in_crack");
+    }
+  }
   std::vector<DeviceScalars> host;
   m.scalars.download(host, "energy sums");
   sys.external_work = host[0].external_work;

@@ -76,15 +76,9 @@ public:
     }
   }
 
-  // The gas load (gas.hpp) on the double arrays.
-  template <class Real>
-  void gas(const StepArrays<Real>& a, PdSystem& sys, double t, double dt) const {
-    gas_update(*this, a.d, a.facets, sys.gas, t, dt, dt > 0.0 ? static_cast<const Real*>(a.u_before) : nullptr);
-  }
-  template <class Real>
-  void gas_crack_forces(const StepArrays<Real>& a, PdSystem& sys) const {
-    solver::gas_crack_forces(*this, a.d, sys.gas, const_cast<double*>(a.d.body));
-  }
+  // The gas load (gas.hpp) keeps its arrays in the host's GasState.
+  GasBuffers gas_buffers(GasState& gas) const { return host_gas_buffers(gas); }
+  const GasSums* gas_block_sums_on_host(GasState&, const GasSums* sums, int64_t) const { return sums; }
 
 private:
   PdSystem& sys_;

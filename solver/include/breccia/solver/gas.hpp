@@ -390,7 +390,7 @@ struct GasState {
   std::vector<uint8_t> front_done, in_crack, wall_on;
   std::vector<uint8_t> halves;    // per bond entry (gas_entry_open; set-up, not checkpointed)
   std::vector<double> position;   // 3 per particle: the crack pass's x0 + u
-  std::vector<GasSums> block_sums;  // gas_fixed_order_sum's per-block sums
+  std::vector<GasSums> block_sums;  // gas_fixed_order_sum's per-block sums (setup_gas sizes it once)
   std::vector<double> wall_left;
   // evolving state (checkpointed with the particles')
   double volume = 0.0, wall_volume = 0.0, crack_volume = 0.0;
@@ -435,34 +435,89 @@ struct GasState {
   void advance(double wall, const GasSums& crack, double t, double dt);
 };
 
-// The gas at time t on the double arrays `d` (after the drift): front, volume, pressure.
-// u_before: the displacement at the step's start (null outside a step).
-// The sum of load(i) over [0, n) in a fixed order (GasBlockSum): the same on any number of
-// threads, so the gas's volume, and the motion it drives, do not depend on it.
+// Where a backend keeps the gas's per-step arrays (`view`) and the partial sums of
+// gas_fixed_order_sum. The host sums each block of kGasBlock particles in one loop index,
+// adding each particle's terms as it forms them (`particle_sums` null). A device, where one
+// thread per block would leave most of it idle, forms each particle's terms in a thread of
+// its own into `particle_sums` and then folds each block in index order (GasBlockFold): the
+// same additions in the same order, so its sums are the host's bit for bit.
+struct GasBuffers {
+  GasView view;
+  GasSums* block_sums = nullptr;     // at least gas_blocks(max(n, wall particles)) entries
+  GasSums* particle_sums = nullptr;  // at least max(n, wall particles) entries; null: host's fused blocks
+};
+
+// The host's buffers: the GasState's own arrays (setup_gas sizes block_sums once).
+inline GasBuffers host_gas_buffers(GasState& gas) { return {gas.view(), gas.block_sums.data(), nullptr}; }
+
+// Particle i's terms of a sum, one index per particle (the device path of GasBuffers).
+template <class Load>
+struct GasParticleTerms {
+  Load load;
+  typename Load::Value* terms;
+  BRECCIA_HD void operator()(int64_t i) const { terms[i] = load(i); }
+};
+
+// Block b's sum of the per-particle terms, in index order from the identity, as GasBlockSum adds them.
+template <class Load>
+struct GasBlockFold {
+  const typename Load::Value* terms;
+  int64_t n;
+  typename Load::Value* sums;
+  BRECCIA_HD void operator()(int64_t b) const {
+    const int64_t end = (b + 1) * kGasBlock < n ? (b + 1) * kGasBlock : n;
+    typename Load::Value acc = Load::identity();
+    for (int64_t i = b * kGasBlock; i < end; ++i) acc = Load::combine(acc, terms[i]);
+    sums[b] = acc;
+  }
+};
+
+// The sum of load(i) over [0, n) in a fixed order (GasBlockSum, or GasParticleTerms and
+// GasBlockFold): the same on any number of threads and on either path, so the gas's volume,
+// and the motion it drives, do not depend on them. The block sums are read on the host
+// (exec.gas_block_sums_on_host: the device copies them back) and added there in block order.
 template <class Exec, class Load>
-GasSums gas_fixed_order_sum(Exec& exec, int64_t n, const Load& load, GasState& gas, const char* name) {
+GasSums gas_fixed_order_sum(Exec& exec, int64_t n, const Load& load, const GasBuffers& buffers, GasState& gas,
+                            const char* name) {
   const int64_t blocks = gas_blocks(n);
   if (blocks == 0) return Load::identity();
-  gas.block_sums.resize(blocks);
-  exec.for_each(blocks, GasBlockSum<Load>{load, n, blocks, gas_block_stride(blocks), gas.block_sums.data()}, name);
+  if (buffers.particle_sums) {
+    exec.for_each(n, GasParticleTerms<Load>{load, buffers.particle_sums}, name);
+    exec.for_each(blocks, GasBlockFold<Load>{buffers.particle_sums, n, buffers.block_sums}, name);
+  } else {
+    exec.for_each(blocks, GasBlockSum<Load>{load, n, blocks, gas_block_stride(blocks), buffers.block_sums}, name);
+  }
+  const GasSums* sums = exec.gas_block_sums_on_host(gas, buffers.block_sums, blocks);
   GasSums total = Load::identity();
-  for (int64_t b = 0; b < blocks; ++b) total = Load::combine(total, gas.block_sums[b]);
+  for (int64_t b = 0; b < blocks; ++b) total = Load::combine(total, sums[b]);
   return total;
 }
 
+// The gas at time t on the double arrays `d` (after the drift): front, volume, pressure.
+// u_before: the displacement at the step's start (null outside a step). The arrays are where
+// the backend keeps them (exec.gas_buffers: the host's GasState, or device copies).
 template <class Exec, class UBefore>
 void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, double t, double dt,
                 const UBefore* u_before) {
   if (gas.spent) return;
-  GasView g = gas.view();
+  const GasBuffers buffers = exec.gas_buffers(gas);
+  const GasView& g = buffers.view;
   exec.for_each(f.particle_count, GasWallVolume{f, g, d.u, d.offsets, d.state}, "gas_wall_volume");
   GasSums crack{};
-  const GasSums wall = gas_fixed_order_sum(exec, f.particle_count, GasWallSum{g.wall_dv, g.wall_left}, gas, "gas wall volume");
+  const GasSums wall =
+      gas_fixed_order_sum(exec, f.particle_count, GasWallSum{g.wall_dv, g.wall_left}, buffers, gas, "gas wall volume");
   if (g.arrival) {
     exec.for_each(d.n, GasFrontCopy{g, d.x0, d.u}, "gas_front_copy");
-    exec.for_each(gas_blocks(d.n), GasBlocks<GasFront>{GasFront{d, g, t, gas.front_speed()}, d.n, gas_blocks(d.n),
-                                                        gas_block_stride(gas_blocks(d.n))}, "gas_front");
-    crack = gas_fixed_order_sum(exec, d.n, GasCrackSum<UBefore>{d, g, u_before}, gas, "gas crack volume");
+    const GasFront front{d, g, t, gas.front_speed()};
+    // The front's minima do not depend on the order: a device takes a thread per particle,
+    // the host the scrambled blocks (balanced between its few threads).
+    if (buffers.particle_sums) {
+      exec.for_each(d.n, front, "gas_front");
+    } else {
+      const int64_t blocks = gas_blocks(d.n);
+      exec.for_each(blocks, GasBlocks<GasFront>{front, d.n, blocks, gas_block_stride(blocks)}, "gas_front");
+    }
+    crack = gas_fixed_order_sum(exec, d.n, GasCrackSum<UBefore>{d, g, u_before}, buffers, gas, "gas crack volume");
   }
   crack.left = wall.left;
   gas.advance(wall.volume, crack, t, dt);
@@ -472,7 +527,7 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
 template <class Exec>
 void gas_crack_forces(Exec& exec, const PdView& d, GasState& gas, double* body) {
   if (!gas.crack_entry || gas.pressure <= 0.0) return;
-  exec.for_each(d.n, GasCrackPressure{gas.view(), gas.pressure, body}, "gas_crack_pressure");
+  exec.for_each(d.n, GasCrackPressure{exec.gas_buffers(gas).view, gas.pressure, body}, "gas_crack_pressure");
 }
 
 }  // namespace breccia::solver

@@ -11,8 +11,9 @@
 //   exec.contact(arrays)                      short-range forces between particles that are
 //                                             not family members (a cell grid of the current
 //                                             positions; the CPU builds it, CUDA refuses)
-//   exec.gas(arrays, sys, t, dt)              the gas load's volume, front and pressure at t
-//   exec.gas_crack_forces(arrays, sys)        (gas.hpp; the CPU runs them, CUDA refuses)
+//   exec.gas_buffers(gas)                     where the gas load's arrays and partial sums
+//   exec.gas_block_sums_on_host(gas, p, n)    live, and its n block sums readable on the host
+//                                             (gas.hpp GasBuffers; gas_update runs the passes)
 //   exec.exchange(arrays, field)              optional: a distributed run's halo exchange
 //                                             (solver/mpi/; rank_system.hpp)
 //
@@ -299,7 +300,7 @@ void pd_external(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t,
   // the machine does not inflate; the requirement bounds it at 5% of a step).
   const auto gas_start = std::chrono::steady_clock::now();
   const std::clock_t gas_cpu_start = sys.gas.active ? std::clock() : 0;
-  if (sys.gas.active) exec.gas(a, sys, t, dt);
+  if (sys.gas.active) gas_update(exec, d, a.facets, sys.gas, t, dt, dt > 0.0 ? static_cast<const Real*>(a.u_before) : nullptr);
   const auto gas_mid = std::chrono::steady_clock::now();
   const std::clock_t gas_cpu_mid = sys.gas.active ? std::clock() : 0;
   exec.for_each(3 * n, ClearArray{const_cast<double*>(d.body)}, "clear body forces");
@@ -315,7 +316,7 @@ void pd_external(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t,
   if (sys.gas.active) {
     const auto crack_start = std::chrono::steady_clock::now();
     const std::clock_t crack_cpu_start = std::clock();
-    exec.gas_crack_forces(a, sys);
+    gas_crack_forces(exec, d, sys.gas, body);
     sys.gas.wall_s += std::chrono::duration<double>(gas_mid - gas_start).count() +
                       std::chrono::duration<double>(std::chrono::steady_clock::now() - crack_start).count();
     sys.gas.cpu_s += static_cast<double>((gas_cpu_mid - gas_cpu_start) + (std::clock() - crack_cpu_start)) / CLOCKS_PER_SEC;

@@ -51,6 +51,20 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
   const double cell = std::max({0.5 * (min_horizon + max_pad), max_reach / 8.0, 1e-300});
   const CellList cells = sort_into_cells(CellGrid::covering(bounding_box(x), cell), x);
   const CellGrid& grid = cells.grid;
+  // The search reads each candidate's position, pad and horizon: copies in cell order
+  // (sorted[k] for cells.members[k]) turn its gathers into reads of consecutive memory.
+  // The same values, so the same tests and lists.
+  struct Candidate {
+    double x[3];
+    double pad, horizon;
+    int32_t index;
+  };
+  std::vector<Candidate> sorted(cells.members.size());
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < static_cast<int64_t>(sorted.size()); ++k) {
+    const size_t j = static_cast<size_t>(cells.members[static_cast<size_t>(k)]);
+    sorted[static_cast<size_t>(k)] = {{x[3 * j], x[3 * j + 1], x[3 * j + 2]}, pad_of(j), horizon[j], static_cast<int32_t>(j)};
+  }
   // Own search of particle i: every j within h_i + max(p_i, p_j).
   auto visit = [&](size_t i, auto&& emit) {
     long long ci[3];
@@ -60,6 +74,8 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
     // A cell is skipped when its box lies beyond the search radius (with a margin for the
     // rounding of a point's cell coordinate, so that no neighbour is ever lost).
     const double skip2 = (search + 1e-9 * cell) * (search + 1e-9 * cell);
+    const double xi[3] = {x[3 * i], x[3 * i + 1], x[3 * i + 2]};
+    const double pad_i = pad_of(i), horizon_i = horizon[i];
     auto gap = [&](int d, long long a) {
       const double lo = grid.origin[d] + static_cast<double>(a) * grid.cell[d], hi = lo + grid.cell[d];
       const double v = x[3 * i + d];
@@ -76,16 +92,17 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
           if (gz * gz + gy * gy + gx * gx > skip2) continue;
           const long long c = grid.index(ax, ay, az);
           for (int64_t k = cells.start[c]; k < cells.start[c + 1]; ++k) {
-            const size_t j = static_cast<size_t>(cells.members[k]);
+            const Candidate& cj = sorted[static_cast<size_t>(k)];
+            const size_t j = static_cast<size_t>(cj.index);
             if (j == i) continue;
-            const double p = std::max(pad_of(i), pad_of(j));
-            const double reach = horizon[i] + p;
+            const double p = std::max(pad_i, cj.pad);
+            const double reach = horizon_i + p;
             double r2 = 0.0;
             for (int d = 0; d < 3; ++d) {
-              const double e = x[3 * j + d] - x[3 * i + d];
+              const double e = cj.x[d] - xi[d];
               r2 += e * e;
             }
-            const double reach_j = horizon[j] + p;  // j's own test of i (both_ends only)
+            const double reach_j = cj.horizon + p;  // j's own test of i (both_ends only)
             if (r2 <= reach * reach || (both_ends && r2 <= reach_j * reach_j)) emit(j);
           }
         }

@@ -213,7 +213,7 @@ Energies measure(const PdSystem& sys);
 // iteration's force pass runs (ForcePass); the result does not depend on it.
 double estimate_max_frequency(PdSystem& sys, int iterations = 60, const ForcePass& forces = {});
 // The same by Lanczos in the mass inner product: at most `max_passes` force passes, fewer
-// once converged (sys.stable_step_passes says how many): 23 instead of 60 on the full
+// once converged (sys.stable_step_passes says how many): 19 instead of 60 on the full
 // concrete case, within 0.4% of the power iteration on five models (docs/performance.md).
 // The set-up's stable step (setup_system): its dt is up to 0.4% smaller than the power
 // iteration's, as its Ritz value approaches omega_max^2 from below faster.

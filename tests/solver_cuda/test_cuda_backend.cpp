@@ -12,6 +12,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cpu_gpu_compare.hpp"
@@ -410,6 +411,18 @@ TEST(CudaBackend, CompressiveEnhancementCracksMatchTheCpuInBothPrecisions) {
   }
 }
 
+// The time loop on the CPU and on the GPU, each writing to TempDir()/<stem>_cpu or _gpu
+// (expect_same_history compares the two folders' history.csv).
+std::pair<RunResult, RunResult> run_loops_on_both(PdSystem& cpu, PdSystem& gpu, const std::string& stem) {
+  RunOptions o;
+  o.progress = false;
+  o.out_dir = ::testing::TempDir() + "/" + stem + "_cpu";
+  const RunResult rc = run_system(cpu, o);
+  o.out_dir = ::testing::TempDir() + "/" + stem + "_gpu";
+  o.backend = "cuda";
+  return {rc, run_system_cuda(gpu, o)};
+}
+
 TEST(CudaBackend, RunLoopWritesTheSameHistoryAsTheCpuLoop) {
   if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
   // The fracture case with a velocity probe: history rows need a u/v download between outputs.
@@ -418,13 +431,7 @@ TEST(CudaBackend, RunLoopWritesTheSameHistoryAsTheCpuLoop) {
                "time: {steps: 300}\noutput: {every: 100, history_every: 10, probes: [{name: A, position: [0.015, 0.009, 0], "
                "field: velocity}]}\n");
   PdSystem cpu = system_from_yaml("run_cpu", yaml), gpu = system_from_yaml("run_gpu", yaml);
-  RunOptions o;
-  o.progress = false;
-  o.out_dir = ::testing::TempDir() + "/cuda_run_cpu";
-  const RunResult rc = run_system(cpu, o);
-  o.out_dir = ::testing::TempDir() + "/cuda_run_gpu";
-  o.backend = "cuda";
-  const RunResult rg = run_system_cuda(gpu, o);
+  const auto [rc, rg] = run_loops_on_both(cpu, gpu, "cuda_run");
   EXPECT_EQ(rg.status, rc.status);
   EXPECT_EQ(rg.steps, rc.steps);
   EXPECT_LE(field_difference(gpu.u, cpu.u), kAgreement);
@@ -439,13 +446,7 @@ TEST(CudaBackend, GasRunLoopWritesTheSameHistoryAsTheCpuLoop) {
   yaml.replace(yaml.find("time: {steps: 1000}"), std::string::npos,
                "time: {steps: 300}\noutput: {every: 100, history_every: 10}\n");
   PdSystem cpu = system_from_yaml("gas_run_cpu", yaml), gpu = system_from_yaml("gas_run_gpu", yaml);
-  RunOptions o;
-  o.progress = false;
-  o.out_dir = ::testing::TempDir() + "/cuda_gas_run_cpu";
-  const RunResult rc = run_system(cpu, o);
-  o.out_dir = ::testing::TempDir() + "/cuda_gas_run_gpu";
-  o.backend = "cuda";
-  const RunResult rg = run_system_cuda(gpu, o);
+  const auto [rc, rg] = run_loops_on_both(cpu, gpu, "cuda_gas_run");
   EXPECT_EQ(rg.status, rc.status);
   ASSERT_GT(cpu.gas.crack_volume, 0.0) << "the gas must be in the crack";
   expect_same_history("cuda_gas_run_cpu", "cuda_gas_run_gpu", 31u);

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include <omp.h>
+
 #include "breccia/postproc/bond_graph.hpp"
 #include "breccia/postproc/fragments.hpp"
 #include "breccia/postproc/meshes.hpp"
@@ -150,6 +152,34 @@ TEST(Fragments, TurnedCubeAndSquarePlateGetTheirOwnBoxFromTheOrientedBoundingBox
     for (int k = 0; k < 3; ++k) worst = std::max(worst, std::fabs(r.fragments[0].box_m[k] - shape.box[k] * kH));
     std::printf("turned %dx%dx%d: largest box edge error %.2e spacings\n", shape.cells[0], shape.cells[1], shape.cells[2],
                 worst / kH);
+  }
+}
+
+// The oriented boxes are searched in parallel, one fragment per OpenMP iteration; each search
+// seeds its own random generator, so the boxes must not depend on the thread count. Twelve
+// turned cubes and square plates (each with undetermined principal axes, so each goes to the
+// search), far apart: the boxes with 1 and 4 threads equal bit for bit, and each is its
+// lattice box within the 0.02 spacings of the test above.
+TEST(Fragments, OrientedBoxesAreTheSameWithOneOrSeveralThreads) {
+  std::vector<ParticleModel> parts;
+  for (int p = 0; p < 12; ++p) {
+    auto part = bt::lattice(3, p % 2 ? std::array<int, 3>{6, 6, 6} : std::array<int, 3>{8, 8, 2}, kH);
+    rotate(part, {1.0 + p, 2.0, 3.0 - 0.2 * p}, 0.3 + 0.1 * p);
+    for (size_t i = 0; i < part.size(); ++i) part.position_m[3 * i] += 30 * kH * p;  // beyond every horizon
+    parts.push_back(part);
+  }
+  const auto m = bt::merge(parts);
+  omp_set_num_threads(1);
+  const FragmentResult one = fragments_of(m, 1.6 * kH, {});
+  omp_set_num_threads(4);
+  const FragmentResult four = fragments_of(m, 1.6 * kH, {});
+  omp_set_num_threads(1);
+  ASSERT_EQ(one.fragments.size(), 12u);
+  ASSERT_EQ(four.fragments.size(), 12u);
+  for (size_t f = 0; f < 12; ++f) {
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(one.fragments[f].box_m[k], four.fragments[f].box_m[k]) << "fragment " << f;
+    const double middle = one.fragments[f].particle_count == 216 ? 6 : 8;  // cube 6, plate 8 spacings
+    EXPECT_NEAR(one.fragments[f].sieve_size_m, middle * kH, 0.02 * kH) << "fragment " << f;
   }
 }
 

@@ -218,12 +218,14 @@ double estimate_max_frequency(PdSystem& sys, int iterations = 60, const ForcePas
 // concrete case, within 0.4% of the power iteration on five models (docs/performance.md).
 // The set-up's stable step (setup_system): its dt is up to 0.4% smaller than the power
 // iteration's, as its Ritz value approaches omega_max^2 from below faster.
-// On a graded body it works on the stiff region (stable_step_region), the rest held at rest.
-double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes = 60, const ForcePass& forces = {});
-// The particles the Lanczos estimate moves: 1 where the local frequency scale
-// E / (rho delta^2) is at least kStableStepRegionRatio of the largest; empty (the whole
-// system) where that is half the particles or more.
+// On a graded body it works on the stiff region (stable_step_region with `region_ratio`; 0:
+// the whole system), the rest held at rest.
 inline constexpr double kStableStepRegionRatio = 0.25;
-std::vector<uint8_t> stable_step_region(const PdSystem& sys);
+double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes = 60, const ForcePass& forces = {},
+                                      double region_ratio = kStableStepRegionRatio);
+// The particles the Lanczos estimate moves: 1 where the local frequency scale
+// E / (rho delta^2) is at least `ratio` of the largest; empty (the whole system) where that
+// is half the particles or more, or ratio <= 0.
+std::vector<uint8_t> stable_step_region(const PdSystem& sys, double ratio);
 
 }  // namespace breccia::solver

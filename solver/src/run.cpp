@@ -67,6 +67,7 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
     phases_cpu[s.setup_phases[k].first] = s.setup_phases_cpu[k];
   j["setup_phases_cpu_s"] = phases_cpu;
   j["stable_step_force_passes"] = s.stable_step_passes;
+  j["stable_step_particles"] = static_cast<int64_t>(s.stable_step_particles);  // the region it moved
   number("wall_s", r.wall_s);
   number("bond_updates_per_s", r.bond_updates_per_s);
   number("loop_cpu_s", r.cpu_s);
@@ -386,7 +387,8 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
       std::snprintf(item, sizeof item, "%s%s %.2f s", phases.empty() ? "" : ", ", name.c_str(), seconds);
       phases += item;
     }
-    std::fprintf(stderr, "  set-up phases: %s (stable step: %d force passes)\n", phases.c_str(), s.stable_step_passes);
+    std::fprintf(stderr, "  set-up phases: %s (stable step: %d force passes over %zu of %zu particles)\n", phases.c_str(),
+                 s.stable_step_passes, s.stable_step_particles, s.n);
   }
   RunResult r = run_system(s, o);
   if (o.root) write_summary(s, o, r, setup_s);

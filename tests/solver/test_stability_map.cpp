@@ -223,3 +223,53 @@ TEST_P(StableStepEstimate, LargestFrequencyMatchesTheDenseEigenvalue) {
 
 INSTANTIATE_TEST_SUITE_P(Models, StableStepEstimate, ::testing::Values("pmb", "lps"),
                          [](const ::testing::TestParamInfo<const char*>& info) { return std::string(info.param); });
+
+#ifdef BRECCIA_MESH_EXE
+namespace {
+// A tet block graded from 0.4 mm tets at a notch to 1 mm (as in test_distributed.cpp):
+// horizons differing by 3x, so the particles within a factor 2 of the highest local frequency
+// are a minority near the notch.
+std::string graded_block() {
+  static const std::string path = [] {
+    const std::string dir = breccia::solver::testing::process_temp_dir() + "/stability_graded_block";
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir + "/block.yaml")
+        << "dimension: 3\nbody: {shape: box, name: block, size: [12 mm, 6 mm, 3 mm]}\n"
+           "notches: [{name: notch, corner: [6 mm, 0, 0], edge_a: [0, 2 mm, 0], edge_b: [0, 0, 3 mm]}]\n"
+           "mesh: {size: 1 mm, refine: [{near: notch, size: 0.4 mm, distance_min: 0.5 mm, distance_max: 4 mm}]}\n";
+    const std::string cmd = std::string(BRECCIA_MESH_EXE) + " " + dir + "/block.yaml -o " + dir +
+                            "/block.msh --quiet > /dev/null 2>&1 && " + BRECCIA_PLACE_EXE + " " + dir + "/block.msh -o " +
+                            dir + "/particles.h5 > /dev/null 2>&1";
+    return std::system(cmd.c_str()) == 0 ? dir + "/particles.h5" : std::string();
+  }();
+  return path;
+}
+}  // namespace
+
+// On a graded body the estimate moves only the stiff region (stable_step_region), the rest
+// held at rest: the largest eigenvalue of that block of M^-1 K, at most the whole system's
+// (Cauchy interlacing). It must agree with the whole system's estimate within the 0.5% band
+// of the dense comparison above (the 2% safety margin covers it), and one process's pass over
+// the region's rows must give the bits of the whole force pass a distributed set-up runs.
+TEST_P(StableStepEstimate, GradedBodyEstimatedOnItsStiffRegionAgreesWithTheWholeSystem) {
+  ASSERT_FALSE(graded_block().empty()) << "could not mesh the graded block";
+  const std::string type = GetParam();
+  PdSystem s = system_from_yaml("stable_step_graded_" + type,
+                                "specimen: {particles: " + graded_block() + "}\n"
+                                "model: {type: " + type + ", horizon_factor: 3.015, variable_horizon: true}\n"
+                                "materials: [{name: block, density: 2400, youngs_modulus: 30 GPa, poisson_ratio: 0.25}]\n"
+                                "time: {steps: 1}\n");
+  const std::vector<uint8_t> region = stable_step_region(s, kStableStepRegionRatio);
+  ASSERT_EQ(region.size(), s.n) << "the graded block must have a stiff region smaller than half";
+  const size_t inside = static_cast<size_t>(std::count(region.begin(), region.end(), uint8_t{1}));
+  EXPECT_GT(inside, 0u);
+  EXPECT_LT(2 * inside, s.n);
+  const double whole = estimate_max_frequency_lanczos(s, 60, {}, 0.0);
+  EXPECT_EQ(s.stable_step_particles, s.n);
+  const double part = estimate_max_frequency_lanczos(s);
+  EXPECT_EQ(s.stable_step_particles, inside);
+  const double part_whole_pass = estimate_max_frequency_lanczos(s, 60, [](PdSystem& g) { cpu_compute_forces(g); });
+  EXPECT_EQ(part, part_whole_pass) << "the region's rows must give the whole pass's forces bit for bit";
+  EXPECT_NEAR(part / whole, 1.0, 0.005) << inside << " of " << s.n << " particles";
+}
+#endif

@@ -100,6 +100,7 @@ struct PdSystem {
   double stable_dt = 0.0;         // 2 / omega_max by Lanczos (sharp; setup_system)
   double silling_askari_dt = 0.0; // Silling & Askari 2005 bound (PMB), for reference
   int stable_step_passes = 0;     // force passes the stable-step estimate took
+  size_t stable_step_particles = 0;  // particles free in that estimate (stable_step_region)
   double external_work = 0.0;
   double dissipated_energy = 0.0;
   double indenter_position[3] = {0, 0, 0};
@@ -217,6 +218,14 @@ double estimate_max_frequency(PdSystem& sys, int iterations = 60, const ForcePas
 // concrete case, within 0.4% of the power iteration on five models (docs/performance.md).
 // The set-up's stable step (setup_system): its dt is up to 0.4% smaller than the power
 // iteration's, as its Ritz value approaches omega_max^2 from below faster.
-double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes = 60, const ForcePass& forces = {});
+// On a graded body it works on the stiff region (stable_step_region with `region_ratio`; 0:
+// the whole system), the rest held at rest.
+inline constexpr double kStableStepRegionRatio = 0.25;
+double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes = 60, const ForcePass& forces = {},
+                                      double region_ratio = kStableStepRegionRatio);
+// The particles the Lanczos estimate moves: 1 where the local frequency scale
+// E / (rho delta^2) is at least `ratio` of the largest; empty (the whole system) where that
+// is half the particles or more, or ratio <= 0.
+std::vector<uint8_t> stable_step_region(const PdSystem& sys, double ratio);
 
 }  // namespace breccia::solver

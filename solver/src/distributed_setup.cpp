@@ -106,6 +106,8 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   // Collective: every rank takes the same branches (the case decides them, not the rank).
   gather_entries(d, s.state, true);
   if (s.config.softening) gather_entries(d, s.bond_damage, true);
+  // A rate law's onsets are state (restrict_to_rank_taking_bonds left the rank's own here).
+  if (s.config.strength_rate != StrengthRateLaw::None) gather_entries(d, s.s_onset, true);
   // The stable-step estimate cut the rank's system and took the coefficients with it
   // (restrict_to_rank_taking_bonds): without that hook the ranks would have no bonds.
   if (!s.xi_len.empty())

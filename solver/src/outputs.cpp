@@ -379,10 +379,9 @@ void HistoryWriter::write(const PdSystem& s, const Energies& e) {
 
 namespace {
 
-// The doubles of elements [first, first + count) of a float or double array.
-template <class T> std::vector<double> doubles_of(const std::vector<T>& a, size_t first, size_t count) {
-  return std::vector<double>(a.begin() + static_cast<std::ptrdiff_t>(first),
-                             a.begin() + static_cast<std::ptrdiff_t>(first + count));
+// The doubles of the first `count` elements of a float or double array.
+template <class T> std::vector<double> doubles_of(const std::vector<T>& a, size_t count) {
+  return std::vector<double>(a.begin(), a.begin() + static_cast<std::ptrdiff_t>(count));
 }
 
 // checkpoint.h5's content: the scalars and small arrays from s, the per-particle and per-entry
@@ -408,12 +407,12 @@ void write_checkpoint_content(const h5::File& f, const PdSystem& s, const Checkp
     f.write_rows("/body", r.body.data(), p0, pc, {n, 3});
     f.write_rows("/bond_state", r.state.data(), e0, ec, {s.state.size()});
     if (!s.bond_damage.empty())
-      f.write_rows("/bond_damage", doubles_of(r.bond_damage, 0, ec).data(), e0, ec, {s.bond_damage.size()});
+      f.write_rows("/bond_damage", doubles_of(r.bond_damage, ec).data(), e0, ec, {s.bond_damage.size()});
     if (s.config.strength_rate != StrengthRateLaw::None)  // the onsets softening bonds were given at their rate
-      f.write_rows("/bond_onset", doubles_of(r.s_onset, 0, ec).data(), e0, ec, {s.s_onset.size()});
+      f.write_rows("/bond_onset", doubles_of(r.s_onset, ec).data(), e0, ec, {s.s_onset.size()});
     if (!s.min_stretch.empty()) {  // compressive enhancement: the s_min this step's pass read, and its own
-      f.write_rows("/min_stretch_previous", doubles_of(r.min_stretch, 0, pc).data(), p0, pc, {s.n});
-      f.write_rows("/min_stretch", doubles_of(r.min_stretch_next, 0, pc).data(), p0, pc, {s.n});
+      f.write_rows("/min_stretch_previous", doubles_of(r.min_stretch, pc).data(), p0, pc, {s.n});
+      f.write_rows("/min_stretch", doubles_of(r.min_stretch_next, pc).data(), p0, pc, {s.n});
     }
     std::vector<double> ind(s.indenter_position, s.indenter_position + 3);
     f.write("/indenter_position", ind, {3});
@@ -423,11 +422,14 @@ void write_checkpoint_content(const h5::File& f, const PdSystem& s, const Checkp
                                         g.mass_fraction, g.work,        g.vented ? 1.0 : 0.0, g.vent_time,
                                         g.peak_pressure, g.spent ? 1.0 : 0.0, g.crack_vent_area};
       f.write("/gas/scalars", scalars, {scalars.size()});
-      f.write("/gas/wall_dv", g.wall_dv, {g.wall_dv.size()});
-      f.write("/gas/wall_on", g.wall_on, {g.wall_on.size()});
+      // Per facet particle, particle and entry: the rows of `mine` (a rank's own gas arrays).
+      const GasState& rg = r.gas;
+      const size_t f0 = mine.facet_first, fc = mine.facet_count;
+      f.write_rows("/gas/wall_dv", rg.wall_dv.data(), f0, fc, {g.wall_dv.size()});
+      f.write_rows("/gas/wall_on", rg.wall_on.data(), f0, fc, {g.wall_on.size()});
       if (g.crack_entry) {
-        f.write("/gas/arrival", g.arrival, {g.arrival.size()});
-        f.write("/gas/in_crack", g.in_crack, {g.in_crack.size()});  // which cracks the work follows
+        f.write_rows("/gas/arrival", rg.arrival.data(), p0, pc, {g.arrival.size()});
+        f.write_rows("/gas/in_crack", rg.in_crack.data(), e0, ec, {g.in_crack.size()});  // which cracks the work follows
       }
     }
   }
@@ -439,7 +441,7 @@ void write_checkpoint(const PdSystem& s, const std::string& path) {
   OutputFile out(path);
   {
     h5::File f(out.temp_path().string(), h5::File::Mode::Create);
-    write_checkpoint_content(f, s, {&s, 0, s.n, 0, s.state.size()});
+    write_checkpoint_content(f, s, {&s, 0, s.n, 0, s.state.size(), 0, s.facets.particle.size()});
   }
   out.commit();
 }

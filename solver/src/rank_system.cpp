@@ -57,16 +57,19 @@ RankLayout rank_layout(const PdSystem& g, int ranks, int rank) {
 }
 
 std::string distributed_unsupported(const PdSystem& g) {
-  // The gas load reads particles that are not bond partners (the cavity's whole wall).
-  // (The short-range forces' pairs outside the families come by their own exchange,
-  // ContactExchange in solver/mpi/.)
-  if (g.gas.active) return "loads[].type: gas";
-  // The rate law reads the ghosts' velocities (bond_stretch_rate) and keeps per-entry onsets
-  // that the ranks' gathers and checkpoints do not carry yet.
-  for (size_t k = 0; k < g.config.materials.size(); ++k)
-    if (g.config.materials[k].strength_rate != StrengthRateLaw::None)
-      return "materials[" + std::to_string(k) + "].strength_rate";
+  // Dynamic relaxation evaluates the gas through compute_external, which takes the gas's
+  // sums over the particles it is given: a rank's share only.
+  if (g.gas.active && g.config.quasi_static) return "loads[].type: gas with time.integrator: adr";
   return "";
+}
+
+namespace {
+void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std::vector<int32_t>& ids);
+}  // namespace
+
+int64_t first_facet_of(const PdSystem& g, int64_t particle) {
+  const std::vector<int32_t>& fp = g.facets.particle;  // ascending (group_facets_by_particle)
+  return std::lower_bound(fp.begin(), fp.end(), static_cast<int32_t>(particle)) - fp.begin();
 }
 
 namespace {
@@ -163,7 +166,10 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   k_own.swap(g.k_own);
   s0_own.swap(g.s0_own);
   s0_dual.swap(g.s0_dual);
-  s_onset.swap(g.s_onset);
+  // Under a rate law the onsets are state (raised as bonds begin to soften): the global
+  // system keeps them, gathered whole (finish_distributed_setup) for checkpoints and restarts.
+  if (g.config.strength_rate != StrengthRateLaw::None) s_onset = g.s_onset;
+  else s_onset.swap(g.s_onset);
   if (g.config.write_results) {  // rank 0's writers read them (finish_distributed_setup)
     k_dual = g.k_dual;
     vol_own = g.vol_own;
@@ -208,6 +214,7 @@ void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
   const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
   s.state = slice(g.state, eb, ee);
   s.bond_damage = slice(g.bond_damage, eb, ee);
+  if (g.config.strength_rate != StrengthRateLaw::None) s.s_onset = slice(g.s_onset, eb, ee);  // raised onsets
 
   s.step = g.step;
   s.time = g.time;
@@ -222,6 +229,51 @@ void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
   s.dissipated_energy = L.rank == 0 ? g.dissipated_energy : 0.0;
   s.f32 = {};
   if (g.f32.active) float32_enable(s, g.f32.origin);
+  if (g.gas.active) restrict_gas(s, g, L, ids);
 }
+
+namespace {
+
+// The gas of the rank's particles: per particle over owned and ghosts (the front and the
+// crack pass read the partners'), per entry the owned rows, per facet particle the owned ones
+// (one contiguous run of the global list: it is sorted by particle). The scalars are the
+// global system's: every rank advances them alike from sums over every rank (mpi_backend.cpp).
+void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std::vector<int32_t>& ids) {
+  const GasState& G = g.gas;
+  GasState& r = s.gas;
+  const size_t n = g.n;
+  const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
+  const int64_t fb = first_facet_of(g, L.begin()), fe = first_facet_of(g, L.begin() + L.owned());
+  r = GasState{};
+  r.active = true;
+  r.load = G.load;
+  r.spec = G.spec;
+  r.law = G.law;
+  r.reference_volume = G.reference_volume;
+  r.vent_area = G.vent_area;
+  r.vent_crack_opening = G.vent_crack_opening;
+  r.reference_density = G.reference_density;
+  r.ambient = G.ambient;
+  r.fixed_front_speed = G.fixed_front_speed;
+  r.crack_entry = G.crack_entry;
+  r.copy_scalars(G);
+  r.wall_dv = slice(G.wall_dv, fb, fe);
+  r.wall_left = slice(G.wall_left, fb, fe);
+  r.wall_on = slice(G.wall_on, fb, fe);
+  r.kappa_volume = take(G.kappa_volume, ids, 2, n);
+  r.vent_facet_area = take(G.vent_facet_area, ids, 1, n);
+  if (G.crack_entry) {
+    r.arrival = take(G.arrival, ids, 1, n);
+    r.arrival_next = r.arrival;  // as read_checkpoint and setup_gas leave it
+    r.push = take(G.push, ids, 3, n);
+    r.front_done = take(G.front_done, ids, 1, n);
+    r.position = take(G.position, ids, 3, n);
+    r.in_crack = slice(G.in_crack, eb, ee);
+    r.halves = slice(G.halves, eb, ee);
+  }
+  r.block_sums.assign(static_cast<size_t>(gas_blocks(std::max<int64_t>(L.owned(), fe - fb))), GasSums{});
+}
+
+}  // namespace
 
 }  // namespace breccia::solver

@@ -104,6 +104,8 @@ public:
     check_counts(L);
   }
 
+  int64_t ghosts() const { return ghosts_; }
+
   void exchange(std::initializer_list<HaloArray> arrays) {
     size_t per = 0;
     for (const HaloArray& a : arrays) per += a.bytes;
@@ -140,8 +142,31 @@ public:
     }
   }
 
+  // The transpose of exchange: each ghost's value goes back to its owner, which keeps the
+  // smallest of its own and every reader's (a minimum does not depend on the order of
+  // arrival, so the result is exact at any rank count). One double per particle.
+  void reduce_min_to_owners(double* data) {
+    size_t send_total = 0;
+    for (const Peer& p : send_) send_total += p.local.size();
+    back_buf_.resize(send_total);
+    requests_.resize(send_.size() + recv_.size());
+    size_t req = 0, at = 0;
+    for (const Peer& p : send_) {  // what the peer's ghosts of these particles hold
+      MPI_Irecv(back_buf_.data() + at, static_cast<int>(p.local.size()), MPI_DOUBLE, p.rank, kBackTag, comm_,
+                &requests_[req++]);
+      at += p.local.size();
+    }
+    for (const Source& s : recv_)
+      MPI_Isend(data + owned_ + s.begin, static_cast<int>(s.end - s.begin), MPI_DOUBLE, s.rank, kBackTag, comm_,
+                &requests_[req++]);
+    MPI_Waitall(static_cast<int>(req), requests_.data(), MPI_STATUSES_IGNORE);
+    at = 0;
+    for (const Peer& p : send_)
+      for (const int32_t i : p.local) data[i] = std::min(data[i], back_buf_[at++]);
+  }
+
 private:
-  static constexpr int kTag = 7101;
+  static constexpr int kTag = 7101, kBackTag = 7102;
   struct Peer {
     int rank;
     std::vector<int32_t> local;  // owned local indices this peer reads
@@ -172,7 +197,32 @@ private:
   std::vector<Peer> send_;
   std::vector<Source> recv_;
   std::vector<char> send_buf_, recv_buf_;
+  std::vector<double> back_buf_;
   std::vector<MPI_Request> requests_;
+};
+
+// An all-to-all where rank r is sent send_counts[r] consecutive elements of `type` (in rank
+// order), each `per` values of T: the counts go first (MPI_Alltoall) and the displacements
+// are their prefix sums. `recv` is sized to what arrives; rank r's elements start at
+// recv_displs[r] (ranks + 1 entries, the last the total). Its vectors are kept between calls.
+struct AllToAll {
+  std::vector<int> recv_counts, send_displs, recv_displs;
+  template <class T>
+  void run(const T* send, const std::vector<int>& send_counts, std::vector<T>& recv, size_t per, MPI_Datatype type,
+           MPI_Comm comm) {
+    const size_t ranks = send_counts.size();
+    recv_counts.assign(ranks, 0);
+    send_displs.assign(ranks + 1, 0);
+    recv_displs.assign(ranks + 1, 0);
+    MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, comm);
+    for (size_t r = 0; r < ranks; ++r) {
+      send_displs[r + 1] = send_displs[r] + send_counts[r];
+      recv_displs[r + 1] = recv_displs[r] + recv_counts[r];
+    }
+    recv.resize(static_cast<size_t>(recv_displs[ranks]) * per);
+    MPI_Alltoallv(send, send_counts.data(), send_displs.data(), type, recv.data(), recv_counts.data(),
+                  recv_displs.data(), type, comm);
+  }
 };
 
 // The short-range forces' partners on other ranks (model.short_range_forces;
@@ -212,7 +262,7 @@ public:
     boxes_.resize(6 * static_cast<size_t>(ranks_));
     MPI_Allgather(box, 6, MPI_DOUBLE, boxes_.data(), 6, MPI_DOUBLE, comm_);
     // The owned particles near each other rank's box, in ascending order, with their values.
-    std::vector<int>& send_counts = counts_[0];
+    std::vector<int>& send_counts = send_counts_;
     send_counts.assign(static_cast<size_t>(ranks_), 0);
     send_.clear();
     for (int r = 0; r < ranks_; ++r) {
@@ -237,25 +287,13 @@ public:
         ++send_counts[r];
       }
     }
-    std::vector<int>& recv_counts = counts_[1];
-    recv_counts.assign(static_cast<size_t>(ranks_), 0);
-    MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, comm_);
-    std::vector<int>& send_displs = counts_[2];
-    std::vector<int>& recv_displs = counts_[3];
-    send_displs.assign(static_cast<size_t>(ranks_), 0);
-    recv_displs.assign(static_cast<size_t>(ranks_), 0);
-    for (int r = 1; r < ranks_; ++r) {
-      send_displs[r] = send_displs[r - 1] + send_counts[r - 1];
-      recv_displs[r] = recv_displs[r - 1] + recv_counts[r - 1];
-    }
-    const int64_t received = recv_displs[ranks_ - 1] + recv_counts[ranks_ - 1];
-    recv_.resize(static_cast<size_t>(received) * record);
     MPI_Datatype type;
     MPI_Type_contiguous(static_cast<int>(record), MPI_BYTE, &type);
     MPI_Type_commit(&type);
-    MPI_Alltoallv(send_.data(), send_counts.data(), send_displs.data(), type, recv_.data(), recv_counts.data(),
-                  recv_displs.data(), type, comm_);
+    all_to_all_.run(send_.data(), send_counts, recv_, record, type, comm_);
     MPI_Type_free(&type);
+    const std::vector<int>& recv_displs = all_to_all_.recv_displs;
+    const int64_t received = recv_displs[ranks_];
 
     // The rank's particles (owned, then ghosts) and the received ones after them.
     Scratch<Real>& sc = scratch<Real>();
@@ -346,7 +384,8 @@ private:
   double margin_;
   const RankLayout& layout_;
   std::vector<double> boxes_;
-  std::vector<int> counts_[4];
+  std::vector<int> send_counts_;
+  AllToAll all_to_all_;
   std::vector<char> send_, recv_;
   std::vector<int64_t> where_;
   std::vector<int32_t> members_, keys_;
@@ -354,11 +393,124 @@ private:
   Scratch<float> float_;
 };
 
+// The gas load's sums over every rank (gas.hpp, gas_fixed_order_sum). One process adds the
+// wall's terms (per facet particle) and the cracks' (per particle) in blocks of kGasBlock
+// items of the global index, each block from zero in index order, then the blocks in order.
+// A rank owns one contiguous range of each index (the facet particles are sorted by
+// particle), so a block lies wholly in one rank's range or is cut between consecutive ranks:
+// each rank sends its whole blocks' sums and the terms of the items of the blocks it shares,
+// every rank receives all of them in rank order, which is index order (MPI_Allgatherv), and
+// adds them exactly as one process does. The sum is one process's bit for bit at any rank
+// count, where adding each rank's partial sum would not be: 48 bytes per block of 256 items
+// plus the cut blocks' items, every rank from every rank.
+class GasExchange {
+public:
+  GasExchange(const PdSystem& global, const RankLayout& L, MPI_Comm comm)
+      : comm_(comm), rank_(L.rank), particles_(L.part.begin) {
+    for (const int64_t b : L.part.begin) facets_.push_back(first_facet_of(global, b));
+  }
+
+  GasSums* terms(int64_t count) {
+    terms_.resize(static_cast<size_t>(std::max<int64_t>(count, 1)));
+    return terms_.data();
+  }
+
+  GasSums sum(const GasSums* terms, int64_t count, GasSumOver over) {
+    const std::vector<int64_t>& begin = over == GasSumOver::Facets ? facets_ : particles_;
+    const int ranks = static_cast<int>(begin.size()) - 1;
+    if (count != begin[rank_ + 1] - begin[rank_]) throw std::logic_error("distributed gas: a rank's item count");
+    mine_.clear();
+    counts_.resize(static_cast<size_t>(ranks));
+    displs_.resize(static_cast<size_t>(ranks));
+    int total = 0;
+    for (int r = 0; r < ranks; ++r) {
+      counts_[r] = static_cast<int>(records(begin, r, r == rank_ ? terms : nullptr));
+      displs_[r] = total;
+      total += counts_[r];
+    }
+    all_.resize(static_cast<size_t>(std::max(total, 1)));
+    MPI_Datatype type;
+    MPI_Type_contiguous(static_cast<int>(sizeof(GasSums)), MPI_BYTE, &type);
+    MPI_Type_commit(&type);
+    MPI_Allgatherv(mine_.data(), counts_[rank_], type, all_.data(), counts_.data(), displs_.data(), type, comm_);
+    MPI_Type_free(&type);
+    // One process's additions (GasBlockSum, then gas_fixed_order_sum's fold of the blocks).
+    const int64_t n = begin.back();
+    GasSums sum{};
+    size_t at = 0;
+    for (int64_t lo = 0; lo < n; lo += kGasBlock) {
+      const int64_t hi = std::min(lo + kGasBlock, n);
+      const int r = static_cast<int>(std::upper_bound(begin.begin(), begin.end(), lo) - begin.begin()) - 1;
+      if (hi <= begin[r + 1]) {  // wholly rank r's: its sum
+        sum = gas_sums_add(sum, all_[at++]);
+      } else {
+        GasSums block{};
+        for (int64_t i = lo; i < hi; ++i) block = gas_sums_add(block, all_[at++]);
+        sum = gas_sums_add(sum, block);
+      }
+    }
+    return sum;
+  }
+
+private:
+  // Rank r's records: per block meeting its range, the block's sum if the block is wholly
+  // its own, else its items' terms. With `terms` (this rank's) they go to mine_; the count
+  // alone otherwise (every rank counts every rank's from the ranges).
+  int64_t records(const std::vector<int64_t>& begin, int r, const GasSums* terms) {
+    const int64_t b = begin[r], e = begin[r + 1], n = begin.back();
+    int64_t count = 0;
+    for (int64_t lo = b; lo < e;) {
+      const int64_t block = lo - lo % kGasBlock, block_end = std::min(block + kGasBlock, n), hi = std::min(block_end, e);
+      if (block >= b && block_end <= e) {
+        if (terms) {
+          GasSums acc{};
+          for (int64_t i = block; i < block_end; ++i) acc = gas_sums_add(acc, terms[i - b]);
+          mine_.push_back(acc);
+        }
+        ++count;
+      } else {
+        if (terms) mine_.insert(mine_.end(), terms + (lo - b), terms + (hi - b));
+        count += hi - lo;
+      }
+      lo = hi;
+    }
+    return count;
+  }
+
+  MPI_Comm comm_;
+  int rank_;
+  std::vector<int64_t> particles_, facets_;  // each rank's first item, and the total
+  std::vector<GasSums> terms_, mine_, all_;
+  std::vector<int> counts_, displs_;
+};
+
 // The CPU's execution space plus the exchanges a distributed step needs (step.hpp).
 class MpiExec : public OpenMpExec {
 public:
-  MpiExec(PdSystem& local, HaloExchange& halo, ContactExchange* contact)
-      : OpenMpExec(local), local_(local), halo_(halo), contact_(contact) {}
+  MpiExec(PdSystem& local, HaloExchange& halo, ContactExchange* contact, GasExchange* gas)
+      : OpenMpExec(local), local_(local), halo_(halo), contact_(contact), gas_(gas) {}
+
+  // The gas load over ranks (gas.hpp GasOnRanks).
+  static constexpr bool kGasRanks = true;
+  // The front and the crack pass read the ghosts' positions: their displacement now (the
+  // force pass's exchange comes after the loads).
+  int64_t gas_ghosts(const PdView& d) const {
+    halo_.exchange({{d.u, 3 * sizeof(double)}});
+    return halo_.ghosts();
+  }
+  // A dry ghost reached from this rank's particles is reached on its owner's rank: the
+  // smallest arrival time of every rank's goes to the owner, then the owner's to every
+  // ghost, which is committed there as the crack pass commits the owned ones.
+  void gas_front_to_ghosts(const GasView& g) const {
+    halo_.reduce_min_to_owners(g.arrival_next);
+    halo_.exchange({{g.arrival_next, sizeof(double)}});
+    const int64_t owned = static_cast<int64_t>(local_.n);
+    std::copy(g.arrival_next + owned, g.arrival_next + owned + halo_.ghosts(), g.arrival + owned);
+  }
+  GasSums* gas_rank_terms(int64_t count) const { return gas().terms(count); }
+  GasSums gas_sum_over_ranks(const GasSums* terms, int64_t count, GasSumOver over) const {
+    return gas().sum(terms, count, over);
+  }
 
   // The short-range forces with the other ranks' particles near this rank's (ContactExchange).
   template <class Real>
@@ -378,7 +530,12 @@ public:
   void exchange(const StepArrays<Real>& a, HaloField field) const {
     switch (field) {
       case HaloField::Displacement:
-        halo_.exchange({{a.p.u, 3 * sizeof(Real)}});
+        // A rate law reads the partners' velocities too (bond_stretch_rate): the half-step
+        // velocity the owner's drift left.
+        if (local_.config.strength_rate != StrengthRateLaw::None)
+          halo_.exchange({{a.p.u, 3 * sizeof(Real)}, {a.p.v, 3 * sizeof(Real)}});
+        else
+          halo_.exchange({{a.p.u, 3 * sizeof(Real)}});
         break;
       case HaloField::Lps:
         if (a.p.lps_a) halo_.exchange({{a.p.dilatation, sizeof(Real)}, {a.p.lps_a, sizeof(Real)}, {a.p.lps_b, sizeof(Real)}});
@@ -391,9 +548,15 @@ public:
   }
 
 private:
+  GasExchange& gas() const {
+    if (!gas_) throw std::logic_error("distributed run: a gas load without its exchange");
+    return *gas_;
+  }
+
   PdSystem& local_;
   HaloExchange& halo_;
   ContactExchange* contact_;
+  GasExchange* gas_;
 };
 
 // Each rank's elements [begin[r], begin[r + 1]) of an array, in elements of `bytes` (a
@@ -453,6 +616,7 @@ struct RankShare {
   PdSystem local;
   std::unique_ptr<HaloExchange> halo;
   std::unique_ptr<ContactExchange> contact;  // model.short_range_forces only
+  std::unique_ptr<GasExchange> gas;          // a gas load only
   size_t global_n = 0, global_bonds = 0;  // of the system it was cut from
 };
 
@@ -468,6 +632,7 @@ std::shared_ptr<RankShare> make_rank_share(const PdSystem& global, MPI_Comm comm
   sh->halo = std::make_unique<HaloExchange>(sh->layout, comm);
   if (!sh->local.short_range_k.empty())
     sh->contact = std::make_unique<ContactExchange>(sh->layout, comm, sh->local.contact_cell_edge);
+  if (global.gas.active) sh->gas = std::make_unique<GasExchange>(global, sh->layout, comm);
   sh->global_n = global.n;
   sh->global_bonds = global.bond_count();
   return sh;
@@ -498,10 +663,17 @@ public:
       // read_checkpoint's pass at the restored state, on the rank's particles (no bond
       // breaks: the stretches are the checkpointed step's); forces and the dissipated
       // energy stay the checkpoint's.
+      // With a rate law the bond states are kept as checkpointed (read_checkpoint says why).
       const double dissipated = local_.dissipated_energy;
       const std::vector<double> force = local_.force;
+      const bool keep_bonds = local_.config.strength_rate != StrengthRateLaw::None;
+      std::vector<uint8_t> state;
+      std::vector<float> damage, onset;
+      if (keep_bonds) state = local_.state, damage = local_.bond_damage, onset = local_.s_onset;
       local_.diagnostics = true;
       force_pass(local_);
+      if (keep_bonds)
+        local_.state = std::move(state), local_.bond_damage = std::move(damage), local_.s_onset = std::move(onset);
       local_.dissipated_energy = dissipated;
       local_.force = force;
       global.derived_fields_pending = false;
@@ -513,11 +685,12 @@ public:
 
   void step(PdSystem& g) override {
     local_.diagnostics = g.diagnostics;
-    MpiExec exec(local_, *halo_, share_->contact.get());
+    MpiExec exec(local_, *halo_, share_->contact.get(), share_->gas.get());
     with_step_arrays(local_, [&](auto& a) { pd_step(exec, a, local_); });
     g.time = local_.time;
     g.step = local_.step;
     std::copy(local_.indenter_position, local_.indenter_position + 3, g.indenter_position);
+    if (local_.gas.active) g.gas.copy_scalars(local_.gas);  // every rank's alike (GasExchange)
   }
 
   void compute_forces(PdSystem&) override {
@@ -548,6 +721,8 @@ public:
     out.bad_particle = gbad;
     g.external_work = total[2];
     g.dissipated_energy = total[3];
+    // The history counts the particles the gas has reached: the owners' arrival times.
+    if (local_.gas.crack_entry) gather_ranges(local_.gas.arrival, g.gas.arrival, particle_ranges(layout_.part, 1), layout_.rank, comm_);
     return out;
   }
 
@@ -570,6 +745,14 @@ public:
     gather_ranges(local_.min_stretch_next, g.min_stretch_next, one, r, comm_);
     gather_ranges(local_.state, g.state, entries, r, comm_);
     gather_ranges(local_.bond_damage, g.bond_damage, entries, r, comm_);
+    if (local_.config.strength_rate != StrengthRateLaw::None) gather_ranges(local_.s_onset, g.s_onset, entries, r, comm_);
+    if (local_.gas.active) {  // what checkpoint.h5 keeps of the gas (write_checkpoint)
+      const std::vector<int64_t> facets = facet_ranges(g);
+      gather_ranges(local_.gas.wall_dv, g.gas.wall_dv, facets, r, comm_);
+      gather_ranges(local_.gas.wall_on, g.gas.wall_on, facets, r, comm_);
+      gather_ranges(local_.gas.arrival, g.gas.arrival, one, r, comm_);
+      gather_ranges(local_.gas.in_crack, g.gas.in_crack, entries, r, comm_);
+    }
   }
 
 #ifdef BRECCIA_PARALLEL_HDF5
@@ -596,16 +779,11 @@ public:
       return q;
     };
     const int64_t first = layout_.begin(), owned = layout_.owned();
-    std::vector<int> send_counts(size, 0), recv_counts(size), send_displs(size + 1, 0), recv_displs(size + 1, 0);
+    std::vector<int> send_counts(size, 0), at(size, 0);  // at: where each block's values go in `send`
     for (int64_t k = 0; k < owned; ++k) send_counts[block_of(g.original_index[first + k])] += static_cast<int>(width);
-    MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, comm_);
-    for (int q = 0; q < size; ++q) {
-      send_displs[q + 1] = send_displs[q] + send_counts[q];
-      recv_displs[q + 1] = recv_displs[q] + recv_counts[q];
-    }
-    std::vector<double> send(static_cast<size_t>(send_displs[size])), recv(static_cast<size_t>(recv_displs[size]));
+    for (int q = 1; q < size; ++q) at[q] = at[q - 1] + send_counts[q - 1];
+    std::vector<double> send(static_cast<size_t>(at[size - 1] + send_counts[size - 1])), recv;
     {
-      std::vector<int> at(send_displs.begin(), send_displs.end() - 1);
       for (int64_t k = 0; k < owned; ++k) {
         const int64_t fi = g.original_index[first + k];
         double* out = send.data() + at[block_of(fi)];
@@ -615,8 +793,7 @@ public:
           for (int c = 0; c < f.components; ++c) *out++ = (local_.*f.values)[static_cast<size_t>(f.components * k + c)];
       }
     }
-    MPI_Alltoallv(send.data(), send_counts.data(), send_displs.data(), MPI_DOUBLE, recv.data(), recv_counts.data(),
-                  recv_displs.data(), MPI_DOUBLE, comm_);
+    AllToAll().run(send.data(), send_counts, recv, 1, MPI_DOUBLE, comm_);
     const int64_t file_first = block_begin(r), file_count = block_begin(r + 1) - file_first;
     std::vector<std::vector<double>> rows(fields.size());
     for (size_t f = 0; f < fields.size(); ++f) rows[f].resize(static_cast<size_t>(file_count * fields[f].components));
@@ -636,8 +813,14 @@ public:
   void checkpoint(PdSystem& g, const std::string& path, bool root, bool downloaded) override {
     if (local_.f32.active && !downloaded) float32_download(local_);
     const int64_t first = layout_.begin(), owned = layout_.owned();
-    const CheckpointRows mine{&local_, static_cast<size_t>(first), static_cast<size_t>(owned),
-                              static_cast<size_t>(g.offsets[first]), static_cast<size_t>(local_.offsets[owned])};
+    const std::vector<int64_t> facets = facet_ranges(g);
+    const CheckpointRows mine{&local_,
+                              static_cast<size_t>(first),
+                              static_cast<size_t>(owned),
+                              static_cast<size_t>(g.offsets[first]),
+                              static_cast<size_t>(local_.offsets[owned]),
+                              static_cast<size_t>(facets[layout_.rank]),
+                              static_cast<size_t>(facets[layout_.rank + 1] - facets[layout_.rank])};
     write_checkpoint(g, path, mine, comm_, root);
   }
 #endif
@@ -693,6 +876,13 @@ private:
     return take_rank_share(global, comm);
   }
 
+  // The ranks' ranges of the facet particles (sorted by particle: one run per rank).
+  std::vector<int64_t> facet_ranges(const PdSystem& g) const {
+    std::vector<int64_t> begin;
+    for (const int64_t b : layout_.part.begin) begin.push_back(first_facet_of(g, b));
+    return begin;
+  }
+
   // The step's arrays over the rank's state in its precision, with the ghosts counted.
   template <class F>
   void with_step_arrays(PdSystem& l, F&& f) {
@@ -708,7 +898,7 @@ private:
   }
 
   void force_pass(PdSystem& l) {
-    MpiExec exec(l, *halo_, share_->contact.get());
+    MpiExec exec(l, *halo_, share_->contact.get(), share_->gas.get());
     with_step_arrays(l, [&](auto& a) { pd_force_pass(exec, a, true); });
   }
 
@@ -745,7 +935,7 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
       std::copy_n(g.u.begin() + 3 * static_cast<int64_t>(L.halo.ghosts[q]), 3, l.u.begin() + 3 * (owned + q));
     l.config.fracture = g.config.fracture;  // the estimate turns fracture off
     l.diagnostics = g.diagnostics;
-    MpiExec exec(l, *sh->halo, sh->contact.get());
+    MpiExec exec(l, *sh->halo, sh->contact.get(), sh->gas.get());
     StepArrays<double> a = cpu_step_arrays(l);
     a.ghosts = L.ghosts();
     pd_force_pass(exec, a, true);

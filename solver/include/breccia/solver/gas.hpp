@@ -21,6 +21,8 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "breccia/solver/gas_law.hpp"
@@ -429,6 +431,14 @@ struct GasState {
   // Speed of the gas front along open bonds now: the fixed one, or the speed of a gas
   // expanding into an empty channel (gas_escape_speed, gas_law.hpp).
   double front_speed() const;
+  // The evolving scalars of `o` (a distributed run's ranks each advance the same ones; the
+  // global system's writers read them from the rank's).
+  void copy_scalars(const GasState& o) {
+    volume = o.volume, wall_volume = o.wall_volume, crack_volume = o.crack_volume, crack_vent_area = o.crack_vent_area;
+    pressure = o.pressure, pressure_abs = o.pressure_abs, mass_fraction = o.mass_fraction, work = o.work;
+    vented = o.vented, vent_time = o.vent_time, peak_pressure = o.peak_pressure, spent = o.spent;
+    wall_s = o.wall_s, cpu_s = o.cpu_s;
+  }
   // One update of the scalars from the summed wall and crack volumes at time t (dt: the
   // step, 0 outside one: no outflow). crack.volume_before: the cracks that were in the volume
   // at the last update, at the current positions (the work counts only the motion's dV).
@@ -472,13 +482,39 @@ struct GasBlockFold {
   }
 };
 
+// What a gas sum runs over: the wall's facet particles (FacetView order) or the particles.
+enum class GasSumOver : int { Facets, Particles };
+
+// A distributed run's execution space (solver/mpi/) holds a rank's share of the particles
+// and facet particles, and its ghosts; it declares `kGasRanks` and provides
+//   exec.gas_ghosts(d)                  the ghosts' displacement from their owners; returns
+//                                       how many ghosts follow the d.n owned particles
+//   exec.gas_front_to_ghosts(g)         the front's arrival times: the smallest any rank
+//                                       reached to the owner, then the owner's to its ghosts
+//   exec.gas_rank_terms(count)          a buffer for count per-item terms
+//   exec.gas_sum_over_ranks(t, n, over) the sum of every rank's terms in one process's order
+// (C++17 detection: nvcc compiles this header too.)
+template <class Exec, class = void>
+struct GasOnRanks : std::false_type {};
+template <class Exec>
+struct GasOnRanks<Exec, std::void_t<decltype(Exec::kGasRanks)>> : std::true_type {};
+
 // The sum of load(i) over [0, n) in a fixed order (GasBlockSum, or GasParticleTerms and
 // GasBlockFold): the same on any number of threads and on either path, so the gas's volume,
 // and the motion it drives, do not depend on them. The block sums are read on the host
 // (exec.gas_block_sums_on_host: the device copies them back) and added there in block order.
+// On ranks each forms its items' terms and the execution space adds every rank's in the
+// order one process adds them (the same blocks over the global index), so the sum is one
+// process's bit for bit at any rank count.
 template <class Exec, class Load>
 GasSums gas_fixed_order_sum(Exec& exec, int64_t n, const Load& load, const GasBuffers& buffers, GasState& gas,
-                            const char* name) {
+                            const char* name, GasSumOver over) {
+  if constexpr (GasOnRanks<Exec>::value) {
+    GasSums* terms = exec.gas_rank_terms(n);
+    if (n > 0) exec.for_each(n, GasParticleTerms<Load>{load, terms}, name);
+    return exec.gas_sum_over_ranks(terms, n, over);
+  }
+  (void)over;
   const int64_t blocks = gas_blocks(n);
   if (blocks == 0) return Load::identity();
   if (buffers.particle_sums) {
@@ -504,10 +540,13 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
   const GasView& g = buffers.view;
   exec.for_each(f.particle_count, GasWallVolume{f, g, d.u, d.offsets, d.state}, "gas_wall_volume");
   GasSums crack{};
-  const GasSums wall =
-      gas_fixed_order_sum(exec, f.particle_count, GasWallSum{g.wall_dv, g.wall_left}, buffers, gas, "gas wall volume");
+  const GasSums wall = gas_fixed_order_sum(exec, f.particle_count, GasWallSum{g.wall_dv, g.wall_left}, buffers, gas,
+                                           "gas wall volume", GasSumOver::Facets);
   if (g.arrival) {
-    exec.for_each(d.n, GasFrontCopy{g, d.x0, d.u}, "gas_front_copy");
+    // On ranks the front and the crack pass read the ghosts' positions and arrival times too.
+    int64_t ghosts = 0;
+    if constexpr (GasOnRanks<Exec>::value) ghosts = exec.gas_ghosts(d);
+    exec.for_each(d.n + ghosts, GasFrontCopy{g, d.x0, d.u}, "gas_front_copy");
     const GasFront front{d, g, t, gas.front_speed()};
     // The front's minima do not depend on the order: a device takes a thread per particle,
     // the host the scrambled blocks (balanced between its few threads).
@@ -517,7 +556,10 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
       const int64_t blocks = gas_blocks(d.n);
       exec.for_each(blocks, GasBlocks<GasFront>{front, d.n, blocks, gas_block_stride(blocks)}, "gas_front");
     }
-    crack = gas_fixed_order_sum(exec, d.n, GasCrackSum<UBefore>{d, g, u_before}, buffers, gas, "gas crack volume");
+    // A ghost reached here is reached on its owner's rank too; a minimum, so exact.
+    if constexpr (GasOnRanks<Exec>::value) exec.gas_front_to_ghosts(g);
+    crack = gas_fixed_order_sum(exec, d.n, GasCrackSum<UBefore>{d, g, u_before}, buffers, gas, "gas crack volume",
+                                GasSumOver::Particles);
   }
   crack.left = wall.left;
   gas.advance(wall.volume, crack, t, dt);

@@ -81,6 +81,7 @@ void write_checkpoint(const PdSystem& sys, const std::string& path);
 struct CheckpointRows {
   const PdSystem* rows = nullptr;
   size_t particle_first = 0, particle_count = 0, entry_first = 0, entry_count = 0;
+  size_t facet_first = 0, facet_count = 0;  // the surface loads' facet particles (the gas's wall)
 };
 
 #ifdef BRECCIA_PARALLEL_HDF5

@@ -181,8 +181,8 @@ struct BondMotionT {
 // The bond's stretch rate ds/dt = (v_j - v_i) . n / |xi|, n the deformed direction. The force
 // pass runs after the drift, so v is the half-step velocity (x^{n+1} - x^n) / dt: this is the
 // stretch change since the previous step over dt (to first order in the step), without storing
-// a stretch per entry. (A distributed run's ghosts carry displacements only: the rate law is
-// refused under mpirun, rank_system.cpp distributed_unsupported.)
+// a stretch per entry. (A distributed run's ghosts receive their owners' velocities with their
+// displacements under a rate law: solver/mpi/, MpiExec::exchange.)
 template <class Real>
 BRECCIA_HD double bond_stretch_rate(const PdViewT<Real>& p, const BondMotionT<Real>& b) {
   const Real* v = p.v;

@@ -54,6 +54,11 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& global, const RankLayout& layou
 // built again.
 void copy_rank_state(PdSystem& local, const PdSystem& global, const RankLayout& layout);
 
+// The index in global.facets (sorted by particle) of the first facet particle at or after
+// internal index `particle`: a rank's facet particles are [first_facet_of(begin),
+// first_facet_of(begin + owned)).
+int64_t first_facet_of(const PdSystem& global, int64_t particle);
+
 // What a distributed run cannot do yet, as the case key that asks for it (empty: nothing).
 std::string distributed_unsupported(const PdSystem& global);
 

@@ -445,7 +445,8 @@ TEST(Gas, SparseCrackPassesKeepTheWorkOfTheForcesAndTheExactPassesAnswer) {
   // The interval must actually grow here (else nothing is tested), and the answer stay near
   // the every-step passes'.
   PdSystem exact = system_from_yaml("gas_exact_passes", cracking_disc(""));
-  PdSystem sparse = system_from_yaml("gas_sparse_passes", cracking_disc(kSparsePasses));
+  // The default tolerance (1e-3 of the cavity's volume missed at a pass).
+  PdSystem sparse = system_from_yaml("gas_sparse_passes", cracking_disc(", crack_pass_every: 8"));
   int widest = 1;
   while (exact.time < 40e-6) cpu_step(exact);
   while (sparse.time < 40e-6) {
@@ -453,17 +454,21 @@ TEST(Gas, SparseCrackPassesKeepTheWorkOfTheForcesAndTheExactPassesAnswer) {
     widest = std::max(widest, sparse.gas.crack_pass_interval);
   }
   ASSERT_GT(sparse.gas.crack_volume, 0.05 * (sparse.gas.volume - sparse.gas.reference_volume));
-  EXPECT_GT(widest, 2) << "the passes never spread out";
+  // The disc keeps cracking to 40 us: at the default tolerance the interval reaches 2 (the
+  // drift runs every other step), not more.
+  EXPECT_GE(widest, 2) << "the passes never spread out";
   // 1%: the bound, as for the every-step passes (ACrackingChargeDoesTheWorkOfItsForces).
   EXPECT_NEAR(sparse.external_work / sparse.gas.work, 1.0, 0.01);
-  // Against the every-step passes: the pressure of a pass is off by at most about gamma x
-  // tolerance (3 x 1%) for a step; 3% on the work and the volume covers that (measured
-  // differences are printed).
+  // Against the every-step passes: a pass puts back at most about 1e-3 of the volume, so
+  // each pass's pressure jump is under 0.3% (gamma 3); the held-back crack's free expansion
+  // adds up over the passes, so 1% on the work and the volume (the measured differences are
+  // printed: -0.91% and -0.22%; at crack_pass_tolerance 1e-2, interval up to 8, they were
+  // -5.4% and -5.7%).
   std::printf("sparse / every-step passes at 40 us: work %.6f, volume %.6f, crack volume %.6f\n",
               sparse.gas.work / exact.gas.work, sparse.gas.volume / exact.gas.volume,
               sparse.gas.crack_volume / exact.gas.crack_volume);
-  EXPECT_NEAR(sparse.gas.work / exact.gas.work, 1.0, 0.03);
-  EXPECT_NEAR(sparse.gas.volume / exact.gas.volume, 1.0, 0.03);
+  EXPECT_NEAR(sparse.gas.work / exact.gas.work, 1.0, 0.01);
+  EXPECT_NEAR(sparse.gas.volume / exact.gas.volume, 1.0, 0.01);
 }
 
 namespace {

@@ -397,7 +397,7 @@ CaseConfig parse_case_file(const std::string& path) {
     if (type == "gas")
       l.allow_only({"type", "surface", "history", "eos", "gamma_high", "gamma_low", "switch_pressure", "jwl", "stemming",
                     "vent_surfaces", "front_speed", "crack_entry", "gas_density", "vent_area", "ambient_pressure",
-                    "cavity_volume"});
+                    "cavity_volume", "crack_pass_every", "crack_pass_tolerance"});
     else
       l.allow_only({"type", "surface", "set", "value", "history", "depth"});
     if (type != "traction" && type != "gas" && l.has("depth"))
@@ -442,6 +442,21 @@ CaseConfig parse_case_file(const std::string& path) {
       if (l.has("front_speed") && l.text("front_speed") != "escape")
         g.front_speed = l.positive("front_speed", Quantity::Velocity);
       if (l.has("gas_density")) g.density = l.positive("gas_density", Quantity::Density);
+      if (l.has("crack_pass_every")) {
+        const double every = l.number("crack_pass_every", Quantity::Dimensionless, 1.0);
+        if (!(every >= 1.0 && every <= 1000.0 && every == std::floor(every)))
+          throw InputError(path, l.field("crack_pass_every"), short_number(every), "a whole number of steps, 1 to 1000");
+        if (!g.crack_entry && every > 1.0)
+          throw InputError(path, l.field("crack_pass_every"), "given with crack_entry: false",
+                           "no crack_pass_every (the gas enters no cracks)");
+        g.crack_pass_every = static_cast<int>(every);
+      }
+      if (l.has("crack_pass_tolerance")) {
+        g.crack_pass_tolerance = l.positive("crack_pass_tolerance", Quantity::Dimensionless);
+        if (!(g.crack_pass_tolerance < 1.0))
+          throw InputError(path, l.field("crack_pass_tolerance"), short_number(g.crack_pass_tolerance),
+                           "a fraction of the cavity's volume below 1 (1e-3: the pressure within 0.3% at each pass)");
+      }
       if (l.has("vent_area")) {
         if (l.node()["vent_area"].IsScalar() && l.text("vent_area") == "crack_opening")
           g.vent_crack_opening = true;  // the cracks' mouths on the vent surfaces (gas.hpp)

@@ -104,6 +104,11 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
   g.ambient = spec.ambient_pressure;
   g.fixed_front_speed = spec.front_speed;
   g.crack_entry = spec.crack_entry;
+  g.crack_pass_every = spec.crack_pass_every;
+  g.crack_pass_tolerance = spec.crack_pass_tolerance;
+  g.crack_pass_countdown = 0;
+  g.crack_pass_interval = 1;
+  g.crack_pass_done = false;
   const int dim = s.dimension;
 
   // Reference volume by the divergence theorem over the wall, closed by the mouth's plane:
@@ -170,6 +175,7 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
     g.arrival.assign(n, std::numeric_limits<double>::infinity());
     for (int64_t p : sf.particle) g.arrival[s.internal_index[p]] = 0.0;  // the wall is wetted
     g.arrival_next = g.arrival;
+    if (g.crack_pass_every > 1) g.arrival_hop = g.arrival;  // the front's later hops (GasFront)
     g.push.assign(3 * n, 0.0);
     g.front_done.assign(n, 0);
     g.in_crack.assign(s.neighbor.size(), 0);

@@ -430,6 +430,12 @@ void write_checkpoint_content(const h5::File& f, const PdSystem& s, const Checkp
       if (g.crack_entry) {
         f.write_rows("/gas/arrival", rg.arrival.data(), p0, pc, {g.arrival.size()});
         f.write_rows("/gas/in_crack", rg.in_crack.data(), e0, ec, {g.in_crack.size()});  // which cracks the work follows
+        if (g.crack_pass_every > 1) {  // between two crack passes: the vectors the volume follows
+          f.write_rows("/gas/push", rg.push.data(), p0, pc, {n, 3});
+          const std::vector<double> pass{static_cast<double>(g.crack_pass_countdown), g.crack_pass_done ? 1.0 : 0.0,
+                                         static_cast<double>(g.crack_pass_interval)};
+          f.write("/gas/crack_pass", pass, {pass.size()});
+        }
       }
     }
   }
@@ -535,6 +541,19 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
       g.in_crack = f.read_uint8("/gas/in_crack");
       if (g.in_crack.size() != s.neighbor.size())
         throw InputError(path, "/gas/in_crack", "sized for other families", "a checkpoint of this case");
+      if (g.crack_pass_every > 1) {
+        if (!f.exists("/gas/push") || !f.exists("/gas/crack_pass"))
+          throw InputError(path, "/gas/push", "missing (a checkpoint of a run with crack_pass_every 1)",
+                           "a checkpoint of this case with its crack_pass_every");
+        g.push = f.read_doubles("/gas/push");
+        const auto pass = f.read_doubles("/gas/crack_pass");
+        if (g.push.size() != 3 * s.n || pass.size() != 3)
+          throw InputError(path, "/gas/push", "sized for other particles", "a checkpoint of this case");
+        g.crack_pass_countdown = static_cast<int>(pass[0]);
+        g.crack_pass_done = pass[1] != 0.0;
+        g.crack_pass_interval = static_cast<int>(pass[2]);
+        g.arrival_hop = g.arrival;
+      }
     }
   }
   // A distributed set-up's global system holds no bonds: each rank's system makes this pass

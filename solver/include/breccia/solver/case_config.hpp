@@ -53,6 +53,12 @@ struct GasSpec {
   bool vent_crack_opening = false;     // vent_area: crack_opening, the cracks' mouths on the vent surfaces
   double ambient_pressure = 101325.0;  // Pa
   double cavity_volume = 0.0;          // m3; 0: from the surface's facets
+  // The exact crack pass (openings, front, joins, vents) every this many steps; in between the
+  // crack volume follows the particles' motion along the last pass's push vectors (gas.hpp).
+  int crack_pass_every = 1;
+  // The interval adapts: the crack volume a pass finds the drift missed, over the cavity's
+  // volume, above this halves it, below a quarter of it doubles it (gas_crack_pass_interval).
+  double crack_pass_tolerance = 1e-3;
 };
 
 struct LoadSpec {

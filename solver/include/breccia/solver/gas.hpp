@@ -17,6 +17,7 @@
 // m_i = sum_j V_j |xi|, d the dimension: for a straight crack opened by delta in a continuum
 // this sum is exactly (crack area) x delta (docs/theory.md). The gas force on particle i is
 // p dV/dy_i, so the gas work is the integral of p dV and the energy balance closes.
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -48,6 +49,7 @@ struct GasView {
   double* wall_left = nullptr;     // per facet particle: the dV of this step's motion of one that left now
   double* arrival = nullptr;       // per particle: time the gas reached it (+inf: dry); null: no crack entry
   double* arrival_next = nullptr;  // the front pass writes here, then copies back
+  double* arrival_hop = nullptr;   // crack_pass_every > 1: arrival_next after the last hop (GasFront)
   // per particle: kappa_i = 2 d / sum_j V_j |xi| and V_i side by side (one cache line per
   // partner in the crack pass)
   const double* kappa_volume = nullptr;
@@ -125,18 +127,29 @@ struct GasFrontCopy {
   const double* u;
   BRECCIA_HD void operator()(int64_t i) const {
     g.arrival_next[i] = g.arrival[i];
+    if (g.front_done[i] == 2) g.front_done[i] = 0;  // a later hop's mark (GasFront)
     for (int d = 0; d < 3; ++d) g.position[3 * i + d] = x0[3 * i + d] + u[3 * i + d];
   }
 };
 
 // A wetted particle all of whose partners are wetted has nothing left to push (wetting is
 // for good): it is marked once and skipped from then on.
+// With the crack pass every k steps (crack_pass_every) the front runs at those steps only and
+// takes up to k hops there, so that it moves as far as every step would (each hop bound by
+// reached <= t as before). The first hop pushes from every wetted particle (`from` is
+// arrival); each further one only from the particles the hop before reached (`from` is
+// arrival_hop, the snapshot of arrival_next after it, read-only during the hop, so the hops
+// do not depend on the thread count): the others would push what they pushed already.
 struct GasFront {
   PdView p;
   GasView g;
   double t, speed;
+  const double* from = nullptr;  // null: arrival (the first hop)
+  BRECCIA_HD bool wet(int64_t j) const { return (from ? from[j] : g.arrival[j]) < 1e300; }
   BRECCIA_HD void operator()(int64_t i) const {
-    if (!gas_wetted(g, i) || g.front_done[i]) return;
+    if (!wet(i) || g.front_done[i]) return;
+    if (from && gas_wetted(g, i)) return;  // a later hop: only the ones reached at this pass
+    const double arrival_i = from ? from[i] : g.arrival[i];
     bool dry_partner = false;
     for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
       if (g.in_crack[k]) continue;  // both ends wetted
@@ -145,14 +158,23 @@ struct GasFront {
       // partner's arrival time (a read from anywhere in memory) is not needed.
       if (!open && dry_partner) continue;
       const int32_t j = p.neighbor[k];
-      if (gas_wetted(g, j)) continue;
+      if (wet(j)) continue;
       dry_partner = true;
       if (!open) continue;
-      const double reached = g.arrival[i] + p.xi_len[k] / speed;
+      const double reached = arrival_i + p.xi_len[k] / speed;
       if (reached <= t) atomic_min(&g.arrival_next[j], reached);
     }
+    // A later hop marks the particles it has pushed from (2) so that the hops after it skip
+    // them; the next pass's copy clears the mark (GasFrontCopy), and its first hop sees them again.
     if (!dry_partner) g.front_done[i] = 1;
+    else if (from) g.front_done[i] = 2;
   }
+};
+
+// The snapshot a later hop of the front reads (GasFront).
+struct GasFrontHopCopy {
+  GasView g;
+  BRECCIA_HD void operator()(int64_t i) const { g.arrival_hop[i] = g.arrival_next[i]; }
 };
 
 struct GasSums {
@@ -319,6 +341,30 @@ BRECCIA_SIMD
   }
 };
 
+// Between two crack passes (crack_pass_every > 1): the crack volume's change over this step
+// to first order, dV = sum_i dV/dy_i . du_i = -sum_i V_i push_i . du_i, with the push vectors
+// of the last pass; that is exactly the work the crack forces -p push_i do over the step
+// (GasCrackPressure applies the same vectors), so the gas work and the external work stay
+// together. The volume so followed drifts from the entries' exact openings at second order
+// in the motion since the last pass; the next pass puts it back (the difference counted as a
+// free expansion, like a joining entry: no work). O(particles), not O(entries).
+template <class UBefore>
+struct GasCrackDrift {
+  using Value = GasSums;
+  PdView p;
+  GasView g;
+  const UBefore* u_before;
+  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
+  BRECCIA_HD static Value combine(Value a, Value b) { return gas_sums_add(a, b); }
+  BRECCIA_HD Value operator()(int64_t i) const {
+    if (!u_before || !gas_wetted(g, i)) return identity();
+    double dot = 0.0;
+    for (int d = 0; d < 3; ++d) dot += g.push[3 * i + d] * (p.u[3 * i + d] - double(u_before[3 * i + d]));
+    const double dv = -g.kappa_volume[2 * i + 1] * dot;
+    return {dv, dv, 0.0, 0.0, 0.0, 0.0};
+  }
+};
+
 // Gas pressure on the faces of the cracks it fills: -p a_k e_hat on i for each open wetted
 // entry (the derivative of p V_crack), as a force density: -p push_i (GasCrackSum).
 struct GasCrackPressure {
@@ -388,7 +434,9 @@ struct GasState {
   double ambient = 0.0;           // [Pa]
   double fixed_front_speed = 0.0; // [m/s]; 0: the escape speed (gas_escape_speed)
   bool crack_entry = false;
-  std::vector<double> wall_dv, arrival, arrival_next, kappa_volume, push, vent_facet_area;
+  int crack_pass_every = 1;       // at most this many steps between exact crack passes (GasCrackDrift between)
+  double crack_pass_tolerance = 1e-3;  // missed crack volume over V at a pass (gas_crack_pass_interval)
+  std::vector<double> wall_dv, arrival, arrival_next, arrival_hop, kappa_volume, push, vent_facet_area;
   std::vector<uint8_t> front_done, in_crack, wall_on;
   std::vector<uint8_t> halves;    // per bond entry (gas_entry_open; set-up, not checkpointed)
   std::vector<double> position;   // 3 per particle: the crack pass's x0 + u
@@ -406,6 +454,12 @@ struct GasState {
   // Vented and down to 0.1% of its peak: the gas has done its work; its passes stop and it
   // pushes no more (a pulverised block would otherwise pay a bond pass per step for nothing).
   bool spent = false;
+  // crack_pass_every > 1: steps to the next exact crack pass (0: this step's), and whether one
+  // has run (push holds its vectors; a restart restores them: outputs.cpp).
+  // crack_pass_interval: the steps between passes now, adapted at each pass (gas_update).
+  int crack_pass_countdown = 0;
+  int crack_pass_interval = 1;
+  bool crack_pass_done = false;
   double wall_s = 0.0;            // wall time spent in the gas's passes (not checkpointed)
   double cpu_s = 0.0;             // their process CPU time, all threads (robust to other load)
 
@@ -417,6 +471,7 @@ struct GasState {
     v.wall_left = wall_left.data();
     v.arrival = crack_entry ? arrival.data() : nullptr;
     v.arrival_next = crack_entry ? arrival_next.data() : nullptr;
+    v.arrival_hop = arrival_hop.empty() ? nullptr : arrival_hop.data();
     v.kappa_volume = kappa_volume.data();
     v.vent_area = vent_facet_area.data();
     v.halves = halves.data();
@@ -529,6 +584,20 @@ GasSums gas_fixed_order_sum(Exec& exec, int64_t n, const Load& load, const GasBu
   return total;
 }
 
+// The next interval between crack passes (crack_pass_every > 1) from what this pass found:
+// `missed`, the crack volume the drift did not follow since the last pass (cracks the gas
+// entered, entries that opened between wetted particles, the second-order drift), against
+// the cavity's volume. Applied at once at the pass, it moves the pressure by about
+// gamma missed / V: a tolerance of 1e-3 (crack_pass_tolerance, the default) keeps that
+// below 0.3% (gamma 3) per pass. Above the tolerance the interval halves (down to 1: every
+// step), well below it (a quarter) it doubles (up to `every`).
+inline int gas_crack_pass_interval(int interval, int every, double missed, double volume, double tolerance) {
+  const double share = std::fabs(missed) / std::max(volume, 1e-300);
+  if (share > tolerance) return interval / 2 > 1 ? interval / 2 : 1;
+  if (share < 0.25 * tolerance) return interval * 2 < every ? interval * 2 : every;
+  return interval;
+}
+
 // The gas at time t on the double arrays `d` (after the drift): front, volume, pressure.
 // u_before: the displacement at the step's start (null outside a step). The arrays are where
 // the backend keeps them (exec.gas_buffers: the host's GasState, or device copies).
@@ -543,23 +612,64 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
   const GasSums wall = gas_fixed_order_sum(exec, f.particle_count, GasWallSum{g.wall_dv, g.wall_left}, buffers, gas,
                                            "gas wall volume", GasSumOver::Facets);
   if (g.arrival) {
-    // On ranks the front and the crack pass read the ghosts' positions and arrival times too.
-    int64_t ghosts = 0;
-    if constexpr (GasOnRanks<Exec>::value) ghosts = exec.gas_ghosts(d);
-    exec.for_each(d.n + ghosts, GasFrontCopy{g, d.x0, d.u}, "gas_front_copy");
-    const GasFront front{d, g, t, gas.front_speed()};
-    // The front's minima do not depend on the order: a device takes a thread per particle,
-    // the host the scrambled blocks (balanced between its few threads).
-    if (buffers.particle_sums) {
-      exec.for_each(d.n, front, "gas_front");
-    } else {
+    // crack_pass_every k > 1: the exact pass every crack_pass_interval steps (and at the first
+    // call; a call outside a step, dt 0, moves nothing and keeps the count), GasCrackDrift in
+    // between. The interval adapts (gas_crack_pass_interval): 1 while the passes find the
+    // gas spreading into new crack, up to k while the crack it fills only moves. Under mpirun
+    // k is 1 (distributed_setup refuses more): the hops below do not refresh the ghosts.
+    const int every = gas.crack_pass_every;
+    const bool exact = every <= 1 || !gas.crack_pass_done || (dt > 0.0 && gas.crack_pass_countdown == 0);
+    if (every > 1 && dt > 0.0 && !exact) --gas.crack_pass_countdown;
+    // the front catches up the steps since the last pass, a hop each
+    const int hops = every > 1 && dt > 0.0 && gas.crack_pass_done ? gas.crack_pass_interval : 1;
+    if (exact) {
+      // The step's motion along the vectors its forces had (the last pass's): the work.
+      const double moved = every > 1 && gas.crack_pass_done
+                               ? gas_fixed_order_sum(exec, d.n, GasCrackDrift<UBefore>{d, g, u_before}, buffers, gas,
+                                                     "gas crack drift", GasSumOver::Particles)
+                                     .volume
+                               : 0.0;
+      // On ranks the front and the crack pass read the ghosts' positions and arrival times too.
+      int64_t ghosts = 0;
+      if constexpr (GasOnRanks<Exec>::value) ghosts = exec.gas_ghosts(d);
+      exec.for_each(d.n + ghosts, GasFrontCopy{g, d.x0, d.u}, "gas_front_copy");
+      GasFront front{d, g, t, gas.front_speed()};
+      // The front's minima do not depend on the order: a device takes a thread per particle,
+      // the host the scrambled blocks (balanced between its few threads).
       const int64_t blocks = gas_blocks(d.n);
-      exec.for_each(blocks, GasBlocks<GasFront>{front, d.n, blocks, gas_block_stride(blocks)}, "gas_front");
+      for (int hop = 0; hop < hops; ++hop) {
+        if (hop > 0) {
+          exec.for_each(d.n, GasFrontHopCopy{g}, "gas_front_hop");
+          front.from = g.arrival_hop;
+        }
+        if (buffers.particle_sums)
+          exec.for_each(d.n, front, "gas_front");
+        else
+          exec.for_each(blocks, GasBlocks<GasFront>{front, d.n, blocks, gas_block_stride(blocks)}, "gas_front");
+      }
+      // A ghost reached here is reached on its owner's rank too; a minimum, so exact.
+      if constexpr (GasOnRanks<Exec>::value) exec.gas_front_to_ghosts(g);
+      crack = gas_fixed_order_sum(exec, d.n, GasCrackSum<UBefore>{d, g, u_before}, buffers, gas, "gas crack volume",
+                                  GasSumOver::Particles);
+      // The old entries' volume at the current positions less the volume followed so far is
+      // the drift since the last pass: put back without work (the forces never did it).
+      if (every > 1 && gas.crack_pass_done) {
+        crack.volume_before = gas.crack_volume + moved;
+        if (dt > 0.0) {
+          gas.crack_pass_interval =
+              gas_crack_pass_interval(gas.crack_pass_interval, every, crack.volume - crack.volume_before, gas.volume,
+                                      gas.crack_pass_tolerance);
+          gas.crack_pass_countdown = gas.crack_pass_interval - 1;
+        }
+      }
+      gas.crack_pass_done = true;
+    } else {
+      crack = gas_fixed_order_sum(exec, d.n, GasCrackDrift<UBefore>{d, g, u_before}, buffers, gas, "gas crack drift",
+                                  GasSumOver::Particles);
+      crack.volume += gas.crack_volume;
+      crack.volume_before += gas.crack_volume;
+      crack.vent_area = gas.crack_vent_area;
     }
-    // A ghost reached here is reached on its owner's rank too; a minimum, so exact.
-    if constexpr (GasOnRanks<Exec>::value) exec.gas_front_to_ghosts(g);
-    crack = gas_fixed_order_sum(exec, d.n, GasCrackSum<UBefore>{d, g, u_before}, buffers, gas, "gas crack volume",
-                                GasSumOver::Particles);
   }
   crack.left = wall.left;
   gas.advance(wall.volume, crack, t, dt);

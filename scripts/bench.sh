@@ -2,7 +2,8 @@
 # Throughput benchmark: bond-updates per second for PMB, LPS and correspondence on a cubic
 # lattice with m = 3 (41^3 particles, delta = 3.015 dx), Breccia next to LAMMPS PERI (PMB,
 # LPS) in the same run. MODELS="pmb lps correspondence" picks Breccia's models (correspondence:
-# float64 only, with its default penalty stabilisation); LAMMPS=0 skips the LAMMPS rows.
+# float64 only, with its default penalty stabilisation); LAMMPS=0 skips the LAMMPS rows,
+# LAMMPS_MODELS=pmb runs LAMMPS's PMB rows only (default "pmb lps").
 # bond-updates = particles x mean family size x steps (each bond counted once from each
 # end) / wall time of the time loop. Usage: scripts/bench.sh BUILD_DIR [N=41] [STEPS=100]
 # MODELS may also name pmb-softening and lps-softening: the same lattice with
@@ -69,7 +70,7 @@ for a, b, c in off:  # pairs along each offset inside the n^3 block
 print(f"{total / n**3:.1f}")
 PY
 )
-for model in pmb lps; do
+for model in ${LAMMPS_MODELS:-pmb lps}; do
   write_lammps_lattice_input "$OUT/lammps-$model.in" "$model" "$N" "$DX" "$STEPS"
   for t in $THREADS_LIST; do
     if ( cd "$OUT" && mpirun --allow-run-as-root --oversubscribe -np "$t" lmp -in "lammps-$model.in" -log "lammps-$model-$t.log" -screen none ) >/dev/null 2>&1; then

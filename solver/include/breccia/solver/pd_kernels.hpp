@@ -131,10 +131,20 @@ struct BondOriginT {
       len = std::sqrt(dx * dx + dy * dy + dz * dz);
       return (Real(2) * (ax * bx + ay * by + az * bz) + (bx * bx + by * by + bz * bz)) / (len + xi_len);
     } else {
-      dx = p.x[3 * j] - px; dy = p.x[3 * j + 1] - py; dz = p.x[3 * j + 2] - pz;
-      len = std::sqrt(dx * dx + dy * dy + dz * dz);
-      return len - xi_len;
+      return extension_from(bond_vector(p.x, j, dx, dy, dz), xi_len, len);
     }
+  }
+  // Double's two halves of to(): the deformed vector to j from the current positions and its
+  // squared length, then the length and the extension. The host's PMB loop gathers every
+  // entry's vector of a chunk first and runs the rest over the gathered buffers
+  // (two_stage_force_loop), with the same operations as to().
+  BRECCIA_HD Real bond_vector(const Real* x, int64_t j, Real& dx, Real& dy, Real& dz) const {
+    dx = x[3 * j] - px; dy = x[3 * j + 1] - py; dz = x[3 * j + 2] - pz;
+    return dx * dx + dy * dy + dz * dz;
+  }
+  BRECCIA_HD static Real extension_from(Real squared_len, Real xi_len, Real& len) {
+    len = std::sqrt(squared_len);
+    return len - xi_len;
   }
 };
 
@@ -404,6 +414,11 @@ BRECCIA_HD void ordered_fast_loop(const PdViewT<Real>& p, int64_t i, int64_t cou
   p.dissipated[i] = released;
 }
 
+// Does a path gather its bond vectors in stages of their own (`Path::kGathers` true, with
+// `gather`, `density` and `select`)? Paths without the member do it all in entry().
+template <class Path>
+inline constexpr bool kPathGathers = requires { requires Path::kGathers; };
+
 template <class Released, class Real, class Path>
 BRECCIA_HD void two_stage_force_loop(const PdViewT<Real>& p, int64_t i, const Path& path) {
   const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
@@ -417,19 +432,55 @@ BRECCIA_HD void two_stage_force_loop(const PdViewT<Real>& p, int64_t i, const Pa
   const PdViewT<Real> v = p;
   Real cx[kBondChunk], cy[kBondChunk], cz[kBondChunk];
   bool breaks[kBondChunk];
+  // kPathGathers: the chunk's bond vectors and squared lengths.
+  [[maybe_unused]] Real gx[kBondChunk], gy[kBondChunk], gz[kBondChunk], gr2[kBondChunk];
   for (int64_t base = begin; base < end; base += kBondChunk) {
     const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
-    // The branch-free stage, with or without the state test (chunk_intact).
-    const auto stage = [&](auto check_state) {
-      int breaking = 0;
-BRECCIA_SIMD_COUNT(breaking)
+    int breaking = 0;
+    if constexpr (kPathGathers<Path>) {
+      // PMB in double. The neighbours' positions are gathered first, one entry at a time,
+      // into unit-stride buffers, so the next stage reads nothing indirectly and runs packed
+      // even on SSE2 (sqrtpd, divpd: the scalar instructions' results lane by lane); with the
+      // gathers inside it SSE2 emulated them lane by lane and it gained nothing. That stage
+      // forms every entry's unmasked force (no selection: it is instruction-bound, and GCC 12
+      // sank the division of a selecting loop into a branch and left it scalar) and counts the
+      // entries that may break; only a chunk with a broken entry or a candidate runs the
+      // selection (path.select, the same as in entry()) over the buffers. Otherwise every
+      // entry pushes and none breaks, which is what the selection would find.
+      for (int q = 0; q < m; ++q) gr2[q] = path.gather(v, base + q, gx[q], gy[q], gz[q]);
+      // Counted in Real (exact up to 2^53 in any order): GCC 12 would not vectorise the
+      // conversion of the lanes' comparison masks to an integer count here.
+      Real candidates = Real(0);
+BRECCIA_SIMD_COUNT(candidates)
       for (int q = 0; q < m; ++q) {
-        breaks[q] = path.template entry<decltype(check_state)::value>(v, base + q, cx[q], cy[q], cz[q]);
-        breaking += breaks[q] ? 1 : 0;
+        bool over;
+        const Real f = path.density(v, base + q, gr2[q], over);
+        cx[q] = f * gx[q];
+        cy[q] = f * gy[q];
+        cz[q] = f * gz[q];
+        candidates += (v.fracture & over) ? Real(1) : Real(0);
       }
-      return breaking;
-    };
-    const int breaking = chunk_intact(v, base, m) ? stage(std::false_type{}) : stage(std::true_type{});
+      if (candidates != Real(0) || !chunk_intact(v, base, m)) {
+        for (int q = 0; q < m; ++q) {
+          bool over;  // (a bool array stored from the vector stage kept GCC 12 from vectorising it)
+          path.density(v, base + q, gr2[q], over);
+          breaks[q] = path.select(v, base + q, over, cx[q], cy[q], cz[q]);
+          breaking += breaks[q] ? 1 : 0;
+        }
+      }
+    } else {
+      // The branch-free stage, with or without the state test (chunk_intact).
+      const auto stage = [&](auto check_state) {
+        int count = 0;
+BRECCIA_SIMD_COUNT(count)
+        for (int q = 0; q < m; ++q) {
+          breaks[q] = path.template entry<decltype(check_state)::value>(v, base + q, cx[q], cy[q], cz[q]);
+          count += breaks[q] ? 1 : 0;
+        }
+        return count;
+      };
+      breaking = chunk_intact(v, base, m) ? stage(std::false_type{}) : stage(std::true_type{});
+    }
     for (int q = 0; q < m; ++q) {
       fx += cx[q];
       fy += cy[q];
@@ -557,39 +608,61 @@ BRECCIA_HD uint8_t break_bonds(const PdViewT<Real>& p, int64_t k, SameReal<Real>
   return st;
 }
 
-// One PMB entry of the fast loop: the force contribution on i (+0 when the entry is broken,
-// or breaks in this pass with break_check before_force) and whether it breaks now. Double
-// takes the extension as |xi + eta| - |xi| (BondOriginT::to); float as num / den,
-// num = eta.(xi + (xi + eta)), den = |xi + eta| + |xi|, with one division per entry.
+// What a PMB entry of the fast loop contributes, given whether its extension passed the
+// critical one (`over`) and its unmasked force f (xi + eta) (fdx, fdy, fdz, formed by the
+// caller for every entry): the force on i (+0 when the entry is broken, or breaks in this
+// pass with break_check before_force) and whether it breaks now.
 template <bool kCheckState = true, class Real>
-BRECCIA_HD bool pmb_fast_entry(const PdViewT<Real>& p, const BondOriginT<Real>& origin, int64_t k, Real& cx,
-                               Real& cy, Real& cz) {
-  Real dx, dy, dz, len, f;
-  bool over;
-  const Real xi = p.xi_len[k];
-  const Real k2 = Real(2) * p.k_own[k];  // own + dual halves
-  const Real s0 = p.s0_own[k];
-  if constexpr (BondOriginT<Real>::kRelative) {
-    const Real num = origin.extension_numerator(p.x0, p.u, p.neighbor[k], dx, dy, dz, len);
-    const Real den = len + xi;
-    over = num > s0 * xi * den;
-    f = k2 * num / (xi * len * den);
-  } else {
-    const Real extension = origin.to(p, p.neighbor[k], xi, dx, dy, dz, len);
-    over = extension > s0 * xi;
-    f = k2 * extension / (xi * len);  // c s / |xi + eta|
-  }
+BRECCIA_HD bool pmb_fast_select(const PdViewT<Real>& p, int64_t k, bool over, Real fdx, Real fdy, Real fdz, Real& cx,
+                                Real& cy, Real& cz) {
   // Bitwise & and | (no short circuit): the loop stays free of branches the vectoriser refuses.
   const bool intact = !kCheckState || p.state[k] != 0;  // chunk_intact
   const bool breaks = p.fracture & intact & over;
   const bool pushes = intact & (!breaks | p.break_after_force);
   // The products are formed for every entry and then selected: a product inside the
   // condition is one GCC will not run for all lanes (it could trap), and it would not vectorise.
-  const Real fdx = f * dx, fdy = f * dy, fdz = f * dz;
   cx = pushes ? fdx : Real(0);
   cy = pushes ? fdy : Real(0);
   cz = pushes ? fdz : Real(0);
   return breaks;
+}
+
+// Double's PMB entry from its squared deformed length r2 (BondOriginT::bond_vector): its
+// force density over length f = c s / |xi + eta|, and whether its extension |xi + eta| - |xi|
+// passed the critical one (`over`).
+template <class Real>
+BRECCIA_HD Real pmb_fast_density(const PdViewT<Real>& p, int64_t k, Real r2, bool& over) {
+  static_assert(!BondOriginT<Real>::kRelative, "float forms its extension from x0 and u (pmb_fast_entry)");
+  const Real xi = p.xi_len[k];
+  const Real k2 = Real(2) * p.k_own[k];  // own + dual halves
+  const Real s0 = p.s0_own[k];
+  Real len;
+  const Real extension = BondOriginT<Real>::extension_from(r2, xi, len);
+  over = extension > s0 * xi;
+  return k2 * extension / (xi * len);
+}
+
+// One PMB entry of the fast loop (pmb_fast_select). Double takes the extension as
+// |xi + eta| - |xi| (pmb_fast_density); float as num / den, num = eta.(xi + (xi + eta)),
+// den = |xi + eta| + |xi|, with one division per entry.
+template <bool kCheckState = true, class Real>
+BRECCIA_HD bool pmb_fast_entry(const PdViewT<Real>& p, const BondOriginT<Real>& origin, int64_t k, Real& cx,
+                               Real& cy, Real& cz) {
+  Real dx, dy, dz, f;
+  bool over;
+  if constexpr (BondOriginT<Real>::kRelative) {
+    const Real xi = p.xi_len[k];
+    const Real k2 = Real(2) * p.k_own[k];  // own + dual halves
+    const Real s0 = p.s0_own[k];
+    Real len;
+    const Real num = origin.extension_numerator(p.x0, p.u, p.neighbor[k], dx, dy, dz, len);
+    const Real den = len + xi;
+    over = num > s0 * xi * den;
+    f = k2 * num / (xi * len * den);
+  } else {
+    f = pmb_fast_density(p, k, origin.bond_vector(p.x, p.neighbor[k], dx, dy, dz), over);
+  }
+  return pmb_fast_select<kCheckState>(p, k, over, f * dx, f * dy, f * dz, cx, cy, cz);
 }
 
 // Entry k of particle i broke in the fast PMB loop: clear it and return the energy it held at
@@ -616,6 +689,17 @@ struct PmbFastPath {
   BRECCIA_HD bool entry(const PdViewT<Real>& v, int64_t k, Real& cx, Real& cy, Real& cz) const {
     return pmb_fast_entry<kCheckState>(v, origin, k, cx, cy, cz);
   }
+  // Double gathers its bond vectors in a stage of their own on the host (two_stage_force_loop).
+  static constexpr bool kGathers = !BondOriginT<Real>::kRelative;
+  BRECCIA_HD Real gather(const PdViewT<Real>& v, int64_t k, Real& dx, Real& dy, Real& dz) const {
+    return origin.bond_vector(v.x, v.neighbor[k], dx, dy, dz);
+  }
+  BRECCIA_HD Real density(const PdViewT<Real>& v, int64_t k, Real r2, bool& over) const {
+    return pmb_fast_density(v, k, r2, over);
+  }
+  BRECCIA_HD bool select(const PdViewT<Real>& v, int64_t k, bool over, Real& cx, Real& cy, Real& cz) const {
+    return pmb_fast_select(v, k, over, cx, cy, cz, cx, cy, cz);
+  }
   BRECCIA_HD double release(const PdViewT<Real>& p, int64_t i, int64_t k) const { return pmb_fast_break(p, i, k); }
 };
 
@@ -637,16 +721,7 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
   const BondOriginT<Real> origin(p, i);
   // (The compressive enhancement and softening bonds take the scalar loop below: they read and
   // write per-bond and per-particle state the fast loop does not carry.)
-  // Double on the portable build (SSE2: 2-wide, gathers emulated) keeps the scalar loop below,
-  // which skips broken entries: the two-stage loop measured no faster there
-  // (docs/performance.md). Float, and double where the build has AVX2's gathers
-  // (BRECCIA_NATIVE), take it; the results are the same bit for bit either way.
-#if defined(__AVX2__) || defined(__CUDA_ARCH__)
-  constexpr bool kTwoStage = true;
-#else
-  constexpr bool kTwoStage = BondOriginT<Real>::kRelative;
-#endif
-  if constexpr (!kDiagnostics && kTwoStage) {
+  if constexpr (!kDiagnostics) {
     if (fast_bond_loop(p)) {
       pmb_fast_force_loop(p, i, origin);
       return;

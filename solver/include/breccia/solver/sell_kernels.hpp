@@ -63,11 +63,12 @@ BRECCIA_HD bool sell_fast_pass(const PdViewT<Real>& p) {
 // Does this force pass take the dual-horizon pass the layout carries? Where force_kernel runs
 // general_force_loop (variable horizons), with brittle bonds (a softening entry's damage and
 // onset are per-entry state the layout does not hold); gathered bond vectors for LPS's first
-// pass. Diagnostic passes too where the layout holds the damage weights (`e.vol_own`). The
+// pass; the layout's dual halves (gathered where the set-up found variable horizons).
+// Diagnostic passes too where the layout holds the damage weights (`e.vol_own`). The
 // compressive enhancement's s_min is per particle, so it runs here too.
 template <class Real>
 BRECCIA_HD bool sell_general_pass(const PdViewT<Real>& p, const SellEntriesT<Real>& e) {
-  if (p.bond_damage || !has_bond_vectors(p) || !takes_general_loop(p)) return false;
+  if (p.bond_damage || !has_bond_vectors(p) || !takes_general_loop(p) || !e.k_dual || !e.s0_dual) return false;
   if (p.diagnostics && !e.vol_own) return false;
   return p.model == static_cast<int>(PdModel::PMB) || p.model == static_cast<int>(PdModel::LPS);
 }

@@ -308,14 +308,21 @@ gpu_leg_possible() { [ "$1" != gpu ] || [ "$DRY" = 1 ] || [ "$HAVE_GPU" = 1 ] ||
 
 # PD: bond-updates/s on a cubic lattice (the bench.sh case, larger). MODEL: pmb, lps,
 # correspondence, pmb32/lps32 (model.precision float32, the GPU's float path) or
-# pmbsell/lpssell (model.cuda_layout: sell).
+# pmbsell/lpssell (model.cuda_layout: sell), or lps2d/lps2dsell: a 2D LPS square with fracture
+# (each complete family's s0 rescaled, so the halves differ: the dual-horizon pass) of about as
+# many particles as the cube, on the CSR and on the layout.
 PD_L=$(awk -v n="$PD_N" 'BEGIN{printf "%.6g", n*0.0005}')
+PD2_L=$(awk -v n="$PD_N" 'BEGIN{printf "%.6g", int(n^1.5 + 0.5)*0.0005}')
 result pd_n "$PD_N"
 pd_leg() {  # pd_leg MODEL gpu|cpu
   local model=$1 leg=$2 backend=$GPU_BACKEND steps=$PD_GPU_STEPS model_line
+  local specimen="{lattice: {dimension: 3, box: [0, 0, 0, $PD_L, $PD_L, $PD_L], spacing: 0.0005}}"
   gpu_leg_possible "$leg" || return 0
   [ "$leg" = cpu ] && backend=cpu steps=$PD_CPU_STEPS
   case $model in
+    lps2d*)  # dual horizon (variable halves); lps2dsell: over the layout
+      specimen="{lattice: {dimension: 2, box: [0, 0, $PD2_L, $PD2_L], spacing: 0.0005, thickness: 0.0005}}"
+      model_line="{type: lps, planar: plane_strain, horizon_factor: 3.015$([ "$model" = lps2dsell ] && echo ", cuda_layout: sell")}" ;;
     correspondence) model_line="{type: correspondence, horizon_factor: 3.015, stabilisation: {type: penalty, coefficient: 1}}" ;;
     *32) model_line="{type: ${model%32}, horizon_factor: 3.015, precision: float32}" ;;
     *sell) model_line="{type: ${model%sell}, horizon_factor: 3.015, cuda_layout: sell}" ;;  # SELL-C-sigma bonds
@@ -324,7 +331,7 @@ pd_leg() {  # pd_leg MODEL gpu|cpu
   local k="pd_${model}_$leg" dir="$WORK/pd_${model}_$leg"
   cat >"$WORK/$k.yaml" <<YAML
 name: device-bench-$model
-specimen: {lattice: {dimension: 3, box: [0, 0, 0, $PD_L, $PD_L, $PD_L], spacing: 0.0005}}
+specimen: $specimen
 model: $model_line
 materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, fracture_energy: 1e6}]
 initial: [{type: radial_velocity, center: [0, 0, 0], strain_rate: 10}]
@@ -469,3 +476,6 @@ check rest atlas_rows 0 atlas_rows
 # pd_pmb_gpu and pd_lps_gpu, its rate against theirs.
 check rest pd_pmbsell_gpu 0 pd_leg pmbsell gpu
 check rest pd_lpssell_gpu 0 pd_leg lpssell gpu
+# Variable horizons: the dual-horizon pass on the CSR and on the layout (a 2D LPS square).
+check rest pd_lps2d_gpu 0 pd_leg lps2d gpu
+check rest pd_lps2dsell_gpu 0 pd_leg lps2dsell gpu

@@ -9,11 +9,15 @@
 #include <numeric>
 #include <stdexcept>
 
+#include <set>
+#include <string>
+
 #include "breccia/solver/exec_openmp.hpp"
 #include "breccia/solver/sell_host.hpp"
 #include "breccia/solver/sell_layout.hpp"
 #include "breccia/solver/step.hpp"
 #include "helpers.hpp"
+#include "measures.hpp"
 
 using namespace breccia::solver;
 using namespace breccia::solver::testing;
@@ -161,18 +165,39 @@ TEST(SellLayout, GathersThePerEntryArraysAndPadsSafely) {
 
 namespace {
 
-// The layout's arrays of a system, and the step's arrays pointing at them.
+// The layout's arrays of a system (with variable horizons the dual halves too, as the CUDA
+// launcher gathers them), and the step's arrays pointing at them.
+SellBondArrays<double> gather_bonds(const SellLayout& layout, const PdSystem& s) {
+  if (s.symmetric_halves) return gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state);
+  return gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state, s.k_dual, s.s0_dual, s.vol_own);
+}
 struct HostSell {
   SellLayout layout;
   SellBondArrays<double> bonds;
   HostSell(const PdSystem& s, int chunk, int sigma)
-      : layout(build_sell_layout(s.offsets, chunk, sigma)),
-        bonds(gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state)) {}
+      : layout(build_sell_layout(s.offsets, chunk, sigma)), bonds(gather_bonds(layout, s)) {}
   void attach(PdSystem& s, StepArrays<double>& a) {
     a.sell = layout.view(s.state.data());
     a.sell_entries = {bonds.neighbor.data(), bonds.xi_len.data(), bonds.k_own.data(), bonds.s0_own.data(),
-                      bonds.state.data()};
+                      bonds.state.data(),    bonds.k_dual.empty() ? nullptr : bonds.k_dual.data(),
+                      bonds.s0_dual.empty() ? nullptr : bonds.s0_dual.data(),
+                      bonds.vol_own.empty() ? nullptr : bonds.vol_own.data()};
   }
+};
+
+// The OpenMP execution space, recording the names of the loops it ran: which passes a step
+// took (the layout's, or the CSR's and the state refresh).
+class RecordingExec : public OpenMpExec {
+public:
+  explicit RecordingExec(PdSystem& sys, std::set<std::string>& launched) : OpenMpExec(sys), launched_(launched) {}
+  template <class F>
+  void for_each(int64_t n, const F& f, const char* name) const {
+    launched_.insert(name);
+    OpenMpExec::for_each(n, f, name);
+  }
+
+private:
+  std::set<std::string>& launched_;
 };
 
 // 2D LPS with fracture rescales each complete family's s0 (setup.cpp), so its halves differ
@@ -203,13 +228,51 @@ std::string plate(const char* model) {
          "time: {steps: 1}\n";
 }
 
-// Steps the plate on the CSR (cpu_step) and through the layout (pd_step with the SELL arrays),
-// diagnostics on every 10th step only (the run loop's pattern: the fast passes in between, the
-// CSR's diagnostic pass and the layout's state refresh on those steps), and compares.
-void run_sell_against_csr(const char* model, int chunk, int sigma, int steps) {
-  PdSystem cpu = system_from_yaml(std::string("sell_cpu_") + model, plate(model));
-  PdSystem sell = system_from_yaml(std::string("sell_lanes_") + model, plate(model));
-  ASSERT_TRUE(cpu.symmetric_halves) << "the case must take the fast paths";
+// The dual-horizon cases. 2D LPS with fracture: each complete family's s0 is rescaled
+// (setup.cpp), so the halves of an entry differ and force_kernel takes the general loop.
+std::string lps_plate_2d() {
+  return "specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.01], spacing: 0.5 mm, thickness: 1 mm}}\n"
+         "model: {type: lps, planar: plane_strain, horizon_factor: 3.015}\n"
+         "materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.25, fracture_energy: 3.8, "
+         "weibull: {modulus: 5, seed: 3}}]\n"
+         "precracks: [{type: segment, from: [0, 0.005], to: [0.008, 0.005]}]\n"
+         "loads:\n"
+         "  - {type: traction, surface: ymax, value: [0, 12 MPa, 0], history: {type: ramp, value: 1, ramp_time: 20 us}}\n"
+         "boundary:\n"
+         "  - {type: fixed, set: ymin}\n"
+         "time: {steps: 1}\n";
+}
+// A graded strip (spacing 0.5 mm, then 1 mm beyond the middle) with variable horizons, its ends
+// pulled apart: the dual horizon proper (own and dual halves of different horizons).
+std::string graded_pmb_strip(const std::string& extra_model_keys) {
+  const std::string file = breccia::atlas::write_graded_strip(process_temp_dir() + "/sell_graded_strip.h5", 0.02,
+                                                              0.01, 0.5e-3, 2.0);
+  return "specimen: {particles: " + file + "}\n"
+         "model: {type: pmb, planar: plane_strain, horizon_factor: 3.015, variable_horizon: true" + extra_model_keys +
+         "}\n"
+         "materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25, fracture_energy: 2, "
+         "weibull: {modulus: 3, seed: 5}}]\n"
+         "sets: [{name: left, box: [-1, -1, 0.0015, 1]}, {name: right, box: [0.0185, -1, 1, 1]}]\n"
+         "boundary:\n"
+         "  - {type: velocity, set: left, value: [-4, 0, 0], components: [x]}\n"
+         "  - {type: velocity, set: right, value: [4, 0, 0], components: [x]}\n"
+         "time: {steps: 1}\n";
+}
+
+// Steps a case on the CSR (cpu_step) and through the layout (pd_step with the SELL arrays),
+// diagnostics on every 10th step only (the run loop's pattern: the layout's passes in between;
+// on those steps with one horizon the CSR's diagnostic pass and the layout's state refresh,
+// with variable horizons the layout's diagnostic pass), and compares.
+// `force_kernel`: the layout's force pass the steps between must launch (and never the CSR's).
+// `general`: the case's halves are declared different (symmetric_halves false), which makes
+// both sides take the general (dual-horizon) loop on a one-horizon case, as the CUDA tests do.
+void run_sell_against_csr(const std::string& name, const std::string& deck, int chunk, int sigma, int steps,
+                          const std::string& force_kernel, bool general = false) {
+  PdSystem cpu = system_from_yaml("sell_cpu_" + name, deck);
+  PdSystem sell = system_from_yaml("sell_lanes_" + name, deck);
+  if (general) cpu.symmetric_halves = sell.symmetric_halves = false;
+  const bool dual = force_kernel == "sell_dual_horizon_force_kernel";
+  ASSERT_EQ(cpu.symmetric_halves, !dual) << name << ": the case must take the " << force_kernel << "'s path";
   HostSell h(sell, chunk, sigma);
   long long broken_in_sell_passes = 0;
   for (int k = 0; k < steps; ++k) {
@@ -217,66 +280,137 @@ void run_sell_against_csr(const char* model, int chunk, int sigma, int steps) {
     cpu.diagnostics = sell.diagnostics = diagnostics;
     cpu_step(cpu);
     const long long before = measure(sell).broken_half_bonds;
-    OpenMpExec exec(sell);
+    std::set<std::string> launched;
+    RecordingExec exec(sell, launched);
     StepArrays<double> a = cpu_step_arrays(sell);
     h.attach(sell, a);
     pd_step(exec, a, sell);
-    if (!diagnostics) broken_in_sell_passes += measure(sell).broken_half_bonds - before;
+    if (!diagnostics) {
+      broken_in_sell_passes += measure(sell).broken_half_bonds - before;
+      ASSERT_EQ(launched.count(force_kernel), 1u) << name << " step " << k;
+      ASSERT_EQ(launched.count("force_kernel"), 0u) << name << " step " << k << ": the CSR's pass ran";
+    } else if (dual) {  // one pass, no refresh
+      broken_in_sell_passes += measure(sell).broken_half_bonds - before;
+      ASSERT_EQ(launched.count("sell_dual_horizon_diagnostics_kernel"), 1u) << name << " step " << k;
+      ASSERT_EQ(launched.count("force_kernel") + launched.count("sell_state_from_csr"), 0u) << name << " step " << k;
+    } else {
+      ASSERT_EQ(launched.count("sell_state_from_csr"), 1u) << name << " step " << k;
+    }
   }
   const Energies e = measure(cpu);
+  const std::string& model = name;
   ASSERT_GT(e.broken_half_bonds, 0) << model << ": the case should break bonds";
   EXPECT_GT(broken_in_sell_passes, 0) << model << ": bonds should break in the layout's passes";
   EXPECT_EQ(0, std::memcmp(cpu.u.data(), sell.u.data(), cpu.u.size() * sizeof(double))) << model;
   EXPECT_EQ(0, std::memcmp(cpu.v.data(), sell.v.data(), cpu.v.size() * sizeof(double))) << model;
   EXPECT_EQ(0, std::memcmp(cpu.force.data(), sell.force.data(), cpu.force.size() * sizeof(double))) << model;
   EXPECT_EQ(0, std::memcmp(cpu.damage.data(), sell.damage.data(), cpu.damage.size() * sizeof(double))) << model;
+  EXPECT_EQ(0, std::memcmp(cpu.energy_density.data(), sell.energy_density.data(), cpu.n * sizeof(double))) << model;
   EXPECT_EQ(cpu.state, sell.state) << model;
   std::vector<uint8_t> from_layout(sell.state.size(), 9);
   h.layout.scatter(h.bonds.state, from_layout);
   EXPECT_EQ(sell.state, from_layout) << model << ": the layout's state and the CSR's agree";
   EXPECT_EQ(cpu.dissipated_energy, sell.dissipated_energy) << model;  // same reduction, same values
   EXPECT_EQ(cpu.external_work, sell.external_work) << model;
-  std::printf("[ sell %s C=%d sigma=%d ] %lld broken half-bonds, %lld in the layout's passes, padding %.4f\n", model,
-              chunk, sigma, e.broken_half_bonds, broken_in_sell_passes, h.layout.padding_factor());
+  std::printf("[ sell %s C=%d sigma=%d ] %lld broken half-bonds, %lld in the layout's passes, padding %.4f\n",
+              model.c_str(), chunk, sigma, e.broken_half_bonds, broken_in_sell_passes, h.layout.padding_factor());
 }
 
 }  // namespace
 
-TEST(SellKernels, PmbFastPassOverTheLayoutReproducesTheCsrStepBitForBit) { run_sell_against_csr("pmb", 32, 256, 400); }
+TEST(SellKernels, PmbFastPassOverTheLayoutReproducesTheCsrStepBitForBit) {
+  run_sell_against_csr("pmb", plate("pmb"), 32, 256, 400, "sell_pmb_force_kernel");
+}
 
-TEST(SellKernels, LpsFastPassesOverTheLayoutReproduceTheCsrStepBitForBit) { run_sell_against_csr("lps", 32, 256, 400); }
+TEST(SellKernels, LpsFastPassesOverTheLayoutReproduceTheCsrStepBitForBit) {
+  run_sell_against_csr("lps", plate("lps"), 32, 256, 400, "sell_lps_force_kernel");
+}
 
-TEST(SellKernels, SmallSlicesAndNoSortingReproduceTheCsrStepBitForBit) { run_sell_against_csr("pmb", 8, 1, 250); }
+TEST(SellKernels, SmallSlicesAndNoSortingReproduceTheCsrStepBitForBit) {
+  run_sell_against_csr("pmb", plate("pmb"), 8, 1, 250, "sell_pmb_force_kernel");
+}
 
-// The check above can fail: a layout whose rows are walked in reverse (the same entries, another
-// summation order) gives other forces.
-TEST(SellKernels, ReversedRowOrderChangesTheForces) {
-  PdSystem cpu = system_from_yaml("sell_rev_cpu", plate("pmb"));
-  for (size_t k = 0; k < cpu.u.size(); ++k) cpu.u[k] = 1e-6 * std::sin(0.37 * double(k)) * cpu.x0[k];
-  PdSystem sell = cpu;
-  cpu.diagnostics = sell.diagnostics = false;
-  cpu_compute_forces(cpu);
-  HostSell h(sell, 32, 256);
-  for (int64_t l = 0; l < h.layout.lanes(); ++l) {  // reverse every lane's row
-    const SellView v = h.layout.view(nullptr);
-    for (int64_t q = 0, r = h.layout.row_length[l] - 1; q < r; ++q, --r) {
-      const int64_t a = v.entry(l, q), b = v.entry(l, r);
-      std::swap(h.layout.csr_entry[a], h.layout.csr_entry[b]);
+// The dual-horizon pass over the layout (sell_general_force_lane: the CSR's general loop over a
+// lane's entries), half-bonds breaking one at a time and copied to the CSR's state.
+TEST(SellKernels, DualHorizonPassOverTheLayoutReproducesTheCsrStepBitForBit) {
+  run_sell_against_csr("lps_2d_dual", lps_plate_2d(), 32, 256, 400, "sell_dual_horizon_force_kernel");
+  run_sell_against_csr("pmb_graded_dual", graded_pmb_strip(""), 32, 256, 300, "sell_dual_horizon_force_kernel");
+  // Small slices without sorting: rows of unequal length side by side (the graded strip's).
+  run_sell_against_csr("pmb_graded_dual_c8", graded_pmb_strip(""), 8, 1, 200, "sell_dual_horizon_force_kernel");
+}
+
+// The general loop's other per-particle state on the layout: the compressive enhancement's
+// s_min (read at both ends, written by the lane's particle) and the after-force break order.
+TEST(SellKernels, DualHorizonPassWithLammpsRulesReproducesTheCsrStepBitForBit) {
+  run_sell_against_csr("pmb_graded_lammps", graded_pmb_strip(", compressive_enhancement: 0.25, break_check: after_force"),
+                       32, 256, 300, "sell_dual_horizon_force_kernel");
+  run_sell_against_csr("pmb_plate_general", plate("pmb"), 32, 256, 400, "sell_dual_horizon_force_kernel", true);
+}
+
+// Where the layout carries no pass, the CSR's runs and the layout's state follows it: one
+// constant horizon with the compressive enhancement (the symmetric loop's s_min), and
+// softening bonds (per-entry damage).
+TEST(SellKernels, PassesTheLayoutDoesNotCarryRunOnTheCsr) {
+  for (const bool softening : {false, true}) {
+    std::string deck = plate("pmb");
+    if (softening) {
+      const std::string at = "fracture_energy: 3.8,";
+      deck.replace(deck.find(at), at.size(), at + " tensile_strength: 8 MPa,");
+    } else {
+      deck.replace(deck.find("horizon_factor: 3.015"), 21, "horizon_factor: 3.015, compressive_enhancement: 0.25");
     }
+    PdSystem s = system_from_yaml(softening ? "sell_csr_softening" : "sell_csr_enhancement", deck);
+    ASSERT_EQ(s.bond_damage.empty(), !softening);
+    s.diagnostics = false;
+    HostSell h(s, 32, 256);
+    std::set<std::string> launched;
+    RecordingExec exec(s, launched);
+    StepArrays<double> a = cpu_step_arrays(s);
+    h.attach(s, a);
+    EXPECT_FALSE(sell_fast_pass(a.p));
+    EXPECT_FALSE(sell_general_pass(a.p, a.sell_entries));
+    pd_step(exec, a, s);
+    EXPECT_EQ(launched.count("force_kernel"), 1u);
+    EXPECT_EQ(launched.count("sell_state_from_csr"), 1u);
   }
-  h.bonds = gather_sell_bonds(h.layout, sell.neighbor, sell.xi_len, sell.k_own, sell.s0_own, sell.state);
-  OpenMpExec exec(sell);
-  StepArrays<double> a = cpu_step_arrays(sell);
-  h.attach(sell, a);
-  pd_force_pass(exec, a, true);
-  int64_t differ = 0;
-  for (size_t k = 0; k < cpu.force.size(); ++k) differ += cpu.force[k] != sell.force[k];
-  EXPECT_GT(differ, 0) << "a different summation order should change some force in its last bit";
-  double scale = 0.0;
-  for (double f : cpu.force) scale = std::max(scale, std::fabs(f));
-  // Round-off only: the same terms in another order (1e-9 of the largest force: far above
-  // the ~1e-15 relative of a 30-term reordering, far below a missing or doubled bond).
-  for (size_t k = 0; k < cpu.force.size(); ++k) EXPECT_NEAR(cpu.force[k], sell.force[k], 1e-9 * scale) << k;
+}
+
+// The checks above can fail: a layout whose rows are walked in reverse (the same entries, another
+// summation order) gives other forces, in the fast pass and in the dual-horizon pass (the
+// plate's halves declared different; the graded strip's own rows).
+TEST(SellKernels, ReversedRowOrderChangesTheForces) {
+  for (const int path : {0, 1, 2}) {
+    PdSystem cpu = system_from_yaml(path == 2 ? "sell_rev_graded" : "sell_rev_cpu",
+                                    path == 2 ? graded_pmb_strip("") : plate("pmb"));
+    if (path == 1) cpu.symmetric_halves = false;
+    for (size_t k = 0; k < cpu.u.size(); ++k) cpu.u[k] = 1e-6 * std::sin(0.37 * double(k)) * cpu.x0[k];
+    PdSystem sell = cpu;
+    cpu.diagnostics = sell.diagnostics = false;
+    cpu_compute_forces(cpu);
+    HostSell h(sell, 32, 256);
+    for (int64_t l = 0; l < h.layout.lanes(); ++l) {  // reverse every lane's row
+      const SellView v = h.layout.view(nullptr);
+      for (int64_t q = 0, r = h.layout.row_length[l] - 1; q < r; ++q, --r) {
+        const int64_t a = v.entry(l, q), b = v.entry(l, r);
+        std::swap(h.layout.csr_entry[a], h.layout.csr_entry[b]);
+      }
+    }
+    h.bonds = gather_bonds(h.layout, sell);
+    std::set<std::string> launched;
+    RecordingExec exec(sell, launched);
+    StepArrays<double> a = cpu_step_arrays(sell);
+    h.attach(sell, a);
+    pd_force_pass(exec, a, true);
+    EXPECT_EQ(launched.count(path == 0 ? "sell_pmb_force_kernel" : "sell_dual_horizon_force_kernel"), 1u) << path;
+    int64_t differ = 0;
+    for (size_t k = 0; k < cpu.force.size(); ++k) differ += cpu.force[k] != sell.force[k];
+    EXPECT_GT(differ, 0) << "path " << path << ": a different summation order should change some force in its last bit";
+    double scale = 0.0;
+    for (double f : cpu.force) scale = std::max(scale, std::fabs(f));
+    // Round-off only: the same terms in another order (1e-9 of the largest force: far above
+    // the ~1e-15 relative of a 30-term reordering, far below a missing or doubled bond).
+    for (size_t k = 0; k < cpu.force.size(); ++k) EXPECT_NEAR(cpu.force[k], sell.force[k], 1e-9 * scale) << path << " " << k;
+  }
 }
 
 // The host's slice-wide form (sell_host.hpp: the lanes of a slice side by side) gives the lane

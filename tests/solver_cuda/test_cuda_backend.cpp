@@ -353,24 +353,56 @@ std::string with_sell_layout(std::string deck) {
   return deck.replace(deck.find(line), line.size(), line + ", cuda_layout: sell");
 }
 
-TEST(CudaBackend, SellLayoutIsRefusedWhereTheFastPassesNeverApply) {
+// LAMMPS's fracture rules (docs/lammps-peri.md) on the device: the compressive enhancement's
+// s_min buffers swapped per step, and the after-force break order, in double and float32.
+std::string with_lammps_rules(std::string yaml, const std::string& model_line, bool float32) {
+  const size_t at = yaml.find(model_line);
+  yaml.replace(at, model_line.size(),
+               model_line + ", compressive_enhancement: 0.25, break_check: after_force" +
+                   (float32 ? ", precision: float32" : ""));
+  return yaml;
+}
+
+// One constant horizon with the compressive enhancement takes the CSR's symmetric loop (its s_min
+// test), which the layout does not carry.
+std::string with_compressive_enhancement(std::string deck) {
+  const std::string line = "horizon_factor: 3.015";
+  return deck.replace(deck.find(line), line.size(), line + ", compressive_enhancement: 0.25");
+}
+
+TEST(CudaBackend, SellLayoutIsRefusedWhereItsPassesNeverApply) {
   if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
-  PdSystem s = system_from_yaml("sell_lps_2d", with_sell_layout(kLpsPlateFracture));
-  ASSERT_FALSE(s.symmetric_halves);
+  PdSystem s = system_from_yaml("sell_pmb_enhanced", with_sell_layout(with_compressive_enhancement(kPmbPlateFracture)));
+  ASSERT_TRUE(s.symmetric_halves);
   try {
     CudaSystem device(s);
-    ADD_FAILURE() << "a 2D LPS case with fracture has no fast passes: the layout should be refused";
+    ADD_FAILURE() << "one horizon with the compressive enhancement has no layout pass: the layout should be refused";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("model.cuda_layout"), std::string::npos) << e.what();
   }
 }
 
+// The fast passes (PMB plate, 3D LPS block: one constant horizon) and the dual-horizon pass
+// (the 2D LPS plate with fracture, whose halves differ; the PMB plate with its halves declared
+// different, with and without LAMMPS's rules: the general loop on both backends).
 TEST(CudaBackend, SellLayoutCracksMatchTheCpu) {
   if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
-  for (const char* yaml : {kPmbPlateFracture, kLpsBlockFracture}) {
-    const std::string deck = with_sell_layout(yaml);
+  struct Case {
+    std::string name, yaml;
+    bool general;
+  };
+  const std::vector<Case> cases{
+      {"PMB", kPmbPlateFracture, false},
+      {"LPS", kLpsBlockFracture, false},
+      {"LPS 2D, dual horizon", kLpsPlateFracture, false},
+      {"PMB, dual-horizon kernel", kPmbPlateFracture, true},
+      {"PMB, dual-horizon kernel, LAMMPS rules", with_lammps_rules(kPmbPlateFracture, "horizon_factor: 3.015", false),
+       true}};
+  for (const Case& c : cases) {
+    const std::string deck = with_sell_layout(c.yaml);
     Pair r{system_from_yaml("sell_crack", deck), system_from_yaml("sell_crack", deck), {}, {}};
     ASSERT_TRUE(r.cpu.config.cuda_sell_layout);
+    if (c.general) r.cpu.symmetric_halves = r.gpu.symmetric_halves = false;
     CudaSystem device(r.gpu);
     for (int k = 0; k < kSteps; ++k) {
       r.cpu.diagnostics = r.gpu.diagnostics = k % 10 == 9;
@@ -380,22 +412,11 @@ TEST(CudaBackend, SellLayoutCracksMatchTheCpu) {
     r.cpu_e = measure(r.cpu);
     r.gpu_e = device.measure(r.gpu);
     device.download(r.gpu);
-    const bool pmb = r.cpu.config.model == PdModel::PMB;
-    std::printf("  [cuda sell] %s: u identical to the bit: %s, bond states identical: %s\n", pmb ? "PMB" : "LPS",
+    std::printf("  [cuda sell] %s: u identical to the bit: %s, bond states identical: %s\n", c.name.c_str(),
                 r.gpu.u == r.cpu.u ? "yes" : "no", r.gpu.state == r.cpu.state ? "yes" : "no");
     expect_same_motion_and_energies(r);
-    expect_same_cracks(r, pmb ? "PMB, SELL layout" : "LPS, SELL layout");
+    expect_same_cracks(r, (c.name + ", SELL layout").c_str());
   }
-}
-
-// LAMMPS's fracture rules (docs/lammps-peri.md) on the device: the compressive enhancement's
-// s_min buffers swapped per step, and the after-force break order, in double and float32.
-std::string with_lammps_rules(std::string yaml, const std::string& model_line, bool float32) {
-  const size_t at = yaml.find(model_line);
-  yaml.replace(at, model_line.size(),
-               model_line + ", compressive_enhancement: 0.25, break_check: after_force" +
-                   (float32 ? ", precision: float32" : ""));
-  return yaml;
 }
 
 TEST(CudaBackend, CompressiveEnhancementCracksMatchTheCpuInBothPrecisions) {

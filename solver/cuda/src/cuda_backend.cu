@@ -173,11 +173,12 @@ struct CudaSystem::Impl {
   DeviceArray<double> short_range_k, spacing;
   DeviceArray<float> fshort_range_k, fspacing;
   // model.cuda_layout: sell (sell_layout.hpp): the layout and, in its order, the per-entry
-  // arrays of the fast passes (double and float copies of the lengths and moduli)
+  // arrays of its passes (double and float copies of the lengths and moduli; the dual halves
+  // and the damage weights with variable horizons only, whose diagnostic passes it carries)
   DeviceArray<int64_t> sell_slice_offset, sell_csr_entry;
   DeviceArray<int32_t> sell_particle, sell_row_length, sell_neighbor;
-  DeviceArray<double> sell_xi_len, sell_k_own;
-  DeviceArray<float> sell_fxi_len, sell_fk_own, sell_s0_own;
+  DeviceArray<double> sell_xi_len, sell_k_own, sell_k_dual, sell_vol_own;
+  DeviceArray<float> sell_fxi_len, sell_fk_own, sell_fk_dual, sell_fvol_own, sell_s0_own, sell_s0_dual;
   DeviceArray<uint8_t> sell_state;
   // step scratch
   DeviceArray<double> u_before, f_before;
@@ -506,36 +507,53 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
     m.farrays.u_before = m.fu_before.get();
   }
   if (s.config.cuda_sell_layout) {
-    // The fast passes over SELL-C-sigma (step.hpp pd_force_pass): one thread per slice lane.
-    // Only they read the layout; a case that never takes them would pay its state refresh
-    // after every pass for nothing.
-    const bool fast = s.symmetric_halves && s.bond_damage.empty() && s.min_stretch.empty() &&
-                      (s.config.model == PdModel::PMB || (s.config.model == PdModel::LPS && s.lps_a.size() == s.n));
-    if (!fast)
-      throw RunError("CUDA backend: model.cuda_layout: sell serves the fast bond passes only (PMB or LPS with one "
-                     "constant horizon, brittle bonds, no compressive enhancement); use model.cuda_layout: csr");
+    // The layout's passes (step.hpp pd_force_pass): one thread per slice lane. The fast passes
+    // of one constant horizon, or the dual-horizon pass (sell_kernels.hpp sell_general_pass);
+    // a case that takes neither would pay the layout's state refresh after every pass for nothing.
+    const bool bond_model = s.config.model == PdModel::PMB || s.config.model == PdModel::LPS;
+    const bool fast = s.symmetric_halves && s.min_stretch.empty() &&
+                      (s.config.model == PdModel::PMB || s.lps_a.size() == s.n);
+    const bool dual = !s.symmetric_halves;
+    if (!bond_model || !s.bond_damage.empty() || !(fast || dual))
+      throw RunError("CUDA backend: model.cuda_layout: sell serves the bond passes of PMB and LPS with brittle bonds "
+                     "(one constant horizon without compressive enhancement, or variable horizons); use "
+                     "model.cuda_layout: csr");
     const SellLayout layout = build_sell_layout(s.offsets, kSellChunk, kSellSigma);
     m.sell_slice_offset.upload(layout.slice_offset, "SELL slice offsets");
     m.sell_csr_entry.upload(layout.csr_entry, "SELL CSR entries");
     m.sell_particle.upload(layout.particle, "SELL lane particles");
     m.sell_row_length.upload(layout.row_length, "SELL row lengths");
-    const SellBondArrays<double> b = gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state);
+    const SellBondArrays<double> b =
+        dual ? gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state, s.k_dual, s.s0_dual,
+                                 s.vol_own)
+             : gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state);
     m.sell_neighbor.upload(b.neighbor, "SELL neighbours");
     m.sell_xi_len.upload(b.xi_len, "SELL bond lengths");
     m.sell_k_own.upload(b.k_own, "SELL moduli");
     m.sell_s0_own.upload(b.s0_own, "SELL critical stretches");
     m.sell_state.upload(b.state, "SELL bond states");
+    if (dual) {
+      m.sell_k_dual.upload(b.k_dual, "SELL dual moduli");
+      m.sell_s0_dual.upload(b.s0_dual, "SELL dual critical stretches");
+      m.sell_vol_own.upload(b.vol_own, "SELL damage weights");
+    }
     const SellView view{layout.lanes(), kSellChunk, m.sell_slice_offset.get(), m.sell_particle.get(),
                         m.sell_row_length.get(), m.sell_csr_entry.get(), m.state.get()};
     m.arrays.sell = view;
     m.arrays.sell_entries = {m.sell_neighbor.get(), m.sell_xi_len.get(), m.sell_k_own.get(), m.sell_s0_own.get(),
-                             m.sell_state.get()};
+                             m.sell_state.get(),    dual ? m.sell_k_dual.get() : nullptr,
+                             dual ? m.sell_s0_dual.get() : nullptr, dual ? m.sell_vol_own.get() : nullptr};
     if (m.f32) {
       m.sell_fxi_len.upload(layout.gather(s.f32.xi_len, 1.0f), "SELL float bond lengths");
       m.sell_fk_own.upload(layout.gather(s.f32.k_own, 0.0f), "SELL float moduli");
+      if (dual) {
+        m.sell_fk_dual.upload(layout.gather(s.f32.k_dual, 0.0f), "SELL float dual moduli");
+        m.sell_fvol_own.upload(layout.gather(s.f32.vol_own, 0.0f), "SELL float damage weights");
+      }
       m.farrays.sell = view;
       m.farrays.sell_entries = {m.sell_neighbor.get(), m.sell_fxi_len.get(), m.sell_fk_own.get(), m.sell_s0_own.get(),
-                                m.sell_state.get()};
+                                m.sell_state.get(),    dual ? m.sell_fk_dual.get() : nullptr,
+                                dual ? m.sell_s0_dual.get() : nullptr, dual ? m.sell_fvol_own.get() : nullptr};
     }
   }
   m.refresh_step_views();

@@ -253,20 +253,23 @@ BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double uni
 // of a masked entry changes nothing: a sum that starts at +0 never becomes -0.
 inline constexpr int kBondChunk = 64;
 
-// Are all m entries of a chunk from `base` intact? Then the host's two stages run a copy of
-// the entry without its state test (kCheckState false): in a run most chunks have no broken
-// entry, and the test (a byte widened to a lane mask and a select per entry) measured 11 % of
-// LPS's loop (docs/performance.md, "Bond state in bits"). The AND of the state bytes is
-// nonzero only if every byte shares a set bit, so "nonzero" proves every entry intact (the
-// converse need not hold: then the chunk takes the checked copy, as before). The results are
-// the checked copy's bit for bit: an intact entry's test is true. A bit per entry would make
-// this test one word per chunk, but the byte test is a few vector ANDs per 64 entries, and
-// every other reader of the state (checkpoints, outputs, the general loops) keeps its bytes.
+// Are the own halves of all m entries of a chunk from `base` intact? Then the host's two
+// stages run a copy of the entry without its state test (kCheckState false): in a run most
+// chunks have no broken entry, and the test (a byte widened to a lane mask and a select per
+// entry) measured 11 % of LPS's loop (docs/performance.md, "Bond state in bits"). The own bit
+// of the AND of the state bytes is set only if every byte has it. The unchecked entries test
+// the own half (lps_dilatation_entry) or, with one constant horizon, where both bits go
+// together, any bit (pmb_fast_entry, lps_fast_entry), so the results are the checked copy's bit
+// for bit. (Testing for any shared bit would be wrong with variable horizons: a chunk whose
+// entries all keep their dual half would add own halves that broke to LPS's dilatation.)
+// A bit per entry would make this test one word per chunk, but the byte test is a few vector
+// ANDs per 64 entries, and every other reader of the state (checkpoints, outputs, the general
+// loops) keeps its bytes.
 template <class Real>
 BRECCIA_HD bool chunk_intact(const PdViewT<Real>& p, int64_t base, int m) {
   uint8_t all = 0xff;
   for (int q = 0; q < m; ++q) all &= p.state[base + q];
-  return all != 0;
+  return (all & kOwnIntact) != 0;
 }
 
 // Is particle i's PMB or LPS pass free of per-entry state beyond the intact flag (the fast
@@ -848,8 +851,12 @@ struct GeneralUnbrokenPath {
   BRECCIA_HD double release(const PdViewT<Real>&, int64_t, int64_t) const { return 0.0; }
 };
 
-template <bool kDiagnostics, class Real>
-BRECCIA_HD void general_force_loop(const PdViewT<Real>& p, int64_t i) {
+// The general loop over particle i's `count` entries in row order, the q-th at index `at(q)`;
+// `broke(k)` is told of every change of entry k's state (a half broken, or a softened bond
+// gone). The CSR row (general_force_loop) and a SELL lane (sell_kernels.hpp) both run it, so a
+// lane's sums are the CSR loop's bit for bit.
+template <bool kDiagnostics, class Real, class At, class Broke>
+BRECCIA_HD void general_force_row(const PdViewT<Real>& p, int64_t i, int64_t count, const At& at, const Broke& broke) {
   Real fx = Real(0), fy = Real(0), fz = Real(0);
   double w = 0.0, released = 0.0, smax = 0.0, smin = 1e300;
   double intact_vol = 0.0, total_vol = 0.0;
@@ -863,13 +870,8 @@ BRECCIA_HD void general_force_loop(const PdViewT<Real>& p, int64_t i) {
     theta_i = p.dilatation[i];
     own_factors = lps_force_factors(p.lps[i], m_i, theta_i);
   }
-#if !defined(__CUDA_ARCH__)
-  if (!kDiagnostics && !p.fracture && fast_bond_loop(p) && has_bond_vectors(p)) {
-    two_stage_force_loop<double>(p, i, GeneralUnbrokenPath<Real>{BondOriginT<Real>(p, i), own_factors, lps});
-    return;
-  }
-#endif
-  for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
+  for (int64_t q = 0; q < count; ++q) {
+    const int64_t k = at(q);
     if (kDiagnostics) total_vol += p.vol_own[k];
     uint8_t st = p.state[k];
     if (!st) continue;
@@ -889,6 +891,7 @@ BRECCIA_HD void general_force_loop(const PdViewT<Real>& p, int64_t i) {
       keep = 1.0 - soften(p, k, double(g.stretch), unit, released, BondMotionT<Real>{i, j, g.dx, g.dy, g.dz, g.length, xi});
       if (keep <= 0.0) {
         p.state[k] = 0;
+        broke(k);
         continue;
       }
     } else if (p.fracture) {
@@ -913,6 +916,7 @@ BRECCIA_HD void general_force_loop(const PdViewT<Real>& p, int64_t i) {
         }
         st = after;
         p.state[k] = st;
+        broke(k);
       }
     }
     if (kDiagnostics && (st & kOwnIntact)) intact_vol += keep * p.vol_own[k];
@@ -957,16 +961,35 @@ BRECCIA_HD void general_force_loop(const PdViewT<Real>& p, int64_t i) {
   }
 }
 
+template <bool kDiagnostics, class Real>
+BRECCIA_HD void general_force_loop(const PdViewT<Real>& p, int64_t i) {
+#if !defined(__CUDA_ARCH__)
+  if (!kDiagnostics && !p.fracture && fast_bond_loop(p) && has_bond_vectors(p)) {
+    const bool lps = p.model == static_cast<int>(PdModel::LPS);
+    const LpsForceFactors<Real> own_factors =
+        lps ? lps_force_factors(p.lps[i], p.weighted_volume[i], p.dilatation[i]) : LpsForceFactors<Real>{};
+    two_stage_force_loop<double>(p, i, GeneralUnbrokenPath<Real>{BondOriginT<Real>(p, i), own_factors, lps});
+    return;
+  }
+#endif
+  general_force_row<kDiagnostics>(p, i, p.offsets[i + 1] - p.offsets[i], CsrRow{p.offsets[i]}, NoBreakHook{});
+}
+
+// Does force_kernel take the general loop (variable horizons, or a path the symmetric loops
+// do not carry)? The SELL layout's dual-horizon pass applies exactly there (sell_kernels.hpp).
+template <class Real>
+BRECCIA_HD bool takes_general_loop(const PdViewT<Real>& p) {
+  if (p.symmetric_halves && has_bond_vectors(p) && p.model == static_cast<int>(PdModel::PMB)) return false;
+  return !(p.symmetric_halves && p.lps_a && has_bond_vectors(p));
+}
+
 // Internal force density, strain-energy density, damage and breaking for particle i (the
 // diagnostics only when p.diagnostics asks for them).
 template <class Real>
 BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
-  if (p.symmetric_halves && has_bond_vectors(p) && p.model == static_cast<int>(PdModel::PMB)) {
-    pmb_symmetric_force_kernel(p, i);
-    return;
-  }
-  if (p.symmetric_halves && p.lps_a && has_bond_vectors(p)) {
-    lps_symmetric_force_kernel(p, i);
+  if (!takes_general_loop(p)) {  // one constant horizon: the symmetric loops
+    if (p.model == static_cast<int>(PdModel::PMB)) pmb_symmetric_force_kernel(p, i);
+    else lps_symmetric_force_kernel(p, i);
     return;
   }
   if (p.diagnostics) general_force_loop<true>(p, i);

@@ -385,17 +385,27 @@ void pd_force_pass(Exec& exec, const StepArrays<Real>& a, bool sum_released) {
     }
   }
   if (p.model != static_cast<int>(PdModel::Correspondence)) {
-    // The layout's passes where the fast paths apply; otherwise the CSR's, after which the
-    // layout's state is refreshed from the CSR's (those passes break bonds there only).
-    const bool sell = a.sell.lanes > 0 && sell_fast_pass(p);
+    // The layout's passes where they apply (one constant horizon: the fast paths; variable
+    // horizons: the dual-horizon pass), one launch per path; otherwise the CSR's, after which
+    // the layout's state is refreshed from the CSR's (those passes break bonds there only).
+    const bool fast = a.sell.lanes > 0 && sell_fast_pass(p);
+    const bool general = a.sell.lanes > 0 && !fast && sell_general_pass(p, a.sell_entries);
+    const bool sell = fast || general;
     const PdViewT<Real> e = sell ? sell_entry_view(p, a.sell_entries) : p;
-    if (p.model == static_cast<int>(PdModel::LPS)) {
+    const bool lps = p.model == static_cast<int>(PdModel::LPS);
+    if (lps) {
       if (sell) exec.for_each(a.sell.lanes, SellDilatation<Real>{e, a.sell}, "sell_dilatation_kernel");
       else exec.for_each(n, Dilatation<Real>{p}, "lps_dilatation_kernel");
       exchange_halo(exec, a, HaloField::Lps);
     }
-    if (sell) {
-      exec.for_each(a.sell.lanes, SellBondForces<Real>{e, a.sell}, "sell_force_kernel");
+    if (general && p.diagnostics) {
+      exec.for_each(a.sell.lanes, SellGeneralForces<Real, true>{e, a.sell}, "sell_dual_horizon_diagnostics_kernel");
+    } else if (general) {
+      exec.for_each(a.sell.lanes, SellGeneralForces<Real, false>{e, a.sell}, "sell_dual_horizon_force_kernel");
+    } else if (fast && lps) {
+      exec.for_each(a.sell.lanes, SellLpsForces<Real>{e, a.sell}, "sell_lps_force_kernel");
+    } else if (fast) {
+      exec.for_each(a.sell.lanes, SellPmbForces<Real>{e, a.sell}, "sell_pmb_force_kernel");
     } else {
       exec.for_each(n, BondForces<Real>{p}, "force_kernel");
       if (a.sell.lanes > 0)

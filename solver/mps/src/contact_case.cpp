@@ -40,11 +40,17 @@ void configure_contact(const CaseSpec& spec, const std::vector<int>& body_id, So
     p.inertia_kg_m2 = r.density_kg_m3 * g.polar_moment_m4 * solid.thickness_m();
     p.velocity_m_s = {r.velocity_m_s[0], r.velocity_m_s[1]};
     p.angular_velocity_rad_s = r.angular_velocity_rad_s;
-    // Per particle, one layer of the material (A / spacing), or a stated length: then the
-    // stiffness per unit area of a face stays the same when the spacing is refined.
+    // Per particle, one layer of the material (A / spacing), a stated length of it, or a
+    // contact layer of the polygon's material: with the last two the stiffness per unit area
+    // of a face stays the same when the spacing is refined.
+    // (The products in this order: a stiffness_length's penalties as before it was added.)
     const double per_area = r.stiffness_length_m > 0.0 ? solid.spacing_m() / r.stiffness_length_m : 1.0;
-    p.law.normal_stiffness_n_m = r.stiffness_factor * per_area * solid.face_stiffness_n_m();
-    p.law.tangential_stiffness_n_m = r.friction.tangential_stiffness_factor * per_area * solid.shear_face_stiffness_n_m();
+    const double normal_n_m = r.contact_layer ? r.contact_layer->normal_stiffness_pa_m() * solid.face_area_m2()
+                                              : solid.face_stiffness_n_m();
+    const double tangential_n_m = r.contact_layer ? r.contact_layer->tangential_stiffness_pa_m() * solid.face_area_m2()
+                                                  : solid.shear_face_stiffness_n_m();
+    p.law.normal_stiffness_n_m = r.stiffness_factor * per_area * normal_n_m;
+    p.law.tangential_stiffness_n_m = r.friction.tangential_stiffness_factor * per_area * tangential_n_m;
     p.law.static_friction = r.friction.static_friction;
     p.law.kinetic_friction = r.friction.kinetic_friction;
     p.law.damping_ratio = damping_ratio_of_restitution(r.restitution);

@@ -447,6 +447,15 @@ output: {progress: false}
   refused("contact_layer: {youngs_modulus: 2 MPa, poisson_ratio: 0, thickness: 1, depth: 1}",
           "contact.rigid_bodies[0].contact_layer");
   refused(layer + ", stiffness_length: 0.2", "contact.rigid_bodies[0].contact_layer");
+  // A layer so stiff that a particle on it would outrun the step (omega dt = 0.3 x 0.1 m x
+  // sqrt(k_A / (rho h)) / c_L: 1.7 for 2 GPa / 20 mm, above the limit of 1) is refused.
+  try {
+    make_solid(parse_case_text(deck(0.1, "contact_layer: {youngs_modulus: 2 GPa, poisson_ratio: 0, thickness: 20 mm}"),
+                               "stiff.yaml"));
+    ADD_FAILURE() << "expected an InputError for a layer that outruns the step";
+  } catch (const breccia::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("contact.rigid_bodies[0].contact_layer.thickness"), std::string::npos) << e.what();
+  }
 }
 
 namespace {

@@ -384,6 +384,80 @@ time: {end: 1 ms}
   }
 }
 
+// contact.rigid_bodies[k].contact_layer: a block resting under gravity on a rigid polygon
+// whose contact is a layer of stated material and thickness sinks, once its bounce has died
+// out, by the Winkler settlement of a rigid footing on a bed of springs, d = p / k_A: the
+// bearing pressure p = rho g H over the layer's stiffness per unit area k_A = (lambda + 2 mu)
+// / thickness (E = 2 MPa, nu = 0, thickness 1 m: 2e6 Pa/m; 1000 kg/m3 x 9.81 x 0.2 m: d =
+// 0.981 mm), at every spacing (one particle layer would sink by rho g H h / (lambda + 2 mu):
+// 0.65 and 0.33 um here). The mean over the bottom row is exact at rest (sum k d_i = weight);
+// tolerance 0.5%: the block's own compression, H k_A / 2 (lambda + 2 mu) = 0.07% of d, rings
+// undamped; the bounce (restitution 0.1 per particle, at least 0.3 of critical on the block)
+// has decayed by e^-15 at 0.5 s. Bad layers are refused naming the field.
+TEST(MpsGroundMotion, ContactLayerBlockSinksByItsWinklerSettlementAtEverySpacing) {
+  auto deck = [](double h, const std::string& layer) {
+    const double y0 = -h / 2 + 1e-7;  // bottom centres 0.1 um above the polygon's top face y = 0
+    return R"(specimen:
+  lattice: {dimension: 2, box: [0, )" + std::to_string(y0) + ", 1, " + std::to_string(y0 + 0.2) +
+           "], spacing: " + std::to_string(h) + R"(, thickness: 1}
+model: {type: mps, formulation: stress, gravity: [0, -9.81]}
+materials: [{name: m, density: 1000, lambda: 100 MPa, mu: 100 MPa}]
+contact:
+  rigid_bodies:
+    - {name: bed, vertices: [[-1, -1], [2, -1], [2, 0], [-1, 0]], restitution: 0.1, )" + layer + R"(}
+time: {end: 1 s}
+output: {progress: false}
+)";
+  };
+  const std::string layer = "contact_layer: {youngs_modulus: 2 MPa, poisson_ratio: 0, thickness: 1 m}";
+  const double expected = 1000 * 9.81 * 0.2 / 2e6;
+  for (const double h : {0.1, 0.05}) {
+    Solid sim = make_solid(parse_case_text(deck(h, layer), "layer.yaml"));
+    // k per particle: k_A x face (h x 1 m); k_t: mu / thickness = E / 2 per metre, x face.
+    EXPECT_NEAR(sim.contact().polygon(0).law.normal_stiffness_n_m, 2e6 * h, 1e-9 * 2e6 * h);
+    EXPECT_NEAR(sim.contact().polygon(0).law.tangential_stiffness_n_m, 1e6 * h, 1e-9 * 1e6 * h);
+    while (sim.time_s() < 0.5) sim.step();
+    double sum = 0.0;
+    int bottom = 0;
+    for (size_t i = 0; i < sim.size(); ++i) {
+      if (sim.position_m()[3 * i + 1] > 0.0) continue;  // the bottom row starts at y = 1e-7 m
+      sum += -(sim.position_m()[3 * i + 1] + sim.displacement(1)[i]);
+      ++bottom;
+    }
+    const double sink = sum / bottom;
+    std::printf("contact layer, spacing %.2f m: %d bottom particles sink %.5f mm (Winkler %.5f mm)\n", h, bottom,
+                1e3 * sink, 1e3 * expected);
+    EXPECT_EQ(bottom, static_cast<int>(std::lround(1.0 / h)));
+    EXPECT_NEAR(sink, expected, 0.005 * expected) << "spacing " << h;
+  }
+  auto refused = [&](const std::string& keys, const std::string& field) {
+    try {
+      parse_case_text(deck(0.1, keys), "bad.yaml");
+      ADD_FAILURE() << "expected an InputError for " << keys;
+    } catch (const breccia::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.yaml"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  refused("contact_layer: {youngs_modulus: 2 MPa, poisson_ratio: 0}", "contact.rigid_bodies[0].contact_layer.thickness");
+  refused("contact_layer: {youngs_modulus: 2 MPa, poisson_ratio: 0.5, thickness: 1}",
+          "contact.rigid_bodies[0].contact_layer.poisson_ratio");
+  refused("contact_layer: {youngs_modulus: -2 MPa, poisson_ratio: 0, thickness: 1}",
+          "contact.rigid_bodies[0].contact_layer.youngs_modulus");
+  refused("contact_layer: {youngs_modulus: 2 MPa, poisson_ratio: 0, thickness: 1, depth: 1}",
+          "contact.rigid_bodies[0].contact_layer");
+  refused(layer + ", stiffness_length: 0.2", "contact.rigid_bodies[0].contact_layer");
+  // A layer so stiff that a particle on it would outrun the step (omega dt = 0.3 x 0.1 m x
+  // sqrt(k_A / (rho h)) / c_L: 1.7 for 2 GPa / 20 mm, above the limit of 1) is refused.
+  try {
+    make_solid(parse_case_text(deck(0.1, "contact_layer: {youngs_modulus: 2 GPa, poisson_ratio: 0, thickness: 20 mm}"),
+                               "stiff.yaml"));
+    ADD_FAILURE() << "expected an InputError for a layer that outruns the step";
+  } catch (const breccia::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("contact.rigid_bodies[0].contact_layer.thickness"), std::string::npos) << e.what();
+  }
+}
+
 namespace {
 
 // One particle (mass 1 kg, no bonds) moving at -1 m/s along y onto the top face y = 0 of a

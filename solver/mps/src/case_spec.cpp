@@ -71,8 +71,9 @@ MaterialSpec parse_material(const Section& s) {
     const double e = s.positive("youngs_modulus", Quantity::Pressure);
     const double nu = s.number("poisson_ratio", Quantity::Dimensionless);
     if (!(nu > -1.0 && nu < 0.5)) fail(s, "poisson_ratio", std::to_string(nu), "-1 < nu < 0.5");
-    m.lame_lambda_pa = e * nu / ((1 + nu) * (1 - 2 * nu));  // plane strain in 2D
-    m.shear_modulus_pa = e / (2 * (1 + nu));
+    const LameConstants l = lame_of_youngs(e, nu);  // plane strain in 2D
+    m.lame_lambda_pa = l.lambda_pa;
+    m.shear_modulus_pa = l.mu_pa;
   } else if (lame) {
     m.lame_lambda_pa = s.number("lambda", Quantity::Pressure);
     m.shear_modulus_pa = s.positive("mu", Quantity::Pressure);

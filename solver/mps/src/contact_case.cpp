@@ -1,8 +1,11 @@
 #include "breccia/mps/contact_case.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "breccia/common/error.hpp"
+#include "breccia/common/units.hpp"
 
 namespace breccia::mps {
 
@@ -40,11 +43,30 @@ void configure_contact(const CaseSpec& spec, const std::vector<int>& body_id, So
     p.inertia_kg_m2 = r.density_kg_m3 * g.polar_moment_m4 * solid.thickness_m();
     p.velocity_m_s = {r.velocity_m_s[0], r.velocity_m_s[1]};
     p.angular_velocity_rad_s = r.angular_velocity_rad_s;
-    // Per particle, one layer of the material (A / spacing), or a stated length: then the
-    // stiffness per unit area of a face stays the same when the spacing is refined.
+    // Per particle, one layer of the material (A / spacing), a stated length of it, or a
+    // contact layer of the polygon's material: with the last two the stiffness per unit area
+    // of a face stays the same when the spacing is refined.
+    // (The products in this order: a stiffness_length's penalties as before it was added.)
     const double per_area = r.stiffness_length_m > 0.0 ? solid.spacing_m() / r.stiffness_length_m : 1.0;
-    p.law.normal_stiffness_n_m = r.stiffness_factor * per_area * solid.face_stiffness_n_m();
-    p.law.tangential_stiffness_n_m = r.friction.tangential_stiffness_factor * per_area * solid.shear_face_stiffness_n_m();
+    const double normal_n_m = r.contact_layer ? r.contact_layer->normal_stiffness_pa_m() * solid.face_area_m2()
+                                              : solid.face_stiffness_n_m();
+    const double tangential_n_m = r.contact_layer ? r.contact_layer->tangential_stiffness_pa_m() * solid.face_area_m2()
+                                                  : solid.shear_face_stiffness_n_m();
+    p.law.normal_stiffness_n_m = r.stiffness_factor * per_area * normal_n_m;
+    p.law.tangential_stiffness_n_m = r.friction.tangential_stiffness_factor * per_area * tangential_n_m;
+    if (r.contact_layer && n > 0) {
+      // The penalty is stated, not tied to the spacing, so it can outrun the step: a particle
+      // on it oscillates at omega = sqrt(k / m); the explicit step is stable for omega dt < 2
+      // and its period resolved by 6 steps at omega dt = 1, the limit taken here.
+      double lightest = solid.volume_m3()[0];
+      for (size_t i = 1; i < n; ++i) lightest = std::min(lightest, solid.volume_m3()[i]);
+      const double omega_dt = std::sqrt(p.law.normal_stiffness_n_m / (solid.density_kg_m3() * lightest)) * solid.dt_s();
+      if (!(omega_dt <= 1.0))
+        throw InputError(spec.file, "contact.rigid_bodies[" + std::to_string(k) + "].contact_layer.thickness",
+                         "a layer stiff enough per unit area for omega dt = " + short_number(omega_dt) +
+                             " per particle (omega = sqrt(k / m), dt " + short_number(solid.dt_s()) + " s)",
+                         "omega dt <= 1: a thicker or softer layer, or a smaller time.safety");
+    }
     p.law.static_friction = r.friction.static_friction;
     p.law.kinetic_friction = r.friction.kinetic_friction;
     p.law.damping_ratio = damping_ratio_of_restitution(r.restitution);

@@ -158,9 +158,23 @@ PrescribedMotion parse_motion(const Section& s) {
   return m;
 }
 
+LameConstants lame_of_youngs(double youngs_modulus_pa, double poisson_ratio) {
+  const double e = youngs_modulus_pa, nu = poisson_ratio;
+  return {e * nu / ((1 + nu) * (1 - 2 * nu)), e / (2 * (1 + nu))};
+}
+
+double ContactLayerSpec::normal_stiffness_pa_m() const {
+  const LameConstants l = lame_of_youngs(youngs_modulus_pa, poisson_ratio);
+  return (l.lambda_pa + 2.0 * l.mu_pa) / thickness_m;
+}
+
+double ContactLayerSpec::tangential_stiffness_pa_m() const {
+  return lame_of_youngs(youngs_modulus_pa, poisson_ratio).mu_pa / thickness_m;
+}
+
 RigidBodySpec parse_rigid_body(const Section& s, size_t index, int dimension) {
   std::vector<std::string> keys{"name",           "vertices",         "fixed",  "density", "velocity",
-                                "angular_velocity", "stiffness_factor", "stiffness_length", "restitution", "floor_restitution", "motion"};
+                                "angular_velocity", "stiffness_factor", "stiffness_length", "contact_layer", "restitution", "floor_restitution", "motion"};
   for (const auto& k : friction_keys()) keys.push_back(k);
   s.allow_only(keys);
   RigidBodySpec r;
@@ -225,6 +239,24 @@ RigidBodySpec parse_rigid_body(const Section& s, size_t index, int dimension) {
   }
   r.stiffness_factor = s.positive("stiffness_factor", Quantity::Dimensionless, 1.0);
   if (s.has("stiffness_length")) r.stiffness_length_m = s.positive("stiffness_length", Quantity::Length, 0.0);
+  if (auto l = s.optional_section("contact_layer")) {
+    if (s.has("stiffness_length"))
+      fail(s, "contact_layer", "given with stiffness_length",
+           "one of them: contact_layer (the stiffness per unit area from a layer's material and thickness) or "
+           "stiffness_length (a layer of the particles' material)");
+    l->allow_only({"youngs_modulus", "poisson_ratio", "thickness"});
+    for (const char* key : {"youngs_modulus", "poisson_ratio", "thickness"})
+      if (!l->has(key))
+        fail(*l, key, "missing",
+             "contact_layer: {youngs_modulus: E, poisson_ratio: nu, thickness: t} (the polygon's material and the "
+             "thickness of the layer that stands in for its compliance)");
+    ContactLayerSpec c;
+    c.youngs_modulus_pa = l->positive("youngs_modulus", Quantity::Pressure);
+    c.poisson_ratio = l->number("poisson_ratio", Quantity::Dimensionless);
+    if (!(c.poisson_ratio > -1.0 && c.poisson_ratio < 0.5)) fail(*l, "poisson_ratio", text_of(c.poisson_ratio), "-1 < nu < 0.5");
+    c.thickness_m = l->positive("thickness", Quantity::Length);
+    r.contact_layer = c;
+  }
   // A coefficient of restitution: 0 < e <= 1 (1, the default: no dashpot).
   auto restitution = [&](const char* key) {
     if (!s.has(key)) return 1.0;

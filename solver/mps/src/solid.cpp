@@ -231,10 +231,12 @@ void Solid::set_floor(const RigidFloor& floor) {
   contact_.add_half_space(h);
 }
 
+double Solid::face_area_m2() const {
+  return options_.dimension == 2 ? options_.spacing_m * options_.thickness_m : options_.spacing_m * options_.spacing_m;
+}
+
 double Solid::face_stiffness_n_m() const {
-  const double face_area = options_.dimension == 2 ? options_.spacing_m * options_.thickness_m
-                                                   : options_.spacing_m * options_.spacing_m;
-  return (law_.lame_lambda_pa + 2.0 * law_.shear_modulus_pa) * face_area / options_.spacing_m;
+  return (law_.lame_lambda_pa + 2.0 * law_.shear_modulus_pa) * face_area_m2() / options_.spacing_m;
 }
 
 double Solid::shear_face_stiffness_n_m() const {

@@ -62,6 +62,26 @@ struct PrescribedMotion {
   solver::HistorySpec history;
 };
 
+// Plane-strain Lame constants of Young's modulus and Poisson's ratio (-1 < nu < 0.5):
+// lambda = E nu / ((1 + nu)(1 - 2 nu)), mu = E / (2 (1 + nu)).
+struct LameConstants {
+  double lambda_pa = 0.0, mu_pa = 0.0;
+};
+LameConstants lame_of_youngs(double youngs_modulus_pa, double poisson_ratio);
+
+// A rigid polygon's contact layer (contact.rigid_bodies[k].contact_layer): the polygon is
+// rigid, so its own local compliance at a contact is absent; it is stood in for by an elastic
+// layer of the polygon's material and a stated thickness, a Winkler (bed of springs) law per
+// unit area of contact: normal (lambda + 2 mu) / thickness (the constrained modulus of the
+// layer over its thickness), tangential mu / thickness. Per particle the penalty is that
+// times the particle's face area, so the stiffness per unit area of a face is a property of
+// the materials and does not change when the spacing is refined (docs/mps.md).
+struct ContactLayerSpec {
+  double youngs_modulus_pa = 0.0, poisson_ratio = 0.0, thickness_m = 0.0;
+  double normal_stiffness_pa_m() const;      // (lambda + 2 mu) / thickness
+  double tangential_stiffness_pa_m() const;  // mu / thickness
+};
+
 // A 2D rigid polygon (contact.hpp, RigidPolygon).
 struct RigidBodySpec {
   std::string name;
@@ -75,6 +95,9 @@ struct RigidBodySpec {
   // k = factor (lambda + 2 mu) A / stiffness_length (and k_t likewise), so the polygon's
   // contact stiffness per unit area of a face does not change when the spacing is refined.
   double stiffness_length_m = 0.0;
+  // Given: the penalty per unit area is the layer's (stiffness_factor and
+  // tangential_stiffness_factor still scale it); exclusive with stiffness_length.
+  std::optional<ContactLayerSpec> contact_layer;
   // Coefficient of restitution of a particle's normal impact on the polygon, 0 < e <= 1: a
   // normal dashpot in the penalty contact (contact_kernels.hpp,
   // damping_ratio_of_restitution); 1 (the default): no dashpot.

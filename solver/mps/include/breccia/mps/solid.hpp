@@ -162,6 +162,8 @@ public:
   // counterpart mu A / spacing (A: particle face area, spacing x thickness in 2D).
   double face_stiffness_n_m() const;
   double shear_face_stiffness_n_m() const;
+  // A particle's face area: spacing x thickness in 2D, spacing^2 in 3D.
+  double face_area_m2() const;
   // Brittle fracture with the separation tensor (fracture.hpp); nullptr when not enabled.
   void set_fracture(const FractureLaw& law);
   // On a device the separation values are brought up to date here when read (sync_fracture).

@@ -56,16 +56,6 @@ RankLayout rank_layout(const PdSystem& g, int ranks, int rank) {
   return L;
 }
 
-std::string distributed_unsupported(const PdSystem& g) {
-  // Dynamic relaxation evaluates the gas through compute_external, which takes the gas's
-  // sums over the particles it is given: a rank's share only.
-  if (g.gas.active && g.config.quasi_static) return "loads[].type: gas with time.integrator: adr";
-  // The crack pass's later hops (gas_update) spread the front without refreshing the ghosts'
-  // arrival times in between.
-  if (g.gas.active && g.gas.crack_pass_every > 1) return "loads[].crack_pass_every above 1";
-  return "";
-}
-
 namespace {
 void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std::vector<int32_t>& ids);
 }  // namespace
@@ -259,6 +249,8 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
   r.ambient = G.ambient;
   r.fixed_front_speed = G.fixed_front_speed;
   r.crack_entry = G.crack_entry;
+  r.crack_pass_every = G.crack_pass_every;
+  r.crack_pass_tolerance = G.crack_pass_tolerance;
   r.copy_scalars(G);
   r.wall_dv = slice(G.wall_dv, fb, fe);
   r.wall_left = slice(G.wall_left, fb, fe);
@@ -268,6 +260,8 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
   if (G.crack_entry) {
     r.arrival = take(G.arrival, ids, 1, n);
     r.arrival_next = r.arrival;  // as read_checkpoint and setup_gas leave it
+    // The front's later hops read the snapshot of every partner, ghosts included (gas_update).
+    if (G.crack_pass_every > 1) r.arrival_hop = r.arrival;
     r.push = take(G.push, ids, 3, n);
     r.front_done = take(G.front_done, ids, 1, n);
     r.position = take(G.position, ids, 3, n);

@@ -149,6 +149,8 @@ std::string instability_message(const PdSystem& s, const Energies& e, double ene
 long long relax_to_equilibrium(PdSystem& s, bool progress, const RelaxHooks& hooks) {
   // A distributed run passes its force pass (with the halo exchange) and its sum over ranks.
   const auto forces = hooks.forces ? hooks.forces : [](PdSystem& sys) { cpu_compute_forces(sys); };
+  // And its external forces: a gas load's sums and front are taken over every rank.
+  const auto external = hooks.external ? hooks.external : [](PdSystem& sys, double t) { compute_external(sys, t); };
   // Its sums steer the iteration (damping, convergence): they are taken reproducibly, so
   // that P ranks, or any thread count, follow one process's path bit for bit.
   std::vector<double> sums_out;
@@ -163,7 +165,7 @@ long long relax_to_equilibrium(PdSystem& s, bool progress, const RelaxHooks& hoo
   for (size_t i = 0; i < s.n; ++i) lam[i] = 1.2 * s.density[i] * omega2 / 4.0;
   apply_constraints(s, 1e300, 0.0);  // prescribed values at their full size
   for (auto& x : s.v) x = 0.0;
-  compute_external(s, 0.0);
+  external(s, 0.0);
   const double load_norm =
       std::sqrt(sum_terms(1, [&](size_t k, int) { return s.body[k] * s.body[k] * s.volume[k / 3]; })[0]);
   auto is_free = [&](size_t k) { return !(s.fixed_dof[k / 3] & (1u << (k % 3))); };
@@ -171,7 +173,7 @@ long long relax_to_equilibrium(PdSystem& s, bool progress, const RelaxHooks& hoo
   auto last = start;
   for (long long it = 0; it < s.config.adr_max_steps; ++it) {
     commit_min_stretch(s);
-    if (s.gas.active && it > 0) compute_external(s, 0.0);  // the gas follows the cavity's volume
+    if (s.gas.active && it > 0) external(s, 0.0);  // the gas follows the cavity's volume
     forces(s);
     // Terms per component: the Rayleigh quotient's numerator and denominator of the local
     // stiffness (Kilic & Madenci's damping), and the squared residual force.

@@ -658,7 +658,7 @@ std::shared_ptr<RankShare> take_rank_share(const PdSystem& global, MPI_Comm comm
 
 class MpiBackend final : public StepBackend {
 public:
-  MpiBackend(PdSystem& global, MPI_Comm comm) : comm_(comm), share_(supported_share(global, comm)) {
+  MpiBackend(PdSystem& global, MPI_Comm comm) : comm_(comm), share_(take_rank_share(global, comm)) {
     if (global.derived_fields_pending) {
       // read_checkpoint's pass at the restored state, on the rank's particles (no bond
       // breaks: the stretches are the checkpointed step's); forces and the dissipated
@@ -752,6 +752,8 @@ public:
       gather_ranges(local_.gas.wall_on, g.gas.wall_on, facets, r, comm_);
       gather_ranges(local_.gas.arrival, g.gas.arrival, one, r, comm_);
       gather_ranges(local_.gas.in_crack, g.gas.in_crack, entries, r, comm_);
+      // Between two crack passes: the vectors the volume follows (/gas/push).
+      if (local_.gas.crack_pass_every > 1) gather_ranges(local_.gas.push, g.gas.push, three, r, comm_);
     }
   }
 
@@ -846,6 +848,14 @@ public:
       force_pass(l);
       if (l.f32.active) float32_download(l);
     };
+    // The gas's pressure follows the cavity's volume: its sums over every rank in one
+    // process's order, its crack pass reading the ghosts (MpiExec), not the rank's share alone.
+    hooks.external = [this](PdSystem& l, double t) {
+      MpiExec exec(l, *halo_, share_->contact.get(), share_->gas.get());
+      StepArrays<double> a = cpu_step_arrays(l);  // double, as compute_external's (float32 too)
+      a.ghosts = layout_.ghosts();
+      pd_external(exec, a, l, t);
+    };
     hooks.sum = [this](double* values, int count) {
       MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_SUM, comm_);
     };
@@ -856,6 +866,7 @@ public:
     const Energies e = measure(g);  // and the accumulators
     download(g);
     g.step = local_.step;
+    if (local_.gas.active) g.gas.copy_scalars(local_.gas);  // the history's and summary's gas
     return {iterations, e};
   }
 
@@ -866,16 +877,6 @@ public:
   }
 
 private:
-  static std::shared_ptr<RankShare> supported_share(const PdSystem& global, MPI_Comm comm) {
-    if (const std::string key = distributed_unsupported(global); !key.empty()) {
-      int size = 1;
-      MPI_Comm_size(comm, &size);
-      throw InputError(global.config.file, key, "set, which a run on " + std::to_string(size) + " ranks does not support yet",
-                       "a run on one process (docs/parallel.md lists what is distributed)");
-    }
-    return take_rank_share(global, comm);
-  }
-
   // The ranks' ranges of the facet particles (sorted by particle: one run per rank).
   std::vector<int64_t> facet_ranges(const PdSystem& g) const {
     std::vector<int64_t> begin;

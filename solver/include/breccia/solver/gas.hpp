@@ -486,13 +486,15 @@ struct GasState {
   // Speed of the gas front along open bonds now: the fixed one, or the speed of a gas
   // expanding into an empty channel (gas_escape_speed, gas_law.hpp).
   double front_speed() const;
-  // The evolving scalars of `o` (a distributed run's ranks each advance the same ones; the
-  // global system's writers read them from the rank's).
+  // The evolving scalars of `o`, the crack passes' schedule with them (a distributed run's
+  // ranks each advance the same ones; the global system's writers read them from the rank's).
   void copy_scalars(const GasState& o) {
     volume = o.volume, wall_volume = o.wall_volume, crack_volume = o.crack_volume, crack_vent_area = o.crack_vent_area;
     pressure = o.pressure, pressure_abs = o.pressure_abs, mass_fraction = o.mass_fraction, work = o.work;
     vented = o.vented, vent_time = o.vent_time, peak_pressure = o.peak_pressure, spent = o.spent;
     wall_s = o.wall_s, cpu_s = o.cpu_s;
+    crack_pass_countdown = o.crack_pass_countdown, crack_pass_interval = o.crack_pass_interval;
+    crack_pass_done = o.crack_pass_done;
   }
   // One update of the scalars from the summed wall and crack volumes at time t (dt: the
   // step, 0 outside one: no outflow). crack.volume_before: the cracks that were in the volume
@@ -546,6 +548,7 @@ enum class GasSumOver : int { Facets, Particles };
 //                                       how many ghosts follow the d.n owned particles
 //   exec.gas_front_to_ghosts(g)         the front's arrival times: the smallest any rank
 //                                       reached to the owner, then the owner's to its ghosts
+//                                       (after each hop of the front: gas_update)
 //   exec.gas_rank_terms(count)          a buffer for count per-item terms
 //   exec.gas_sum_over_ranks(t, n, over) the sum of every rank's terms in one process's order
 // (C++17 detection: nvcc compiles this header too.)
@@ -615,8 +618,7 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
     // crack_pass_every k > 1: the exact pass every crack_pass_interval steps (and at the first
     // call; a call outside a step, dt 0, moves nothing and keeps the count), GasCrackDrift in
     // between. The interval adapts (gas_crack_pass_interval): 1 while the passes find the
-    // gas spreading into new crack, up to k while the crack it fills only moves. Under mpirun
-    // k is 1 (distributed_setup refuses more): the hops below do not refresh the ghosts.
+    // gas spreading into new crack, up to k while the crack it fills only moves.
     const int every = gas.crack_pass_every;
     const bool exact = every <= 1 || !gas.crack_pass_done || (dt > 0.0 && gas.crack_pass_countdown == 0);
     if (every > 1 && dt > 0.0 && !exact) --gas.crack_pass_countdown;
@@ -639,7 +641,11 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
       const int64_t blocks = gas_blocks(d.n);
       for (int hop = 0; hop < hops; ++hop) {
         if (hop > 0) {
-          exec.for_each(d.n, GasFrontHopCopy{g}, "gas_front_hop");
+          // On ranks a hop reads the ghosts' snapshot too: what every rank reached by the hop
+          // before, its smallest on the owner and back (gas_front_to_ghosts also commits the
+          // ghosts' arrival, which no later hop reads: they read the snapshot).
+          if constexpr (GasOnRanks<Exec>::value) exec.gas_front_to_ghosts(g);
+          exec.for_each(d.n + ghosts, GasFrontHopCopy{g}, "gas_front_hop");
           front.from = g.arrival_hop;
         }
         if (buffers.particle_sums)

@@ -59,7 +59,4 @@ void copy_rank_state(PdSystem& local, const PdSystem& global, const RankLayout& 
 // first_facet_of(begin + owned)).
 int64_t first_facet_of(const PdSystem& global, int64_t particle);
 
-// What a distributed run cannot do yet, as the case key that asks for it (empty: nothing).
-std::string distributed_unsupported(const PdSystem& global);
-
 }  // namespace breccia::solver

@@ -83,9 +83,11 @@ RunResult run_case(const CaseConfig& config, const RunOptions& options);
 RunResult run_system(PdSystem& sys, const RunOptions& options);
 
 // What adaptive dynamic relaxation needs beyond the PdSystem, for a distributed run: its
-// force pass (with the halo exchange) and a sum over ranks in place. Empty: one process.
+// force pass (with the halo exchange), its external forces (a gas load's sums and front over
+// every rank) and a sum over ranks in place. Empty: one process.
 struct RelaxHooks {
   std::function<void(PdSystem&)> forces;
+  std::function<void(PdSystem&, double t)> external;  // compute_external's part (a gas load over ranks)
   std::function<void(double* values, int count)> sum;  // in place, over ranks
   std::function<void(double* values, int count)> max;
 };

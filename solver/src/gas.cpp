@@ -49,7 +49,7 @@ void GasState::advance(double wall, const GasSums& cracks, double t, double dt) 
   // Work on the solid: the volume the motion made, without the crack the front just reached.
   const double v_moved = std::max(reference_volume + wall + cracks.volume_before, 1e-6 * reference_volume);
   // and the entries that joined: their force starts now, over this step's displacement.
-  // The wall particles that left now: their last force over this step's displacement.
+  // The wall particles and crack entries that left now: their last force over this step's displacement.
   work += 0.5 * (pressure + gauge) * (v_moved - volume) + 0.5 * gauge * cracks.joined + 0.5 * pressure * cracks.left;
   volume = v_now;
   wall_volume = wall;
@@ -178,6 +178,7 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
     if (g.crack_pass_every > 1) g.arrival_hop = g.arrival;  // the front's later hops (GasFront)
     g.push.assign(3 * n, 0.0);
     g.front_done.assign(n, 0);
+    g.attached.assign(n, 1);
     g.in_crack.assign(s.neighbor.size(), 0);
     g.position.assign(3 * n, 0.0);
     // The halves each entry has (gas_entry_open), so the open test reads two bytes.

@@ -420,7 +420,7 @@ void write_checkpoint_content(const h5::File& f, const PdSystem& s, const Checkp
       const GasState& g = s.gas;
       const std::vector<double> scalars{g.volume,       g.wall_volume, g.crack_volume, g.pressure, g.pressure_abs,
                                         g.mass_fraction, g.work,        g.vented ? 1.0 : 0.0, g.vent_time,
-                                        g.peak_pressure, g.spent ? 1.0 : 0.0, g.crack_vent_area};
+                                        g.peak_pressure, g.spent ? 1.0 : 0.0, g.crack_vent_area, g.debris_volume};
       f.write("/gas/scalars", scalars, {scalars.size()});
       // Per facet particle, particle and entry: the rows of `mine` (a rank's own gas arrays).
       const GasState& rg = r.gas;
@@ -522,11 +522,13 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
       throw InputError(path, "/gas/scalars", "missing (written without a gas load)", "a checkpoint of this case");
     const auto sc = f.read_doubles("/gas/scalars");
     const auto wall = f.read_doubles("/gas/wall_dv");
-    if (sc.size() != 12 || wall.size() != g.wall_dv.size())
+    // 12 scalars: written before the debris entries' frozen volume (none then).
+    if ((sc.size() != 12 && sc.size() != 13) || wall.size() != g.wall_dv.size())
       throw InputError(path, "/gas", "gas state of another cavity", "a checkpoint of this case");
     g.volume = sc[0], g.wall_volume = sc[1], g.crack_volume = sc[2], g.pressure = sc[3], g.pressure_abs = sc[4];
     g.mass_fraction = sc[5], g.work = sc[6], g.vented = sc[7] != 0.0, g.vent_time = sc[8];
     g.peak_pressure = sc[9], g.spent = sc[10] != 0.0, g.crack_vent_area = sc[11];
+    g.debris_volume = sc.size() > 12 ? sc[12] : 0.0;
     g.wall_dv = wall;
     if (!f.exists("/gas/wall_on"))
       throw InputError(path, "/gas/wall_on", "missing (written by an older breccia-solve)",

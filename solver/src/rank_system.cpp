@@ -264,6 +264,7 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
     if (G.crack_pass_every > 1) r.arrival_hop = r.arrival;
     r.push = take(G.push, ids, 3, n);
     r.front_done = take(G.front_done, ids, 1, n);
+    r.attached = take(G.attached, ids, 1, n);
     r.position = take(G.position, ids, 3, n);
     r.in_crack = slice(G.in_crack, eb, ee);
     r.halves = slice(G.halves, eb, ee);

@@ -194,7 +194,7 @@ struct CudaSystem::Impl {
   // fixed-order sums (GasBuffers' device path); the scalars stay on the host
   DeviceArray<double> gas_wall_dv, gas_wall_left, gas_arrival, gas_arrival_next, gas_kappa_volume, gas_vent_area;
   DeviceArray<double> gas_position, gas_push, gas_arrival_hop;
-  DeviceArray<uint8_t> gas_wall_on, gas_halves, gas_front_done, gas_in_crack;
+  DeviceArray<uint8_t> gas_wall_on, gas_halves, gas_front_done, gas_in_crack, gas_attached;
   DeviceArray<GasSums> gas_block_sums, gas_particle_sums;
   GasBuffers gas{};
   void upload_gas(const GasState& g, int64_t n);
@@ -581,6 +581,7 @@ void CudaSystem::Impl::upload_gas(const GasState& g, int64_t n) {
     gas_push.upload(g.push, "gas push");
     gas_front_done.upload(g.front_done, "gas front_done");
     gas_in_crack.upload(g.in_crack, "gas in_crack");
+    gas_attached.upload(g.attached, "gas attached");
     v.arrival = gas_arrival.get();
     v.arrival_next = gas_arrival_next.get();
     v.halves = gas_halves.get();
@@ -588,6 +589,7 @@ void CudaSystem::Impl::upload_gas(const GasState& g, int64_t n) {
     v.push = gas_push.get();
     v.front_done = gas_front_done.get();
     v.in_crack = gas_in_crack.get();
+    v.attached = gas_attached.get();
     if (!g.arrival_hop.empty()) {  // crack_pass_every > 1: the front's later hops
       gas_arrival_hop.upload(g.arrival_hop, "gas arrival_hop");
       v.arrival_hop = gas_arrival_hop.get();

@@ -493,9 +493,9 @@ public:
   // The gas load over ranks (gas.hpp GasOnRanks).
   static constexpr bool kGasRanks = true;
   // The front and the crack pass read the ghosts' positions: their displacement now (the
-  // force pass's exchange comes after the loads).
-  int64_t gas_ghosts(const PdView& d) const {
-    halo_.exchange({{d.u, 3 * sizeof(double)}});
+  // force pass's exchange comes after the loads), and whether they are debris (GasAttached).
+  int64_t gas_ghosts(const PdView& d, const GasView& g) const {
+    halo_.exchange({{d.u, 3 * sizeof(double)}, {g.attached, sizeof(uint8_t)}});
     return halo_.ghosts();
   }
   // A dry ghost reached from this rank's particles is reached on its owner's rank: the

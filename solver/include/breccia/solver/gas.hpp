@@ -61,11 +61,31 @@ struct GasView {
   // Per bond entry: 1 once the entry is open with both ends wetted at an update, so that its
   // crack is in the gas's volume (for good: bonds do not heal and wetting is for good). The
   // entries so marked skip the open and wetted checks, and the work counts only their motion.
+  // 2 once an end of the entry is debris (gas_debris_entry): its share is frozen in the volume.
   uint8_t* in_crack = nullptr;
+  // Per particle (owned and ghosts): it keeps at least one intact bond (GasAttached, each
+  // exact crack pass). A particle that has lost every bond is debris (gas_debris_entry).
+  uint8_t* attached = nullptr;
 };
 
 BRECCIA_HD bool gas_wetted(const GasView& g, int64_t i) { return g.arrival[i] < 1e300; }
 BRECCIA_HD bool gas_wetted_next(const GasView& g, int64_t i) { return g.arrival_next[i] < 1e300; }
+
+// Is entry i -> j a debris entry: has either end lost every bond? A crack is the gap between
+// two faces of the solid; a particle with no bond left is a loose grain, and its entries'
+// openings measure how far it has flown, not a gap the gas fills (only openings count, so a
+// grain moving through the solid would open volume without bound). Such an entry leaves the
+// crack for good (bonds do not heal): its share is frozen in the volume at the pass that
+// finds it (the gap it bounded then stays, around the grain), and it pushes neither end, as
+// a wall particle that leaves the wall is no longer pushed (GasWallVolume, SurfaceLoads).
+BRECCIA_HD bool gas_debris_entry(const GasView& g, int64_t i, int64_t j) { return !g.attached[i] || !g.attached[j]; }
+
+// Whether particle i keeps at least one intact bond (GasView::attached).
+struct GasAttached {
+  PdView p;
+  GasView g;
+  BRECCIA_HD void operator()(int64_t i) const { g.attached[i] = particle_attached(p.offsets, p.state, i) ? 1 : 0; }
+};
 
 // Wall volume change of facet particle q: while the particle is attached its share follows
 // its displacement; when it loses its last bond it leaves the wall and its share is frozen
@@ -183,12 +203,13 @@ struct GasSums {
   double vents;          // crack-wetted particles on a vent surface
   double vent_area;      // m2, the cracks' mouths on the vent surfaces (opening x trace length)
   double joined;         // m3, -sum V_i a_k e_hat . du_i over the entries that joined this step
-  double left;           // m3, the dV of this step's motion of the wall particles that left it
+  double left;           // m3, the dV of this step's motion of the wall particles and crack entries that left it
+  double frozen;         // m3, the shares of the entries that became debris entries now (gas_debris_entry)
 };
 
 BRECCIA_HD GasSums gas_sums_add(GasSums a, GasSums b) {
   return {a.volume + b.volume, a.volume_before + b.volume_before, a.vents + b.vents, a.vent_area + b.vent_area,
-          a.joined + b.joined, a.left + b.left};
+          a.joined + b.joined, a.left + b.left, a.frozen + b.frozen};
 }
 
 // Sum of the wall shares.
@@ -196,9 +217,9 @@ struct GasWallSum {
   using Value = GasSums;
   const double* wall_dv;
   const double* wall_left;
-  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
+  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
   BRECCIA_HD static Value combine(Value a, Value b) { return gas_sums_add(a, b); }
-  BRECCIA_HD Value operator()(int64_t q) const { return {wall_dv[q], wall_dv[q], 0.0, 0.0, 0.0, wall_left[q]}; }
+  BRECCIA_HD Value operator()(int64_t q) const { return {wall_dv[q], wall_dv[q], 0.0, 0.0, 0.0, wall_left[q], 0.0}; }
 };
 
 // Entry k of particle i (at x_i) in the current configuration: returns its opening
@@ -245,24 +266,39 @@ struct GasCrackSum {
   PdView p;
   GasView g;
   const UBefore* u_before;
-  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
+  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
   BRECCIA_HD static Value combine(Value a, Value b) { return gas_sums_add(a, b); }
 
   // One entry's terms of the sums, +0 where it adds nothing (closed: e <= 0), so that they are
   // formed branch-free. Adding +0 changes no sum: one that starts at +0 never becomes -0.
   struct Terms {
-    double volume, volume_before, joined, density, push[3];
+    double volume, volume_before, joined, left, frozen, density, push[3];
   };
-  // Entry at opening e, direction u (i -> j), a_k / V_i; `joined`: it joined the volume now.
-  BRECCIA_HD static Terms entry_terms(double e, double ux, double uy, double uz, double a_over_vi, bool joined,
+  // What an entry is at this pass: in the volume since the last update, joined it now, or
+  // left it now (an end became debris: gas_debris_entry).
+  enum Mode : uint8_t { kKept = 0, kJoined = 1, kLeft = 2 };
+  // Entry at opening e, direction u (i -> j), a_k / V_i, in `mode`. `moved` is minus the
+  // first-order dV of the pair over i's motion this step (du), both halves (a_k e_hat . du_i).
+  // An entry that leaves keeps its share in the volume (frozen: `frozen`), and its last force
+  // acted over this step's motion (the trapezoid's first half): `left` is that motion's dV and
+  // volume_before its share before it, so that the work counts it as the trapezoid does, as for
+  // a wall particle that leaves the wall (GasWallVolume).
+  BRECCIA_HD static Terms entry_terms(double e, double ux, double uy, double uz, double a_over_vi, uint8_t mode,
                                       double volume_i, const double du[3]) {
     const bool open = e > 0.0;
+    const bool kept = mode == kKept, joined = mode == kJoined, left = mode == kLeft;
     const double share = a_over_vi * volume_i * e * 0.5;
     const double moved = volume_i * a_over_vi * (ux * du[0] + uy * du[1] + uz * du[2]);
     const double density = a_over_vi * e * 0.5;
     const double px = a_over_vi * ux, py = a_over_vi * uy, pz = a_over_vi * uz;
-    return {open ? share : 0.0,        open & !joined ? share : 0.0, open & joined ? moved : 0.0,
-            open ? density : 0.0,      {open ? px : 0.0, open ? py : 0.0, open ? pz : 0.0}};
+    const bool live = open & !left;
+    return {open ? share : 0.0,
+            open & kept ? share : (open & left ? share + moved : 0.0),
+            open & joined ? moved : 0.0,
+            open & left ? -moved : 0.0,
+            open & left ? share : 0.0,
+            live ? density : 0.0,
+            {live ? px : 0.0, live ? py : 0.0, live ? pz : 0.0}};
   }
   // Particle i's running sums, added in entry order.
   struct Particle {
@@ -272,17 +308,40 @@ struct GasCrackSum {
       v.volume += t.volume;
       v.volume_before += t.volume_before;
       v.joined -= t.joined;
+      v.left += t.left;
+      v.frozen += t.frozen;
       density += t.density;
       for (int d = 0; d < 3; ++d) push[d] += t.push[d];
     }
   };
+
+  // Entry k of i at this pass (Mode), or kNone: not in the volume (closed, a dry or debris
+  // end, or frozen since an earlier pass). Marks the entries that join (1) or leave (2)
+  // in in_crack; only i writes its entries.
+  static constexpr uint8_t kNone = 3;
+  BRECCIA_HD static uint8_t entry_mode(const GasView& g, const uint8_t* state, uint8_t* in_crack,
+                                       const int32_t* neighbor, int64_t i, int64_t k) {
+    const uint8_t counted = in_crack[k];
+    if (counted == 2) return kNone;
+    const int32_t j = neighbor[k];
+    if (!counted) {
+      if (!gas_entry_open(state, g.halves, k) || !gas_wetted_next(g, j) || gas_debris_entry(g, i, j)) return kNone;
+      in_crack[k] = 1;
+      return kJoined;
+    }
+    if (gas_debris_entry(g, i, j)) {
+      in_crack[k] = 2;
+      return kLeft;
+    }
+    return kKept;
+  }
 
   BRECCIA_HD Value operator()(int64_t i) const {
     // The front's commit: nothing in this pass reads `arrival`, only arrival_next.
     g.arrival[i] = g.arrival_next[i];
     if (!gas_wetted_next(g, i)) return identity();
     const bool vent = g.vent_area[i] > 0.0 && g.arrival_next[i] > 0.0;
-    Particle s{{0.0, 0.0, vent ? 1.0 : 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, 0.0};
+    Particle s{{0.0, 0.0, vent ? 1.0 : 0.0, 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, 0.0};
     double du[3] = {0.0, 0.0, 0.0};
     if (u_before)
       for (int d = 0; d < 3; ++d) du[d] = p.u[3 * i + d] - double(u_before[3 * i + d]);
@@ -300,31 +359,24 @@ struct GasCrackSum {
     const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
 #if defined(__CUDA_ARCH__)
     for (int64_t k = begin; k < end; ++k) {
-      const bool counted = in_crack[k];
-      if (!counted) {
-        if (!gas_entry_open(state, gv.halves, k) || !gas_wetted_next(gv, neighbor[k])) continue;
-        in_crack[k] = 1;  // only i writes its entries
-      }
+      const uint8_t mode = entry_mode(gv, state, in_crack, neighbor, i, k);
+      if (mode == kNone) continue;
       double ux, uy, uz, a;
       const double e = gas_entry_opening(position, kv, neighbor, xi_len, kappa_i, xx, xy, xz, k, ux, uy, uz, a);
-      s.add(entry_terms(e, ux, uy, uz, a, !counted, volume_i, du));
+      s.add(entry_terms(e, ux, uy, uz, a, mode, volume_i, du));
     }
 #else
     int32_t pick[kBondChunk];
-    bool joined[kBondChunk];
+    uint8_t modes[kBondChunk];
     double e[kBondChunk], ux[kBondChunk], uy[kBondChunk], uz[kBondChunk], a[kBondChunk];
     for (int64_t base = begin; base < end; base += kBondChunk) {
       const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
       int count = 0;
       for (int q = 0; q < m; ++q) {
-        const int64_t k = base + q;
-        const bool counted = in_crack[k];
-        if (!counted) {
-          if (!gas_entry_open(state, gv.halves, k) || !gas_wetted_next(gv, neighbor[k])) continue;
-          in_crack[k] = 1;  // only i writes its entries
-        }
+        const uint8_t mode = entry_mode(gv, state, in_crack, neighbor, i, base + q);
+        if (mode == kNone) continue;
         pick[count] = q;
-        joined[count] = !counted;
+        modes[count] = mode;
         ++count;
       }
       const int32_t* chunk_neighbor = neighbor + base;
@@ -332,7 +384,7 @@ struct GasCrackSum {
 BRECCIA_SIMD
       for (int c = 0; c < count; ++c)
         e[c] = gas_entry_opening(position, kv, chunk_neighbor, chunk_xi, kappa_i, xx, xy, xz, pick[c], ux[c], uy[c], uz[c], a[c]);
-      for (int c = 0; c < count; ++c) s.add(entry_terms(e[c], ux[c], uy[c], uz[c], a[c], joined[c], volume_i, du));
+      for (int c = 0; c < count; ++c) s.add(entry_terms(e[c], ux[c], uy[c], uz[c], a[c], modes[c], volume_i, du));
     }
 #endif
     if (vent) s.v.vent_area = s.density * gv.vent_area[i];
@@ -354,14 +406,14 @@ struct GasCrackDrift {
   PdView p;
   GasView g;
   const UBefore* u_before;
-  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
+  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
   BRECCIA_HD static Value combine(Value a, Value b) { return gas_sums_add(a, b); }
   BRECCIA_HD Value operator()(int64_t i) const {
     if (!u_before || !gas_wetted(g, i)) return identity();
     double dot = 0.0;
     for (int d = 0; d < 3; ++d) dot += g.push[3 * i + d] * (p.u[3 * i + d] - double(u_before[3 * i + d]));
     const double dv = -g.kappa_volume[2 * i + 1] * dot;
-    return {dv, dv, 0.0, 0.0, 0.0, 0.0};
+    return {dv, dv, 0.0, 0.0, 0.0, 0.0, 0.0};
   }
 };
 
@@ -438,12 +490,14 @@ struct GasState {
   double crack_pass_tolerance = 1e-3;  // missed crack volume over V at a pass (gas_crack_pass_interval)
   std::vector<double> wall_dv, arrival, arrival_next, arrival_hop, kappa_volume, push, vent_facet_area;
   std::vector<uint8_t> front_done, in_crack, wall_on;
+  std::vector<uint8_t> attached;  // per particle (GasView::attached; derived each pass, not checkpointed)
   std::vector<uint8_t> halves;    // per bond entry (gas_entry_open; set-up, not checkpointed)
   std::vector<double> position;   // 3 per particle: the crack pass's x0 + u
   std::vector<GasSums> block_sums;  // gas_fixed_order_sum's per-block sums (setup_gas sizes it once)
   std::vector<double> wall_left;
   // evolving state (checkpointed with the particles')
   double volume = 0.0, wall_volume = 0.0, crack_volume = 0.0;
+  double debris_volume = 0.0;     // [m3] the frozen shares of the debris entries, in crack_volume
   double pressure = 0.0;          // gauge pressure applied [Pa]
   double pressure_abs = 0.0;      // absolute gas pressure [Pa]
   double mass_fraction = 1.0;     // of the charge's gas still in the cavity
@@ -479,6 +533,7 @@ struct GasState {
     v.push = push.data();
     v.front_done = front_done.data();
     v.in_crack = in_crack.data();
+    v.attached = attached.data();
     return v;
   }
   // The area the gas escapes through once vented [m2]: the fixed part and the cracks' mouths.
@@ -490,6 +545,7 @@ struct GasState {
   // ranks each advance the same ones; the global system's writers read them from the rank's).
   void copy_scalars(const GasState& o) {
     volume = o.volume, wall_volume = o.wall_volume, crack_volume = o.crack_volume, crack_vent_area = o.crack_vent_area;
+    debris_volume = o.debris_volume;
     pressure = o.pressure, pressure_abs = o.pressure_abs, mass_fraction = o.mass_fraction, work = o.work;
     vented = o.vented, vent_time = o.vent_time, peak_pressure = o.peak_pressure, spent = o.spent;
     wall_s = o.wall_s, cpu_s = o.cpu_s;
@@ -544,8 +600,9 @@ enum class GasSumOver : int { Facets, Particles };
 
 // A distributed run's execution space (solver/mpi/) holds a rank's share of the particles
 // and facet particles, and its ghosts; it declares `kGasRanks` and provides
-//   exec.gas_ghosts(d)                  the ghosts' displacement from their owners; returns
-//                                       how many ghosts follow the d.n owned particles
+//   exec.gas_ghosts(d, g)               the ghosts' displacement and attachment (g.attached)
+//                                       from their owners; returns how many ghosts follow
+//                                       the d.n owned particles
 //   exec.gas_front_to_ghosts(g)         the front's arrival times: the smallest any rank
 //                                       reached to the owner, then the owner's to its ghosts
 //                                       (after each hop of the front: gas_update)
@@ -631,9 +688,12 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
                                                      "gas crack drift", GasSumOver::Particles)
                                      .volume
                                : 0.0;
-      // On ranks the front and the crack pass read the ghosts' positions and arrival times too.
+      // Which particles are debris now (gas_debris_entry), before the crack pass reads them.
+      exec.for_each(d.n, GasAttached{d, g}, "gas_attached");
+      // On ranks the front and the crack pass read the ghosts' positions, arrival times and
+      // attachment too.
       int64_t ghosts = 0;
-      if constexpr (GasOnRanks<Exec>::value) ghosts = exec.gas_ghosts(d);
+      if constexpr (GasOnRanks<Exec>::value) ghosts = exec.gas_ghosts(d, g);
       exec.for_each(d.n + ghosts, GasFrontCopy{g, d.x0, d.u}, "gas_front_copy");
       GasFront front{d, g, t, gas.front_speed()};
       // The front's minima do not depend on the order: a device takes a thread per particle,
@@ -657,13 +717,20 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
       if constexpr (GasOnRanks<Exec>::value) exec.gas_front_to_ghosts(g);
       crack = gas_fixed_order_sum(exec, d.n, GasCrackSum<UBefore>{d, g, u_before}, buffers, gas, "gas crack volume",
                                   GasSumOver::Particles);
+      // The debris entries' frozen shares stay in the volume; those frozen now join them.
+      crack.volume += gas.debris_volume;
+      crack.volume_before += gas.debris_volume;
+      gas.debris_volume += crack.frozen;
       // The old entries' volume at the current positions less the volume followed so far is
-      // the drift since the last pass: put back without work (the forces never did it).
+      // the drift since the last pass: put back without work (the forces never did it). The
+      // drift followed the entries that left now along their old push: their step's motion,
+      // which `left` counts.
       if (every > 1 && gas.crack_pass_done) {
-        crack.volume_before = gas.crack_volume + moved;
+        crack.volume_before = gas.crack_volume + moved - crack.left;
         if (dt > 0.0) {
           gas.crack_pass_interval =
-              gas_crack_pass_interval(gas.crack_pass_interval, every, crack.volume - crack.volume_before, gas.volume,
+              gas_crack_pass_interval(gas.crack_pass_interval, every,
+                                      crack.volume - crack.volume_before - crack.left, gas.volume,
                                       gas.crack_pass_tolerance);
           gas.crack_pass_countdown = gas.crack_pass_interval - 1;
         }
@@ -677,7 +744,7 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
       crack.vent_area = gas.crack_vent_area;
     }
   }
-  crack.left = wall.left;
+  crack.left += wall.left;
   gas.advance(wall.volume, crack, t, dt);
 }
 

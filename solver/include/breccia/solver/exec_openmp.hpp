@@ -14,27 +14,14 @@
 
 namespace breccia::solver {
 
-// The bond passes, compiled for the host's widest vectors too (cpu_wide.cpp); the same
-// static schedule and the same results bit for bit.
-void wide_rows(int64_t n, const BondForces<double>& f);
-void wide_rows(int64_t n, const BondForces<float>& f);
-void wide_rows(int64_t n, const Dilatation<double>& f);
-void wide_rows(int64_t n, const Dilatation<float>& f);
-template <class F>
-inline constexpr bool kWideRows = requires(int64_t n, const F& f) { wide_rows(n, f); };
-
 class OpenMpExec {
 public:
   explicit OpenMpExec(PdSystem& sys) : sys_(sys) {}
 
   template <class F>
   void for_each(int64_t n, const F& f, const char* /*name*/) const {
-    if constexpr (kWideRows<F>) {
-      wide_rows(n, f);
-    } else {
 #pragma omp parallel for schedule(static)
-      for (int64_t i = 0; i < n; ++i) f(i);
-    }
+    for (int64_t i = 0; i < n; ++i) f(i);
   }
 
   template <class Load, class Finish>

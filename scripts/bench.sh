@@ -27,6 +27,9 @@ if [ "${LAMMPS:-1}" != 0 ] && ! command -v lmp >/dev/null 2>&1; then
   SUDO=""; [ "$(id -u)" != 0 ] && SUDO=sudo
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends lammps >/dev/null
 fi
+if [ ! -x /usr/bin/time ]; then
+  echo "bench: /usr/bin/time not found (Debian package 'time'): it times each whole process" >&2; exit 2
+fi
 results="$OUT/bench.csv"
 # The machine's load during the run (a shared machine: compare CPU seconds there).
 echo "start $(date -u +%FT%TZ) loadavg $(cat /proc/loadavg)" > "$OUT/load.txt"

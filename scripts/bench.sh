@@ -9,6 +9,10 @@
 # MODELS may also name pmb-softening and lps-softening: the same lattice with
 # tensile_strength (softening bonds; every bond below its onset, as most bonds of a fracture
 # run are), to cost the softening law against the critical-stretch one.
+# Time to solution: each process is run under /usr/bin/time; process_wall_s and process_cpu_s
+# (user + sys, all threads and, for mpirun, its ranks) cover the whole run: start-up, set-up
+# (Breccia: families, bond coefficients, stable-step estimate; LAMMPS: its run 0, which builds
+# the PERI families), the time loop and the final writes. setup_wall_s is Breccia's set-up.
 set -euo pipefail
 source "$(dirname "$0")/lammps_lattice_input.sh"
 BUILD=${1:-build}; N=${2:-41}; STEPS=${3:-100}
@@ -23,8 +27,14 @@ if [ "${LAMMPS:-1}" != 0 ] && ! command -v lmp >/dev/null 2>&1; then
   SUDO=""; [ "$(id -u)" != 0 ] && SUDO=sudo
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends lammps >/dev/null
 fi
+if [ ! -x /usr/bin/time ]; then
+  echo "bench: /usr/bin/time not found (Debian package 'time'): it times each whole process" >&2; exit 2
+fi
 results="$OUT/bench.csv"
-echo "code,model,precision,threads,particles,bonds_per_particle,steps,loop_wall_s,bond_updates_per_s,per_core_wall,loop_cpu_s,per_cpu_second" > "$results"
+# The machine's load during the run (a shared machine: compare CPU seconds there).
+echo "start $(date -u +%FT%TZ) loadavg $(cat /proc/loadavg)" > "$OUT/load.txt"
+trap 'echo "end $(date -u +%FT%TZ) loadavg $(cat /proc/loadavg)" >> "$OUT/load.txt"' EXIT
+echo "code,model,precision,threads,particles,bonds_per_particle,steps,loop_wall_s,bond_updates_per_s,per_core_wall,loop_cpu_s,per_cpu_second,process_wall_s,process_cpu_s,setup_wall_s" > "$results"
 
 # PRECISIONS="float64 float32": model.precision (docs/performance.md, float32 rows).
 for model in ${MODELS:-pmb lps correspondence}; do
@@ -43,11 +53,12 @@ time: {steps: $STEPS}
 output: {every: 1000000, history_every: 1000000, results: false}
 YAML
   for t in $THREADS_LIST; do
-    OMP_NUM_THREADS=$t "$BIN/breccia-solve" "$OUT/$model-$prec.yaml" -o "$OUT/breccia-$model-$prec-$t" --threads "$t" --quiet --backend cpu
-    $PYTHON - "$OUT/breccia-$model-$prec-$t/summary.json" "$model" "$t" "$prec" >> "$results" <<'PY'
+    OMP_NUM_THREADS=$t /usr/bin/time -f "%e %U %S" -o "$OUT/time-breccia-$model-$prec-$t" "$BIN/breccia-solve" "$OUT/$model-$prec.yaml" -o "$OUT/breccia-$model-$prec-$t" --threads "$t" --quiet --backend cpu
+    $PYTHON - "$OUT/breccia-$model-$prec-$t/summary.json" "$model" "$t" "$prec" "$OUT/time-breccia-$model-$prec-$t" >> "$results" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1])); t = int(sys.argv[3])
-print(f"breccia,{sys.argv[2]},{sys.argv[4]},{t},{s['particles']},{s['mean_family_size']:.1f},{s['steps_this_run']},{s['wall_s']:.3f},{s['bond_updates_per_s']:.4g},{s['bond_updates_per_s']/t:.4g},{s['loop_cpu_s']:.3f},{s['bond_updates_per_cpu_s']:.4g}")
+wall, user, sys_s = map(float, open(sys.argv[5]).read().split()[-3:])
+print(f"breccia,{sys.argv[2]},{sys.argv[4]},{t},{s['particles']},{s['mean_family_size']:.1f},{s['steps_this_run']},{s['wall_s']:.3f},{s['bond_updates_per_s']:.4g},{s['bond_updates_per_s']/t:.4g},{s['loop_cpu_s']:.3f},{s['bond_updates_per_cpu_s']:.4g},{wall:.2f},{user + sys_s:.2f},{s['setup_wall_s']:.2f}")
 PY
   done
 done
@@ -73,7 +84,7 @@ PY
 for model in ${LAMMPS_MODELS:-pmb lps}; do
   write_lammps_lattice_input "$OUT/lammps-$model.in" "$model" "$N" "$DX" "$STEPS"
   for t in $THREADS_LIST; do
-    if ( cd "$OUT" && mpirun --allow-run-as-root --oversubscribe -np "$t" lmp -in "lammps-$model.in" -log "lammps-$model-$t.log" -screen none ) >/dev/null 2>&1; then
+    if ( cd "$OUT" && /usr/bin/time -f "%e %U %S" -o "time-lammps-$model-$t" mpirun --allow-run-as-root --oversubscribe -np "$t" lmp -in "lammps-$model.in" -log "lammps-$model-$t.log" -screen none ) >/dev/null 2>&1; then
       loop=$(grep "^Loop time" "$OUT/lammps-$model-$t.log" | tail -1 | awk '{print $4}')
       atoms=$((N*N*N))
       rate=$(awk -v a=$atoms -v b=$BONDS -v s=$STEPS -v l=$loop 'BEGIN{printf "%.4g", a*b*s/l}')
@@ -82,7 +93,8 @@ for model in ${LAMMPS_MODELS:-pmb lps}; do
       pct=$(grep "CPU use with" "$OUT/lammps-$model-$t.log" | tail -1 | awk '{print $1}' | tr -d '%')
       cpu=$(awk -v l=$loop -v p=$pct -v t=$t 'BEGIN{printf "%.4g", l*p/100*t}')
       percpu=$(awk -v a=$atoms -v b=$BONDS -v s=$STEPS -v c=$cpu 'BEGIN{printf "%.4g", a*b*s/c}')
-      echo "lammps,$model,float64,$t,$atoms,$BONDS,$STEPS,$loop,$rate,$per,$cpu,$percpu" >> "$results"
+      proc=$(awk '{w=$1; c=$2+$3} END{printf "%.2f,%.2f", w, c}' "$OUT/time-lammps-$model-$t")
+      echo "lammps,$model,float64,$t,$atoms,$BONDS,$STEPS,$loop,$rate,$per,$cpu,$percpu,$proc," >> "$results"
     else
       echo "lammps,$model,float64,$t,,,,failed (see $OUT/lammps-$model-$t.log),," >> "$results"
     fi

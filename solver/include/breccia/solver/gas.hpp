@@ -315,17 +315,21 @@ struct GasCrackSum {
     double e[kBondChunk], ux[kBondChunk], uy[kBondChunk], uz[kBondChunk], a[kBondChunk];
     for (int64_t base = begin; base < end; base += kBondChunk) {
       const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
+      // Branch-free: on a block the gas has broken up the entries in the crack and the intact
+      // ones alternate at random along a row, and a branch on each would be mispredicted about
+      // every other entry. The partner's arrival is read for every entry (the particles near i
+      // are in cache: Morton order); only a join, rare, takes a branch (its store).
       int count = 0;
+      const uint8_t* halves = gv.halves;
+      const double* arrival_next = gv.arrival_next;
       for (int q = 0; q < m; ++q) {
         const int64_t k = base + q;
-        const bool counted = in_crack[k];
-        if (!counted) {
-          if (!gas_entry_open(state, gv.halves, k) || !gas_wetted_next(gv, neighbor[k])) continue;
-          in_crack[k] = 1;  // only i writes its entries
-        }
+        const bool counted = in_crack[k] != 0;
+        const bool joins = !counted & gas_entry_open(state, halves, k) & (arrival_next[neighbor[k]] < 1e300);
+        if (joins) in_crack[k] = 1;  // only i writes its entries
         pick[count] = q;
-        joined[count] = !counted;
-        ++count;
+        joined[count] = joins;
+        count += counted | joins;
       }
       const int32_t* chunk_neighbor = neighbor + base;
       const double* chunk_xi = xi_len + base;

@@ -41,6 +41,21 @@ BRECCIA_HD bool gas_entry_open(const uint8_t* state, const uint8_t* halves, int6
   return (state[k] & halves[k]) == 0;
 }
 
+// Is entry k in the crack volume at this update: in it since an earlier one (`in_crack`), or
+// joining now (open, and its partner wetted: arrival_next), which marks it? `joins` tells
+// which. Branch-free (GasCrackSum's host pick: where the gas has broken up a block, entries
+// in the crack and intact ones alternate at random along a row, and a branch on each would
+// be mispredicted about every other entry); the partner's arrival is read for every entry
+// (the particles near i are in cache: Morton order), and only a join, rare, takes a branch
+// (its store; only i writes its own entries).
+BRECCIA_HD bool gas_entry_in_crack(uint8_t* in_crack, const uint8_t* state, const uint8_t* halves,
+                                   const double* arrival_next, const int32_t* neighbor, int64_t k, bool& joins) {
+  const bool counted = in_crack[k] != 0;
+  joins = !counted & gas_entry_open(state, halves, k) & (arrival_next[neighbor[k]] < 1e300);
+  if (joins) in_crack[k] = 1;
+  return counted | joins;
+}
+
 // Device-side arrays of the gas (GasState below holds them on the host).
 struct GasView {
   int load = -1;                   // index of the gas among the surface loads (FacetView::load)
@@ -300,14 +315,11 @@ struct GasCrackSum {
     const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
 #if defined(__CUDA_ARCH__)
     for (int64_t k = begin; k < end; ++k) {
-      const bool counted = in_crack[k];
-      if (!counted) {
-        if (!gas_entry_open(state, gv.halves, k) || !gas_wetted_next(gv, neighbor[k])) continue;
-        in_crack[k] = 1;  // only i writes its entries
-      }
+      bool joins;
+      if (!gas_entry_in_crack(in_crack, state, gv.halves, gv.arrival_next, neighbor, k, joins)) continue;
       double ux, uy, uz, a;
       const double e = gas_entry_opening(position, kv, neighbor, xi_len, kappa_i, xx, xy, xz, k, ux, uy, uz, a);
-      s.add(entry_terms(e, ux, uy, uz, a, !counted, volume_i, du));
+      s.add(entry_terms(e, ux, uy, uz, a, joins, volume_i, du));
     }
 #else
     int32_t pick[kBondChunk];
@@ -315,21 +327,15 @@ struct GasCrackSum {
     double e[kBondChunk], ux[kBondChunk], uy[kBondChunk], uz[kBondChunk], a[kBondChunk];
     for (int64_t base = begin; base < end; base += kBondChunk) {
       const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
-      // Branch-free: on a block the gas has broken up the entries in the crack and the intact
-      // ones alternate at random along a row, and a branch on each would be mispredicted about
-      // every other entry. The partner's arrival is read for every entry (the particles near i
-      // are in cache: Morton order); only a join, rare, takes a branch (its store).
-      int count = 0;
+      int count = 0;  // branch-free (gas_entry_in_crack): every entry is written, the count says which stay
       const uint8_t* halves = gv.halves;
       const double* arrival_next = gv.arrival_next;
       for (int q = 0; q < m; ++q) {
-        const int64_t k = base + q;
-        const bool counted = in_crack[k] != 0;
-        const bool joins = !counted & gas_entry_open(state, halves, k) & (arrival_next[neighbor[k]] < 1e300);
-        if (joins) in_crack[k] = 1;  // only i writes its entries
+        bool joins;
+        const bool in = gas_entry_in_crack(in_crack, state, halves, arrival_next, neighbor, base + q, joins);
         pick[count] = q;
         joined[count] = joins;
-        count += counted | joins;
+        count += in;
       }
       const int32_t* chunk_neighbor = neighbor + base;
       const double* chunk_xi = xi_len + base;

@@ -614,4 +614,147 @@ TEST(Gas, AParticleThatHasLostEveryBondIsDebrisTheGasNeitherPushesNorFollows) {
   // 1%: the bound on the gas work against the work of its forces (as above); the
   // frozen entries leave the work as a wall particle that leaves the wall does.
   EXPECT_NEAR(s.external_work / s.gas.work, 1.0, 0.01);
+
+TEST(Gas, TheChunkedCrackPassSumsAsTheOneEntryLoopBitForBit) {
+  // GasCrackSum's host pass picks the entries in the crack branch-free in chunks of
+  // kBondChunk, computes their openings as a batch and adds their terms in entry order; the
+  // CUDA build runs one entry at a time. Here rows of 150 entries (three chunks) mix every
+  // kind of entry at random: in the crack already, joining (open, partner wetted), open to a
+  // dry partner, intact on one or both halves, half missing, opening or closing, leaving (an
+  // end that has lost every bond: debris) or frozen since an earlier pass. The sums and
+  // each particle's push must be the one-entry loop's, written out below from the formulas
+  // (gas.hpp's header), bit for bit, and the entries marked the same.
+  constexpr int n = 151;
+  std::vector<double> x0(3 * n), u(3 * n), u_before(3 * n), position(3 * n), kappa_volume(2 * n), vent(n, 0.0);
+  std::vector<double> arrival(n), arrival_next(n), push(3 * n, 0.0);
+  std::vector<uint8_t> front_done(n, 0), attached(n, 1);
+  std::vector<int64_t> offsets(n + 1, 0);
+  std::vector<int32_t> neighbor;
+  std::vector<double> xi_len;
+  std::vector<uint8_t> state, halves, in_crack;
+  uint64_t seed = 12345;
+  const auto rnd = [&seed] {  // uniform in [0, 1), a fixed sequence
+    seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(seed >> 11) * 0x1.0p-53;
+  };
+  for (int i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) {
+      x0[3 * i + d] = rnd();
+      u_before[3 * i + d] = 0.02 * (rnd() - 0.5);
+      u[3 * i + d] = u_before[3 * i + d] + 0.01 * (rnd() - 0.5);
+      position[3 * i + d] = x0[3 * i + d] + u[3 * i + d];
+    }
+    kappa_volume[2 * i] = 1.0 + rnd();
+    kappa_volume[2 * i + 1] = 1e-3 * (1.0 + rnd());
+    arrival_next[i] = rnd() < 0.7 ? 1e-6 * rnd() : std::numeric_limits<double>::infinity();
+    arrival[i] = arrival_next[i];
+    if (rnd() < 0.2) vent[i] = rnd();
+    if (rnd() < 0.1) attached[i] = 0;  // debris (gas_debris_entry)
+  }
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      if (j == i) continue;
+      neighbor.push_back(j);
+      double r2 = 0.0;
+      for (int d = 0; d < 3; ++d) r2 += (x0[3 * j + d] - x0[3 * i + d]) * (x0[3 * j + d] - x0[3 * i + d]);
+      xi_len.push_back(std::sqrt(r2));
+      const uint8_t have = static_cast<uint8_t>(1 + static_cast<int>(3 * rnd()));  // own, dual or both
+      const uint8_t st = static_cast<uint8_t>(have & static_cast<int>(4 * rnd()));
+      halves.push_back(have);
+      state.push_back(st);
+      const double r = rnd();  // in the crack (1), frozen there (2) or not yet (0)
+      in_crack.push_back((st & have) == 0 && r < 0.5 ? (r < 0.05 ? 2 : 1) : 0);
+    }
+    offsets[i + 1] = static_cast<int64_t>(neighbor.size());
+  }
+  std::vector<uint8_t> in_crack_ref = in_crack;
+
+  PdView p;
+  p.n = n;
+  p.u = u.data();
+  p.offsets = offsets.data();
+  p.neighbor = neighbor.data();
+  p.xi_len = xi_len.data();
+  p.state = state.data();
+  GasView g;
+  g.arrival = arrival.data();
+  g.arrival_next = arrival_next.data();
+  g.kappa_volume = kappa_volume.data();
+  g.vent_area = vent.data();
+  g.halves = halves.data();
+  g.position = position.data();
+  g.push = push.data();
+  g.front_done = front_done.data();
+  g.in_crack = in_crack.data();
+  g.attached = attached.data();
+  const GasCrackSum<double> pass{p, g, u_before.data()};
+
+  int64_t joined_entries = 0, summed_entries = 0, left_entries = 0;
+  for (int i = 0; i < n; ++i) {
+    const GasSums got = pass(i);
+    // The one-entry loop.
+    double volume = 0.0, before = 0.0, joined = 0.0, left = 0.0, frozen = 0.0, density = 0.0, pv[3] = {0.0, 0.0, 0.0};
+    const bool wet = arrival_next[i] < 1e300;
+    if (wet) {
+      const double vi = kappa_volume[2 * i + 1];
+      for (int64_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+        const int j = neighbor[k];
+        if (in_crack_ref[k] == 2) continue;  // frozen at an earlier pass
+        const bool counted = in_crack_ref[k] == 1;
+        const bool debris = !attached[i] || !attached[j];
+        const bool leaves = counted && debris;
+        if (leaves) {
+          in_crack_ref[k] = 2;
+          ++left_entries;
+        }
+        if (!counted) {
+          if (debris) continue;
+          if ((state[k] & halves[k]) != 0 || !(arrival_next[j] < 1e300)) continue;
+          in_crack_ref[k] = 1;
+          ++joined_entries;
+        }
+        ++summed_entries;
+        double dv[3], len2 = 0.0;
+        for (int d = 0; d < 3; ++d) dv[d] = position[3 * j + d] - position[3 * i + d];
+        len2 = dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2];
+        const double len = std::sqrt(len2);
+        const double e = len - xi_len[k];
+        if (!(e > 0.0)) continue;
+        double unit[3];
+        for (int d = 0; d < 3; ++d) unit[d] = len > 0 ? dv[d] / len : 0.0;
+        const double a = 0.5 * (kappa_volume[2 * i] + kappa_volume[2 * j]) * kappa_volume[2 * j + 1];
+        const double share = a * vi * e * 0.5;
+        volume += share;
+        double dot = 0.0;
+        for (int d = 0; d < 3; ++d) dot += unit[d] * (u[3 * i + d] - u_before[3 * i + d]);
+        const double moved = vi * a * dot;
+        if (leaves) {  // its share frozen in the volume; its last force over this step's motion
+          before += share + moved;
+          left += -moved;
+          frozen += share;
+          continue;  // pushes no more
+        }
+        if (counted) before += share;
+        else joined -= moved;
+        density += a * e * 0.5;
+        for (int d = 0; d < 3; ++d) pv[d] += a * unit[d];
+      }
+    }
+    const bool vents = wet && vent[i] > 0.0 && arrival_next[i] > 0.0;
+    ASSERT_EQ(got.volume, volume) << "particle " << i;
+    EXPECT_EQ(got.volume_before, before) << "particle " << i;
+    EXPECT_EQ(got.joined, joined) << "particle " << i;
+    EXPECT_EQ(got.left, left) << "particle " << i;
+    EXPECT_EQ(got.frozen, frozen) << "particle " << i;
+    EXPECT_EQ(got.vents, vents ? 1.0 : 0.0) << "particle " << i;
+    EXPECT_EQ(got.vent_area, vents ? density * vent[i] : 0.0) << "particle " << i;
+    if (wet)
+      for (int d = 0; d < 3; ++d) EXPECT_EQ(push[3 * i + d], pv[d]) << "particle " << i << ", component " << d;
+    EXPECT_EQ(arrival[i], arrival_next[i]) << "the front's commit";
+  }
+  EXPECT_TRUE(in_crack == in_crack_ref) << "the entries marked in the crack differ";
+  // Something of each kind was exercised.
+  EXPECT_GT(joined_entries, 1000);
+  EXPECT_GT(summed_entries - joined_entries, 1000);
+  EXPECT_GT(left_entries, 500);
 }

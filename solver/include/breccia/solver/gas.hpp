@@ -321,20 +321,19 @@ struct GasCrackSum {
   static constexpr uint8_t kNone = 3;
   BRECCIA_HD static uint8_t entry_mode(const GasView& g, const uint8_t* state, uint8_t* in_crack,
                                        const int32_t* neighbor, int64_t i, int64_t k) {
+    // Branch-free but for the stores, which are rare: where the gas has broken up a block,
+    // entries in the crack and intact ones alternate at random along a row, and a branch on
+    // each would be mispredicted about every other entry. The partner's arrival and
+    // attachment are read for every entry (the particles near i are in cache: Morton order).
     const uint8_t counted = in_crack[k];
-    if (counted == 2) return kNone;
     const int32_t j = neighbor[k];
-    if (!counted) {
-      if (!gas_entry_open(state, g.halves, k) || !gas_wetted_next(g, j) || gas_debris_entry(g, i, j)) return kNone;
-      in_crack[k] = 1;
-      return kJoined;
-    }
-    if (gas_debris_entry(g, i, j)) {
-      in_crack[k] = 2;
-      return kLeft;
-    }
-    return kKept;
+    const bool debris = gas_debris_entry(g, i, j);
+    const bool joins = (counted == 0) & gas_entry_open(state, g.halves, k) & gas_wetted_next(g, j) & !debris;
+    const bool leaves = (counted == 1) & debris;
+    if (joins | leaves) in_crack[k] = joins ? 1 : 2;
+    return counted == 1 ? (leaves ? kLeft : kKept) : (joins ? kJoined : kNone);
   }
+
 
   BRECCIA_HD Value operator()(int64_t i) const {
     // The front's commit: nothing in this pass reads `arrival`, only arrival_next.
@@ -371,13 +370,12 @@ struct GasCrackSum {
     double e[kBondChunk], ux[kBondChunk], uy[kBondChunk], uz[kBondChunk], a[kBondChunk];
     for (int64_t base = begin; base < end; base += kBondChunk) {
       const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
-      int count = 0;
+      int count = 0;  // branch-free (entry_mode): every entry is written, the count says which stay
       for (int q = 0; q < m; ++q) {
         const uint8_t mode = entry_mode(gv, state, in_crack, neighbor, i, base + q);
-        if (mode == kNone) continue;
         pick[count] = q;
         modes[count] = mode;
-        ++count;
+        count += mode != kNone;
       }
       const int32_t* chunk_neighbor = neighbor + base;
       const double* chunk_xi = xi_len + base;

@@ -725,11 +725,23 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
       // which `left` counts.
       if (every > 1 && gas.crack_pass_done) {
         crack.volume_before = gas.crack_volume + moved - crack.left;
+        // The step's work trapezoid takes the forces at its start along the old push vectors
+        // and at its end along this pass's: 1/2 p_old dV(old push) + 1/2 p_new dV(new push).
+        // GasState::advance counts 1/2 (p_old + p_new) (moved - left) + 1/2 p_new joined +
+        // 1/2 p_old left, so `joined` becomes the new push's dV less the old's (kept entries
+        // turned, entries joined): the gas work stays the work of its forces at a pass too.
+        // (Every step, the kept entries' exact dV is already the secant of the two pushes.)
+        if (u_before) {
+          const double moved_new = gas_fixed_order_sum(exec, d.n, GasCrackDrift<UBefore>{d, g, u_before}, buffers, gas,
+                                                       "gas crack drift", GasSumOver::Particles)
+                                       .volume;
+          crack.joined = moved_new - (moved - crack.left);
+        }
         if (dt > 0.0) {
           gas.crack_pass_interval =
               gas_crack_pass_interval(gas.crack_pass_interval, every,
-                                      crack.volume - crack.volume_before - crack.left, gas.volume,
-                                      gas.crack_pass_tolerance);
+                                      std::fabs(crack.volume - crack.volume_before - crack.left) + crack.frozen,
+                                      gas.volume, gas.crack_pass_tolerance);
           gas.crack_pass_countdown = gas.crack_pass_interval - 1;
         }
       }

@@ -65,11 +65,25 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
     const size_t j = static_cast<size_t>(cells.members[static_cast<size_t>(k)]);
     sorted[static_cast<size_t>(k)] = {{x[3 * j], x[3 * j + 1], x[3 * j + 2]}, pad_of(j), horizon[j], static_cast<int32_t>(j)};
   }
+  // The largest pad in each cell: a cell is searched only as far as its own particles'
+  // pads reach. On a graded mesh the largest pad is a coarse particle's, several times a
+  // fine one's, and fine particles (most of them) searched a sphere of twice their reach:
+  // the full concrete case tested 281 million candidates for 70 million entries, 145
+  // million with this bound. The same lists: every skipped j lies beyond its own reach.
+  std::vector<double> cell_pad;
+  if (max_pad > 0.0) {
+    cell_pad.assign(static_cast<size_t>(grid.cells()), 0.0);
+#pragma omp parallel for schedule(static)
+    for (long long c = 0; c < grid.cells(); ++c)
+      for (int64_t k = cells.start[c]; k < cells.start[c + 1]; ++k)
+        cell_pad[static_cast<size_t>(c)] = std::max(cell_pad[static_cast<size_t>(c)], sorted[static_cast<size_t>(k)].pad);
+  }
   // Own search of particle i: every j within h_i + max(p_i, p_j).
   auto visit = [&](size_t i, auto&& emit) {
     long long ci[3];
     for (int d = 0; d < 3; ++d) ci[d] = grid.coordinate(d, x[3 * i + d]);
-    const double search = (both_ends ? max_horizon : horizon[i]) + max_pad;
+    const double reach_base = both_ends ? max_horizon : horizon[i];
+    const double search = reach_base + max_pad;
     const long long ring = static_cast<long long>(std::ceil(search / cell));
     // A cell is skipped when its box lies beyond the search radius (with a margin for the
     // rounding of a point's cell coordinate, so that no neighbour is ever lost).
@@ -91,6 +105,10 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
           const double gx = gap(0, ax);
           if (gz * gz + gy * gy + gx * gx > skip2) continue;
           const long long c = grid.index(ax, ay, az);
+          if (!cell_pad.empty()) {  // this cell's own reach (the same margin)
+            const double cell_search = reach_base + std::max(pad_i, cell_pad[static_cast<size_t>(c)]) + 1e-9 * cell;
+            if (gz * gz + gy * gy + gx * gx > cell_search * cell_search) continue;
+          }
           for (int64_t k = cells.start[c]; k < cells.start[c + 1]; ++k) {
             const Candidate& cj = sorted[static_cast<size_t>(k)];
             const size_t j = static_cast<size_t>(cj.index);

@@ -48,44 +48,8 @@ inline constexpr int partial_volume_sample_total(int dimension) {
   return dimension == 3 ? kPartialVolumeSamples * kPartialVolumeSamples * kPartialVolumeSamples
                         : kPartialVolumeSamples * kPartialVolumeSamples;
 }
-inline int partial_volume_samples_inside(const double xi[3], double horizon, double half_cell_j, int dimension) {
-  constexpr int n = kPartialVolumeSamples;
-  const double reach = half_cell_j * (dimension == 3 ? 1.7320508075688772 : 1.4142135623730951);
-  const double len = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
-  if (len + reach <= horizon) return partial_volume_sample_total(dimension);
-  if (len - reach >= horizon) return 0;
-  const double h = 2.0 * half_cell_j / n;
-  // Each axis's squared sample coordinates once (6 per axis, not 216 per point); a point is
-  // inside when (px^2 + py^2) + pz^2 <= horizon^2, summed in that order. Floating-point
-  // addition is monotonic, so a row of z samples is all outside when its smallest square
-  // is, all inside when its largest is: the count is the point-by-point count exactly.
-  double sq[3][n];
-  for (int axis = 0; axis < 3; ++axis)
-    for (int a = 0; a < n; ++a) {
-      const double p = xi[axis] - half_cell_j + (a + 0.5) * h;
-      sq[axis][a] = p * p;
-    }
-  const int nz = dimension == 3 ? n : 1;
-  if (dimension != 3) sq[2][0] = xi[2] * xi[2];
-  double z_min = sq[2][0], z_max = sq[2][0];
-  for (int c = 1; c < nz; ++c) {
-    z_min = sq[2][c] < z_min ? sq[2][c] : z_min;
-    z_max = sq[2][c] > z_max ? sq[2][c] : z_max;
-  }
-  const double r2 = horizon * horizon;
-  int inside = 0;
-  for (int a = 0; a < n; ++a)
-    for (int b = 0; b < n; ++b) {
-      const double s = sq[0][a] + sq[1][b];
-      if (s + z_min > r2) continue;
-      if (s + z_max <= r2) {
-        inside += nz;
-        continue;
-      }
-      for (int c = 0; c < nz; ++c) inside += (s + sq[2][c] <= r2);
-    }
-  return inside;
-}
+// Host only (solver/src/partial_volume.cpp): the set-up runs it once per candidate entry.
+int partial_volume_samples_inside(const double xi[3], double horizon, double half_cell_j, int dimension);
 inline double partial_volume_sampled(const double xi[3], double horizon, double half_cell_j, int dimension) {
   return static_cast<double>(partial_volume_samples_inside(xi, horizon, half_cell_j, dimension)) /
          partial_volume_sample_total(dimension);

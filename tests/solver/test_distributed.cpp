@@ -385,6 +385,15 @@ static void expect_same_history(const std::string& one_dir, const std::string& r
   }
 }
 
+// A run on ranks (`out`) against one process's (`one`): results.h5 and checkpoint.h5 byte for
+// byte, the history (expect_same_history) and summary.json's energies (expect_same_energies).
+static void expect_one_process_files(const std::string& one, const std::string& out) {
+  for (const char* f : {"/results.h5", "/checkpoint.h5"})
+    EXPECT_EQ(differing(one + f, out + f), std::vector<std::string>{}) << out << f;
+  expect_same_history(one, out);
+  expect_same_energies(summary(one), summary(out), out);
+}
+
 // A disc of radius 40 mm with a 5 mm charge hole, in plane strain (meshed once per test
 // process; the gas tests' specimen, test_gas.cpp): 4,327 particles.
 static std::string gas_disc() {
@@ -687,10 +696,7 @@ TEST(Distributed, ShortRangeForcesBetweenRanksGiveTheOneProcessAnswer) {
       const std::string out = base + "_np" + std::to_string(ranks);
       const Outcome o = solve(file, out, ranks, 1);
       ASSERT_EQ(o.exit_code, 0) << out << ": " << o.err;
-      for (const char* f : {"/results.h5", "/checkpoint.h5"})
-        EXPECT_EQ(differing(base + "_np1" + f, out + f), std::vector<std::string>{}) << out << f;
-      expect_same_history(base + "_np1", out);
-      expect_same_energies(summary(base + "_np1"), summary(out), out);
+      expect_one_process_files(base + "_np1", out);
       EXPECT_TRUE(summary(out)["distributed_setup"].get<bool>()) << out << " built the whole system";
       EXPECT_EQ(o.err.find("note: set-up"), std::string::npos) << out << ": " << o.err;
     }
@@ -730,10 +736,7 @@ static void expect_gas_gives_one_process_answer(const std::string& name, const s
     const std::string out = base + "_np" + std::to_string(ranks);
     const Outcome o = solve(file, out, ranks, 1);
     ASSERT_EQ(o.exit_code, 0) << out << ": " << o.err;
-    for (const char* f : {"/results.h5", "/checkpoint.h5"})
-      EXPECT_EQ(differing(base + "_np1" + f, out + f), std::vector<std::string>{}) << out << f;
-    expect_same_history(base + "_np1", out);
-    expect_same_energies(summary(base + "_np1"), summary(out), out);
+    expect_one_process_files(base + "_np1", out);
   }
   // Stopped on 3 ranks half way (on a history row: a stop writes one), finished on 2.
   const std::string out = base + "_restart";

@@ -1,29 +1,15 @@
 #include "breccia/solver/distributed_setup.hpp"
 
-#include <cstdio>
 #include <stdexcept>
 
 #include "breccia/common/error.hpp"
 
 namespace breccia::solver {
 
-std::string distributed_setup_refusal(const PdSystem& s) {
-  const CaseConfig& c = s.config;
-  // Each of these reads, per particle, values summed over other particles' families (the
-  // ghosts' own rows: a second layer), or runs a pass over every family at set-up.
-  for (const auto& l : c.loads)
-    if (l.kind == LoadSpec::Kind::Gas) return "loads[].type: gas";
-  return "";
-}
-
 DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d) {
   DistributedRows rows;
   rows.end = static_cast<int64_t>(s.n);
   if (!d.active()) return rows;
-  if (const std::string why = distributed_setup_refusal(s); !why.empty()) {
-    std::fprintf(stderr, "note: set-up: %s: every rank builds the whole system (docs/parallel.md)\n", why.c_str());
-    return rows;
-  }
   // The row lengths the set-up will build, counted without a bond stored: the whole
   // system's offsets and the partition MortonRangePartitioner cuts from them (the one the
   // whole-system set-up's ranks cut).
@@ -108,6 +94,9 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   if (s.config.softening) gather_entries(d, s.bond_damage, true);
   // A rate law's onsets are state (restrict_to_rank_taking_bonds left the rank's own here).
   if (s.config.strength_rate != StrengthRateLaw::None) gather_entries(d, s.s_onset, true);
+  // A gas load's entered cracks are state too (checkpoint.h5's /gas/in_crack, read whole by a
+  // restart); its `halves` moved into the rank's system with the bonds (set-up only).
+  if (s.gas.active && s.gas.crack_entry) gather_entries(d, s.gas.in_crack, true);
   // The stable-step estimate cut the rank's system and took the coefficients with it
   // (restrict_to_rank_taking_bonds): without that hook the ranks would have no bonds.
   if (!s.xi_len.empty())
@@ -118,7 +107,8 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
     gather_entries(d, s.k_dual, false);
   }
   s.offsets = rows.full_offsets;
-  if (s.state.size() != s.bond_count()) throw std::logic_error("distributed set-up: the gathered bond states");
+  if (s.state.size() != s.bond_count() || (s.gas.active && s.gas.crack_entry && s.gas.in_crack.size() != s.bond_count()))
+    throw std::logic_error("distributed set-up: the gathered bond states");
 }
 
 }  // namespace breccia::solver

@@ -163,7 +163,8 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
                        "the name of a boundary surface group");
     for (size_t f = 0; f < vent->size(); ++f) g.vent_facet_area[s.internal_index[vent->particle[f]]] += vent->area_m2[f];
   }
-  // Crack-face area factor kappa_i = 2 d / sum_j V_j |xi| (gas.hpp).
+  // Crack-face area factor kappa_i = 2 d / sum_j V_j |xi| (gas.hpp). A distributed set-up
+  // holds the rank's rows only (the others are empty here): setup_system gathers the owners'.
   g.kappa_volume.assign(2 * n, 0.0);
   for (size_t i = 0; i < n; ++i) {
     double mi = 0.0;
@@ -179,6 +180,8 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
     g.push.assign(3 * n, 0.0);
     g.front_done.assign(n, 0);
     g.attached.assign(n, 1);
+    // Per entry: the rank's rows under a distributed set-up (finish_distributed_setup gathers
+    // in_crack whole, the state a checkpoint keeps; halves move into the rank's system).
     g.in_crack.assign(s.neighbor.size(), 0);
     g.position.assign(3 * n, 0.0);
     // The halves each entry has (gas_entry_open), so the open test reads two bytes.

@@ -155,6 +155,8 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   // rest (an empty array slices as empty).
   std::vector<double> xi_len, k_own, k_dual, vol_own;
   std::vector<float> s0_own, s0_dual, s_onset;
+  std::vector<uint8_t> gas_halves;  // set-up data of the bonds; in_crack is state (restrict_gas)
+  gas_halves.swap(g.gas.halves);
   xi_len.swap(g.xi_len);
   k_own.swap(g.k_own);
   s0_own.swap(g.s0_own);
@@ -178,6 +180,7 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   s.s0_own = std::move(s0_own);
   s.s0_dual = std::move(s0_dual);
   s.s_onset = std::move(s_onset);
+  s.gas.halves = std::move(gas_halves);
   if (!g.config.write_results) std::vector<int32_t>().swap(g.neighbor);  // renumbered in s
   return s;
 }
@@ -228,7 +231,9 @@ void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
 namespace {
 
 // The gas of the rank's particles: per particle over owned and ghosts (the front and the
-// crack pass read the partners'), per entry the owned rows, per facet particle the owned ones
+// crack pass read the partners'), per entry the owned rows (in_crack from the global entry
+// range: a distributed set-up's global system holds its own rows at first, every rank's once
+// finish_distributed_setup gathered them), per facet particle the owned ones
 // (one contiguous run of the global list: it is sorted by particle). The scalars are the
 // global system's: every rank advances them alike from sums over every rank (mpi_backend.cpp).
 void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std::vector<int32_t>& ids) {
@@ -237,6 +242,10 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
   const size_t n = g.n;
   const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
   const int64_t fb = first_facet_of(g, L.begin()), fe = first_facet_of(g, L.begin() + L.owned());
+  // A distributed set-up's halves are the rank's rows already: they moved into this system
+  // with the bonds (restrict_to_rank_taking_bonds) and stay when its state is brought up to
+  // date; a whole system's are its rows' slice.
+  std::vector<uint8_t> halves = G.halves.empty() ? std::move(r.halves) : slice(G.halves, eb, ee);
   r = GasState{};
   r.active = true;
   r.load = G.load;
@@ -267,7 +276,7 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
     r.attached = take(G.attached, ids, 1, n);
     r.position = take(G.position, ids, 3, n);
     r.in_crack = slice(G.in_crack, eb, ee);
-    r.halves = slice(G.halves, eb, ee);
+    r.halves = std::move(halves);
   }
   r.block_sums.assign(static_cast<size_t>(gas_blocks(std::max<int64_t>(L.owned(), fe - fb))), GasSums{});
 }

@@ -1273,6 +1273,9 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       setup_gas(s, static_cast<int>(surface), "loads[" + std::to_string(l) + "]");
     ++surface;
   }
+  // dist: the crack-face factors (a sum over each row) of the ghosts, which the crack pass
+  // reads for every partner. setup_gas computed its own rows' (the others are empty here).
+  gather_owned(dist, dist_rows, s.gas.kappa_volume, 2);
 
   // Constraints.
   s.fixed_dof.assign(n, 0);

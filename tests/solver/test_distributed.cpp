@@ -394,24 +394,12 @@ static void expect_one_process_files(const std::string& one, const std::string& 
   expect_same_energies(summary(one), summary(out), out);
 }
 
-// A disc of radius 40 mm with a 5 mm charge hole, in plane strain (meshed once per test
-// process; the gas tests' specimen, test_gas.cpp): 4,327 particles.
-static std::string gas_disc() {
-  static const std::string path = mesh_and_place(
-      "mpi_gas_disc",
-      "dimension: 2\nthickness: 10 mm\n"
-      "body: {shape: disc, name: rock, radius: 40 mm}\n"
-      "holes: [{name: charge_hole, centre: [0, 0], radius: 5 mm}]\n"
-      "mesh: {size: 2 mm, refine: [{near: charge_hole, size: 0.6 mm, distance_min: 1 mm, distance_max: 15 mm}]}\n",
-      "--thickness 10mm");
-  return path;
-}
-
-// The charge hole of gas_disc pressurised by a gas (loads[].type: gas) behind a pre-crack
-// `to` the given point; `extra`: more of the gas's keys, `material`: more of the rock's.
+// The charge hole of the gas tests' disc (charge_hole_disc, helpers.hpp) pressurised by a gas
+// (loads[].type: gas) behind a pre-crack `to` the given point; `extra`: more of the gas's
+// keys, `material`: more of the rock's.
 static std::string gas_case(const std::string& material, const std::string& to, const std::string& extra,
                             const std::string& time, const std::string& model = "type: lps") {
-  return "specimen: {particles: " + gas_disc() + "}\n"
+  return "specimen: {particles: " + charge_hole_disc() + "}\n"
          "model: {" + model + ", planar: plane_strain, horizon_factor: 3.015, variable_horizon: true}\n"
          "materials: [{name: rock, density: 2000, youngs_modulus: 1 GPa, poisson_ratio: 0.25" + material + "}]\n"
          "precracks: [{type: segment, from: [4 mm, 0.01 mm], to: " + to + "}]\n"
@@ -426,7 +414,7 @@ static std::string gas_case(const std::string& material, const std::string& to, 
 // history.csv (with the gas's columns) byte for byte. Without that hook each rank's gas would
 // see its own share of the wall and the cracks, and a pressure of its own.
 TEST(Distributed, GasWithDynamicRelaxationGivesTheOneProcessAnswer) {
-  ASSERT_FALSE(gas_disc().empty()) << "could not mesh the charge-hole disc";
+  ASSERT_FALSE(charge_hole_disc().empty()) << "could not mesh the charge-hole disc";
   const std::string file = write_case(
       "mpi_gas_adr", gas_case("", "[15 mm, 0.01 mm]", "",
                               "time: {integrator: adr, adr_tolerance: 1e-3, adr_max_steps: 20000}\n"
@@ -443,6 +431,7 @@ TEST(Distributed, GasWithDynamicRelaxationGivesTheOneProcessAnswer) {
     const std::string out = base + "_np" + std::to_string(ranks);
     const Outcome o = solve(file, out, ranks, 1);
     ASSERT_EQ(o.exit_code, 0) << out << ": " << o.err;
+    EXPECT_TRUE(summary(out)["distributed_setup"].get<bool>()) << out << " built the whole system";
     EXPECT_EQ(summary(out)["steps"], summary(base + "_np1")["steps"]) << out << ": iterations";
     EXPECT_EQ(differing(base + "_np1/results.h5", out + "/results.h5"), std::vector<std::string>{}) << out;
     expect_same_history(base + "_np1", out);
@@ -736,6 +725,9 @@ static void expect_gas_gives_one_process_answer(const std::string& name, const s
     const std::string out = base + "_np" + std::to_string(ranks);
     const Outcome o = solve(file, out, ranks, 1);
     ASSERT_EQ(o.exit_code, 0) << out << ": " << o.err;
+    // Each rank built its own bonds and the gas's per-entry arrays of its rows.
+    EXPECT_TRUE(summary(out)["distributed_setup"].get<bool>()) << out << " built the whole system";
+    EXPECT_EQ(o.err.find("note: set-up"), std::string::npos) << out << ": " << o.err;
     expect_one_process_files(base + "_np1", out);
   }
   // Stopped on 3 ranks half way (on a history row: a stop writes one), finished on 2.
@@ -751,7 +743,7 @@ static void expect_gas_gives_one_process_answer(const std::string& name, const s
 static const std::string kGasOutput = "output: {every: 50, history_every: 10, fields: [damage, displacement, velocity]}\n";
 
 TEST(Distributed, GasLoadsGiveTheOneProcessAnswer) {
-  ASSERT_FALSE(gas_disc().empty()) << "could not mesh the charge-hole disc";
+  ASSERT_FALSE(charge_hole_disc().empty()) << "could not mesh the charge-hole disc";
   const std::vector<std::pair<std::string, std::string>> cases = {
       // Breaking rock: the gas follows the cracks that grow from the pre-crack's tip.
       {"gas_cracking", gas_case(", fracture_energy: 20", "[15 mm, 0.01 mm]", "", "time: {end: 60 us}\n" + kGasOutput)},
@@ -773,7 +765,7 @@ TEST(Distributed, GasLoadsGiveTheOneProcessAnswer) {
 // steps apart gives one process's files at 2 and 3 ranks, and a run stopped on 3 ranks
 // between two passes (checkpoint.h5's /gas/push and /gas/crack_pass) finishes on 2 alike.
 TEST(Distributed, GasSparseCrackPassesGiveTheOneProcessAnswer) {
-  ASSERT_FALSE(gas_disc().empty()) << "could not mesh the charge-hole disc";
+  ASSERT_FALSE(charge_hole_disc().empty()) << "could not mesh the charge-hole disc";
   const auto deck = [](const std::string& passes) {
     return gas_case(", fracture_energy: 20", "[15 mm, 0.01 mm]", passes, "time: {end: 60 us}\n" + kGasOutput);
   };

@@ -31,24 +31,12 @@ namespace {
 constexpr double kE = 1e9, kNu = 0.25, kA = 5e-3, kB = 40e-3, kThickness = 0.01;
 constexpr double kP0 = 20e6, kSwitch = 18e6, kGammaHigh = 3.0, kGammaLow = 1.4;
 
-// Particles of the disc with its hole (meshed once per test process).
-std::string thick_cylinder_particles() {
-  static const std::string path = mesh_and_place(
-      "gas_disc",
-      "dimension: 2\nthickness: 10 mm\n"
-      "body: {shape: disc, name: rock, radius: 40 mm}\n"
-      "holes: [{name: charge_hole, centre: [0, 0], radius: 5 mm}]\n"
-      "mesh: {size: 2 mm, refine: [{near: charge_hole, size: 0.6 mm, distance_min: 1 mm, distance_max: 15 mm}]}\n",
-      "--thickness 10mm");
-  return path;
-}
-
 constexpr const char* kTwoGamma = "gamma_high: 3, gamma_low: 1.4, switch_pressure: 18 MPa";
 
 std::string disc_case(const std::string& gas_extra, const std::string& rest,
                       const std::string& history = "{type: constant, value: 20 MPa}",
                       const std::string& law = kTwoGamma) {
-  const std::string file = thick_cylinder_particles();
+  const std::string file = charge_hole_disc();
   EXPECT_FALSE(file.empty()) << "could not mesh the thick cylinder";
   return "specimen: {particles: " + file + "}\n"
          "model: {type: lps, planar: plane_strain, horizon_factor: 3.015, variable_horizon: true}\n"

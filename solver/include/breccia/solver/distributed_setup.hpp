@@ -26,21 +26,16 @@
 
 namespace breccia::solver {
 
-// Which rows this rank builds. inactive: all of them (one process, or a case the
-// distributed set-up does not cover yet: the whole system on every rank, as before).
+// Which rows this rank builds. inactive: all of them (one process).
 struct DistributedRows {
   bool active = false;
   int64_t begin = 0, end = 0;          // the rank's rows (internal order)
   std::vector<int64_t> full_offsets;   // the whole system's row offsets (n + 1), from the family sizes
 };
 
-// Why this case takes the set-up that builds the whole system on every rank (the case key
-// or feature, one line), or "" when it can take the distributed one.
-std::string distributed_setup_refusal(const PdSystem& s);
-
-// Called once the internal order and horizons are set: decides, counts the family sizes,
-// cuts the partition (s.distributed_rows) and returns the rank's rows. A refused case gets a
-// note on stderr (rank 0's) and inactive rows. Throws InputError for more ranks than particles.
+// Called once the internal order and horizons are set: counts the family sizes, cuts the
+// partition (s.distributed_rows) and returns the rank's rows (inactive on one process).
+// Throws InputError for more ranks than particles.
 DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d);
 
 // Every rank's elements of `mine`, concatenated in rank order, on every rank.

@@ -5,12 +5,38 @@
 # Usage: scripts/mem_mpi.sh BUILD_DIR [N=30] [RANKS="1 2 4"]   (OUT=runs/mem-mpi)
 # MODEL: the model keys (default "type: pmb"; e.g. "type: lps", "type: pmb, precision: float32").
 # TIME: the time keys (default "steps: 5"; e.g. "integrator: adr, adr_tolerance: 1": a dozen iterations).
+# GAS=SIZE: instead of the lattice, a gas load (loads[].type: gas): the gas tests' disc (40 mm
+#   radius, 5 mm charge hole, plane strain) meshed at SIZE throughout (e.g. GAS="0.5 mm":
+#   46,062 particles), LPS with the dual horizon, 20 MPa of gas behind a pre-crack; N unused.
 set -euo pipefail
 BUILD=${1:-build}; N=${2:-30}; RANKS=${3:-"1 2 4"}; MODEL=${MODEL:-"type: pmb"}; TIME=${TIME:-"steps: 5"}
 BIN="$(cd "$BUILD" && pwd)/bin"
 OUT="${OUT:-$(pwd)/runs/mem-mpi}"
 mkdir -p "$OUT"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+if [ -n "${GAS:-}" ]; then
+  cat > "$OUT/specimen.yaml" <<YAML
+dimension: 2
+thickness: 10 mm
+body: {shape: disc, name: rock, radius: 40 mm}
+holes: [{name: charge_hole, centre: [0, 0], radius: 5 mm}]
+mesh: {size: $GAS}
+YAML
+  "$BIN/breccia-mesh" "$OUT/specimen.yaml" -o "$OUT/specimen.msh" --quiet > /dev/null
+  "$BIN/breccia-place" "$OUT/specimen.msh" -o "$OUT/particles.h5" --thickness 10mm > /dev/null
+  cat > "$OUT/case.yaml" <<YAML
+name: memory-per-rank-gas
+specimen: {particles: $OUT/particles.h5}
+model: {type: lps, planar: plane_strain, horizon_factor: 3.015, variable_horizon: true}
+materials: [{name: rock, density: 2000, youngs_modulus: 1 GPa, poisson_ratio: 0.25, fracture_energy: 20}]
+precracks: [{type: segment, from: [4 mm, 0.01 mm], to: [15 mm, 0.01 mm]}]
+loads:
+  - {type: gas, surface: charge_hole, history: {type: constant, value: 20 MPa}, gamma_high: 3, gamma_low: 1.4,
+     switch_pressure: 18 MPa, ambient_pressure: 0, front_speed: 500 m/s, gas_density: 1000 kg/m3}
+time: {$TIME}
+output: {every: 1000000, history_every: 1000000, results: false}
+YAML
+else
 DX=0.0005
 L=$(awk -v n="$N" -v dx="$DX" 'BEGIN{printf "%.6g", n*dx}')
 cat > "$OUT/case.yaml" <<YAML
@@ -22,6 +48,7 @@ initial: [{type: radial_velocity, center: [0, 0, 0], strain_rate: 10}]
 time: {$TIME}
 output: {every: 1000000, history_every: 1000000, results: false}
 YAML
+fi
 echo "ranks,particles,bond_entries,peak_rss_mb_per_rank (rank 0 first),peak_rss_mb_max,peak_rss_mb_sum"
 for ranks in $RANKS; do
   run="$OUT/np$ranks"

@@ -92,8 +92,8 @@ inline constexpr ForcePassField kForcePassFields[] = {
     {&PdSystem::corr_nonaffine, 1}};
 
 // The global system as the time loop and the writers need it, its bonds now in the ranks'
-// own systems: the whole row offsets and bond states (and softening's bond damage) on every
-// rank; with results written, rank 0 also gathers the partners and the two half-bond
+// own systems: the whole row offsets and bond states (and softening's bond damage, a rate
+// law's onsets, a gas load's entered cracks `in_crack`) on every rank; with results written, rank 0 also gathers the partners and the two half-bond
 // volumes and moduli the results' bond list reads (outputs.cpp); every other per-entry
 // array is dropped.
 void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const DistributedSetup& d);

@@ -1,4 +1,6 @@
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include "breccia/solver/pd_physics.hpp"
 
@@ -15,7 +17,28 @@ namespace breccia::solver {
 //   outside every sample is and when the second is inside every sample is;
 // - else every sample point is tested, without a branch: the 6 z squares in pairs, each
 //   comparison giving -1 or 0 per lane (GCC/Clang vector extension: SSE2 on x86-64, NEON on
-//   ARM, scalar elsewhere). The per-row shortcuts it replaced mispredicted a branch a row.
+//   ARM, scalar elsewhere). The per-row shortcuts it replaced mispredicted a branch a row;
+// - a count asked before by this thread with the same arguments (bits) is looked up.
+namespace {
+
+// The full quadrature's counts, kept per thread by the exact bits of their arguments: on a
+// lattice the same few hundred offsets between cells recur in every row (each in a few
+// roundings of x_j - x_i), and a count looked up is the count computed, bit for bit, since
+// the key is every input. A slot holds the last key hashed to it (0 in `count_plus_one`:
+// empty; thread_local and zero-initialised, so no guard per call).
+struct CountMemo {
+  static constexpr int kBits = 13;
+  struct Slot {
+    uint64_t key[5];
+    int dimension;
+    int count_plus_one;
+  };
+  Slot slot[1 << kBits];
+};
+thread_local CountMemo count_memo;
+
+}  // namespace
+
 int partial_volume_samples_inside(const double xi[3], double horizon, double half_cell_j, int dimension) {
   constexpr int n = kPartialVolumeSamples;
   static_assert(n % 2 == 0, "the z samples are taken in pairs");
@@ -49,6 +72,14 @@ int partial_volume_samples_inside(const double xi[3], double horizon, double hal
   const double r2 = horizon * horizon;
   if ((lo[0] + lo[1]) + lo[2] > r2) return 0;
   if ((hi[0] + hi[1]) + hi[2] <= r2) return partial_volume_sample_total(dimension);
+  const double args[5] = {xi[0], xi[1], xi[2], horizon, half_cell_j};
+  uint64_t key[5];
+  std::memcpy(key, args, sizeof key);
+  uint64_t hash = static_cast<uint64_t>(dimension);
+  for (uint64_t k : key) hash = (hash ^ k) * 0x9E3779B97F4A7C15ull;
+  CountMemo::Slot& slot = count_memo.slot[hash >> (64 - CountMemo::kBits)];
+  if (slot.count_plus_one != 0 && slot.dimension == dimension && std::memcmp(slot.key, key, sizeof key) == 0)
+    return slot.count_plus_one - 1;
   typedef double Pair __attribute__((vector_size(16)));
   typedef long long Mask __attribute__((vector_size(16)));
   Pair z[n / 2];
@@ -61,7 +92,11 @@ int partial_volume_samples_inside(const double xi[3], double horizon, double hal
       const Pair s = {row, row};
       for (int c = 0; c < n / 2; ++c) inside -= (s + z[c] <= limit);  // true is -1
     }
-  return static_cast<int>(inside[0] + inside[1]);
+  const int count = static_cast<int>(inside[0] + inside[1]);
+  std::memcpy(slot.key, key, sizeof key);
+  slot.dimension = dimension;
+  slot.count_plus_one = count + 1;
+  return count;
 }
 
 }  // namespace breccia::solver

@@ -34,7 +34,8 @@ public:
 #pragma omp parallel num_threads(threads)
     {
       Value acc = Load::identity();
-#pragma omp for schedule(static)
+      // nowait: each thread's partial is its own; the region's end is the one barrier.
+#pragma omp for schedule(static) nowait
       for (int64_t i = 0; i < n; ++i) acc = Load::combine(acc, load(i));
       partial[omp_get_thread_num()] = acc;
     }

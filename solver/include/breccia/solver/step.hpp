@@ -6,7 +6,9 @@
 //
 //   exec.for_each(n, functor, name)          functor(i) for i in [0, n)
 //   exec.reduce(n, load, finish, name)        finish(combine of load(i) over i), e.g. into
-//                                             energy accumulators in host or device memory
+//                                             energy accumulators in host or device memory;
+//                                             load(i) runs exactly once per i (the step's
+//                                             end-of-step load also kicks the particles)
 //   exec.commit_min_stretch(arrays)           swap the compressive enhancement's s_min buffers
 //   exec.contact(arrays)                      short-range forces between particles that are
 //                                             not family members (a cell grid of the current
@@ -58,25 +60,33 @@ struct ConstraintStep {
 // ---------------------------------------------------------------------------------------
 // The phases, as functors (callable on host and device).
 
-template <class Real>
-struct KickDrift {
-  PdViewT<Real> p;
-  double half_dt, dt;
-  BRECCIA_HD void operator()(int64_t i) const { kick_drift_kernel(p, i, half_dt, dt); }
-};
-
 // Force times displacement before the step, for the trapezoidal work of loads and reactions
-// (in double for float runs too). k runs over 3N components.
+// (in double for float runs too), of component k.
 template <class Real>
-struct WorkBefore {
+BRECCIA_HD void work_before(const PdViewT<Real>& p, Real* u_before, double* f_before, int64_t k) {
+  const int64_t i = k / 3;
+  const bool constrained = p.fixed_dof[i] & (1u << (k % 3));
+  u_before[k] = p.u[k];
+  f_before[k] = double(p.volume[i]) * (constrained ? -double(p.force[k]) : double(p.body[k]));
+}
+
+// The start of a step, one pass per particle (one loop, one barrier, where three were): the
+// work's "before" values of its components, then its first half kick and drift, then, when
+// `x` is given (double runs), its current position x0 + u. Each reads and writes particle i's
+// values only, so fusing them changes no bits. A constraint that prescribes a component
+// afterwards writes that component's position again (Constrain).
+template <class Real>
+struct StartOfStep {
   PdViewT<Real> p;
   Real* u_before;
   double* f_before;
-  BRECCIA_HD void operator()(int64_t k) const {
-    const int64_t i = k / 3;
-    const bool constrained = p.fixed_dof[i] & (1u << (k % 3));
-    u_before[k] = p.u[k];
-    f_before[k] = double(p.volume[i]) * (constrained ? -double(p.force[k]) : double(p.body[k]));
+  double half_dt, dt;
+  double* x;  // null: the force pass forms the positions (float runs never do)
+  BRECCIA_HD void operator()(int64_t i) const {
+    for (int d = 0; d < 3; ++d) work_before(p, u_before, f_before, 3 * i + d);
+    kick_drift_kernel(p, i, half_dt, dt);
+    if (x)
+      for (int64_t k = 3 * i; k < 3 * i + 3; ++k) x[k] = double(p.x0[k]) + double(p.u[k]);
   }
 };
 
@@ -89,6 +99,8 @@ struct Constrain {
   const double* values;  // null: c's values for every particle
   Real* u;
   Real* v;
+  const Real* x0;
+  double* x;  // non-null: the positions StartOfStep formed, kept current
   BRECCIA_HD void operator()(int64_t q) const {
     const int64_t i = set.particles[q];
     for (int d = 0; d < 3; ++d)
@@ -99,6 +111,7 @@ struct Constrain {
         constrain_component(c.kind, velocity, target, c.dt, uk, vk);
         u[3 * i + d] = static_cast<Real>(uk);
         v[3 * i + d] = static_cast<Real>(vk);
+        if (x) x[3 * i + d] = double(x0[3 * i + d]) + double(u[3 * i + d]);
       }
   }
 };
@@ -188,13 +201,6 @@ struct CorrespondenceForces {
   BRECCIA_HD void operator()(int64_t i) const { correspondence_force_kernel(c, i); }
 };
 
-template <class Real>
-struct Acceleration {
-  PdViewT<Real> p;
-  double half_dt;
-  BRECCIA_HD void operator()(int64_t i) const { acceleration_kernel(p, i, half_dt); }
-};
-
 // ---------------------------------------------------------------------------------------
 // Reductions: a load per index, an associative combine, and a finish that adds the total to
 // accumulators wherever the backend keeps them.
@@ -204,17 +210,24 @@ struct StepSums {
   double work;      // work of external forces and reactions over the step [J]
 };
 
+// The end of a step in one pass (one loop where there were two): component k's share of the
+// step's sums, and, at each particle's first component, that particle's acceleration and
+// second half kick. The kick writes a and v, which no share reads, so fusing changes no
+// bits; the sum still runs over the 3N components in the same order, split among threads as
+// before.
 template <class Real>
 struct StepLoad {
   using Value = StepSums;
   PdViewT<Real> p;
   const Real* u_before;
   const double* f_before;
+  double half_dt;
   BRECCIA_HD static Value identity() { return {0.0, 0.0}; }
   BRECCIA_HD static Value combine(Value a, Value b) { return {a.released + b.released, a.work + b.work}; }
   // k runs over 3N components; the first N also carry the particles' released energy.
   BRECCIA_HD Value operator()(int64_t k) const {
     const int64_t i = k / 3;
+    if (k % 3 == 0) acceleration_kernel(p, i, half_dt);
     const bool constrained = p.fixed_dof[i] & (1u << (k % 3));
     const double f_after = double(p.volume[i]) * (constrained ? -double(p.force[k]) : double(p.body[k]));
     return {k < p.n ? p.dissipated[k] : 0.0, 0.5 * (f_before[k] + f_after) * (double(p.u[k]) - double(u_before[k]))};
@@ -346,9 +359,11 @@ struct HasBoundaryUpload<Exec, std::void_t<decltype(std::declval<Exec&>().upload
 
 // Prescribed components at time t: one pass per boundary, in the case's order (a particle
 // in two boundaries takes the later one's value), the ramps (and fields by expression)
-// evaluated here on the host.
+// evaluated here on the host. `positions`: current positions (double) formed before, kept
+// current for the components prescribed here.
 template <class Exec, class Real>
-void pd_constraints(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t, double dt) {
+void pd_constraints(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t, double dt,
+                    double* positions = nullptr) {
   for (size_t c = 0; c < sys.constraints.size(); ++c) {
     PdSystem::Constraint& con = sys.constraints[c];
     const BoundarySpec& b = *con.spec;
@@ -364,20 +379,25 @@ void pd_constraints(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double
         if constexpr (HasBoundaryUpload<Exec>::value) exec.upload_boundary_values(c, con.values);
       values = a.constraint_values[c];
     }
-    exec.for_each(set.count, Constrain<Real>{set, cs, values, a.p.u, a.p.v}, "constraint");
+    exec.for_each(set.count, Constrain<Real>{set, cs, values, a.p.u, a.p.v, a.p.x0, positions}, "constraint");
   }
 }
 
 // Internal forces at the current displacement: bond forces (LPS: dilatation first;
 // correspondence: its two passes), then the short-range forces. Released energy summed into
 // the accumulators when `sum_released` (a step sums it with the work instead).
+// `owned_positions_current`: the owned particles' positions a.x were formed already (a
+// step's StartOfStep); the ghosts' are formed here, after their displacement arrived.
 template <class Exec, class Real>
-void pd_force_pass(Exec& exec, const StepArrays<Real>& a, bool sum_released) {
+void pd_force_pass(Exec& exec, const StepArrays<Real>& a, bool sum_released, bool owned_positions_current = false) {
   const PdViewT<Real>& p = a.p;
   const int64_t n = p.n;
   exchange_halo(exec, a, HaloField::Displacement);
   if constexpr (std::is_same_v<Real, double>) {  // float never forms x0 + u (float32_state.hpp)
-    exec.for_each(3 * (n + a.ghosts), CurrentPositions{p.x0, p.u, a.x}, "current_positions");
+    if (!owned_positions_current)
+      exec.for_each(3 * (n + a.ghosts), CurrentPositions{p.x0, p.u, a.x}, "current_positions");
+    else if (a.ghosts > 0)
+      exec.for_each(3 * a.ghosts, CurrentPositions{p.x0 + 3 * n, p.u + 3 * n, a.x + 3 * n}, "ghost_positions");
     if (p.model == static_cast<int>(PdModel::Correspondence)) {
       exec.for_each(n, CorrespondenceDeformation{a.corr}, "correspondence_deformation_kernel");
       exchange_halo(exec, a, HaloField::Correspondence);
@@ -433,11 +453,13 @@ void pd_step(Exec& exec, StepArrays<Real>& a, PdSystem& sys) {
     ++sys.step;
     return;
   }
-  exec.for_each(3 * n, WorkBefore<Real>{a.p, a.u_before, a.f_before}, "work_before");
-  exec.for_each(n, KickDrift<Real>{a.p, half, dt}, "kick_drift_kernel");
+  // Double runs form the owned positions here (float never forms x0 + u): nothing moves u
+  // between here and the force pass but the constraints, which keep them current.
+  double* positions = single ? nullptr : a.x;
+  exec.for_each(n, StartOfStep<Real>{a.p, a.u_before, a.f_before, half, dt, positions}, "start_of_step_kernel");
   sys.time += dt;
   const double t = sys.time;
-  pd_constraints(exec, a, sys, t, dt);
+  pd_constraints(exec, a, sys, t, dt, positions);
   if (sys.loads_vary()) {
     // The indenter and the gas read the double displacement: a float run copies it first.
     if (single && (sys.config.indenter.enabled || sys.gas.active))
@@ -445,10 +467,9 @@ void pd_step(Exec& exec, StepArrays<Real>& a, PdSystem& sys) {
     pd_external(exec, a, sys, t, dt);
     if (single) exec.for_each(3 * n, Convert<double, Real>{a.d.body, const_cast<Real*>(a.p.body)}, "body force to float");
   }
-  pd_force_pass(exec, a, false);
-  exec.for_each(n, Acceleration<Real>{a.p, half}, "acceleration_kernel");
-  exec.reduce(3 * n, StepLoad<Real>{a.p, a.u_before, a.f_before}, StepFinish{a.external_work, a.dissipated_energy},
-              "step energy reduction");
+  pd_force_pass(exec, a, false, !single);
+  exec.reduce(3 * n, StepLoad<Real>{a.p, a.u_before, a.f_before, half}, StepFinish{a.external_work, a.dissipated_energy},
+              "end_of_step_kernel");
   ++sys.step;
 }
 

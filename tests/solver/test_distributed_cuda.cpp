@@ -26,15 +26,16 @@ using namespace breccia::solver::testing;
 namespace {
 
 // A lattice block of 40 x 20 x 8 particles (6,400) with a pre-crack across half its width at
-// x = 10 mm, its ends pulled apart at 5 m/s: bonds break from the crack's tip during the run,
-// so the bond states and damage the ranks compute are tested, not only the elastic waves.
-std::string pulled_block(const std::string& name, const std::string& model) {
+// x = 10 mm, its ends pulled apart at 5 m/s: with G0 = 5 J/m2 bonds break from the crack's tip
+// during the run (PMB: 0.21 mJ released by step 120 on the CPU), so the bond states and damage
+// the ranks compute are tested, not only the elastic waves.
+std::string pulled_block(const std::string& name, const std::string& model, const std::string& fracture_energy = "5") {
   return write_case(name,
                     "name: " + name + "\n"
                     "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.02, 0.01, 0.004], spacing: 0.5 mm}}\n"
                     "model: {" + model + ", horizon_factor: 3.015}\n"
                     "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, "
-                    "fracture_energy: 5}]\n"
+                    "fracture_energy: " + fracture_energy + "}]\n"
                     "precracks: [{type: polygon, points: [[0.01, -0.001, -0.001], [0.01, 0.005, -0.001], "
                     "[0.01, 0.005, 0.005], [0.01, -0.001, 0.005]]}]\n"
                     "boundary:\n"
@@ -52,24 +53,31 @@ bool no_gpu(const Outcome& o) { return o.exit_code == 2 && o.err.find("no CUDA d
 // two passes), LPS in float32 (the float state's exchange) and PMB on the SELL-C-sigma layout:
 // 2 ranks sharing the GPU against 1 process on it.
 TEST(DistributedCuda, TwoRanksSharingTheGpuGiveTheOneProcessGpuFilesByteForByte) {
-  const char* models[][2] = {
-      {"pmb", "type: pmb"},
-      {"lps", "type: lps"},
-      {"correspondence", "type: correspondence, stabilisation: {type: penalty, coefficient: 1}"},
-      {"lps_float32", "type: lps, precision: float32"},
-      {"pmb_sell", "type: pmb, cuda_layout: sell"},
+  // Correspondence with bonds that do not break: with G0 = 5 J/m2 this block became unstable at
+  // step 20 on one CPU process too (measured); what the model adds to the halo, its force
+  // tensor between the two passes, is exercised by the elastic waves alone.
+  struct Model {
+    const char *tag, *model, *fracture_energy;
   };
-  for (const auto& [tag, model] : models) {
+  const Model models[] = {
+      {"pmb", "type: pmb", "5"},
+      {"lps", "type: lps", "5"},
+      {"correspondence", "type: correspondence, stabilisation: {type: penalty, coefficient: 1}", "1e6"},
+      {"lps_float32", "type: lps, precision: float32", "5"},
+      {"pmb_sell", "type: pmb, cuda_layout: sell", "5"},
+  };
+  for (const Model& m : models) {
+    const std::string tag = m.tag;
     SCOPED_TRACE(tag);
-    const std::string name = std::string("cuda_ranks_") + tag;
-    const std::string file = pulled_block(name, model);
+    const std::string name = "cuda_ranks_" + tag;
+    const std::string file = pulled_block(name, m.model, m.fracture_energy);
     const std::string base = process_temp_dir() + "/" + name;
     const Outcome one = solve(file, base + "_np1", 1, 1, "--backend cuda");
     if (no_gpu(one)) GTEST_SKIP() << "no CUDA device on this machine: the 2-rank GPU comparison runs on a GPU only "
                                      "(scripts/device-check.sh)";
     ASSERT_EQ(one.exit_code, 0) << one.err;
     const nlohmann::json s_one = summary(base + "_np1");
-    EXPECT_GT(s_one["broken_bonds"].get<double>(), 0.0) << "the check needs bonds that break";
+    if (tag != "correspondence") EXPECT_GT(s_one["dissipated_J"].get<double>(), 0.0) << "no bond broke during the run";
     const Outcome two = solve(file, base + "_np2", 2, 1, "--backend cuda");
     ASSERT_EQ(two.exit_code, 0) << two.err;
     EXPECT_EQ(summary(base + "_np2")["ranks"], 2);

@@ -22,7 +22,7 @@
 #        scripts/device-check.sh prepare
 #      builds breccia-solve, breccia-atlas and the four CUDA test executables for sm_90 in
 #      build-device/ and packs them with the shared libraries they load and the case files the
-#      run reads into one archive, build-device/kit/kit.tar.gz (21 MB). The device machine has nvcc but no HDF5, yaml-cpp or
+#      run reads into one archive, build-device/kit/kit.tar.gz (21 MB before the OpenMPI launcher was added, which adds about 9 MB). The device machine has nvcc but no HDF5, yaml-cpp or
 #      GoogleTest headers (nothing can be installed there), so the binaries travel instead.
 #        BRECCIA_DEVICE_DRY=1 scripts/device-check.sh
 #      rehearses everything here with the "GPU" legs on the CPU (small sizes,

@@ -117,11 +117,12 @@ public:
       recv_.push_back({L.halo.recv_ranks[r], L.halo.recv_begin[r], L.halo.recv_begin[r + 1]});
     ghosts_ = L.ghosts();
     check_counts(L);
+    device_buffers_ = mpi_cuda_aware();
   }
 
   int64_t ghosts() const override { return ghosts_; }
   const std::vector<int32_t>& send_indices() const override { return send_all_; }
-  bool device_buffers() const override { return mpi_cuda_aware(); }
+  bool device_buffers() const override { return device_buffers_; }
 
   void exchange(std::initializer_list<HaloArray> arrays) {
     HaloArrays h;
@@ -212,6 +213,7 @@ private:
 
   MPI_Comm comm_;
   int64_t owned_ = 0, ghosts_ = 0;
+  bool device_buffers_ = false;
   std::vector<int32_t> send_all_;
   std::vector<Peer> send_;
   std::vector<Source> recv_;
@@ -671,9 +673,6 @@ int node_local_rank(MPI_Comm comm) {
   return local;
 }
 
-// The rank's step: on the CPU (MpiExec), or with `cuda` on a GPU (a CudaSystem of the rank's
-// system, the halo packed on the device and carried by the same HaloExchange's messages).
-// Everything else (the sums over ranks, the gathers, the files) is the same code either way.
 // --backend cuda: which device each rank took and how the halo travels, printed by rank 0
 // (collective: every rank sends its device's index).
 void print_rank_devices(MPI_Comm comm, bool progress) {
@@ -693,6 +692,9 @@ void print_rank_devices(MPI_Comm comm, bool progress) {
 #endif
 }
 
+// The rank's step: on the CPU (MpiExec), or with `cuda` on a GPU (a CudaSystem of the rank's
+// system, the halo packed on the device and carried by the same HaloExchange's messages).
+// Everything else (the sums over ranks, the gathers, the files) is the same code either way.
 class MpiBackend final : public StepBackend {
 public:
   MpiBackend(PdSystem& global, MPI_Comm comm, bool cuda = false)

@@ -38,7 +38,9 @@ RunResult cuda_time_loop(PdSystem& s, const RunOptions& o, ResultsWriter* result
   return run_time_loop(s, o, backend, results, history);
 }
 
-std::unique_ptr<StepBackend> make_cuda_step_backend(PdSystem& s, HaloTransport* halo) {
+std::unique_ptr<StepBackend> make_cuda_step_backend(PdSystem& s) { return std::make_unique<CudaStepBackend>(s, nullptr); }
+
+std::unique_ptr<StepBackend> make_cuda_rank_backend(PdSystem& s, HaloTransport* halo) {
   return std::make_unique<CudaStepBackend>(s, halo);
 }
 

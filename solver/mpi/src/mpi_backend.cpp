@@ -725,7 +725,7 @@ public:
 #ifdef BRECCIA_MPI_CUDA
       check_cuda_ranks_support(local_.config, "the case");  // breccia-solve refused these before set-up
       cuda_use_device(node_local_rank(comm_));
-      device_ = make_cuda_step_backend(local_, halo_.get());  // uploads the state as it is now
+      device_ = make_cuda_rank_backend(local_, halo_.get());  // uploads the state as it is now
 #else
       throw InputError("--backend", "cuda", "cuda under mpirun", "cpu (this build's MPI backend has no CUDA)");
 #endif

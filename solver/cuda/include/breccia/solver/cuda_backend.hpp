@@ -67,8 +67,10 @@ int cuda_device_in_use();
 RunResult run_system_cuda(PdSystem& sys, const RunOptions& options);
 // A StepBackend (run.hpp) owning a CudaSystem built from `sys` as it is now (float32: after
 // float32_upload), for callers that drive the steps themselves (breccia-atlas).
-// `halo`: a distributed run's rank system (CudaSystem's constructor).
-std::unique_ptr<StepBackend> make_cuda_step_backend(PdSystem& sys, HaloTransport* halo = nullptr);
+std::unique_ptr<StepBackend> make_cuda_step_backend(PdSystem& sys);
+// The same for a distributed run's rank system, its ghosts filled through `halo` (CudaSystem's
+// constructor; solver/mpi/).
+std::unique_ptr<StepBackend> make_cuda_rank_backend(PdSystem& sys, HaloTransport* halo);
 // The dynamic loop on the GPU, for RunOptions::backend_loop (run_system calls it).
 RunResult cuda_time_loop(PdSystem& sys, const RunOptions& options, ResultsWriter* results, HistoryWriter* history);
 

@@ -2,12 +2,14 @@
 # The GPU session's one command (docs/cuda.md, "How to verify on a GPU"): ONE device call of at
 # most 7 minutes. The checks run most important first, each with its own time cap, the caps
 # summing to BUDGET_S (420 s):
-#   agreement tests   test_solver_cuda 60, test_mps_cuda 40, test_mps_solid_cuda 30, test_atlas_backends 15
-#   PD throughput     PMB and LPS on a 61^3 lattice, GPU 25 + CPU 25 each
+#   agreement tests   test_solver_cuda 60, distributed_cuda 45 (2 ranks on the GPU against 1:
+#                     test_distributed_cuda under the kit's mpirun), test_mps_cuda 40,
+#                     test_mps_solid_cuda 30, test_atlas_backends 15
+#   PD throughput     PMB and LPS on a 61^3 lattice, GPU 25 + CPU 20 each
 #   float32           PMB and LPS float32, GPU 15 each
-#   MPS harmonics     0.125 mm, GPU 20 + CPU 35, histories compared
-#   Taylor bar        32 across, GPU 35
-#   sanitizer         compute-sanitizer memcheck: PD agreement tests on small plates 35, MPS 20
+#   MPS harmonics     0.125 mm, GPU 20 + CPU 25, histories compared
+#   Taylor bar        32 across, GPU 25
+#   sanitizer         compute-sanitizer memcheck: PD agreement tests on small plates 25, MPS 15
 #   the rest          correspondence GPU/CPU, atlas GPU rows: only in the time the others left
 # A check may use what earlier checks left unused (each must end by the sum of the caps so far),
 # so a slow check never eats a later check's own cap; a check with no time left is skipped and
@@ -20,7 +22,7 @@
 #        scripts/device-check.sh prepare
 #      builds breccia-solve, breccia-atlas and the four CUDA test executables for sm_90 in
 #      build-device/ and packs them with the shared libraries they load and the case files the
-#      run reads into one archive, build-device/kit/kit.tar.gz (21 MB). The device machine has nvcc but no HDF5, yaml-cpp or
+#      run reads into one archive, build-device/kit/kit.tar.gz (21 MB before the OpenMPI launcher was added, which adds about 9 MB). The device machine has nvcc but no HDF5, yaml-cpp or
 #      GoogleTest headers (nothing can be installed there), so the binaries travel instead.
 #        BRECCIA_DEVICE_DRY=1 scripts/device-check.sh
 #      rehearses everything here with the "GPU" legs on the CPU (small sizes,
@@ -47,7 +49,7 @@ if [ "${1:-}" = prepare ]; then
     -DCMAKE_CUDA_ARCHITECTURES=90 "${LAUNCHER[@]}" >"$BUILD.configure.log" 2>&1 || { cat "$BUILD.configure.log"; exit 1; }
   # Every executable the run starts (the CLI tests start breccia-solve and breccia-atlas: the
   # run points them at the kit's copies through BRECCIA_SOLVE_EXE and BRECCIA_ATLAS_EXE).
-  EXES=(breccia-solve breccia-atlas test_solver_cuda test_mps_cuda test_mps_solid_cuda test_atlas_backends)
+  EXES=(breccia-solve breccia-atlas test_solver_cuda test_mps_cuda test_mps_solid_cuda test_atlas_backends test_distributed_cuda)
   nice -n 10 cmake --build "$BUILD" -j"${JOBS:-2}" --target "${EXES[@]}"
   # The kit's files are staged in $STAGE and travel as one gzip archive (about 21 MB against
   # 54 MB unpacked): the carry limit (64 MiB) counts the working tree (about 11 MB) as well.
@@ -68,6 +70,32 @@ if [ "${1:-}" = prepare ]; then
         *) cp -L "$lib" "$KIT/lib/" ;;
       esac
     done
+  # OpenMPI's launcher for the 2-rank check (the device image may have no MPI): orterun and
+  # its plugins under ompi/ in the layout of Debian's prefix /usr, relocated at run time
+  # (OPAL_PREFIX and the directories below; PMIx's plugins likewise), the libraries they load
+  # in lib/ with the rest.
+  if [ -x /usr/bin/orterun ]; then
+    OMPI="$KIT/ompi" MA=/usr/lib/x86_64-linux-gnu
+    mkdir -p "$OMPI/bin" "$OMPI/share" "$OMPI/etc" "$OMPI/pmix2"
+    cp -L /usr/bin/orterun "$OMPI/bin/mpirun"
+    cp -L /usr/bin/orted "$OMPI/bin/orted"
+    mkdir -p "$OMPI/lib/openmpi3"
+    cp -L "$MA"/openmpi/lib/openmpi3/*.so "$OMPI/lib/openmpi3/" 2>/dev/null || true
+    cp -rL /usr/share/openmpi "$OMPI/share/" 2>/dev/null || true
+    cp -rL /etc/openmpi/. "$OMPI/etc/" 2>/dev/null || true
+    cp -rL "$MA/pmix2/lib" "$OMPI/pmix2/" 2>/dev/null || true
+    cp -rL "$MA/pmix2/share" "$OMPI/pmix2/" 2>/dev/null || true
+    rm -f "$OMPI/pmix2/lib/"*.a
+    for f in "$OMPI/bin/"* "$OMPI/lib/openmpi3/"*.so "$OMPI/pmix2/lib/pmix/"*.so; do ldd "$f" 2>/dev/null; done |
+      awk '$3 ~ /^\// {print $3}' | sort -u | while read -r lib; do
+        name=$(basename "$lib")
+        case "$name" in
+          libc.so*|libm.so*|libpthread.so*|libdl.so*|librt.so*|libresolv.so*|libutil.so*|ld-linux*) ;;
+          libstdc++.so*|libgcc_s.so*|libgomp.so*) [ -e "$KIT/runtime/$name" ] || cp -L "$lib" "$KIT/runtime/" ;;
+          *) [ -e "$KIT/lib/$name" ] || cp -L "$lib" "$KIT/lib/" ;;
+        esac
+      done
+  fi
   cp "$ROOT/cases/mps-harmonics/case.yaml" "$KIT/cases/mps-harmonics.yaml"
   cp "$ROOT/cases/mps-taylor-bar/case.yaml" "$KIT/cases/mps-taylor-bar.yaml"
   {
@@ -452,23 +480,55 @@ atlas_rows() {
   return $rc
 }
 
+# --backend cuda under mpirun (docs/parallel.md, GPUs): test_distributed_cuda runs breccia-solve
+# on 2 ranks sharing the GPU and on 1 process, and compares the files byte for byte. mpirun:
+# the kit's OpenMPI (relocated), else the device's own; none: skipped with the reason.
+distributed_cuda() {
+  gpu_leg_possible gpu || return 0
+  local mpirun=""
+  if [ -x "$KIT/ompi/bin/mpirun" ]; then
+    export OPAL_PREFIX="$KIT/ompi" OPAL_BINDIR="$KIT/ompi/bin" OPAL_LIBDIR="$KIT/lib" OPAL_PKGLIBDIR="$KIT/ompi/lib/openmpi3" \
+      OPAL_DATADIR="$KIT/ompi/share" OPAL_PKGDATADIR="$KIT/ompi/share/openmpi" OPAL_SYSCONFDIR="$KIT/ompi/etc" \
+      PMIX_PREFIX="$KIT/ompi/pmix2" PMIX_LIBDIR="$KIT/ompi/pmix2/lib" PMIX_PKGLIBDIR="$KIT/ompi/pmix2/lib/pmix" \
+      PMIX_PKGDATADIR="$KIT/ompi/pmix2/share/pmix" PMIX_SYSCONFDIR="$KIT/ompi/pmix2/share" \
+      OMPI_MCA_mca_base_component_show_load_errors=0
+    mpirun="${LOADP[*]:+${LOADP[*]} }$KIT/ompi/bin/mpirun"
+  elif command -v mpirun >/dev/null; then
+    mpirun=$(command -v mpirun)
+  fi
+  [ -n "$mpirun" ] || { skip "no mpirun (kit or device)"; return 0; }
+  export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 \
+    OMPI_MCA_btl_vader_single_copy_mechanism=none
+  # The launcher itself first: a relocation that fails says so here, not as a test failure.
+  if ! timeout 30 "${ENVP[@]}" $mpirun -np 2 "${LOADP[@]}" "$BIN/breccia-solve" --help >"$WORK/mpirun_probe.log" 2>&1; then
+    tail -20 "$WORK/mpirun_probe.log"
+    result distributed_cuda_mpirun "failed: $mpirun"
+    skip "mpirun does not start here (log in the archive)"
+    return 0
+  fi
+  result distributed_cuda_mpirun "$mpirun"
+  export BRECCIA_MPIEXEC="$mpirun"  # test_distributed_cuda's launcher (distributed_compare.hpp)
+  run_tests test_distributed_cuda
+}
+
 # Most important first; the caps sum to 420 s (the default BUDGET_S).
 check tests test_solver_cuda 60 run_tests test_solver_cuda
+check tests distributed_cuda 45 distributed_cuda
 check tests test_mps_cuda 40 run_tests test_mps_cuda
 check tests test_mps_solid_cuda 30 run_tests test_mps_solid_cuda
 check tests test_atlas_backends 15 run_tests test_atlas_backends
 check pd pd_pmb_gpu 25 pd_leg pmb gpu
-check pd pd_pmb_cpu 25 pd_leg pmb cpu
+check pd pd_pmb_cpu 20 pd_leg pmb cpu
 check pd pd_lps_gpu 25 pd_leg lps gpu
-check pd pd_lps_cpu 25 pd_leg lps cpu
+check pd pd_lps_cpu 20 pd_leg lps cpu
 check float32 pd_pmb32_gpu 15 pd_leg pmb32 gpu
 check float32 pd_lps32_gpu 15 pd_leg lps32 gpu
 check mps mps_gpu 20 mps_leg gpu
-check mps mps_cpu 35 mps_leg cpu
-check taylor taylor 35 taylor
-check sanitizer sanitizer_pd 35 sanitize sanitizer_pd test_solver_cuda \
+check mps mps_cpu 25 mps_leg cpu
+check taylor taylor 25 taylor
+check sanitizer sanitizer_pd 25 sanitize sanitizer_pd test_solver_cuda \
   'CudaBackend.PmbCrackBreaksTheSameBondsAsOnTheCpu:CudaBackend.LpsBlockWithPressureAndIndenterMatchesTheCpuOver1000Steps:LoadKernels.*'
-check sanitizer sanitizer_mps 20 sanitize sanitizer_mps test_mps_cuda 'MpsCuda.Sliding*:MpsCuda.Navier*Verlet*'
+check sanitizer sanitizer_mps 15 sanitize sanitizer_mps test_mps_cuda 'MpsCuda.Sliding*:MpsCuda.Navier*Verlet*'
 check rest pd_correspondence_gpu 0 pd_leg correspondence gpu
 check rest pd_correspondence_cpu 0 pd_leg correspondence cpu
 check rest atlas_rows 0 atlas_rows

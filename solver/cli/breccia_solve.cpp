@@ -18,6 +18,7 @@
 #include "breccia/common/yaml_input.hpp"
 #include "breccia/solver/mpi_launch.hpp"
 #include "breccia/solver/partition.hpp"
+#include "breccia/solver/rank_system.hpp"
 #include "breccia/solver/sell_layout.hpp"
 #include "breccia/solver/run.hpp"
 #ifdef BRECCIA_WITH_MPS
@@ -124,12 +125,8 @@ int main(int argc, char** argv) {
                          "; use --backend cpu or auto\n");
     return kExitBadInput;
   }
-  if (distributed && backend == "cuda") {
-    std::fprintf(stderr, "error: --backend cuda under mpirun: not yet (a distributed run steps on the CPU, "
-                         "docs/parallel.md); use --backend cpu\n");
-    return kExitBadInput;
-  }
-  if (distributed) backend = "cpu";
+  // Under mpirun a rank takes its GPU only when asked (--backend cuda): auto stays on the CPU.
+  if (distributed && backend == "auto") backend = "cpu";
   opt.backend = (backend == "cuda" || (backend == "auto" && gpu_available())) ? "cuda" : "cpu";
   if (backend == "auto" && opt.progress)
     std::fprintf(stderr, "note: --backend auto: %s\n",
@@ -241,6 +238,9 @@ int main(int argc, char** argv) {
     }
     if (distributed) {
 #ifdef BRECCIA_WITH_MPI
+      // One GPU per rank (the rank's system on it, the halo through the host or, with a
+      // CUDA-aware MPI, device buffers): what it does not run yet is refused before set-up.
+      if (opt.backend == "cuda") solver::check_cuda_ranks_support(config, case_file);
       opt.root = rank == 0;
       opt.ranks = ranks;
       opt.progress = opt.progress && rank == 0;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <string>
 
 #include "breccia/common/error.hpp"
 #include "breccia/solver/correspondence_kernels.hpp"
@@ -282,5 +283,18 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
 }
 
 }  // namespace
+
+// What runs on the host in a distributed run and has no device path yet: the gas load's sums
+// over ranks and its front (GasExchange, reduce_min_to_owners in solver/mpi/), and the
+// short-range forces' contact search (which the CUDA backend lacks on one process too).
+void check_cuda_ranks_support(const CaseConfig& config, const std::string& file) {
+  for (size_t l = 0; l < config.loads.size(); ++l)
+    if (config.loads[l].kind == LoadSpec::Kind::Gas)
+      throw InputError(file, "loads[" + std::to_string(l) + "].type", "gas with --backend cuda under mpirun",
+                       "--backend cpu (a distributed gas load's sums and front run on the CPU; docs/parallel.md)");
+  if (config.short_range_forces)
+    throw InputError(file, "model.short_range_forces", "true with --backend cuda under mpirun",
+                     "--backend cpu (the CUDA backend has no contact search; docs/parallel.md)");
+}
 
 }  // namespace breccia::solver

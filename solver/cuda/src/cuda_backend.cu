@@ -130,6 +130,36 @@ struct MeasureFinish {
   __device__ void operator()(MeasureSums s) const { scalars->measured = s; }
 };
 
+// A distributed run's halo on the device (halo_transport.hpp): one array's `bytes` per item
+// gathered from the owned particles the peers read into its place in the packed items, and
+// back from the received items into the ghosts. One thread per byte: any element size and
+// alignment, for the few thousand ghosts of a rank's surface.
+struct PackHalo {
+  const char* from;
+  size_t bytes;
+  const int32_t* index;  // the send list (local indices of owned particles)
+  char* to;
+  size_t per, offset;  // item size and this array's place in an item
+  __device__ void operator()(int64_t k) const {
+    const int64_t q = k / static_cast<int64_t>(bytes), b = k % static_cast<int64_t>(bytes);
+    to[q * per + offset + b] = from[static_cast<int64_t>(index[q]) * bytes + b];
+  }
+};
+
+struct UnpackHalo {
+  const char* from;
+  size_t per, offset;
+  char* to;
+  size_t bytes;
+  int64_t owned;  // ghost g is local index owned + g
+  __device__ void operator()(int64_t k) const {
+    const int64_t g = k / static_cast<int64_t>(bytes), b = k % static_cast<int64_t>(bytes);
+    to[(owned + g) * static_cast<int64_t>(bytes) + b] = from[g * per + offset + b];
+  }
+};
+
+int g_device = 0;  // the device CudaSystems use (cuda_use_device)
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
@@ -147,12 +177,24 @@ bool cuda_device_available() {
 std::string cuda_device_description() {
   if (!cuda_device_available()) return "";
   cudaDeviceProp prop{};
-  if (cudaGetDeviceProperties(&prop, 0) != cudaSuccess) return "";
+  if (cudaGetDeviceProperties(&prop, g_device) != cudaSuccess) return "";
   char text[512];
   std::snprintf(text, sizeof text, "%s, %.1f GiB, compute capability %d.%d", prop.name,
                 prop.totalGlobalMem / 1073741824.0, prop.major, prop.minor);
   return text;
 }
+
+int cuda_use_device(int index) {
+  int count = 0;
+  if (cudaGetDeviceCount(&count) != cudaSuccess || count == 0) {
+    cudaGetLastError();
+    return -1;
+  }
+  g_device = (index % count + count) % count;
+  return g_device;
+}
+
+int cuda_device_in_use() { return g_device; }
 
 struct CudaSystem::Impl {
   // per particle
@@ -245,7 +287,56 @@ struct CudaSystem::Impl {
     refresh_step_views();
   }
   void float_kinematics_to_double();  // fu, fv -> u, v (a float run's measure and probes)
+
+  // A distributed run's halo (null on one process): the send list on the device, the packed
+  // items on the device, and their pinned host copies for an MPI that takes host memory only.
+  HaloTransport* halo = nullptr;
+  bool rate_law = false;  // the displacement's exchange carries the velocity too (halo_arrays)
+  DeviceArray<int32_t> halo_send;
+  DeviceArray<char> halo_send_items, halo_recv_items;
+  cuda::PinnedBuffer halo_host_send, halo_host_recv;
+  void exchange(const HaloArrays& h);
 };
+
+// The ghosts' values of the arrays `h` names from their owners: packed on the device from the
+// send list, handed to MPI (the device buffers themselves where the library is CUDA-aware,
+// else pinned host copies), unpacked on the device into the ghosts. The bytes are the
+// owners', so a ghost holds what the CPU's exchange gives it.
+void CudaSystem::Impl::exchange(const HaloArrays& h) {
+  const size_t per = h.bytes_per_item();
+  if (!halo || per == 0) return;
+  const size_t sends = halo_send.size(), ghosts = static_cast<size_t>(halo->ghosts());
+  if (halo_send_items.size() < sends * per) halo_send_items.allocate(sends * per, "halo send items");
+  if (halo_recv_items.size() < ghosts * per) halo_recv_items.allocate(ghosts * per, "halo receive items");
+  size_t offset = 0;
+  for (int k = 0; k < h.count; ++k) {
+    const HaloArray& a = h.item[k];
+    for_each(static_cast<int64_t>(sends * a.bytes),
+             PackHalo{static_cast<const char*>(a.data), a.bytes, halo_send.get(), halo_send_items.get(), per, offset},
+             "halo_pack");
+    offset += a.bytes;
+  }
+  if (halo->device_buffers()) {
+    check(cudaDeviceSynchronize(), "halo packing");  // MPI reads the items as soon as it is called
+    halo->exchange_packed(halo_send_items.get(), halo_recv_items.get(), per);
+  } else {
+    void* send = halo_host_send.reserve(std::max<size_t>(sends * per, 1), "halo send items");
+    void* recv = halo_host_recv.reserve(std::max<size_t>(ghosts * per, 1), "halo receive items");
+    // cudaMemcpy waits for the packing kernels (the default stream) and returns when done.
+    if (sends > 0)
+      check(cudaMemcpy(send, halo_send_items.get(), sends * per, cudaMemcpyDeviceToHost), "halo send items to the host");
+    halo->exchange_packed(send, recv, per);
+    if (ghosts > 0)
+      check(cudaMemcpy(halo_recv_items.get(), recv, ghosts * per, cudaMemcpyHostToDevice), "halo items to the device");
+  }
+  offset = 0;
+  for (int k = 0; k < h.count; ++k) {
+    const HaloArray& a = h.item[k];
+    for_each(static_cast<int64_t>(ghosts * a.bytes),
+             UnpackHalo{halo_recv_items.get(), per, offset, static_cast<char*>(a.data), a.bytes, view.n}, "halo_unpack");
+    offset += a.bytes;
+  }
+}
 
 namespace {
 
@@ -280,6 +371,19 @@ public:
     m_.view.min_stretch = m_.fview.min_stretch = m_.min_stretch.get();
     m_.view.min_stretch_next = m_.fview.min_stretch_next = m_.min_stretch_next.get();
     m_.refresh_step_views();
+    // Under MPI: the ghosts' minimum stretches the coming pass reads are their owners' (the
+    // CPU's MpiExec does the same).
+    if (m_.halo) {
+      HaloArrays h;
+      h.item[h.count++] = {m_.min_stretch.get(), sizeof(float)};
+      m_.exchange(h);
+    }
+  }
+  // A distributed run's exchanges (step.hpp exchange_halo): the arrays halo_arrays names, on
+  // the device. Nothing on one process.
+  template <class Real>
+  void exchange(const StepArrays<Real>& a, HaloField field) const {
+    if (m_.halo) m_.exchange(halo_arrays(a, field, m_.rate_law));
   }
   template <class Real>
   void contact(const StepArrays<Real>&) const {
@@ -305,11 +409,14 @@ private:
 
 }  // namespace
 
-CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
+CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make_unique<Impl>()) {
   if (!cuda_device_available())
     throw RunError("CUDA backend: no CUDA device is available (no GPU, or no NVIDIA driver); use --backend cpu");
-  check(cudaSetDevice(0), "cudaSetDevice(0)");
+  check(cudaSetDevice(g_device), "cudaSetDevice(" + std::to_string(g_device) + ")");
   Impl& m = *impl_;
+  // The particles held: the n stepped, then a distributed run's ghosts (rank_system.hpp),
+  // whose per-particle arrays are uploaded with the owned ones' and filled by the exchanges.
+  const size_t held = s.x0.size() / 3;
   const char* sync = std::getenv("BRECCIA_CUDA_SYNC");
   m.sync_after_launch = sync && std::string(sync) == "1";
 
@@ -335,7 +442,7 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   m.dilatation.upload(s.dilatation, "dilatation");
   m.weighted_volume.upload(s.weighted_volume, "weighted_volume");
   // The fast LPS path's per-particle factors exist only where set-up allocated them.
-  if (s.lps_a.size() == s.n && s.lps_b.size() == s.n) {
+  if (s.lps_a.size() == held && s.lps_b.size() == held) {
     m.lps_a.upload(s.lps_a, "lps_a");
     m.lps_b.upload(s.lps_b, "lps_b");
   }
@@ -382,7 +489,7 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
     m.fdensity.upload(f.density, "float density");
     m.fweighted_volume.upload(f.weighted_volume, "float weighted_volume");
     m.fdilatation.upload(f.dilatation, "float dilatation");
-    if (f.lps_a.size() == s.n && f.lps_b.size() == s.n) {
+    if (f.lps_a.size() == held && f.lps_b.size() == held) {
       m.flps_a.upload(f.lps_a, "float lps_a");
       m.flps_b.upload(f.lps_b, "float lps_b");
     }
@@ -495,6 +602,12 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
   };
   fill(m.arrays);
   m.arrays.u_before = m.u_before.get();
+  if (halo) {
+    m.halo = halo;
+    m.rate_law = s.config.strength_rate != StrengthRateLaw::None;
+    m.halo_send.upload(halo->send_indices(), "halo send list");
+    m.arrays.ghosts = m.farrays.ghosts = halo->ghosts();
+  }
   if (s.config.model == PdModel::Correspondence) {
     m.arrays.corr.dimension = m.dimension;
     m.arrays.corr.moduli = m.corr_moduli.get();
@@ -512,7 +625,7 @@ CudaSystem::CudaSystem(const PdSystem& s) : impl_(std::make_unique<Impl>()) {
     // a case that takes neither would pay the layout's state refresh after every pass for nothing.
     const bool bond_model = s.config.model == PdModel::PMB || s.config.model == PdModel::LPS;
     const bool fast = s.symmetric_halves && s.min_stretch.empty() &&
-                      (s.config.model == PdModel::PMB || s.lps_a.size() == s.n);
+                      (s.config.model == PdModel::PMB || s.lps_a.size() == held);
     const bool dual = !s.symmetric_halves;
     if (!bond_model || !s.bond_damage.empty() || !(fast || dual))
       throw RunError("CUDA backend: model.cuda_layout: sell serves the bond passes of PMB and LPS with brittle bonds "

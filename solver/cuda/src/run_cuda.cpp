@@ -15,7 +15,7 @@ namespace {
 // which a checkpoint may have replaced (as the CPU's float backend does when it starts).
 class CudaStepBackend final : public StepBackend {
 public:
-  explicit CudaStepBackend(PdSystem& s) : gpu_(prepared(s)) {}
+  CudaStepBackend(PdSystem& s, HaloTransport* halo) : gpu_(prepared(s), halo) {}
   void step(PdSystem& s) override { gpu_.step(s); }
   Energies measure(PdSystem& s) override { return gpu_.measure(s); }
   void compute_forces(PdSystem& s) override { gpu_.compute_forces(s); }
@@ -33,12 +33,16 @@ private:
 }  // namespace
 
 RunResult cuda_time_loop(PdSystem& s, const RunOptions& o, ResultsWriter* results, HistoryWriter* history) {
-  CudaStepBackend backend(s);
+  CudaStepBackend backend(s, nullptr);
   if (o.progress) std::fprintf(stderr, "  CUDA device: %s\n", cuda_device_description().c_str());
   return run_time_loop(s, o, backend, results, history);
 }
 
-std::unique_ptr<StepBackend> make_cuda_step_backend(PdSystem& s) { return std::make_unique<CudaStepBackend>(s); }
+std::unique_ptr<StepBackend> make_cuda_step_backend(PdSystem& s) { return std::make_unique<CudaStepBackend>(s, nullptr); }
+
+std::unique_ptr<StepBackend> make_cuda_rank_backend(PdSystem& s, HaloTransport* halo) {
+  return std::make_unique<CudaStepBackend>(s, halo);
+}
 
 RunResult run_system_cuda(PdSystem& s, const RunOptions& o) {
   // Without a device nothing may be written: fail before run_system opens any file.

@@ -3,6 +3,9 @@
 #include "breccia/solver/mpi_backend.hpp"
 
 #include <fcntl.h>
+#if __has_include(<mpi-ext.h>)
+#include <mpi-ext.h>  // OpenMPI's extensions: MPIX_Query_cuda_support
+#endif
 #include <unistd.h>
 
 #include <algorithm>
@@ -11,6 +14,7 @@
 #include <cstring>
 #include <initializer_list>
 #include <stdexcept>
+#include <string>
 #include <type_traits>
 #include <vector>
 
@@ -22,12 +26,28 @@
 #include "breccia/solver/outputs.hpp"
 #include "breccia/solver/rank_system.hpp"
 #include "breccia/solver/step.hpp"
+#ifdef BRECCIA_MPI_CUDA
+#include "breccia/solver/cuda_backend.hpp"
+#endif
 
 namespace breccia::solver {
 
 namespace {
 int g_saved_stderr = -1;  // a quiet rank's real stderr, for the message that stops the run
 }  // namespace
+
+bool mpi_cuda_aware() {
+  // BRECCIA_MPI_CUDA_AWARE=0 keeps the staged path where the library could take device memory
+  // (to compare the two paths).
+  if (const char* env = std::getenv("BRECCIA_MPI_CUDA_AWARE"); env && std::string(env) == "0") return false;
+#if defined(MPIX_CUDA_AWARE_SUPPORT)
+  // OpenMPI's CUDA extension: the headers' MPIX_CUDA_AWARE_SUPPORT says what the library they
+  // came with was built with; the library loaded at run time answers for itself.
+  return MPIX_Query_cuda_support() == 1;
+#else
+  return false;
+#endif
+}
 
 MpiSession::MpiSession(int& argc, char**& argv) {
   if (!mpi_launch_from_environment().by_launcher) return;
@@ -80,96 +100,95 @@ bool mpi_all_agree(bool ok) {
 
 namespace {
 
-// One array a halo exchange carries: `bytes` per particle at `data` (local indices).
-struct HaloArray {
-  void* data;
-  size_t bytes;
-};
-
 // The exchange of ghost values with the neighbouring ranks. The ghosts from one source rank
 // are one contiguous run of the rank's ghosts (rank_system.hpp), and the source's send list
 // to this rank holds the same particles in the same (ascending) order, so a message is
-// unpacked by position.
-class HaloExchange {
+// unpacked by position. The messages (exchange_packed) are the same for the CPU, which packs
+// here (exchange), and the CUDA backend, which packs on the device (halo_transport.hpp).
+class HaloExchange final : public HaloTransport {
 public:
   HaloExchange(const RankLayout& L, MPI_Comm comm) : comm_(comm), owned_(L.owned()) {
     for (size_t d = 0; d < L.halo.send_ranks.size(); ++d) {
-      std::vector<int32_t> local(L.halo.send_lists[d].size());
-      for (size_t q = 0; q < local.size(); ++q) local[q] = static_cast<int32_t>(L.halo.send_lists[d][q] - L.begin());
-      send_.push_back({L.halo.send_ranks[d], std::move(local)});
+      const size_t begin = send_all_.size();
+      for (const int64_t j : L.halo.send_lists[d]) send_all_.push_back(static_cast<int32_t>(j - L.begin()));
+      send_.push_back({L.halo.send_ranks[d], begin, send_all_.size()});
     }
     for (size_t r = 0; r < L.halo.recv_ranks.size(); ++r)
       recv_.push_back({L.halo.recv_ranks[r], L.halo.recv_begin[r], L.halo.recv_begin[r + 1]});
     ghosts_ = L.ghosts();
     check_counts(L);
+    device_buffers_ = mpi_cuda_aware();
   }
 
-  int64_t ghosts() const { return ghosts_; }
+  int64_t ghosts() const override { return ghosts_; }
+  const std::vector<int32_t>& send_indices() const override { return send_all_; }
+  bool device_buffers() const override { return device_buffers_; }
 
   void exchange(std::initializer_list<HaloArray> arrays) {
-    size_t per = 0;
-    for (const HaloArray& a : arrays) per += a.bytes;
+    HaloArrays h;
+    for (const HaloArray& a : arrays) h.item[h.count++] = a;
+    exchange(h);
+  }
+
+  void exchange(const HaloArrays& h) {
+    const size_t per = h.bytes_per_item();
     if (per == 0) return;
-    size_t send_total = 0;
-    for (const Peer& p : send_) send_total += p.local.size();
-    send_buf_.resize(send_total * per);
+    send_buf_.resize(send_all_.size() * per);
     recv_buf_.resize(static_cast<size_t>(ghosts_) * per);
-    requests_.resize(send_.size() + recv_.size());
-    size_t req = 0;
-    for (const Source& s : recv_)
-      MPI_Irecv(recv_buf_.data() + s.begin * per, static_cast<int>((s.end - s.begin) * per), MPI_BYTE, s.rank, kTag,
-                comm_, &requests_[req++]);
-    size_t at = 0;
-    for (const Peer& p : send_) {
-      char* out = send_buf_.data() + at * per;
-      for (size_t q = 0; q < p.local.size(); ++q) {
-        char* item = out + q * per;
-        for (const HaloArray& a : arrays) {
-          std::memcpy(item, static_cast<const char*>(a.data) + static_cast<size_t>(p.local[q]) * a.bytes, a.bytes);
-          item += a.bytes;
-        }
+    for (size_t q = 0; q < send_all_.size(); ++q) {
+      char* item = send_buf_.data() + q * per;
+      for (int k = 0; k < h.count; ++k) {
+        const HaloArray& a = h.item[k];
+        std::memcpy(item, static_cast<const char*>(a.data) + static_cast<size_t>(send_all_[q]) * a.bytes, a.bytes);
+        item += a.bytes;
       }
-      MPI_Isend(out, static_cast<int>(p.local.size() * per), MPI_BYTE, p.rank, kTag, comm_, &requests_[req++]);
-      at += p.local.size();
     }
-    MPI_Waitall(static_cast<int>(req), requests_.data(), MPI_STATUSES_IGNORE);
+    exchange_packed(send_buf_.data(), recv_buf_.data(), per);
     for (int64_t g = 0; g < ghosts_; ++g) {
       const char* item = recv_buf_.data() + static_cast<size_t>(g) * per;
-      for (const HaloArray& a : arrays) {
+      for (int k = 0; k < h.count; ++k) {
+        const HaloArray& a = h.item[k];
         std::memcpy(static_cast<char*>(a.data) + static_cast<size_t>(owned_ + g) * a.bytes, item, a.bytes);
         item += a.bytes;
       }
     }
   }
 
+  void exchange_packed(const void* send, void* recv, size_t per) override {
+    if (per == 0) return;
+    requests_.resize(send_.size() + recv_.size());
+    size_t req = 0;
+    for (const Source& s : recv_)
+      MPI_Irecv(static_cast<char*>(recv) + s.begin * per, static_cast<int>((s.end - s.begin) * per), MPI_BYTE, s.rank,
+                kTag, comm_, &requests_[req++]);
+    for (const Peer& p : send_)
+      MPI_Isend(static_cast<const char*>(send) + p.begin * per, static_cast<int>((p.end - p.begin) * per), MPI_BYTE,
+                p.rank, kTag, comm_, &requests_[req++]);
+    MPI_Waitall(static_cast<int>(req), requests_.data(), MPI_STATUSES_IGNORE);
+  }
+
   // The transpose of exchange: each ghost's value goes back to its owner, which keeps the
   // smallest of its own and every reader's (a minimum does not depend on the order of
   // arrival, so the result is exact at any rank count). One double per particle.
   void reduce_min_to_owners(double* data) {
-    size_t send_total = 0;
-    for (const Peer& p : send_) send_total += p.local.size();
-    back_buf_.resize(send_total);
+    back_buf_.resize(send_all_.size());
     requests_.resize(send_.size() + recv_.size());
-    size_t req = 0, at = 0;
-    for (const Peer& p : send_) {  // what the peer's ghosts of these particles hold
-      MPI_Irecv(back_buf_.data() + at, static_cast<int>(p.local.size()), MPI_DOUBLE, p.rank, kBackTag, comm_,
+    size_t req = 0;
+    for (const Peer& p : send_)  // what the peer's ghosts of these particles hold
+      MPI_Irecv(back_buf_.data() + p.begin, static_cast<int>(p.end - p.begin), MPI_DOUBLE, p.rank, kBackTag, comm_,
                 &requests_[req++]);
-      at += p.local.size();
-    }
     for (const Source& s : recv_)
       MPI_Isend(data + owned_ + s.begin, static_cast<int>(s.end - s.begin), MPI_DOUBLE, s.rank, kBackTag, comm_,
                 &requests_[req++]);
     MPI_Waitall(static_cast<int>(req), requests_.data(), MPI_STATUSES_IGNORE);
-    at = 0;
-    for (const Peer& p : send_)
-      for (const int32_t i : p.local) data[i] = std::min(data[i], back_buf_[at++]);
+    for (size_t q = 0; q < send_all_.size(); ++q) data[send_all_[q]] = std::min(data[send_all_[q]], back_buf_[q]);
   }
 
 private:
   static constexpr int kTag = 7101, kBackTag = 7102;
   struct Peer {
     int rank;
-    std::vector<int32_t> local;  // owned local indices this peer reads
+    size_t begin, end;  // its run of send_all_: the owned local indices this peer reads
   };
   struct Source {
     int rank;
@@ -182,7 +201,7 @@ private:
   void check_counts(const RankLayout& L) {
     const int ranks = L.part.ranks();
     std::vector<long long> sends(ranks, 0), expected(ranks, 0), told(ranks, 0);
-    for (const Peer& p : send_) sends[p.rank] = static_cast<long long>(p.local.size());
+    for (const Peer& p : send_) sends[p.rank] = static_cast<long long>(p.end - p.begin);
     for (const Source& s : recv_) expected[s.rank] = s.end - s.begin;
     MPI_Alltoall(sends.data(), 1, MPI_LONG_LONG, told.data(), 1, MPI_LONG_LONG, comm_);
     int bad = told != expected ? 1 : 0, any_bad = 0;
@@ -194,6 +213,8 @@ private:
 
   MPI_Comm comm_;
   int64_t owned_ = 0, ghosts_ = 0;
+  bool device_buffers_ = false;
+  std::vector<int32_t> send_all_;
   std::vector<Peer> send_;
   std::vector<Source> recv_;
   std::vector<char> send_buf_, recv_buf_;
@@ -528,23 +549,7 @@ public:
 
   template <class Real>
   void exchange(const StepArrays<Real>& a, HaloField field) const {
-    switch (field) {
-      case HaloField::Displacement:
-        // A rate law reads the partners' velocities too (bond_stretch_rate): the half-step
-        // velocity the owner's drift left.
-        if (local_.config.strength_rate != StrengthRateLaw::None)
-          halo_.exchange({{a.p.u, 3 * sizeof(Real)}, {a.p.v, 3 * sizeof(Real)}});
-        else
-          halo_.exchange({{a.p.u, 3 * sizeof(Real)}});
-        break;
-      case HaloField::Lps:
-        if (a.p.lps_a) halo_.exchange({{a.p.dilatation, sizeof(Real)}, {a.p.lps_a, sizeof(Real)}, {a.p.lps_b, sizeof(Real)}});
-        else halo_.exchange({{a.p.dilatation, sizeof(Real)}});
-        break;
-      case HaloField::Correspondence:
-        halo_.exchange({{a.corr.force_tensor, 9 * sizeof(double)}});
-        break;
-    }
+    halo_.exchange(halo_arrays(a, field, local_.config.strength_rate != StrengthRateLaw::None));
   }
 
 private:
@@ -656,9 +661,44 @@ std::shared_ptr<RankShare> take_rank_share(const PdSystem& global, MPI_Comm comm
   return make_rank_share(global, comm);
 }
 
+// This process's place among the ranks on its node (MPI_COMM_TYPE_SHARED): which GPU it takes.
+int node_local_rank(MPI_Comm comm) {
+  MPI_Comm node;
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, rank, MPI_INFO_NULL, &node);
+  int local = 0;
+  MPI_Comm_rank(node, &local);
+  MPI_Comm_free(&node);
+  return local;
+}
+
+// --backend cuda: which device each rank took and how the halo travels, printed by rank 0
+// (collective: every rank sends its device's index).
+void print_rank_devices(MPI_Comm comm, bool progress) {
+#ifdef BRECCIA_MPI_CUDA
+  int rank = 0, ranks = 1, device = cuda_device_in_use();
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &ranks);
+  std::vector<int> devices(static_cast<size_t>(ranks));
+  MPI_Gather(&device, 1, MPI_INT, devices.data(), 1, MPI_INT, 0, comm);
+  if (rank != 0 || !progress) return;
+  std::string list;
+  for (int r = 0; r < ranks; ++r) list += (r ? ", " : "") + std::to_string(devices[r]);
+  std::fprintf(stderr, "  CUDA device: %s; devices by rank: %s; halo: %s\n", cuda_device_description().c_str(),
+               list.c_str(), mpi_cuda_aware() ? "device buffers (CUDA-aware MPI)" : "staged through pinned host buffers");
+#else
+  (void)comm, (void)progress;
+#endif
+}
+
+// The rank's step: on the CPU (MpiExec), or with `cuda` on a GPU (a CudaSystem of the rank's
+// system, the halo packed on the device and carried by the same HaloExchange's messages).
+// Everything else (the sums over ranks, the gathers, the files) is the same code either way.
 class MpiBackend final : public StepBackend {
 public:
-  MpiBackend(PdSystem& global, MPI_Comm comm) : comm_(comm), share_(take_rank_share(global, comm)) {
+  MpiBackend(PdSystem& global, MPI_Comm comm, bool cuda = false)
+      : comm_(comm), share_(take_rank_share(global, comm)) {
     if (global.derived_fields_pending) {
       // read_checkpoint's pass at the restored state, on the rank's particles (no bond
       // breaks: the stretches are the checkpointed step's); forces and the dissipated
@@ -681,12 +721,25 @@ public:
     // float32: one process's first measure leaves the float-rounded kinematics in its system,
     // which the first output writes (run_time_loop); later outputs download first anyway.
     if (local_.f32.active) download_kinematics(global);
+    if (cuda) {
+#ifdef BRECCIA_MPI_CUDA
+      check_cuda_ranks_support(local_.config, "the case");  // breccia-solve refused these before set-up
+      cuda_use_device(node_local_rank(comm_));
+      device_ = make_cuda_rank_backend(local_, halo_.get());  // uploads the state as it is now
+#else
+      throw InputError("--backend", "cuda", "cuda under mpirun", "cpu (this build's MPI backend has no CUDA)");
+#endif
+    }
   }
 
   void step(PdSystem& g) override {
     local_.diagnostics = g.diagnostics;
-    MpiExec exec(local_, *halo_, share_->contact.get(), share_->gas.get());
-    with_step_arrays(local_, [&](auto& a) { pd_step(exec, a, local_); });
+    if (device_) {
+      device_->step(local_);
+    } else {
+      MpiExec exec(local_, *halo_, share_->contact.get(), share_->gas.get());
+      with_step_arrays(local_, [&](auto& a) { pd_step(exec, a, local_); });
+    }
     g.time = local_.time;
     g.step = local_.step;
     std::copy(local_.indenter_position, local_.indenter_position + 3, g.indenter_position);
@@ -695,15 +748,18 @@ public:
 
   void compute_forces(PdSystem&) override {
     local_.diagnostics = true;
+    if (device_) return device_->compute_forces(local_);  // the fields stay there until a download
     force_pass(local_);
     if (local_.f32.active) float32_download(local_);
   }
 
   // Sums over ranks: energies to rounding (the order of the sum differs from one process's),
   // counts and the largest damage exactly; the accumulators into the global system.
+  // On a GPU the rank's sums are the device's (as on one process with --backend cuda), then
+  // taken over ranks here alike.
   Energies measure(PdSystem& g) override {
-    if (local_.f32.active) float32_download_kinematics(local_);  // the float state is the truth
-    const Energies e = solver::measure(local_);
+    if (!device_ && local_.f32.active) float32_download_kinematics(local_);  // the float state is the truth
+    const Energies e = device_ ? device_->measure(local_) : solver::measure(local_);
     double sums[4] = {e.kinetic, e.strain, local_.external_work, local_.dissipated_energy}, total[4];
     MPI_Allreduce(sums, total, 4, MPI_DOUBLE, MPI_SUM, comm_);
     double dmax = e.max_damage, gmax = 0.0;
@@ -727,7 +783,7 @@ public:
   }
 
   void download(PdSystem& g) override {
-    if (local_.f32.active) float32_download(local_);
+    to_host();
     const std::vector<int64_t> one = particle_ranges(layout_.part, 1), three = particle_ranges(layout_.part, 3),
                                nine = particle_ranges(layout_.part, 9), entries = entry_ranges(layout_.part, g.offsets);
     const int r = layout_.rank;
@@ -764,7 +820,7 @@ public:
   // bits read them: 1 byte per entry) and, for probes and the indenter, u and v.
   void output(PdSystem& g, ResultsWriter* results, const std::string& out_dir) override {
     if (!g.config.write_results) return StepBackend::output(g, results, out_dir);
-    if (local_.f32.active) float32_download(local_);
+    to_host();
     const int r = layout_.rank;
     gather_ranges(local_.state, g.state, entry_ranges(layout_.part, g.offsets), r, comm_);
     if (!g.config.probes.empty() || g.config.indenter.enabled) download_kinematics(g);
@@ -813,7 +869,7 @@ public:
   // The rows are the gathered file's (internal order: rank r's particles and its rows' bond
   // entries are one contiguous range of each array), so the file is the same.
   void checkpoint(PdSystem& g, const std::string& path, bool root, bool downloaded) override {
-    if (local_.f32.active && !downloaded) float32_download(local_);
+    if (!downloaded) to_host();
     const int64_t first = layout_.begin(), owned = layout_.owned();
     const std::vector<int64_t> facets = facet_ranges(g);
     const CheckpointRows mine{&local_,
@@ -828,7 +884,8 @@ public:
 #endif
 
   void download_kinematics(PdSystem& g) override {
-    if (local_.f32.active) float32_download_kinematics(local_);
+    if (device_) device_->download_kinematics(local_);
+    else if (local_.f32.active) float32_download_kinematics(local_);
     const std::vector<int64_t> three = particle_ranges(layout_.part, 3);
     gather_ranges(local_.u, g.u, three, layout_.rank, comm_);
     gather_ranges(local_.v, g.v, three, layout_.rank, comm_);
@@ -877,6 +934,12 @@ public:
   }
 
 private:
+  // The rank's whole state into its host system (from the GPU, or float32's float state).
+  void to_host() {
+    if (device_) device_->download(local_);
+    else if (local_.f32.active) float32_download(local_);
+  }
+
   // The ranks' ranges of the facet particles (sorted by particle: one run per rank).
   std::vector<int64_t> facet_ranges(const PdSystem& g) const {
     std::vector<int64_t> begin;
@@ -908,12 +971,13 @@ private:
   const RankLayout& layout_ = share_->layout;
   PdSystem& local_ = share_->local;
   std::unique_ptr<HaloExchange>& halo_ = share_->halo;
+  std::unique_ptr<StepBackend> device_;  // --backend cuda: the rank's system on its GPU
 };
 
 }  // namespace
 
-std::unique_ptr<StepBackend> make_mpi_backend(PdSystem& global, MPI_Comm comm) {
-  return std::make_unique<MpiBackend>(global, comm);
+std::unique_ptr<StepBackend> make_mpi_backend(PdSystem& global, MPI_Comm comm, bool cuda) {
+  return std::make_unique<MpiBackend>(global, comm, cuda);
 }
 
 ForcePass mpi_stable_step_forces(PdSystem& global) {
@@ -1008,8 +1072,10 @@ std::pair<long long, Energies> mpi_relax(PdSystem& global, bool progress) {
 RunResult mpi_time_loop(PdSystem& global, const RunOptions& o, ResultsWriter* results, HistoryWriter* history) {
   // Every rank gets here with the same (replicated) system, so a case the backend refuses is
   // refused by all alike: an InputError, reported once by rank 0.
-  const std::unique_ptr<StepBackend> backend = make_mpi_backend(global, MPI_COMM_WORLD);
+  const bool cuda = o.backend == "cuda";
+  const std::unique_ptr<StepBackend> backend = make_mpi_backend(global, MPI_COMM_WORLD, cuda);
   try {
+    if (cuda) print_rank_devices(MPI_COMM_WORLD, o.progress);
     return run_time_loop(global, o, *backend, results, history);
   } catch (const std::exception& e) {
     // From here a failure may be one rank's alone (a file rank 0 writes): stop them all.

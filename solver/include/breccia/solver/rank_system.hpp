@@ -11,6 +11,7 @@
 // No MPI here: the layout and the restriction are plain data, so they are tested without it
 // (tests/solver/test_partition.cpp, RankSystem.*); the exchange itself is in solver/mpi/.
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "breccia/solver/partition.hpp"
@@ -53,6 +54,11 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& global, const RankLayout& layou
 // restores. A rank system built for the estimate is brought up to date with it rather than
 // built again.
 void copy_rank_state(PdSystem& local, const PdSystem& global, const RankLayout& layout);
+
+// A distributed run on the CUDA backend (one GPU per rank, docs/parallel.md) runs what the
+// CUDA step runs on one process, less what a distributed run adds on the host: throws
+// InputError naming the first key of `config` it does not run (`file`: the case file's name).
+void check_cuda_ranks_support(const CaseConfig& config, const std::string& file);
 
 // The index in global.facets (sorted by particle) of the first facet particle at or after
 // internal index `particle`: a rank's facet particles are [first_facet_of(begin),

@@ -35,6 +35,7 @@
 
 #include "breccia/solver/boundary_field.hpp"
 #include "breccia/solver/correspondence_kernels.hpp"
+#include "breccia/solver/halo_transport.hpp"
 #include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_kernels.hpp"
 #include "breccia/solver/pd_system.hpp"
@@ -253,13 +254,7 @@ struct StepFinish {
 };
 
 // ---------------------------------------------------------------------------------------
-// What a distributed run's ranks exchange (rank_system.hpp): each names the values its
-// ghosts receive from their owners.
-enum class HaloField : int {
-  Displacement,    // u, before a force pass reads the partners' positions
-  Lps,             // dilatation and the fast path's factors, between LPS's two passes
-  Correspondence,  // the force tensor sigma K^-1 - G h F, between correspondence's passes
-};
+// What a distributed run's ranks exchange: HaloField (halo_transport.hpp).
 
 // Everything one step touches, as raw pointers into the backend's memory. `p` is the working
 // precision; `d` holds the double arrays the loads are evaluated on (for a double run the
@@ -287,6 +282,33 @@ struct StepArrays {
   SellView sell{};
   SellEntriesT<Real> sell_entries{};
 };
+
+// The arrays a halo exchange of `field` carries, in the step's memory (host or device), for
+// every execution space that exchanges (the CPU's and the CUDA backend's under MPI), so that
+// what travels is decided once. `velocity`: a rate law (materials[].strength_rate) reads the
+// partners' velocities too (bond_stretch_rate): the half-step velocity the owner's drift left.
+template <class Real>
+HaloArrays halo_arrays(const StepArrays<Real>& a, HaloField field, bool velocity) {
+  HaloArrays h;
+  auto add = [&h](const void* data, size_t bytes) { h.item[h.count++] = {const_cast<void*>(data), bytes}; };
+  switch (field) {
+    case HaloField::Displacement:
+      add(a.p.u, 3 * sizeof(Real));
+      if (velocity) add(a.p.v, 3 * sizeof(Real));
+      break;
+    case HaloField::Lps:
+      add(a.p.dilatation, sizeof(Real));
+      if (a.p.lps_a) {
+        add(a.p.lps_a, sizeof(Real));
+        add(a.p.lps_b, sizeof(Real));
+      }
+      break;
+    case HaloField::Correspondence:
+      add(a.corr.force_tensor, 9 * sizeof(double));
+      break;
+  }
+  return h;
+}
 
 // exec.exchange(a, field) where the execution space has one (a distributed run's); nothing
 // otherwise. Detected at compile time (C++17: nvcc compiles this header too).

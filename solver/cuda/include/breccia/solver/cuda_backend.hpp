@@ -9,6 +9,7 @@
 #include <string>
 
 #include "breccia/solver/cuda_device.hpp"  // cuda_device_available, cuda_device_description
+#include "breccia/solver/halo_transport.hpp"
 #include "breccia/solver/pd_system.hpp"
 #include "breccia/solver/run.hpp"
 
@@ -25,7 +26,10 @@ namespace breccia::solver {
 // Throws RunError naming the kernel or copy if CUDA reports an error.
 class CudaSystem {
 public:
-  explicit CudaSystem(const PdSystem& sys);
+  // `halo`: a distributed run's rank system (owned particles, then ghosts: rank_system.hpp),
+  // whose step exchanges the ghosts' values through it (packed on the device); it must
+  // outlive this object. Null: one process.
+  explicit CudaSystem(const PdSystem& sys, HaloTransport* halo = nullptr);
   ~CudaSystem();
   CudaSystem(const CudaSystem&) = delete;
   CudaSystem& operator=(const CudaSystem&) = delete;
@@ -50,6 +54,13 @@ private:
   std::unique_ptr<Impl> impl_;
 };
 
+// The device every CudaSystem built from now on uses: `index` mod the number of devices (a
+// distributed run passes the rank's place on its node, so ranks spread over a node's GPUs
+// and several share one when there are more ranks). Returns the device chosen, -1 if none.
+int cuda_use_device(int index);
+// The device CudaSystems use now (0 unless cuda_use_device chose another).
+int cuda_device_in_use();
+
 // run_system's time loop on the device: same outputs (results.h5, history.csv, checkpoint),
 // same instability check and Ctrl-C handling; arrays are downloaded only when an output,
 // a probe row or a checkpoint needs them. Quasi-static cases (ADR) run on the host.
@@ -57,6 +68,9 @@ RunResult run_system_cuda(PdSystem& sys, const RunOptions& options);
 // A StepBackend (run.hpp) owning a CudaSystem built from `sys` as it is now (float32: after
 // float32_upload), for callers that drive the steps themselves (breccia-atlas).
 std::unique_ptr<StepBackend> make_cuda_step_backend(PdSystem& sys);
+// The same for a distributed run's rank system, its ghosts filled through `halo` (CudaSystem's
+// constructor; solver/mpi/).
+std::unique_ptr<StepBackend> make_cuda_rank_backend(PdSystem& sys, HaloTransport* halo);
 // The dynamic loop on the GPU, for RunOptions::backend_loop (run_system calls it).
 RunResult cuda_time_loop(PdSystem& sys, const RunOptions& options, ResultsWriter* results, HistoryWriter* history);
 

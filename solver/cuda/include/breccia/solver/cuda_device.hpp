@@ -9,7 +9,7 @@ namespace breccia::solver {
 // without a GPU or without the driver library simply answers false.
 bool cuda_device_available();
 
-// Name and memory of device 0, for logs ("NVIDIA H100 80GB HBM3, 79.1 GiB"); empty if none.
+// Name and memory of the device in use (0 unless cuda_use_device chose another), for logs ("NVIDIA H100 80GB HBM3, 79.1 GiB"); empty if none.
 std::string cuda_device_description();
 
 }  // namespace breccia::solver

@@ -78,4 +78,31 @@ private:
   size_t count_ = 0;
 };
 
+// Page-locked host memory (cudaMallocHost): a copy to or from it runs at the link's full rate
+// and needs no staging copy by the driver (the halo of a distributed run: cuda_backend.cu).
+// Grows on demand and keeps its allocation between uses.
+class PinnedBuffer {
+public:
+  PinnedBuffer() = default;
+  PinnedBuffer(const PinnedBuffer&) = delete;
+  PinnedBuffer& operator=(const PinnedBuffer&) = delete;
+  ~PinnedBuffer() {
+    if (ptr_) cudaFreeHost(ptr_);
+  }
+  void* reserve(size_t bytes, const char* name) {
+    if (bytes > bytes_) {
+      if (ptr_) cudaFreeHost(ptr_);
+      ptr_ = nullptr;
+      bytes_ = 0;
+      check(cudaMallocHost(&ptr_, bytes), std::string("cudaMallocHost of ") + name);
+      bytes_ = bytes;
+    }
+    return ptr_;
+  }
+
+private:
+  void* ptr_ = nullptr;
+  size_t bytes_ = 0;
+};
+
 }  // namespace breccia::cuda

@@ -44,8 +44,15 @@ bool mpi_all_agree(bool ok);
 // The time loop's backend for rank `rank` of `comm`: builds the rank's system from the
 // (replicated) global one and keeps it between steps; measure() sums over ranks,
 // download() gathers the owned ranges into the global system on rank 0.
-// Throws InputError for a case it cannot distribute (naming the key).
-std::unique_ptr<StepBackend> make_mpi_backend(PdSystem& global, MPI_Comm comm);
+// Throws InputError for a case it cannot distribute (naming the key). `cuda`: each rank steps
+// on a GPU (the node-local rank's, modulo the node's GPUs), the halo packed on the device and
+// carried through pinned host buffers, or device buffers with a CUDA-aware MPI.
+std::unique_ptr<StepBackend> make_mpi_backend(PdSystem& global, MPI_Comm comm, bool cuda = false);
+
+// Whether the MPI library loaded takes device memory in its messages (OpenMPI:
+// MPIX_Query_cuda_support, asked at run time where mpi-ext.h declares it; false otherwise,
+// and with BRECCIA_MPI_CUDA_AWARE=0 in the environment).
+bool mpi_cuda_aware();
 
 // SetupHooks::stable_step_forces for a distributed run: the set-up's stable-step estimate
 // with its force passes shared between the ranks (the step comes out as one process's).
@@ -63,7 +70,7 @@ DistributedSetup mpi_distributed_setup();
 // final energies summed over ranks.
 std::pair<long long, Energies> mpi_relax(PdSystem& global, bool progress);
 
-// RunOptions::backend_loop for a distributed run.
+// RunOptions::backend_loop for a distributed run (options.backend "cuda": on the ranks' GPUs).
 RunResult mpi_time_loop(PdSystem& global, const RunOptions& options, ResultsWriter* results,
                         HistoryWriter* history);
 

@@ -97,3 +97,51 @@ TEST(Families, RowRangeBuildsThoseRowsAsTheWholeBuild) {
     }
   }
 }
+
+// A cloud graded over more than three octaves of horizon (several reach classes, each with
+// grids of its own cells) and pads not proportional to the horizons: every row equals the
+// brute-force family (the pair's reach is max(h_i, h_j) + max(p_i, p_j)), and a row range
+// gives the whole build's rows. Ten octaves exercise the last, open-ended class.
+TEST(Families, MatchBruteForceAcrossReachClasses) {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const size_t n = 900;
+  for (const double octaves : {3.5, 10.0}) {
+    std::vector<double> x(3 * n), h(n), pad(n);
+    for (size_t i = 0; i < n; ++i) {
+      // denser towards x = 0, the horizon growing with x as on a graded mesh
+      const double s = u(rng);
+      x[3 * i] = s * s;
+      x[3 * i + 1] = u(rng);
+      x[3 * i + 2] = 0.5 * u(rng);
+      h[i] = (octaves < 5.0 ? 0.05 : 0.01) * std::pow(2.0, octaves * x[3 * i] * (0.8 + 0.2 * u(rng)));
+      pad[i] = (i % 7 == 0 ? 0.5 : 0.2) * h[i] * u(rng);
+    }
+    const Families f = build_families(x, h, pad);
+    size_t entries = 0;
+    for (size_t i = 0; i < n; ++i) {
+      std::vector<int32_t> expected;
+      for (size_t j = 0; j < n; ++j) {
+        if (j == i) continue;
+        const double reach = std::max(h[i], h[j]) + std::max(pad[i], pad[j]);
+        double r2 = 0;
+        for (int d = 0; d < 3; ++d) r2 += (x[3 * j + d] - x[3 * i + d]) * (x[3 * j + d] - x[3 * i + d]);
+        if (r2 <= reach * reach) expected.push_back(static_cast<int32_t>(j));
+      }
+      entries += expected.size();
+      ASSERT_EQ(std::vector<int32_t>(f.neighbors.begin() + f.offsets[i], f.neighbors.begin() + f.offsets[i + 1]), expected)
+          << octaves << " octaves, particle " << i;
+    }
+    EXPECT_GT(entries, 10 * n) << octaves << " octaves";  // not a trivially empty family
+    EXPECT_LT(entries, n * (n - 1)) << octaves << " octaves";  // nor every pair
+    const Families part = build_families(x, h, pad, 300, 640);
+    for (size_t i = 0; i < n; ++i) {
+      const bool own = i >= 300 && i < 640;
+      EXPECT_EQ(part.offsets[i + 1] - part.offsets[i], own ? f.offsets[i + 1] - f.offsets[i] : 0) << "particle " << i;
+      if (own)
+        EXPECT_TRUE(std::equal(part.neighbors.begin() + part.offsets[i], part.neighbors.begin() + part.offsets[i + 1],
+                               f.neighbors.begin() + f.offsets[i]))
+            << "particle " << i;
+    }
+  }
+}

@@ -2,9 +2,10 @@
 // Peridynamic families (bonds): for each particle i, every j != i whose reference distance is
 // within reach(i, j) = max(horizon_i, horizon_j) + max(pad_i, pad_j). Full lists (each
 // pair appears from both ends) so a particle sums its own force without atomics.
-// Built with a uniform cell list (cell_list.hpp) of half the smallest reach (each particle
-// scans the cells its own reach covers; the family is the union of both directions): O(N)
-// for bounded density contrast. Shared by the solver (set-up, breccia-plan's bond counts) and
+// Built with cell lists (cell_list.hpp) per reach class (horizons in octaves; cells of half
+// the class's largest reach), each row searching every j within the pair's reach (both ends'
+// test): O(N) for bounded density contrast, about the same cells scanned per row whatever
+// its horizon. Shared by the solver (set-up, breccia-plan's bond counts) and
 // post-processing (the bond list of results.h5 and its fragment graph), so that both see
 // the same bonds in the same order.
 #include <cstdint>
@@ -23,10 +24,8 @@ struct Families {
 // position: 3N (x, y, z interleaved); horizon_m, pad_m: N (pad may be empty = 0).
 // The pad lets partial-volume rules include neighbours whose cell straddles the horizon.
 // rows [row_begin, row_end) only (default: all): the other rows are left empty, so a
-// distributed set-up builds the families of the particles it owns alone. With several
-// horizons (dual horizon) a row of a range searches the largest reach and tests both ends
-// (the whole build takes the union with the transposed search, which reads every row):
-// the same rows, in the same order.
+// distributed set-up builds the families of the particles it owns alone: the same rows, in
+// the same order, as the whole build's.
 Families build_families(std::span<const double> position, std::span<const double> horizon_m,
                         std::span<const double> pad_m = {}, int64_t row_begin = 0, int64_t row_end = -1);
 

@@ -265,6 +265,8 @@ public:
     sync_contact();
     return contact_.friction_dissipation_j();
   }
+  // Energy dissipated by material damping (SolidLaw::viscous_time_s) since the start.
+  double material_damping_j() const;
   double gravity_energy_j() const;  // - m g . u (particles and free rigid bodies), zero at the start
   double plastic_fraction() const;  // share of particles with eq. plastic strain > 0
 
@@ -336,6 +338,9 @@ private:
   mutable std::vector<SymTensor> stress_;
   std::vector<char> full_stencil_;  // number density >= 0.97 n0 (not a surface particle)
   mutable std::vector<double> eq_plastic_strain_, stress_work_j_;
+  // Material damping (law_.viscous_time_s > 0, else empty): solid_phases.hpp, stress_phase_at.
+  std::vector<SymTensor> viscous_stress_;
+  std::vector<double> viscous_work_j_;
   std::vector<double> pressure_pa_, pressure_floor_pa_;
   mutable std::array<std::vector<double>, 3> u_, v_;
   std::array<std::vector<double>, 3> a_, external_force_n_;

@@ -124,7 +124,7 @@ void Solid::rebuild_stencils_on_current_configuration() {
   for (size_t i = 0; i < n; ++i) {
     gradient_[i] = zero;
     f_inverse_[i] = identity3();
-    matrices_[i] = force_matrices(stress_[i], zero, f_inverse_[i], moment_inverse_[i], matrices_[i].hourglass_stiffness);
+    matrices_[i] = force_matrices(stress_in_force(i), zero, f_inverse_[i], moment_inverse_[i], matrices_[i].hourglass_stiffness);
   }
   ++stencil_rebuilds_;
 }

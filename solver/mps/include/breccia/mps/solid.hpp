@@ -317,6 +317,10 @@ private:
   void build_stencils(const std::vector<double>& position_m);  // bonds, L^-1, surface flags
   void rebuild_stencils_on_current_configuration();            // updated Lagrangian
   void update_substeps();  // substeps per step() from the shortest current bond
+  // The stress particle i's force matrices carry: elastic + viscous (material damping).
+  SymTensor stress_in_force(size_t i) const {
+    return viscous_stress_.empty() ? stress_[i] : add_stresses(stress_[i], viscous_stress_[i]);
+  }
 
   std::vector<double> position_m_, volume_m3_;
   double density_kg_m3_ = 0.0;

@@ -155,6 +155,11 @@ BRECCIA_HD inline double damped_step_factor(double viscous_time_s, double p_wave
   return std::sqrt(1.0 + zeta_max * zeta_max) - zeta_max;
 }
 
+// a + b, component by component (the elastic and viscous stresses in the force).
+BRECCIA_HD inline SymTensor add_stresses(const SymTensor& a, const SymTensor& b) {
+  return {a.xx + b.xx, a.yy + b.yy, a.zz + b.zz, a.xy + b.xy, a.yz + b.yz, a.zx + b.zx};
+}
+
 // The viscous stress of a step over which the strain grew by strain_increment in dt:
 // beta C : (strain_increment / dt).
 BRECCIA_HD inline SymTensor viscous_stress_of(const SolidLaw& law, const SymTensor& strain_increment, double dt) {

@@ -71,12 +71,7 @@ BRECCIA_HD inline double stress_phase_at(long long i, const SolidStressInputs& i
     SymTensor& viscous = s.viscous_stress[i];
     s.viscous_work_j[i] += in.volume_m3[i] * contract(viscous, strain_increment);
     viscous = viscous_stress_of(in.law, strain_increment, in.dt_s);
-    force_stress.xx += viscous.xx;
-    force_stress.yy += viscous.yy;
-    force_stress.zz += viscous.zz;
-    force_stress.xy += viscous.xy;
-    force_stress.yz += viscous.yz;
-    force_stress.zx += viscous.zx;
+    force_stress = add_stresses(force_stress, viscous);
   }
   s.matrices[i] = force_matrices(force_stress, h_new, s.f_inverse[i], in.moment_inverse[i],
                                  in.hourglass_stiffness * deviatoric_scale);

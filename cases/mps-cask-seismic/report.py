@@ -50,7 +50,7 @@ def analyse(out, name):
     energy = {}
     if "ground_work_J" in rows[0]:
         parts = ["kinetic_energy_J", "stress_work_J", "contact_energy_J", "gravity_energy_J", "friction_dissipation_J",
-                 "contact_damping_J"]
+                 "contact_damping_J", "material_damping_J"]
         total = sum(col(k) for k in parts if k in rows[0]) + col("hourglass_energy_J") - col("ground_work_J")
         work = col("ground_work_J")
         energy = {"ground_work_J_end": float(work[-1]), "imbalance_J_end": float(total[-1] - total[0]),

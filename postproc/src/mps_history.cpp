@@ -54,11 +54,14 @@ MpsHistoryMapping map_mps_history(const History& mps) {
     const auto hourglass = column_or_zero("hourglass_energy_J"), contact = column_or_zero("contact_energy_J");
     for (size_t r = 0; r < rows; ++r) strain[r] = work[r] + hourglass[r] + contact[r];
     dissipated = column_or_zero("friction_dissipation_J");
+    const auto viscous = column_or_zero("material_damping_J");  // materials[0].damping_ratio
+    for (size_t r = 0; r < rows; ++r) dissipated[r] += viscous[r];
     m.terms = {{"kinetic_J", "kinetic_energy_J (particles and free rigid bodies)"},
                {"strain_J", "stress_work_J + hourglass_energy_J + contact_energy_J (stress work holds the plastic "
                             "dissipation too: MPS does not separate it from the elastic energy)"},
-               {"dissipated_J", mps.find("friction_dissipation_J") ? "friction_dissipation_J (Coulomb slip)"
-                                                                    : "0 (no friction_dissipation_J column: no frictional contact)"},
+               {"dissipated_J", std::string(mps.find("friction_dissipation_J") ? "friction_dissipation_J (Coulomb slip)"
+                                                                    : "0 (no friction_dissipation_J column: no frictional contact)") +
+                                    (mps.find("material_damping_J") ? " + material_damping_J (viscous stress)" : "")},
                {"external_work_J", "initial kinetic + strain + dissipated (first row) - gravity_energy_J (work of gravity)"}};
     m.notes.push_back("MPS fracture is a strength criterion without a fracture energy: cut bonds release no recorded "
                       "energy, dissipated_J has no fracture part and G0 x crack area is not computed");

@@ -300,6 +300,23 @@ TEST(MpsPost, HistoryColumnsMapOntoTheBalanceTermsAsDocumented) {
   EXPECT_NE(none.notes[0].find("output.energy: false"), std::string::npos);
 }
 
+// Material damping (materials[].damping_ratio): its material_damping_J joins the friction in
+// post's dissipated term, exactly.
+TEST(MpsPost, MaterialDampingColumnJoinsTheDissipatedTerm) {
+  History mps;
+  mps.path = "history.csv";
+  mps.names = {"time_s", "kinetic_energy_J", "stress_work_J", "hourglass_energy_J", "contact_energy_J",
+               "gravity_energy_J", "friction_dissipation_J", "material_damping_J"};
+  mps.columns = {{0.0, 1e-3}, {5.0, 3.0}, {0.0, 0.5}, {0.0, 0.1}, {0.0, 0.0}, {0.0, 0.0}, {0.0, 0.25}, {0.0, 1.15}};
+  const MpsHistoryMapping m = map_mps_history(mps);
+  ASSERT_TRUE(m.energy);
+  EXPECT_DOUBLE_EQ(m.history.column("dissipated_J")[1], 1.4);
+  bool documented = false;
+  for (const auto& [term, expression] : m.terms)
+    documented = documented || (term == "dissipated_J" && expression.find("material_damping_J") != std::string::npos);
+  EXPECT_TRUE(documented);
+}
+
 // A results file of an old MPS run (format 1: groups named by step, no bond list) is refused
 // with the message an old PD file gets.
 TEST(MpsPost, OldFormatOneMpsResultsAreRefusedLikePdOnes) {

@@ -1,6 +1,7 @@
 #include "breccia/mps/case_spec.hpp"
 
 #include <cmath>
+#include <numbers>
 #include <cstdio>
 #include <filesystem>
 
@@ -57,7 +58,8 @@ LatticeSpec parse_lattice(const Section& s) {
 }
 
 MaterialSpec parse_material(const Section& s) {
-  s.allow_only({"name", "density", "youngs_modulus", "poisson_ratio", "lambda", "mu", "C13", "C55", "plasticity", "fracture"});
+  s.allow_only({"name", "density", "youngs_modulus", "poisson_ratio", "lambda", "mu", "C13", "C55", "plasticity", "fracture",
+                "damping_ratio", "damping_frequency"});
   MaterialSpec m;
   m.name = s.text("name", "material");
   m.density_kg_m3 = s.positive("density", Quantity::Density);
@@ -95,6 +97,19 @@ MaterialSpec parse_material(const Section& s) {
       fail(*p, "hardening_modulus", pascal_text(ps.hardening_modulus_pa),
            "a hardening modulus >= 0 (0: perfectly plastic)");
     m.plasticity = ps;
+  }
+  // Material damping (stress formulation): a damping ratio zeta at a frequency f, stored as
+  // the stiffness-proportional (Rayleigh beta) coefficient beta = zeta / (pi f) (docs/mps.md).
+  if (s.has("damping_ratio") || s.has("damping_frequency")) {
+    if (!s.has("damping_ratio")) fail(s, "damping_ratio", "missing (damping_frequency is given)", "a damping ratio, e.g. 0.02");
+    if (!s.has("damping_frequency"))
+      fail(s, "damping_frequency", "missing (damping_ratio is given)", "the frequency the ratio holds at, e.g. 140 Hz");
+    const double zeta = s.number("damping_ratio", Quantity::Dimensionless);
+    if (!(zeta > 0.0 && zeta < 1.0)) fail(s, "damping_ratio", std::to_string(zeta), "a damping ratio 0 < zeta < 1");
+    const double f = s.positive("damping_frequency", Quantity::Frequency);
+    m.damping_ratio = zeta;
+    m.damping_frequency_hz = f;
+    m.viscous_time_s = zeta / (std::numbers::pi * f);
   }
   if (auto f = s.optional_section("fracture")) {
     f->allow_only({"tensile_strength"});
@@ -288,6 +303,9 @@ CaseSpec parse_root(const Section& root) {
   if (c.material.plasticity && !stress)
     fail(materials[0], "plasticity", "given for the displacement formulation (it has no stress state)",
          "model.formulation: stress");
+  if (c.material.viscous_time_s > 0.0 && !stress)
+    fail(materials[0], "damping_ratio", "given for the displacement formulation (material damping acts on the stress)",
+         "model.formulation: stress (or model.damping for mass damping)");
 
   const auto cracks = root.list("cracks");
   for (size_t i = 0; i < cracks.size(); ++i) {

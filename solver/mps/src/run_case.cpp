@@ -100,6 +100,12 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
                sim.size(), sim.bonds().size(), sim.dimension(), sim.spacing_m(), spec.re_over_spacing,
                sim.p_wave_speed(), sim.dt_s(), spec.safety, total_steps, sim.law().plastic ? "von Mises" : "none",
                spec.repulsive_pressure ? "repulsive" : "conservative", spec.hourglass);
+  if (sim.law().viscous_time_s > 0.0)
+    std::fprintf(stderr,
+                 "mps (stress): material damping %.3g at %.4g Hz (beta %.4g s); the step above includes its "
+                 "stability factor %.4f\n",
+                 spec.material.damping_ratio, spec.material.damping_frequency_hz, sim.law().viscous_time_s,
+                 damped_step_factor(sim.law().viscous_time_s, sim.p_wave_speed(), sim.spacing_m()));
   std::vector<int> probe_particle;
   for (const auto& p : spec.probes) probe_particle.push_back(sim.nearest_particle(p.position_m));
   const std::filesystem::path dir(out_dir);
@@ -123,6 +129,9 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
   // Normal dashpots (a polygon's restitution < 1): the energy they removed.
   const bool damped = sim.contact().damped();
   if (spec.energy && damped) history << ",contact_damping_J";
+  // Material damping (materials[0].damping_ratio): the energy its viscous stress dissipated.
+  const bool viscous = sim.law().viscous_time_s > 0.0;
+  if (spec.energy && viscous) history << ",material_damping_J";
   for (size_t k : free_bodies) {
     const std::string& name = sim.contact().polygon(k).name;
     history << "," << name << "_x_m," << name << "_y_m," << name << "_angle_rad";
@@ -149,6 +158,7 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
     if (sim.contact().particle_contact()) history << "," << sim.contact().contact_pairs();
     if (spec.energy && frictional) history << "," << fmt(sim.friction_dissipation_j());
     if (spec.energy && damped) history << "," << fmt(sim.contact().contact_damping_j());
+    if (spec.energy && viscous) history << "," << fmt(sim.material_damping_j());
     for (size_t k : free_bodies) {
       const auto c = sim.contact().polygon_centroid_m(k);
       history << "," << fmt(c[0]) << "," << fmt(c[1]) << "," << fmt(sim.contact().polygon_angle_rad(k));
@@ -209,6 +219,11 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
   j["contact_pairs"] = sim.contact().contact_pairs();
   j["friction_dissipation_j"] = json_number(sim.friction_dissipation_j());
   if (damped) j["contact_damping_j"] = json_number(sim.contact().contact_damping_j());
+  if (viscous) {
+    j["damping_ratio"] = json_number(spec.material.damping_ratio);
+    j["damping_frequency_hz"] = json_number(spec.material.damping_frequency_hz);
+    j["material_damping_j"] = json_number(sim.material_damping_j());
+  }
   add_timing(j, sim, wall_s, loop_s);
   write_json_file(dir / "summary.json", j);
   report_timing(sim, wall_s, loop_s, out_dir);

@@ -37,6 +37,10 @@ Solid::Solid(std::vector<double> position_m, std::vector<double> volume_m3, doub
   stress_.assign(n, SymTensor{});
   eq_plastic_strain_.assign(n, 0.0);
   stress_work_j_.assign(n, 0.0);
+  if (law_.viscous_time_s > 0.0) {
+    viscous_stress_.assign(n, SymTensor{});
+    viscous_work_j_.assign(n, 0.0);
+  }
   pressure_pa_.assign(n, 0.0);
   pressure_floor_pa_.assign(n, 0.0);
   for (int a = 0; a < 3; ++a) {
@@ -49,7 +53,9 @@ Solid::Solid(std::vector<double> position_m, std::vector<double> volume_m3, doub
       u_stencil_[a].assign(n, 0.0);
     }
   }
-  cfl_dt_s_ = options_.safety * options_.spacing_m / p_wave_speed();
+  // Material damping shortens the stable step (damped_step_factor, solid_kernels.hpp).
+  cfl_dt_s_ = options_.safety * options_.spacing_m / p_wave_speed() *
+              damped_step_factor(law_.viscous_time_s, p_wave_speed(), options_.spacing_m);
   dt_s_ = options_.dt_s ? *options_.dt_s : cfl_dt_s_;
   // Four P-wave transits of the largest extent of the reference configuration (update_substeps).
   double extent = 0.0;
@@ -118,7 +124,7 @@ void Solid::rebuild_stencils_on_current_configuration() {
   for (size_t i = 0; i < n; ++i) {
     gradient_[i] = zero;
     f_inverse_[i] = identity3();
-    matrices_[i] = force_matrices(stress_[i], zero, f_inverse_[i], moment_inverse_[i], matrices_[i].hourglass_stiffness);
+    matrices_[i] = force_matrices(stress_in_force(i), zero, f_inverse_[i], moment_inverse_[i], matrices_[i].hourglass_stiffness);
   }
   ++stencil_rebuilds_;
 }
@@ -173,7 +179,10 @@ void Solid::update_substeps() {
   // a bond has shortened by more than a fifth (safety 0.3 leaves that margin): split at any
   // shortening, an elastic body in contact (strains ~1e-4) would run at twice the cost.
   constexpr double kSubstepExcess = 1.25;
-  const double stable_dt = kSubstepExcess * options_.safety * shortest / p_wave_speed();
+  // With material damping, its bound for the bond's length as for the spacing in the
+  // constructor (it falls with the length: a shorter bond's mode is faster and more damped).
+  const double stable_dt = kSubstepExcess * options_.safety * shortest / p_wave_speed() *
+                           damped_step_factor(law_.viscous_time_s, p_wave_speed(), shortest);
   double wanted = std::ceil(dt_s_ / stable_dt - 1e-9);
   if (!(wanted >= 1.0)) wanted = 1.0;  // NaN from non-finite fields: the inversion check reports those
   const int count = static_cast<int>(std::min(wanted, static_cast<double>(kMaxSubsteps)));
@@ -280,8 +289,13 @@ void Solid::compute_acceleration(double dt) {
   stress_in.law = law_;
   stress_in.dimension = dim;
   stress_in.hourglass_stiffness = hourglass;
-  const SolidStressState state{gradient_.data(), f_inverse_.data(),   stress_.data(), eq_plastic_strain_.data(),
-                               stress_work_j_.data(), pressure_pa_.data(), matrices_.data()};
+  stress_in.dt_s = dt;
+  SolidStressState state{gradient_.data(), f_inverse_.data(),   stress_.data(), eq_plastic_strain_.data(),
+                         stress_work_j_.data(), pressure_pa_.data(), matrices_.data()};
+  if (!viscous_stress_.empty()) {
+    state.viscous_stress = viscous_stress_.data();
+    state.viscous_work_j = viscous_work_j_.data();
+  }
   long long inverted = 0;
   double largest_gradient2 = 0.0;  // max |H|^2 (Frobenius) over the particles
 #pragma omp parallel for schedule(static) reduction(+ : inverted) reduction(max : largest_gradient2) if (n > kSolidParallelMin)
@@ -387,6 +401,7 @@ void Solid::attach_device(std::unique_ptr<SolidStepDevice> device) {
   else if (contact_.polygon_count() > 0) missing = "rigid polygons";
   else if (contact_.moving_obstacles()) missing = "a moving floor (ground motion)";
   else if (std::isfinite(options_.damping_until_s)) missing = "a settling phase (model.damping_until)";
+  else if (law_.viscous_time_s > 0.0) missing = "material damping";
   if (!missing.empty()) throw RunError("mps solid: the CUDA launcher does not run " + missing + "; use --backend cpu");
   sync_host(false);
   device_ = std::move(device);
@@ -444,6 +459,12 @@ double Solid::stress_work_j() const {
   sync_host(false);
   double e = 0.0;
   for (double w : stress_work_j_) e += w;
+  return e;
+}
+
+double Solid::material_damping_j() const {
+  double e = 0.0;
+  for (double w : viscous_work_j_) e += w;
   return e;
 }
 

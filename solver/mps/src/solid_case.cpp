@@ -15,6 +15,7 @@ Solid make_solid(const CaseSpec& spec, std::string* content_id) {
   SolidLaw law;
   law.lame_lambda_pa = m.lame_lambda_pa;
   law.shear_modulus_pa = m.shear_modulus_pa;
+  law.viscous_time_s = m.viscous_time_s;
   if (m.plasticity) {
     law.plastic = true;
     law.hardening = {m.shear_modulus_pa, m.plasticity->yield_stress_pa, m.plasticity->hardening_modulus_pa};
@@ -71,6 +72,8 @@ std::optional<DeviceRefusal> solid_device_refusal(const CaseSpec& spec) {
     return DeviceRefusal{"contact.rigid_bodies", "rigid polygons with --backend cuda", "none on the GPU" + cpu};
   if (spec.damping_until_s)
     return DeviceRefusal{"model.damping_until", "a settling phase with --backend cuda", "damping for the whole run on the GPU" + cpu};
+  if (spec.material.viscous_time_s > 0.0)
+    return DeviceRefusal{"materials[0].damping_ratio", "material damping with --backend cuda", "none on the GPU" + cpu};
   if (spec.floor && spec.floor->motion)
     return DeviceRefusal{"contact.floor.motion", "a moving floor with --backend cuda", "a fixed floor on the GPU" + cpu};
   return std::nullopt;

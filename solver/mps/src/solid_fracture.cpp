@@ -121,7 +121,7 @@ void Solid::refresh_cut_stencils(const std::vector<long long>& changed) {
     f(2, 2) += 1.0;
     gradient_[i] = h;
     f_inverse_[i] = det(f) > 0.0 ? inverse(f) : identity3();
-    matrices_[i] = force_matrices(stress_[i], gradient_[i], f_inverse_[i], moment_inverse_[i],
+    matrices_[i] = force_matrices(stress_in_force(i), gradient_[i], f_inverse_[i], moment_inverse_[i],
                                   matrices_[i].hourglass_stiffness);
   }
 }

@@ -53,6 +53,9 @@ struct MaterialSpec {
   double shear_modulus_pa = 0.0;  // mu = C55
   std::optional<PlasticitySpec> plasticity;  // stress formulation only
   std::optional<FractureSpec> fracture;      // stress formulation only
+  // Material damping (stress formulation only): damping_ratio at damping_frequency, as the
+  // stiffness-proportional coefficient beta = zeta / (pi f) in s (0: none).
+  double damping_ratio = 0.0, damping_frequency_hz = 0.0, viscous_time_s = 0.0;
   double p_wave_speed() const;  // sqrt((lambda + 2 mu) / rho)
   double s_wave_speed() const;  // sqrt(mu / rho)
 };

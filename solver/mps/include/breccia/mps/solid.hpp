@@ -265,6 +265,8 @@ public:
     sync_contact();
     return contact_.friction_dissipation_j();
   }
+  // Energy dissipated by material damping (SolidLaw::viscous_time_s) since the start.
+  double material_damping_j() const;
   double gravity_energy_j() const;  // - m g . u (particles and free rigid bodies), zero at the start
   double plastic_fraction() const;  // share of particles with eq. plastic strain > 0
 
@@ -315,6 +317,10 @@ private:
   void build_stencils(const std::vector<double>& position_m);  // bonds, L^-1, surface flags
   void rebuild_stencils_on_current_configuration();            // updated Lagrangian
   void update_substeps();  // substeps per step() from the shortest current bond
+  // The stress particle i's force matrices carry: elastic + viscous (material damping).
+  SymTensor stress_in_force(size_t i) const {
+    return viscous_stress_.empty() ? stress_[i] : add_stresses(stress_[i], viscous_stress_[i]);
+  }
 
   std::vector<double> position_m_, volume_m3_;
   double density_kg_m3_ = 0.0;
@@ -336,6 +342,9 @@ private:
   mutable std::vector<SymTensor> stress_;
   std::vector<char> full_stencil_;  // number density >= 0.97 n0 (not a surface particle)
   mutable std::vector<double> eq_plastic_strain_, stress_work_j_;
+  // Material damping (law_.viscous_time_s > 0, else empty): solid_phases.hpp, stress_phase_at.
+  std::vector<SymTensor> viscous_stress_;
+  std::vector<double> viscous_work_j_;
   std::vector<double> pressure_pa_, pressure_floor_pa_;
   mutable std::array<std::vector<double>, 3> u_, v_;
   std::array<std::vector<double>, 3> a_, external_force_n_;

@@ -136,7 +136,44 @@ struct SolidLaw {
   double shear_modulus_pa = 0.0;
   bool plastic = false;
   VonMisesHardening hardening;
+  // Material (stiffness-proportional, Rayleigh beta) damping: a Kelvin-Voigt viscous stress
+  // sigma_v = beta C : d(eps)/dt added to the stress in the force (viscous_stress_of).
+  // 0: none. A damping ratio zeta at a frequency f gives beta = zeta / (pi f).
+  double viscous_time_s = 0.0;
 };
+
+// The stable step of the central-difference (symplectic Euler) scheme with a viscous term:
+// a mode of frequency omega with damping ratio zeta is stable for
+// omega dt <= 2 (sqrt(1 + zeta^2) - zeta) (Belytschko, Liu & Moran 2000, sec. 6.3, recalled),
+// against 2 without damping. Stiffness-proportional damping gives the highest mode the most,
+// zeta_max = beta omega_max / 2, with omega_max = 2 c_L / length for the shortest length the
+// lattice resolves (the bound of a 1D chain; the step's safety factor keeps the MPS stencil's
+// margin). Returns the factor on the undamped step, 1 without damping.
+BRECCIA_HD inline double damped_step_factor(double viscous_time_s, double p_wave_speed_m_s, double length_m) {
+  if (!(viscous_time_s > 0.0)) return 1.0;
+  const double zeta_max = viscous_time_s * p_wave_speed_m_s / length_m;  // beta (2 c / l) / 2
+  return std::sqrt(1.0 + zeta_max * zeta_max) - zeta_max;
+}
+
+// a + b, component by component (the elastic and viscous stresses in the force).
+BRECCIA_HD inline SymTensor add_stresses(const SymTensor& a, const SymTensor& b) {
+  return {a.xx + b.xx, a.yy + b.yy, a.zz + b.zz, a.xy + b.xy, a.yz + b.yz, a.zx + b.zx};
+}
+
+// The viscous stress of a step over which the strain grew by strain_increment in dt:
+// beta C : (strain_increment / dt).
+BRECCIA_HD inline SymTensor viscous_stress_of(const SolidLaw& law, const SymTensor& strain_increment, double dt) {
+  SymTensor v;
+  add_hooke_increment(v, strain_increment, law.lame_lambda_pa, law.shear_modulus_pa);
+  const double s = law.viscous_time_s / dt;
+  v.xx *= s;
+  v.yy *= s;
+  v.zz *= s;
+  v.xy *= s;
+  v.yz *= s;
+  v.zx *= s;
+  return v;
+}
 
 // One particle's stress update over a step, from the displacement gradients at the start
 // (h_old, with f_old_inverse = (I + h_old)^-1) and the end (h_new) of the step. The
@@ -147,10 +184,10 @@ struct SolidLaw {
 // only rotates the stress), then receives the Hooke increment (elastic trial) and, if
 // plastic, the radial return (deviatoric_scale: q_returned / q_trial, 1 when elastic).
 // Returns the stress work density of the step, (sigma_old + sigma_new)/2 : d eps (J/m^3),
-// for the energy balance.
+// for the energy balance; the strain increment itself in *strain_increment_out if given.
 BRECCIA_HD inline double update_stress(const SolidLaw& law, const Mat3& h_old, const Mat3& f_old_inverse,
                                        const Mat3& h_new, int dimension, SymTensor& stress, double& eq_plastic_strain,
-                                       double* deviatoric_scale = nullptr) {
+                                       double* deviatoric_scale = nullptr, SymTensor* strain_increment_out = nullptr) {
   Mat3 dh;
   for (int k = 0; k < 9; ++k) dh.a[k] = h_new.a[k] - h_old.a[k];
   const Mat3 g = mul(dh, f_old_inverse);
@@ -174,6 +211,7 @@ BRECCIA_HD inline double update_stress(const SolidLaw& law, const Mat3& h_old, c
     if (radial_return(law.hardening, next, eq_plastic_strain) > 0.0) scale = von_mises_stress(next) / q_trial;
   }
   if (deviatoric_scale) *deviatoric_scale = scale;
+  if (strain_increment_out) *strain_increment_out = strain_increment;
   SymTensor mid;
   mid.xx = 0.5 * (rotated.xx + next.xx);
   mid.yy = 0.5 * (rotated.yy + next.yy);

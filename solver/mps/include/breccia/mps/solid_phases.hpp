@@ -23,6 +23,10 @@ struct SolidStressState {
   double* stress_work_j = nullptr; // accumulated stress work of the particle
   double* pressure_pa = nullptr;   // -tr(sigma)/3
   ForceMatrices* matrices = nullptr;
+  // Material damping (law.viscous_time_s > 0; nullptr: none): the viscous stress of the last
+  // step, and the energy it has dissipated per particle.
+  SymTensor* viscous_stress = nullptr;
+  double* viscous_work_j = nullptr;
 };
 
 struct SolidStressInputs {
@@ -33,6 +37,7 @@ struct SolidStressInputs {
   SolidLaw law;
   int dimension = 2;
   double hourglass_stiffness = 0.0;  // K_hg before the plastic scaling
+  double dt_s = 0.0;                 // the (sub)step: the strain rate of material damping
 };
 
 // Phase 1 for particle i: H from the current displacement, the stress update over the step
@@ -48,14 +53,27 @@ BRECCIA_HD inline double stress_phase_at(long long i, const SolidStressInputs& i
   f(2, 2) += 1.0;
   if (!(det(f) > 0.0)) return -1.0;  // also catches NaN
   double deviatoric_scale = 1.0;
+  SymTensor strain_increment;
   s.stress_work_j[i] += in.volume_m3[i] * update_stress(in.law, s.gradient[i], s.f_inverse[i], h_new, in.dimension,
-                                                        s.stress[i], s.eq_plastic_strain[i], &deviatoric_scale);
+                                                        s.stress[i], s.eq_plastic_strain[i], &deviatoric_scale,
+                                                        &strain_increment);
   double h2 = 0.0;
   for (double v : h_new.a) h2 += v * v;
   s.gradient[i] = h_new;
   s.f_inverse[i] = inverse(f);
   s.pressure_pa[i] = pressure_of(s.stress[i]);
-  s.matrices[i] = force_matrices(s.stress[i], h_new, s.f_inverse[i], in.moment_inverse[i],
+  SymTensor force_stress = s.stress[i];
+  if (s.viscous_stress && in.law.viscous_time_s > 0.0) {
+    // Material damping. The viscous stress of the last step drove the particles from the
+    // last configuration to this one, so its work is booked on this step's strain increment
+    // (the work of that force over that motion); the new one, from this increment over dt (a
+    // backward difference: explicit, as the force must be), acts over the next step.
+    SymTensor& viscous = s.viscous_stress[i];
+    s.viscous_work_j[i] += in.volume_m3[i] * contract(viscous, strain_increment);
+    viscous = viscous_stress_of(in.law, strain_increment, in.dt_s);
+    force_stress = add_stresses(force_stress, viscous);
+  }
+  s.matrices[i] = force_matrices(force_stress, h_new, s.f_inverse[i], in.moment_inverse[i],
                                  in.hourglass_stiffness * deviatoric_scale);
   return h2;
 }

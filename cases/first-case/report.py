@@ -17,10 +17,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-
-def bits(packed, count):
-    """The first `count` bits of a little-endian packed bit set (results.h5's bond flags)."""
-    return np.unpackbits(np.asarray(packed, dtype=np.uint8), bitorder="little")[:count].astype(bool)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from case_report import bits  # noqa: E402  (cases/case_report.py)
 
 
 def halves_without_the_crack_bands(h5, last, damage_below=0.5):

@@ -8,6 +8,12 @@ radius is the outer edge of the last such ring. Radial cracks at radius r: parti
 ring r +- dx sorted by angle; a crack is a run of damaged particles, runs separated by an
 angular gap larger than 2 dx / r. Reach: the largest radius of the damaged particles joined to the
 hole wall through damaged neighbours (the tip of the longest radial crack from the hole).
+
+The same measures are taken twice: from the damage field, and from the broken-bond fraction
+(the fraction of a particle's bonds fully broken, `broken` bits of results.h5; key "broken" of
+each snapshot), with the same threshold. Without softening bonds the two agree (the damage is
+the weighted broken fraction); with softening bonds the damage also counts the share a bond
+has lost while it softens, which the broken fraction leaves out.
 Writes OUT/report.json, OUT/damage_<RUN>.png, OUT/cracks_vs_radius.png.
 """
 import json
@@ -87,9 +93,19 @@ def hole_connected_reach(x, damaged, dx, hole_radius):
     return reach
 
 
+def measures(x, r, theta, damaged, dx):
+    """Crushed zone, farthest damaged particle, reach from the hole and radial cracks of one
+    output's damaged particles."""
+    return {"crushed_radius_m": crushed_radius(r, damaged, dx),
+            "max_damaged_radius_m": float(r[damaged].max()) if damaged.any() else 0.0,
+            "hole_connected_reach_m": hole_connected_reach(x, damaged, dx, HOLE_RADIUS),
+            "cracks_at_radius_mm": {str(q): cracks_at(r, theta, damaged, q * 1e-3, dx) for q in COUNT_RADII_MM}}
+
+
 def analyse(out, name):
     run = os.path.join(out, name)
     x, times, damage, summary = case_report.load_damage_history(run)
+    broken = case_report.load_broken_fraction_history(run)
     g0 = float(re.search(r"fracture_energy:\s*([0-9.eE+-]+)", open(os.path.join(run, "case_as_run.yaml")).read()).group(1))
     dx = float(np.min(np.diff(np.unique(np.round(x[:, 0], 9)))))
     r = np.hypot(x[:, 0], x[:, 1])
@@ -99,11 +115,9 @@ def analyse(out, name):
            "wall_s": round(summary["wall_s"] + summary["setup_wall_s"], 1), "snapshots": []}
     for k in range(len(times)):
         dmg = damage[k] > DAMAGE_THRESHOLD
-        snap = {"time_s": float(times[k]), "crushed_radius_m": crushed_radius(r, dmg, dx),
-                "max_damaged_radius_m": float(r[dmg].max()) if dmg.any() else 0.0,
-                "hole_connected_reach_m": hole_connected_reach(x, dmg, dx, HOLE_RADIUS),
-                "cracks_at_radius_mm": {str(q): cracks_at(r, theta, dmg, q * 1e-3, dx) for q in COUNT_RADII_MM},
-                "outer_rim_damaged_fraction": float(dmg[r > OUTER_RADIUS - 3 * dx].mean())}
+        snap = {"time_s": float(times[k]), **measures(x, r, theta, dmg, dx),
+                "outer_rim_damaged_fraction": float(dmg[r > OUTER_RADIUS - 3 * dx].mean()),
+                "broken": measures(x, r, theta, broken[k] > DAMAGE_THRESHOLD, dx)}
         res["snapshots"].append(snap)
     res["final"] = res["snapshots"][-1]
     res["crushed_radius_over_hole_radius"] = res["final"]["crushed_radius_m"] / HOLE_RADIUS
@@ -140,6 +154,10 @@ def main(argv):
               f"{f['crushed_radius_m'] * 1e3:.2f} mm ({res['crushed_radius_over_hole_radius']:.1f} x hole), "
               f"cracks at radius {f['cracks_at_radius_mm']}, max damaged radius {f['max_damaged_radius_m'] * 1e3:.1f} mm, "
               f"reach from the hole {f['hole_connected_reach_m'] * 1e3:.2f} mm")
+        b = f["broken"]
+        print(f"{name} from broken bonds only: crushed radius {b['crushed_radius_m'] * 1e3:.2f} mm, cracks at radius "
+              f"{b['cracks_at_radius_mm']}, max radius {b['max_damaged_radius_m'] * 1e3:.1f} mm, "
+              f"reach from the hole {b['hole_connected_reach_m'] * 1e3:.2f} mm")
     ax_c.set_xlabel("radius (mm)")
     ax_c.set_ylabel("radial cracks crossing the circle")
     ax_c.grid(alpha=0.3)

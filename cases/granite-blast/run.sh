@@ -21,13 +21,14 @@ mkdir -p "$OUT"
 # stretch) and seed_s0 (G0 = 200/pi J/m2, the critical stretch of [Fukuda PD]'s formula, which
 # carries an extra 1/sqrt(pi), benchmarks.md section 0.6: a labelled sensitivity run, not a
 # calibration). On request (GRANITE_RUNS=...): softening (G0 = 200 J/m2 and a tensile strength,
-# STRENGTH, default 12 MPa, through softening bonds: docs/theory.md "Quasi-brittle bonds";
-# README.md) and gas (the borehole history as a gas load's closed-cavity pressure: docs/theory.md
+# STRENGTH, default 12 MPa, a placeholder, through softening bonds: docs/theory.md "Quasi-brittle
+# bonds"; README.md; softening_sqrt and softening_none: the strength x the square root of each
+# bond's G0 draw, or not scattered: docs/theory.md "Weibull heterogeneity") and gas (the borehole history as a gas load's closed-cavity pressure: docs/theory.md
 # "Borehole gas"; README.md).
 RUNS=()
 for run in ${GRANITE_RUNS:-g0_200 seed_s0}; do
   extra=()
-  [ "$run" != softening ] || [ -z "${STRENGTH:-}" ] || extra=(--set "materials[0].tensile_strength=$STRENGTH")
+  [ "${run#softening}" = "$run" ] || [ -z "${STRENGTH:-}" ] || extra=(--set "materials[0].tensile_strength=$STRENGTH")
   echo "== $run"
   "$BRECCIA_BIN/breccia-solve" "$HERE/case.yaml" -o "$OUT/$run" --set "specimen.particles=$OUT/particles.h5" \
     --variant "$run" "${OPTIONS[@]}" "${extra[@]}" --threads "$THREADS" --quiet

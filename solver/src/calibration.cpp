@@ -1,4 +1,5 @@
 #include "breccia/solver/calibration.hpp"
+#include "breccia/solver/case_config.hpp"
 
 #include <array>
 #include <cmath>
@@ -84,6 +85,17 @@ double lps_critical_stretch(const ElasticInput& in, Influence kind, double delta
   if (in.dimension == 3)
     return std::sqrt(G0 * 4.0 * influence_moment(kind, 4) / (15.0 * mu * delta * influence_moment(kind, 5)));
   return std::sqrt(G0 * pi * influence_moment(kind, 3) / (8.0 * mu * delta * influence_moment(kind, 4)));
+}
+
+// Same keeps the expression the set-up has always used (strength x draw / mean), so runs
+// without the option stay bit-identical.
+double weibull_bond_strength(const MaterialSpec& m, double drawn_g0) {
+  switch (m.weibull_strength) {
+    case MaterialSpec::WeibullStrength::Sqrt: return m.tensile_strength * std::sqrt(drawn_g0 / m.fracture_energy);
+    case MaterialSpec::WeibullStrength::None: return m.tensile_strength;
+    case MaterialSpec::WeibullStrength::Same: break;
+  }
+  return m.tensile_strength * drawn_g0 / m.fracture_energy;
 }
 
 double softening_onset_stretch(const ElasticInput& in, double tensile_strength) {

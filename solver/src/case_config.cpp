@@ -240,7 +240,7 @@ CaseConfig parse_case_file(const std::string& path) {
                          "compressive_strength >= tensile_strength");
     }
     if (auto w = m.optional_section("weibull")) {
-      w->allow_only({"modulus", "seed", "scales"});
+      w->allow_only({"modulus", "seed", "scales", "strength_scaling"});
       ms.weibull_modulus = w->positive("modulus", Quantity::Dimensionless);
       ms.weibull_seed = w->integer("seed", 1);
       if (w->has("scales")) {
@@ -251,6 +251,19 @@ CaseConfig parse_case_file(const std::string& path) {
         ms.weibull_scales = what == "both"              ? MaterialSpec::WeibullScales::Both
                             : what == "fracture_energy" ? MaterialSpec::WeibullScales::FractureEnergy
                                                         : MaterialSpec::WeibullScales::TensileStrength;
+      }
+      if (w->has("strength_scaling")) {  // docs/theory.md "Weibull heterogeneity"
+        const std::string how = w->choice("strength_scaling", {"same", "sqrt", "none"});
+        if (!(ms.tensile_strength > 0))
+          throw InputError(path, w->field("strength_scaling"), "'" + how + "' for a material without a tensile_strength",
+                           "a tensile_strength (the key says how the strength follows the G0 draw), or no key");
+        if (ms.weibull_scales != MaterialSpec::WeibullScales::Both)
+          throw InputError(path, w->field("strength_scaling"), "'" + how + "' with scales other than both",
+                           "scales: both (the strength follows the G0 draw only when the draw scales both), "
+                           "or no strength_scaling");
+        ms.weibull_strength = how == "sqrt"   ? MaterialSpec::WeibullStrength::Sqrt
+                              : how == "none" ? MaterialSpec::WeibullStrength::None
+                                              : MaterialSpec::WeibullStrength::Same;
       }
     }
     c.materials.push_back(ms);

@@ -801,7 +801,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       const double U = bond_uniform(static_cast<uint64_t>(s.original_index[i]), static_cast<uint64_t>(s.original_index[j]),
                                     static_cast<uint64_t>(wm.weibull_seed));
       // The draw of G0 (mean G0); weibull.scales says what it scatters (both by default, the
-      // strength by the same ratio to the mean).
+      // strength following the draw as weibull.strength_scaling says).
       const double drawn = weibull_scale[weak] * std::pow(-std::log(U), 1.0 / wm.weibull_modulus);
       if (wm.weibull_scales != MaterialSpec::WeibullScales::FractureEnergy) strength_draw = drawn;
       if (wm.weibull_scales != MaterialSpec::WeibullScales::TensileStrength) G0 = drawn;
@@ -819,7 +819,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     if (c.softening) {
       // Onset stretch of the weaker material, scattered as weibull.scales says;
       // s0 becomes the ultimate stretch in convert_to_softening.
-      const double strength = wm.fracture_energy > 0 ? wm.tensile_strength * strength_draw / wm.fracture_energy : 0.0;
+      const double strength = wm.fracture_energy > 0 ? weibull_bond_strength(wm, strength_draw) : 0.0;
       s.s_onset[out] = strength > 0 ? static_cast<float>(onset_per_strength[weak] * strength) : FLT_MAX;
     }
   };

@@ -149,6 +149,81 @@ TEST(Softening, WeibullScatterGoesWhereScalesSays) {
   }
 }
 
+// weibull.strength_scaling: how a bond's strength follows its G0 draw w. The mapping itself:
+// sigma_t w (same), sigma_t sqrt(w) (sqrt), sigma_t (none), for draws around the mean.
+TEST(Weibull, StrengthScalingMapsTheG0DrawToTheStrength) {
+  MaterialSpec m;
+  m.fracture_energy = 200.0;
+  m.tensile_strength = 12e6;
+  for (double w : {0.01, 0.2, 1.0, 2.5}) {
+    const double drawn = w * m.fracture_energy;
+    m.weibull_strength = MaterialSpec::WeibullStrength::Same;
+    EXPECT_NEAR(weibull_bond_strength(m, drawn), 12e6 * w, 1e-9 * 12e6) << w;
+    m.weibull_strength = MaterialSpec::WeibullStrength::Sqrt;
+    EXPECT_NEAR(weibull_bond_strength(m, drawn), 12e6 * std::sqrt(w), 1e-9 * 12e6) << w;
+    m.weibull_strength = MaterialSpec::WeibullStrength::None;
+    EXPECT_EQ(weibull_bond_strength(m, drawn), 12e6) << w;
+  }
+}
+
+// The same per bond after set-up. The onset carries the strength and onset x ultimate = s_G^2
+// carries G0 (as above), so: `same` keeps onset / (onset x ultimate) = 1 / ultimate fixed;
+// `sqrt` keeps onset^2 / (onset x ultimate) = onset / ultimate fixed (every bond the mean's
+// ultimate / onset ratio, the ratio the calibration is done at); `none` keeps the onset fixed.
+// Relative spreads at 1e-5 (float storage); the scattered quantities spread by > 10 %
+// (modulus 10: the 1st-99th percentile draws differ by ~60 %).
+TEST(Weibull, StrengthScalingSetsEachBondsOnsetFromItsDraw) {
+  auto spread = [](const PdSystem& s, auto&& value) {
+    double lo = 1e300, hi = -1e300;
+    for (size_t k = 0; k < s.s_onset.size(); ++k) {
+      if (!(s.s_onset[k] < FLT_MAX) || !(s.s0_own[k] < FLT_MAX)) continue;
+      const double v = value(k);
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+    return hi / lo - 1.0;
+  };
+  const std::string w = ", tensile_strength: 4 MPa, weibull: {modulus: 10, seed: 7";
+  PdSystem def = system_from_yaml("soft_weibull_default", block_deck("pmb", w + "}"));
+  for (const char* how : {"same", "sqrt", "none"}) {
+    PdSystem s = system_from_yaml(std::string("soft_weibull_strength_") + how,
+                                  block_deck("pmb", w + ", strength_scaling: " + how + "}"));
+    const double onset = spread(s, [&](size_t k) { return double(s.s_onset[k]); });
+    const double product = spread(s, [&](size_t k) { return double(s.s_onset[k]) * s.s0_own[k]; });
+    const double per_ultimate = spread(s, [&](size_t k) { return 1.0 / s.s0_own[k]; });
+    const double ratio = spread(s, [&](size_t k) { return double(s.s_onset[k]) / s.s0_own[k]; });
+    std::printf("weibull strength_scaling %s: spreads onset %.3g, onset x ultimate %.3g, 1/ultimate %.3g, "
+                "onset/ultimate %.3g\n", how, onset, product, per_ultimate, ratio);
+    EXPECT_GT(product, 0.1) << how;  // G0 scattered in every case
+    const std::string what = how;
+    if (what == "same") {
+      EXPECT_GT(onset, 0.1);
+      EXPECT_LT(per_ultimate, 1e-5);
+      // The default: bit-identical onsets.
+      ASSERT_EQ(s.s_onset.size(), def.s_onset.size());
+      EXPECT_EQ(0, std::memcmp(s.s_onset.data(), def.s_onset.data(), s.s_onset.size() * sizeof(float)));
+    } else if (what == "sqrt") {
+      EXPECT_GT(onset, 0.05);
+      EXPECT_LT(ratio, 1e-5);
+      // onset spreads as the square root of G0: log-spreads in the ratio 1/2 (to 1 %).
+      EXPECT_NEAR(std::log1p(onset) / std::log1p(product), 0.5, 0.005);
+    } else {
+      EXPECT_LT(onset, 1e-5);
+    }
+  }
+  // Refused without a strength, and with a draw that does not scale both.
+  for (const std::string& bad : {std::string(", weibull: {modulus: 10, strength_scaling: sqrt}"),
+                                 w + ", scales: fracture_energy, strength_scaling: sqrt}",
+                                 w + ", strength_scaling: half}"}) {
+    try {
+      system_from_yaml("soft_weibull_strength_bad", block_deck("pmb", bad));
+      ADD_FAILURE() << "expected an InputError for " << bad;
+    } catch (const breccia::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("weibull.strength_scaling"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(Softening, HorizonTooLargeForStrengthAndToughnessIsRefusedWithTheLargestThatWorks) {
   // s_G = sqrt(5 G0 / (9 K delta)) = 1.66e-3 at delta 3.015 mm (K = 6.67 GPa); a strength of
   // 30 MPa asks s_t = 3e-3 > s_G: refused, naming the material and the key; the largest

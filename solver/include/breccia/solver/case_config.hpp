@@ -34,11 +34,20 @@ struct MaterialSpec {
   // What the Weibull draw scales (softening materials): both G0 and the strength by the same
   // ratio to the mean (default), or only one of them.
   enum class WeibullScales { Both, FractureEnergy, TensileStrength } weibull_scales = WeibullScales::Both;
+  // With `Both`, how the strength follows the bond's G0 draw w (weibull.strength_scaling,
+  // docs/theory.md "Weibull heterogeneity"): w itself (default), sqrt(w) (a flaw-size
+  // argument, sigma_t ~ sqrt(E G0 / a)), or not at all.
+  enum class WeibullStrength { Same, Sqrt, None } weibull_strength = WeibullStrength::Same;
   // Rate-dependent strength of the softening bonds (pd_physics.hpp strength_dif); None: static.
   StrengthRateLaw strength_rate = StrengthRateLaw::None;
   // > 0: the softening bonds also crush in compression (docs/theory.md "Crushing"); 0: elastic.
   double compressive_strength = 0.0;
 };
+
+// The tensile strength of a bond of material `m` whose draw of G0 is `drawn_g0` (mean
+// m.fracture_energy), as m.weibull_strength says: m.tensile_strength x (drawn_g0 / mean)^p,
+// p = 1, 1/2 or 0. Set-up only (each bond's onset is stored; every backend reads it).
+double weibull_bond_strength(const MaterialSpec& m, double drawn_g0);
 
 // Explosive gas in a cavity (loads[].type: gas; gas.hpp, docs/case-format.md).
 struct GasSpec {

@@ -40,6 +40,21 @@ TEST(CellList, GroupByKeyIsAStableCountingSort) {
   EXPECT_EQ(members, (std::vector<int32_t>{1, 4, 3, 0, 2}));
 }
 
+// Particle i's family by testing every pair: j is in it when |x_j - x_i| <= max(h_i, h_j) +
+// max(p_i, p_j), the reach build_families promises.
+static std::vector<int32_t> brute_force_family(const std::vector<double>& x, const std::vector<double>& h,
+                                               const std::vector<double>& pad, size_t i) {
+  std::vector<int32_t> family;
+  for (size_t j = 0; j < h.size(); ++j) {
+    if (j == i) continue;
+    const double reach = std::max(h[i], h[j]) + std::max(pad[i], pad[j]);
+    double r2 = 0;
+    for (int d = 0; d < 3; ++d) r2 += (x[3 * j + d] - x[3 * i + d]) * (x[3 * j + d] - x[3 * i + d]);
+    if (r2 <= reach * reach) family.push_back(static_cast<int32_t>(j));
+  }
+  return family;
+}
+
 TEST(Families, MatchBruteForceWithGradedHorizonsAndPads) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -52,14 +67,7 @@ TEST(Families, MatchBruteForceWithGradedHorizonsAndPads) {
   }
   const Families f = build_families(x, h, pad);
   for (size_t i = 0; i < n; ++i) {
-    std::vector<int32_t> expected;
-    for (size_t j = 0; j < n; ++j) {
-      if (j == i) continue;
-      const double reach = std::max(h[i], h[j]) + std::max(pad[i], pad[j]);
-      double r2 = 0;
-      for (int d = 0; d < 3; ++d) r2 += (x[3 * j + d] - x[3 * i + d]) * (x[3 * j + d] - x[3 * i + d]);
-      if (r2 <= reach * reach) expected.push_back(static_cast<int32_t>(j));
-    }
+    const std::vector<int32_t> expected = brute_force_family(x, h, pad, i);
     EXPECT_EQ(std::vector<int32_t>(f.neighbors.begin() + f.offsets[i], f.neighbors.begin() + f.offsets[i + 1]), expected)
         << "particle " << i;
   }
@@ -120,14 +128,7 @@ TEST(Families, MatchBruteForceAcrossReachClasses) {
     const Families f = build_families(x, h, pad);
     size_t entries = 0;
     for (size_t i = 0; i < n; ++i) {
-      std::vector<int32_t> expected;
-      for (size_t j = 0; j < n; ++j) {
-        if (j == i) continue;
-        const double reach = std::max(h[i], h[j]) + std::max(pad[i], pad[j]);
-        double r2 = 0;
-        for (int d = 0; d < 3; ++d) r2 += (x[3 * j + d] - x[3 * i + d]) * (x[3 * j + d] - x[3 * i + d]);
-        if (r2 <= reach * reach) expected.push_back(static_cast<int32_t>(j));
-      }
+      const std::vector<int32_t> expected = brute_force_family(x, h, pad, i);
       entries += expected.size();
       ASSERT_EQ(std::vector<int32_t>(f.neighbors.begin() + f.offsets[i], f.neighbors.begin() + f.offsets[i + 1]), expected)
           << octaves << " octaves, particle " << i;

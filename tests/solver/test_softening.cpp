@@ -103,29 +103,32 @@ TEST_P(SofteningFractureEnergy, EqualsTheBrittleBondsEnergyWhateverTheStrength) 
 
 INSTANTIATE_TEST_SUITE_P(Models, SofteningFractureEnergy, ::testing::Values("pmb", "lps"));
 
+// Relative spread (largest / smallest - 1) of value(k) over the softening bonds' entries.
+template <class Value>
+static double onset_spread(const PdSystem& s, Value&& value) {
+  double lo = 1e300, hi = -1e300;
+  for (size_t k = 0; k < s.s_onset.size(); ++k) {
+    if (!(s.s_onset[k] < FLT_MAX) || !(s.s0_own[k] < FLT_MAX)) continue;
+    const double v = value(k);
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  return hi / lo - 1.0;
+}
+
 // weibull.scales: the draw scatters G0 and the strength together (default), or one of them.
 // Per bond, the onset carries the strength (s_t proportional to it) and onset x ultimate is
 // s_G^2, proportional to G0 (s_u = s_G^2 / s_t). So: `tensile_strength` varies the onset and
 // keeps onset x ultimate; `fracture_energy` keeps the onset and varies the product; `both`
 // varies both in proportion. Relative spreads compared at 1e-5 (float storage).
 TEST(Softening, WeibullScatterGoesWhereScalesSays) {
-  auto spread = [](const PdSystem& s, auto&& value) {
-    double lo = 1e300, hi = -1e300;
-    for (size_t k = 0; k < s.s_onset.size(); ++k) {
-      if (!(s.s_onset[k] < FLT_MAX) || !(s.s0_own[k] < FLT_MAX)) continue;
-      const double v = value(k);
-      lo = std::min(lo, v);
-      hi = std::max(hi, v);
-    }
-    return hi / lo - 1.0;
-  };
   const std::string w = ", tensile_strength: 4 MPa, weibull: {modulus: 10, seed: 7";
   for (const char* scales : {"both", "fracture_energy", "tensile_strength"}) {
     PdSystem s = system_from_yaml(std::string("soft_weibull_") + scales,
                                   block_deck("pmb", w + ", scales: " + scales + "}"));
-    const double onset = spread(s, [&](size_t k) { return double(s.s_onset[k]); });
-    const double product = spread(s, [&](size_t k) { return double(s.s_onset[k]) * s.s0_own[k]; });
-    const double ratio = spread(s, [&](size_t k) { return double(s.s_onset[k]) / (double(s.s_onset[k]) * s.s0_own[k]); });
+    const double onset = onset_spread(s, [&](size_t k) { return double(s.s_onset[k]); });
+    const double product = onset_spread(s, [&](size_t k) { return double(s.s_onset[k]) * s.s0_own[k]; });
+    const double ratio = onset_spread(s, [&](size_t k) { return double(s.s_onset[k]) / (double(s.s_onset[k]) * s.s0_own[k]); });
     std::printf("weibull scales %s: spreads onset %.3g, onset x ultimate %.3g, their ratio %.3g\n", scales, onset, product,
                 ratio);
     const std::string what = scales;
@@ -173,25 +176,15 @@ TEST(Weibull, StrengthScalingMapsTheG0DrawToTheStrength) {
 // Relative spreads at 1e-5 (float storage); the scattered quantities spread by > 10 %
 // (modulus 10: the 1st-99th percentile draws differ by ~60 %).
 TEST(Weibull, StrengthScalingSetsEachBondsOnsetFromItsDraw) {
-  auto spread = [](const PdSystem& s, auto&& value) {
-    double lo = 1e300, hi = -1e300;
-    for (size_t k = 0; k < s.s_onset.size(); ++k) {
-      if (!(s.s_onset[k] < FLT_MAX) || !(s.s0_own[k] < FLT_MAX)) continue;
-      const double v = value(k);
-      lo = std::min(lo, v);
-      hi = std::max(hi, v);
-    }
-    return hi / lo - 1.0;
-  };
   const std::string w = ", tensile_strength: 4 MPa, weibull: {modulus: 10, seed: 7";
   PdSystem def = system_from_yaml("soft_weibull_default", block_deck("pmb", w + "}"));
   for (const char* how : {"same", "sqrt", "none"}) {
     PdSystem s = system_from_yaml(std::string("soft_weibull_strength_") + how,
                                   block_deck("pmb", w + ", strength_scaling: " + how + "}"));
-    const double onset = spread(s, [&](size_t k) { return double(s.s_onset[k]); });
-    const double product = spread(s, [&](size_t k) { return double(s.s_onset[k]) * s.s0_own[k]; });
-    const double per_ultimate = spread(s, [&](size_t k) { return 1.0 / s.s0_own[k]; });
-    const double ratio = spread(s, [&](size_t k) { return double(s.s_onset[k]) / s.s0_own[k]; });
+    const double onset = onset_spread(s, [&](size_t k) { return double(s.s_onset[k]); });
+    const double product = onset_spread(s, [&](size_t k) { return double(s.s_onset[k]) * s.s0_own[k]; });
+    const double per_ultimate = onset_spread(s, [&](size_t k) { return 1.0 / s.s0_own[k]; });
+    const double ratio = onset_spread(s, [&](size_t k) { return double(s.s_onset[k]) / s.s0_own[k]; });
     std::printf("weibull strength_scaling %s: spreads onset %.3g, onset x ultimate %.3g, 1/ultimate %.3g, "
                 "onset/ultimate %.3g\n", how, onset, product, per_ultimate, ratio);
     EXPECT_GT(product, 0.1) << how;  // G0 scattered in every case

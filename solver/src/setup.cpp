@@ -665,17 +665,6 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     for (auto f : require_set(s, c.no_fail_sets[k], "model.no_fail[" + std::to_string(k) + "]").indices)
       no_fail[s.internal_index[f]] = 1;
 
-  // A distributed run shares the two passes over the candidate bonds below between its
-  // processes (RowShare): equal shares of rows, gathered by all.
-  const RowShare& share = hooks.coefficients;
-  const int shares = share.gather && !dist_rows.active ? std::max(1, share.ranks) : 1;
-  auto share_rows = [&](const std::vector<int64_t>& offsets) {
-    std::vector<int64_t> begin(static_cast<size_t>(shares) + 1, 0);
-    begin[shares] = static_cast<int64_t>(n);
-    for (int r = 1; r < shares; ++r)
-      begin[r] = std::lower_bound(offsets.begin(), offsets.end() - 1, offsets[n] * r / shares) - offsets.begin();
-    return begin;
-  };
   // Partial volumes: one quadrature per candidate entry. Entry (i -> j) counts j's cell's
   // samples inside i's horizon (its own half-bond); its dual half-bond is entry (j -> i)'s own
   // count, bit for bit, since x_i - x_j = -(x_j - x_i) exactly in floating point. Families
@@ -688,10 +677,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   std::vector<uint8_t> samples_inside, dual_inside;
   std::vector<int64_t> keep_count(n, 0);
   {
-    const std::vector<int64_t> rows = share_rows(fam.offsets);
-    const int64_t first = rows[shares > 1 ? share.rank : 0], last = rows[shares > 1 ? share.rank + 1 : 1];
-    std::vector<int64_t> entry_begin(rows.size());
-    for (size_t r = 0; r < rows.size(); ++r) entry_begin[r] = fam.offsets[rows[r]];
+    // Every row (a distributed set-up's rows other than its own are empty).
+    const int64_t first = 0, last = static_cast<int64_t>(n);
     if (sampled) {
       assign_on_huge_pages(samples_inside, fam.neighbors.size());
 #pragma omp parallel for schedule(dynamic, 256)
@@ -701,7 +688,6 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
           const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1], s.x0[3 * j + 2] - s.x0[3 * i + 2]};
           samples_inside[k] = static_cast<uint8_t>(partial_volume_samples_inside(xv, s.horizon[i], s.half_cell[j], s.dimension));
         }
-      if (shares > 1) share.gather(samples_inside.data(), sizeof(uint8_t), entry_begin);
     }
     // Kept entries (a half-bond with some volume either way), counted per row; with the
     // sampled rule the same pass copies each entry's dual count from its reverse entry.
@@ -711,7 +697,6 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         dual_inside[k] = samples_inside[r];
         keep_count[i] += samples_inside[k] > 0 || samples_inside[r] > 0;
       });
-      if (shares > 1) share.gather(dual_inside.data(), sizeof(uint8_t), entry_begin);
     } else {
 #pragma omp parallel for schedule(dynamic, 256)
       for (int64_t i = first; i < last; ++i)
@@ -729,7 +714,6 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
           keep_count[i] += keep;
         }
     }
-    if (shares > 1) share.gather(keep_count.data(), sizeof(int64_t), rows);  // rows as the elements
   }
   const double sample_total = partial_volume_sample_total(s.dimension);
   // beta of entry k = (i -> j): its own half-bond (j's cell in i's horizon) and its dual (i's cell in j's).
@@ -825,9 +809,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   };
   // A distributed set-up holds only its own rows (the reverse entry may be another rank's).
   const bool copy_strengths = !dist_rows.active;
-  // This process's rows (all on one process; equal entries each in a distributed run).
-  const std::vector<int64_t> row_begin = share_rows(s.offsets);
-  const int64_t rows_begin = row_begin[shares > 1 ? share.rank : 0], rows_end = row_begin[shares > 1 ? share.rank + 1 : 1];
+  // Every row (a distributed set-up's rows other than its own are empty).
+  const int64_t rows_begin = 0, rows_end = static_cast<int64_t>(n);
 #pragma omp parallel for schedule(dynamic, 256)
   for (int64_t i = rows_begin; i < rows_end; ++i) {
     int64_t out = s.offsets[i];
@@ -864,15 +847,6 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       if (!copy_strengths || j > i || !strengths_shared(i, j)) fill_strengths(i, j, out, s0_memo);
       ++out;
     }
-  }
-  if (shares > 1) {  // every process gets every range
-    std::vector<int64_t> entry_begin(row_begin.size());
-    for (size_t r = 0; r < row_begin.size(); ++r) entry_begin[r] = s.offsets[row_begin[r]];
-    share.gather(s.neighbor.data(), sizeof(int32_t), entry_begin);
-    for (auto* a : {&s.xi_len, &s.vol_own, &s.k_own, &s.k_dual}) share.gather(a->data(), sizeof(double), entry_begin);
-    for (auto* a : {&s.s0_own, &s.s0_dual}) share.gather(a->data(), sizeof(float), entry_begin);
-    share.gather(s.state.data(), sizeof(uint8_t), entry_begin);
-    if (c.softening) share.gather(s.s_onset.data(), sizeof(float), entry_begin);
   }
   fam = Families{};
   samples_inside = {};

@@ -1023,16 +1023,6 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
   };
 }
 
-RowShare mpi_row_share() {
-  RowShare share;
-  MPI_Comm_rank(MPI_COMM_WORLD, &share.rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &share.ranks);
-  share.gather = [](void* data, size_t element_bytes, const std::vector<int64_t>& entry_begin) {
-    allgather_ranges(data, element_bytes, entry_begin, MPI_COMM_WORLD);
-  };
-  return share;
-}
-
 DistributedSetup mpi_distributed_setup() {
   DistributedSetup d;
   MPI_Comm_rank(MPI_COMM_WORLD, &d.rank);

@@ -331,7 +331,7 @@ struct GasCrackSum {
     const bool joins = (counted == 0) & gas_entry_open(state, g.halves, k) & gas_wetted_next(g, j) & !debris;
     const bool leaves = (counted == 1) & debris;
     if (joins | leaves) in_crack[k] = joins ? 1 : 2;
-    return counted == 1 ? (leaves ? kLeft : kKept) : (joins ? kJoined : kNone);
+    return counted == 1 ? uint8_t(leaves ? kLeft : kKept) : (joins ? uint8_t(kJoined) : kNone);
   }
 
 

@@ -135,17 +135,6 @@ struct PdSystem {
 using ForcePass = std::function<void(PdSystem&)>;
 using ForcePassFactory = std::function<ForcePass(PdSystem&)>;
 
-// The set-up's heaviest row loops (over the candidate bonds: which are kept, then their
-// coefficients: partial-volume quadratures, Weibull draws) shared by the processes of a
-// distributed run: process `rank` of `ranks` fills its range of rows (equal bond entries
-// each), then `gather` gives every process every range of an array in place (elements of
-// `element_bytes`; `entry_begin`: ranks + 1 element offsets). Every value is computed by
-// the same code either way: the arrays are the same.
-struct RowShare {
-  int rank = 0, ranks = 1;
-  std::function<void(void* data, size_t element_bytes, const std::vector<int64_t>& entry_begin)> gather;
-};
-
 // A distributed set-up's one collective (solver/mpi/): every rank's `count` elements of
 // `element_bytes` at `data`, concatenated in rank order, returned on every rank (everyone)
 // or on rank 0 only (the others get nothing). With it each rank builds the bonds of the
@@ -159,7 +148,6 @@ struct DistributedSetup {
 // What a distributed run changes in the set-up (solver/mpi/); empty: one process.
 struct SetupHooks {
   ForcePassFactory stable_step_forces;
-  RowShare coefficients;
   DistributedSetup distributed;
 };
 

@@ -58,10 +58,6 @@ bool mpi_cuda_aware();
 // with its force passes shared between the ranks (the step comes out as one process's).
 ForcePass mpi_stable_step_forces(PdSystem& global);
 
-// SetupHooks::coefficients for a distributed run: the bond coefficients' rows shared
-// between the ranks of MPI_COMM_WORLD, gathered by all.
-RowShare mpi_row_share();
-
 // The distributed set-up's collective (pd_system.hpp, DistributedSetup) over MPI_COMM_WORLD.
 DistributedSetup mpi_distributed_setup();
 

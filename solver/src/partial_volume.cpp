@@ -18,7 +18,8 @@ namespace breccia::solver {
 // - else every sample point is tested, without a branch: the 6 z squares in pairs, each
 //   comparison giving -1 or 0 per lane (GCC/Clang vector extension: SSE2 on x86-64, NEON on
 //   ARM, scalar elsewhere). The per-row shortcuts it replaced mispredicted a branch a row;
-// - a count asked before by this thread with the same arguments (bits) is looked up.
+// - a count asked before by this thread with the same arguments (bits) is looked up, where
+//   such counts recur (a lattice); where they do not (a graded mesh) the memo steps aside.
 namespace {
 
 // The full quadrature's counts, kept per thread by the exact bits of their arguments: on a
@@ -26,14 +27,34 @@ namespace {
 // roundings of x_j - x_i), and a count looked up is the count computed, bit for bit, since
 // the key is every input. A slot holds the last key hashed to it (0 in `count_plus_one`:
 // empty; thread_local and zero-initialised, so no guard per call).
+//
+// On a graded mesh offsets rarely recur: there the hash, the compare and the slot's store cost
+// 6-10% of the bond-coefficient phase for nothing (full concrete case, paired runs,
+// docs/performance.md). So the memo watches its hits over windows of kWindow full counts, and
+// after a window with under one hit in eight it stands aside for kRest windows, then
+// tries again (a graded case then pays for a sixteenth of its counts' lookups). The counts
+// are the same either way: the memo only decides whether a count is computed or looked up.
 struct CountMemo {
   static constexpr int kBits = 13;
+  static constexpr int kWindow = 4096, kRest = 15;
   struct Slot {
     uint64_t key[5];
     int dimension;
     int count_plus_one;
   };
   Slot slot[1 << kBits];
+  int calls = 0, hits = 0, resting = 0;  // in the current window; windows left to stand aside
+
+  // Whether this full count consults the memo; the window's bookkeeping.
+  bool in_use() {
+    if (++calls == kWindow) {
+      const bool in_rest = resting > 0;
+      if (in_rest) --resting;
+      else if (hits < kWindow / 8) resting = kRest;
+      calls = hits = 0;
+    }
+    return resting == 0;
+  }
 };
 thread_local CountMemo count_memo;
 
@@ -72,14 +93,20 @@ int partial_volume_samples_inside(const double xi[3], double horizon, double hal
   const double r2 = horizon * horizon;
   if ((lo[0] + lo[1]) + lo[2] > r2) return 0;
   if ((hi[0] + hi[1]) + hi[2] <= r2) return partial_volume_sample_total(dimension);
+  const bool memo = count_memo.in_use();
   const double args[5] = {xi[0], xi[1], xi[2], horizon, half_cell_j};
   uint64_t key[5];
-  std::memcpy(key, args, sizeof key);
-  uint64_t hash = static_cast<uint64_t>(dimension);
-  for (uint64_t k : key) hash = (hash ^ k) * 0x9E3779B97F4A7C15ull;
-  CountMemo::Slot& slot = count_memo.slot[hash >> (64 - CountMemo::kBits)];
-  if (slot.count_plus_one != 0 && slot.dimension == dimension && std::memcmp(slot.key, key, sizeof key) == 0)
-    return slot.count_plus_one - 1;
+  CountMemo::Slot* slot = nullptr;
+  if (memo) {
+    std::memcpy(key, args, sizeof key);
+    uint64_t hash = static_cast<uint64_t>(dimension);
+    for (uint64_t k : key) hash = (hash ^ k) * 0x9E3779B97F4A7C15ull;
+    slot = &count_memo.slot[hash >> (64 - CountMemo::kBits)];
+    if (slot->count_plus_one != 0 && slot->dimension == dimension && std::memcmp(slot->key, key, sizeof key) == 0) {
+      ++count_memo.hits;
+      return slot->count_plus_one - 1;
+    }
+  }
   typedef double Pair __attribute__((vector_size(16)));
   typedef long long Mask __attribute__((vector_size(16)));
   Pair z[n / 2];
@@ -93,9 +120,11 @@ int partial_volume_samples_inside(const double xi[3], double horizon, double hal
       for (int c = 0; c < n / 2; ++c) inside -= (s + z[c] <= limit);  // true is -1
     }
   const int count = static_cast<int>(inside[0] + inside[1]);
-  std::memcpy(slot.key, key, sizeof key);
-  slot.dimension = dimension;
-  slot.count_plus_one = count + 1;
+  if (memo) {
+    std::memcpy(slot->key, key, sizeof key);
+    slot->dimension = dimension;
+    slot->count_plus_one = count + 1;
+  }
   return count;
 }
 

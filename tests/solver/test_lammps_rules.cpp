@@ -431,4 +431,15 @@ TEST(PartialVolume, SampleCountEqualsThePointByPointQuadrature) {
       partial += expected > 0 && expected < partial_volume_sample_total(dimension);
     }
   EXPECT_GT(partial, 50000);  // the cases a row shortcut cannot settle alone are exercised
+
+  // The per-thread memo of counts stands aside after a window of 4,096 full counts with few
+  // hits and tries again later (partial_volume.cpp): a stream of distinct offsets (a graded
+  // mesh) puts it to rest, then a few lattice offsets asked over and over (a lattice) are
+  // looked up again. Every count on the way must be the quadrature's, whichever path gave it.
+  const double lattice_offsets[4][3] = {{2.5, 1.0, 0.5}, {2.0, 2.0, 0.5}, {3.0, 0.0, 0.5}, {1.5, 2.5, 0.0}};
+  for (int k = 0; k < 40 * 4096; ++k) {
+    double xi[3] = {2.2 + 0.6 * uniform(), 0.8 + 0.4 * uniform(), 0.3 + 0.4 * uniform()};
+    const double* x = k < 12 * 4096 ? xi : lattice_offsets[k % 4];
+    ASSERT_EQ(partial_volume_samples_inside(x, 3.0, 0.5, 3), brute_force(x, 3.0, 0.5, 3)) << "call " << k;
+  }
 }

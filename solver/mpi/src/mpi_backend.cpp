@@ -1066,7 +1066,17 @@ RunResult mpi_time_loop(PdSystem& global, const RunOptions& o, ResultsWriter* re
   const std::unique_ptr<StepBackend> backend = make_mpi_backend(global, MPI_COMM_WORLD, cuda);
   try {
     if (cuda) print_rank_devices(MPI_COMM_WORLD, o.progress);
-    return run_time_loop(global, o, *backend, results, history);
+    RunResult r = run_time_loop(global, o, *backend, results, history);
+    // Every rank's resident set at the end of its loop, to rank 0 (summary.json).
+    double mine = r.loop_resident_mb.empty() ? -1.0 : r.loop_resident_mb[0];
+    int rank = 0, ranks = 1;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+    std::vector<double> all(static_cast<size_t>(ranks));
+    MPI_Gather(&mine, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+    if (std::find(all.begin(), all.end(), -1.0) == all.end()) r.loop_resident_mb = all;
+    else r.loop_resident_mb.clear();
+    return r;
   } catch (const std::exception& e) {
     // From here a failure may be one rank's alone (a file rank 0 writes): stop them all.
     mpi_abort_all(e.what(), dynamic_cast<const InputError*>(&e) ? kExitBadInput : kExitRunFailed);

@@ -454,7 +454,9 @@ void write_checkpoint(const PdSystem& s, const std::string& path) {
   OutputFile out(path);
   {
     h5::File f(out.temp_path().string(), h5::File::Mode::Create);
-    write_checkpoint_content(f, s, {&s, 0, s.n, 0, s.state.size(), 0, s.facets.particle.size()});
+    // The gas's wall shares, one per facet particle (setup_gas): a distributed run's rank 0
+    // writes this file with serial HDF5 after its facet lists were let go (release_global_for_loop).
+    write_checkpoint_content(f, s, {&s, 0, s.n, 0, s.bond_count(), 0, s.gas.wall_dv.size()});
   }
   out.commit();
 }

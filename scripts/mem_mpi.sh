@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Peak memory per rank of a distributed run (docs/parallel.md, Memory): a box lattice (PMB by default) of
 # N^3 particles (m = 3.015) run for a few steps on 1, 2 and 4 ranks of one thread each; each
-# rank's peak resident set (VmHWM, GNU time's %M) in MB, beside summary.json's figures.
+# rank's peak resident set (VmHWM, GNU time's %M) in MB, beside summary.json's figures, and each
+# rank's resident set at the end of the time loop (summary.json's loop_resident_mb: VmRSS after
+# the last step, before the final outputs; the peak is the set-up's).
 # Usage: scripts/mem_mpi.sh BUILD_DIR [N=30] [RANKS="1 2 4"]   (OUT=runs/mem-mpi)
 # MODEL: the model keys (default "type: pmb"; e.g. "type: lps", "type: pmb, precision: float32").
 # TIME: the time keys (default "steps: 5"; e.g. "integrator: adr, adr_tolerance: 1": a dozen iterations).
@@ -49,7 +51,7 @@ time: {$TIME}
 output: {every: 1000000, history_every: 1000000, results: false}
 YAML
 fi
-echo "ranks,particles,bond_entries,peak_rss_mb_per_rank (rank 0 first),peak_rss_mb_max,peak_rss_mb_sum"
+echo "ranks,particles,bond_entries,peak_rss_mb_per_rank (rank 0 first),peak_rss_mb_max,peak_rss_mb_sum,loop_rss_mb_per_rank,loop_rss_mb_max,loop_rss_mb_sum"
 for ranks in $RANKS; do
   run="$OUT/np$ranks"
   rm -rf "$run"; mkdir -p "$run"
@@ -62,6 +64,8 @@ import json, sys
 run, ranks = sys.argv[1], int(sys.argv[2])
 s = json.load(open(f"{run}/summary.json"))
 mb = [int(open(f"{run}/rss.{r}").read().split()[-1]) / 1024 for r in range(ranks)]
-print(f"{ranks},{s['particles']},{s['bonds']},{' '.join(f'{m:.0f}' for m in mb)},{max(mb):.0f},{sum(mb):.0f}")
+loop = s.get("loop_resident_mb", [])
+tail = f",{' '.join(f'{m:.0f}' for m in loop)},{max(loop):.0f},{sum(loop):.0f}" if loop else ",,,"
+print(f"{ranks},{s['particles']},{s['bonds']},{' '.join(f'{m:.0f}' for m in mb)},{max(mb):.0f},{sum(mb):.0f}{tail}")
 PY
 done

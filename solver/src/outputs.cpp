@@ -364,8 +364,11 @@ void HistoryWriter::write(const PdSystem& s, const Energies& e) {
   }
   if (s.gas.active) {
     const GasState& g = s.gas;
-    long long wetted = 0;
-    for (double t : g.arrival) wetted += t < 1e300;
+    long long wetted = e.gas_wetted;  // a distributed run's sum over its ranks
+    if (wetted < 0) {
+      wetted = 0;
+      for (double t : g.arrival) wetted += t < 1e300;
+    }
     std::fprintf(file_, ",%.9e,%.9e,%.9e,%.9e,%.9e,%d,%lld,%.9e", g.pressure, g.volume, g.crack_volume, g.work,
                  g.mass_fraction, g.vented ? 1 : 0, wetted, g.outflow_area());
   }
@@ -385,7 +388,10 @@ template <class T> std::vector<double> doubles_of(const std::vector<T>& a, size_
 }
 
 // checkpoint.h5's content: the scalars and small arrays from s, the per-particle and per-entry
-// arrays row by row from `mine` (the whole arrays when one process writes).
+// arrays row by row from `mine` (the whole arrays when one process writes). Which datasets
+// and their sizes come from what every rank holds alike (the particle and bond counts, the
+// case, the rank's own rows): a distributed run's ranks other than 0 hold none of the whole
+// arrays (release_global_for_loop, rank_system.hpp).
 void write_checkpoint_content(const h5::File& f, const PdSystem& s, const CheckpointRows& mine) {
   {
     f.set_attr("/", "format", std::string("breccia-checkpoint"));
@@ -405,12 +411,13 @@ void write_checkpoint_content(const h5::File& f, const PdSystem& s, const Checkp
     f.write_rows("/a", r.a.data(), p0, pc, {n, 3});
     f.write_rows("/force", r.force.data(), p0, pc, {n, 3});
     f.write_rows("/body", r.body.data(), p0, pc, {n, 3});
-    f.write_rows("/bond_state", r.state.data(), e0, ec, {s.state.size()});
-    if (!s.bond_damage.empty())
-      f.write_rows("/bond_damage", doubles_of(r.bond_damage, ec).data(), e0, ec, {s.bond_damage.size()});
+    const size_t entries = s.bond_count();
+    f.write_rows("/bond_state", r.state.data(), e0, ec, {entries});
+    if (s.config.softening)  // softening bonds (their damage is held exactly then: setup_system)
+      f.write_rows("/bond_damage", doubles_of(r.bond_damage, ec).data(), e0, ec, {entries});
     if (s.config.strength_rate != StrengthRateLaw::None)  // the onsets softening bonds were given at their rate
-      f.write_rows("/bond_onset", doubles_of(r.s_onset, ec).data(), e0, ec, {s.s_onset.size()});
-    if (!s.min_stretch.empty()) {  // compressive enhancement: the s_min this step's pass read, and its own
+      f.write_rows("/bond_onset", doubles_of(r.s_onset, ec).data(), e0, ec, {entries});
+    if (!r.min_stretch.empty()) {  // every rank owns a particle: held alike  // compressive enhancement: the s_min this step's pass read, and its own
       f.write_rows("/min_stretch_previous", doubles_of(r.min_stretch, pc).data(), p0, pc, {s.n});
       f.write_rows("/min_stretch", doubles_of(r.min_stretch_next, pc).data(), p0, pc, {s.n});
     }
@@ -428,8 +435,8 @@ void write_checkpoint_content(const h5::File& f, const PdSystem& s, const Checkp
       f.write_rows("/gas/wall_dv", rg.wall_dv.data(), f0, fc, {g.wall_dv.size()});
       f.write_rows("/gas/wall_on", rg.wall_on.data(), f0, fc, {g.wall_on.size()});
       if (g.crack_entry) {
-        f.write_rows("/gas/arrival", rg.arrival.data(), p0, pc, {g.arrival.size()});
-        f.write_rows("/gas/in_crack", rg.in_crack.data(), e0, ec, {g.in_crack.size()});  // which cracks the work follows
+        f.write_rows("/gas/arrival", rg.arrival.data(), p0, pc, {n});
+        f.write_rows("/gas/in_crack", rg.in_crack.data(), e0, ec, {entries});  // which cracks the work follows
         if (g.crack_pass_every > 1) {  // between two crack passes: the vectors the volume follows
           f.write_rows("/gas/push", rg.push.data(), p0, pc, {n, 3});
           const std::vector<double> pass{static_cast<double>(g.crack_pass_countdown), g.crack_pass_done ? 1.0 : 0.0,
@@ -447,7 +454,9 @@ void write_checkpoint(const PdSystem& s, const std::string& path) {
   OutputFile out(path);
   {
     h5::File f(out.temp_path().string(), h5::File::Mode::Create);
-    write_checkpoint_content(f, s, {&s, 0, s.n, 0, s.state.size(), 0, s.facets.particle.size()});
+    // The gas's wall shares, one per facet particle (setup_gas): a distributed run's rank 0
+    // writes this file with serial HDF5 after its facet lists were let go (release_global_for_loop).
+    write_checkpoint_content(f, s, {&s, 0, s.n, 0, s.bond_count(), 0, s.gas.wall_dv.size()});
   }
   out.commit();
 }

@@ -284,6 +284,78 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
 
 }  // namespace
 
+namespace {
+// Empties arrays and frees their memory, keeping the addresses of those that were held.
+struct Release {
+  std::vector<const void*> held;
+  template <class T>
+  void operator()(std::vector<T>& a) {
+    if (!a.empty()) held.push_back(&a);
+    std::vector<T>().swap(a);
+  }
+};
+}  // namespace
+
+std::vector<const void*> release_global_for_loop(PdSystem& g, bool root) {
+  Release drop;
+  // What the set-up read: each rank's system holds its particles' (owned and ghosts) rows.
+  for (auto* a : {&g.density, &g.horizon, &g.half_cell, &g.weighted_volume, &g.calibration_factor, &g.corr_moduli,
+                  &g.short_range_k, &g.spacing, &g.x, &g.u_before, &g.f_before})
+    drop(*a);
+  drop(g.material);
+  drop(g.fixed_dof);
+  drop(g.lps);
+  drop(g.lps_factors);
+  drop(g.internal_index);
+  g.contact_cells = ContactCells{};
+  // The particle file's arrays (rank 0's results writer read them when it opened results.h5,
+  // before the loop); its content id stays (checkpoint.h5 quotes it).
+  ParticleModel& pm = g.particles;
+  drop(pm.position_m);
+  drop(pm.volume_m3);
+  drop(pm.spacing_m);
+  drop(pm.material_id);
+  drop(pm.sets);
+  drop(pm.surfaces);
+  drop(pm.mesh_nodes_m);
+  drop(pm.mesh_cells);
+  // Loads' facets and constraints' particles: the ranks' systems hold their owned ones (the
+  // body loads' lists stay: an empty one means every particle).
+  for (PdSystem::SurfaceLoad& sl : g.surface_loads) drop(sl.facets);
+  g.facets = FacetLayout{};
+  for (PdSystem::Constraint& c : g.constraints) {
+    drop(c.particles);
+    drop(c.values);
+  }
+  // The gas's set-up and scratch arrays; its front, entered cracks and wall shares are state.
+  GasState& gas = g.gas;
+  for (auto* a : {&gas.arrival_next, &gas.arrival_hop, &gas.kappa_volume, &gas.vent_facet_area, &gas.position,
+                  &gas.wall_left})
+    drop(*a);
+  for (auto* a : {&gas.front_done, &gas.attached, &gas.halves}) drop(*a);
+  drop(gas.block_sums);
+  if (!root) {
+    // What rank 0 gathers the state into for its files (MpiBackend::download, output).
+    for (auto* a : {&g.u, &g.v, &g.a, &g.force, &g.body, &g.energy_density, &g.dissipated, &g.damage,
+                    &g.max_stretch, &g.dilatation, &g.lps_a, &g.lps_b, &g.corr_deformation, &g.corr_force_tensor,
+                    &g.corr_nonaffine, &g.gas.arrival, &g.gas.push})
+      drop(*a);
+    for (auto* a : {&g.min_stretch, &g.min_stretch_next, &g.bond_damage, &g.s_onset}) drop(*a);
+    drop(g.state);
+    drop(g.gas.in_crack);
+    // What rank 0's writers alone read: the instability message's positions, the indenter's
+    // volumes, the file order, the results' bond list.
+    drop(g.x0);
+    drop(g.volume);
+    drop(g.original_index);
+    drop(g.precrack_pairs);
+    drop(g.neighbor);
+    drop(g.vol_own);
+    drop(g.k_dual);
+  }
+  return drop.held;
+}
+
 // What runs on the host in a distributed run and has no device path yet: the gas load's sums
 // over ranks and its front (GasExchange, reduce_min_to_owners in solver/mpi/), and the
 // short-range forces' contact search (which the CUDA backend lacks on one process too).

@@ -25,6 +25,19 @@ namespace breccia::solver {
 namespace {
 
 std::atomic<bool> g_interrupted{false};
+
+// This process's resident set now (VmRSS of /proc/self/status, Linux), in MB; -1 where it
+// cannot be read.
+double resident_mb() {
+  std::FILE* f = std::fopen("/proc/self/status", "r");
+  if (!f) return -1.0;
+  char line[256];
+  double kb = -1.0;
+  while (std::fgets(line, sizeof line, f))
+    if (std::sscanf(line, "VmRSS: %lf kB", &kb) == 1) break;
+  std::fclose(f);
+  return kb < 0 ? -1.0 : kb / 1024.0;
+}
 void on_sigint(int) { g_interrupted = true; }
 
 void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, double setup_s) {
@@ -89,6 +102,8 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
     number("gas_cpu_share_of_loop", r.cpu_s > 0 ? s.gas.cpu_s / r.cpu_s : 0.0);
   }
   j["broken_bonds"] = r.final_energies.broken_half_bonds / 2;
+  // What the time loop holds (RunResult::loop_resident_mb): per rank, rank 0 first.
+  if (!r.loop_resident_mb.empty()) j["loop_resident_mb"] = r.loop_resident_mb;
   j["non_finite"] = non_finite;
   if (!non_finite.empty())
     j["non_finite_note"] = "these values were not finite when the run stopped (status " + r.status +
@@ -312,6 +327,7 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
   r.steps = s.step - first_step;
   r.cpu_s = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
   r.bond_updates_per_s = r.wall_s > 0 ? static_cast<double>(s.bond_count()) * r.steps / r.wall_s : 0.0;
+  if (const double mb = resident_mb(); mb >= 0) r.loop_resident_mb = {mb};
   if (r.status == "completed") {
     r.final_energies = backend.measure(s);
     backend.download(s);

@@ -352,6 +352,10 @@ TEST(DistributedSetup, PmbBuildsEachRanksOwnBondsWithOneProcessAnswer) {
     const Outcome o = solve(pmb, out, ranks, 1);
     ASSERT_EQ(o.exit_code, 0) << o.err;
     EXPECT_TRUE(summary(out)["distributed_setup"].get<bool>()) << ranks << " ranks built the whole system";
+    // Each rank's resident set at the end of its loop (docs/parallel.md, Memory), rank 0 first.
+    const auto loop_mb = summary(out)["loop_resident_mb"];
+    ASSERT_EQ(loop_mb.size(), static_cast<size_t>(ranks)) << "one value per rank";
+    for (const auto& mb : loop_mb) EXPECT_GT(mb.get<double>(), 1.0);
     EXPECT_EQ(o.err.find("note: set-up"), std::string::npos) << o.err;
     for (const char* file : {"/results.h5", "/checkpoint.h5"})
       EXPECT_EQ(differing(base + "_whole" + file, out + file), std::vector<std::string>{}) << ranks << " ranks, " << file;

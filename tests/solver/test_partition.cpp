@@ -213,6 +213,53 @@ TEST(RankSystem, OwnedRowsReadTheGlobalPartnersThroughLocalIndices) {
   }
 }
 
+// What the global system of a distributed run keeps for the time loop
+// (release_global_for_loop): on rank 0 the state its writers gather and read, on the other
+// ranks only the counts and offsets every rank's collectives and checkpoint sizes read; the
+// arrays a gather targets are named as held on every rank (else the other ranks would skip
+// a collective rank 0 enters).
+TEST(RankSystem, GlobalSystemKeepsWhatTheLoopReadsAfterTheRanksTookTheirShare) {
+  const std::string yaml = "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], spacing: 1 mm}}\n"
+                           "model: {type: lps, horizon_factor: 3.015}\n"
+                           "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 10}]\n"
+                           "boundary: [{type: velocity, set: xmin, value: [-1, 0, 0], components: [x]}]\n"
+                           "time: {steps: 5}\n";
+  const PdSystem whole = system_from_yaml("release_whole", yaml);
+  for (const bool root : {true, false}) {
+    PdSystem g = system_from_yaml("release_global", yaml);
+    const std::vector<const void*> held = release_global_for_loop(g, root);
+    const auto named = [&](const void* a) { return std::find(held.begin(), held.end(), a) != held.end(); };
+    // Every rank: the counts, offsets and content id (the checkpoint's sizes and identity).
+    EXPECT_EQ(g.n, whole.n);
+    EXPECT_EQ(g.bond_count(), whole.bond_count());
+    EXPECT_EQ(g.offsets, whole.offsets);
+    EXPECT_EQ(g.particles.content_id, whole.particles.content_id);
+    // Set-up only, on every rank: released.
+    for (const std::vector<double>* a : {&g.density, &g.horizon, &g.weighted_volume, &g.particles.position_m})
+      EXPECT_TRUE(a->empty());
+    EXPECT_TRUE(g.material.empty());
+    EXPECT_TRUE(g.constraints[0].particles.empty());
+    EXPECT_TRUE(named(&g.density));
+    if (root) {  // the gathers' targets and what the writers read stay whole
+      EXPECT_EQ(g.u.size(), 3 * whole.n);
+      EXPECT_EQ(g.state, whole.state);
+      EXPECT_EQ(g.x0, whole.x0);
+      EXPECT_EQ(g.original_index, whole.original_index);
+      EXPECT_EQ(g.neighbor, whole.neighbor);
+      EXPECT_FALSE(named(&g.u));
+    } else {  // released, and named as held: the gather into rank 0's still runs
+      for (const std::vector<double>* a : {&g.u, &g.v, &g.force, &g.damage, &g.dilatation, &g.x0, &g.volume})
+        EXPECT_TRUE(a->empty());
+      EXPECT_TRUE(g.state.empty());
+      EXPECT_TRUE(g.original_index.empty());
+      for (const void* a : {static_cast<const void*>(&g.u), static_cast<const void*>(&g.dilatation),
+                            static_cast<const void*>(&g.state)})
+        EXPECT_TRUE(named(a));
+      EXPECT_FALSE(named(&g.min_stretch)) << "not held (no compressive enhancement): no gather";
+    }
+  }
+}
+
 // The lattice stencil the figures without families use (lattice_family_stencil) is the
 // family the set-up builds for a lattice point whose reach stays inside the box: same
 // offsets, none missing, none extra.

@@ -3,6 +3,9 @@
 #include "breccia/solver/mpi_backend.hpp"
 
 #include <fcntl.h>
+#if defined(__GLIBC__)
+#include <malloc.h>  // malloc_trim
+#endif
 #if __has_include(<mpi-ext.h>)
 #include <mpi-ext.h>  // OpenMPI's extensions: MPIX_Query_cuda_support
 #endif
@@ -424,12 +427,22 @@ private:
 // adds them exactly as one process does. The sum is one process's bit for bit at any rank
 // count, where adding each rank's partial sum would not be: 48 bytes per block of 256 items
 // plus the cut blocks' items, every rank from every rank.
+// The ranks' ranges of the facet particles come from each rank's own count (`own_facets`:
+// its slice of the global list, restrict_gas), so no rank needs the global facet list.
 class GasExchange {
 public:
-  GasExchange(const PdSystem& global, const RankLayout& L, MPI_Comm comm)
+  GasExchange(const RankLayout& L, int64_t own_facets, MPI_Comm comm)
       : comm_(comm), rank_(L.rank), particles_(L.part.begin) {
-    for (const int64_t b : L.part.begin) facets_.push_back(first_facet_of(global, b));
+    const int ranks = L.part.ranks();
+    std::vector<long long> counts(static_cast<size_t>(ranks));
+    long long mine = own_facets;
+    MPI_Allgather(&mine, 1, MPI_LONG_LONG, counts.data(), 1, MPI_LONG_LONG, comm);
+    facets_.assign(1, 0);
+    for (int r = 0; r < ranks; ++r) facets_.push_back(facets_.back() + counts[r]);
   }
+
+  // Each rank's first facet particle, and the total: the rows of the per-facet arrays.
+  const std::vector<int64_t>& facet_begin() const { return facets_; }
 
   GasSums* terms(int64_t count) {
     terms_.resize(static_cast<size_t>(std::max<int64_t>(count, 1)));
@@ -589,12 +602,13 @@ void allgather_ranges(void* data, size_t bytes, const std::vector<int64_t>& begi
 }
 
 // Rank 0 receives every rank's range (the rank's own, from the start of `local`) into
-// `global`. The global system is held by every rank, so whether an array is held (the
-// feature is on) is the same everywhere and every rank takes part or none.
+// `global`. `held`: whether rank 0 holds `global` (the feature is on), the same on every
+// rank, so every rank takes part or none; the other ranks need not hold it (their global
+// system lets go of the gathers' targets: release_global_for_loop).
 template <class T>
 void gather_ranges(const std::vector<T>& local, std::vector<T>& global, const std::vector<int64_t>& begin, int rank,
-                   MPI_Comm comm) {
-  if (global.empty()) return;
+                   MPI_Comm comm, bool held) {
+  if (!held) return;
   const ElementRanges e(sizeof(T), begin);
   MPI_Gatherv(local.data(), e.counts[rank], e.type, global.data(), e.counts.data(), e.displs.data(), e.type, 0, comm);
 }
@@ -637,7 +651,8 @@ std::shared_ptr<RankShare> make_rank_share(const PdSystem& global, MPI_Comm comm
   sh->halo = std::make_unique<HaloExchange>(sh->layout, comm);
   if (!sh->local.short_range_k.empty())
     sh->contact = std::make_unique<ContactExchange>(sh->layout, comm, sh->local.contact_cell_edge);
-  if (global.gas.active) sh->gas = std::make_unique<GasExchange>(global, sh->layout, comm);
+  if (global.gas.active)
+    sh->gas = std::make_unique<GasExchange>(sh->layout, static_cast<int64_t>(sh->local.gas.wall_dv.size()), comm);
   sh->global_n = global.n;
   sh->global_bonds = global.bond_count();
   return sh;
@@ -730,6 +745,12 @@ public:
       throw InputError("--backend", "cuda", "cuda under mpirun", "cpu (this build's MPI backend has no CUDA)");
 #endif
     }
+    // Every rank's system now holds its share: the global one keeps what the loop and the
+    // writers read, the whole state on rank 0 only (release_global_for_loop).
+    released_ = release_global_for_loop(global, layout_.rank == 0);
+#if defined(__GLIBC__)
+    malloc_trim(0);  // the freed pages back to the system (glibc's heap would keep them resident)
+#endif
   }
 
   void step(PdSystem& g) override {
@@ -764,8 +785,13 @@ public:
     MPI_Allreduce(sums, total, 4, MPI_DOUBLE, MPI_SUM, comm_);
     double dmax = e.max_damage, gmax = 0.0;
     MPI_Allreduce(&dmax, &gmax, 1, MPI_DOUBLE, MPI_MAX, comm_);
-    long long counts[2] = {e.broken_half_bonds, e.finite ? 0 : 1}, gcounts[2];
-    MPI_Allreduce(counts, gcounts, 2, MPI_LONG_LONG, MPI_SUM, comm_);
+    // The history counts the particles the gas has reached: each rank its own particles'
+    // arrival times (the owners'), summed (a count: exact in any order).
+    long long wetted = 0;
+    if (local_.gas.crack_entry)
+      for (size_t i = 0; i < local_.n; ++i) wetted += local_.gas.arrival[i] < 1e300;
+    long long counts[3] = {e.broken_half_bonds, e.finite ? 0 : 1, wetted}, gcounts[3];
+    MPI_Allreduce(counts, gcounts, 3, MPI_LONG_LONG, MPI_SUM, comm_);
     long long bad = e.bad_particle >= 0 ? e.bad_particle + layout_.begin() : -1, gbad = -1;
     MPI_Allreduce(&bad, &gbad, 1, MPI_LONG_LONG, MPI_MAX, comm_);
     Energies out;
@@ -775,10 +801,9 @@ public:
     out.broken_half_bonds = gcounts[0];
     out.finite = gcounts[1] == 0;
     out.bad_particle = gbad;
+    out.gas_wetted = local_.gas.crack_entry ? gcounts[2] : -1;
     g.external_work = total[2];
     g.dissipated_energy = total[3];
-    // The history counts the particles the gas has reached: the owners' arrival times.
-    if (local_.gas.crack_entry) gather_ranges(local_.gas.arrival, g.gas.arrival, particle_ranges(layout_.part, 1), layout_.rank, comm_);
     return out;
   }
 
@@ -786,30 +811,29 @@ public:
     to_host();
     const std::vector<int64_t> one = particle_ranges(layout_.part, 1), three = particle_ranges(layout_.part, 3),
                                nine = particle_ranges(layout_.part, 9), entries = entry_ranges(layout_.part, g.offsets);
-    const int r = layout_.rank;
     for (auto [l, gl] : {std::pair{&local_.u, &g.u}, {&local_.v, &g.v}, {&local_.a, &g.a}, {&local_.force, &g.force},
                          {&local_.body, &g.body}})
-      gather_ranges(*l, *gl, three, r, comm_);
+      gather(*l, *gl, three);
     for (auto [l, gl] : {std::pair{&local_.energy_density, &g.energy_density}, {&local_.dissipated, &g.dissipated},
                          {&local_.damage, &g.damage}, {&local_.max_stretch, &g.max_stretch},
                          {&local_.dilatation, &g.dilatation}, {&local_.lps_a, &g.lps_a}, {&local_.lps_b, &g.lps_b},
                          {&local_.corr_nonaffine, &g.corr_nonaffine}})
-      gather_ranges(*l, *gl, one, r, comm_);
-    gather_ranges(local_.corr_deformation, g.corr_deformation, nine, r, comm_);
-    gather_ranges(local_.corr_force_tensor, g.corr_force_tensor, nine, r, comm_);
-    gather_ranges(local_.min_stretch, g.min_stretch, one, r, comm_);
-    gather_ranges(local_.min_stretch_next, g.min_stretch_next, one, r, comm_);
-    gather_ranges(local_.state, g.state, entries, r, comm_);
-    gather_ranges(local_.bond_damage, g.bond_damage, entries, r, comm_);
-    if (local_.config.strength_rate != StrengthRateLaw::None) gather_ranges(local_.s_onset, g.s_onset, entries, r, comm_);
+      gather(*l, *gl, one);
+    gather(local_.corr_deformation, g.corr_deformation, nine);
+    gather(local_.corr_force_tensor, g.corr_force_tensor, nine);
+    gather(local_.min_stretch, g.min_stretch, one);
+    gather(local_.min_stretch_next, g.min_stretch_next, one);
+    gather(local_.state, g.state, entries);
+    gather(local_.bond_damage, g.bond_damage, entries);
+    if (local_.config.strength_rate != StrengthRateLaw::None) gather(local_.s_onset, g.s_onset, entries);
     if (local_.gas.active) {  // what checkpoint.h5 keeps of the gas (write_checkpoint)
-      const std::vector<int64_t> facets = facet_ranges(g);
-      gather_ranges(local_.gas.wall_dv, g.gas.wall_dv, facets, r, comm_);
-      gather_ranges(local_.gas.wall_on, g.gas.wall_on, facets, r, comm_);
-      gather_ranges(local_.gas.arrival, g.gas.arrival, one, r, comm_);
-      gather_ranges(local_.gas.in_crack, g.gas.in_crack, entries, r, comm_);
+      const std::vector<int64_t>& facets = share_->gas->facet_begin();
+      gather(local_.gas.wall_dv, g.gas.wall_dv, facets);
+      gather(local_.gas.wall_on, g.gas.wall_on, facets);
+      gather(local_.gas.arrival, g.gas.arrival, one);
+      gather(local_.gas.in_crack, g.gas.in_crack, entries);
       // Between two crack passes: the vectors the volume follows (/gas/push).
-      if (local_.gas.crack_pass_every > 1) gather_ranges(local_.gas.push, g.gas.push, three, r, comm_);
+      if (local_.gas.crack_pass_every > 1) gather(local_.gas.push, g.gas.push, three);
     }
   }
 
@@ -822,7 +846,7 @@ public:
     if (!g.config.write_results) return StepBackend::output(g, results, out_dir);
     to_host();
     const int r = layout_.rank;
-    gather_ranges(local_.state, g.state, entry_ranges(layout_.part, g.offsets), r, comm_);
+    gather(local_.state, g.state, entry_ranges(layout_.part, g.offsets));
     if (!g.config.probes.empty() || g.config.indenter.enabled) download_kinematics(g);
     const std::vector<ResultsField> fields = results_fields(g);
     size_t width = 1;  // per particle: its file index, then every field's components
@@ -836,14 +860,14 @@ public:
       while (q > 0 && block_begin(q) > fi) --q;
       return q;
     };
-    const int64_t first = layout_.begin(), owned = layout_.owned();
+    const int64_t owned = layout_.owned();
     std::vector<int> send_counts(size, 0), at(size, 0);  // at: where each block's values go in `send`
-    for (int64_t k = 0; k < owned; ++k) send_counts[block_of(g.original_index[first + k])] += static_cast<int>(width);
+    for (int64_t k = 0; k < owned; ++k) send_counts[block_of(local_.original_index[k])] += static_cast<int>(width);
     for (int q = 1; q < size; ++q) at[q] = at[q - 1] + send_counts[q - 1];
     std::vector<double> send(static_cast<size_t>(at[size - 1] + send_counts[size - 1])), recv;
     {
       for (int64_t k = 0; k < owned; ++k) {
-        const int64_t fi = g.original_index[first + k];
+        const int64_t fi = local_.original_index[k];  // the rank's own: the global list is rank 0's
         double* out = send.data() + at[block_of(fi)];
         at[block_of(fi)] += static_cast<int>(width);
         *out++ = static_cast<double>(fi);  // exact: file indices stay below 2^53
@@ -871,7 +895,8 @@ public:
   void checkpoint(PdSystem& g, const std::string& path, bool root, bool downloaded) override {
     if (!downloaded) to_host();
     const int64_t first = layout_.begin(), owned = layout_.owned();
-    const std::vector<int64_t> facets = facet_ranges(g);
+    std::vector<int64_t> facets(static_cast<size_t>(layout_.part.ranks()) + 1, 0);  // without a gas load: none
+    if (share_->gas) facets = share_->gas->facet_begin();
     const CheckpointRows mine{&local_,
                               static_cast<size_t>(first),
                               static_cast<size_t>(owned),
@@ -887,8 +912,8 @@ public:
     if (device_) device_->download_kinematics(local_);
     else if (local_.f32.active) float32_download_kinematics(local_);
     const std::vector<int64_t> three = particle_ranges(layout_.part, 3);
-    gather_ranges(local_.u, g.u, three, layout_.rank, comm_);
-    gather_ranges(local_.v, g.v, three, layout_.rank, comm_);
+    gather(local_.u, g.u, three);
+    gather(local_.v, g.v, three);
   }
 
   // Dynamic relaxation on the rank's share: the force pass exchanges the halo, the sums
@@ -934,17 +959,22 @@ public:
   }
 
 private:
+  // Whether rank 0 holds `global` (a gather's target): the other ranks let it go
+  // (release_global_for_loop) but take part in the gather alike.
+  template <class T>
+  bool held(const std::vector<T>& global) const {
+    return !global.empty() ||
+           std::find(released_.begin(), released_.end(), static_cast<const void*>(&global)) != released_.end();
+  }
+  template <class T>
+  void gather(const std::vector<T>& local, std::vector<T>& global, const std::vector<int64_t>& begin) {
+    gather_ranges(local, global, begin, layout_.rank, comm_, held(global));
+  }
+
   // The rank's whole state into its host system (from the GPU, or float32's float state).
   void to_host() {
     if (device_) device_->download(local_);
     else if (local_.f32.active) float32_download(local_);
-  }
-
-  // The ranks' ranges of the facet particles (sorted by particle: one run per rank).
-  std::vector<int64_t> facet_ranges(const PdSystem& g) const {
-    std::vector<int64_t> begin;
-    for (const int64_t b : layout_.part.begin) begin.push_back(first_facet_of(g, b));
-    return begin;
   }
 
   // The step's arrays over the rank's state in its precision, with the ghosts counted.
@@ -972,6 +1002,7 @@ private:
   PdSystem& local_ = share_->local;
   std::unique_ptr<HaloExchange>& halo_ = share_->halo;
   std::unique_ptr<StepBackend> device_;  // --backend cuda: the rank's system on its GPU
+  std::vector<const void*> released_;    // the global arrays this rank let go of (held())
 };
 
 }  // namespace
@@ -1066,7 +1097,17 @@ RunResult mpi_time_loop(PdSystem& global, const RunOptions& o, ResultsWriter* re
   const std::unique_ptr<StepBackend> backend = make_mpi_backend(global, MPI_COMM_WORLD, cuda);
   try {
     if (cuda) print_rank_devices(MPI_COMM_WORLD, o.progress);
-    return run_time_loop(global, o, *backend, results, history);
+    RunResult r = run_time_loop(global, o, *backend, results, history);
+    // Every rank's resident set at the end of its loop, to rank 0 (summary.json).
+    double mine = r.loop_resident_mb.empty() ? -1.0 : r.loop_resident_mb[0];
+    int rank = 0, ranks = 1;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+    std::vector<double> all(static_cast<size_t>(ranks));
+    MPI_Gather(&mine, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+    if (std::find(all.begin(), all.end(), -1.0) == all.end()) r.loop_resident_mb = all;
+    else r.loop_resident_mb.clear();
+    return r;
   } catch (const std::exception& e) {
     // From here a failure may be one rank's alone (a file rank 0 writes): stop them all.
     mpi_abort_all(e.what(), dynamic_cast<const InputError*>(&e) ? kExitBadInput : kExitRunFailed);

@@ -193,6 +193,10 @@ struct Energies {
   long long broken_half_bonds = 0;
   bool finite = true;
   int64_t bad_particle = -1;  // internal index of a non-finite particle
+  // A gas load with crack entry: the particles its front has reached (history.csv's
+  // gas_wetted_particles), counted by a distributed run's ranks over their own particles and
+  // summed; -1: not counted here (the history counts the system's arrival times).
+  long long gas_wetted = -1;
 };
 Energies measure(const PdSystem& sys);
 

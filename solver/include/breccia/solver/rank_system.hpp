@@ -55,6 +55,21 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& global, const RankLayout& layou
 // built again.
 void copy_rank_state(PdSystem& local, const PdSystem& global, const RankLayout& layout);
 
+// The global system of a distributed run once every rank's system has been cut from it and
+// brought up to date (by the time loop's or dynamic relaxation's backend, solver/mpi/): the
+// rank's own system holds what its steps need, so the global one keeps only what the time
+// loop and the writers read (docs/parallel.md, Memory). On every rank it lets go of what the
+// set-up alone read (densities, horizons, cells, materials, constraints' and loads' particle
+// lists, the facet lists, the particle file's arrays, the model's coefficients, the gas's
+// set-up arrays); on the ranks that do not write (`root` false) also of the arrays rank 0
+// gathers the state into for its files (displacements to bond states, the gas's front and
+// entered cracks) and of what only rank 0's writers read (reference positions, volumes,
+// file indices). What stays: the scalars, the row offsets (the entry ranges, the bond
+// count), the configuration, the particle model's content id, the gas's scalars and its per-
+// facet shares. Returns the arrays released that were held: a gather into them on rank 0
+// (solver/mpi/) still takes every rank's part, though only rank 0 holds the target.
+std::vector<const void*> release_global_for_loop(PdSystem& global, bool root);
+
 // A distributed run on the CUDA backend (one GPU per rank, docs/parallel.md) runs what the
 // CUDA step runs on one process, less what a distributed run adds on the host: throws
 // InputError naming the first key of `config` it does not run (`file`: the case file's name).

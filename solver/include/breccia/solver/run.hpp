@@ -46,6 +46,10 @@ struct RunResult {
   double bond_updates_per_s = 0.0;
   Energies final_energies;
   std::string message;
+  // The process's resident set (VmRSS, MB) when the time loop's last step is done, before the
+  // final outputs: what the loop holds, where the peak (VmHWM) is usually the set-up's. One
+  // value per rank of a distributed run (rank 0 first); empty where it cannot be read.
+  std::vector<double> loop_resident_mb;
 };
 
 // What the time loop needs from a backend. The CPU backend works on the PdSystem in place;

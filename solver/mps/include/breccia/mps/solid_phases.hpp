@@ -46,7 +46,7 @@ struct SolidStressInputs {
 // the hourglass stiffness scaled by the radial return's deviatoric factor. Returns |H|^2
 // (Frobenius), or -1 when the new F is inverted (det F <= 0, or not finite); the particle is
 // then left unchanged, and the caller decides (fracture may detach it; otherwise an error).
-BRECCIA_HD inline double stress_phase_at(long long i, const SolidStressInputs& in, const SolidStressState& s) {
+BRECCIA_HD BRECCIA_FLATTEN inline double stress_phase_at(long long i, const SolidStressInputs& in, const SolidStressState& s) {
   const Mat3 h_new =
       displacement_gradient_at(i, in.bonds, in.u, in.volume_m3, in.moment_inverse[i], in.dimension, in.bond_coefficient);
   Mat3 f = h_new;

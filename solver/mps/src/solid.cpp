@@ -25,6 +25,14 @@ Solid::Solid(std::vector<double> position_m, std::vector<double> volume_m3, doub
       options_(options) {
   const size_t n = volume_m3_.size();
   if (position_m_.size() != 3 * n) throw RunError("mps solid: positions and volumes disagree in size");
+  // Plane strain: every particle in one plane, so that no bond has a z component (the 2D
+  // kernels skip the z row and column of every matrix, solid_kernels.hpp "Plane strain").
+  if (options_.dimension == 2)
+    for (size_t i = 1; i < n; ++i)
+      if (position_m_[3 * i + 2] != position_m_[2])
+        throw RunError("mps solid: a 2D (plane strain) solid needs every particle at the same z; particle " +
+                       std::to_string(i) + " is at z = " + std::to_string(position_m_[3 * i + 2]) + " m, particle 0 at " +
+                       std::to_string(position_m_[2]) + " m");
   mean_volume_m3_ = 0.0;
   for (double v : volume_m3_) mean_volume_m3_ += v / n;
   stencil_volume_m3_ = volume_m3_;
@@ -83,6 +91,8 @@ void Solid::build_stencils(const std::vector<double>& position_m) {
   if (norm_.number_density_n0 == 0.0) norm_ = reference_normalisation(bonds_);
   const double mps_scale = options_.dimension / norm_.number_density_n0;
   const BondsView b = bonds_.view();
+  bond_coefficient_.resize(bonds_.size());
+  for (size_t i = 0; i < n; ++i) refresh_bond_coefficients(static_cast<long long>(i));
   moment_inverse_.resize(n);
   for (size_t i = 0; i < n; ++i)
     moment_inverse_[i] = inverse_moment_matrix_at(i, b, stencil_volume_m3_.data(), options_.dimension, mps_scale);
@@ -92,6 +102,12 @@ void Solid::build_stencils(const std::vector<double>& position_m) {
     for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) number_density += b.weight[k];
     full_stencil_[i] = number_density >= 0.97 * norm_.number_density_n0;
   }
+}
+
+void Solid::refresh_bond_coefficients(long long i) {
+  const BondsView b = bonds_.view();
+  for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k)
+    bond_coefficient_[k] = bond_coefficient(b, k, stencil_volume_m3_.data(), nullptr);
 }
 
 // Updated Lagrangian: the current configuration becomes the stencils' reference. Each
@@ -124,7 +140,8 @@ void Solid::rebuild_stencils_on_current_configuration() {
   for (size_t i = 0; i < n; ++i) {
     gradient_[i] = zero;
     f_inverse_[i] = identity3();
-    matrices_[i] = force_matrices(stress_in_force(i), zero, f_inverse_[i], moment_inverse_[i], matrices_[i].hourglass_stiffness);
+    matrices_[i] = force_matrices(stress_in_force(i), zero, f_inverse_[i], moment_inverse_[i], matrices_[i].hourglass_stiffness,
+                                  options_.dimension);
   }
   ++stencil_rebuilds_;
 }
@@ -290,6 +307,7 @@ void Solid::compute_acceleration(double dt) {
   stress_in.dimension = dim;
   stress_in.hourglass_stiffness = hourglass;
   stress_in.dt_s = dt;
+  stress_in.bond_coefficient = bond_coefficient_.data();
   SolidStressState state{gradient_.data(), f_inverse_.data(),   stress_.data(), eq_plastic_strain_.data(),
                          stress_work_j_.data(), pressure_pa_.data(), matrices_.data()};
   if (!viscous_stress_.empty()) {
@@ -327,6 +345,8 @@ void Solid::compute_acceleration(double dt) {
   in.forces.matrices = matrices_.data();
   in.forces.pressure_floor_pa = repulsive ? pressure_floor_pa_.data() : nullptr;
   in.forces.volume_m3 = volume;
+  in.forces.bond_coefficient = bond_coefficient_.data();
+  in.forces.dimension = dim;
   const bool contact = contact_.active();
   if (contact) contact_.compute_forces(state_view(), dt);
   for (int a = 0; a < 3; ++a) {
@@ -481,8 +501,10 @@ double Solid::hourglass_energy_j() const {
   // Plus what earlier stencils held when they were rebuilt (updated Lagrangian; dissipated).
   double e = hourglass_released_j_;
   for (size_t i = 0; i < size(); ++i) {
-    const Mat3 h = displacement_gradient_at(i, b, u, stencil_volume_m3_.data(), moment_inverse_[i]);
-    e += hourglass_energy_at(i, b, u, stencil_volume_m3_.data(), h, matrices_[i].hourglass_stiffness);
+    const Mat3 h = displacement_gradient_at(i, b, u, stencil_volume_m3_.data(), moment_inverse_[i], options_.dimension,
+                                            bond_coefficient_.data());
+    e += hourglass_energy_at(i, b, u, stencil_volume_m3_.data(), h, matrices_[i].hourglass_stiffness, options_.dimension,
+                             bond_coefficient_.data());
   }
   return e;
 }

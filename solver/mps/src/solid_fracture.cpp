@@ -109,20 +109,22 @@ void Solid::refresh_cut_stencils(const std::vector<long long>& changed) {
   const VectorField u{stencil_displacement(0).data(), stencil_displacement(1).data(), stencil_displacement(2).data()};
   const double mps_scale = options_.dimension / norm_.number_density_n0;
   for (long long i : changed) {
+    refresh_bond_coefficients(i);
     moment_inverse_[i] = inverse_moment_matrix_at(i, b, stencil_volume_m3_.data(), options_.dimension, mps_scale);
     double number_density = 0.0;
     for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) number_density += b.weight[k];
     full_stencil_[i] = number_density >= 0.97 * norm_.number_density_n0;
     if (number_density == 0.0) stress_[i] = SymTensor{};  // a detached particle carries no stress
-    const Mat3 h = displacement_gradient_at(i, b, u, stencil_volume_m3_.data(), moment_inverse_[i]);
+    const Mat3 h = displacement_gradient_at(i, b, u, stencil_volume_m3_.data(), moment_inverse_[i], options_.dimension,
+                                            bond_coefficient_.data());
     Mat3 f = h;
     f(0, 0) += 1.0;
     f(1, 1) += 1.0;
     f(2, 2) += 1.0;
     gradient_[i] = h;
-    f_inverse_[i] = det(f) > 0.0 ? inverse(f) : identity3();
+    f_inverse_[i] = det(f, options_.dimension) > 0.0 ? inverse(f, options_.dimension) : identity3();
     matrices_[i] = force_matrices(stress_in_force(i), gradient_[i], f_inverse_[i], moment_inverse_[i],
-                                  matrices_[i].hourglass_stiffness);
+                                  matrices_[i].hourglass_stiffness, options_.dimension);
   }
 }
 

@@ -153,14 +153,18 @@ BRECCIA_HD inline double damping_ratio_of_restitution(double e) {
 // (also for concave polygons, where only its gradient jumps on the medial axis).
 BRECCIA_HD inline double polygon_penetration(const double* x, const double* y, int count, double px, double py,
                                              double normal[2]) {
+  // Inside or outside first (crossing number, ray to +x): most points tested are outside, and
+  // for those the nearest edge is not needed.
   bool inside = false;
-  double best = 1e300, nx = 0.0, ny = 0.0;
   for (int k = 0, m = count - 1; k < count; m = k++) {
-    // Crossing number (ray to +x) for inside/outside.
     if ((y[k] > py) != (y[m] > py)) {
       const double xc = x[m] + (py - y[m]) * (x[k] - x[m]) / (y[k] - y[m]);
       if (px < xc) inside = !inside;
     }
+  }
+  if (!inside) return 0.0;
+  double best = 1e300, nx = 0.0, ny = 0.0;
+  for (int k = 0, m = count - 1; k < count; m = k++) {
     // Nearest point on edge m -> k.
     const double ex = x[k] - x[m], ey = y[k] - y[m];
     double t = ((px - x[m]) * ex + (py - y[m]) * ey) / (ex * ex + ey * ey);
@@ -173,7 +177,6 @@ BRECCIA_HD inline double polygon_penetration(const double* x, const double* y, i
       ny = qy;
     }
   }
-  if (!inside) return 0.0;
   const double d = std::sqrt(best);
   if (d <= 0.0) return 0.0;
   normal[0] = nx / d;

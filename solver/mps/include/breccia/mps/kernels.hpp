@@ -17,6 +17,14 @@
 #define BRECCIA_HD
 #endif
 #endif
+// On a per-particle body: inline everything it calls (GCC/Clang host code), so that the
+// temporaries of the 3x3 algebra stay in registers and the entries a plane-strain form never
+// reads are not computed at all. Nothing for the device compiler, which inlines by itself.
+#if !defined(__CUDACC__) && defined(__GNUC__)
+#define BRECCIA_FLATTEN __attribute__((flatten))
+#else
+#define BRECCIA_FLATTEN
+#endif
 
 namespace breccia::mps {
 

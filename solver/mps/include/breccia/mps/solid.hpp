@@ -315,6 +315,8 @@ private:
   void sync_fracture() const;  // separation values of the device's last stress phase
   void sync_contact() const;  // the device's contact totals (friction, pairs) into contact_
   void build_stencils(const std::vector<double>& position_m);  // bonds, L^-1, surface flags
+  // bond_coefficient_ of particle i's bonds (build_stencils; fracture's cuts name both ends).
+  void refresh_bond_coefficients(long long i);
   void rebuild_stencils_on_current_configuration();            // updated Lagrangian
   void update_substeps();  // substeps per step() from the shortest current bond
   // The stress particle i's force matrices carry: elastic + viscous (material damping).
@@ -335,6 +337,9 @@ private:
   mutable bool separation_current_ = true;
   BondList bonds_;
   Normalisation norm_;
+  // c_k = V_j w_k / |r_k|^2 per bond on the stencil volumes (bond_coefficient, solid_kernels.hpp):
+  // the gradient, force and hourglass loops read it instead of dividing per bond per step.
+  std::vector<double> bond_coefficient_;
   // mutable: with a device attached, the state below is a cache of its state (sync_host).
   std::vector<Mat3> moment_inverse_;                   // L^-1
   mutable std::vector<Mat3> gradient_, f_inverse_;     // H = F - I, F^-1

@@ -68,6 +68,42 @@ BRECCIA_HD inline Mat3 transpose(const Mat3& m) {
   return t;
 }
 
+// Plane strain (2D): every matrix of the solid is block-diagonal, its in-plane 2x2 block and
+// its zz entry, the entries (0,2), (1,2), (2,0), (2,1) exactly zero (no z bonds, no z
+// displacement, L^-1 with a zero z row and column, no out-of-plane shear stress). The *_plane
+// forms below skip only the products that have such a zero factor and keep the others in
+// the order of the full forms above, so every nonzero entry is the full form's to the last
+// bit (adding an exact zero changes no nonzero sum); only the sign of an entry that is zero
+// anyway can differ. dimension 3 takes the full forms.
+BRECCIA_HD inline Mat3 mul_plane(const Mat3& x, const Mat3& y) {
+  Mat3 m;
+  for (int r = 0; r < 2; ++r)
+    for (int c = 0; c < 2; ++c) m(r, c) = x(r, 0) * y(0, c) + x(r, 1) * y(1, c);
+  m(2, 2) = x(2, 2) * y(2, 2);
+  return m;
+}
+
+BRECCIA_HD inline Mat3 mul(const Mat3& x, const Mat3& y, int dimension) {
+  return dimension == 2 ? mul_plane(x, y) : mul(x, y);
+}
+
+BRECCIA_HD inline double det(const Mat3& m, int dimension) {
+  if (dimension != 2) return det(m);
+  return m(0, 0) * (m(1, 1) * m(2, 2)) - m(0, 1) * (m(1, 0) * m(2, 2));
+}
+
+BRECCIA_HD inline Mat3 inverse(const Mat3& m, int dimension) {
+  if (dimension != 2) return inverse(m);
+  const double inv_det = 1.0 / det(m, 2);
+  Mat3 r;
+  r(0, 0) = (m(1, 1) * m(2, 2)) * inv_det;
+  r(0, 1) = (-(m(0, 1) * m(2, 2))) * inv_det;
+  r(1, 0) = (-(m(1, 0) * m(2, 2))) * inv_det;
+  r(1, 1) = (m(0, 0) * m(2, 2)) * inv_det;
+  r(2, 2) = (m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0)) * inv_det;
+  return r;
+}
+
 BRECCIA_HD inline Mat3 to_matrix(const SymTensor& s) {
   Mat3 m;
   m(0, 0) = s.xx;
@@ -85,6 +121,15 @@ BRECCIA_HD inline SymTensor symmetric_part(const Mat3& m) {
 
 BRECCIA_HD inline double contract(const SymTensor& s, const SymTensor& e) {
   return s.xx * e.xx + s.yy * e.yy + s.zz * e.zz + 2.0 * (s.xy * e.xy + s.yz * e.yz + s.zx * e.zx);
+}
+
+// c_k = V_j w_k / |r_k|^2 of bond k (V: the stencil volumes), or coefficient[k] where the
+// caller keeps these products (Solid::bond_coefficient_, computed once per stencil from the
+// same expression, so the values are the same to the last bit; nullptr: computed here).
+BRECCIA_HD inline double bond_coefficient(BondsView b, long long k, const double* volume_m3, const double* coefficient) {
+  if (coefficient) return coefficient[k];
+  const double r[3] = {b.rx[k], b.ry[k], b.rz[k]};
+  return volume_m3[b.neighbour[k]] * b.weight[k] / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
 }
 
 // L_i^-1 for particle i. In 2D the z row and column stay zero (no z bonds). A stencil too
@@ -115,14 +160,33 @@ BRECCIA_HD inline Mat3 inverse_moment_matrix_at(long long i, BondsView b, const 
   return inv;
 }
 
-// H_i = [sum_k V_j c_k (u_j - u_i) (x) r_k] L_i^-1 (see the header comment).
+// H_i = [sum_k V_j c_k (u_j - u_i) (x) r_k] L_i^-1 (see the header comment). dimension 2:
+// the in-plane block only (the z row and column are zero); coefficient: bond_coefficient's.
 BRECCIA_HD inline Mat3 displacement_gradient_at(long long i, BondsView b, VectorField u, const double* volume_m3,
-                                                const Mat3& moment_inverse) {
+                                                const Mat3& moment_inverse, int dimension = 3,
+                                                const double* coefficient = nullptr) {
   Mat3 sum;
+  if (dimension == 2) {  // the same sums in registers (c du_p r_q in the same order)
+    double s00 = 0.0, s01 = 0.0, s10 = 0.0, s11 = 0.0;
+    for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
+      const long long j = b.neighbour[k];
+      const double c = bond_coefficient(b, k, volume_m3, coefficient);
+      const double cu0 = c * (u.x[j] - u.x[i]), cu1 = c * (u.y[j] - u.y[i]);
+      s00 += cu0 * b.rx[k];
+      s01 += cu0 * b.ry[k];
+      s10 += cu1 * b.rx[k];
+      s11 += cu1 * b.ry[k];
+    }
+    sum(0, 0) = s00;
+    sum(0, 1) = s01;
+    sum(1, 0) = s10;
+    sum(1, 1) = s11;
+    return mul_plane(sum, moment_inverse);
+  }
   for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
     const long long j = b.neighbour[k];
     const double r[3] = {b.rx[k], b.ry[k], b.rz[k]};
-    const double c = volume_m3[j] * b.weight[k] / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    const double c = bond_coefficient(b, k, volume_m3, coefficient);
     const double du[3] = {u.x[j] - u.x[i], u.y[j] - u.y[i], u.z[j] - u.z[i]};
     for (int p = 0; p < 3; ++p)
       for (int q = 0; q < 3; ++q) sum(p, q) += c * du[p] * r[q];
@@ -190,7 +254,7 @@ BRECCIA_HD inline double update_stress(const SolidLaw& law, const Mat3& h_old, c
                                        double* deviatoric_scale = nullptr, SymTensor* strain_increment_out = nullptr) {
   Mat3 dh;
   for (int k = 0; k < 9; ++k) dh.a[k] = h_new.a[k] - h_old.a[k];
-  const Mat3 g = mul(dh, f_old_inverse);
+  const Mat3 g = mul(dh, f_old_inverse, dimension);
   const SymTensor strain_increment = symmetric_part(g);
   Mat3 half_spin;  // W/2
   for (int r = 0; r < 3; ++r)
@@ -200,8 +264,8 @@ BRECCIA_HD inline double update_stress(const SolidLaw& law, const Mat3& h_old, c
     minus.a[k] -= half_spin.a[k];
     plus.a[k] += half_spin.a[k];
   }
-  const Mat3 q = mul(inverse(minus), plus);
-  SymTensor rotated = symmetric_part(mul(mul(q, to_matrix(stress)), transpose(q)));
+  const Mat3 q = mul(inverse(minus, dimension), plus, dimension);
+  SymTensor rotated = symmetric_part(mul(mul(q, to_matrix(stress), dimension), transpose(q), dimension));
   if (dimension == 2) rotated.yz = rotated.zx = 0.0;  // plane strain: no out-of-plane shear
   SymTensor next = rotated;
   add_hooke_increment(next, strain_increment, law.lame_lambda_pa, law.shear_modulus_pa);
@@ -234,14 +298,15 @@ struct ForceMatrices {
 };
 
 BRECCIA_HD inline ForceMatrices force_matrices(const SymTensor& stress, const Mat3& h, const Mat3& f_inverse,
-                                               const Mat3& moment_inverse, double hourglass_stiffness) {
+                                               const Mat3& moment_inverse, double hourglass_stiffness,
+                                               int dimension = 3) {
   Mat3 f = h;
   f(0, 0) += 1.0;
   f(1, 1) += 1.0;
   f(2, 2) += 1.0;
-  const double j = det(f);
-  const Mat3 g = mul(transpose(f_inverse), moment_inverse);
-  const Mat3 piola = mul(to_matrix(stress), g);
+  const double j = det(f, dimension);
+  const Mat3 g = mul(transpose(f_inverse), moment_inverse, dimension);
+  const Mat3 piola = mul(to_matrix(stress), g, dimension);
   ForceMatrices out;
   out.hourglass_stiffness = hourglass_stiffness;
   for (int k = 0; k < 9; ++k) {
@@ -282,6 +347,8 @@ struct SolidForceInputs {
   const ForceMatrices* matrices = nullptr;
   const double* pressure_floor_pa = nullptr;  // nullptr: conservative form
   const double* volume_m3 = nullptr;
+  const double* bond_coefficient = nullptr;   // bond_coefficient's (nullptr: computed per bond)
+  int dimension = 3;                          // 2: the in-plane components only (out[2] = 0)
 };
 
 BRECCIA_HD inline void solid_force_at(long long i, const SolidForceInputs& in, double out[3]) {
@@ -291,13 +358,18 @@ BRECCIA_HD inline void solid_force_at(long long i, const SolidForceInputs& in, d
   for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
     const long long j = b.neighbour[k];
     const double r[3] = {b.rx[k], b.ry[k], b.rz[k]};
-    const double c = in.volume_m3[j] * b.weight[k] / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    const double c = bond_coefficient(b, k, in.volume_m3, in.bond_coefficient);
     const Mat3& cj = in.matrices[j].combined;
     const double hg = in.matrices[i].hourglass_stiffness + in.matrices[j].hourglass_stiffness;
     const double du[3] = {in.u.x[j] - in.u.x[i], in.u.y[j] - in.u.y[i], in.u.z[j] - in.u.z[i]};
-    for (int p = 0; p < 3; ++p)
-      f[p] += c * ((ci.a[3 * p] + cj.a[3 * p]) * r[0] + (ci.a[3 * p + 1] + cj.a[3 * p + 1]) * r[1] +
-                   (ci.a[3 * p + 2] + cj.a[3 * p + 2]) * r[2] + hg * du[p]);
+    if (in.dimension == 2) {  // r[2] = 0 and the matrices' z column is zero: those terms are 0
+      for (int p = 0; p < 2; ++p)
+        f[p] += c * ((ci.a[3 * p] + cj.a[3 * p]) * r[0] + (ci.a[3 * p + 1] + cj.a[3 * p + 1]) * r[1] + hg * du[p]);
+    } else {
+      for (int p = 0; p < 3; ++p)
+        f[p] += c * ((ci.a[3 * p] + cj.a[3 * p]) * r[0] + (ci.a[3 * p + 1] + cj.a[3 * p + 1]) * r[1] +
+                     (ci.a[3 * p + 2] + cj.a[3 * p + 2]) * r[2] + hg * du[p]);
+    }
     if (in.pressure_floor_pa) {
       const double p_ref = in.pressure_floor_pa[i];
       const Mat3& gi = in.matrices[i].pressure;
@@ -314,14 +386,23 @@ BRECCIA_HD inline void solid_force_at(long long i, const SolidForceInputs& in, d
 }
 
 // Hourglass energy of particle i (J), the E_hg term above.
+// dimension 2: the in-plane components (the z residual and the z terms are zero).
 BRECCIA_HD inline double hourglass_energy_at(long long i, BondsView b, VectorField u, const double* volume_m3,
-                                             const Mat3& h, double hourglass_stiffness) {
+                                             const Mat3& h, double hourglass_stiffness, int dimension = 3,
+                                             const double* coefficient = nullptr) {
   double sum = 0.0;
   for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
     const long long j = b.neighbour[k];
     const double r[3] = {b.rx[k], b.ry[k], b.rz[k]};
-    const double c = volume_m3[j] * b.weight[k] / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    const double c = bond_coefficient(b, k, volume_m3, coefficient);
     const double du[3] = {u.x[j] - u.x[i], u.y[j] - u.y[i], u.z[j] - u.z[i]};
+    if (dimension == 2) {
+      for (int p = 0; p < 2; ++p) {
+        const double e = du[p] - (h(p, 0) * r[0] + h(p, 1) * r[1]);
+        sum += c * e * e;
+      }
+      continue;
+    }
     for (int p = 0; p < 3; ++p) {
       const double e = du[p] - (h(p, 0) * r[0] + h(p, 1) * r[1] + h(p, 2) * r[2]);
       sum += c * e * e;

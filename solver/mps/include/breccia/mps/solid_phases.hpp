@@ -38,6 +38,7 @@ struct SolidStressInputs {
   int dimension = 2;
   double hourglass_stiffness = 0.0;  // K_hg before the plastic scaling
   double dt_s = 0.0;                 // the (sub)step: the strain rate of material damping
+  const double* bond_coefficient = nullptr;  // c_k per bond (bond_coefficient; nullptr: computed per bond)
 };
 
 // Phase 1 for particle i: H from the current displacement, the stress update over the step
@@ -45,13 +46,14 @@ struct SolidStressInputs {
 // the hourglass stiffness scaled by the radial return's deviatoric factor. Returns |H|^2
 // (Frobenius), or -1 when the new F is inverted (det F <= 0, or not finite); the particle is
 // then left unchanged, and the caller decides (fracture may detach it; otherwise an error).
-BRECCIA_HD inline double stress_phase_at(long long i, const SolidStressInputs& in, const SolidStressState& s) {
-  const Mat3 h_new = displacement_gradient_at(i, in.bonds, in.u, in.volume_m3, in.moment_inverse[i]);
+BRECCIA_HD BRECCIA_FLATTEN inline double stress_phase_at(long long i, const SolidStressInputs& in, const SolidStressState& s) {
+  const Mat3 h_new =
+      displacement_gradient_at(i, in.bonds, in.u, in.volume_m3, in.moment_inverse[i], in.dimension, in.bond_coefficient);
   Mat3 f = h_new;
   f(0, 0) += 1.0;
   f(1, 1) += 1.0;
   f(2, 2) += 1.0;
-  if (!(det(f) > 0.0)) return -1.0;  // also catches NaN
+  if (!(det(f, in.dimension) > 0.0)) return -1.0;  // also catches NaN
   double deviatoric_scale = 1.0;
   SymTensor strain_increment;
   s.stress_work_j[i] += in.volume_m3[i] * update_stress(in.law, s.gradient[i], s.f_inverse[i], h_new, in.dimension,
@@ -60,7 +62,7 @@ BRECCIA_HD inline double stress_phase_at(long long i, const SolidStressInputs& i
   double h2 = 0.0;
   for (double v : h_new.a) h2 += v * v;
   s.gradient[i] = h_new;
-  s.f_inverse[i] = inverse(f);
+  s.f_inverse[i] = inverse(f, in.dimension);
   s.pressure_pa[i] = pressure_of(s.stress[i]);
   SymTensor force_stress = s.stress[i];
   if (s.viscous_stress && in.law.viscous_time_s > 0.0) {
@@ -74,7 +76,7 @@ BRECCIA_HD inline double stress_phase_at(long long i, const SolidStressInputs& i
     force_stress = add_stresses(force_stress, viscous);
   }
   s.matrices[i] = force_matrices(force_stress, h_new, s.f_inverse[i], in.moment_inverse[i],
-                                 in.hourglass_stiffness * deviatoric_scale);
+                                 in.hourglass_stiffness * deviatoric_scale, in.dimension);
   return h2;
 }
 

@@ -65,9 +65,8 @@ std::vector<int64_t> family_sizes(const std::vector<double>& x, const std::vecto
   if (x.size() != 3 * n || half_cell.size() != n) throw std::invalid_argument("family_sizes: x0 3N, horizon and half_cell N");
   std::vector<int64_t> count(n, 0);
   if (n == 0) return count;
-  // The set-up's pad (setup.cpp): a neighbour's cell corner may reach into the horizon.
-  const double root_d = std::sqrt(static_cast<double>(dimension));
-  auto pad = [&](size_t i) { return half_cell[i] * root_d; };
+  // The set-up's pad (setup.cpp): a neighbour's outermost sample may reach into the horizon.
+  auto pad = [&](size_t i) { return partial_volume_reach(half_cell[i], dimension); };
   double max_pad = 0.0, min_horizon = horizon[0], max_horizon = horizon[0];
   for (size_t i = 0; i < n; ++i) {
     max_pad = std::max(max_pad, pad(i));

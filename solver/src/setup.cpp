@@ -645,8 +645,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   const DistributedSetup& dist = hooks.distributed;
   const DistributedRows dist_rows = plan_distributed_rows(s, dist);
   // Families and per-bond coefficients.
-  std::vector<double> pad(n);  // a neighbour's cell corner may reach into the horizon
-  for (size_t k = 0; k < n; ++k) pad[k] = s.half_cell[k] * std::sqrt(static_cast<double>(s.dimension));
+  std::vector<double> pad(n);  // a neighbour's outermost partial-volume sample may reach into the horizon
+  for (size_t k = 0; k < n; ++k) pad[k] = partial_volume_reach(s.half_cell[k], s.dimension);
   Families fam = build_families(s.x0, s.horizon, pad, dist_rows.begin, dist_rows.end);
   phase("families");
   std::vector<ElasticInput> elastic;

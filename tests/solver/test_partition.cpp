@@ -314,37 +314,77 @@ TEST(Partition, FamilySizesWithoutFamiliesAreTheSetUpsRowLengths) {
 // Graded, irregular points with per-particle horizons varying threefold (the dual horizon's
 // case, where a pair is found from one end only): the counts equal build_families' pairs
 // kept by the set-up's test, counted by brute force over the built families.
-TEST(Partition, FamilySizesOfAGradedCloudMatchBuiltFamiliesFiltered) {
-  const int n = 1500;
-  std::vector<double> x(3 * n), horizon(n), half_cell(n), pad(n);
-  uint64_t state = 12345;
-  auto uniform = [&] {  // a fixed LCG: the same cloud on every machine
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<double>(state >> 11) / 9007199254740992.0;
-  };
-  for (int i = 0; i < n; ++i) {
-    for (int d = 0; d < 3; ++d) x[3 * i + d] = 0.01 * uniform();
-    const double spacing = 0.4e-3 + 0.8e-3 * x[3 * i] / 0.01;  // finer towards x = 0
-    half_cell[i] = 0.5 * spacing;
-    horizon[i] = 3.0 * spacing;
-    pad[i] = half_cell[i] * std::sqrt(3.0);
-  }
-  const breccia::Families fam = breccia::build_families(x, horizon, pad);
-  for (const PartialVolume kind : {PartialVolume::Sampled, PartialVolume::Lammps}) {
-    const std::vector<int64_t> sizes = family_sizes(x, horizon, half_cell, 3, kind);
-    int64_t total = 0;
+namespace {
+// 1500 particles in a 10 mm cube, spacing graded 0.4-1.2 mm along x, horizon 3 spacings.
+struct GradedCloud {
+  static constexpr int n = 1500;
+  std::vector<double> x = std::vector<double>(3 * n), horizon = std::vector<double>(n), half_cell = std::vector<double>(n);
+  GradedCloud() {
+    uint64_t state = 12345;
+    auto uniform = [&] {  // a fixed LCG: the same cloud on every machine
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      return static_cast<double>(state >> 11) / 9007199254740992.0;
+    };
     for (int i = 0; i < n; ++i) {
-      int64_t kept = 0;
+      for (int d = 0; d < 3; ++d) x[3 * i + d] = 0.01 * uniform();
+      const double spacing = 0.4e-3 + 0.8e-3 * x[3 * i] / 0.01;  // finer towards x = 0
+      half_cell[i] = 0.5 * spacing;
+      horizon[i] = 3.0 * spacing;
+    }
+  }
+  // Each row's entries with a partial volume from either end (the set-up's keep test).
+  std::vector<std::vector<int32_t>> kept(const breccia::Families& fam, PartialVolume kind) const {
+    std::vector<std::vector<int32_t>> rows(n);
+    for (int i = 0; i < n; ++i)
       for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
         const int j = fam.neighbors[k];
         const double xv[3] = {x[3 * j] - x[3 * i], x[3 * j + 1] - x[3 * i + 1], x[3 * j + 2] - x[3 * i + 2]};
         const double xm[3] = {-xv[0], -xv[1], -xv[2]};
-        kept += partial_volume_positive(kind, xv, horizon[i], half_cell[j], 3) ||
-                partial_volume_positive(kind, xm, horizon[j], half_cell[i], 3);
+        if (partial_volume_positive(kind, xv, horizon[i], half_cell[j], 3) ||
+            partial_volume_positive(kind, xm, horizon[j], half_cell[i], 3))
+          rows[i].push_back(j);
       }
-      ASSERT_EQ(sizes[i], kept) << "particle " << i;
-      total += kept;
+    return rows;
+  }
+};
+}  // namespace
+
+TEST(Partition, FamilySizesOfAGradedCloudMatchBuiltFamiliesFiltered) {
+  const GradedCloud cloud;
+  const int n = cloud.n;
+  const std::vector<double>&x = cloud.x, &horizon = cloud.horizon, &half_cell = cloud.half_cell;
+  std::vector<double> pad(n);
+  for (int i = 0; i < n; ++i) pad[i] = half_cell[i] * std::sqrt(3.0);
+  const breccia::Families fam = breccia::build_families(x, horizon, pad);
+  for (const PartialVolume kind : {PartialVolume::Sampled, PartialVolume::Lammps}) {
+    const std::vector<int64_t> sizes = family_sizes(x, horizon, half_cell, 3, kind);
+    const std::vector<std::vector<int32_t>> kept = cloud.kept(fam, kind);
+    int64_t total = 0;
+    for (int i = 0; i < n; ++i) {
+      ASSERT_EQ(sizes[i], static_cast<int64_t>(kept[i].size())) << "particle " << i;
+      total += sizes[i];
     }
     EXPECT_GT(total, 20 * n);  // the families are not trivially empty
+  }
+}
+
+// The set-up's family search pads each horizon by the reach of a cell's outermost sample
+// (partial_volume_reach), not its corner: the entries kept (a partial volume from either end)
+// must be the corner pad's, entry for entry, on a graded cloud (horizons and cells differing
+// 3x between neighbours), and the tighter pad must leave candidates out.
+TEST(Partition, SamplePadKeepsTheCornerPadsEntries) {
+  const GradedCloud cloud;
+  std::vector<double> corner(cloud.n), sample(cloud.n);
+  for (int i = 0; i < cloud.n; ++i) {
+    corner[i] = cloud.half_cell[i] * std::sqrt(3.0);
+    sample[i] = partial_volume_reach(cloud.half_cell[i], 3);
+    ASSERT_LT(sample[i], corner[i]);
+  }
+  const breccia::Families by_corner = breccia::build_families(cloud.x, cloud.horizon, corner);
+  const breccia::Families by_sample = breccia::build_families(cloud.x, cloud.horizon, sample);
+  EXPECT_LT(by_sample.neighbors.size(), by_corner.neighbors.size());
+  for (const PartialVolume kind : {PartialVolume::Sampled, PartialVolume::Lammps}) {
+    const auto a = cloud.kept(by_corner, kind), b = cloud.kept(by_sample, kind);
+    for (int i = 0; i < cloud.n; ++i) ASSERT_EQ(a[i], b[i]) << "particle " << i;
   }
 }

@@ -6,8 +6,11 @@
 // agreement rests on, checked here without a GPU.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstring>
+#include <memory>
+#include <omp.h>
 
 #include "breccia/solver/exec_openmp.hpp"
 #include "breccia/solver/step.hpp"
@@ -68,7 +71,61 @@ std::string plate(const char* model, const char* extra_model, const char* extra_
          "time: {steps: 1}\n";
 }
 
+// A load that counts how often each index is loaded. StepLoad kicks particle k / 3 at k % 3
+// == 0 and the measure's loads write too (step.hpp: "load(i) runs exactly once per i"): a
+// reduce that loaded an index twice (a second pass for a two-level sum, a thread's chunk run
+// again) would kick a particle twice. The value is the index itself, so the sum also checks
+// that every index was combined once.
+struct CountingLoad {
+  using Value = int64_t;
+  std::atomic<int>* calls;
+  static Value identity() { return 0; }
+  static Value combine(Value a, Value b) { return a + b; }
+  Value operator()(int64_t i) const {
+    calls[i].fetch_add(1, std::memory_order_relaxed);
+    return i;
+  }
+};
+
+template <class Exec>
+void expect_each_index_loaded_once(const Exec& exec, int64_t n, const std::string& what) {
+  std::unique_ptr<std::atomic<int>[]> calls(new std::atomic<int>[static_cast<size_t>(n)]);
+  for (int64_t i = 0; i < n; ++i) calls[i] = 0;
+  int64_t total = -1;
+  int finishes = 0;
+  exec.reduce(n, CountingLoad{calls.get()}, [&](int64_t sum) {
+    total = sum;
+    ++finishes;
+  }, "count");
+  int64_t wrong = 0, first_wrong = -1;
+  for (int64_t i = 0; i < n; ++i)
+    if (calls[i] != 1 && wrong++ == 0) first_wrong = i;
+  EXPECT_EQ(wrong, 0) << what << ", n = " << n << ": index " << first_wrong << " loaded "
+                      << (first_wrong >= 0 ? calls[first_wrong].load() : 0) << " times";
+  EXPECT_EQ(finishes, 1) << what << ", n = " << n;
+  EXPECT_EQ(total, n * (n - 1) / 2) << what << ", n = " << n;  // every index combined once
+}
+
 }  // namespace
+
+// The contract the fused end-of-step load (StepLoad) relies on: OpenMpExec::reduce (on 1 to
+// 4 threads, n below, at and above the thread count and not a multiple of it) and the
+// emulated device reduction (ReverseBlockExec: grid-stride blocks as the CUDA kernel loads)
+// call the load exactly once per index.
+TEST(StepEmulation, ReduceLoadsEachIndexExactlyOnce) {
+  PdSystem s;
+  const OpenMpExec cpu(s);
+  const ReverseBlockExec emulated(s);
+  const int threads_before = omp_get_max_threads();
+  for (int threads : {1, 2, 3, 4}) {
+    omp_set_num_threads(threads);
+    for (int64_t n : {int64_t{0}, int64_t{1}, int64_t{3}, int64_t{1000}, int64_t{3 * 68921 + 1}})
+      expect_each_index_loaded_once(cpu, n, "OpenMpExec on " + std::to_string(threads) + " threads");
+  }
+  omp_set_num_threads(threads_before);
+  for (int64_t n : {int64_t{0}, int64_t{1}, int64_t{255}, int64_t{7 * 256}, int64_t{7 * 256 * 3 + 5}})
+    expect_each_index_loaded_once(emulated, n, "ReverseBlockExec");
+}
 
 TEST(StepEmulation, PmbDoubleReproducesTheOpenMpStepBitForBit) { run_both("emu_pmb", plate("pmb", "", ""), 400); }
 

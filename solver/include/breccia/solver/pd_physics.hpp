@@ -48,6 +48,17 @@ inline constexpr int partial_volume_sample_total(int dimension) {
   return dimension == 3 ? kPartialVolumeSamples * kPartialVolumeSamples * kPartialVolumeSamples
                         : kPartialVolumeSamples * kPartialVolumeSamples;
 }
+// How far beyond a horizon a neighbour's centre may lie and still have a sample point of its
+// cell inside (the family search's pad): the outermost sample's distance from the cell's
+// centre, (n - 1) / n of the half diagonal (the samples are the n midpoints per axis; 2D's
+// samples lie in the plane), times 1 + 1e-6, far above the quadrature's rounding (a few ulp
+// of |xi|). A farther candidate has no sample inside from either end, so the kept entries are
+// those of the cell-corner pad it replaced (half diagonal: 18 % more candidates on a cubic
+// lattice at m = 3, all of them dropped by the keep test); the Lammps rule needs no pad.
+inline double partial_volume_reach(double half_cell, int dimension) {
+  const double half_diagonal = half_cell * (dimension == 3 ? 1.7320508075688772 : 1.4142135623730951);
+  return half_diagonal * (static_cast<double>(kPartialVolumeSamples - 1) / kPartialVolumeSamples) * (1.0 + 1e-6);
+}
 // Host only (solver/src/partial_volume.cpp): the set-up runs it once per candidate entry.
 int partial_volume_samples_inside(const double xi[3], double horizon, double half_cell_j, int dimension);
 inline double partial_volume_sampled(const double xi[3], double horizon, double half_cell_j, int dimension) {

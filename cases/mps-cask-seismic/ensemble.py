@@ -1,6 +1,6 @@
 """Ensemble summary of cases/mps-cask-seismic (ensemble.sh): for each run name, the peak tilt
 over the members OUT/m*/report.json: mean, sample standard deviation, the standard error of the
-mean (sd / sqrt(n)), range. Writes OUT/ensemble.json.
+mean (sd / sqrt(n)), median, range. Writes OUT/ensemble.json.
 
     ensemble.py OUT
 """
@@ -23,10 +23,12 @@ def main(out):
         n = len(v)
         mean = sum(v) / n
         sd = math.sqrt(sum((x - mean) ** 2 for x in v) / (n - 1)) if n > 1 else float("nan")
-        summary[name] = {"members": n, "mean_deg": mean, "sd_deg": sd, "se_deg": sd / math.sqrt(n),
+        ordered = sorted(v)
+        median = (ordered[(n - 1) // 2] + ordered[n // 2]) / 2
+        summary[name] = {"members": n, "mean_deg": mean, "sd_deg": sd, "se_deg": sd / math.sqrt(n), "median_deg": median,
                          "min_deg": min(v), "max_deg": max(v), "peak_tilt_deg": by_member}
         print(f"{name}: {n} members, peak tilt mean {mean:.4f} deg, sd {sd:.4f}, se of the mean "
-              f"{sd / math.sqrt(n):.4f}, range {min(v):.4f}-{max(v):.4f}")
+              f"{sd / math.sqrt(n):.4f}, median {median:.4f}, range {min(v):.4f}-{max(v):.4f}")
     json.dump(summary, open(os.path.join(out, "ensemble.json"), "w"), indent=1)
 
 

@@ -48,8 +48,7 @@ struct CountMemo {
   // Whether this full count consults the memo; the window's bookkeeping.
   bool in_use() {
     if (++calls == kWindow) {
-      const bool in_rest = resting > 0;
-      if (in_rest) --resting;
+      if (resting > 0) --resting;
       else if (hits < kWindow / 8) resting = kRest;
       calls = hits = 0;
     }
@@ -63,7 +62,7 @@ thread_local CountMemo count_memo;
 int partial_volume_samples_inside(const double xi[3], double horizon, double half_cell_j, int dimension) {
   constexpr int n = kPartialVolumeSamples;
   static_assert(n % 2 == 0, "the z samples are taken in pairs");
-  const double reach = half_cell_j * (dimension == 3 ? 1.7320508075688772 : 1.4142135623730951);
+  const double reach = partial_volume_half_diagonal(half_cell_j, dimension);
   const double len = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
   if (len + reach <= horizon) return partial_volume_sample_total(dimension);
   if (len - reach >= horizon) return 0;
@@ -94,10 +93,10 @@ int partial_volume_samples_inside(const double xi[3], double horizon, double hal
   if ((lo[0] + lo[1]) + lo[2] > r2) return 0;
   if ((hi[0] + hi[1]) + hi[2] <= r2) return partial_volume_sample_total(dimension);
   const bool memo = count_memo.in_use();
-  const double args[5] = {xi[0], xi[1], xi[2], horizon, half_cell_j};
   uint64_t key[5];
   CountMemo::Slot* slot = nullptr;
   if (memo) {
+    const double args[5] = {xi[0], xi[1], xi[2], horizon, half_cell_j};
     std::memcpy(key, args, sizeof key);
     uint64_t hash = static_cast<uint64_t>(dimension);
     for (uint64_t k : key) hash = (hash ^ k) * 0x9E3779B97F4A7C15ull;

@@ -48,6 +48,11 @@ inline constexpr int partial_volume_sample_total(int dimension) {
   return dimension == 3 ? kPartialVolumeSamples * kPartialVolumeSamples * kPartialVolumeSamples
                         : kPartialVolumeSamples * kPartialVolumeSamples;
 }
+// The half diagonal of a neighbour's cell (half edge half_cell): the early accept and reject
+// of the partial-volume quadrature, and the family search's pad below, measure from it.
+inline double partial_volume_half_diagonal(double half_cell, int dimension) {
+  return half_cell * (dimension == 3 ? 1.7320508075688772 : 1.4142135623730951);
+}
 // How far beyond a horizon a neighbour's centre may lie and still have a sample point of its
 // cell inside (the family search's pad): the outermost sample's distance from the cell's
 // centre, (n - 1) / n of the half diagonal (the samples are the n midpoints per axis; 2D's
@@ -56,8 +61,7 @@ inline constexpr int partial_volume_sample_total(int dimension) {
 // those of the cell-corner pad it replaced (half diagonal: 18 % more candidates on a cubic
 // lattice at m = 3, all of them dropped by the keep test); the Lammps rule needs no pad.
 inline double partial_volume_reach(double half_cell, int dimension) {
-  const double half_diagonal = half_cell * (dimension == 3 ? 1.7320508075688772 : 1.4142135623730951);
-  return half_diagonal * (static_cast<double>(kPartialVolumeSamples - 1) / kPartialVolumeSamples) * (1.0 + 1e-6);
+  return partial_volume_half_diagonal(half_cell, dimension) * (static_cast<double>(kPartialVolumeSamples - 1) / kPartialVolumeSamples) * (1.0 + 1e-6);
 }
 // Host only (solver/src/partial_volume.cpp): the set-up runs it once per candidate entry.
 int partial_volume_samples_inside(const double xi[3], double horizon, double half_cell_j, int dimension);
@@ -71,7 +75,7 @@ inline double partial_volume_sampled(const double xi[3], double horizon, double 
 // nearest zero on each axis; its squared distance is summed in the quadrature's own order,
 // so the answer is the quadrature's exactly (floating-point sums are monotonic).
 inline bool partial_volume_sampled_positive(const double xi[3], double horizon, double half_cell_j, int dimension) {
-  const double reach = half_cell_j * (dimension == 3 ? 1.7320508075688772 : 1.4142135623730951);
+  const double reach = partial_volume_half_diagonal(half_cell_j, dimension);
   const double len = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
   if (len + reach <= horizon) return true;
   if (len - reach >= horizon) return false;

@@ -72,6 +72,9 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   if (s.offsets[s.n] != static_cast<int64_t>(own_entries) ||
       rows.full_offsets[rows.end] - rows.full_offsets[rows.begin] != static_cast<int64_t>(own_entries))
     throw std::logic_error("distributed set-up: a rank's rows differ from the counted family sizes");
+  // What each rank's set-up built, to every rank (summary.json): its own rows' entries alone.
+  s.setup_candidate_entries = concat_over_ranks(d, s.setup_candidate_entries);
+  s.setup_kept_entries = concat_over_ranks(d, s.setup_kept_entries);
   // Rank 0's writers read the bond list of results.h5 (partners, and which halves exist).
   const bool writer_bonds = s.config.write_results;
   // The force pass that ended the stable-step estimate filled the fields of this rank's

@@ -648,6 +648,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   std::vector<double> pad(n);  // a neighbour's outermost partial-volume sample may reach into the horizon
   for (size_t k = 0; k < n; ++k) pad[k] = partial_volume_reach(s.half_cell[k], s.dimension);
   Families fam = build_families(s.x0, s.horizon, pad, dist_rows.begin, dist_rows.end);
+  s.setup_candidate_entries = {static_cast<int64_t>(fam.neighbors.size())};  // this rank's rows' (summary.json)
   phase("families");
   std::vector<ElasticInput> elastic;
   for (const auto& m : c.materials) elastic.push_back(elastic_input(s, m));
@@ -738,6 +739,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   for (size_t i = 0; i < n; ++i) s.offsets[i + 1] = s.offsets[i] + keep_count[i];
   keep_count = {};
   const size_t nb = static_cast<size_t>(s.offsets[n]);
+  s.setup_kept_entries = {static_cast<int64_t>(nb)};
   // The run's largest arrays (3.3 GB on the full concrete case): huge pages (huge_pages.hpp).
   // Their first touch (the kernel zeroes each page) is most of their cost: the arrays are
   // touched side by side, one per thread.

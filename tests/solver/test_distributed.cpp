@@ -304,6 +304,31 @@ static std::string graded_case(const std::string& particles, const std::string& 
          "output: {every: 20, history_every: 10, fields: [damage, displacement, velocity]}\n";
 }
 
+// Each rank's set-up built the bonds of its own rows alone (distributed_setup.hpp), read off
+// summary.json's setup_entries_per_rank (rank 0 first): the candidate family entries (the
+// family search's arrays, the set-up's largest) and the kept bond entries of the ranks sum to
+// one process's exactly, and each rank's is a part of them. A rank that built the whole
+// system's families or bond arrays, or any row another rank also built (a ghost's), breaks the
+// sum; exact counts, no tolerance.
+static void expect_each_rank_built_its_own_rows(const std::string& one_dir, const std::string& out, int ranks) {
+  const auto one = summary(one_dir), dist = summary(out);
+  ASSERT_TRUE(one.contains("setup_entries_per_rank") && dist.contains("setup_entries_per_rank")) << out;
+  EXPECT_EQ(one["setup_entries_per_rank"]["kept"][0], one["bonds"]) << "one process keeps every entry";
+  for (const char* kind : {"candidates", "kept"}) {
+    const auto& whole = one["setup_entries_per_rank"][kind];
+    const auto& each = dist["setup_entries_per_rank"][kind];
+    ASSERT_EQ(whole.size(), 1u) << kind;
+    ASSERT_EQ(each.size(), static_cast<size_t>(ranks)) << out << ": one value per rank, " << kind;
+    long long sum = 0;
+    for (const auto& e : each) {
+      EXPECT_GT(e.get<long long>(), 0) << out << ", " << kind;
+      EXPECT_LT(e.get<long long>(), whole[0].get<long long>()) << out << ": a rank built the whole system's " << kind;
+      sum += e.get<long long>();
+    }
+    EXPECT_EQ(sum, whole[0].get<long long>()) << out << ": the ranks' " << kind << " are not one process's rows once each";
+  }
+}
+
 // A case run by one process and, with the distributed set-up, on each of `ranks`: no fallback
 // note, and results.h5, history.csv and (for a dynamic run) checkpoint.h5 byte for byte.
 static void expect_distributed_setup_gives_one_process_answer(const std::string& name, const std::string& yaml,
@@ -319,6 +344,7 @@ static void expect_distributed_setup_gives_one_process_answer(const std::string&
     const Outcome o = solve(file, out, r, 1);
     ASSERT_EQ(o.exit_code, 0) << name << ": " << o.err;
     EXPECT_TRUE(summary(out)["distributed_setup"].get<bool>()) << name << ", " << r << " ranks built the whole system";
+    expect_each_rank_built_its_own_rows(base + "_whole", out, r);
     EXPECT_EQ(o.err.find("note: set-up"), std::string::npos) << name << ": " << o.err;
     EXPECT_EQ(summary(out)["steps"], summary(base + "_whole")["steps"]) << name << ", " << r << " ranks";
     for (const char* f : {"/results.h5", "/checkpoint.h5"}) {
@@ -352,6 +378,7 @@ TEST(DistributedSetup, PmbBuildsEachRanksOwnBondsWithOneProcessAnswer) {
     const Outcome o = solve(pmb, out, ranks, 1);
     ASSERT_EQ(o.exit_code, 0) << o.err;
     EXPECT_TRUE(summary(out)["distributed_setup"].get<bool>()) << ranks << " ranks built the whole system";
+    expect_each_rank_built_its_own_rows(base + "_whole", out, ranks);
     // Each rank's resident set at the end of its loop (docs/parallel.md, Memory), rank 0 first.
     const auto loop_mb = summary(out)["loop_resident_mb"];
     ASSERT_EQ(loop_mb.size(), static_cast<size_t>(ranks)) << "one value per rank";

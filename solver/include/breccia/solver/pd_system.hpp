@@ -115,6 +115,11 @@ struct PdSystem {
   // A distributed set-up's partition (ranks + 1 row offsets, cut before any family existed;
   // distributed_setup.hpp): the ranks' layouts take it. Empty: every rank built everything.
   std::vector<int64_t> distributed_rows;
+  // The bond entries the set-up built (setup_system): the candidate families' entries (the
+  // family search's, its largest arrays) and the kept ones (the bond arrays'). Under mpirun,
+  // one value per rank, rank 0 first (finish_distributed_setup gathers them): each rank's own
+  // rows alone, so they sum to one process's (summary.json's setup_entries_per_rank).
+  std::vector<int64_t> setup_candidate_entries, setup_kept_entries;
   // A checkpoint was read into such a system: the derived fields (damage, energies) of the
   // restored state are still to be computed, by the ranks' systems (read_checkpoint).
   bool derived_fields_pending = false;

@@ -93,13 +93,12 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
     s.dissipated_energy = sum;
   }
   // Collective: every rank takes the same branches (the case decides them, not the rank).
-  gather_entries(d, s.state, true);
-  if (s.config.softening) gather_entries(d, s.bond_damage, true);
-  // A rate law's onsets are state (restrict_to_rank_taking_bonds left the rank's own here).
-  if (s.config.strength_rate != StrengthRateLaw::None) gather_entries(d, s.s_onset, true);
-  // A gas load's entered cracks are state too (checkpoint.h5's /gas/in_crack, read whole by a
-  // restart); its `halves` moved into the rank's system with the bonds (set-up only).
-  if (s.gas.active && s.gas.crack_entry) gather_entries(d, s.gas.in_crack, true);
+  // The bond states to rank 0 alone (for_each_bond_state_array): the other ranks' own rows are
+  // in their systems already, the same bits (the estimate's last pass copied them here from
+  // there). A rate law's onsets are state (restrict_to_rank_taking_bonds left the rank's own
+  // here); so are a gas load's entered cracks (checkpoint.h5's /gas/in_crack), whose
+  // `halves` moved into the rank's system with the bonds (set-up only).
+  for_each_bond_state_array(s, [&](auto& a) { gather_entries(d, a, false); });
   // The stable-step estimate cut the rank's system and took the coefficients with it
   // (restrict_to_rank_taking_bonds): without that hook the ranks would have no bonds.
   if (!s.xi_len.empty())
@@ -110,8 +109,9 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
     gather_entries(d, s.k_dual, false);
   }
   s.offsets = rows.full_offsets;
-  if (s.state.size() != s.bond_count() || (s.gas.active && s.gas.crack_entry && s.gas.in_crack.size() != s.bond_count()))
-    throw std::logic_error("distributed set-up: the gathered bond states");
+  for_each_bond_state_array(s, [&](auto& a) {
+    if (a.size() != (d.rank == 0 ? s.bond_count() : 0)) throw std::logic_error("distributed set-up: the gathered bond states");
+  });
 }
 
 }  // namespace breccia::solver

@@ -7,6 +7,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/solver/correspondence_kernels.hpp"
+#include "breccia/solver/distributed_setup.hpp"
 
 namespace breccia::solver {
 namespace {
@@ -209,9 +210,14 @@ void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
   s.min_stretch = take(g.min_stretch, ids, 1, n);
   s.min_stretch_next = take(g.min_stretch_next, ids, 1, n);
   const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
-  s.state = slice(g.state, eb, ee);
-  s.bond_damage = slice(g.bond_damage, eb, ee);
-  if (g.config.strength_rate != StrengthRateLaw::None) s.s_onset = slice(g.s_onset, eb, ee);  // raised onsets
+  // A bond state array the global system does not hold (a distributed set-up's, on the ranks
+  // other than 0: for_each_bond_state_array) is already this system's own rows: kept.
+  auto entries = [&](auto& mine, const auto& whole) {
+    if (!whole.empty()) mine = slice(whole, eb, ee);
+  };
+  entries(s.state, g.state);
+  entries(s.bond_damage, g.bond_damage);
+  if (g.config.strength_rate != StrengthRateLaw::None) entries(s.s_onset, g.s_onset);  // raised onsets
 
   s.step = g.step;
   s.time = g.time;
@@ -233,8 +239,9 @@ namespace {
 
 // The gas of the rank's particles: per particle over owned and ghosts (the front and the
 // crack pass read the partners'), per entry the owned rows (in_crack from the global entry
-// range: a distributed set-up's global system holds its own rows at first, every rank's once
-// finish_distributed_setup gathered them), per facet particle the owned ones
+// range: a distributed set-up's global system holds its own rows at first, every rank's on
+// rank 0 once finish_distributed_setup gathered them; the other ranks keep their own), per
+// facet particle the owned ones
 // (one contiguous run of the global list: it is sorted by particle). The scalars are the
 // global system's: every rank advances them alike from sums over every rank (mpi_backend.cpp).
 void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std::vector<int32_t>& ids) {
@@ -247,6 +254,7 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
   // with the bonds (restrict_to_rank_taking_bonds) and stay when its state is brought up to
   // date; a whole system's are its rows' slice.
   std::vector<uint8_t> halves = G.halves.empty() ? std::move(r.halves) : slice(G.halves, eb, ee);
+  std::vector<uint8_t> in_crack = G.in_crack.empty() ? std::move(r.in_crack) : slice(G.in_crack, eb, ee);
   r = GasState{};
   r.active = true;
   r.load = G.load;
@@ -276,7 +284,7 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
     r.front_done = take(G.front_done, ids, 1, n);
     r.attached = take(G.attached, ids, 1, n);
     r.position = take(G.position, ids, 3, n);
-    r.in_crack = slice(G.in_crack, eb, ee);
+    r.in_crack = std::move(in_crack);
     r.halves = std::move(halves);
   }
   r.block_sums.assign(static_cast<size_t>(gas_blocks(std::max<int64_t>(L.owned(), fe - fb))), GasSums{});
@@ -340,9 +348,14 @@ std::vector<const void*> release_global_for_loop(PdSystem& g, bool root) {
                     &g.max_stretch, &g.dilatation, &g.lps_a, &g.lps_b, &g.corr_deformation, &g.corr_force_tensor,
                     &g.corr_nonaffine, &g.gas.arrival, &g.gas.push})
       drop(*a);
-    for (auto* a : {&g.min_stretch, &g.min_stretch_next, &g.bond_damage, &g.s_onset}) drop(*a);
-    drop(g.state);
-    drop(g.gas.in_crack);
+    for (auto* a : {&g.min_stretch, &g.min_stretch_next}) drop(*a);
+    // The bond states: a distributed set-up left them on rank 0 alone (a restart's read them
+    // whole here too). Rank 0 holds them whenever there are bonds: this rank takes part in its
+    // gathers (MpiBackend::held).
+    for_each_bond_state_array(g, [&](auto& a) {
+      if (g.bond_count() > 0) drop.held.push_back(&a);
+      drop(a);
+    });
     // What rank 0's writers alone read: the instability message's positions, the indenter's
     // volumes, the file order, the results' bond list.
     drop(g.x0);

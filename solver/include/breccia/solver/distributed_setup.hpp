@@ -2,8 +2,9 @@
 // The distributed set-up (docs/parallel.md, Memory): under mpirun each rank builds the bonds
 // of the particles it owns only, so the bond arrays, the set-up's and the run's largest,
 // fall as 1/ranks. What every rank still holds whole is per particle (positions, volumes,
-// materials, horizons, the state arrays: a few hundred bytes each) plus the bond states
-// (1 B per entry, which checkpoints and restarts read in the file's layout).
+// materials, horizons, the state arrays: a few hundred bytes each); the bond states (1 B
+// per entry, with softening, a rate law or a gas load up to 10 B) are whole on rank 0 alone,
+// its writers' staging (for_each_bond_state_array).
 //
 // How: the family sizes are counted from the positions alone (family_sizes, partition.hpp),
 // which gives the whole system's row offsets and the partition before any family exists.
@@ -91,11 +92,26 @@ inline constexpr ForcePassField kForcePassFields[] = {
     {&PdSystem::lps_b, 1},          {&PdSystem::corr_deformation, 9}, {&PdSystem::corr_force_tensor, 9},
     {&PdSystem::corr_nonaffine, 1}};
 
+// The global system's per-entry state arrays: the bond states, softening's bond damage, a
+// rate law's onsets, a gas load's entered cracks `in_crack` (those the case holds: alike on
+// every rank). After a distributed set-up rank 0 alone holds them whole (its writers read
+// them: the first output group, the broken bits, a serial HDF5's files); the other ranks'
+// are empty, their own rows being in their systems (copy_rank_state keeps those), and they
+// take part in rank 0's gathers (release_global_for_loop names them as held). A restart's
+// read_checkpoint reads them whole on every rank (I/O staging, let go with the rest).
+template <class F>
+void for_each_bond_state_array(PdSystem& s, F&& f) {
+  f(s.state);
+  if (s.config.softening) f(s.bond_damage);
+  if (s.config.strength_rate != StrengthRateLaw::None) f(s.s_onset);
+  if (s.gas.active && s.gas.crack_entry) f(s.gas.in_crack);
+}
+
 // The global system as the time loop and the writers need it, its bonds now in the ranks'
-// own systems: the whole row offsets and bond states (and softening's bond damage, a rate
-// law's onsets, a gas load's entered cracks `in_crack`) on every rank; with results written, rank 0 also gathers the partners and the two half-bond
-// volumes and moduli the results' bond list reads (outputs.cpp); every other per-entry
-// array is dropped.
+// own systems: the whole row offsets on every rank, the bond state arrays
+// (for_each_bond_state_array) on rank 0; with results written, rank 0 also gathers the
+// partners and the two half-bond volumes and moduli the results' bond list reads
+// (outputs.cpp); every other per-entry array is dropped.
 void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const DistributedSetup& d);
 
 }  // namespace breccia::solver

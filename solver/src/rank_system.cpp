@@ -164,7 +164,7 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   s0_own.swap(g.s0_own);
   s0_dual.swap(g.s0_dual);
   // Under a rate law the onsets are state (raised as bonds begin to soften): the global
-  // system keeps them, gathered whole (finish_distributed_setup) for checkpoints and restarts.
+  // system keeps them, gathered whole on rank 0 (finish_distributed_setup) for its files.
   if (g.config.strength_rate != StrengthRateLaw::None) s_onset = g.s_onset;
   else s_onset.swap(g.s_onset);
   if (g.config.write_results) {  // rank 0's writers read them (finish_distributed_setup)

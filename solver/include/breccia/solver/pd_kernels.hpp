@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <type_traits>
 
+#include "breccia/solver/host_pack.hpp"
 #include "breccia/solver/pd_physics.hpp"
 
 namespace breccia::solver {
@@ -279,6 +280,20 @@ BRECCIA_HD bool fast_bond_loop(const PdViewT<Real>& p) {
   return !p.min_stretch && !p.min_stretch_next && !p.bond_damage;
 }
 
+// LPS's brittle terms, for one entry (V = Real) or a pack of entries (the host's PackD,
+// lps_packed_dilatation_row and lps_packed_row): the first pass's omega beta |xi| e V_j, and
+// the force pass's force density over length t V_j / |xi + eta| with t = omega ((A_i + A_j)
+// |xi| + (B_i + B_j) e) (lps_symmetric_force_kernel).
+template <class V>
+BRECCIA_HD V lps_dilatation_term(V omega, V xi, V extension, V volume_j) {
+  return omega * xi * extension * volume_j;
+}
+template <class V>
+BRECCIA_HD V lps_fast_density(V omega, V a_sum, V b_sum, V xi, V e, V volume_j, V len) {
+  const V t = omega * (a_sum * xi + b_sum * e);
+  return t * volume_j / len;
+}
+
 // One entry's term of the LPS first pass through gathered bond vectors, brittle bonds:
 // omega beta |xi| e V_j for an intact own half, else +0 (formed for every entry, then selected).
 template <bool kCheckState = true, class Real>
@@ -286,7 +301,7 @@ BRECCIA_HD Real lps_dilatation_entry(const PdViewT<Real>& p, const BondOriginT<R
   const int64_t j = p.neighbor[k];
   Real dx, dy, dz, len;
   const Real extension = origin.to(p, j, p.xi_len[k], dx, dy, dz, len);
-  const Real term = p.k_own[k] * p.xi_len[k] * extension * p.volume[j];
+  const Real term = lps_dilatation_term(p.k_own[k], p.xi_len[k], extension, p.volume[j]);
   if constexpr (!kCheckState) return term;  // chunk_intact
   return (p.state[k] & kOwnIntact) ? term : Real(0);
 }
@@ -305,6 +320,41 @@ BRECCIA_HD void lps_store_dilatation(const PdViewT<Real>& p, int64_t i, Real sum
   }
 }
 
+#if defined(BRECCIA_HOST_PACK)
+// The host's bond vectors of entries k .. k + kPackWidth - 1 from particle i (origin) in
+// double: x_j - x_i per component (BondOriginT::bond_vector, lane by lane).
+struct PackedBond {
+  PackD dx, dy, dz;
+  PackD squared_length() const { return dx * dx + dy * dy + dz * dz; }
+};
+inline PackedBond packed_bond(const PdViewT<double>& p, const BondOriginT<double>& origin, int64_t k) {
+  const int32_t* j = p.neighbor + k;
+  return {gather_pack(p.x, j, 3, 0) - origin.px, gather_pack(p.x, j, 3, 1) - origin.py,
+          gather_pack(p.x, j, 3, 2) - origin.pz};
+}
+
+// LPS's first pass in double on the host for a row whose own halves are all intact: the terms
+// kPackWidth at a time and their sum in the entry order in the same loop (pmb_packed_row), so
+// the sum is the two-stage loop's bit for bit. False, with `sum` untouched, for a row with an
+// own half broken (the two-stage loop selects).
+inline bool lps_packed_dilatation_row(const PdViewT<double>& p, int64_t i, const BondOriginT<double>& origin,
+                                      double& sum) {
+  const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
+  if (end > begin && !chunk_intact(p, begin, static_cast<int>(end - begin))) return false;
+  double total = 0.0;
+  int64_t k = begin;
+  for (; k + kPackWidth <= end; k += kPackWidth) {
+    const PackD xi = load_pack(p.xi_len + k);
+    const PackD extension = sqrt_of(packed_bond(p, origin, k).squared_length()) - xi;  // BondOriginT::extension_from
+    const PackD term = lps_dilatation_term(load_pack(p.k_own + k), xi, extension, gather_pack(p.volume, p.neighbor + k, 1, 0));
+    for (int l = 0; l < kPackWidth; ++l) total += term[l];
+  }
+  for (; k < end; ++k) total += lps_dilatation_entry<false>(p, origin, k);
+  sum = total;
+  return true;
+}
+#endif
+
 // LPS first pass: theta_i = d/m_i * sum_j omega beta |xi| e V_j over intact own bonds.
 template <class Real>
 BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
@@ -312,6 +362,13 @@ BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
   const bool gather = has_bond_vectors(p);
   const BondOriginT<Real> origin = gather ? BondOriginT<Real>(p, i) : BondOriginT<Real>();
 #if !defined(__CUDA_ARCH__)
+#if defined(BRECCIA_HOST_PACK)
+  if constexpr (!BondOriginT<Real>::kRelative)
+    if (gather && !p.bond_damage && lps_packed_dilatation_row(p, i, origin, sum)) {
+      lps_store_dilatation(p, i, sum);
+      return;
+    }
+#endif
   if (gather && !p.bond_damage) {  // the fast loops' two stages (kBondChunk): every term, then the sum in order
     Real term[kBondChunk];
     for (int64_t base = p.offsets[i]; base < p.offsets[i + 1]; base += kBondChunk) {
@@ -357,8 +414,7 @@ BRECCIA_HD bool lps_fast_entry(const PdViewT<Real>& p, const BondOriginT<Real>& 
   const bool intact = !kCheckState || p.state[k] != 0;  // chunk_intact
   const bool breaks = p.fracture & intact & (e > s0 * xi);  // bitwise: no branch (pmb_fast_entry)
   const bool pushes = intact & (!breaks | p.break_after_force);
-  const Real t = omega * ((a_i + p.lps_a[j]) * xi + (b_i + p.lps_b[j]) * e);
-  const Real f = t * p.volume[j] / len;
+  const Real f = lps_fast_density(omega, a_i + p.lps_a[j], b_i + p.lps_b[j], xi, e, p.volume[j], len);
   const Real fdx = f * dx, fdy = f * dy, fdz = f * dz;  // formed for every entry (pmb_fast_entry)
   cx = pushes ? fdx : Real(0);
   cy = pushes ? fdy : Real(0);
@@ -512,8 +568,57 @@ struct LpsFastPath {
   BRECCIA_HD double release(const PdViewT<Real>& p, int64_t i, int64_t k) const { return lps_fast_break(p, i, k); }
 };
 
+#if defined(BRECCIA_HOST_PACK)
+// The fast LPS force pass in double on the host for a row whose entries are all intact (one
+// constant horizon): as pmb_packed_row, kPackWidth entries at a time and the ordered sums in
+// one loop. False, having written nothing, for a row with a broken entry or one past its
+// critical extension with fracture on (the two-stage loop selects and breaks).
+inline bool lps_packed_row(const PdViewT<double>& p, int64_t i, const BondOriginT<double>& origin, double a_i,
+                           double b_i) {
+  const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
+  if (end > begin && !chunk_intact(p, begin, static_cast<int>(end - begin))) return false;
+  double fx = 0.0, fy = 0.0, fz = 0.0;
+  PackMask over_any = {};
+  bool over_tail = false;
+  int64_t k = begin;
+  for (; k + kPackWidth <= end; k += kPackWidth) {
+    const int32_t* j = p.neighbor + k;
+    const PackedBond b = packed_bond(p, origin, k);
+    const PackD xi = load_pack(p.xi_len + k);
+    const PackD len = sqrt_of(b.squared_length());
+    const PackD e = len - xi;  // BondOriginT::extension_from
+    over_any |= e > widen_floats(p.s0_own + k) * xi;
+    const PackD f = lps_fast_density(load_pack(p.k_own + k), a_i + gather_pack(p.lps_a, j, 1, 0),
+                                     b_i + gather_pack(p.lps_b, j, 1, 0), xi, e, gather_pack(p.volume, j, 1, 0), len);
+    const PackD cx = f * b.dx, cy = f * b.dy, cz = f * b.dz;
+    for (int l = 0; l < kPackWidth; ++l) {
+      fx += cx[l];
+      fy += cy[l];
+      fz += cz[l];
+    }
+  }
+  for (; k < end; ++k) {
+    double cx, cy, cz;
+    over_tail |= lps_fast_entry<false>(p, origin, k, a_i, b_i, cx, cy, cz);  // a break: with fracture on only
+    fx += cx;
+    fy += cy;
+    fz += cz;
+  }
+  if (over_tail || (p.fracture && any_lane(over_any))) return false;
+  p.force[3 * i] = fx;
+  p.force[3 * i + 1] = fy;
+  p.force[3 * i + 2] = fz;
+  p.dissipated[i] = 0.0;
+  return true;
+}
+#endif
+
 template <class Real>
 BRECCIA_HD void lps_fast_force_loop(const PdViewT<Real>& p, int64_t i, const BondOriginT<Real>& origin) {
+#if defined(BRECCIA_HOST_PACK) && !defined(__CUDA_ARCH__)
+  if constexpr (!BondOriginT<Real>::kRelative)
+    if (lps_packed_row(p, i, origin, p.lps_a[i], p.lps_b[i])) return;
+#endif
   two_stage_force_loop<double>(p, i, LpsFastPath<Real>{origin, p.lps_a[i], p.lps_b[i]});
 }
 
@@ -630,19 +735,24 @@ BRECCIA_HD bool pmb_fast_select(const PdViewT<Real>& p, int64_t k, bool over, Re
   return breaks;
 }
 
-// Double's PMB entry from its squared deformed length r2 (BondOriginT::bond_vector): its
-// force density over length f = c s / |xi + eta|, and whether its extension |xi + eta| - |xi|
-// passed the critical one (`over`).
+// Double's PMB entry from its squared deformed length r2 (BondOriginT::bond_vector), its
+// reference length xi, own modulus and critical stretch (widened from float): its force
+// density over length f = c s / |xi + eta|, and whether its extension |xi + eta| - |xi| passed
+// the critical one (`over`). V is double (one entry) or the host's PackD (kPackWidth entries,
+// pmb_packed_row), whose lanes round as the scalar operations do: one expression for both.
+BRECCIA_HD double sqrt_of(double v) { return std::sqrt(v); }
+template <class V>
+BRECCIA_HD V pmb_density_from(V r2, V xi, V k_own, V s0, decltype(V{} > V{})& over) {
+  const V k2 = k_own + k_own;  // own + dual halves (2 k, exact)
+  const V len = sqrt_of(r2);   // BondOriginT::extension_from
+  const V extension = len - xi;
+  over = extension > s0 * xi;
+  return k2 * extension / (xi * len);
+}
 template <class Real>
 BRECCIA_HD Real pmb_fast_density(const PdViewT<Real>& p, int64_t k, Real r2, bool& over) {
   static_assert(!BondOriginT<Real>::kRelative, "float forms its extension from x0 and u (pmb_fast_entry)");
-  const Real xi = p.xi_len[k];
-  const Real k2 = Real(2) * p.k_own[k];  // own + dual halves
-  const Real s0 = p.s0_own[k];
-  Real len;
-  const Real extension = BondOriginT<Real>::extension_from(r2, xi, len);
-  over = extension > s0 * xi;
-  return k2 * extension / (xi * len);
+  return pmb_density_from<Real>(r2, p.xi_len[k], p.k_own[k], static_cast<Real>(p.s0_own[k]), over);
 }
 
 // One PMB entry of the fast loop (pmb_fast_select). Double takes the extension as
@@ -711,8 +821,60 @@ struct PmbFastPath {
 template <class Real>
 using PmbReleased = std::conditional_t<BondOriginT<Real>::kRelative, Real, double>;
 
+#if defined(BRECCIA_HOST_PACK)
+// PMB in double on the host, a row whose entries are all intact (between output steps nearly
+// every row): one loop forms kPackWidth entries at a time (gathers, squared length, square
+// root, division, force: pmb_density_from on packs) and adds their forces to the sums in the
+// entry order, so the sums and every value are two_stage_force_loop's bit for bit. In one loop
+// the gathers, products and the ordered sum run while the divider works on the square roots
+// and divisions, which the two-stage loop's separate stages serialised (docs/performance.md,
+// "PMB in double: one packed loop per row"). Returns false, having written nothing, for a row
+// with an entry broken, or past its critical extension with fracture on: the two-stage loop
+// then runs it (the selection, the breaks and their released energy).
+inline bool pmb_packed_row(const PdViewT<double>& p, int64_t i, const BondOriginT<double>& origin) {
+  const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
+  if (end > begin && !chunk_intact(p, begin, static_cast<int>(end - begin))) return false;
+  double fx = 0.0, fy = 0.0, fz = 0.0;
+  PackMask over_any = {};
+  bool over_tail = false;
+  int64_t k = begin;
+  for (; k + kPackWidth <= end; k += kPackWidth) {
+    const PackedBond b = packed_bond(p, origin, k);
+    PackMask over;
+    const PackD f = pmb_density_from<PackD>(b.squared_length(), load_pack(p.xi_len + k), load_pack(p.k_own + k),
+                                            widen_floats(p.s0_own + k), over);
+    over_any |= over;
+    const PackD cx = f * b.dx, cy = f * b.dy, cz = f * b.dz;
+    for (int l = 0; l < kPackWidth; ++l) {
+      fx += cx[l];
+      fy += cy[l];
+      fz += cz[l];
+    }
+  }
+  for (; k < end; ++k) {
+    double dx, dy, dz;
+    bool over;
+    const double f = pmb_fast_density(p, k, origin.bond_vector(p.x, p.neighbor[k], dx, dy, dz), over);
+    over_tail |= over;
+    fx += f * dx;
+    fy += f * dy;
+    fz += f * dz;
+  }
+  if (p.fracture && (over_tail || any_lane(over_any))) return false;
+  p.force[3 * i] = fx;
+  p.force[3 * i + 1] = fy;
+  p.force[3 * i + 2] = fz;
+  p.dissipated[i] = 0.0;
+  return true;
+}
+#endif
+
 template <class Real>
 BRECCIA_HD void pmb_fast_force_loop(const PdViewT<Real>& p, int64_t i, const BondOriginT<Real>& origin) {
+#if defined(BRECCIA_HOST_PACK) && !defined(__CUDA_ARCH__)
+  if constexpr (!BondOriginT<Real>::kRelative)
+    if (pmb_packed_row(p, i, origin)) return;
+#endif
   two_stage_force_loop<PmbReleased<Real>>(p, i, PmbFastPath<Real>{origin});
 }
 

@@ -512,12 +512,12 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
     if (onset.size() != s.s_onset.size())
       throw InputError(path, "/bond_onset", "sized for other families", "a checkpoint of this case");
     // The ultimates of the raised laws are not written: each is the set-up's scaled as its
-    // onset was (pd_kernels.hpp raised_ultimate), rebuilt here from the set-up's values.
-    for (size_t k = 0; k < onset.size(); ++k) {
-      const float raised = static_cast<float>(onset[k]);
-      if (raised != s.s_onset[k]) s.s0_own[k] = raised_ultimate(s.s_onset[k], raised, s.s0_own[k]);
-      s.s_onset[k] = raised;
-    }
+    // onset was (pd_kernels.hpp raised_ultimate), rebuilt here from the set-up's values where
+    // this system holds them (a distributed set-up's ranks hold their rows' ultimates:
+    // copy_rank_state rebuilds those).
+    const std::vector<float> raised(onset.begin(), onset.end());
+    adopt_raised_onsets(s.s_onset.data(), s.s0_own.size() == raised.size() ? s.s0_own.data() : nullptr, raised.data(),
+                        raised.size());
   }
   if (!s.min_stretch.empty()) {
     if (!f.exists("/min_stretch_previous"))

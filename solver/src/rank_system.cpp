@@ -211,7 +211,12 @@ void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
   const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
   s.state = slice(g.state, eb, ee);
   s.bond_damage = slice(g.bond_damage, eb, ee);
-  if (g.config.strength_rate != StrengthRateLaw::None) s.s_onset = slice(g.s_onset, eb, ee);  // raised onsets
+  if (g.config.strength_rate != StrengthRateLaw::None) {  // raised onsets, and the ultimates raised with them
+    const std::vector<float> raised = slice(g.s_onset, eb, ee);
+    if (s.s_onset.size() != raised.size()) s.s_onset = raised;
+    else adopt_raised_onsets(s.s_onset.data(), s.s0_own.size() == raised.size() ? s.s0_own.data() : nullptr,
+                             raised.data(), raised.size());
+  }
 
   s.step = g.step;
   s.time = g.time;

@@ -237,6 +237,18 @@ BRECCIA_HD float raised_ultimate(float onset, float raised, float ultimate) {
   return static_cast<float>(double(ultimate) * (double(raised) / double(onset)));
 }
 
+// A system takes `count` onsets a rate law may have raised (a checkpoint's, or the global
+// system's rows for a rank): each entry whose onset differs gets the raised onset and, where
+// the system holds its ultimates (`ultimate` not null), the ultimate raised with it from the
+// system's own (the set-up's) by raised_ultimate. Host only.
+inline void adopt_raised_onsets(float* onset, float* ultimate, const float* raised, size_t count) {
+  for (size_t k = 0; k < count; ++k) {
+    if (raised[k] == onset[k]) continue;
+    if (ultimate) ultimate[k] = raised_ultimate(onset[k], raised[k], ultimate[k]);
+    onset[k] = raised[k];
+  }
+}
+
 // One softening bond entry at stretch s this pass (softens(p, k)): the damage it reaches
 // (never below what it had), stored unless fracture is off, and the energy that dissipated,
 // `unit` x (D(d) - D(d_old)) with unit the entry's energy per unit stretch squared (a PMB

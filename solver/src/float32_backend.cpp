@@ -104,6 +104,7 @@ PdViewT<float> float32_view(PdSystem& s) {
   p.break_after_force = s.config.break_after_force;
   if (!s.bond_damage.empty()) {  // float in both views: shared
     p.s_onset = s.s_onset.data();
+    p.s_ultimate = s.s0_own.data();
     p.bond_damage = s.bond_damage.data();
     p.strength_rate = static_cast<int>(s.config.strength_rate);
     p.crush_ratio = static_cast<float>(s.config.crush_ratio);

@@ -12,6 +12,7 @@
 #include "breccia/common/output_file.hpp"
 #include "breccia/common/particle_file.hpp"
 #include "breccia/solver/load_kernels.hpp"
+#include "breccia/solver/pd_kernels.hpp"
 
 namespace breccia::solver {
 namespace {
@@ -510,7 +511,13 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
     const auto onset = f.read_doubles("/bond_onset");
     if (onset.size() != s.bond_count())  // a distributed set-up's ranks other than 0 hold none (for_each_bond_state_array)
       throw InputError(path, "/bond_onset", "sized for other families", "a checkpoint of this case");
-    s.s_onset.assign(onset.begin(), onset.end());
+    // The ultimates of the raised laws are not written: each is the set-up's scaled as its
+    // onset was (pd_kernels.hpp raised_ultimate), rebuilt here from the set-up's values where
+    // this system holds them (a distributed set-up's ranks hold their rows' ultimates:
+    // copy_rank_state rebuilds those).
+    const std::vector<float> raised(onset.begin(), onset.end());
+    adopt_raised_onsets(s.s_onset.data(), s.s0_own.size() == raised.size() ? s.s0_own.data() : nullptr, raised.data(),
+                        raised.size());
   }
   if (!s.min_stretch.empty()) {
     if (!f.exists("/min_stretch_previous"))
@@ -582,10 +589,11 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
   const std::vector<double> force = s.force;
   const bool keep_bonds = s.config.strength_rate != StrengthRateLaw::None;
   std::vector<uint8_t> state;
-  std::vector<float> damage, onset;
-  if (keep_bonds) state = s.state, damage = s.bond_damage, onset = s.s_onset;
+  std::vector<float> damage, onset, ultimate;
+  if (keep_bonds) state = s.state, damage = s.bond_damage, onset = s.s_onset, ultimate = s.s0_own;
   cpu_compute_forces(s);
-  if (keep_bonds) s.state = std::move(state), s.bond_damage = std::move(damage), s.s_onset = std::move(onset);
+  if (keep_bonds)
+    s.state = std::move(state), s.bond_damage = std::move(damage), s.s_onset = std::move(onset), s.s0_own = std::move(ultimate);
   s.dissipated_energy = dissipated;
   s.force = force;
 }

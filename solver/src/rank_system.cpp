@@ -217,7 +217,13 @@ void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
   };
   entries(s.state, g.state);
   entries(s.bond_damage, g.bond_damage);
-  if (g.config.strength_rate != StrengthRateLaw::None) entries(s.s_onset, g.s_onset);  // raised onsets
+  if (g.config.strength_rate != StrengthRateLaw::None && !g.s_onset.empty()) {
+    // raised onsets, and the ultimates raised with them
+    const std::vector<float> raised = slice(g.s_onset, eb, ee);
+    if (s.s_onset.size() != raised.size()) s.s_onset = raised;
+    else adopt_raised_onsets(s.s_onset.data(), s.s0_own.size() == raised.size() ? s.s0_own.data() : nullptr,
+                             raised.data(), raised.size());
+  }
 
   s.step = g.step;
   s.time = g.time;

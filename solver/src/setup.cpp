@@ -525,6 +525,7 @@ PdView PdSystem::view() {
   p.break_after_force = config.break_after_force;
   if (!bond_damage.empty()) {
     p.s_onset = s_onset.data();
+    p.s_ultimate = s0_own.data();  // the rate law's raised ultimates (pd_kernels.hpp soften)
     p.bond_damage = bond_damage.data();
     p.strength_rate = static_cast<int>(config.strength_rate);
     p.crush_ratio = static_cast<float>(config.crush_ratio);

@@ -9,6 +9,7 @@
 #include <vector>
 #include <algorithm>
 #include <string>
+#include <utility>
 
 #include "breccia/common/error.hpp"
 #include "breccia/solver/calibration.hpp"
@@ -347,6 +348,24 @@ TEST(StrengthRate, FibModelCode2010Factor) {
   EXPECT_EQ(strength_dif(static_cast<int>(StrengthRateLaw::None), 100.0), 1.0);
 }
 
+// The factor from a bond's stretch rate to the uniaxial strain rate (pd_kernels.hpp
+// bond_rate_factor) is the homogeneous peak per unit onset Phi(r) of the 3D mixture at
+// nu = 1/4, tabulated from a separate quadrature (180 directions, steps of s_t/100): between
+// its points (ln r interpolation) and at them it agrees with the solver's own calibration
+// quadrature (homogeneous_tension_peak: 720 directions, steps of s_t/400) within 1% (the two
+// quadratures' difference plus the interpolation's). 1 at r <= 1 (a brittle law).
+TEST(StrengthRate, BondRateFactorIsTheHomogeneousPeakPerUnitOnset) {
+  ElasticInput in;
+  in.youngs_modulus = 30e9;
+  in.poisson_ratio = 0.25;
+  for (const double r : {1.3, 2.0, 2.5, 4.0, 10.0, 15.0, 70.0, 300.0}) {
+    const double phi = homogeneous_tension_peak(in, PdModel::LPS, 1e-4, r * 1e-4) / (30e9 * 1e-4);
+    EXPECT_NEAR(bond_rate_factor(r) / phi, 1.0, 0.01) << "r = " << r;
+  }
+  EXPECT_EQ(bond_rate_factor(1.0), 1.0);
+  EXPECT_EQ(bond_rate_factor(0.5), 1.0);
+}
+
 namespace {
 // A bar 30 mm long, 6 x 6 mm, LPS with its surface correction (the static bar above is within
 // 5% of sigma_t with it), stretched at a constant strain rate from the start: every particle
@@ -395,29 +414,48 @@ TEST(StrengthRate, HomogeneousBarWithoutTheLawPeaksAtTheStaticStrength) {
   EXPECT_NEAR(run.stress_pa / 3e6, 1.0, 0.05);
 }
 
-// The target: the bar pulled at a constant strain rate peaks within 5% of DIF(rate) x
-// tensile_strength, DIF from fib Model Code 2010 (strength_dif), on each branch of the law:
-// 3.3 /s (DIF 1.31) and 100 /s (DIF 2.88). NOT MET by the present rule (DIF on each bond's
-// onset at its own stretch rate, ultimate stretch kept): measured 0.906 at 3.3 /s (still rising
-// at the end of the run) and 0.784 at 100 /s (docs/theory.md "Rate-dependent strength": the
-// raised onset lowers s_u/s_t, so the bonds' homogeneous peak Phi grows less than the onset,
-// and oblique bonds see a lower rate). Kept as a measurement that fails until the rule is
-// calibrated: run with --gtest_also_run_disabled_tests --gtest_filter='StrengthRate.*'.
-TEST(StrengthRate, DISABLED_BarPeakStressIsTheDynamicStrengthOnBothBranches) {
-  const int fib = static_cast<int>(StrengthRateLaw::FibMC2010);
-  for (const double rate : {3.3, 100.0}) {
-    const double dif = strength_dif(fib, rate);
-    // The static bar peaks near 8 sigma_t / E (the homogeneous curve's flat top); run to
-    // 6 DIF sigma_t / E.
-    const double end = 6.0 * dif * 3e6 / 30e9 / rate;
-    const auto run = rate_bar_peak_stress(rate, end, "fib_mc2010");
-    EXPECT_NEAR(run.stress_pa / (dif * 3e6), 1.0, 0.05) << rate << " /s, DIF " << dif;
-    EXPECT_LT(run.time_s, 0.95 * end) << "the peak must be reached before the run ends";
+namespace {
+// The rate bar pulled at `rate` to 12 DIF sigma_t / E (the static bar peaks near 8 sigma_t / E,
+// the homogeneous curve's flat top, and the law scales the whole curve by DIF): its peak over
+// DIF(rate) x tensile_strength, and whether the peak came before 95% of the run.
+std::pair<double, bool> rate_bar_peak_over_dynamic_strength(double rate) {
+  const double dif = strength_dif(static_cast<int>(StrengthRateLaw::FibMC2010), rate);
+  const double end = 12.0 * dif * 3e6 / 30e9 / rate;
+  const auto run = rate_bar_peak_stress(rate, end, "fib_mc2010");
+  return {run.stress_pa / (dif * 3e6), run.time_s < 0.95 * end};
+}
+}  // namespace
+
+// The bar pulled at a fast constant strain rate peaks at DIF(rate) x tensile_strength, DIF from
+// fib Model Code 2010 (strength_dif) on its cube-root branch, where blasts load: 30 /s (DIF
+// 1.93) and 100 /s (2.88); measured 0.989 and 0.988. Tolerance 5%: the static bar's (its peak is
+// sigma_t within 2%, SofteningBar above); the homogeneous model of the bond mixture the rate
+// factor (bond_rate_factor) was calibrated on gives 0.996-1.000 at these rates (docs/theory.md
+// "Rate-dependent strength"), so what is left is the bar's own discretisation. Before the
+// calibration (DIF at the bond's own rate, ultimate stretch kept) the bar gave 0.784 at 100 /s.
+TEST(StrengthRate, BarPeakStressIsTheDynamicStrengthAtFastRates) {
+  for (const double rate : {30.0, 100.0}) {
+    const auto [ratio, peaked] = rate_bar_peak_over_dynamic_strength(rate);
+    EXPECT_NEAR(ratio, 1.0, 0.05) << rate << " /s";
+    EXPECT_TRUE(peaked) << "the peak must be reached before the run ends";
   }
 }
 
-// With the rate law the onsets of the bonds that began to soften are state: a restart from a
-// checkpoint reproduces the straight run bit for bit (the checkpoint carries /bond_onset).
+// On the slow branch (3.3 /s, DIF 1.31) the same bar peaks at 0.926 DIF sigma_t (3.64 MPa at
+// 367 us of 476): NOT within 5%, though the homogeneous model gives 1.000 there. Not
+// investigated; the likely cause is that the law takes the bond's rate at each step until it
+// softens, so the smallest DIF along the way counts, and at 3.3 /s the particles' vibrations are
+// comparable to a bond's stretch rate (a rate at or below zero gives DIF 1). Kept as a
+// measurement that fails: --gtest_also_run_disabled_tests --gtest_filter='StrengthRate.*'.
+TEST(StrengthRate, DISABLED_BarPeakStressIsTheDynamicStrengthOnTheSlowBranch) {
+  const auto [ratio, peaked] = rate_bar_peak_over_dynamic_strength(3.3);
+  EXPECT_NEAR(ratio, 1.0, 0.05);
+  EXPECT_TRUE(peaked);
+}
+
+// With the rate law the laws of the bonds that began to soften are state: a restart from a
+// checkpoint reproduces the straight run bit for bit (the checkpoint carries /bond_onset, and
+// the raised ultimates are rebuilt from it).
 TEST(StrengthRate, RestartWithRaisedOnsetsIsBitIdentical) {
   std::string deck = kPrecrackedGlassPlateDeck;
   const std::string g0 = "fracture_energy: 3.8";
@@ -434,6 +472,11 @@ TEST(StrengthRate, RestartWithRaisedOnsetsIsBitIdentical) {
   EXPECT_EQ(second.state, straight.state);
   EXPECT_EQ(second.bond_damage, straight.bond_damage);
   EXPECT_EQ(second.s_onset, straight.s_onset);
+  // The raised laws' ultimates are rebuilt from the onsets (read_checkpoint), not written.
+  int raised_ultimates = 0;
+  for (size_t k = 0; k < straight.s0_own.size(); ++k) raised_ultimates += straight.s0_own[k] > fresh.s0_own[k];
+  EXPECT_GT(raised_ultimates, 0);
+  EXPECT_EQ(second.s0_own, straight.s0_own);
 }
 
 TEST(StrengthRate, BadInputNamesTheKey) {

@@ -527,6 +527,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   p.short_range_k = m.short_range_k.get(); p.spacing = m.spacing.get();
   p.break_after_force = s.config.break_after_force;
   p.s_onset = m.s_onset.get();
+  p.s_ultimate = m.s0_own.get();  // the rate law's raised ultimates (pd_kernels.hpp soften)
   p.bond_damage = m.bond_damage.get();
   p.strength_rate = m.bond_damage.size() > 0 ? static_cast<int>(s.config.strength_rate) : 0;
   p.crush_ratio = m.bond_damage.size() > 0 ? static_cast<float>(s.config.crush_ratio) : 0.0f;
@@ -548,6 +549,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     q.alpha = p.alpha; q.min_stretch = p.min_stretch; q.min_stretch_next = p.min_stretch_next;
     q.break_after_force = p.break_after_force;
     q.s_onset = p.s_onset;
+    q.s_ultimate = p.s_ultimate;
     q.bond_damage = p.bond_damage;
     q.strength_rate = p.strength_rate;
     q.crush_ratio = p.crush_ratio;
@@ -793,7 +795,10 @@ void CudaSystem::download(PdSystem& sys) {
   m.dilatation.download(sys.dilatation, "dilatation");
   m.state.download(sys.state, "state");
   m.bond_damage.download(sys.bond_damage, "bond_damage");
-  if (sys.config.strength_rate != StrengthRateLaw::None) m.s_onset.download(sys.s_onset, "s_onset");  // state with a rate law
+  if (sys.config.strength_rate != StrengthRateLaw::None) {  // state with a rate law: the raised laws
+    m.s_onset.download(sys.s_onset, "s_onset");
+    m.s0_own.download(sys.s0_own, "s0_own");
+  }
   m.min_stretch.download(sys.min_stretch, "min_stretch");
   m.min_stretch_next.download(sys.min_stretch_next, "min_stretch_next");
   if (sys.gas.active) {  // what a checkpoint keeps of the gas (outputs.cpp)

@@ -723,12 +723,14 @@ public:
       const std::vector<double> force = local_.force;
       const bool keep_bonds = local_.config.strength_rate != StrengthRateLaw::None;
       std::vector<uint8_t> state;
-      std::vector<float> damage, onset;
-      if (keep_bonds) state = local_.state, damage = local_.bond_damage, onset = local_.s_onset;
+      std::vector<float> damage, onset, ultimate;
+      if (keep_bonds)
+        state = local_.state, damage = local_.bond_damage, onset = local_.s_onset, ultimate = local_.s0_own;
       local_.diagnostics = true;
       force_pass(local_);
       if (keep_bonds)
-        local_.state = std::move(state), local_.bond_damage = std::move(damage), local_.s_onset = std::move(onset);
+        local_.state = std::move(state), local_.bond_damage = std::move(damage), local_.s_onset = std::move(onset),
+        local_.s0_own = std::move(ultimate);
       local_.dissipated_energy = dissipated;
       local_.force = force;
       global.derived_fields_pending = false;

@@ -59,7 +59,10 @@ struct PdViewT {
   // With a strength rate law (StrengthRateLaw, materials[].strength_rate) the onset of an entry
   // that has not begun to soften is the static one times strength_dif at its stretch rate, and
   // the owner writes that dynamic onset into s_onset when it begins to soften (soften()).
+  // The rate law raises the ultimate stretch with the onset (self-similar law): it writes the
+  // entry's raised ultimate through s_ultimate, the storage s0_own reads (one float per entry).
   float* s_onset = nullptr;
+  float* s_ultimate = nullptr;
   float* bond_damage = nullptr;
   int strength_rate = 0;  // StrengthRateLaw; None: the onset is s_onset as set up
   // Crushing (materials[].compressive_strength): a softening entry shortened past
@@ -202,24 +205,71 @@ BRECCIA_HD double bond_stretch_rate(const PdViewT<Real>& p, const BondMotionT<Re
   return (dvx * double(b.dx) + dvy * double(b.dy) + dvz * double(b.dz)) / (double(b.len) * double(b.xi));
 }
 
+// The uniaxial strain rate a softening bond's stretch rate stands for, the rate fib's law
+// (strength_dif) is stated for. In uniaxial tension at the strain rate R a bond at angle a to
+// the load stretches at R (cos^2 a - nu sin^2 a): the bonds that carry the material past its
+// first onsets are oblique and see less than R, so the DIF at the bond's own rate gives the
+// material less than DIF(R) sigma_t (0.83-0.93 of it on the cube-root branch, depending on
+// s_u/s_t). The factor c that corrects it is calibrated, as the static onset is, on the
+// homogeneous uniaxial response of the bond mixture with the rate law (3D, nu = 1/4:
+// docs/theory.md "Rate-dependent strength"): on the cube-root branch it depends on r = s_u/s_t
+// alone, and equals that mixture's static peak per unit onset Phi(r) (the Calibration table)
+// within 1% from r = 3 to 100, so c = Phi(r), interpolated in ln r from the values below
+// (180 directions, steps of s_t/100; 1 at r = 1, where the law is brittle; held above 1000).
+BRECCIA_HD double bond_rate_factor(double ultimate_over_onset) {
+  constexpr int kPoints = 14;
+  constexpr double r_at[kPoints] = {1.0, 1.5, 2.0, 3.0, 5.0, 7.0, 10.0, 20.0, 30.0, 50.0, 100.0, 200.0, 500.0, 1000.0};
+  constexpr double phi[kPoints] = {1.0,    1.0842, 1.1434, 1.2248, 1.3228, 1.3838, 1.4449,
+                                   1.5521, 1.6073, 1.6692, 1.7402, 1.7976, 1.8558, 1.8891};
+  if (!(ultimate_over_onset > r_at[0])) return phi[0];
+  for (int q = 1; q < kPoints; ++q)
+    if (ultimate_over_onset <= r_at[q]) {
+      const double t = std::log(ultimate_over_onset / r_at[q - 1]) / std::log(r_at[q] / r_at[q - 1]);
+      return phi[q - 1] + t * (phi[q] - phi[q - 1]);
+    }
+  return phi[kPoints - 1];
+}
+
+// The ultimate stretch of an entry whose onset the rate law raised from `onset` to `raised`:
+// `ultimate` scaled by the same factor (self-similar law). One expression in floats, so that a
+// restart rebuilds the checkpointed ultimate bit for bit from the set-up's onset and ultimate
+// and the checkpointed onset (read_checkpoint).
+BRECCIA_HD float raised_ultimate(float onset, float raised, float ultimate) {
+  return static_cast<float>(double(ultimate) * (double(raised) / double(onset)));
+}
+
+// A system takes `count` onsets a rate law may have raised (a checkpoint's, or the global
+// system's rows for a rank): each entry whose onset differs gets the raised onset and, where
+// the system holds its ultimates (`ultimate` not null), the ultimate raised with it from the
+// system's own (the set-up's) by raised_ultimate. Host only.
+inline void adopt_raised_onsets(float* onset, float* ultimate, const float* raised, size_t count) {
+  for (size_t k = 0; k < count; ++k) {
+    if (raised[k] == onset[k]) continue;
+    if (ultimate) ultimate[k] = raised_ultimate(onset[k], raised[k], ultimate[k]);
+    onset[k] = raised[k];
+  }
+}
+
 // One softening bond entry at stretch s this pass (softens(p, k)): the damage it reaches
 // (never below what it had), stored unless fracture is off, and the energy that dissipated,
 // `unit` x (D(d) - D(d_old)) with unit the entry's energy per unit stretch squared (a PMB
 // half-bond: V_i k2 |xi| / 4). Returns d; d = 1 means broken (the caller clears the state).
-// Rate law (p.strength_rate): while the entry is undamaged its onset is the static one times
-// strength_dif at its stretch rate now, capped at the ultimate stretch (there the bond breaks
-// brittle, holding what it dissipates); the rate is only formed once s passes the static onset
-// (DIF >= 1, so below it nothing can soften). The onset the entry has when it begins to soften
-// is written into s_onset and kept: the law of a softening bond is then fixed, so D(d) stays
-// the energy it dissipates. The ultimate stretch is kept, so the bond's fracture energy scales
-// with the DIF as its strength does (docs/theory.md "Rate-dependent strength").
+// Rate law (p.strength_rate): while the entry is undamaged its law is the static one scaled by
+// F = strength_dif at the material strain rate its stretch rate stands for
+// (bond_rate_factor): onset and ultimate stretch both times F, so a material point whose
+// bonds share F peaks at F times its static strength whatever s_u/s_t (the homogeneous peak
+// Phi depends on s_u/s_t alone); the rate is only formed once s passes the static onset
+// (F >= 1, so below it nothing can soften). The law the entry has when it begins to soften is
+// written into s_onset and s_ultimate and kept: the law of a softening bond is then fixed, so
+// D(d) stays the energy it dissipates (F^2 times the static triangle; docs/theory.md
+// "Rate-dependent strength").
 template <class Real>
 BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double unit, double& released,
                          const BondMotionT<Real>& motion) {
   const double d_old = p.bond_damage[k];
   if (!p.fracture) return d_old;
   double onset = p.s_onset[k];
-  const double ultimate = p.s0_own[k];
+  double ultimate = p.s0_own[k];
   if (s < 0.0) {  // crushing: one damage for both signs, so D(d) of the law in force stays exact
     if (!(p.crush_ratio > 0.0f)) return d_old;
     const double c_onset = double(p.crush_ratio) * onset, c_ultimate = double(p.crush_ratio) * ultimate;
@@ -231,15 +281,20 @@ BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double uni
   }
   const bool dynamic_onset = p.strength_rate && d_old <= 0.0 && s > onset;
   if (dynamic_onset) {
-    const double raised = onset * strength_dif(p.strength_rate, bond_stretch_rate(p, motion));
-    onset = raised < ultimate ? static_cast<double>(static_cast<float>(raised)) : ultimate;
+    const double uniaxial_rate = bond_rate_factor(ultimate / onset) * bond_stretch_rate(p, motion);
+    const float raised = static_cast<float>(onset * strength_dif(p.strength_rate, uniaxial_rate));
+    ultimate = raised_ultimate(p.s_onset[k], raised, p.s0_own[k]);
+    onset = raised;
   }
   const double d = softening_damage<double>(s, onset, ultimate);
   if (d <= d_old) return d_old;
   released += unit * (softening_dissipation(d, onset, ultimate) - softening_dissipation(d_old, onset, ultimate));
   const float stored = static_cast<float>(d);
   p.bond_damage[k] = stored;
-  if (dynamic_onset && stored > 0.0f) p.s_onset[k] = static_cast<float>(onset);  // fixed while d > 0 is stored
+  if (dynamic_onset && stored > 0.0f) {  // fixed while d > 0 is stored
+    p.s_onset[k] = static_cast<float>(onset);
+    p.s_ultimate[k] = static_cast<float>(ultimate);
+  }
   return d;
 }
 

@@ -18,15 +18,22 @@ namespace breccia::solver {
 // - else every sample point is tested, without a branch: the 6 z squares in pairs, each
 //   comparison giving -1 or 0 per lane (GCC/Clang vector extension: SSE2 on x86-64, NEON on
 //   ARM, scalar elsewhere). The per-row shortcuts it replaced mispredicted a branch a row;
-// - a count asked before by this thread with the same arguments (bits) is looked up, where
-//   such counts recur (a lattice); where they do not (a graded mesh) the memo steps aside.
+// - a count asked before by this thread for an offset within a grid step (2^-30 horizons)
+//   is looked up where every sample is farther than that from the sphere, where such counts
+//   recur (a lattice); where they do not (a graded mesh) the memo steps aside.
 namespace {
 
-// The full quadrature's counts, kept per thread by the exact bits of their arguments: on a
-// lattice the same few hundred offsets between cells recur in every row (each in a few
-// roundings of x_j - x_i), and a count looked up is the count computed, bit for bit, since
-// the key is every input. A slot holds the last key hashed to it (0 in `count_plus_one`:
-// empty; thread_local and zero-initialised, so no guard per call).
+// The full quadrature's counts, kept per thread by their offset x_j - x_i rounded to a grid
+// of 2^-30 horizons (and the exact horizon, cell and dimension): on a lattice the same few
+// hundred offsets between cells recur in every row, each in a few roundings of x_j - x_i
+// (3.0 million distinct bit patterns at 41^3). A count is stored only where every sample
+// point's squared distance is farther from the horizon's square than any offset within a
+// grid step (and the arithmetic's rounding) can move it: then each sample is inside or
+// outside for every offset of the key, and a count looked up is the count the quadrature
+// would compute, exactly. Samples on or within that margin of the sphere (a lattice whose
+// horizon is a whole number of half-cells) are counted every time. A slot holds the last key
+// hashed to it (0 in `count_plus_one`: empty; thread_local and zero-initialised, so no guard
+// per call).
 //
 // On a graded mesh offsets rarely recur: there the hash, the compare and the slot's store cost
 // 6-10% of the bond-coefficient phase for nothing (full concrete case, paired runs,
@@ -38,7 +45,8 @@ struct CountMemo {
   static constexpr int kBits = 13;
   static constexpr int kWindow = 4096, kRest = 15;
   struct Slot {
-    uint64_t key[5];
+    int64_t offset[3];       // x_j - x_i in grid steps (kGridStep horizons)
+    uint64_t exact[2];       // the horizon's and the half cell's bits
     int dimension;
     int count_plus_one;
   };
@@ -55,6 +63,7 @@ struct CountMemo {
     return resting == 0;
   }
 };
+constexpr double kGridStep = 0x1p-30;  // of the horizon
 thread_local CountMemo count_memo;
 
 }  // namespace
@@ -93,15 +102,29 @@ int partial_volume_samples_inside(const double xi[3], double horizon, double hal
   if ((lo[0] + lo[1]) + lo[2] > r2) return 0;
   if ((hi[0] + hi[1]) + hi[2] <= r2) return partial_volume_sample_total(dimension);
   const bool memo = count_memo.in_use();
-  uint64_t key[5];
+  const double step = kGridStep * horizon;
+  int64_t offset[3];
+  uint64_t exact[2];
   CountMemo::Slot* slot = nullptr;
   if (memo) {
-    const double args[5] = {xi[0], xi[1], xi[2], horizon, half_cell_j};
-    std::memcpy(key, args, sizeof key);
+    // Rounded to the nearest step by the 1.5 * 2^52 shift (exact for |v| < 2^51; |xi| / step
+    // is below 2^32): no division, no library call per count.
+    const double per_step = 1.0 / step, shift = 0x1.8p52;
+    for (int axis = 0; axis < 3; ++axis) offset[axis] = static_cast<int64_t>((xi[axis] * per_step + shift) - shift);
+    std::memcpy(&exact[0], &horizon, sizeof(double));
+    std::memcpy(&exact[1], &half_cell_j, sizeof(double));
+    // Each word mixed into the high bits (the slot's index); a plain xor-multiply chain maps
+    // offsets that differ in sign alone to one slot.
     uint64_t hash = static_cast<uint64_t>(dimension);
-    for (uint64_t k : key) hash = (hash ^ k) * 0x9E3779B97F4A7C15ull;
+    auto mix = [&hash](uint64_t k) {
+      hash = (hash ^ k) * 0x9E3779B97F4A7C15ull;
+      hash ^= hash >> 29;
+    };
+    for (int64_t k : offset) mix(static_cast<uint64_t>(k));
+    for (uint64_t k : exact) mix(k);
     slot = &count_memo.slot[hash >> (64 - CountMemo::kBits)];
-    if (slot->count_plus_one != 0 && slot->dimension == dimension && std::memcmp(slot->key, key, sizeof key) == 0) {
+    if (slot->count_plus_one != 0 && slot->dimension == dimension && std::memcmp(slot->offset, offset, sizeof offset) == 0 &&
+        std::memcmp(slot->exact, exact, sizeof exact) == 0) {
       ++count_memo.hits;
       return slot->count_plus_one - 1;
     }
@@ -120,9 +143,30 @@ int partial_volume_samples_inside(const double xi[3], double horizon, double hal
     }
   const int count = static_cast<int>(inside[0] + inside[1]);
   if (memo) {
-    std::memcpy(slot->key, key, sizeof key);
-    slot->dimension = dimension;
-    slot->count_plus_one = count + 1;
+    // Every sample's distance from the sphere, in the sums just compared, against how far
+    // another offset of the key moves it: two offsets of one key differ by at most a grid
+    // step per axis (1.01: the rounding of xi / step), which changes a sample
+    // coordinate's square by at most step (2 |p| + step), |p| <= |xi| + half; 1e-12 r^2 is
+    // far above the few ulp of r^2 that rounding the coordinates and sums adds.
+    const double moved = 1.01 * step *
+                             (2.0 * (std::fabs(xi[0]) + std::fabs(xi[1]) + std::fabs(xi[2]) + 3.0 * half_cell_j) +
+                              3.03 * step) +
+                         1e-12 * r2;
+    double margin = INFINITY;
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b < n; ++b) {
+        const double row = sq[0][a] + sq[1][b];
+        for (int c = 0; c < nz; ++c) {
+          const double gap = std::fabs((row + sq[2][c]) - r2);
+          margin = gap < margin ? gap : margin;
+        }
+      }
+    if (margin > moved) {
+      std::memcpy(slot->offset, offset, sizeof offset);
+      std::memcpy(slot->exact, exact, sizeof exact);
+      slot->dimension = dimension;
+      slot->count_plus_one = count + 1;
+    }
   }
   return count;
 }

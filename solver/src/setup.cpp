@@ -811,7 +811,12 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     }
   };
   // A distributed set-up holds only its own rows (the reverse entry may be another rank's).
-  const bool copy_strengths = !dist_rows.active;
+  // The copy saves a Weibull draw's pow and log at one end of each pair; without a draw
+  // both ends are filled (memoised per row: the same function of the same arguments, the
+  // same bits), which costs less than the reverse pass (41^3 lattice, docs/performance.md).
+  const bool weibull = std::any_of(c.materials.begin(), c.materials.end(),
+                                   [](const MaterialSpec& m) { return m.fracture_energy > 0 && m.weibull_modulus > 0; });
+  const bool copy_strengths = !dist_rows.active && weibull;
   // Every row (a distributed set-up's rows other than its own are empty).
   const int64_t rows_begin = 0, rows_end = static_cast<int64_t>(n);
 #pragma omp parallel for schedule(dynamic, 256)

@@ -386,25 +386,31 @@ TEST(PartialVolume, PositiveTestEqualsTheQuadratureWithoutRunningIt) {
   EXPECT_LT(positive, checked);
 }
 
+namespace {
+// The plain quadrature: every sample point tested, the squares summed in the same order as
+// partial_volume_samples_inside's.
+int plain_sample_count(const double xi[3], double horizon, double half, int dimension) {
+  constexpr int n = 6;
+  const double h = 2.0 * half / n;
+  int inside = 0;
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b)
+      for (int c = 0; c < (dimension == 3 ? n : 1); ++c) {
+        const double px = xi[0] - half + (a + 0.5) * h;
+        const double py = xi[1] - half + (b + 0.5) * h;
+        const double pz = dimension == 3 ? xi[2] - half + (c + 0.5) * h : xi[2];
+        inside += (px * px + py * py + pz * pz <= horizon * horizon);
+      }
+  return inside;
+}
+}  // namespace
+
 TEST(PartialVolume, SampleCountEqualsThePointByPointQuadrature) {
   // partial_volume_samples_inside squares each axis's 6 sample coordinates once and decides
   // whole rows of z samples by their smallest and largest square; the count must equal the
   // plain quadrature's (every point tested, the squares summed in the same order) exactly,
   // points on the sphere included, or the bond coefficients would change.
-  auto brute_force = [](const double xi[3], double horizon, double half, int dimension) {
-    constexpr int n = 6;
-    const double h = 2.0 * half / n;
-    int inside = 0;
-    for (int a = 0; a < n; ++a)
-      for (int b = 0; b < n; ++b)
-        for (int c = 0; c < (dimension == 3 ? n : 1); ++c) {
-          const double px = xi[0] - half + (a + 0.5) * h;
-          const double py = xi[1] - half + (b + 0.5) * h;
-          const double pz = dimension == 3 ? xi[2] - half + (c + 0.5) * h : xi[2];
-          inside += (px * px + py * py + pz * pz <= horizon * horizon);
-        }
-    return inside;
-  };
+  const auto brute_force = plain_sample_count;
   uint64_t z = 11;
   auto uniform = [&z] {
     z += 0x9E3779B97F4A7C15ull;
@@ -442,4 +448,44 @@ TEST(PartialVolume, SampleCountEqualsThePointByPointQuadrature) {
     const double* x = k < 12 * 4096 ? xi : lattice_offsets[k % 4];
     ASSERT_EQ(partial_volume_samples_inside(x, 3.0, 0.5, 3), brute_force(x, 3.0, 0.5, 3)) << "call " << k;
   }
+}
+
+TEST(PartialVolume, CountsLookedUpByRoundedOffsetEqualTheQuadrature) {
+  // The memo keys a count by x_j - x_i rounded to 2^-30 horizons and keeps it only where no
+  // sample lies within reach of the sphere (partial_volume.cpp): offsets of one lattice
+  // offset that differ in their last bits, or by up to 0.4 grid steps, must get the
+  // quadrature's count whichever of them was counted first. With half cell 0.5 the samples
+  // of integer offsets lie at odd twelfths; at horizon sqrt(35^2 + 7^2 + 5^2) / 12 (3D) or
+  // sqrt(35^2 + 11^2) / 12 (2D) some lie on the sphere, to rounding, so their counts change
+  // with the last bits (never kept); at 3.015 none is near it (kept and looked up).
+  SplitMixUniform centred{29};  // in [-0.5, 0.5)
+  int differing = 0;  // jittered offsets whose count differs from their lattice offset's
+  for (int dimension : {3, 2})
+    for (double delta : {std::sqrt(dimension == 3 ? 1299.0 : 1346.0) / 12.0, 3.015})
+      for (int pass = 0; pass < 3; ++pass)
+        for (int a = -4; a <= 4; ++a)
+          for (int b = -4; b <= 4; ++b)
+            for (int c = (dimension == 3 ? -4 : 0); c <= (dimension == 3 ? 4 : 0); ++c) {
+              const double base[3] = {double(a), double(b), double(c)};
+              if (base[0] * base[0] + base[1] * base[1] + base[2] * base[2] == 0.0) continue;
+              const int exact = plain_sample_count(base, delta, 0.5, dimension);
+              for (int copy = 0; copy < 4; ++copy) {
+                double xi[3];
+                for (int axis = 0; axis < 3; ++axis) {
+                  xi[axis] = base[axis];
+                  if (axis == 2 && dimension != 3) continue;
+                  if (copy % 2 == 0) {  // a few ulp either way, as x_j - x_i rounds on a lattice
+                    const int ulps = static_cast<int>((centred() + 0.5) * 7.0) - 3;
+                    for (int u = 0; u < std::abs(ulps); ++u) xi[axis] = std::nextafter(xi[axis], ulps > 0 ? 10.0 : -10.0);
+                  } else {  // up to 0.4 grid steps
+                    xi[axis] += centred() * 0.8 * 0x1p-30 * delta;
+                  }
+                }
+                const int expected = plain_sample_count(xi, delta, 0.5, dimension);
+                differing += expected != exact;
+                ASSERT_EQ(partial_volume_samples_inside(xi, delta, 0.5, dimension), expected)
+                    << xi[0] << " " << xi[1] << " " << xi[2] << " horizon " << delta << " dimension " << dimension;
+              }
+            }
+  EXPECT_GT(differing, 0) << "the on-sphere offsets must include counts that the last bits change";
 }

@@ -516,8 +516,11 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
     // this system holds them (a distributed set-up's ranks hold their rows' ultimates:
     // copy_rank_state rebuilds those).
     const std::vector<float> raised(onset.begin(), onset.end());
-    adopt_raised_onsets(s.s_onset.data(), s.s0_own.size() == raised.size() ? s.s0_own.data() : nullptr, raised.data(),
-                        raised.size());
+    if (s.s_onset.size() != raised.size())  // a distributed set-up's rank > 0: held whole for copy_rank_state
+      s.s_onset = raised;
+    else
+      adopt_raised_onsets(s.s_onset.data(), s.s0_own.size() == raised.size() ? s.s0_own.data() : nullptr,
+                          raised.data(), raised.size());
   }
   if (!s.min_stretch.empty()) {
     if (!f.exists("/min_stretch_previous"))

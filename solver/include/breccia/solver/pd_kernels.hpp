@@ -624,12 +624,14 @@ struct LpsFastPath {
 };
 
 #if defined(BRECCIA_HOST_PACK)
-// The fast LPS force pass in double on the host for a row whose entries are all intact (one
-// constant horizon): as pmb_packed_row, kPackWidth entries at a time and the ordered sums in
-// one loop. False, having written nothing, for a row with a broken entry or one past its
-// critical extension with fracture on (the two-stage loop selects and breaks).
-inline bool lps_packed_row(const PdViewT<double>& p, int64_t i, const BondOriginT<double>& origin, double a_i,
-                           double b_i) {
+// The packed force rows' loop (pmb_packed_row, lps_packed_row), written once: kPackWidth entries
+// at a time through `pack_term` (their force components and a mask of entries past their
+// critical extension), the rest one at a time through `entry_term`, every term added to the
+// sums in entry order (the one-entry loop's order, so the bits are its). False, having written
+// nothing, for a row with a broken entry, or one past its critical extension with fracture on:
+// the two-stage loop then runs it (the selection, the breaks and their released energy).
+template <class PackTerm, class EntryTerm>
+inline bool packed_row_force(const PdViewT<double>& p, int64_t i, PackTerm&& pack_term, EntryTerm&& entry_term) {
   const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
   if (end > begin && !chunk_intact(p, begin, static_cast<int>(end - begin))) return false;
   double fx = 0.0, fy = 0.0, fz = 0.0;
@@ -637,15 +639,8 @@ inline bool lps_packed_row(const PdViewT<double>& p, int64_t i, const BondOrigin
   bool over_tail = false;
   int64_t k = begin;
   for (; k + kPackWidth <= end; k += kPackWidth) {
-    const int32_t* j = p.neighbor + k;
-    const PackedBond b = packed_bond(p, origin, k);
-    const PackD xi = load_pack(p.xi_len + k);
-    const PackD len = sqrt_of(b.squared_length());
-    const PackD e = len - xi;  // BondOriginT::extension_from
-    over_any |= e > widen_floats(p.s0_own + k) * xi;
-    const PackD f = lps_fast_density(load_pack(p.k_own + k), a_i + gather_pack(p.lps_a, j, 1, 0),
-                                     b_i + gather_pack(p.lps_b, j, 1, 0), xi, e, gather_pack(p.volume, j, 1, 0), len);
-    const PackD cx = f * b.dx, cy = f * b.dy, cz = f * b.dz;
+    PackD cx, cy, cz;
+    over_any |= pack_term(k, cx, cy, cz);
     for (int l = 0; l < kPackWidth; ++l) {
       fx += cx[l];
       fy += cy[l];
@@ -654,17 +649,46 @@ inline bool lps_packed_row(const PdViewT<double>& p, int64_t i, const BondOrigin
   }
   for (; k < end; ++k) {
     double cx, cy, cz;
-    over_tail |= lps_fast_entry<false>(p, origin, k, a_i, b_i, cx, cy, cz);  // a break: with fracture on only
+    over_tail |= entry_term(k, cx, cy, cz);
     fx += cx;
     fy += cy;
     fz += cz;
   }
-  if (over_tail || (p.fracture && any_lane(over_any))) return false;
+  if (p.fracture && (over_tail || any_lane(over_any))) return false;
   p.force[3 * i] = fx;
   p.force[3 * i + 1] = fy;
   p.force[3 * i + 2] = fz;
   p.dissipated[i] = 0.0;
   return true;
+}
+#endif
+
+#if defined(BRECCIA_HOST_PACK)
+// The fast LPS force pass in double on the host for a row whose entries are all intact (one
+// constant horizon): as pmb_packed_row, kPackWidth entries at a time and the ordered sums in
+// one loop. False, having written nothing, for a row with a broken entry or one past its
+// critical extension with fracture on (the two-stage loop selects and breaks).
+inline bool lps_packed_row(const PdViewT<double>& p, int64_t i, const BondOriginT<double>& origin, double a_i,
+                           double b_i) {
+  return packed_row_force(
+      p, i,
+      [&](int64_t k, PackD& cx, PackD& cy, PackD& cz) {
+        const int32_t* j = p.neighbor + k;
+        const PackedBond b = packed_bond(p, origin, k);
+        const PackD xi = load_pack(p.xi_len + k);
+        const PackD len = sqrt_of(b.squared_length());
+        const PackD e = len - xi;  // BondOriginT::extension_from
+        const PackMask over = e > widen_floats(p.s0_own + k) * xi;
+        const PackD f = lps_fast_density(load_pack(p.k_own + k), a_i + gather_pack(p.lps_a, j, 1, 0),
+                                         b_i + gather_pack(p.lps_b, j, 1, 0), xi, e, gather_pack(p.volume, j, 1, 0), len);
+        cx = f * b.dx;
+        cy = f * b.dy;
+        cz = f * b.dz;
+        return over;
+      },
+      [&](int64_t k, double& cx, double& cy, double& cz) {
+        return lps_fast_entry<false>(p, origin, k, a_i, b_i, cx, cy, cz);  // a break: with fracture on only
+      });
 }
 #endif
 
@@ -887,40 +911,27 @@ using PmbReleased = std::conditional_t<BondOriginT<Real>::kRelative, Real, doubl
 // with an entry broken, or past its critical extension with fracture on: the two-stage loop
 // then runs it (the selection, the breaks and their released energy).
 inline bool pmb_packed_row(const PdViewT<double>& p, int64_t i, const BondOriginT<double>& origin) {
-  const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
-  if (end > begin && !chunk_intact(p, begin, static_cast<int>(end - begin))) return false;
-  double fx = 0.0, fy = 0.0, fz = 0.0;
-  PackMask over_any = {};
-  bool over_tail = false;
-  int64_t k = begin;
-  for (; k + kPackWidth <= end; k += kPackWidth) {
-    const PackedBond b = packed_bond(p, origin, k);
-    PackMask over;
-    const PackD f = pmb_density_from<PackD>(b.squared_length(), load_pack(p.xi_len + k), load_pack(p.k_own + k),
-                                            widen_floats(p.s0_own + k), over);
-    over_any |= over;
-    const PackD cx = f * b.dx, cy = f * b.dy, cz = f * b.dz;
-    for (int l = 0; l < kPackWidth; ++l) {
-      fx += cx[l];
-      fy += cy[l];
-      fz += cz[l];
-    }
-  }
-  for (; k < end; ++k) {
-    double dx, dy, dz;
-    bool over;
-    const double f = pmb_fast_density(p, k, origin.bond_vector(p.x, p.neighbor[k], dx, dy, dz), over);
-    over_tail |= over;
-    fx += f * dx;
-    fy += f * dy;
-    fz += f * dz;
-  }
-  if (p.fracture && (over_tail || any_lane(over_any))) return false;
-  p.force[3 * i] = fx;
-  p.force[3 * i + 1] = fy;
-  p.force[3 * i + 2] = fz;
-  p.dissipated[i] = 0.0;
-  return true;
+  return packed_row_force(
+      p, i,
+      [&](int64_t k, PackD& cx, PackD& cy, PackD& cz) {
+        const PackedBond b = packed_bond(p, origin, k);
+        PackMask over;
+        const PackD f = pmb_density_from<PackD>(b.squared_length(), load_pack(p.xi_len + k), load_pack(p.k_own + k),
+                                                widen_floats(p.s0_own + k), over);
+        cx = f * b.dx;
+        cy = f * b.dy;
+        cz = f * b.dz;
+        return over;
+      },
+      [&](int64_t k, double& cx, double& cy, double& cz) {
+        double dx, dy, dz;
+        bool over;
+        const double f = pmb_fast_density(p, k, origin.bond_vector(p.x, p.neighbor[k], dx, dy, dz), over);
+        cx = f * dx;
+        cy = f * dy;
+        cz = f * dz;
+        return over;
+      });
 }
 #endif
 

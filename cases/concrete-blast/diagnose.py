@@ -11,13 +11,14 @@ wetted particles; from each output of results.h5: the share of particles softeni
 cracks on the ring and on the side faces (measures.py). Last, the block's expansion rate from
 its final velocities (least squares v_r = rate r about the hole axis) and Grady's (1982)
 fragment size for it, s = (sqrt(24) K_Ic / (rho c rate))^(2/3), K_Ic = sqrt(E G0), c = sqrt(E/rho)
-(docs/references.md [Grady 1982]; the material of case.yaml).
+(docs/references.md [Grady 1982]; E and rho of case.yaml, G0 of the run's case_as_run.yaml).
 """
 import argparse
 import csv
 import json
 import math
 import os
+import re
 import sys
 
 import h5py
@@ -26,8 +27,35 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import measures  # noqa: E402
 
-E, RHO, G0 = 34.2e9, 2320.0, 25.0  # case.yaml
+E, RHO = 34.2e9, 2320.0  # case.yaml
 BLOCK_MASS = 62.6  # kg, the meshed block (README)
+
+
+def p_wave_radius(t_us):
+    """Radius [mm] from the hole axis that the wall's P wave reaches by t (uniaxial-strain speed
+    sqrt(M/rho), M = E (1 - nu)/((1 + nu)(1 - 2 nu)), nu 1/4 of case.yaml; from the wall at 10 mm)."""
+    m = E * 0.75 / (1.25 * 0.5)
+    return 10.0 + math.sqrt(m / RHO) * t_us * 1e-3
+
+
+def damage_front(rad, band, damage, width=0.01):
+    """Outermost radius [mm] (10 mm rings about the hole axis, 20-130 mm below the top, out to
+    the inscribed 150 mm) in which at least half of the particles have damage above 0.05."""
+    front = 10.0
+    for lo in np.arange(0.01, 0.15, width):
+        m = band & (rad >= lo) & (rad < lo + width)
+        if m.any() and np.mean(damage[m] > 0.05) >= 0.5:
+            front = (lo + width) * 1e3
+    return front
+
+
+def fracture_energy(run):
+    """G0 [J/m2] of the run's material, from the case as it ran (a --set may change it)."""
+    for line in open(f"{run}/case_as_run.yaml"):
+        m = re.match(r"\s*fracture_energy:\s*([0-9.eE+-]+)\s*J/m2", line)
+        if m:
+            return float(m.group(1))
+    raise SystemExit(f"diagnose.py: {run}/case_as_run.yaml: no materials[0].fracture_energy in J/m2")
 
 
 def main():
@@ -61,21 +89,25 @@ def main():
     out["outputs"] = []
     with h5py.File(f"{a.run}/results.h5") as r:
         keys = sorted(r["output"].keys(), key=lambda k: float(r[f"output/{k}"].attrs["time_s"]))
-        print("t [us] | softening / broken share, r = 10-30, 30-60, 60-100, 100-150 mm | cracks ring, side faces")
+        print("t [us] | softening / broken share, r = 10-30, 30-60, 60-100, 100-150 mm | cracks ring, side faces"
+              " | damage front, P wave from the wall")
         for k in keys:
             d = r[f"output/{k}/damage"][:]
             tk = float(r[f"output/{k}"].attrs["time_s"]) * 1e6
             shares = [(float(np.mean((d[m] > 0.05) & (d[m] < 0.5))), float(np.mean(d[m] >= 0.5)))
                       for m in [(rad > lo) & (rad < hi) & band for lo, hi in rings]]
             ring, faces = measures.ring_cracks(x, d), measures.side_face_cracks(x, d)
-            out["outputs"].append({"t_us": tk, "softening_broken": shares, "ring": ring, "side_faces": faces})
-            print(f"{tk:6.1f} | " + "  ".join(f"{s:.2f}/{b:.2f}" for s, b in shares) + f" | {ring}, {faces}")
+            front = damage_front(rad, band, d)
+            out["outputs"].append({"t_us": tk, "softening_broken": shares, "ring": ring, "side_faces": faces,
+                                   "damage_front_mm": front, "p_wave_mm": p_wave_radius(tk)})
+            print(f"{tk:6.1f} | " + "  ".join(f"{s:.2f}/{b:.2f}" for s, b in shares) + f" | {ring}, {faces}"
+                  f" | front {front:.0f} mm, P wave {p_wave_radius(tk):.0f} mm")
         v = r[f"output/{keys[-1]}/velocity"][:]
     er = np.stack([x[:, 0] - measures.HOLE_AXIS[0], x[:, 1] - measures.HOLE_AXIS[1]], axis=1) / np.maximum(rad, 1e-9)[:, None]
     vr = np.sum(v[:, :2] * er, axis=1)
     w = vol if vol is not None else np.ones(len(x))
     rate = float(np.sum(w * vr * rad) / np.sum(w * rad * rad))
-    k_ic, c = math.sqrt(E * G0), math.sqrt(E / RHO)
+    k_ic, c = math.sqrt(E * fracture_energy(a.run)), math.sqrt(E / RHO)
     s = (math.sqrt(24) * k_ic / (RHO * c * rate)) ** (2 / 3) if rate > 0 else float("inf")
     out.update({"expansion_rate_per_s": rate, "grady_size_m": s, "grady_cube_mass_share": RHO * s ** 3 / BLOCK_MASS})
     print(f"expansion rate {rate:.0f} /s at the end: Grady's fragment size {s * 1e3:.0f} mm "

@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """The issue's measures of a concrete-blast run (after breccia-post): large pieces (each more
 than 2% of the block's mass) and their share of the mass, fine debris (fragments under 1 g),
-radial cracks counted on a ring around the hole, and damage on the side faces.
+radial cracks counted on a ring around the hole, damage on the side faces, and the share of
+the mass in particles with damage >= 0.5 (broken_mass_share: a large piece of broken particles
+held by softening bonds is a skeleton, not a sound piece).
 
 Usage: measures.py RUN_DIR PARTICLES_H5 [--label TEXT] [--json OUT]
 Radial cracks: particles in the ring 40-80 mm from the hole axis and 20-130 mm below the top
@@ -69,6 +71,15 @@ def side_face_cracks(x, damage, strip=0.01, bin_width=0.01):
     return count_cracks(binned_mean(damage[near], bins, count))
 
 
+def broken_mass_share(volume, damage):
+    """Share of the block's mass (one material: its volume) in particles with damage >= 0.5,
+    i.e. that have lost at least half their bonds' share. The fragments count only fully broken
+    bonds as cuts (docs/theory.md "Quasi-brittle bonds"), so a large piece whose particles
+    are held by bonds near the end of their softening counts as one piece: this share tells
+    a sound piece from such a skeleton."""
+    return float(np.sum(volume[damage >= 0.5]) / np.sum(volume))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("run")
@@ -86,6 +97,7 @@ def main():
     debris = masses[masses < 1e-3]
     with h5py.File(a.particles) as p:
         x = p["particles/position"][:]
+        volume = p["particles/volume"][:]
     with h5py.File(f"{a.run}/results.h5") as r:
         last = sorted(r["output"].keys())[-1]
         damage = r[f"output/{last}/damage"][:]
@@ -103,6 +115,7 @@ def main():
         "radial_cracks_ring": radial,
         "radial_cracks_side_faces": side_face_cracks(x, damage),
         "side_face_damaged_share": float(np.mean(damage[side] > 0.5)),
+        "broken_mass_share": broken_mass_share(volume, damage),
     }
     print(", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}" for k, v in out.items()))
     if a.json:

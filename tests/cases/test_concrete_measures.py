@@ -2,7 +2,7 @@
 """The concrete-blast case's crack counts (cases/concrete-blast/measures.py) on synthetic
 damage fields whose answer is known by construction: a 5 mm lattice filling the 300 mm cube,
 damage 1 within 4 mm of chosen half-planes that start on the hole axis (radial cracks) and
-stop at a chosen radius. Exit 1 on any wrong count."""
+stop at a chosen radius; and the broken mass share on three particles. Exit 1 on any wrong count."""
 import importlib.util
 import os
 import sys
@@ -54,4 +54,6 @@ expect("three short cracks, side faces", measures.side_face_cracks(x, d), 0)
 expect("intact, side faces", measures.side_face_cracks(x, np.zeros(len(x))), 0)
 expect("damaged throughout, side faces", measures.side_face_cracks(x, np.ones(len(x))), "all")
 expect("damaged throughout, ring", measures.ring_cracks(x, np.ones(len(x))), "all")
+# The broken share weighs particles by volume: two particles of three by count, a quarter by volume.
+expect("broken mass share", measures.broken_mass_share(np.array([1.0, 1.0, 6.0]), np.array([0.5, 0.99, 0.49])), 0.25)
 sys.exit(1 if failures else 0)

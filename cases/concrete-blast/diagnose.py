@@ -12,6 +12,9 @@ cracks on the ring and on the side faces (measures.py). Last, the block's expans
 its final velocities (least squares v_r = rate r about the hole axis) and Grady's (1982)
 fragment size for it, s = (sqrt(24) K_Ic / (rho c rate))^(2/3), K_Ic = sqrt(E G0), c = sqrt(E/rho)
 (docs/references.md [Grady 1982]; E and rho of case.yaml, G0 of the run's case_as_run.yaml).
+At the end also: the particles faster than 300 m/s (count, mass, share of the kinetic energy),
+and the sound pieces (components of unbroken bonds between particles with damage < 0.9) over
+2% of the mass.
 """
 import argparse
 import csv
@@ -47,6 +50,44 @@ def damage_front(rad, band, damage, width=0.01):
         if m.any() and np.mean(damage[m] > 0.05) >= 0.5:
             front = (lo + width) * 1e3
     return front
+
+
+def fast_particles(x, vol, v, speed=300.0):
+    """The particles faster than `speed` [m/s] at the end: count, mass, their share of the
+    kinetic energy, and how many started within 16 mm of the hole axis (the wall's zone)."""
+    m = RHO * vol
+    sp = np.linalg.norm(v, axis=1)
+    ke = 0.5 * m * sp ** 2
+    fast = sp > speed
+    near = np.hypot(x[:, 0] - measures.HOLE_AXIS[0], x[:, 1] - measures.HOLE_AXIS[1]) < 0.016
+    out = {"fast_count": int(fast.sum()), "fast_mass_kg": float(m[fast].sum()),
+           "fast_kinetic_share": float(ke[fast].sum() / max(ke.sum(), 1e-300)), "fast_from_hole_zone": int((fast & near).sum())}
+    print(f"particles faster than {speed:.0f} m/s at the end: {out['fast_count']} ({out['fast_mass_kg'] * 1e3:.1f} g, "
+          f"{out['fast_from_hole_zone']} from within 16 mm of the axis), {out['fast_kinetic_share']:.0%} of the kinetic energy")
+    return out
+
+
+def sound_pieces(r, key, vol, threshold=0.9):
+    """Pieces of sound particles at output `key`: components of the unbroken within-horizon bonds
+    between particles with damage below `threshold` (the fragments of breccia-post with the
+    particles that have lost most of their bonds' share left out). Returns those over 2% of the
+    mass and their share, and the mass share at or above the threshold."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    off, nb = r["bonds/offsets"][:], r["bonds/neighbors"][:]
+    bits = lambda name: np.unpackbits(r[name][:], bitorder="little")[:len(nb)].astype(bool)  # noqa: E731
+    src = np.repeat(np.arange(len(off) - 1), np.diff(off))
+    ok = r[f"output/{key}/damage"][:] < threshold
+    keep = bits("bonds/within_horizon") & ~bits(f"output/{key}/broken") & ok[src] & ok[nb]
+    n = len(ok)
+    _, label = connected_components(coo_matrix((np.ones(keep.sum()), (src[keep], nb[keep])), shape=(n, n)), directed=False)
+    share = np.sort(np.bincount(label[ok], weights=vol[ok]))[::-1] / vol.sum()
+    big = share[share > 0.02]
+    out = {"sound_pieces_over_2pct": int(len(big)), "sound_pieces_share": float(big.sum()),
+           "mass_share_damage_over_threshold": float(vol[~ok].sum() / vol.sum())}
+    print(f"sound pieces (damage < {threshold}): {len(big)} over 2% holding {big.sum():.1%}; "
+          f"{out['mass_share_damage_over_threshold']:.1%} of the mass at damage >= {threshold}")
+    return out
 
 
 def fracture_energy(run):
@@ -103,6 +144,8 @@ def main():
             print(f"{tk:6.1f} | " + "  ".join(f"{s:.2f}/{b:.2f}" for s, b in shares) + f" | {ring}, {faces}"
                   f" | front {front:.0f} mm, P wave {p_wave_radius(tk):.0f} mm")
         v = r[f"output/{keys[-1]}/velocity"][:]
+        out.update(fast_particles(x, vol, v))
+        out.update(sound_pieces(r, keys[-1], vol))
     er = np.stack([x[:, 0] - measures.HOLE_AXIS[0], x[:, 1] - measures.HOLE_AXIS[1]], axis=1) / np.maximum(rad, 1e-9)[:, None]
     vr = np.sum(v[:, :2] * er, axis=1)
     w = vol if vol is not None else np.ones(len(x))

@@ -229,6 +229,19 @@ private:
 // order), each `per` values of T: the counts go first (MPI_Alltoall) and the displacements
 // are their prefix sums. `recv` is sized to what arrives; rank r's elements start at
 // recv_displs[r] (ranks + 1 entries, the last the total). Its vectors are kept between calls.
+// `total` items cut into one contiguous block per rank: rank q's begins at total q / ranks.
+struct Blocks {
+  int64_t total;
+  int ranks;
+  int64_t begin(int q) const { return total * q / ranks; }
+  int holding(int64_t item) const {  // the rank whose block holds `item`
+    int q = static_cast<int>(item * ranks / std::max<int64_t>(total, 1));
+    while (q + 1 < ranks && begin(q + 1) <= item) ++q;
+    while (q > 0 && begin(q) > item) --q;
+    return q;
+  }
+};
+
 struct AllToAll {
   std::vector<int> recv_counts, send_displs, recv_displs;
   template <class T>
@@ -866,13 +879,9 @@ public:
     for (const ResultsField& f : fields) width += static_cast<size_t>(f.components);
     int size = 1;
     MPI_Comm_size(comm_, &size);
-    auto block_begin = [&](int q) { return static_cast<int64_t>(g.n) * q / size; };
-    auto block_of = [&](int64_t fi) {  // the rank whose block holds file row fi
-      int q = static_cast<int>(fi * size / static_cast<int64_t>(g.n));
-      while (q + 1 < size && block_begin(q + 1) <= fi) ++q;
-      while (q > 0 && block_begin(q) > fi) --q;
-      return q;
-    };
+    const Blocks file_rows{static_cast<int64_t>(g.n), size};
+    auto block_begin = [&](int q) { return file_rows.begin(q); };
+    auto block_of = [&](int64_t fi) { return file_rows.holding(fi); };  // the rank whose block holds file row fi
     const int64_t owned = layout_.owned();
     std::vector<int> send_counts(size, 0), at(size, 0);  // at: where each block's values go in `send`
     for (int64_t k = 0; k < owned; ++k) send_counts[block_of(local_.original_index[k])] += static_cast<int>(width);
@@ -915,13 +924,9 @@ public:
     const int64_t bytes = (offsets.back() + 7) / 8;
     int size = 1;
     MPI_Comm_size(comm_, &size);
-    auto byte_begin = [&](int q) { return bytes * q / size; };
-    auto block_of = [&](int64_t byte) {  // the rank whose block holds that byte
-      int q = static_cast<int>(byte * size / std::max<int64_t>(bytes, 1));
-      while (q + 1 < size && byte_begin(q + 1) <= byte) ++q;
-      while (q > 0 && byte_begin(q) > byte) --q;
-      return q;
-    };
+    const Blocks blocks{bytes, size};
+    auto byte_begin = [&](int q) { return blocks.begin(q); };
+    auto block_of = [&](int64_t byte) { return blocks.holding(byte); };  // the rank whose block holds that byte
     std::vector<int64_t> mine =
         broken_bond_positions(local_, static_cast<size_t>(layout_.owned()), offsets, g.precrack_pairs);
     long long total = static_cast<long long>(mine.size());

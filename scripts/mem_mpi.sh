@@ -10,8 +10,13 @@
 # GAS=SIZE: instead of the lattice, a gas load (loads[].type: gas): the gas tests' disc (40 mm
 #   radius, 5 mm charge hole, plane strain) meshed at SIZE throughout (e.g. GAS="0.5 mm":
 #   46,062 particles), LPS with the dual horizon, 20 MPa of gas behind a pre-crack; N unused.
+# RESULTS=1: results.h5 written too (its first and last output groups: the bond list, the
+#   broken bits); default none.
+# RESTART=1: each run is then continued from its checkpoint.h5 on the same ranks for 5 steps
+#   more (--restart, --steps): a second row per rank count, "R restart", with that run's peaks.
 set -euo pipefail
 BUILD=${1:-build}; N=${2:-30}; RANKS=${3:-"1 2 4"}; MODEL=${MODEL:-"type: pmb"}; TIME=${TIME:-"steps: 5"}
+WRITE_RESULTS=false; [ "${RESULTS:-0}" = 1 ] && WRITE_RESULTS=true
 BIN="$(cd "$BUILD" && pwd)/bin"
 OUT="${OUT:-$(pwd)/runs/mem-mpi}"
 mkdir -p "$OUT"
@@ -36,7 +41,7 @@ loads:
   - {type: gas, surface: charge_hole, history: {type: constant, value: 20 MPa}, gamma_high: 3, gamma_low: 1.4,
      switch_pressure: 18 MPa, ambient_pressure: 0, front_speed: 500 m/s, gas_density: 1000 kg/m3}
 time: {$TIME}
-output: {every: 1000000, history_every: 1000000, results: false}
+output: {every: 1000000, history_every: 1000000, results: $WRITE_RESULTS}
 YAML
 else
 DX=0.0005
@@ -48,24 +53,33 @@ model: {$MODEL, horizon_factor: 3.015}
 materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, fracture_energy: 1e6}]
 initial: [{type: radial_velocity, center: [0, 0, 0], strain_rate: 10}]
 time: {$TIME}
-output: {every: 1000000, history_every: 1000000, results: false}
+output: {every: 1000000, history_every: 1000000, results: $WRITE_RESULTS}
 YAML
 fi
 echo "ranks,particles,bond_entries,peak_rss_mb_per_rank (rank 0 first),peak_rss_mb_max,peak_rss_mb_sum,loop_rss_mb_per_rank,loop_rss_mb_max,loop_rss_mb_sum"
+# One run on $1 ranks into $2, each rank's peak into $2/rss$3.RANK, then its row ($4: its label).
+measure() {
+  local ranks=$1 run=$2 tag=$3 label=$4; shift 4
+  # One file per rank: GNU time writes the rank's own peak when it exits.
+  OMP_NUM_THREADS=1 mpirun --oversubscribe -np "$ranks" bash -c \
+    '/usr/bin/time -f %M -o "$0/rss$1.$OMPI_COMM_WORLD_RANK" "${@:2}"' \
+    "$run" "$tag" "$BIN/breccia-solve" "$OUT/case.yaml" -o "$run" --threads 1 --quiet --backend cpu "$@"
+  /usr/bin/python3 - "$run" "$ranks" "$tag" "$label" <<'PY'
+import json, sys
+run, ranks, tag, label = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
+s = json.load(open(f"{run}/summary.json"))
+mb = [int(open(f"{run}/rss{tag}.{r}").read().split()[-1]) / 1024 for r in range(ranks)]
+loop = s.get("loop_resident_mb", [])
+tail = f",{' '.join(f'{m:.0f}' for m in loop)},{max(loop):.0f},{sum(loop):.0f}" if loop else ",,,"
+print(f"{label},{s['particles']},{s['bonds']},{' '.join(f'{m:.0f}' for m in mb)},{max(mb):.0f},{sum(mb):.0f}{tail}")
+PY
+}
 for ranks in $RANKS; do
   run="$OUT/np$ranks"
   rm -rf "$run"; mkdir -p "$run"
-  # One file per rank: GNU time writes the rank's own peak when it exits.
-  OMP_NUM_THREADS=1 mpirun --oversubscribe -np "$ranks" bash -c \
-    '/usr/bin/time -f %M -o "$0/rss.$OMPI_COMM_WORLD_RANK" "$1" "$2" -o "$0" --threads 1 --quiet --backend cpu' \
-    "$run" "$BIN/breccia-solve" "$OUT/case.yaml"
-  /usr/bin/python3 - "$run" "$ranks" <<'PY'
-import json, sys
-run, ranks = sys.argv[1], int(sys.argv[2])
-s = json.load(open(f"{run}/summary.json"))
-mb = [int(open(f"{run}/rss.{r}").read().split()[-1]) / 1024 for r in range(ranks)]
-loop = s.get("loop_resident_mb", [])
-tail = f",{' '.join(f'{m:.0f}' for m in loop)},{max(loop):.0f},{sum(loop):.0f}" if loop else ",,,"
-print(f"{ranks},{s['particles']},{s['bonds']},{' '.join(f'{m:.0f}' for m in mb)},{max(mb):.0f},{sum(mb):.0f}{tail}")
-PY
+  measure "$ranks" "$run" "" "$ranks"
+  if [ "${RESTART:-0}" = 1 ]; then
+    step=$(/usr/bin/python3 -c 'import h5py, sys; print(int(h5py.File(sys.argv[1], "r").attrs["step"]))' "$run/checkpoint.h5")
+    measure "$ranks" "$run" "-restart" "$ranks restart" --restart "$run/checkpoint.h5" --steps $((step + 5))
+  fi
 done

@@ -260,6 +260,9 @@ std::vector<double> File::read_double_rows(const std::string& p, hsize_t first, 
 std::vector<int32_t> File::read_int32_rows(const std::string& p, hsize_t first, hsize_t count) const {
   return read_rows_impl<int32_t>(*this, p, first, count);
 }
+std::vector<uint8_t> File::read_uint8_rows(const std::string& p, hsize_t first, hsize_t count) const {
+  return read_rows_impl<uint8_t>(*this, p, first, count);
+}
 
 std::vector<std::string> File::read_strings(const std::string& path) const {
   const auto d = dims(path);

@@ -1,6 +1,7 @@
 #include "breccia/solver/distributed_setup.hpp"
 
 #include <stdexcept>
+#include <type_traits>
 
 #include "breccia/common/error.hpp"
 
@@ -98,7 +99,15 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   // there). A rate law's onsets are state (restrict_to_rank_taking_bonds left the rank's own
   // here); so are a gas load's entered cracks (checkpoint.h5's /gas/in_crack), whose
   // `halves` moved into the rank's system with the bonds (set-up only).
+  // With parallel HDF5 no writer reads them whole (each rank writes its rows and forms its
+  // part of the broken bits: mpi_backend.cpp), so they are let go on every rank.
+#ifdef BRECCIA_PARALLEL_HDF5
+  const bool staged = false;
+  for_each_bond_state_array(s, [](auto& a) { std::remove_reference_t<decltype(a)>().swap(a); });
+#else
+  const bool staged = d.rank == 0;
   for_each_bond_state_array(s, [&](auto& a) { gather_entries(d, a, false); });
+#endif
   // The stable-step estimate cut the rank's system and took the coefficients with it
   // (restrict_to_rank_taking_bonds): without that hook the ranks would have no bonds.
   if (!s.xi_len.empty())
@@ -110,7 +119,7 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   }
   s.offsets = rows.full_offsets;
   for_each_bond_state_array(s, [&](auto& a) {
-    if (a.size() != (d.rank == 0 ? s.bond_count() : 0)) throw std::logic_error("distributed set-up: the gathered bond states");
+    if (a.size() != (staged ? s.bond_count() : 0)) throw std::logic_error("distributed set-up: the gathered bond states");
   });
 }
 

@@ -31,8 +31,8 @@ std::vector<double> to_file_order(const PdSystem& s, const std::vector<double>& 
   return out;
 }
 
-bool is_precrack(const PdSystem& s, int64_t fi, int64_t fj) {
-  return std::binary_search(s.precrack_pairs.begin(), s.precrack_pairs.end(), std::make_pair(fi, fj));
+bool is_precrack(const std::vector<std::pair<int64_t, int64_t>>& precrack_pairs, int64_t fi, int64_t fj) {
+  return std::binary_search(precrack_pairs.begin(), precrack_pairs.end(), std::make_pair(fi, fj));
 }
 
 // Broken by fracture, seen from bond entry k: a half that never existed (outside that
@@ -55,7 +55,7 @@ std::vector<int64_t> broken_pairs(const PdSystem& s) {
     for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
       const int64_t fi = s.original_index[i], fj = s.original_index[s.neighbor[k]];
       if (fi >= fj || !fracture_broken(s, k)) continue;
-      if (is_precrack(s, fi, fj)) continue;
+      if (is_precrack(s.precrack_pairs, fi, fj)) continue;
       pairs.emplace_back(fi, fj);
     }
   std::sort(pairs.begin(), pairs.end());
@@ -126,7 +126,7 @@ HalfBondList half_bond_list(const PdSystem& s) {
       }
       if (r2 <= horizon[i] * horizon[i] || r2 <= horizon[j] * horizon[j])
         h.within_horizon[at >> 3] |= static_cast<uint8_t>(1u << (at & 7));
-      if (!s.precrack_pairs.empty() && is_precrack(s, static_cast<int64_t>(i), static_cast<int64_t>(j)))
+      if (!s.precrack_pairs.empty() && is_precrack(s.precrack_pairs, static_cast<int64_t>(i), static_cast<int64_t>(j)))
         h.precrack[at >> 3] |= static_cast<uint8_t>(1u << (at & 7));
     }
   return h;
@@ -149,6 +149,35 @@ std::vector<uint8_t> broken_bits(const PdSystem& s, const HalfBondList& h, int64
   }
   if (broken_count) *broken_count = total;
   return bits;
+}
+
+std::vector<int64_t> half_bond_counts(const PdSystem& r, size_t owned, size_t n) {
+  std::vector<int64_t> counts(n + 1, 0);
+  for (size_t i = 0; i < owned; ++i) {
+    const int64_t fi = r.original_index[i];
+    for (int64_t k = r.offsets[i]; k < r.offsets[i + 1]; ++k)
+      if (fi < r.original_index[r.neighbor[k]]) ++counts[fi + 1];
+  }
+  return counts;
+}
+
+std::vector<int64_t> broken_bond_positions(const PdSystem& r, size_t owned, const std::vector<int64_t>& file_offsets,
+                                           const std::vector<std::pair<int64_t, int64_t>>& precrack_pairs) {
+  std::vector<int64_t> positions;
+  std::vector<std::pair<int64_t, int64_t>> row;  // (partner's file index, entry): half_bond_list's order
+  for (size_t i = 0; i < owned; ++i) {
+    const int64_t fi = r.original_index[i];
+    row.clear();
+    for (int64_t k = r.offsets[i]; k < r.offsets[i + 1]; ++k) {
+      const int64_t fj = r.original_index[r.neighbor[k]];
+      if (fi < fj) row.emplace_back(fj, k);
+    }
+    std::sort(row.begin(), row.end());
+    for (size_t q = 0; q < row.size(); ++q)
+      if (fracture_broken(r, row[q].second) && !is_precrack(precrack_pairs, fi, row[q].first))
+        positions.push_back(file_offsets[fi] + static_cast<int64_t>(q));
+  }
+  return positions;
 }
 
 ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool restart) : dir_(out_dir) {
@@ -260,27 +289,23 @@ void ResultsWriter::count_output(const PdSystem& s) {
 
 #ifdef BRECCIA_PARALLEL_HDF5
 void ResultsWriter::write_together(const PdSystem& s, ResultsWriter* w, const std::string& out_dir, size_t file_first,
-                                   size_t file_count, const std::vector<std::vector<double>>& rows, MPI_Comm comm) {
-  // The root: the group's index and the broken bits (from the bond states it gathered), then
-  // its own handle closed, since the ranks open the file together (one open per process).
-  long long meta[3] = {0, 0, 0};  // index, broken count, broken bytes
-  std::vector<uint8_t> broken;
+                                   size_t file_count, const std::vector<std::vector<double>>& rows,
+                                   const std::vector<uint8_t>& broken, long long broken_count, MPI_Comm comm) {
+  // The root: the group's index, then its own handle closed, since the ranks open the file
+  // together (one open per process).
+  long long index = 0;
   if (w) {
-    int64_t count = 0;
-    broken = broken_bits(s, w->bonds_, &count);
-    meta[0] = w->count_, meta[1] = count, meta[2] = static_cast<long long>(broken.size());
+    index = w->count_;
     w->file_.reset();
   }
-  MPI_Bcast(meta, 3, MPI_LONG_LONG, 0, comm);
-  broken.resize(static_cast<size_t>(meta[2]));
-  MPI_Bcast(broken.data(), static_cast<int>(broken.size()), MPI_BYTE, 0, comm);  // b / 8 bytes
+  MPI_Bcast(&index, 1, MPI_LONG_LONG, 0, comm);
   {
     h5::File f(out_dir + "/results.h5", h5::File::Mode::ReadWrite, comm);
-    const std::string g = results_output_group(static_cast<int>(meta[0]));
+    const std::string g = results_output_group(static_cast<int>(index));
     const std::vector<ResultsField> fields = results_fields(s);
     for (size_t k = 0; k < fields.size(); ++k)
       f.write_rows(g + "/" + fields[k].name, rows[k].data(), file_first, file_count, field_dims(s.n, fields[k].components));
-    finish_results_output(f, static_cast<int>(meta[0]), static_cast<long long>(s.step), s.time, broken, meta[1]);
+    finish_results_output(f, static_cast<int>(index), static_cast<long long>(s.step), s.time, broken, broken_count);
   }
   if (w) w->count_output(s);
 }
@@ -475,7 +500,20 @@ void write_checkpoint(const PdSystem& s, const std::string& path, const Checkpoi
 }
 #endif
 
-void read_checkpoint(PdSystem& s, const std::string& path) {
+CheckpointedPassState::CheckpointedPassState(const PdSystem& s)
+    : dissipated_(s.dissipated_energy), force_(s.force), keep_bonds_(s.config.strength_rate != StrengthRateLaw::None) {
+  if (keep_bonds_) state_ = s.state, damage_ = s.bond_damage, onset_ = s.s_onset, ultimate_ = s.s0_own;
+}
+
+void CheckpointedPassState::restore(PdSystem& s) {
+  if (keep_bonds_)
+    s.state = std::move(state_), s.bond_damage = std::move(damage_), s.s_onset = std::move(onset_),
+    s.s0_own = std::move(ultimate_);
+  s.dissipated_energy = dissipated_;
+  s.force = std::move(force_);
+}
+
+void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
   if (!std::filesystem::exists(path)) throw InputError(path, "", "checkpoint file does not exist", "a checkpoint.h5");
   h5::File f(path, h5::File::Mode::Read);
   if (!f.has_attr("/", "format") || f.attr_string("/", "format") != "breccia-checkpoint")
@@ -496,31 +534,47 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
   s.a = f.read_doubles("/a");
   s.force = f.read_doubles("/force");
   s.body = f.read_doubles("/body");
-  s.state = f.read_uint8("/bond_state");
+  // The per-entry arrays: a distributed set-up's rank reads its own rows' entries (one run of
+  // the file's entries, which are in internal order), which its system takes (copy_rank_state);
+  // rank 0 of a build without parallel HDF5 reads them whole (its writers' staging).
+  size_t entry_first = 0, entry_count = s.bond_count();
+#ifndef BRECCIA_PARALLEL_HDF5
+  if (rank != 0)
+#endif
+    if (!s.distributed_rows.empty()) {
+      entry_first = static_cast<size_t>(s.offsets[s.distributed_rows[rank]]);
+      entry_count = static_cast<size_t>(s.offsets[s.distributed_rows[rank + 1]]) - entry_first;
+    }
+  auto entries_sized = [&](const std::string& dataset) {
+    const std::vector<hsize_t> d = f.dims(dataset);
+    if (d.size() != 1 || d[0] != s.bond_count())
+      throw InputError(path, dataset, "sized for other families", "a checkpoint of this case");
+  };
+  auto entry_bytes = [&](const std::string& dataset) {
+    entries_sized(dataset);
+    return f.read_uint8_rows(dataset, entry_first, entry_count);
+  };
+  auto entry_floats = [&](const std::string& dataset) {
+    entries_sized(dataset);
+    const std::vector<double> d = f.read_double_rows(dataset, entry_first, entry_count);
+    return std::vector<float>(d.begin(), d.end());
+  };
+  s.state = entry_bytes("/bond_state");
   if (s.config.softening) {  // softening bonds: partial damage is state
     if (!f.exists("/bond_damage"))
       throw InputError(path, "/bond_damage", "missing (written without materials[].tensile_strength)",
                        "a checkpoint of this case with the same materials");
-    const auto damage = f.read_doubles("/bond_damage");
-    s.bond_damage.assign(damage.begin(), damage.end());
+    s.bond_damage = entry_floats("/bond_damage");
   }
   if (s.config.strength_rate != StrengthRateLaw::None) {
     if (!f.exists("/bond_onset"))
       throw InputError(path, "/bond_onset", "missing (written without materials[].strength_rate)",
                        "a checkpoint of this case with the same materials");
-    const auto onset = f.read_doubles("/bond_onset");
-    if (onset.size() != s.bond_count())  // a distributed set-up's ranks other than 0 hold none (for_each_bond_state_array)
-      throw InputError(path, "/bond_onset", "sized for other families", "a checkpoint of this case");
     // The ultimates of the raised laws are not written: each is the set-up's scaled as its
     // onset was (pd_kernels.hpp raised_ultimate), rebuilt here from the set-up's values where
     // this system holds them (a distributed set-up's ranks hold their rows' ultimates:
-    // copy_rank_state rebuilds those).
-    const std::vector<float> raised(onset.begin(), onset.end());
-    if (s.s_onset.size() != raised.size())  // a distributed set-up's rank > 0: held whole for copy_rank_state
-      s.s_onset = raised;
-    else
-      adopt_raised_onsets(s.s_onset.data(), s.s0_own.size() == raised.size() ? s.s0_own.data() : nullptr,
-                          raised.data(), raised.size());
+    // copy_rank_state rebuilds those from the rows read here).
+    take_raised_onsets(s.s_onset, s.s0_own, entry_floats("/bond_onset"));
   }
   if (!s.min_stretch.empty()) {
     if (!f.exists("/min_stretch_previous"))
@@ -559,9 +613,7 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
       if (!f.exists("/gas/in_crack"))
         throw InputError(path, "/gas/in_crack", "missing (written by an older breccia-solve)",
                          "a checkpoint of this case written by this version");
-      g.in_crack = f.read_uint8("/gas/in_crack");
-      if (g.in_crack.size() != s.bond_count())  // a distributed set-up's global system keeps the offsets, no partners
-        throw InputError(path, "/gas/in_crack", "sized for other families", "a checkpoint of this case");
+      g.in_crack = entry_bytes("/gas/in_crack");
       if (g.crack_pass_every > 1) {
         if (!f.exists("/gas/push") || !f.exists("/gas/crack_pass"))
           throw InputError(path, "/gas/push", "missing (a checkpoint of a run with crack_pass_every 1)",
@@ -585,20 +637,10 @@ void read_checkpoint(PdSystem& s, const std::string& path) {
   }
   // Derived per-particle fields (damage, energy) at the restored state; no bond can break
   // here because the stretches are those already checked at the checkpointed step.
-  // With a rate law the velocities here are the full step's, not the half step's the straight
-  // run's pass saw: a bond near its dynamic onset could soften here and not there, so the
-  // bond state is kept as checkpointed.
-  const double dissipated = s.dissipated_energy;
-  const std::vector<double> force = s.force;
-  const bool keep_bonds = s.config.strength_rate != StrengthRateLaw::None;
-  std::vector<uint8_t> state;
-  std::vector<float> damage, onset, ultimate;
-  if (keep_bonds) state = s.state, damage = s.bond_damage, onset = s.s_onset, ultimate = s.s0_own;
+  // With a rate law the bond state is kept as checkpointed (CheckpointedPassState says why).
+  CheckpointedPassState checkpointed(s);
   cpu_compute_forces(s);
-  if (keep_bonds)
-    s.state = std::move(state), s.bond_damage = std::move(damage), s.s_onset = std::move(onset), s.s0_own = std::move(ultimate);
-  s.dissipated_energy = dissipated;
-  s.force = force;
+  checkpointed.restore(s);
 }
 
 }  // namespace breccia::solver

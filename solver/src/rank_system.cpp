@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "breccia/common/error.hpp"
 #include "breccia/solver/correspondence_kernels.hpp"
@@ -210,20 +211,19 @@ void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
   s.min_stretch = take(g.min_stretch, ids, 1, n);
   s.min_stretch_next = take(g.min_stretch_next, ids, 1, n);
   const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
-  // A bond state array the global system does not hold (a distributed set-up's, on the ranks
-  // other than 0: for_each_bond_state_array) is already this system's own rows: kept.
-  auto entries = [&](auto& mine, const auto& whole) {
-    if (!whole.empty()) mine = slice(whole, eb, ee);
+  // The global system's bond state arrays (for_each_bond_state_array) hold every entry (one
+  // process's set-up, rank 0's staging), or this rank's rows alone (a distributed restart's
+  // read_checkpoint), or nothing: then this system's own rows are already the state, kept.
+  auto rows_of = [&](const auto& global) {
+    return global.size() == g.bond_count() ? slice(global, eb, ee) : global;
+  };
+  auto entries = [&](auto& mine, const auto& global) {
+    if (!global.empty()) mine = rows_of(global);
   };
   entries(s.state, g.state);
   entries(s.bond_damage, g.bond_damage);
-  if (g.config.strength_rate != StrengthRateLaw::None && !g.s_onset.empty()) {
-    // raised onsets, and the ultimates raised with them
-    const std::vector<float> raised = slice(g.s_onset, eb, ee);
-    if (s.s_onset.size() != raised.size()) s.s_onset = raised;
-    else adopt_raised_onsets(s.s_onset.data(), s.s0_own.size() == raised.size() ? s.s0_own.data() : nullptr,
-                             raised.data(), raised.size());
-  }
+  if (g.config.strength_rate != StrengthRateLaw::None && !g.s_onset.empty())
+    take_raised_onsets(s.s_onset, s.s0_own, rows_of(g.s_onset));  // and the ultimates raised with them
 
   s.step = g.step;
   s.time = g.time;
@@ -260,7 +260,9 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
   // with the bonds (restrict_to_rank_taking_bonds) and stay when its state is brought up to
   // date; a whole system's are its rows' slice.
   std::vector<uint8_t> halves = G.halves.empty() ? std::move(r.halves) : slice(G.halves, eb, ee);
-  std::vector<uint8_t> in_crack = G.in_crack.empty() ? std::move(r.in_crack) : slice(G.in_crack, eb, ee);
+  std::vector<uint8_t> in_crack = G.in_crack.empty()                   ? std::move(r.in_crack)
+                                 : G.in_crack.size() == g.bond_count() ? slice(G.in_crack, eb, ee)
+                                                                       : G.in_crack;  // a restart's own rows
   r = GasState{};
   r.active = true;
   r.load = G.load;
@@ -348,6 +350,12 @@ std::vector<const void*> release_global_for_loop(PdSystem& g, bool root) {
     drop(*a);
   for (auto* a : {&gas.front_done, &gas.attached, &gas.halves}) drop(*a);
   drop(gas.block_sums);
+#ifdef BRECCIA_PARALLEL_HDF5
+  // The bond states: each rank writes its own rows (checkpoint.h5) and forms its part of the
+  // broken bits (results.h5) from its system, so no rank gathers them: a distributed set-up
+  // left none here, a restart this rank's rows, which its system has taken. Not named as held.
+  for_each_bond_state_array(g, [](auto& a) { std::remove_reference_t<decltype(a)>().swap(a); });
+#endif
   if (!root) {
     // What rank 0 gathers the state into for its files (MpiBackend::download, output).
     for (auto* a : {&g.u, &g.v, &g.a, &g.force, &g.body, &g.energy_density, &g.dissipated, &g.damage,
@@ -355,19 +363,23 @@ std::vector<const void*> release_global_for_loop(PdSystem& g, bool root) {
                     &g.corr_nonaffine, &g.gas.arrival, &g.gas.push})
       drop(*a);
     for (auto* a : {&g.min_stretch, &g.min_stretch_next}) drop(*a);
-    // The bond states: a distributed set-up left them on rank 0 alone (a restart's read them
-    // whole here too). Rank 0 holds them whenever there are bonds: this rank takes part in its
-    // gathers (MpiBackend::held).
+#ifndef BRECCIA_PARALLEL_HDF5
+    // The bond states: a distributed set-up left them on rank 0 alone (a restart read this
+    // rank's rows here, which its system has taken). Rank 0 holds them whenever there are
+    // bonds: this rank takes part in its gathers (MpiBackend::held).
     for_each_bond_state_array(g, [&](auto& a) {
       if (g.bond_count() > 0) drop.held.push_back(&a);
       drop(a);
     });
+#endif
     // What rank 0's writers alone read: the instability message's positions, the indenter's
     // volumes, the file order, the results' bond list.
     drop(g.x0);
     drop(g.volume);
     drop(g.original_index);
-    drop(g.precrack_pairs);
+#ifndef BRECCIA_PARALLEL_HDF5
+    drop(g.precrack_pairs);  // with parallel HDF5 every rank's broken bits leave out the pre-crack's
+#endif
     drop(g.neighbor);
     drop(g.vol_own);
     drop(g.k_dual);

@@ -262,6 +262,10 @@ void StepBackend::output(PdSystem& s, ResultsWriter* results, const std::string&
   if (results) results->write(s);
 }
 
+void StepBackend::first_output(PdSystem& s, ResultsWriter* results, const std::string&) {
+  if (results) results->write(s);
+}
+
 RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, ResultsWriter* results,
                         HistoryWriter* history) {
   RunResult r;
@@ -272,7 +276,7 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
   double supplied = e.kinetic + e.strain;  // the scale against which blow-up is judged
   if (!restart) {
     if (root) history->write(s, e);  // host and backend agree before the first step
-    if (results) results->write(s);
+    backend.first_output(s, results, o.out_dir);
   }
   const long long first_step = s.step;
   const std::clock_t cpu0 = std::clock();
@@ -311,10 +315,8 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
       backend.compute_forces(s);  // diagnostics at this step (no bond can break again here)
       e = backend.measure(s);
       backend.download(s);
-      if (root) {
-        history->write(s, e);
-        if (results) results->write(s);
-      }
+      if (root) history->write(s, e);
+      backend.output(s, results, o.out_dir);  // a distributed one written by every rank together
       backend.checkpoint(s, o.out_dir + "/checkpoint.h5", root, true);
       break;
     }
@@ -392,7 +394,7 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
   if (o.threads > 0) omp_set_num_threads(o.threads);
   const auto t0 = std::chrono::steady_clock::now();
   PdSystem s = setup_system(config, o.setup_hooks);
-  if (!o.restart_file.empty()) read_checkpoint(s, o.restart_file);
+  if (!o.restart_file.empty()) read_checkpoint(s, o.restart_file, o.setup_hooks.distributed.rank);
   const double setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (o.progress) {
     std::fprintf(stderr,

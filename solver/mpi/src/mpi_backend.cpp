@@ -229,6 +229,19 @@ private:
 // order), each `per` values of T: the counts go first (MPI_Alltoall) and the displacements
 // are their prefix sums. `recv` is sized to what arrives; rank r's elements start at
 // recv_displs[r] (ranks + 1 entries, the last the total). Its vectors are kept between calls.
+// `total` items cut into one contiguous block per rank: rank q's begins at total q / ranks.
+struct Blocks {
+  int64_t total;
+  int ranks;
+  int64_t begin(int q) const { return total * q / ranks; }
+  int holding(int64_t item) const {  // the rank whose block holds `item`
+    int q = static_cast<int>(item * ranks / std::max<int64_t>(total, 1));
+    while (q + 1 < ranks && begin(q + 1) <= item) ++q;
+    while (q > 0 && begin(q) > item) --q;
+    return q;
+  }
+};
+
 struct AllToAll {
   std::vector<int> recv_counts, send_displs, recv_displs;
   template <class T>
@@ -718,21 +731,11 @@ public:
       // read_checkpoint's pass at the restored state, on the rank's particles (no bond
       // breaks: the stretches are the checkpointed step's); forces and the dissipated
       // energy stay the checkpoint's.
-      // With a rate law the bond states are kept as checkpointed (read_checkpoint says why).
-      const double dissipated = local_.dissipated_energy;
-      const std::vector<double> force = local_.force;
-      const bool keep_bonds = local_.config.strength_rate != StrengthRateLaw::None;
-      std::vector<uint8_t> state;
-      std::vector<float> damage, onset, ultimate;
-      if (keep_bonds)
-        state = local_.state, damage = local_.bond_damage, onset = local_.s_onset, ultimate = local_.s0_own;
+      // With a rate law the bond states are kept as checkpointed (CheckpointedPassState).
+      CheckpointedPassState checkpointed(local_);
       local_.diagnostics = true;
       force_pass(local_);
-      if (keep_bonds)
-        local_.state = std::move(state), local_.bond_damage = std::move(damage), local_.s_onset = std::move(onset),
-        local_.s0_own = std::move(ultimate);
-      local_.dissipated_energy = dissipated;
-      local_.force = force;
+      checkpointed.restore(local_);
       global.derived_fields_pending = false;
     }
     // float32: one process's first measure leaves the float-rounded kinematics in its system,
@@ -840,28 +843,45 @@ public:
   }
 
 #ifdef BRECCIA_PARALLEL_HDF5
-  // Every rank writes rows of results.h5's output group: the file's rows are cut into one
-  // contiguous block per rank, and the owned particles' values travel to the rank whose block
-  // holds their file index (one all-to-all). The root gathers the bond states (its broken
-  // bits read them: 1 byte per entry) and, for probes and the indenter, u and v.
   void output(PdSystem& g, ResultsWriter* results, const std::string& out_dir) override {
     if (!g.config.write_results) return StepBackend::output(g, results, out_dir);
     to_host();
-    const int r = layout_.rank;
-    gather(local_.state, g.state, entry_ranges(layout_.part, g.offsets));
     if (!g.config.probes.empty() || g.config.indenter.enabled) download_kinematics(g);
+    write_output(g, results, out_dir);
+  }
+
+  // The set-up's state, as every rank's system holds it (copy_rank_state: the global
+  // system's values, float32's kinematics rounded as download_kinematics left them), written
+  // together like any output: no rank holds the whole bond state to write it alone.
+  void first_output(PdSystem& g, ResultsWriter* results, const std::string& out_dir) override {
+    if (g.config.write_results) write_output(g, results, out_dir);
+  }
+
+  // ADR's output is the root's writer's from the global system (run_system): the bond states
+  // are gathered to rank 0 for it (its staging), the other ranks naming them as held.
+  void stage_bond_states(PdSystem& g) {
+    for_each_bond_state_array(g, [&](auto& a) {
+      if (layout_.rank == 0) a.assign(g.bond_count(), {});
+      else if (g.bond_count() > 0) released_.push_back(&a);
+    });
+  }
+
+  // Every rank writes rows of results.h5's output group: the file's rows are cut into one
+  // contiguous block per rank, and the owned particles' values travel to the rank whose block
+  // holds their file index (one all-to-all). The broken bits: each rank finds its own rows'
+  // broken bonds' places in the file's bond list (broken_bond_positions) and every rank
+  // receives every rank's places (the broken bonds only, 8 bytes each), so no rank gathers
+  // the bond states.
+  void write_output(PdSystem& g, ResultsWriter* results, const std::string& out_dir) {
+    const int r = layout_.rank;
     const std::vector<ResultsField> fields = results_fields(g);
     size_t width = 1;  // per particle: its file index, then every field's components
     for (const ResultsField& f : fields) width += static_cast<size_t>(f.components);
     int size = 1;
     MPI_Comm_size(comm_, &size);
-    auto block_begin = [&](int q) { return static_cast<int64_t>(g.n) * q / size; };
-    auto block_of = [&](int64_t fi) {  // the rank whose block holds file row fi
-      int q = static_cast<int>(fi * size / static_cast<int64_t>(g.n));
-      while (q + 1 < size && block_begin(q + 1) <= fi) ++q;
-      while (q > 0 && block_begin(q) > fi) --q;
-      return q;
-    };
+    const Blocks file_rows{static_cast<int64_t>(g.n), size};
+    auto block_begin = [&](int q) { return file_rows.begin(q); };
+    auto block_of = [&](int64_t fi) { return file_rows.holding(fi); };  // the rank whose block holds file row fi
     const int64_t owned = layout_.owned();
     std::vector<int> send_counts(size, 0), at(size, 0);  // at: where each block's values go in `send`
     for (int64_t k = 0; k < owned; ++k) send_counts[block_of(local_.original_index[k])] += static_cast<int>(width);
@@ -887,9 +907,61 @@ public:
       for (size_t f = 0; f < fields.size(); ++f)
         for (int c = 0; c < fields[f].components; ++c) rows[f][static_cast<size_t>(fields[f].components * row + c)] = recv[c0++];
     }
+    long long broken_count = 0;
+    const std::vector<uint8_t> broken = broken_bits_together(g, &broken_count);
     ResultsWriter::write_together(g, results, out_dir, static_cast<size_t>(file_first), static_cast<size_t>(file_count),
-                                  rows, comm_);
+                                  rows, broken, broken_count, comm_);
   }
+
+  // The output group's broken bits (one per bond of results.h5's bond list), on every rank
+  // (each writes the same dataset), without the bond states leaving their ranks: each rank
+  // finds its own rows' broken bonds' places in the file's list (broken_bond_positions) and
+  // sends each to the rank whose block of the bits' bytes holds it (one all-to-all of the
+  // broken bonds only, 8 bytes each), which sets its block's bits; every rank then gathers
+  // every block (the dataset, 1 bit per bond).
+  std::vector<uint8_t> broken_bits_together(const PdSystem& g, long long* count) {
+    const std::vector<int64_t>& offsets = file_bond_offsets(g);
+    const int64_t bytes = (offsets.back() + 7) / 8;
+    int size = 1;
+    MPI_Comm_size(comm_, &size);
+    const Blocks blocks{bytes, size};
+    auto byte_begin = [&](int q) { return blocks.begin(q); };
+    auto block_of = [&](int64_t byte) { return blocks.holding(byte); };  // the rank whose block holds that byte
+    std::vector<int64_t> mine =
+        broken_bond_positions(local_, static_cast<size_t>(layout_.owned()), offsets, g.precrack_pairs);
+    long long total = static_cast<long long>(mine.size());
+    MPI_Allreduce(MPI_IN_PLACE, &total, 1, MPI_LONG_LONG, MPI_SUM, comm_);
+    *count = total;
+    std::sort(mine.begin(), mine.end());  // ascending places: ascending blocks
+    std::vector<int> send_counts(static_cast<size_t>(size), 0);
+    for (const int64_t at : mine) ++send_counts[block_of(at >> 3)];
+    std::vector<int64_t> received;
+    AllToAll().run(mine.data(), send_counts, received, 1, MPI_INT64_T, comm_);
+    const int r = layout_.rank;
+    std::vector<uint8_t> bits(static_cast<size_t>(bytes), 0);
+    for (const int64_t at : received) bits[at >> 3] |= static_cast<uint8_t>(1u << (at & 7));
+    std::vector<int> counts(static_cast<size_t>(size)), displs(static_cast<size_t>(size));
+    for (int q = 0; q < size; ++q) {
+      displs[q] = static_cast<int>(byte_begin(q));
+      counts[q] = static_cast<int>(byte_begin(q + 1) - byte_begin(q));
+    }
+    MPI_Allgatherv(MPI_IN_PLACE, counts[r], MPI_BYTE, bits.data(), counts.data(), displs.data(), MPI_BYTE, comm_);
+    return bits;
+  }
+
+  // results.h5's /bonds/offsets (HalfBondList::offsets) on every rank, counted once: each
+  // rank its own rows' partners of higher file index, summed over ranks (counts: exact).
+  const std::vector<int64_t>& file_bond_offsets(const PdSystem& g) {
+    if (file_bond_offsets_.empty()) {
+      file_bond_offsets_ = half_bond_counts(local_, static_cast<size_t>(layout_.owned()), g.n);
+      MPI_Allreduce(MPI_IN_PLACE, file_bond_offsets_.data(), static_cast<int>(file_bond_offsets_.size()), MPI_INT64_T,
+                    MPI_SUM, comm_);
+      for (size_t i = 1; i < file_bond_offsets_.size(); ++i) file_bond_offsets_[i] += file_bond_offsets_[i - 1];
+    }
+    return file_bond_offsets_;
+  }
+
+
 
   // Every rank writes its own rows of checkpoint.h5 (collective I/O): nothing is gathered.
   // The rows are the gathered file's (internal order: rank r's particles and its rows' bond
@@ -948,6 +1020,9 @@ public:
     };
     const long long iterations = relax_to_equilibrium(local_, progress, hooks);
     const Energies e = measure(g);  // and the accumulators
+#ifdef BRECCIA_PARALLEL_HDF5
+    stage_bond_states(g);
+#endif
     download(g);
     g.step = local_.step;
     if (local_.gas.active) g.gas.copy_scalars(local_.gas);  // the history's and summary's gas
@@ -1005,6 +1080,7 @@ private:
   std::unique_ptr<HaloExchange>& halo_ = share_->halo;
   std::unique_ptr<StepBackend> device_;  // --backend cuda: the rank's system on its GPU
   std::vector<const void*> released_;    // the global arrays this rank let go of (held())
+  std::vector<int64_t> file_bond_offsets_;  // file_bond_offsets: n + 1 per rank, once
 };
 
 }  // namespace

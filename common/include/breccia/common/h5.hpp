@@ -63,6 +63,7 @@ public:
   // are not all there.
   std::vector<double> read_double_rows(const std::string& path, hsize_t first, hsize_t count) const;
   std::vector<int32_t> read_int32_rows(const std::string& path, hsize_t first, hsize_t count) const;
+  std::vector<uint8_t> read_uint8_rows(const std::string& path, hsize_t first, hsize_t count) const;
 
   // Attributes on an object ("/" for the file).
   void set_attr(const std::string& obj, const std::string& name, const std::string& value) const;

@@ -3,8 +3,9 @@
 // of the particles it owns only, so the bond arrays, the set-up's and the run's largest,
 // fall as 1/ranks. What every rank still holds whole is per particle (positions, volumes,
 // materials, horizons, the state arrays: a few hundred bytes each); the bond states (1 B
-// per entry, with softening, a rate law or a gas load up to 10 B) are whole on rank 0 alone,
-// its writers' staging (for_each_bond_state_array).
+// per entry, with softening, a rate law or a gas load up to 10 B) are each rank's own rows,
+// in its system, with parallel HDF5; without it whole on rank 0 too, its writers' staging
+// (for_each_bond_state_array).
 //
 // How: the family sizes are counted from the positions alone (family_sizes, partition.hpp),
 // which gives the whole system's row offsets and the partition before any family exists.
@@ -94,11 +95,13 @@ inline constexpr ForcePassField kForcePassFields[] = {
 
 // The global system's per-entry state arrays: the bond states, softening's bond damage, a
 // rate law's onsets, a gas load's entered cracks `in_crack` (those the case holds: alike on
-// every rank). After a distributed set-up rank 0 alone holds them whole (its writers read
-// them: the first output group, the broken bits, a serial HDF5's files); the other ranks'
-// are empty, their own rows being in their systems (copy_rank_state keeps those), and they
-// take part in rank 0's gathers (release_global_for_loop names them as held). A restart's
-// read_checkpoint reads them whole on every rank (I/O staging, let go with the rest).
+// every rank). After a distributed set-up every rank's own rows are in its system
+// (copy_rank_state keeps those) and the global system's are empty: with parallel HDF5 on
+// every rank (each writes its rows, the broken bits come from each rank's rows); without it
+// rank 0 holds them whole (its writers read them: the first output group, the broken bits,
+// the files) and the other ranks take part in its gathers (release_global_for_loop names
+// them as held). A restart's read_checkpoint reads each rank's rows (rank 0's whole where
+// it stages them), which copy_rank_state takes.
 template <class F>
 void for_each_bond_state_array(PdSystem& s, F&& f) {
   f(s.state);
@@ -109,7 +112,7 @@ void for_each_bond_state_array(PdSystem& s, F&& f) {
 
 // The global system as the time loop and the writers need it, its bonds now in the ranks'
 // own systems: the whole row offsets on every rank, the bond state arrays
-// (for_each_bond_state_array) on rank 0; with results written, rank 0 also gathers the
+// (for_each_bond_state_array) on rank 0 without parallel HDF5, on none with it; with results written, rank 0 also gathers the
 // partners and the two half-bond volumes and moduli the results' bond list reads
 // (outputs.cpp); every other per-entry array is dropped.
 void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const DistributedSetup& d);

@@ -20,6 +20,18 @@ HalfBondList half_bond_list(const PdSystem& sys);
 // by fracture (pre-cracks excluded): the same bonds as broken_pairs.
 std::vector<uint8_t> broken_bits(const PdSystem& sys, const HalfBondList& list, int64_t* broken_count);
 
+// The same bits per rank, without the whole bond state or bond list on any rank: a rank's
+// owned rows [0, owned) of `rows` (its system: partners local, `original_index` over owned
+// and ghosts) each add, per partner of higher file index, its place in the file's bond list,
+// `file_offsets[fi]` (HalfBondList::offsets) plus its rank among those partners by file
+// index. half_bond_counts gives each own row's count of such partners at its file index (n + 1
+// values, index fi + 1; summed over ranks and prefix-summed they are the list's offsets);
+// broken_bond_positions the places of its broken bonds (fracture_broken, pre-crack pairs
+// excluded, as broken_bits), from which the ranks form the bits together (mpi_backend.cpp).
+std::vector<int64_t> half_bond_counts(const PdSystem& rows, size_t owned, size_t n);
+std::vector<int64_t> broken_bond_positions(const PdSystem& rows, size_t owned, const std::vector<int64_t>& file_offsets,
+                                           const std::vector<std::pair<int64_t, int64_t>>& precrack_pairs);
+
 // A per-particle field of an output group: its dataset, its components per particle and the
 // system's array it comes from (internal order).
 struct ResultsField {
@@ -39,13 +51,14 @@ public:
 
 #ifdef BRECCIA_PARALLEL_HDF5
   // A distributed run's output group, written by every rank of comm together (collective
-  // I/O, nothing gathered but the bond states the broken bits read): each rank gives rows
-  // [file_first, file_first + file_count) of the file-order fields (`rows[f]`: results_fields'
-  // f-th), the root (the one rank whose `writer` is not null) the bond states in `sys`. The
-  // group is the one write() makes of the gathered state. Collective.
+  // I/O, nothing gathered): each rank gives rows [file_first, file_first + file_count) of the
+  // file-order fields (`rows[f]`: results_fields' f-th) and every rank the same broken bits
+  // and count (formed from every rank's broken_bond_positions); the root is the one rank
+  // whose `writer` is not null. The group is the one write() makes of the gathered state.
+  // Collective.
   static void write_together(const PdSystem& sys, ResultsWriter* writer, const std::string& out_dir,
                              size_t file_first, size_t file_count, const std::vector<std::vector<double>>& rows,
-                             MPI_Comm comm);
+                             const std::vector<uint8_t>& broken, long long broken_count, MPI_Comm comm);
 #endif
 
 private:
@@ -91,6 +104,29 @@ struct CheckpointRows {
 void write_checkpoint(const PdSystem& sys, const std::string& path, const CheckpointRows& mine, MPI_Comm comm,
                       bool root);
 #endif
-void read_checkpoint(PdSystem& sys, const std::string& path);
+// A distributed set-up's system (distributed_rows set) reads the per-entry arrays (bond
+// states, bond damage, onsets, the gas's entered cracks) of rank `rank`'s rows only, a
+// hyperslab of the file's entries (internal order: a rank's rows are one run), except where
+// rank 0 stages them whole for its writers (a build without parallel HDF5); the ranks'
+// systems take them (copy_rank_state). One process: everything.
+void read_checkpoint(PdSystem& sys, const std::string& path, int rank = 0);
+
+// What a force pass at a restored (checkpointed) state must leave as the checkpoint has it:
+// the forces and the dissipated energy, and with a rate law the bond states, damage, onsets
+// and ultimates (the pass sees the full step's velocities, not the half step's the straight
+// run's pass saw: a bond near its dynamic onset could soften here and not there). Taken
+// before the pass, put back after (read_checkpoint; a distributed run's ranks, mpi_backend.cpp).
+class CheckpointedPassState {
+public:
+  explicit CheckpointedPassState(const PdSystem& sys);
+  void restore(PdSystem& sys);
+
+private:
+  double dissipated_ = 0.0;
+  std::vector<double> force_;
+  bool keep_bonds_ = false;
+  std::vector<uint8_t> state_;
+  std::vector<float> damage_, onset_, ultimate_;
+};
 
 }  // namespace breccia::solver

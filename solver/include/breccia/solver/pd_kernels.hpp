@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <type_traits>
+#include <vector>
 
 #include "breccia/solver/host_pack.hpp"
 #include "breccia/solver/pd_physics.hpp"
@@ -248,6 +249,20 @@ inline void adopt_raised_onsets(float* onset, float* ultimate, const float* rais
     if (ultimate) ultimate[k] = raised_ultimate(onset[k], raised[k], ultimate[k]);
     onset[k] = raised[k];
   }
+}
+
+// The rule for taking raised onsets `raised` (a checkpoint's, or a rank's rows of the global
+// system's) into arrays `onset` and `ultimate`: arrays of another size (a system that holds
+// none of them yet: a distributed run's global system, whose rows are in the ranks' systems)
+// take the raised onsets as they are; arrays of the same size adopt them (adopt_raised_onsets),
+// the ultimates with them where held for the same entries. Host only.
+inline void take_raised_onsets(std::vector<float>& onset, std::vector<float>& ultimate, const std::vector<float>& raised) {
+  if (onset.size() != raised.size()) {
+    onset = raised;
+    return;
+  }
+  adopt_raised_onsets(onset.data(), ultimate.size() == raised.size() ? ultimate.data() : nullptr, raised.data(),
+                      raised.size());
 }
 
 // One softening bond entry at stretch s this pass (softens(p, k)): the damage it reaches

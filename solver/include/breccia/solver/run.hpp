@@ -70,6 +70,10 @@ public:
   // only one; null elsewhere) writes the output group. A distributed backend with parallel
   // HDF5 has every rank write its rows together and gathers only what the root still reads.
   virtual void output(PdSystem& s, ResultsWriter* results, const std::string& out_dir);
+  // The time loop's first output group, the set-up's state (not after a restart): here the
+  // root's writer writes the host system as it is; a distributed backend with parallel HDF5
+  // has every rank write its rows together, as for output().
+  virtual void first_output(PdSystem& s, ResultsWriter* results, const std::string& out_dir);
   // A decision every process must take together (stop on Ctrl-C, on a blow-up): true if it
   // is true on any of them. One process: the flag itself.
   virtual bool any(bool flag) { return flag; }

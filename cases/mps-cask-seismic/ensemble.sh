@@ -3,7 +3,8 @@
 # (record.py --perturb; README, "An ensemble over perturbed records"): run.sh once per member
 # seed, then ensemble.py prints each run's mean, standard deviation and range of the peak tilt.
 #   MEMBERS="1 2 3 ..." (seeds of the perturbation; default 1-10), PERTURB (default 0.001),
-#   SPACINGS, GAPS, END, DURATION, PGA as for run.sh.
+#   SPACINGS, GAPS, END, DURATION, PGA, PULSE_PGV, PULSE_PERIOD as for run.sh (the pulse is the
+#   same in every member: the perturbation is in the noise).
 # Environment: BRECCIA_BIN, OUT, PYTHON, THREADS (as run.sh).
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
@@ -15,7 +16,7 @@ for s in $MEMBERS; do
   m="$OUT/m$s"
   mkdir -p "$m"
   "$PYTHON" "$HERE/record.py" "$m/record.csv" --pga "${PGA:-0.9}" --duration "${DURATION:-6}" --seed 1995 \
-    --perturb "$PERTURB" --perturb-seed "$s" > /dev/null
+    --perturb "$PERTURB" --perturb-seed "$s" --pulse-pgv "${PULSE_PGV:-0}" --pulse-period "${PULSE_PERIOD:-1}" > /dev/null
   RECORD="$m/record.csv" OUT="$m" bash "$HERE/run.sh" | grep -v '^report:'
 done
 "$PYTHON" "$HERE/ensemble.py" "$OUT"

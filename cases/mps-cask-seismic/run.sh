@@ -5,6 +5,8 @@
 #   VARIANT=full      : spacings 0.2 and 0.1 m (the convergence of the peak tilt), both gaps
 # SPACINGS, GAPS (optional): override the lists (e.g. SPACINGS=0.05 GAPS=0.05).
 # RECORD=path.csv (optional): any time_s,acceleration_g record instead of the synthetic one.
+# PGA, PULSE_PGV, PULSE_PERIOD (optional): the synthetic record's noise peak (g) and its
+# near-fault velocity pulse (m/s, s; PULSE_PGV=0: none); record.py and README, "Set-up".
 # RESTITUTION=e (optional, 0 < e <= 1): the canister's impacts on the container get a normal
 # dashpot with this coefficient of restitution (contact.rigid_bodies[0].restitution; README).
 # FLOOR_RESTITUTION=e (optional): the container's corners on the floor get one too
@@ -26,7 +28,8 @@ esac
 mkdir -p "$OUT"
 if [ -z "${RECORD:-}" ]; then
   RECORD="$OUT/record.csv"
-  "$PYTHON" "$HERE/record.py" "$RECORD" --pga "${PGA:-0.9}" --duration "$DURATION" --seed 1995
+  "$PYTHON" "$HERE/record.py" "$RECORD" --pga "${PGA:-0.9}" --duration "$DURATION" --seed 1995 \
+    --pulse-pgv "${PULSE_PGV:-0}" --pulse-period "${PULSE_PERIOD:-1}"
 fi
 RECORD="$(cd "$(dirname "$RECORD")" && pwd)/$(basename "$RECORD")"
 EXTRA=()

@@ -53,8 +53,9 @@ StableStepStartWave stable_step_start_wave(const PdSystem& sys) {
   // The row's dispersion: a plane wave u = p cos(k . x) over the bulk loads the particle
   // with D(k) p cos(k . x_i), D(k) = sum_j (k_own + k_dual) / |xi| (1 - cos k . xi) e e^T
   // (PMB linearised: each bond's stiffness along its direction). Its largest eigenvalue is
-  // searched over k on a grid of the zone (a sixteenth of pi / spacing, k_x >= 0: D is even
-  // in k) and refined three times around the best by a quarter of the step.
+  // searched over k on a grid of the zone (an eighth of pi / spacing, k_x >= 0: D is even
+  // in k) and refined four times around the best by a quarter of the step (5,500 k in all:
+  // 0.03 s at 41^3, the row's 122 entries each).
   const size_t i = static_cast<size_t>(wave.row);
   const bool planar = sys.dimension == 2;
   struct Entry {
@@ -91,7 +92,7 @@ StableStepStartWave stable_step_start_wave(const PdSystem& sys) {
       }
     }
   };
-  const int steps = 16;
+  const int steps = 8;
   const double dk = 3.14159265358979323846 / (2.0 * sys.half_cell[i]) / steps;
   const int z_steps = planar ? 0 : steps;
   for (int a = 0; a <= steps; ++a)
@@ -101,7 +102,7 @@ StableStepStartWave stable_step_start_wave(const PdSystem& sys) {
         evaluate(k);
       }
   double step = dk;
-  for (int level = 0; level < 3; ++level) {
+  for (int level = 0; level < 4; ++level) {
     step /= 4.0;
     const double centre[3] = {wave.k[0], wave.k[1], wave.k[2]};
     for (int a = -4; a <= 4; ++a)

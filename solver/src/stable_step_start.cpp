@@ -65,9 +65,9 @@ StableStepStartWave stable_step_start_wave(const PdSystem& sys) {
   for (int64_t k = sys.offsets[i]; k < sys.offsets[i + 1]; ++k) {
     const size_t j = static_cast<size_t>(sys.neighbor[k]);
     const double len = sys.xi_len[k];
-    entries.push_back({{sys.x0[3 * j] - sys.x0[3 * i], sys.x0[3 * j + 1] - sys.x0[3 * i + 1],
-                        sys.x0[3 * j + 2] - sys.x0[3 * i + 2]},
-                       (sys.k_own[k] + sys.k_dual[k]) / (len * len * len)});  // xi xi^T / |xi|^2 = e e^T
+    entries.push_back(
+        {{sys.x0[3 * j] - sys.x0[3 * i], sys.x0[3 * j + 1] - sys.x0[3 * i + 1], sys.x0[3 * j + 2] - sys.x0[3 * i + 2]},
+         (sys.k_own[k] + sys.k_dual[k]) / (len * len * len)});  // xi xi^T / |xi|^2 = e e^T
   }
   double best = -1.0;
   auto evaluate = [&](const double k[3]) {

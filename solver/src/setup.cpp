@@ -1413,8 +1413,18 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // 10% compression, which a strain of 1e-9 never reaches (docs/theory.md). Lanczos: the
   // power iteration's value within 0.4% (from below, so dt a little smaller) in 16-32 force
   // passes instead of 60 (docs/performance.md).
-  const double omega_max =
-      estimate_max_frequency_lanczos(s, 60, hooks.stable_step_forces ? hooks.stable_step_forces(s) : ForcePass{});
+  // On a PMB lattice it starts from the lattice's plane wave: a distributed set-up's ranks
+  // each find theirs on their own rows and keep the one of the best row, the first on ties,
+  // as one process does over all rows (the same row's entries, the same wave).
+  StableStepStartWave wave = stable_step_start_wave(s);
+  if (dist_rows.active) {  // dist: every rank's candidate, the best kept in row order
+    for (const StableStepStartWave& other : concat_over_ranks(dist, std::vector<StableStepStartWave>{wave}))
+      if (other.row >= 0 &&
+          (wave.row < 0 || other.score > wave.score || (other.score == wave.score && other.row < wave.row)))
+        wave = other;
+  }
+  const double omega_max = estimate_max_frequency_lanczos(
+      s, 60, hooks.stable_step_forces ? hooks.stable_step_forces(s) : ForcePass{}, kStableStepRegionRatio, &wave);
   s.stable_dt = 2.0 / omega_max;
   // Compressive enhancement: no stretch seen before the first step (s_min = 0: s0 = s00).
   if (c.compressive_enhancement > 0.0 && c.fracture) {

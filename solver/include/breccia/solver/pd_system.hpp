@@ -217,12 +217,30 @@ double estimate_max_frequency(PdSystem& sys, int iterations = 60, const ForcePas
 // iteration's, as its Ritz value approaches omega_max^2 from below faster.
 // On a graded body it works on the stiff region (stable_step_region with `region_ratio`; 0:
 // the whole system), the rest held at rest.
+// On a PMB lattice the estimate starts mostly from the plane wave of stable_step_start_wave
+// (below), the random start kept at a third of its amplitude so that no mode is missed: 9
+// passes instead of 20 at 41^3, its Ritz value above the random start's (docs/performance.md).
+// `wave`: that wave, found by the caller (a distributed set-up's ranks agree on it first);
+// null: found here from the system's rows.
 inline constexpr double kStableStepRegionRatio = 0.25;
+struct StableStepStartWave;
 double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes = 60, const ForcePass& forces = {},
-                                      double region_ratio = kStableStepRegionRatio);
+                                      double region_ratio = kStableStepRegionRatio,
+                                      const StableStepStartWave* wave = nullptr);
 // The particles the Lanczos estimate moves: 1 where the local frequency scale
 // E / (rho delta^2) is at least `ratio` of the largest; empty (the whole system) where that
 // is half the particles or more, or ratio <= 0.
 std::vector<uint8_t> stable_step_region(const PdSystem& sys, double ratio);
+// The plane wave u = p cos(k . x) whose load on a bulk particle of a PMB lattice is largest
+// (stable_step_start_wave.cpp): searched over k on the row with the largest Silling-Askari
+// sum (`score`, `row`: the first such row). found: false but on a PMB lattice (one spacing,
+// one horizon) whose system holds rows.
+struct StableStepStartWave {
+  bool found = false;
+  double score = 0.0;
+  int64_t row = -1;
+  double k[3] = {0.0, 0.0, 0.0}, p[3] = {0.0, 0.0, 0.0};
+};
+StableStepStartWave stable_step_start_wave(const PdSystem& sys);
 
 }  // namespace breccia::solver

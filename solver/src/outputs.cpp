@@ -68,43 +68,49 @@ std::vector<int64_t> broken_pairs(const PdSystem& s) {
   return flat;
 }
 
+namespace {
+// Row i's partners of higher file index, as (partner's file index, entry) sorted by file
+// index: its row of the file's bond list (half_bond_list, broken_bond_positions).
+void higher_partners_by_file_index(const PdSystem& s, size_t i, std::vector<std::pair<int64_t, int64_t>>& row) {
+  const int64_t fi = s.original_index[i];
+  row.clear();
+  for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
+    const int64_t fj = s.original_index[s.neighbor[k]];
+    if (fi < fj) row.emplace_back(fj, k);
+  }
+  std::sort(row.begin(), row.end());
+}
+
+}  // namespace
+
+std::vector<int64_t> half_bond_counts(const PdSystem& r, size_t owned, size_t n) {
+  std::vector<int64_t> counts(n + 1, 0);
+  for (size_t i = 0; i < owned; ++i) {
+    const int64_t fi = r.original_index[i];
+    for (int64_t k = r.offsets[i]; k < r.offsets[i + 1]; ++k)
+      if (fi < r.original_index[r.neighbor[k]]) ++counts[fi + 1];
+  }
+  return counts;
+}
+
 HalfBondList half_bond_list(const PdSystem& s) {
   const size_t n = s.n;
   HalfBondList h;
-  h.offsets.assign(n + 1, 0);
-  for (size_t i = 0; i < n; ++i) {
-    const int64_t fi = s.original_index[i];
-    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k)
-      if (fi < s.original_index[s.neighbor[k]]) ++h.offsets[fi + 1];
-  }
+  h.offsets = half_bond_counts(s, n, n);
   for (size_t i = 0; i < n; ++i) h.offsets[i + 1] += h.offsets[i];
   const size_t b = static_cast<size_t>(h.offsets[n]);
   h.neighbors.resize(b);
   h.entry.resize(b);
-  {
-    std::vector<int64_t> fill(h.offsets.begin(), h.offsets.end() - 1);
-    for (size_t i = 0; i < n; ++i) {
-      const int64_t fi = s.original_index[i];
-      for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
-        const int64_t fj = s.original_index[s.neighbor[k]];
-        if (fi >= fj) continue;
-        const int64_t at = fill[fi]++;
-        h.neighbors[at] = fj;
-        h.entry[at] = k;
-      }
-    }
-  }
 #pragma omp parallel
   {
     std::vector<std::pair<int64_t, int64_t>> row;
 #pragma omp for schedule(dynamic, 1024)
-    for (size_t i = 0; i < n; ++i) {
-      row.clear();
-      for (int64_t at = h.offsets[i]; at < h.offsets[i + 1]; ++at) row.emplace_back(h.neighbors[at], h.entry[at]);
-      std::sort(row.begin(), row.end());
+    for (size_t i = 0; i < n; ++i) {  // each internal row fills its own file row
+      higher_partners_by_file_index(s, i, row);
+      const int64_t first = h.offsets[s.original_index[i]];
       for (size_t r = 0; r < row.size(); ++r) {
-        h.neighbors[h.offsets[i] + r] = row[r].first;
-        h.entry[h.offsets[i] + r] = row[r].second;
+        h.neighbors[first + r] = row[r].first;
+        h.entry[first + r] = row[r].second;
       }
     }
   }
@@ -151,28 +157,13 @@ std::vector<uint8_t> broken_bits(const PdSystem& s, const HalfBondList& h, int64
   return bits;
 }
 
-std::vector<int64_t> half_bond_counts(const PdSystem& r, size_t owned, size_t n) {
-  std::vector<int64_t> counts(n + 1, 0);
-  for (size_t i = 0; i < owned; ++i) {
-    const int64_t fi = r.original_index[i];
-    for (int64_t k = r.offsets[i]; k < r.offsets[i + 1]; ++k)
-      if (fi < r.original_index[r.neighbor[k]]) ++counts[fi + 1];
-  }
-  return counts;
-}
-
 std::vector<int64_t> broken_bond_positions(const PdSystem& r, size_t owned, const std::vector<int64_t>& file_offsets,
                                            const std::vector<std::pair<int64_t, int64_t>>& precrack_pairs) {
   std::vector<int64_t> positions;
-  std::vector<std::pair<int64_t, int64_t>> row;  // (partner's file index, entry): half_bond_list's order
+  std::vector<std::pair<int64_t, int64_t>> row;
   for (size_t i = 0; i < owned; ++i) {
     const int64_t fi = r.original_index[i];
-    row.clear();
-    for (int64_t k = r.offsets[i]; k < r.offsets[i + 1]; ++k) {
-      const int64_t fj = r.original_index[r.neighbor[k]];
-      if (fi < fj) row.emplace_back(fj, k);
-    }
-    std::sort(row.begin(), row.end());
+    higher_partners_by_file_index(r, i, row);
     for (size_t q = 0; q < row.size(); ++q)
       if (fracture_broken(r, row[q].second) && !is_precrack(precrack_pairs, fi, row[q].first))
         positions.push_back(file_offsets[fi] + static_cast<int64_t>(q));

@@ -2,6 +2,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "breccia/solver/partial_volume_lattice.hpp"
 #include "breccia/solver/pd_physics.hpp"
 
 namespace breccia::solver {
@@ -66,20 +67,11 @@ struct CountMemo {
 constexpr double kGridStep = 0x1p-30;  // of the horizon
 thread_local CountMemo count_memo;
 
-}  // namespace
-
-int partial_volume_samples_inside(const double xi[3], double horizon, double half_cell_j, int dimension) {
+// Each axis's squared sample coordinates of j's cell at offset xi; 2D's single z "sample" is
+// the point's own z, and its unused lanes +inf (s + inf is never inside).
+void sample_squares(const double xi[3], double half_cell_j, int dimension, double sq[3][kPartialVolumeSamples]) {
   constexpr int n = kPartialVolumeSamples;
-  static_assert(n % 2 == 0, "the z samples are taken in pairs");
-  const double reach = partial_volume_half_diagonal(half_cell_j, dimension);
-  const double len = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
-  if (len + reach <= horizon) return partial_volume_sample_total(dimension);
-  if (len - reach >= horizon) return 0;
   const double h = 2.0 * half_cell_j / n;
-  const int nz = dimension == 3 ? n : 1;
-  // Each axis's squared sample coordinates once; 2D's single z "sample" is the point's own
-  // z, and its unused lanes +inf (s + inf is never inside).
-  double sq[3][n];
   for (int axis = 0; axis < 3; ++axis)
     for (int a = 0; a < n; ++a) {
       const double p = xi[axis] - half_cell_j + (a + 0.5) * h;
@@ -89,6 +81,45 @@ int partial_volume_samples_inside(const double xi[3], double horizon, double hal
     sq[2][0] = xi[2] * xi[2];
     for (int c = 1; c < n; ++c) sq[2][c] = INFINITY;
   }
+}
+
+// The smallest distance of a sample's squared distance, summed as the count sums it, from r2.
+double sample_margin(const double sq[3][kPartialVolumeSamples], double r2, int dimension) {
+  constexpr int n = kPartialVolumeSamples;
+  const int nz = dimension == 3 ? n : 1;
+  double margin = INFINITY;
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) {
+      const double row = sq[0][a] + sq[1][b];
+      for (int c = 0; c < nz; ++c) {
+        const double gap = std::fabs((row + sq[2][c]) - r2);
+        margin = gap < margin ? gap : margin;
+      }
+    }
+  return margin;
+}
+
+// How far another offset within `step` per axis of xi (and the arithmetic's rounding) can move
+// a sample's squared distance: a sample coordinate p moves by at most step (1.01: the rounding
+// of the offset's own arithmetic), its square by step (2 |p| + step), |p| <= |xi| + half cell;
+// 1e-12 r^2 is far above the few ulp of r^2 that rounding the coordinates and sums adds.
+double sample_shift_bound(const double xi[3], double half_cell_j, double step, double r2) {
+  return 1.01 * step * (2.0 * (std::fabs(xi[0]) + std::fabs(xi[1]) + std::fabs(xi[2]) + 3.0 * half_cell_j) + 3.03 * step) +
+         1e-12 * r2;
+}
+
+}  // namespace
+
+int partial_volume_samples_inside(const double xi[3], double horizon, double half_cell_j, int dimension) {
+  constexpr int n = kPartialVolumeSamples;
+  static_assert(n % 2 == 0, "the z samples are taken in pairs");
+  const double reach = partial_volume_half_diagonal(half_cell_j, dimension);
+  const double len = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
+  if (len + reach <= horizon) return partial_volume_sample_total(dimension);
+  if (len - reach >= horizon) return 0;
+  const int nz = dimension == 3 ? n : 1;
+  double sq[3][n];
+  sample_squares(xi, half_cell_j, dimension, sq);
   double lo[3], hi[3];
   for (int axis = 0; axis < 3; ++axis) {
     const int count = axis == 2 ? nz : n;
@@ -145,23 +176,8 @@ int partial_volume_samples_inside(const double xi[3], double horizon, double hal
   if (memo) {
     // Every sample's distance from the sphere, in the sums just compared, against how far
     // another offset of the key moves it: two offsets of one key differ by at most a grid
-    // step per axis (1.01: the rounding of xi / step), which changes a sample
-    // coordinate's square by at most step (2 |p| + step), |p| <= |xi| + half; 1e-12 r^2 is
-    // far above the few ulp of r^2 that rounding the coordinates and sums adds.
-    const double moved = 1.01 * step *
-                             (2.0 * (std::fabs(xi[0]) + std::fabs(xi[1]) + std::fabs(xi[2]) + 3.0 * half_cell_j) +
-                              3.03 * step) +
-                         1e-12 * r2;
-    double margin = INFINITY;
-    for (int a = 0; a < n; ++a)
-      for (int b = 0; b < n; ++b) {
-        const double row = sq[0][a] + sq[1][b];
-        for (int c = 0; c < nz; ++c) {
-          const double gap = std::fabs((row + sq[2][c]) - r2);
-          margin = gap < margin ? gap : margin;
-        }
-      }
-    if (margin > moved) {
+    // step per axis.
+    if (sample_margin(sq, r2, dimension) > sample_shift_bound(xi, half_cell_j, step, r2)) {
       std::memcpy(slot->offset, offset, sizeof offset);
       std::memcpy(slot->exact, exact, sizeof exact);
       slot->dimension = dimension;
@@ -169,6 +185,35 @@ int partial_volume_samples_inside(const double xi[3], double horizon, double hal
     }
   }
   return count;
+}
+
+LatticeSampleCounts::LatticeSampleCounts(double horizon, double half_cell, int dimension)
+    : horizon_(horizon),
+      half_cell_(half_cell),
+      spacing_(2.0 * half_cell),
+      per_spacing_(1.0 / spacing_),
+      dimension_(dimension) {
+  // Offsets beyond horizon + reach have no sample inside; one more for the rounding.
+  reach_ = static_cast<int>(std::ceil((horizon + partial_volume_half_diagonal(half_cell, dimension)) / spacing_)) + 1;
+  const int side = 2 * reach_ + 1;
+  tolerance_ = kLatticeTolerance * spacing_;
+  const double r2 = horizon * horizon;
+  count_.assign(static_cast<size_t>(side) * side * (dimension == 3 ? side : 1), -1);
+  for (int c = (dimension == 3 ? -reach_ : 0); c <= (dimension == 3 ? reach_ : 0); ++c)
+    for (int b = -reach_; b <= reach_; ++b)
+      for (int a = -reach_; a <= reach_; ++a) {
+        // The lattice offset as counts() rebuilds it, and whether every offset within the
+        // tolerance of it has the same samples inside (then the same count, exactly).
+        const double xi[3] = {a * spacing_, b * spacing_, c * spacing_};
+        double sq[3][kPartialVolumeSamples];
+        sample_squares(xi, half_cell, dimension, sq);
+        if (!(sample_margin(sq, r2, dimension) > sample_shift_bound(xi, half_cell, tolerance_, r2))) continue;
+        count_[index(a, b, c)] = static_cast<int16_t>(partial_volume_samples_inside(xi, horizon, half_cell, dimension));
+      }
+}
+
+int LatticeSampleCounts::counted(const double xi[3]) const {
+  return partial_volume_samples_inside(xi, horizon_, half_cell_, dimension_);
 }
 
 }  // namespace breccia::solver

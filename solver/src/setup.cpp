@@ -26,6 +26,7 @@
 #include "breccia/solver/family.hpp"
 #include "breccia/solver/family_check.hpp"
 #include "breccia/solver/graded_check.hpp"
+#include "breccia/solver/partial_volume_lattice.hpp"
 #include "breccia/solver/particle_field.hpp"
 #include "breccia/solver/pd_system.hpp"
 #include "breccia/solver/step.hpp"
@@ -674,14 +675,21 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // cursors (no search per entry), and the dual counts are copied once into their own bytes.
   // The counts (at most 216) fit a byte: the fraction count / 216 is the quadrature's exactly.
   // A distributed set-up holds only its own rows: there the dual is counted from this end.
+  // A uniform lattice (one spacing, one horizon) looks both counts up by the entry's integer
+  // offset (LatticeSampleCounts: the same counts, bit for bit), with no count bytes and no
+  // pass over the reverse entries.
   const bool sampled = c.partial_volume == PartialVolume::Sampled;
-  const bool dual_by_reverse = sampled && !dist_rows.active;
+  bool uniform = sampled && n > 0;
+  for (size_t i = 1; i < n && uniform; ++i) uniform = s.half_cell[i] == s.half_cell[0] && s.horizon[i] == s.horizon[0];
+  std::unique_ptr<const LatticeSampleCounts> lattice_counts;
+  if (uniform) lattice_counts = std::make_unique<LatticeSampleCounts>(s.horizon[0], s.half_cell[0], s.dimension);
+  const bool dual_by_reverse = sampled && !dist_rows.active && !uniform;
   std::vector<uint8_t> samples_inside, dual_inside;
   std::vector<int64_t> keep_count(n, 0);
   {
     // Every row (a distributed set-up's rows other than its own are empty).
     const int64_t first = 0, last = static_cast<int64_t>(n);
-    if (sampled) {
+    if (sampled && !uniform) {
       assign_on_huge_pages(samples_inside, fam.neighbors.size());
 #pragma omp parallel for schedule(dynamic, 256)
       for (int64_t i = first; i < last; ++i)
@@ -707,7 +715,11 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
           const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1], s.x0[3 * j + 2] - s.x0[3 * i + 2]};
           const double xm[3] = {-xv[0], -xv[1], -xv[2]};
           bool keep;
-          if (sampled) {  // dist: j's row may be another rank's; the same count, from this end
+          if (uniform) {
+            int own, reverse;
+            lattice_counts->counts(xv, own, reverse);
+            keep = own > 0 || reverse > 0;
+          } else if (sampled) {  // dist: j's row may be another rank's; the same count, from this end
             keep = samples_inside[k] > 0 || partial_volume_samples_inside(xm, s.horizon[j], s.half_cell[i], s.dimension) > 0;
           } else {
             keep = partial_volume(c.partial_volume, xv, s.horizon[i], s.half_cell[j], s.dimension) > 0 ||
@@ -718,18 +730,29 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     }
   }
   const double sample_total = partial_volume_sample_total(s.dimension);
+  // count / sample_total for every count, the same division's bits (a division per half-bond
+  // was a quarter of the lattice's fill loop).
+  std::array<double, partial_volume_sample_total(3) + 1> sample_fraction;
+  for (size_t q = 0; q < sample_fraction.size(); ++q) sample_fraction[q] = static_cast<double>(q) / sample_total;
   // beta of entry k = (i -> j): its own half-bond (j's cell in i's horizon) and its dual (i's cell in j's).
   auto beta_own_dual = [&](int64_t i, int64_t k, double& beta_own, double& beta_dual) {
     const int32_t j = fam.neighbors[k];
     if (dual_by_reverse) {
-      beta_own = samples_inside[k] / sample_total;
-      beta_dual = dual_inside[k] / sample_total;
+      beta_own = sample_fraction[samples_inside[k]];
+      beta_dual = sample_fraction[dual_inside[k]];
       return;
     }
     const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1], s.x0[3 * j + 2] - s.x0[3 * i + 2]};
     const double xm[3] = {-xv[0], -xv[1], -xv[2]};
+    if (uniform) {
+      int own, reverse;
+      lattice_counts->counts(xv, own, reverse);
+      beta_own = sample_fraction[own];
+      beta_dual = sample_fraction[reverse];
+      return;
+    }
     if (sampled) {  // dist: j's row may be another rank's; the same count, from this end
-      beta_own = samples_inside[k] / sample_total;
+      beta_own = sample_fraction[samples_inside[k]];
       beta_dual = partial_volume_samples_inside(xm, s.horizon[j], s.half_cell[i], s.dimension) / sample_total;
       return;
     }
@@ -831,8 +854,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       double r2 = 0;
       for (int d = 0; d < 3; ++d) r2 += std::pow(s.x0[3 * j + d] - s.x0[3 * i + d], 2);
       const double xi = std::sqrt(r2);
-      const double w_own = beta_own > 0 ? influence(c.influence, xi / s.horizon[i]) * beta_own : 0.0;
-      const double w_dual = beta_dual > 0 ? influence(c.influence, xi / s.horizon[j]) * beta_dual : 0.0;
+      // The constant influence's 1 is skipped: 1 * beta is beta, without a division per half-bond.
+      const bool weighted = c.influence != Influence::Constant;
+      const double w_own = beta_own > 0 ? (weighted ? influence(c.influence, xi / s.horizon[i]) * beta_own : beta_own) : 0.0;
+      const double w_dual = beta_dual > 0 ? (weighted ? influence(c.influence, xi / s.horizon[j]) * beta_dual : beta_dual) : 0.0;
       s.neighbor[out] = j;
       s.xi_len[out] = xi;
       s.vol_own[out] = beta_own * s.volume[j];
@@ -1065,13 +1090,14 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     const int dims = s.dimension;
     std::vector<double> iso(n, 0.0), family_volume(n, 0.0);
     std::vector<double> uni(3 * n, 0.0);  // PD energy under unit uniaxial strain along each axis
+    const int uni_dims = c.surface_correction ? dims : 0;  // only the surface correction reads them
 #pragma omp parallel for
     for (size_t i = 0; i < n; ++i) {
       for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
         iso[i] += pmb_energy_density(s.k_own[k], s.k_dual[k], s.state[k], 1.0, s.xi_len[k]);
         family_volume[i] += s.vol_own[k];
         const int32_t j = s.neighbor[k];
-        for (int d = 0; d < dims; ++d) {
+        for (int d = 0; d < uni_dims; ++d) {
           const double nd = (s.x0[3 * j + d] - s.x0[3 * i + d]) / s.xi_len[k];
           uni[3 * i + d] += pmb_energy_density(s.k_own[k], s.k_dual[k], s.state[k], nd * nd, s.xi_len[k]);
         }
@@ -1347,8 +1373,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // One constant horizon makes both halves of every entry identical: the fast kernel.
   {
     bool same = true;
-    for (size_t k = 0; k < s.state.size() && same; ++k)
-      same = s.k_own[k] == s.k_dual[k] && s.s0_own[k] == s.s0_dual[k] &&
+    const int64_t entries = static_cast<int64_t>(s.state.size());
+#pragma omp parallel for schedule(static) reduction(&& : same)
+    for (int64_t k = 0; k < entries; ++k)
+      same = same && s.k_own[k] == s.k_dual[k] && s.s0_own[k] == s.s0_dual[k] &&
              (s.state[k] == 0 || s.state[k] == (kOwnIntact | kDualIntact));
     if (dist_rows.active) {  // dist: an AND over every entry
       const std::vector<uint8_t> all = concat_over_ranks(dist, std::vector<uint8_t>{static_cast<uint8_t>(same)});
@@ -1383,11 +1411,16 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   phase("state and start-up checks");
 
   // Stable time step: sharp estimate by Lanczos (below); Silling & Askari (2005) for reference.
+  // Each row's sum is also the plane-wave start's score (stable_step_start_wave reads it).
+  std::vector<double> row_stiffness;
   if (!lps) {
+    row_stiffness.assign(n, 0.0);
     double dt_min = 1e300;
+#pragma omp parallel for schedule(dynamic, 1024) reduction(min : dt_min)
     for (size_t i = 0; i < n; ++i) {
       double sum = 0.0;
       for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) sum += (s.k_own[k] + s.k_dual[k]) / s.xi_len[k];
+      row_stiffness[i] = sum;
       if (sum > 0) dt_min = std::min(dt_min, std::sqrt(2.0 * s.density[i] / sum));
     }
     if (dist_rows.active) {  // dist: the smallest over every rank (a minimum: exact in any order)
@@ -1416,7 +1449,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // On a PMB lattice it starts from the lattice's plane wave: a distributed set-up's ranks
   // each find theirs on their own rows and keep the one of the best row, the first on ties,
   // as one process does over all rows (the same row's entries, the same wave).
-  StableStepStartWave wave = stable_step_start_wave(s);
+  StableStepStartWave wave = stable_step_start_wave(s, lps ? nullptr : &row_stiffness);
   if (dist_rows.active) {  // dist: every rank's candidate, the best kept in row order
     for (const StableStepStartWave& other : concat_over_ranks(dist, std::vector<StableStepStartWave>{wave}))
       if (other.row >= 0 &&

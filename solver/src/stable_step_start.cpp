@@ -26,7 +26,7 @@ double largest_eigenpair(const double m[6], double v[3]) {
 }
 }  // namespace
 
-StableStepStartWave stable_step_start_wave(const PdSystem& sys) {
+StableStepStartWave stable_step_start_wave(const PdSystem& sys, const std::vector<double>* row_sums) {
   StableStepStartWave wave;
   if (sys.config.model != PdModel::PMB || sys.n == 0 || sys.offsets.size() != sys.n + 1 || sys.k_own.empty() ||
       sys.k_dual.empty())
@@ -42,7 +42,11 @@ StableStepStartWave stable_step_start_wave(const PdSystem& sys) {
   for (size_t i = 0; i < sys.n; ++i) {
     if (sys.offsets[i + 1] == sys.offsets[i]) continue;
     double sum = 0.0;
-    for (int64_t k = sys.offsets[i]; k < sys.offsets[i + 1]; ++k) sum += (sys.k_own[k] + sys.k_dual[k]) / sys.xi_len[k];
+    if (row_sums) {
+      sum = (*row_sums)[i];
+    } else {
+      for (int64_t k = sys.offsets[i]; k < sys.offsets[i + 1]; ++k) sum += (sys.k_own[k] + sys.k_dual[k]) / sys.xi_len[k];
+    }
     sum /= sys.density[i];
     if (sum > wave.score) {
       wave.score = sum;

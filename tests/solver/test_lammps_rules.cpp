@@ -14,6 +14,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/solver/outputs.hpp"
+#include "breccia/solver/partial_volume_lattice.hpp"
 #include "breccia/solver/run.hpp"
 #include "helpers.hpp"
 
@@ -488,4 +489,63 @@ TEST(PartialVolume, CountsLookedUpByRoundedOffsetEqualTheQuadrature) {
               }
             }
   EXPECT_GT(differing, 0) << "the on-sphere offsets must include counts that the last bits change";
+}
+
+TEST(PartialVolume, LatticeTableCountsEqualTheQuadrature) {
+  // A uniform lattice's set-up looks each candidate's count and its reverse's up by the integer
+  // offset (LatticeSampleCounts, partial_volume.cpp), kept only where no sample lies within
+  // reach of the sphere for offsets within 2^-24 spacings. Offsets a few ulp off a lattice
+  // offset (x_j - x_i rounds so), up to 0.9 and 2 tolerances off it, and anywhere between
+  // lattice offsets must get the plain quadrature's counts at xi and at -xi, exactly. At the
+  // on-sphere horizons (sqrt(35^2 + 7^2 + 5^2) / 12 spacings in 3D, sqrt(35^2 + 11^2) / 12 in
+  // 2D, some samples on the sphere to rounding) the last bits change some counts, which the
+  // table must not have kept: the test fails when its margin check is removed. Spacing 1
+  // and 0.5 mm (the benchmark's), at positions far from the origin too.
+  SplitMixUniform centred{31};  // in [-0.5, 0.5)
+  int differing = 0, checked = 0;
+  for (int dimension : {3, 2})
+    for (double spacing : {1.0, 0.0005})
+      for (double factor : {std::sqrt(dimension == 3 ? 1299.0 : 1346.0) / 12.0, 3.015}) {
+        const double half = 0.5 * spacing, delta = factor * spacing;
+        const LatticeSampleCounts table(delta, half, dimension);
+        const double tolerance = LatticeSampleCounts::kLatticeTolerance * spacing;
+        for (int a = -5; a <= 5; ++a)
+          for (int b = -5; b <= 5; ++b)
+            for (int c = (dimension == 3 ? -5 : 0); c <= (dimension == 3 ? 5 : 0); ++c) {
+              const double base[3] = {a * spacing, b * spacing, c * spacing};
+              const int exact = plain_sample_count(base, delta, half, dimension);
+              for (int copy = 0; copy < 5; ++copy) {
+                double xi[3];
+                for (int axis = 0; axis < 3; ++axis) {
+                  xi[axis] = base[axis];
+                  if (axis == 2 && dimension != 3) continue;
+                  if (copy == 0) {  // a difference of two positions 1000 spacings out
+                    const double origin = (1000.0 + centred()) * spacing;
+                    xi[axis] = (origin + base[axis]) - origin;
+                  } else if (copy == 1) {  // a few ulp either way
+                    const int ulps = static_cast<int>((centred() + 0.5) * 7.0) - 3;
+                    for (int u = 0; u < std::abs(ulps); ++u) xi[axis] = std::nextafter(xi[axis], ulps > 0 ? 1e9 : -1e9);
+                  } else if (copy == 2) {
+                    xi[axis] += 1.8 * centred() * tolerance;  // within the tolerance
+                  } else if (copy == 3) {
+                    xi[axis] += 4.0 * centred() * tolerance;  // partly beyond it: asked per call
+                  } else {
+                    xi[axis] += centred() * spacing;  // between lattice offsets
+                  }
+                }
+                const double xm[3] = {-xi[0], -xi[1], -xi[2]};
+                const int expected = plain_sample_count(xi, delta, half, dimension);
+                differing += copy < 3 && expected != exact;
+                int own = -1, reverse = -1;
+                table.counts(xi, own, reverse);
+                ASSERT_EQ(own, expected) << xi[0] << " " << xi[1] << " " << xi[2] << " horizon " << delta
+                                         << " dimension " << dimension;
+                ASSERT_EQ(reverse, plain_sample_count(xm, delta, half, dimension))
+                    << xi[0] << " " << xi[1] << " " << xi[2] << " horizon " << delta << " dimension " << dimension;
+                ++checked;
+              }
+            }
+      }
+  EXPECT_GT(differing, 0) << "the on-sphere offsets must include counts that the last bits change";
+  EXPECT_GT(checked, 20000);
 }

@@ -234,13 +234,15 @@ std::vector<uint8_t> stable_step_region(const PdSystem& sys, double ratio);
 // The plane wave u = p cos(k . x) whose load on a bulk particle of a PMB lattice is largest
 // (stable_step_start_wave.cpp): searched over k on the row with the largest Silling-Askari
 // sum (`score`, `row`: the first such row). found: false but on a PMB lattice (one spacing,
-// one horizon) whose system holds rows.
+// one horizon) whose system holds rows. `row_sums` (optional): each row's sum of
+// (k_own + k_dual) / xi_len in entry order, as the set-up's Silling-Askari bound sums it (the
+// same bits): given, the rows are not summed again.
 struct StableStepStartWave {
   bool found = false;
   double score = 0.0;
   int64_t row = -1;
   double k[3] = {0.0, 0.0, 0.0}, p[3] = {0.0, 0.0, 0.0};
 };
-StableStepStartWave stable_step_start_wave(const PdSystem& sys);
+StableStepStartWave stable_step_start_wave(const PdSystem& sys, const std::vector<double>* row_sums = nullptr);
 
 }  // namespace breccia::solver

@@ -16,12 +16,13 @@ namespace breccia {
 
 namespace {
 
-// The host's execution space for family_build.hpp: OpenMP threads, rows handed out in small
-// chunks as they finish (a graded mesh's rows differ in cost).
-struct HostFamilyExec {
+// The grids' binning on the host: one thread. Its passes are O(N) and short (about 10 ms of
+// the 0.5 s build on the 41^3 lattice); the 6 passes per grid each as a parallel region cost
+// more than they save where the machine is shared (threads waiting at every region's end:
+// the concrete demo's families took 0.53 -> 0.84 CPU s on 2 threads with load 10).
+struct SerialFamilyExec {
   template <class F>
   void for_each(int64_t n, const F& f, const char* /*name*/) const {
-#pragma omp parallel for schedule(dynamic, 64)
     for (int64_t i = 0; i < n; ++i) f(i);
   }
 };
@@ -121,9 +122,8 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
   fam.offsets.assign(n + 1, 0);
   if (n == 0) return fam;
   FamilyHostMemory mem;
-  const HostFamilyExec exec;
   const family::Points p = family_detail::points(mem, plan, x, horizon, pad);
-  const family::Grids grids = family_detail::bin_grids(exec, mem, plan, p);
+  const family::Grids grids = family_detail::bin_grids(SerialFamilyExec{}, mem, plan, p);
   // The rows: build_families_with's kernels would search each row twice (count, then write);
   // here each is searched once (search_row, the same kernel) and kept. Each block of 512 rows
   // is searched into a scratch buffer of its thread (sorted per row), then appended to the

@@ -15,8 +15,8 @@
 //   int64_t* offsets(Families&, size_t count)     the output arrays: on the host, the
 //   int32_t* neighbors(Families&, size_t count)   Families' own; elsewhere copied into it by
 //   void finish(Families&)                        finish.
-// build_families (families.cpp) bins with these launches on the host's OpenMP loop and
-// searches each row once, keeping its partners (the same row kernel, search_row).
+// build_families (families.cpp) bins with these launches on one host thread and searches
+// each row once on OpenMP threads, keeping its partners (the same row kernel, search_row).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

@@ -13,7 +13,7 @@ namespace breccia::cuda {
 constexpr int kLaunchBlock = 256;  // threads per block
 
 template <class F>
-__global__ void forall_kernel(int64_t n, F f) {
+__global__ void forall_cuda(int64_t n, F f) {
   const int64_t i = static_cast<int64_t>(blockIdx.x) * blockDim.x + threadIdx.x;
   if (i < n) f(i);
 }
@@ -22,7 +22,7 @@ __global__ void forall_kernel(int64_t n, F f) {
 template <class F>
 void for_each(int64_t n, const F& f, const char* name, bool synchronize) {
   if (n == 0) return;  // a grid of zero blocks is a launch error
-  forall_kernel<F><<<(n + kLaunchBlock - 1) / kLaunchBlock, kLaunchBlock>>>(n, f);
+  forall_cuda<F><<<(n + kLaunchBlock - 1) / kLaunchBlock, kLaunchBlock>>>(n, f);
   check_launch(name, synchronize);
 }
 

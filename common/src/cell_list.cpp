@@ -26,11 +26,6 @@ CellGrid CellGrid::covering(const BoundingBox& box, double cell) {
   return g;
 }
 
-long long CellGrid::coordinate(int axis, double v) const {
-  return std::clamp<long long>(static_cast<long long>(std::floor((v - origin[axis]) / cell[axis])), 0,
-                               count[axis] - 1);
-}
-
 CellList sort_into_cells(const CellGrid& grid, std::span<const double> x) {
   const size_t n = x.size() / 3;
   CellList list;

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "breccia/common/cell_list.hpp"
+#include "breccia/common/family_build.hpp"
 #include "breccia/common/huge_pages.hpp"
 
 #if defined(_OPENMP)
@@ -15,82 +16,42 @@ namespace breccia {
 
 namespace {
 
-// One cell list of a subset of the particles, with copies of what the search reads in cell
-// order (sorted[k] for members[k]: consecutive reads instead of gathers) and, per cell, the
-// largest horizon and pad of its particles (a cell is searched only as far as they reach).
-struct ReachGrid {
-  CellList cells;
-  struct Candidate {
-    double x[3];
-    double pad, horizon;
-    int32_t index;
-  };
-  std::vector<Candidate> sorted;
-  std::vector<double> cell_horizon, cell_pad;
-  double max_horizon = 0.0, max_pad = 0.0;  // over the grid's particles
+// The grids' binning on the host: one thread. Its passes are O(N) and short (about 10 ms of
+// the 0.5 s build on the 41^3 lattice); the 6 passes per grid each as a parallel region cost
+// more than they save where the machine is shared (threads waiting at every region's end:
+// the concrete demo's families took 0.53 -> 0.84 CPU s on 2 threads with load 10).
+struct SerialFamilyExec {
+  template <class F>
+  void for_each(int64_t n, const F& f, const char* /*name*/) const {
+    for (int64_t i = 0; i < n; ++i) f(i);
+  }
 };
-
-// The grid of the particles `subset` (ascending) with cells of edge `cell` over `box`.
-ReachGrid make_grid(std::span<const double> x, std::span<const double> horizon, std::span<const double> pad,
-                    const std::vector<int32_t>& subset, const BoundingBox& box, double cell) {
-  ReachGrid g;
-  const CellGrid grid = CellGrid::covering(box, cell);
-  std::vector<long long> cell_of(subset.size());
-  for (size_t k = 0; k < subset.size(); ++k) cell_of[k] = grid.index_of(&x[3 * static_cast<size_t>(subset[k])]);
-  g.cells.grid = grid;
-  group_by_key(std::span<const long long>(cell_of), static_cast<size_t>(grid.cells()), g.cells.start, g.cells.members);
-  g.sorted.resize(subset.size());
-#pragma omp parallel for schedule(static)
-  for (int64_t k = 0; k < static_cast<int64_t>(subset.size()); ++k) {
-    const size_t j = static_cast<size_t>(subset[static_cast<size_t>(g.cells.members[static_cast<size_t>(k)])]);
-    g.sorted[static_cast<size_t>(k)] = {{x[3 * j], x[3 * j + 1], x[3 * j + 2]}, pad.empty() ? 0.0 : pad[j], horizon[j],
-                                        static_cast<int32_t>(j)};
-  }
-  g.cell_horizon.assign(static_cast<size_t>(grid.cells()), 0.0);
-  g.cell_pad.assign(static_cast<size_t>(grid.cells()), 0.0);
-#pragma omp parallel for schedule(static)
-  for (long long c = 0; c < grid.cells(); ++c)
-    for (int64_t k = g.cells.start[c]; k < g.cells.start[c + 1]; ++k) {
-      const auto& cj = g.sorted[static_cast<size_t>(k)];
-      g.cell_horizon[static_cast<size_t>(c)] = std::max(g.cell_horizon[static_cast<size_t>(c)], cj.horizon);
-      g.cell_pad[static_cast<size_t>(c)] = std::max(g.cell_pad[static_cast<size_t>(c)], cj.pad);
-    }
-  for (const auto& cj : g.sorted) {
-    g.max_horizon = std::max(g.max_horizon, cj.horizon);
-    g.max_pad = std::max(g.max_pad, cj.pad);
-  }
-  return g;
-}
 
 }  // namespace
 
-Families build_families(std::span<const double> x, std::span<const double> horizon,
-                        std::span<const double> pad, int64_t row_begin, int64_t row_end) {
+FamilyPlan plan_families(std::span<const double> x, std::span<const double> horizon, std::span<const double> pad,
+                         int64_t row_begin, int64_t row_end) {
   const size_t n = horizon.size();
   if (x.size() != 3 * n) throw std::invalid_argument("build_families: position must be 3N");
   if (!pad.empty() && pad.size() != n) throw std::invalid_argument("build_families: pad must be empty or N");
   if (row_end < 0) row_end = static_cast<int64_t>(n);
   if (row_begin < 0 || row_begin > row_end || row_end > static_cast<int64_t>(n))
     throw std::invalid_argument("build_families: rows outside [0, N]");
-  Families fam;
-  fam.offsets.assign(n + 1, 0);
-  if (n == 0) return fam;
+  FamilyPlan plan;
+  plan.n = n;
+  plan.row_begin = row_begin;
+  plan.row_end = row_end;
+  if (n == 0) return plan;
   auto pad_of = [&](size_t i) { return pad.empty() ? 0.0 : pad[i]; };
-  // reach(i, j) = max(h_i, h_j) + max(p_i, p_j). Each row searches every j within it (the
-  // test of both ends), so the lists come out symmetric with no transposed search to merge.
   // Reach classes: the particles grouped by horizon in octaves from the smallest (class K:
   // h in [2^K, 2^(K+1)) h_min; at most kClasses, the last open-ended). Class K's grids have
   // cells of half the class's largest reach, so a row's search spans 5 cells per axis (125)
   // whatever its horizon: with one grid sized for the finest particles a coarse particle of a
   // graded mesh scanned up to 3,375 (the full concrete case's horizons span 2.9-22 mm).
-  // Row i of class K finds the particles of classes <= K in the grid "up to K" (all of them
-  // binned in K's cells) and those of each coarser class L in the grid "only L" (L's cells),
-  // so it visits every particle at most once; each cell is skipped when its box lies beyond
-  // the reach of its own particles' largest horizon and pad.
-  constexpr int kClasses = 8;
+  constexpr int kClasses = family::kClasses;
   double h_min = horizon[0];
   for (size_t i = 0; i < n; ++i) h_min = std::min(h_min, horizon[i]);
-  std::vector<uint8_t> klass(n, 0);
+  plan.klass.assign(n, 0);
   int classes = 1;
   if (h_min > 0.0)
     for (size_t i = 0; i < n; ++i) {
@@ -100,23 +61,27 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
         ++k;
         top *= 2.0;
       }
-      klass[i] = static_cast<uint8_t>(k);
+      plan.klass[i] = static_cast<uint8_t>(k);
       classes = std::max(classes, k + 1);
     }
+  plan.classes = classes;
   const BoundingBox box = bounding_box(x);
-  std::vector<double> class_reach(static_cast<size_t>(classes), 0.0);  // largest h + largest pad of the class
-  {
-    std::vector<double> hk(static_cast<size_t>(classes), 0.0), pk(static_cast<size_t>(classes), 0.0);
-    for (size_t i = 0; i < n; ++i) {
-      hk[klass[i]] = std::max(hk[klass[i]], horizon[i]);
-      pk[klass[i]] = std::max(pk[klass[i]], pad_of(i));
-    }
-    for (int k = 0; k < classes; ++k) class_reach[static_cast<size_t>(k)] = hk[static_cast<size_t>(k)] + pk[static_cast<size_t>(k)];
+  // per class: members, largest horizon, largest pad; which classes have rows to build
+  std::vector<int64_t> members(static_cast<size_t>(classes), 0);
+  std::vector<double> hk(static_cast<size_t>(classes), 0.0), pk(static_cast<size_t>(classes), 0.0);
+  std::vector<bool> has_rows(static_cast<size_t>(classes), false);
+  for (size_t i = 0; i < n; ++i) {
+    const size_t k = plan.klass[i];
+    ++members[k];
+    hk[k] = std::max(hk[k], horizon[i]);
+    pk[k] = std::max(pk[k], pad_of(i));
   }
-  // A grid's cell: half the class's reach, or larger where the bounding box would otherwise
-  // hold more than 8 cells per particle (and 2^16): sparse points in a large box.
+  for (int64_t i = row_begin; i < row_end; ++i) has_rows[plan.klass[static_cast<size_t>(i)]] = true;
+  // A grid's cell: half the class's reach (largest h + largest pad), or larger where the
+  // bounding box would otherwise hold more than 8 cells per particle (and 2^16): sparse
+  // points in a large box.
   auto cell_of_class = [&](int k) {
-    double cell = std::max(0.5 * class_reach[static_cast<size_t>(k)], 1e-300);
+    double cell = std::max(0.5 * (hk[static_cast<size_t>(k)] + pk[static_cast<size_t>(k)]), 1e-300);
     for (;;) {
       double cells = 1.0;
       for (int d = 0; d < 3; ++d) cells *= std::floor((box.hi[d] - box.lo[d]) / cell) + 1.0;
@@ -124,79 +89,48 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
       cell *= 1.25;
     }
   };
-  std::vector<ReachGrid> up_to(static_cast<size_t>(classes)), only(static_cast<size_t>(classes));
-  for (int k = 0; k < classes; ++k) {
-    std::vector<int32_t> subset_up_to, subset_only;
-    for (size_t i = 0; i < n; ++i) {
-      if (klass[i] <= k) subset_up_to.push_back(static_cast<int32_t>(i));
-      if (klass[i] == k && k > 0) subset_only.push_back(static_cast<int32_t>(i));
+  // Row i of class K finds the particles of classes <= K in the grid "up to K" (all of them
+  // binned in K's cells) and those of each coarser class L in the grid "only L" (L's cells),
+  // so it visits every particle at most once. Only the grids some row searches: "up to K"
+  // where a row is of class K, "only L" for L above the smallest class present.
+  auto grid = [&](int lo, int hi, double cell) {
+    FamilyPlan::Grid g;
+    g.built = true;
+    g.cells = CellGrid::covering(box, cell);
+    g.class_lo = lo;
+    g.class_hi = hi;
+    for (int k = lo; k <= hi; ++k) {
+      g.size += members[static_cast<size_t>(k)];
+      g.max_horizon = std::max(g.max_horizon, hk[static_cast<size_t>(k)]);
+      g.max_pad = std::max(g.max_pad, pk[static_cast<size_t>(k)]);
     }
-    const double cell = cell_of_class(k);
-    // Only the classes that some row searches: "up to K" where a row is of class K, "only
-    // L" for L above the smallest class present.
-    bool rows_of_k = false;
-    for (size_t i = static_cast<size_t>(row_begin); i < static_cast<size_t>(row_end) && !rows_of_k; ++i) rows_of_k = klass[i] == k;
-    if (rows_of_k) up_to[static_cast<size_t>(k)] = make_grid(x, horizon, pad, subset_up_to, box, cell);
-    if (k > 0) only[static_cast<size_t>(k)] = make_grid(x, horizon, pad, subset_only, box, cell);
-  }
-  // Every j of grid g with r2 <= max(h_i, h_j) + max(p_i, p_j), tested as "i's own reach or
-  // j's": r2 is the same bits from either end (x_i - x_j = -(x_j - x_i) exactly), so the row
-  // is the union of what i finds and what finds i, bit for bit.
-  auto visit = [&](size_t i, const ReachGrid& g, auto&& emit) {
-    if (g.sorted.empty()) return;
-    const CellGrid& grid = g.cells.grid;
-    const double pad_i = pad_of(i), horizon_i = horizon[i];
-    const double margin = 1e-9 * grid.cell[0];  // the rounding of a point's cell coordinate
-    const double search = std::max(horizon_i, g.max_horizon) + std::max(pad_i, g.max_pad);
-    const long long ring = static_cast<long long>(std::ceil(search / grid.cell[0]));
-    const double skip2 = (search + margin) * (search + margin);
-    long long ci[3];
-    for (int d = 0; d < 3; ++d) ci[d] = grid.coordinate(d, x[3 * i + d]);
-    const double xi[3] = {x[3 * i], x[3 * i + 1], x[3 * i + 2]};
-    auto gap = [&](int d, long long a) {
-      const double lo = grid.origin[d] + static_cast<double>(a) * grid.cell[d], hi = lo + grid.cell[d];
-      const double v = xi[d];
-      return v < lo ? lo - v : (v > hi ? v - hi : 0.0);
-    };
-    for (long long az = std::max(0LL, ci[2] - ring); az <= std::min(grid.count[2] - 1, ci[2] + ring); ++az) {
-      const double gz = gap(2, az);
-      if (gz * gz > skip2) continue;
-      for (long long ay = std::max(0LL, ci[1] - ring); ay <= std::min(grid.count[1] - 1, ci[1] + ring); ++ay) {
-        const double gy = gap(1, ay);
-        if (gz * gz + gy * gy > skip2) continue;
-        for (long long ax = std::max(0LL, ci[0] - ring); ax <= std::min(grid.count[0] - 1, ci[0] + ring); ++ax) {
-          const double gx = gap(0, ax);
-          const double g2 = gz * gz + gy * gy + gx * gx;
-          if (g2 > skip2) continue;
-          const long long c = grid.index(ax, ay, az);
-          const int64_t begin = g.cells.start[c], end = g.cells.start[c + 1];
-          if (begin == end) continue;
-          // this cell's own reach: its particles' largest horizon and pad (the same margin)
-          const double cell_search = std::max(horizon_i, g.cell_horizon[static_cast<size_t>(c)]) +
-                                     std::max(pad_i, g.cell_pad[static_cast<size_t>(c)]) + margin;
-          if (g2 > cell_search * cell_search) continue;
-          for (int64_t k = begin; k < end; ++k) {
-            const ReachGrid::Candidate& cj = g.sorted[static_cast<size_t>(k)];
-            const size_t j = static_cast<size_t>(cj.index);
-            if (j == i) continue;
-            const double p = std::max(pad_i, cj.pad);
-            const double reach = horizon_i + p, reach_j = cj.horizon + p;
-            double r2 = 0.0;
-            for (int d = 0; d < 3; ++d) {
-              const double e = cj.x[d] - xi[d];
-              r2 += e * e;
-            }
-            if (r2 <= reach * reach || r2 <= reach_j * reach_j) emit(j);
-          }
-        }
-      }
-    }
+    return g;
   };
-  // Each block of 512 rows is searched into a scratch buffer of its thread (sorted per row),
-  // then appended to the thread's store: chunks of 16M entries (64 MB) on huge pages, written
-  // once and never moved; the lists are copied into place once the counts are known. Buffers
-  // of their own per block, grown by doubling, copied themselves several times and faulted
-  // in every 4 KiB page of them one by one.
+  for (int k = 0; k < classes; ++k) {
+    const double cell = cell_of_class(k);
+    if (has_rows[static_cast<size_t>(k)]) plan.up_to[k] = grid(0, k, cell);
+    if (k > 0) plan.only[k] = grid(k, k, cell);
+  }
+  return plan;
+}
+
+Families build_families(std::span<const double> x, std::span<const double> horizon, std::span<const double> pad,
+                        int64_t row_begin, int64_t row_end) {
+  const FamilyPlan plan = plan_families(x, horizon, pad, row_begin, row_end);
+  const size_t n = plan.n;
+  Families fam;
+  fam.offsets.assign(n + 1, 0);
+  if (n == 0) return fam;
+  FamilyHostMemory mem;
+  const family::Points p = family_detail::points(mem, plan, x, horizon, pad);
+  const family::Grids grids = family_detail::bin_grids(SerialFamilyExec{}, mem, plan, p);
+  // The rows: build_families_with's kernels would search each row twice (count, then write);
+  // here each is searched once (search_row, the same kernel) and kept. Each block of 512 rows
+  // is searched into a scratch buffer of its thread (sorted per row), then appended to the
+  // thread's store: chunks of 16M entries (64 MB) on huge pages, written once and never
+  // moved; the lists are copied into place once the counts are known. Buffers of their own
+  // per block, grown by doubling, copied themselves several times and faulted in every 4 KiB
+  // page of them one by one.
   constexpr size_t block = 512;
   const size_t blocks = (n + block - 1) / block;
 #if defined(_OPENMP)
@@ -208,6 +142,10 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
   std::vector<std::vector<std::vector<int32_t>>> store(threads);
   std::vector<const int32_t*> found(blocks, nullptr);  // block b's lists, count[] of its rows long
   std::vector<int64_t> count(n, 0);
+  struct Keep {  // search_row's emit: the partners onto the block's list
+    std::vector<int32_t>& list;
+    void operator()(int32_t j) { list.push_back(j); }
+  };
 #pragma omp parallel
   {
 #if defined(_OPENMP)
@@ -216,17 +154,17 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
     std::vector<std::vector<int32_t>>& chunks = store[0];
 #endif
     std::vector<int32_t> list;
+    Keep keep{list};
 #pragma omp for schedule(dynamic, 4)
     for (size_t b = 0; b < blocks; ++b) {
       list.clear();
-      for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i) {
-        if (static_cast<int64_t>(i) < row_begin || static_cast<int64_t>(i) >= row_end) continue;  // left empty
+      const int64_t first_row = std::max<int64_t>(plan.row_begin, static_cast<int64_t>(b * block));
+      const int64_t last_row = std::min<int64_t>(plan.row_end, static_cast<int64_t>(std::min(n, (b + 1) * block)));
+      for (int64_t i = first_row; i < last_row; ++i) {  // the rows outside [row_begin, row_end) are left empty
         const size_t first = list.size();
-        auto emit = [&](size_t j) { list.push_back(static_cast<int32_t>(j)); };
-        visit(i, up_to[klass[i]], emit);
-        for (int k = klass[i] + 1; k < classes; ++k) visit(i, only[static_cast<size_t>(k)], emit);
-        std::sort(list.begin() + static_cast<std::ptrdiff_t>(first), list.end());
-        count[i] = static_cast<int64_t>(list.size() - first);
+        family::search_row(p, grids, i, keep);
+        family::sort_ascending(list.data() + first, static_cast<int64_t>(list.size() - first));
+        count[static_cast<size_t>(i)] = static_cast<int64_t>(list.size() - first);
       }
       if (chunks.empty() || chunks.back().capacity() - chunks.back().size() < list.size()) {
         chunks.emplace_back();

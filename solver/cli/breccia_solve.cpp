@@ -26,6 +26,7 @@
 #endif
 #ifdef BRECCIA_WITH_CUDA
 #include "breccia/solver/cuda_backend.hpp"
+#include "breccia/solver/cuda_families.hpp"
 #endif
 #ifdef BRECCIA_WITH_MPI
 #include "breccia/solver/mpi_backend.hpp"
@@ -134,6 +135,13 @@ int main(int argc, char** argv) {
                                        : "no CUDA device found, running on the CPU");
 #ifdef BRECCIA_WITH_CUDA
   if (opt.backend == "cuda") opt.backend_loop = solver::cuda_time_loop;
+  // The bond families on the GPU too (one process: a distributed run's ranks build theirs on
+  // the host); on the host, with a note, if the device path cannot run.
+  if (opt.backend == "cuda" && !distributed)
+    opt.setup_hooks.families = [notes = opt.progress](std::span<const double> x, std::span<const double> h,
+                                                      std::span<const double> pad, int64_t begin, int64_t end) {
+      return solver::cuda_build_families(x, h, pad, begin, end, notes);
+    };
 #endif
   try {
     Section::set_overrides(case_file, overrides, variant, opt.out_dir);
@@ -235,6 +243,7 @@ int main(int argc, char** argv) {
       if (opt.progress) std::fprintf(stderr, "note: --backend auto: model.short_range_forces runs on the CPU\n");
       opt.backend = "cpu";
       opt.backend_loop = nullptr;
+      opt.setup_hooks.families = nullptr;
     }
     if (distributed) {
 #ifdef BRECCIA_WITH_MPI

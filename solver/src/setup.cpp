@@ -649,7 +649,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // Families and per-bond coefficients.
   std::vector<double> pad(n);  // a neighbour's outermost partial-volume sample may reach into the horizon
   for (size_t k = 0; k < n; ++k) pad[k] = partial_volume_reach(s.half_cell[k], s.dimension);
-  Families fam = build_families(s.x0, s.horizon, pad, dist_rows.begin, dist_rows.end);
+  Families fam = hooks.families ? hooks.families(s.x0, s.horizon, pad, dist_rows.begin, dist_rows.end)
+                               : build_families(s.x0, s.horizon, pad, dist_rows.begin, dist_rows.end);
   s.setup_candidate_entries = {static_cast<int64_t>(fam.neighbors.size())};  // this rank's rows' (summary.json)
   phase("families");
   std::vector<ElasticInput> elastic;

@@ -17,6 +17,7 @@
 #include "breccia/common/error.hpp"
 #include "breccia/solver/cuda_backend.hpp"
 #include "breccia/solver/correspondence_kernels.hpp"
+#include "breccia/solver/cuda_launch.cuh"
 #include "breccia/solver/cuda_memory.cuh"
 #include "breccia/solver/float32_state.hpp"
 #include "breccia/solver/load_kernels.hpp"
@@ -44,14 +45,6 @@ int64_t blocks_for(int64_t n) { return (n + kBlock - 1) / kBlock; }
 // the work-of-loads bookkeeping of cpu_step.
 
 __device__ int64_t thread_index() { return static_cast<int64_t>(blockIdx.x) * blockDim.x + threadIdx.x; }
-
-// Every phase of the step is a functor of step.hpp (BRECCIA_HD): one kernel launches any of
-// them over [0, n), one thread per index.
-template <class F>
-__global__ void forall_cuda(int64_t n, F f) {
-  const int64_t i = thread_index();
-  if (i < n) f(i);
-}
 
 // ---------------------------------------------------------------------------------------
 // Reductions: grid-stride partial sums into at most kMaxReduceBlocks values, then one block
@@ -269,12 +262,12 @@ struct CudaSystem::Impl {
     farrays.p = fview;
   }
 
-  void after_launch(const char* kernel) const { check_launch(kernel, sync_after_launch); }
+  // Every phase of the step is a functor of step.hpp (BRECCIA_HD): cuda::for_each launches
+  // any of them over [0, n), one thread per index (cuda_launch.cuh, shared with the set-up's
+  // family kernels).
   template <class F>
   void for_each(int64_t n, const F& f, const char* name) {
-    if (n == 0) return;  // a grid of zero blocks is a launch error
-    forall_cuda<F><<<blocks_for(n), kBlock>>>(n, f);
-    after_launch(name);
+    cuda::for_each(n, f, name, sync_after_launch);
   }
   template <class From, class To>
   void convert(int64_t count, const From* from, To* to, const char* what) {

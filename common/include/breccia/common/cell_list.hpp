@@ -12,11 +12,27 @@
 // particle contact on host and GPU) use the hashed grid instead (hashed_grid.hpp): a fixed
 // number of buckets, so a particle flung far away does not grow the grid. Both sort their
 // particles with group_by_key below.
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
 
+#if defined(__CUDACC__)
+#define BRECCIA_CELL_HD __host__ __device__
+#else
+#define BRECCIA_CELL_HD
+#endif
+
 namespace breccia {
+
+// floor((v - origin) / cell) clamped into [0, count - 1]: a point's cell coordinate on one
+// axis (a point outside the grid's box counts in the nearest cell). Callable from device code
+// too: the bond families' row kernels (family_kernels.hpp) bin and search with it, so host
+// and GPU put every point in the same cell.
+BRECCIA_CELL_HD inline long long cell_coordinate(double v, double origin, double cell, long long count) {
+  const long long c = static_cast<long long>(std::floor((v - origin) / cell));
+  return c < 0 ? 0 : (c > count - 1 ? count - 1 : c);
+}
 
 // The indices 0 ... N-1 grouped by key (key[i] < key_count), ascending within a key (a
 // counting sort): key k holds members[start[k]] ... members[start[k + 1] - 1].
@@ -51,7 +67,7 @@ struct CellGrid {
   long long cells() const { return count[0] * count[1] * count[2]; }
   // floor((v - origin) / cell) on `axis`, clamped into the grid (a point outside the
   // grid's box counts in the nearest cell).
-  long long coordinate(int axis, double v) const;
+  long long coordinate(int axis, double v) const { return cell_coordinate(v, origin[axis], cell[axis], count[axis]); }
   long long index(long long cx, long long cy, long long cz) const { return (cz * count[1] + cy) * count[0] + cx; }
   long long index_of(const double x[3]) const {
     return index(coordinate(0, x[0]), coordinate(1, x[1]), coordinate(2, x[2]));
@@ -68,3 +84,5 @@ struct CellList {
 CellList sort_into_cells(const CellGrid& grid, std::span<const double> position);
 
 }  // namespace breccia
+
+#undef BRECCIA_CELL_HD

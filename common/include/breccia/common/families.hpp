@@ -8,6 +8,9 @@
 // its horizon. Shared by the solver (set-up, breccia-plan's bond counts) and
 // post-processing (the bond list of results.h5 and its fragment graph), so that both see
 // the same bonds in the same order.
+// The search is written as per-index kernels (family_kernels.hpp) that family_build.hpp
+// launches through any execution space: the CUDA backend's set-up builds these same arrays on
+// the device (solver/cuda/src/cuda_families.cu).
 #include <cstdint>
 #include <span>
 #include <vector>

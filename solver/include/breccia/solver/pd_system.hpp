@@ -6,9 +6,11 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "breccia/common/families.hpp"
 #include "breccia/common/particle_file.hpp"
 #include "breccia/solver/case_config.hpp"
 #include "breccia/solver/contact_cells.hpp"
@@ -154,6 +156,11 @@ struct DistributedSetup {
 struct SetupHooks {
   ForcePassFactory stable_step_forces;
   DistributedSetup distributed;
+  // Builds the bond families in build_families' place (its arguments, its result bit for
+  // bit): the CUDA backend's device build (cuda_families.hpp). Empty: build_families.
+  std::function<Families(std::span<const double> position, std::span<const double> horizon_m,
+                         std::span<const double> pad_m, int64_t row_begin, int64_t row_end)>
+      families;
 };
 
 // Points per axis of a `specimen: {lattice: ...}` box (1 on the axes it does not have).

@@ -225,10 +225,6 @@ private:
   std::vector<MPI_Request> requests_;
 };
 
-// An all-to-all where rank r is sent send_counts[r] consecutive elements of `type` (in rank
-// order), each `per` values of T: the counts go first (MPI_Alltoall) and the displacements
-// are their prefix sums. `recv` is sized to what arrives; rank r's elements start at
-// recv_displs[r] (ranks + 1 entries, the last the total). Its vectors are kept between calls.
 // `total` items cut into one contiguous block per rank: rank q's begins at total q / ranks.
 struct Blocks {
   int64_t total;
@@ -242,6 +238,10 @@ struct Blocks {
   }
 };
 
+// An all-to-all where rank r is sent send_counts[r] consecutive elements of `type` (in rank
+// order), each `per` values of T: the counts go first (MPI_Alltoall) and the displacements
+// are their prefix sums. `recv` is sized to what arrives; rank r's elements start at
+// recv_displs[r] (ranks + 1 entries, the last the total). Its vectors are kept between calls.
 struct AllToAll {
   std::vector<int> recv_counts, send_displs, recv_displs;
   template <class T>
@@ -976,6 +976,10 @@ public:
     ResultsWriter::write_bonds_together(results, out_dir, offsets, static_cast<size_t>(offset_rows.begin(r)),
                                         static_cast<size_t>(offset_rows.begin(r + 1) - offset_rows.begin(r)), mine,
                                         within, static_cast<size_t>(bytes.begin(r)), comm_);
+#if defined(__GLIBC__)
+    mine = FileBondRows{};
+    malloc_trim(0);  // the rows' staging back to the system, as after the set-up (glibc keeps freed pages)
+#endif
   }
 
   // results.h5's /bonds/offsets (HalfBondList::offsets) on every rank, counted once: each

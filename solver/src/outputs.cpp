@@ -220,10 +220,10 @@ ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool
       throw InputError(path, "/@format_version", std::to_string(file_->attr_int("/", "format_version")),
                        std::to_string(kResultsFormatVersion) + " (results of this breccia-solve; use a fresh output directory)");
     unchecked_bonds_ = file_->exists("/bonds/neighbors") ? static_cast<int64_t>(file_->dims("/bonds/neighbors").at(0)) : -2;
-    if (!ranks_hold_bonds) {
-      bonds_ = half_bond_list(s);
-      check_bond_count(static_cast<int64_t>(bonds_.neighbors.size()));
-    }
+    if (!ranks_hold_bonds) bonds_ = half_bond_list(s);
+    // A distributed run's ranks check together (mpi_backend.cpp): an error on rank 0 alone
+    // here would leave the others waiting in the run's first collective.
+    if (s.distributed_rows.empty()) check_bond_count(bond_list_size());
     // Keep outputs up to the checkpoint; later ones are recomputed.
     const int stored = static_cast<int>(file_->attr_int("/", "output_count"));
     for (int k = 0; k < stored; ++k) {

@@ -1216,6 +1216,8 @@ RunResult mpi_time_loop(PdSystem& global, const RunOptions& o, ResultsWriter* re
     if (cuda) print_rank_devices(MPI_COMM_WORLD, o.progress);
 #ifdef BRECCIA_PARALLEL_HDF5
     backend->results_bonds(global, results, o.out_dir);  // a new results.h5's bond list, by rows
+#else
+    if (results) results->check_bond_count(results->bond_list_size());  // rank 0 holds the list here
 #endif
     RunResult r = run_time_loop(global, o, *backend, results, history);
     // Every rank's resident set at the end of its loop, to rank 0 (summary.json).

@@ -66,7 +66,8 @@ public:
   // (write_bonds_together), and a restart's file is checked against the count of the list
   // they form (check_bond_count; the writer cannot count it alone).
   bool bonds_pending() const { return bonds_pending_; }
-  void check_bond_count(int64_t bonds);
+  void check_bond_count(int64_t bonds);  // throws InputError on a restart's other list; once
+  int64_t bond_list_size() const { return static_cast<int64_t>(bonds_.neighbors.size()); }  // where it holds the list
 
 #ifdef BRECCIA_PARALLEL_HDF5
   // A distributed run's output group, written by every rank of comm together (collective

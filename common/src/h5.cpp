@@ -108,15 +108,45 @@ std::vector<std::string> File::children(const std::string& group_path) const {
   return names;
 }
 
-// Rows [first, first + rows) of a dataset of shape dims, from data; every row when one process
-// writes it (transfer < 0), else each process of a collective file its own (transfer: the
+// The union of runs [lo, hi) (none empty) of rows of a dataspace of shape dims, as a new
+// dataspace (the caller closes it): halves merged pairwise (H5Scombine_select), since OR-ing
+// one run at a time into one selection takes time quadratic in the runs (HDF5 1.10.8 merges
+// the whole span list each time: 10,000 runs 2.3 s, against 0.01 s so; 100,000 runs 0.14 s).
+static hid_t select_runs(hid_t space, const std::vector<RowRun>& runs, size_t lo, size_t hi,
+                         const std::vector<hsize_t>& dims) {
+  if (hi - lo <= 32) {
+    const hid_t s = H5Scopy(space);
+    H5Sselect_none(s);
+    std::vector<hsize_t> start(dims.size(), 0), block(dims);
+    for (size_t q = lo; q < hi; ++q) {
+      start[0] = runs[q].first;
+      block[0] = runs[q].rows;
+      H5Sselect_hyperslab(s, H5S_SELECT_OR, start.data(), nullptr, block.data(), nullptr);
+    }
+    return s;
+  }
+  const size_t mid = lo + (hi - lo) / 2;
+  const Handle a{select_runs(space, runs, lo, mid, dims), H5Sclose}, b{select_runs(space, runs, mid, hi, dims), H5Sclose};
+  return H5Scombine_select(a.id, H5S_SELECT_OR, b.id);
+}
+
+// Runs of rows (first row, rows; ascending, disjoint) of a dataset of shape dims, from data (the
+// runs' rows one after another); every row when one process writes it (transfer < 0: one run
+// of every row), else each process of a collective file its own runs (transfer: the
 // collective transfer list; a process with no rows selects none and still takes part).
 template <class T>
-static void write_impl(const File& f, const std::string& path, const T* data, hsize_t first, hsize_t rows,
+static void write_impl(const File& f, const std::string& path, const T* data, const std::vector<RowRun>& runs,
                        std::vector<hsize_t> dims, hid_t transfer) {
   hsize_t total = 1;
   for (auto d : dims) total *= d;
-  if (dims.empty() || first > dims[0] || rows > dims[0] - first || (transfer < 0 && rows != dims[0]))
+  hsize_t rows = 0, end = 0;
+  bool inside = !dims.empty();
+  for (const RowRun& r : runs) {
+    inside = inside && r.first >= end && r.first <= dims[0] && r.rows <= dims[0] - r.first;
+    end = r.first + r.rows;
+    rows += r.rows;
+  }
+  if (!inside || (transfer < 0 && (runs.size() != 1 || rows != dims[0])))
     throw std::logic_error("h5 write " + path + ": rows outside the dataset's");
   f.create_group(parent_of(path));
   if (f.exists(path)) H5Ldelete(f.id(), path.c_str(), H5P_DEFAULT);
@@ -137,17 +167,18 @@ static void write_impl(const File& f, const std::string& path, const T* data, hs
   if (transfer < 0) {
     written = H5Dwrite(ds.id, mem_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
   } else {
-    Handle file_space{H5Dget_space(ds.id), H5Sclose};
-    std::vector<hsize_t> start(dims.size(), 0), block(dims);
-    start[0] = first;
+    Handle whole{H5Dget_space(ds.id), H5Sclose};
+    std::vector<RowRun> held;  // the runs with rows
+    for (const RowRun& r : runs)
+      if (r.rows > 0) held.push_back(r);
+    std::vector<hsize_t> block(dims);
     block[0] = rows;
     hsize_t one = 1;
     Handle mem_space{rows > 0 ? H5Screate_simple(static_cast<int>(block.size()), block.data(), nullptr)
                               : H5Screate_simple(1, &one, nullptr),
                      H5Sclose};
-    if (rows > 0) {
-      H5Sselect_hyperslab(file_space.id, H5S_SELECT_SET, start.data(), nullptr, block.data(), nullptr);
-    } else {
+    Handle file_space{held.empty() ? H5Scopy(whole.id) : select_runs(whole.id, held, 0, held.size(), dims), H5Sclose};
+    if (held.empty()) {
       H5Sselect_none(file_space.id);
       H5Sselect_none(mem_space.id);
     }
@@ -163,7 +194,7 @@ static void write_whole(const File& f, const std::string& path, const std::vecto
   for (auto d : dims) total *= d;
   if (total != data.size()) throw std::logic_error("h5 write " + path + ": dims do not match data size");
   // On a collective file every process writes the whole array, the same values.
-  write_impl(f, path, data.data(), 0, dims.empty() ? 0 : dims[0], dims, transfer);
+  write_impl(f, path, data.data(), {{0, dims.empty() ? 0 : dims[0]}}, dims, transfer);
 }
 
 void File::write(const std::string& p, const std::vector<double>& d, std::vector<hsize_t> dims) const {
@@ -183,10 +214,17 @@ void File::write(const std::string& p, const std::vector<uint8_t>& d, std::vecto
 }
 
 void File::write_rows(const std::string& p, const double* d, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const {
-  write_impl(*this, p, d, first, rows, dims, transfer_);
+  write_impl(*this, p, d, {{first, rows}}, dims, transfer_);
 }
 void File::write_rows(const std::string& p, const uint8_t* d, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const {
-  write_impl(*this, p, d, first, rows, dims, transfer_);
+  write_impl(*this, p, d, {{first, rows}}, dims, transfer_);
+}
+void File::write_rows(const std::string& p, const int64_t* d, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const {
+  write_impl(*this, p, d, {{first, rows}}, dims, transfer_);
+}
+void File::write_runs(const std::string& p, const int64_t* d, const std::vector<RowRun>& runs,
+                      std::vector<hsize_t> dims) const {
+  write_impl(*this, p, d, runs, dims, transfer_);
 }
 
 void File::write_strings(const std::string& path, const std::vector<std::string>& values) const {

@@ -76,8 +76,9 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   // What each rank's set-up built, to every rank (summary.json): its own rows' entries alone.
   s.setup_candidate_entries = concat_over_ranks(d, s.setup_candidate_entries);
   s.setup_kept_entries = concat_over_ranks(d, s.setup_kept_entries);
-  // Rank 0's writers read the bond list of results.h5 (partners, and which halves exist).
-  const bool writer_bonds = s.config.write_results;
+  // Rank 0's writers read the bond list of results.h5 (partners, and which halves exist),
+  // where it writes the files alone (serial HDF5).
+  const bool writer_bonds = root_gathers_bond_list(s.config);
   // The force pass that ended the stable-step estimate filled the fields of this rank's
   // particles only (the others' rows are empty here): the owners' values, which the first
   // output writes (a pre-crack's damage) and the ranks' systems start from.

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "breccia/common/csv.hpp"
 #include "breccia/common/error.hpp"
@@ -81,6 +82,18 @@ void higher_partners_by_file_index(const PdSystem& s, size_t i, std::vector<std:
   std::sort(row.begin(), row.end());
 }
 
+// The fragment graph's bond test (half_bond_list says why): the pair (i, j), i the lower file
+// index, within either end's horizon. The same arithmetic on the same doubles wherever the
+// list is formed (a rank's x0 holds the particle file's positions, bit for bit: setup_system).
+bool within_either_horizon(const double* xi, const double* xj, double horizon_i, double horizon_j) {
+  double r2 = 0.0;
+  for (int d = 0; d < 3; ++d) {
+    const double e = xj[d] - xi[d];
+    r2 += e * e;
+  }
+  return r2 <= horizon_i * horizon_i || r2 <= horizon_j * horizon_j;
+}
+
 }  // namespace
 
 std::vector<int64_t> half_bond_counts(const PdSystem& r, size_t owned, size_t n) {
@@ -125,12 +138,7 @@ HalfBondList half_bond_list(const PdSystem& s) {
   for (size_t i = 0; i < n; ++i)
     for (int64_t at = h.offsets[i]; at < h.offsets[i + 1]; ++at) {
       const size_t j = static_cast<size_t>(h.neighbors[at]);
-      double r2 = 0.0;
-      for (int d = 0; d < 3; ++d) {
-        const double e = x[3 * j + d] - x[3 * i + d];
-        r2 += e * e;
-      }
-      if (r2 <= horizon[i] * horizon[i] || r2 <= horizon[j] * horizon[j])
+      if (within_either_horizon(&x[3 * i], &x[3 * j], horizon[i], horizon[j]))
         h.within_horizon[at >> 3] |= static_cast<uint8_t>(1u << (at & 7));
       if (!s.precrack_pairs.empty() && is_precrack(s.precrack_pairs, static_cast<int64_t>(i), static_cast<int64_t>(j)))
         h.precrack[at >> 3] |= static_cast<uint8_t>(1u << (at & 7));
@@ -171,7 +179,36 @@ std::vector<int64_t> broken_bond_positions(const PdSystem& r, size_t owned, cons
   return positions;
 }
 
+FileBondRows file_bond_rows(const PdSystem& r, size_t owned, const std::vector<int64_t>& file_offsets) {
+  std::vector<std::pair<int64_t, size_t>> order(owned);  // (file index, row): the file's order
+  for (size_t i = 0; i < owned; ++i) order[i] = {r.original_index[i], i};
+  std::sort(order.begin(), order.end());
+  FileBondRows out;
+  std::vector<std::pair<int64_t, int64_t>> row;
+  for (const auto& [fi, i] : order) {
+    higher_partners_by_file_index(r, i, row);
+    const int64_t first = file_offsets[fi];
+    if (static_cast<int64_t>(row.size()) != file_offsets[fi + 1] - first)
+      throw std::logic_error("file_bond_rows: a row's partners differ from the list's offsets");
+    if (row.empty()) continue;
+    if (!out.runs.empty() && static_cast<int64_t>(out.runs.back().first + out.runs.back().rows) == first)
+      out.runs.back().rows += row.size();
+    else
+      out.runs.push_back({static_cast<hsize_t>(first), row.size()});
+    for (size_t q = 0; q < row.size(); ++q) {
+      const size_t j = static_cast<size_t>(r.neighbor[row[q].second]);
+      out.neighbors.push_back(row[q].first);
+      if (!within_either_horizon(&r.x0[3 * i], &r.x0[3 * j], r.horizon[i], r.horizon[j]))
+        out.beyond_horizon.push_back(first + static_cast<int64_t>(q));
+    }
+  }
+  return out;
+}
+
 ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool restart) : dir_(out_dir) {
+  // A distributed set-up's global system without the partners (parallel HDF5): each rank
+  // forms and writes its rows of the list (write_bonds_together).
+  const bool ranks_hold_bonds = !s.distributed_rows.empty() && s.neighbor.size() != s.bond_count();
   std::filesystem::create_directories(out_dir);
   const std::string path = out_dir + "/results.h5";
   if (restart && std::filesystem::exists(path)) {
@@ -182,10 +219,11 @@ ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool
     if (file_->attr_int("/", "format_version") != kResultsFormatVersion)
       throw InputError(path, "/@format_version", std::to_string(file_->attr_int("/", "format_version")),
                        std::to_string(kResultsFormatVersion) + " (results of this breccia-solve; use a fresh output directory)");
-    bonds_ = half_bond_list(s);
-    if (!file_->exists("/bonds/neighbors") || file_->dims("/bonds/neighbors").at(0) != bonds_.neighbors.size())
-      throw InputError(path, "/bonds/neighbors", "missing or a different bond count",
-                       std::to_string(bonds_.neighbors.size()) + " bonds, as this case builds");
+    unchecked_bonds_ = file_->exists("/bonds/neighbors") ? static_cast<int64_t>(file_->dims("/bonds/neighbors").at(0)) : -2;
+    if (!ranks_hold_bonds) bonds_ = half_bond_list(s);
+    // A distributed run's ranks check together (mpi_backend.cpp): an error on rank 0 alone
+    // here would leave the others waiting in the run's first collective.
+    if (s.distributed_rows.empty()) check_bond_count(bond_list_size());
     // Keep outputs up to the checkpoint; later ones are recomputed.
     const int stored = static_cast<int>(file_->attr_int("/", "output_count"));
     for (int k = 0; k < stored; ++k) {
@@ -236,10 +274,22 @@ ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool
     pre.push_back(p.second);
   }
   f.write("/precrack_bonds", pre, {pre.size() / 2, 2});
-  bonds_ = half_bond_list(s);
-  write_results_bonds(f, bonds_);
+  if (ranks_hold_bonds) {
+    bonds_pending_ = true;
+  } else {
+    bonds_ = half_bond_list(s);
+    write_results_bonds(f, bonds_);
+  }
   f.create_group("/output");
   f.flush();
+}
+
+void ResultsWriter::check_bond_count(int64_t bonds) {
+  if (unchecked_bonds_ == -1) return;  // a new file, or checked
+  if (unchecked_bonds_ != bonds)
+    throw InputError(dir_ + "/results.h5", "/bonds/neighbors", "missing or a different bond count",
+                     std::to_string(bonds) + " bonds, as this case builds");
+  unchecked_bonds_ = -1;
 }
 
 std::vector<ResultsField> results_fields(const PdSystem& s) {
@@ -259,6 +309,8 @@ std::vector<hsize_t> field_dims(size_t n, int components) {
 }  // namespace
 
 void ResultsWriter::write(const PdSystem& s) {
+  if (bonds_.offsets.empty())  // the ranks hold the list and the bond states: write_together
+    throw std::logic_error("results.h5: an output group written alone where the ranks hold the bond list");
   if (!file_) file_ = std::make_unique<h5::File>(dir_ + "/results.h5", h5::File::Mode::ReadWrite);
   h5::File& f = *file_;
   const std::string g = results_output_group(count_);
@@ -299,6 +351,24 @@ void ResultsWriter::write_together(const PdSystem& s, ResultsWriter* w, const st
     finish_results_output(f, static_cast<int>(index), static_cast<long long>(s.step), s.time, broken, broken_count);
   }
   if (w) w->count_output(s);
+}
+
+void ResultsWriter::write_bonds_together(ResultsWriter* w, const std::string& out_dir,
+                                         const std::vector<int64_t>& file_offsets, size_t offsets_first,
+                                         size_t offsets_count, const FileBondRows& mine,
+                                         const std::vector<uint8_t>& within_horizon, size_t within_first,
+                                         MPI_Comm comm) {
+  if (w) {  // the root's own handle closed: the ranks open the file together
+    w->file_.reset();
+    w->bonds_pending_ = false;
+  }
+  h5::File f(out_dir + "/results.h5", h5::File::Mode::ReadWrite, comm);
+  const size_t bonds = static_cast<size_t>(file_offsets.back());
+  // The datasets and their order as write_results_bonds writes them.
+  f.write_rows("/bonds/offsets", file_offsets.data() + offsets_first, offsets_first, offsets_count,
+               {file_offsets.size()});
+  f.write_runs("/bonds/neighbors", mine.neighbors.data(), mine.runs, {bonds});
+  f.write_rows("/bonds/within_horizon", within_horizon.data(), within_first, within_horizon.size(), {(bonds + 7) / 8});
 }
 #endif
 

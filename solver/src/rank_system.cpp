@@ -33,6 +33,17 @@ std::vector<T> slice(const std::vector<T>& global, int64_t b, int64_t e) {
   return std::vector<T>(global.begin() + b, global.begin() + e);
 }
 
+// A rank's rows [eb, ee) of a global per-entry state array (the bond states, a gas load's
+// entered cracks), which the global system holds whole (one process's set-up, rank 0's
+// staging: its slice), or as this rank's rows alone (a distributed restart's read_checkpoint:
+// a copy), or not at all: then `mine`, the rank's system's own rows, is already the state
+// and stays.
+template <class T>
+void take_entry_rows(std::vector<T>& mine, const std::vector<T>& global, size_t entries, int64_t eb, int64_t ee) {
+  if (global.empty()) return;
+  mine = global.size() == entries ? slice(global, eb, ee) : global;
+}
+
 }  // namespace
 
 int64_t RankLayout::local_index(int64_t j) const {
@@ -168,7 +179,7 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   // system keeps them, gathered whole on rank 0 (finish_distributed_setup) for its files.
   if (g.config.strength_rate != StrengthRateLaw::None) s_onset = g.s_onset;
   else s_onset.swap(g.s_onset);
-  if (g.config.write_results) {  // rank 0's writers read them (finish_distributed_setup)
+  if (root_gathers_bond_list(g.config)) {  // rank 0's writers read them (finish_distributed_setup)
     k_dual = g.k_dual;
     vol_own = g.vol_own;
   } else {
@@ -184,7 +195,7 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   s.s0_dual = std::move(s0_dual);
   s.s_onset = std::move(s_onset);
   s.gas.halves = std::move(gas_halves);
-  if (!g.config.write_results) std::vector<int32_t>().swap(g.neighbor);  // renumbered in s
+  if (!root_gathers_bond_list(g.config)) std::vector<int32_t>().swap(g.neighbor);  // renumbered in s
   return s;
 }
 
@@ -211,19 +222,14 @@ void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
   s.min_stretch = take(g.min_stretch, ids, 1, n);
   s.min_stretch_next = take(g.min_stretch_next, ids, 1, n);
   const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
-  // The global system's bond state arrays (for_each_bond_state_array) hold every entry (one
-  // process's set-up, rank 0's staging), or this rank's rows alone (a distributed restart's
-  // read_checkpoint), or nothing: then this system's own rows are already the state, kept.
-  auto rows_of = [&](const auto& global) {
-    return global.size() == g.bond_count() ? slice(global, eb, ee) : global;
-  };
-  auto entries = [&](auto& mine, const auto& global) {
-    if (!global.empty()) mine = rows_of(global);
-  };
-  entries(s.state, g.state);
-  entries(s.bond_damage, g.bond_damage);
-  if (g.config.strength_rate != StrengthRateLaw::None && !g.s_onset.empty())
-    take_raised_onsets(s.s_onset, s.s0_own, rows_of(g.s_onset));  // and the ultimates raised with them
+  // The global system's bond state arrays (for_each_bond_state_array): take_entry_rows.
+  take_entry_rows(s.state, g.state, g.bond_count(), eb, ee);
+  take_entry_rows(s.bond_damage, g.bond_damage, g.bond_count(), eb, ee);
+  if (g.config.strength_rate != StrengthRateLaw::None && !g.s_onset.empty()) {
+    std::vector<float> onsets;
+    take_entry_rows(onsets, g.s_onset, g.bond_count(), eb, ee);
+    take_raised_onsets(s.s_onset, s.s0_own, onsets);  // and the ultimates raised with them
+  }
 
   s.step = g.step;
   s.time = g.time;
@@ -258,11 +264,10 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
   const int64_t fb = first_facet_of(g, L.begin()), fe = first_facet_of(g, L.begin() + L.owned());
   // A distributed set-up's halves are the rank's rows already: they moved into this system
   // with the bonds (restrict_to_rank_taking_bonds) and stay when its state is brought up to
-  // date; a whole system's are its rows' slice.
-  std::vector<uint8_t> halves = G.halves.empty() ? std::move(r.halves) : slice(G.halves, eb, ee);
-  std::vector<uint8_t> in_crack = G.in_crack.empty()                   ? std::move(r.in_crack)
-                                 : G.in_crack.size() == g.bond_count() ? slice(G.in_crack, eb, ee)
-                                                                       : G.in_crack;  // a restart's own rows
+  // date; a whole system's are its rows' slice. The entered cracks are state: take_entry_rows.
+  std::vector<uint8_t> halves = std::move(r.halves), in_crack = std::move(r.in_crack);
+  take_entry_rows(halves, G.halves, g.bond_count(), eb, ee);
+  take_entry_rows(in_crack, G.in_crack, g.bond_count(), eb, ee);
   r = GasState{};
   r.active = true;
   r.load = G.load;

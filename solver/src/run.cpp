@@ -366,7 +366,7 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();
     long long iters = 0;
     if (o.relax) {
-      std::tie(iters, r.final_energies) = o.relax(s, o.progress);
+      std::tie(iters, r.final_energies) = o.relax(s, o, results.get());  // and its output group
     } else {
       iters = relax_to_equilibrium(s, o.progress);
       r.final_energies = measure(s);
@@ -376,7 +376,7 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
     r.status = iters < 0 ? "not_converged" : "converged";
     if (iters < 0) r.message = "ADR did not reach the tolerance within time.adr_max_steps";
     if (history) history->write(s, r.final_energies);
-    if (results) results->write(s);
+    if (results && !o.relax) results->write(s);
   } else if (o.backend_loop) {
     r = o.backend_loop(s, o, results.get(), history.get());
   } else if (s.f32.active) {

@@ -15,6 +15,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <bitset>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -28,6 +29,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "breccia/common/h5.hpp"
 #include "distributed_compare.hpp"
 #include "helpers.hpp"
 
@@ -408,6 +410,67 @@ TEST(DistributedSetup, PmbBuildsEachRanksOwnBondsWithOneProcessAnswer) {
     EXPECT_TRUE(summary(base + "_soft_np2")["distributed_setup"].get<bool>());
     for (const char* file : {"/results.h5", "/checkpoint.h5"})
       EXPECT_EQ(differing(base + "_soft_whole" + file, base + "_soft_np2" + file), std::vector<std::string>{}) << file;
+  }
+}
+
+// results.h5's bond list (/bonds/*) written by rows (docs/parallel.md, Files): with parallel
+// HDF5 each rank forms its own rows of the list, in the particle file's order (not one range:
+// the ranks own Morton ranges), and writes them together; the pad bonds' within_horizon bits
+// are cleared from every rank's places. A pre-cracked PMB lattice (0.5 mm spacing, m = 3.015:
+// about a quarter of its bonds are pads, checked below, so both bit values are compared)
+// expanding until bonds break: at 2 and 3 ranks every dataset of results.h5, the bond list
+// among them, is one process's byte for byte; a checkpoint of 3 ranks restarted on 2 into a
+// fresh folder (a new results.h5, its bond list written by the ranks at the restart) gives
+// one process's restart into a fresh folder; a restart whose results.h5 holds another bond
+// list is an input error on 2 ranks (exit code 2, the dataset named), as on one process.
+// Without parallel HDF5 rank 0 writes the list alone and the same comparisons hold.
+TEST(Distributed, ResultsBondListWrittenByRowsEqualsOneProcessFile) {
+  const std::string file = write_case(
+      "mpi_bond_rows",
+      "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.008, 0.006, 0.004], spacing: 0.5 mm}}\n"
+      "model: {type: pmb, horizon_factor: 3.015}\n"
+      "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 2}]\n"
+      "precracks: [{type: polygon, points: [[0.004, -0.001, -0.001], [0.004, 0.003, -0.001], [0.004, 0.003, 0.005], [0.004, -0.001, 0.005]]}]\n"
+      "initial: [{type: radial_velocity, center: [0.004, 0.003, 0.002], strain_rate: 300}]\n"
+      "time: {steps: 40}\n"
+      "output: {every: 20, history_every: 10, fields: [damage, displacement, velocity]}\n");
+  const std::string base = process_temp_dir() + "/bond_rows";
+  ASSERT_EQ(solve(file, base + "_whole", 1, 1).exit_code, 0);
+  ASSERT_EQ(solve(file, base + "_half", 1, 1, "--steps 20").exit_code, 0);
+  {  // what the comparison covers: the list, both values of its bits, broken bonds
+    const auto sets = datasets(base + "_whole/results.h5");
+    for (const char* name : {"bonds/offsets", "bonds/neighbors", "bonds/within_horizon"})
+      ASSERT_TRUE(sets.count(name)) << name;
+    const size_t bonds = sets.at("bonds/neighbors").size() / sizeof(int64_t);
+    size_t within = 0;
+    for (const char byte : sets.at("bonds/within_horizon")) within += std::bitset<8>(static_cast<unsigned char>(byte)).count();
+    EXPECT_GT(within, bonds / 2) << "most bonds lie within a horizon";
+    EXPECT_LT(within, bonds - bonds / 10) << "the pad bonds (beyond both horizons) are at least a tenth";
+    EXPECT_GT(summary(base + "_whole")["broken_bonds"].get<long long>(), 0) << "no bond broke";
+  }
+  for (const int ranks : {2, 3}) {
+    const std::string out = base + "_np" + std::to_string(ranks);
+    const Outcome o = solve(file, out, ranks, 1);
+    ASSERT_EQ(o.exit_code, 0) << o.err;
+    EXPECT_EQ(differing(base + "_whole/results.h5", out + "/results.h5"), std::vector<std::string>{}) << ranks << " ranks";
+  }
+  // Restarts into a fresh folder: the checkpoint of step 20, one process's and 3 ranks'.
+  ASSERT_EQ(solve(file, base + "_np3_half", 3, 1, "--steps 20").exit_code, 0);
+  const Outcome one = solve(file, base + "_fresh_whole", 1, 1, "--restart " + base + "_half/checkpoint.h5");
+  const Outcome two = solve(file, base + "_fresh_np2", 2, 1, "--restart " + base + "_np3_half/checkpoint.h5");
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  ASSERT_EQ(two.exit_code, 0) << two.err;
+  EXPECT_EQ(differing(base + "_fresh_whole/results.h5", base + "_fresh_np2/results.h5"), std::vector<std::string>{});
+  // Another bond list in the folder's results.h5: refused on a restart, exit code 2.
+  for (const int ranks : {1, 2}) {
+    const std::string out = base + "_other_list" + std::to_string(ranks);
+    std::filesystem::remove_all(out);
+    std::filesystem::copy(base + "_np3_half", out);
+    breccia::h5::File(out + "/results.h5", breccia::h5::File::Mode::ReadWrite)
+        .write("/bonds/neighbors", std::vector<int64_t>{1, 2, 3}, {3});
+    const Outcome o = solve(file, out, ranks, 1, "--restart " + out + "/checkpoint.h5");
+    EXPECT_EQ(o.exit_code, 2) << ranks << " ranks: " << o.err;
+    EXPECT_NE(o.err.find("/bonds/neighbors: missing or a different bond count"), std::string::npos) << o.err;
   }
 }
 

@@ -225,10 +225,6 @@ private:
   std::vector<MPI_Request> requests_;
 };
 
-// An all-to-all where rank r is sent send_counts[r] consecutive elements of `type` (in rank
-// order), each `per` values of T: the counts go first (MPI_Alltoall) and the displacements
-// are their prefix sums. `recv` is sized to what arrives; rank r's elements start at
-// recv_displs[r] (ranks + 1 entries, the last the total). Its vectors are kept between calls.
 // `total` items cut into one contiguous block per rank: rank q's begins at total q / ranks.
 struct Blocks {
   int64_t total;
@@ -242,6 +238,10 @@ struct Blocks {
   }
 };
 
+// An all-to-all where rank r is sent send_counts[r] consecutive elements of `type` (in rank
+// order), each `per` values of T: the counts go first (MPI_Alltoall) and the displacements
+// are their prefix sums. `recv` is sized to what arrives; rank r's elements start at
+// recv_displs[r] (ranks + 1 entries, the last the total). Its vectors are kept between calls.
 struct AllToAll {
   std::vector<int> recv_counts, send_displs, recv_displs;
   template <class T>
@@ -857,15 +857,6 @@ public:
     if (g.config.write_results) write_output(g, results, out_dir);
   }
 
-  // ADR's output is the root's writer's from the global system (run_system): the bond states
-  // are gathered to rank 0 for it (its staging), the other ranks naming them as held.
-  void stage_bond_states(PdSystem& g) {
-    for_each_bond_state_array(g, [&](auto& a) {
-      if (layout_.rank == 0) a.assign(g.bond_count(), {});
-      else if (g.bond_count() > 0) released_.push_back(&a);
-    });
-  }
-
   // Every rank writes rows of results.h5's output group: the file's rows are cut into one
   // contiguous block per rank, and the owned particles' values travel to the rank whose block
   // holds their file index (one all-to-all). The broken bits: each rank finds its own rows'
@@ -879,26 +870,24 @@ public:
     for (const ResultsField& f : fields) width += static_cast<size_t>(f.components);
     int size = 1;
     MPI_Comm_size(comm_, &size);
-    const Blocks file_rows{static_cast<int64_t>(g.n), size};
-    auto block_begin = [&](int q) { return file_rows.begin(q); };
-    auto block_of = [&](int64_t fi) { return file_rows.holding(fi); };  // the rank whose block holds file row fi
+    const Blocks file_rows{static_cast<int64_t>(g.n), size};  // which rank writes which file rows
     const int64_t owned = layout_.owned();
     std::vector<int> send_counts(size, 0), at(size, 0);  // at: where each block's values go in `send`
-    for (int64_t k = 0; k < owned; ++k) send_counts[block_of(local_.original_index[k])] += static_cast<int>(width);
+    for (int64_t k = 0; k < owned; ++k)
+      send_counts[file_rows.holding(local_.original_index[k])] += static_cast<int>(width);
     for (int q = 1; q < size; ++q) at[q] = at[q - 1] + send_counts[q - 1];
     std::vector<double> send(static_cast<size_t>(at[size - 1] + send_counts[size - 1])), recv;
-    {
-      for (int64_t k = 0; k < owned; ++k) {
-        const int64_t fi = local_.original_index[k];  // the rank's own: the global list is rank 0's
-        double* out = send.data() + at[block_of(fi)];
-        at[block_of(fi)] += static_cast<int>(width);
-        *out++ = static_cast<double>(fi);  // exact: file indices stay below 2^53
-        for (const ResultsField& f : fields)
-          for (int c = 0; c < f.components; ++c) *out++ = (local_.*f.values)[static_cast<size_t>(f.components * k + c)];
-      }
+    for (int64_t k = 0; k < owned; ++k) {
+      const int64_t fi = local_.original_index[k];  // the rank's own: the global list is rank 0's
+      int& next = at[file_rows.holding(fi)];
+      double* out = send.data() + next;
+      next += static_cast<int>(width);
+      *out++ = static_cast<double>(fi);  // exact: file indices stay below 2^53
+      for (const ResultsField& f : fields)
+        for (int c = 0; c < f.components; ++c) *out++ = (local_.*f.values)[static_cast<size_t>(f.components * k + c)];
     }
     AllToAll().run(send.data(), send_counts, recv, 1, MPI_DOUBLE, comm_);
-    const int64_t file_first = block_begin(r), file_count = block_begin(r + 1) - file_first;
+    const int64_t file_first = file_rows.begin(r), file_count = file_rows.begin(r + 1) - file_first;
     std::vector<std::vector<double>> rows(fields.size());
     for (size_t f = 0; f < fields.size(); ++f) rows[f].resize(static_cast<size_t>(file_count * fields[f].components));
     for (size_t at = 0; at < recv.size(); at += width) {
@@ -915,38 +904,82 @@ public:
 
   // The output group's broken bits (one per bond of results.h5's bond list), on every rank
   // (each writes the same dataset), without the bond states leaving their ranks: each rank
-  // finds its own rows' broken bonds' places in the file's list (broken_bond_positions) and
-  // sends each to the rank whose block of the bits' bytes holds it (one all-to-all of the
-  // broken bonds only, 8 bytes each), which sets its block's bits; every rank then gathers
-  // every block (the dataset, 1 bit per bond).
+  // finds its own rows' broken bonds' places in the file's list (broken_bond_positions), the
+  // ranks form the bits' blocks from them (bit_block), and every rank gathers every block (the
+  // dataset, 1 bit per bond).
   std::vector<uint8_t> broken_bits_together(const PdSystem& g, long long* count) {
     const std::vector<int64_t>& offsets = file_bond_offsets(g);
-    const int64_t bytes = (offsets.back() + 7) / 8;
-    int size = 1;
-    MPI_Comm_size(comm_, &size);
-    const Blocks blocks{bytes, size};
-    auto byte_begin = [&](int q) { return blocks.begin(q); };
-    auto block_of = [&](int64_t byte) { return blocks.holding(byte); };  // the rank whose block holds that byte
     std::vector<int64_t> mine =
         broken_bond_positions(local_, static_cast<size_t>(layout_.owned()), offsets, g.precrack_pairs);
     long long total = static_cast<long long>(mine.size());
     MPI_Allreduce(MPI_IN_PLACE, &total, 1, MPI_LONG_LONG, MPI_SUM, comm_);
     *count = total;
-    std::sort(mine.begin(), mine.end());  // ascending places: ascending blocks
-    std::vector<int> send_counts(static_cast<size_t>(size), 0);
-    for (const int64_t at : mine) ++send_counts[block_of(at >> 3)];
-    std::vector<int64_t> received;
-    AllToAll().run(mine.data(), send_counts, received, 1, MPI_INT64_T, comm_);
-    const int r = layout_.rank;
-    std::vector<uint8_t> bits(static_cast<size_t>(bytes), 0);
-    for (const int64_t at : received) bits[at >> 3] |= static_cast<uint8_t>(1u << (at & 7));
-    std::vector<int> counts(static_cast<size_t>(size)), displs(static_cast<size_t>(size));
-    for (int q = 0; q < size; ++q) {
-      displs[q] = static_cast<int>(byte_begin(q));
-      counts[q] = static_cast<int>(byte_begin(q + 1) - byte_begin(q));
+    const Blocks bytes = bit_bytes(offsets.back());
+    std::vector<uint8_t> block = bit_block(std::move(mine), offsets.back(), true, bytes);
+    std::vector<int> counts(static_cast<size_t>(bytes.ranks)), displs(static_cast<size_t>(bytes.ranks));
+    for (int q = 0; q < bytes.ranks; ++q) {
+      displs[q] = static_cast<int>(bytes.begin(q));
+      counts[q] = static_cast<int>(bytes.begin(q + 1) - bytes.begin(q));
     }
-    MPI_Allgatherv(MPI_IN_PLACE, counts[r], MPI_BYTE, bits.data(), counts.data(), displs.data(), MPI_BYTE, comm_);
+    std::vector<uint8_t> bits(static_cast<size_t>(bytes.total));
+    MPI_Allgatherv(block.data(), counts[layout_.rank], MPI_BYTE, bits.data(), counts.data(), displs.data(), MPI_BYTE,
+                   comm_);
     return bits;
+  }
+
+  // The bytes of `bits` bits (one per bond of the file's list), one contiguous block per rank.
+  Blocks bit_bytes(int64_t bits) const { return Blocks{(bits + 7) / 8, layout_.part.ranks()}; }
+
+  // This rank's block (`bytes`: bit_bytes) of a bit array of `bits` bits formed by every rank
+  // together: each rank sends the places it holds to the rank whose block holds them (one
+  // all-to-all, 8 bytes per place), which sets them in a clear block (`set`) or clears them in
+  // a block of ones (the bits past `bits`, in the last byte, stay clear). Collective.
+  std::vector<uint8_t> bit_block(std::vector<int64_t> places, int64_t bits, bool set, const Blocks& bytes) {
+    std::sort(places.begin(), places.end());  // ascending places: ascending blocks
+    std::vector<int> send_counts(static_cast<size_t>(bytes.ranks), 0);
+    for (const int64_t at : places) ++send_counts[bytes.holding(at >> 3)];
+    std::vector<int64_t> received;
+    AllToAll().run(places.data(), send_counts, received, 1, MPI_INT64_T, comm_);
+    const int64_t first = bytes.begin(layout_.rank), end = bytes.begin(layout_.rank + 1);
+    std::vector<uint8_t> block(static_cast<size_t>(end - first), 0);
+    if (!set)
+      for (int64_t at = 8 * first; at < std::min(8 * end, bits); ++at)
+        block[(at >> 3) - first] |= static_cast<uint8_t>(1u << (at & 7));
+    for (const int64_t at : received) {
+      const uint8_t b = static_cast<uint8_t>(1u << (at & 7));
+      if (set) block[(at >> 3) - first] |= b;
+      else block[(at >> 3) - first] &= static_cast<uint8_t>(~b);
+    }
+    return block;
+  }
+
+  // results.h5's bond list, when the root's writer left it to the ranks (a new file:
+  // bonds_pending), written by every rank together: each rank forms its own rows
+  // (file_bond_rows: its rows' partners, in the file's order, at their places, which the
+  // list's offsets give) and writes them as its runs of /bonds/neighbors, its block of the
+  // offsets' rows, and its block of the within_horizon bits (bit_block, from the places of
+  // its pad bonds, which lie beyond both horizons: about a quarter of the bonds on a lattice
+  // with m = 3.015). No rank gathers a partner. On a restart the root checks its file's list
+  // against the count (check_bond_count). Collective.
+  void results_bonds(const PdSystem& g, ResultsWriter* results, const std::string& out_dir) {
+    if (!g.config.write_results) return;
+    const std::vector<int64_t>& offsets = file_bond_offsets(g);
+    int pending = results && results->bonds_pending() ? 1 : 0;
+    MPI_Bcast(&pending, 1, MPI_INT, 0, comm_);
+    if (results) results->check_bond_count(offsets.back());
+    if (!pending) return;
+    const int r = layout_.rank;
+    const Blocks offset_rows{static_cast<int64_t>(offsets.size()), layout_.part.ranks()};
+    FileBondRows mine = file_bond_rows(local_, static_cast<size_t>(layout_.owned()), offsets);
+    const Blocks bytes = bit_bytes(offsets.back());
+    const std::vector<uint8_t> within = bit_block(std::move(mine.beyond_horizon), offsets.back(), false, bytes);
+    ResultsWriter::write_bonds_together(results, out_dir, offsets, static_cast<size_t>(offset_rows.begin(r)),
+                                        static_cast<size_t>(offset_rows.begin(r + 1) - offset_rows.begin(r)), mine,
+                                        within, static_cast<size_t>(bytes.begin(r)), comm_);
+#if defined(__GLIBC__)
+    mine = FileBondRows{};
+    malloc_trim(0);  // the rows' staging back to the system, as after the set-up (glibc keeps freed pages)
+#endif
   }
 
   // results.h5's /bonds/offsets (HalfBondList::offsets) on every rank, counted once: each
@@ -960,8 +993,6 @@ public:
     }
     return file_bond_offsets_;
   }
-
-
 
   // Every rank writes its own rows of checkpoint.h5 (collective I/O): nothing is gathered.
   // The rows are the gathered file's (internal order: rank r's particles and its rows' bond
@@ -993,8 +1024,14 @@ public:
   // Dynamic relaxation on the rank's share: the force pass exchanges the halo, the sums
   // (load norm, residual, the damping's Rayleigh quotient) are taken over ranks,
   // reproducibly (reproducible_sum.hpp), so every rank and one process take the same
-  // decisions from the same bits; then the state is gathered as for an output.
-  std::pair<long long, Energies> relax(PdSystem& g, bool progress) {
+  // decisions from the same bits; then the state is gathered into rank 0's global system (the
+  // history and the summary read it) and the one output group written as the time loop's are:
+  // with parallel HDF5 by every rank together (write_output; no rank gathers a bond state or
+  // a partner), else by rank 0's writer from its staging.
+  std::pair<long long, Energies> relax(PdSystem& g, const RunOptions& o, ResultsWriter* results) {
+#ifdef BRECCIA_PARALLEL_HDF5
+    results_bonds(g, results, o.out_dir);  // the bond list when the run starts, as the time loop's
+#endif
     RelaxHooks hooks;
     hooks.forces = [this](PdSystem& l) {
       l.diagnostics = true;
@@ -1018,14 +1055,16 @@ public:
     hooks.max = [this](double* values, int count) {
       MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_MAX, comm_);
     };
-    const long long iterations = relax_to_equilibrium(local_, progress, hooks);
+    const long long iterations = relax_to_equilibrium(local_, o.progress, hooks);
     const Energies e = measure(g);  // and the accumulators
-#ifdef BRECCIA_PARALLEL_HDF5
-    stage_bond_states(g);
-#endif
     download(g);
     g.step = local_.step;
     if (local_.gas.active) g.gas.copy_scalars(local_.gas);  // the history's and summary's gas
+#ifdef BRECCIA_PARALLEL_HDF5
+    if (g.config.write_results) write_output(g, results, o.out_dir);
+#else
+    if (results) results->write(g);
+#endif
     return {iterations, e};
   }
 
@@ -1159,10 +1198,10 @@ DistributedSetup mpi_distributed_setup() {
   return d;
 }
 
-std::pair<long long, Energies> mpi_relax(PdSystem& global, bool progress) {
+std::pair<long long, Energies> mpi_relax(PdSystem& global, const RunOptions& o, ResultsWriter* results) {
   MpiBackend backend(global, MPI_COMM_WORLD);
   try {
-    return backend.relax(global, progress);
+    return backend.relax(global, o, results);
   } catch (const std::exception& e) {
     mpi_abort_all(e.what(), kExitRunFailed);
   }
@@ -1172,9 +1211,14 @@ RunResult mpi_time_loop(PdSystem& global, const RunOptions& o, ResultsWriter* re
   // Every rank gets here with the same (replicated) system, so a case the backend refuses is
   // refused by all alike: an InputError, reported once by rank 0.
   const bool cuda = o.backend == "cuda";
-  const std::unique_ptr<StepBackend> backend = make_mpi_backend(global, MPI_COMM_WORLD, cuda);
+  const auto backend = std::make_unique<MpiBackend>(global, MPI_COMM_WORLD, cuda);
   try {
     if (cuda) print_rank_devices(MPI_COMM_WORLD, o.progress);
+#ifdef BRECCIA_PARALLEL_HDF5
+    backend->results_bonds(global, results, o.out_dir);  // a new results.h5's bond list, by rows
+#else
+    if (results) results->check_bond_count(results->bond_list_size());  // rank 0 holds the list here
+#endif
     RunResult r = run_time_loop(global, o, *backend, results, history);
     // Every rank's resident set at the end of its loop, to rank 0 (summary.json).
     double mine = r.loop_resident_mb.empty() ? -1.0 : r.loop_resident_mb[0];

@@ -9,6 +9,10 @@
 
 namespace breccia::h5 {
 
+struct RowRun {  // rows [first, first + rows) of a dataset
+  hsize_t first = 0, rows = 0;
+};
+
 class File {
 public:
   enum class Mode { Read, Create, ReadWrite };
@@ -49,6 +53,12 @@ public:
   // process: first 0 and every row, which is write().
   void write_rows(const std::string& path, const double* data, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const;
   void write_rows(const std::string& path, const uint8_t* data, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const;
+  void write_rows(const std::string& path, const int64_t* data, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const;
+  // The same for several runs of rows per process (ascending, disjoint; data: their rows one
+  // after another): a process whose rows are not one range (a distributed run's rows of the
+  // results' bond list, in the particle file's order) writes them in one collective call.
+  void write_runs(const std::string& path, const int64_t* data, const std::vector<RowRun>& runs,
+                  std::vector<hsize_t> dims) const;
 
   std::vector<hsize_t> dims(const std::string& path) const;
   std::vector<double> read_doubles(const std::string& path) const;

@@ -110,11 +110,25 @@ void for_each_bond_state_array(PdSystem& s, F&& f) {
   if (s.gas.active && s.gas.crack_entry) f(s.gas.in_crack);
 }
 
+// Whether rank 0 gathers the results' bond list at the end of a distributed set-up (the
+// partners, and the two half-bond factors its writer's broken bits read: 20 B per entry) and
+// keeps it for its writer: only a build without parallel HDF5, whose rank 0 writes every file
+// alone. With parallel HDF5 each rank writes its own rows of the list and of the broken bits
+// (mpi_backend.cpp), so the set-up keeps no copy of them.
+inline bool root_gathers_bond_list(const CaseConfig& c) {
+#ifdef BRECCIA_PARALLEL_HDF5
+  (void)c;
+  return false;
+#else
+  return c.write_results;
+#endif
+}
+
 // The global system as the time loop and the writers need it, its bonds now in the ranks'
 // own systems: the whole row offsets on every rank, the bond state arrays
-// (for_each_bond_state_array) on rank 0 without parallel HDF5, on none with it; with results written, rank 0 also gathers the
-// partners and the two half-bond volumes and moduli the results' bond list reads
-// (outputs.cpp); every other per-entry array is dropped.
+// (for_each_bond_state_array) on rank 0 without parallel HDF5, on none with it; where
+// root_gathers_bond_list, rank 0 also gathers the partners and the two half-bond volumes and
+// moduli the results' bond list reads (outputs.cpp); every other per-entry array is dropped.
 void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const DistributedSetup& d);
 
 }  // namespace breccia::solver

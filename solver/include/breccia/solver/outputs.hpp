@@ -32,6 +32,18 @@ std::vector<int64_t> half_bond_counts(const PdSystem& rows, size_t owned, size_t
 std::vector<int64_t> broken_bond_positions(const PdSystem& rows, size_t owned, const std::vector<int64_t>& file_offsets,
                                            const std::vector<std::pair<int64_t, int64_t>>& precrack_pairs);
 
+// A rank's rows of the file's bond list (results.h5 /bonds, the list half_bond_list makes),
+// from its system's owned rows [0, owned) (partners local; original_index, x0 and horizon over
+// owned and ghosts), so that no rank holds another's: its rows in file-index order, each row's
+// partners of higher file index at their places in the list, file_offsets[fi] plus their rank
+// by file index (file_offsets: the list's offsets, summed from every rank's half_bond_counts).
+struct FileBondRows {
+  std::vector<int64_t> neighbors;       // the rows' partners (file indices), run after run
+  std::vector<h5::RowRun> runs;         // their places in the list: ascending, adjacent rows merged
+  std::vector<int64_t> beyond_horizon;  // places whose within_horizon bit is clear (the pad bonds)
+};
+FileBondRows file_bond_rows(const PdSystem& rows, size_t owned, const std::vector<int64_t>& file_offsets);
+
 // A per-particle field of an output group: its dataset, its components per particle and the
 // system's array it comes from (internal order).
 struct ResultsField {
@@ -49,6 +61,14 @@ public:
   void write(const PdSystem& sys);  // one output group at the current step
   int output_count() const { return count_; }
 
+  // A distributed run whose global system holds no partners (parallel HDF5: the ranks hold
+  // their rows) leaves the bond list to the ranks: a new file waits for them
+  // (write_bonds_together), and a restart's file is checked against the count of the list
+  // they form (check_bond_count; the writer cannot count it alone).
+  bool bonds_pending() const { return bonds_pending_; }
+  void check_bond_count(int64_t bonds);  // throws InputError on a restart's other list; once
+  int64_t bond_list_size() const { return static_cast<int64_t>(bonds_.neighbors.size()); }  // where it holds the list
+
 #ifdef BRECCIA_PARALLEL_HDF5
   // A distributed run's output group, written by every rank of comm together (collective
   // I/O, nothing gathered): each rank gives rows [file_first, file_first + file_count) of the
@@ -59,6 +79,16 @@ public:
   static void write_together(const PdSystem& sys, ResultsWriter* writer, const std::string& out_dir,
                              size_t file_first, size_t file_count, const std::vector<std::vector<double>>& rows,
                              const std::vector<uint8_t>& broken, long long broken_count, MPI_Comm comm);
+  // /bonds/* of a new file whose writer left them to the ranks (bonds_pending), written by
+  // every rank of comm together: rows [offsets_first, offsets_first + offsets_count) of
+  // /bonds/offsets (file_offsets: the whole list's), its own rows of /bonds/neighbors
+  // (file_bond_rows) and bytes [within_first, within_first + size) of /bonds/within_horizon.
+  // The datasets are the ones write_results_bonds writes of the whole list. Collective; the
+  // root is the one rank whose `writer` is not null.
+  static void write_bonds_together(ResultsWriter* writer, const std::string& out_dir,
+                                   const std::vector<int64_t>& file_offsets, size_t offsets_first,
+                                   size_t offsets_count, const FileBondRows& mine,
+                                   const std::vector<uint8_t>& within_horizon, size_t within_first, MPI_Comm comm);
 #endif
 
 private:
@@ -68,7 +98,9 @@ private:
   std::unique_ptr<h5::File> file_;
   int count_ = 0;
   std::vector<double> times_;
-  HalfBondList bonds_;
+  HalfBondList bonds_;  // empty where the ranks hold the list (bonds_pending, check_bond_count)
+  bool bonds_pending_ = false;    // a new file without /bonds yet
+  int64_t unchecked_bonds_ = -1;  // a restart's file: its list's length, not yet checked
 };
 
 class HistoryWriter {

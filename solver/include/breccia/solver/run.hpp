@@ -34,8 +34,9 @@ struct RunOptions {
   SetupHooks setup_hooks;
   // A backend's dynamic relaxation (a distributed run's): the iterations (-1: not converged)
   // and the final state's energies, which the backend measures (a distributed set-up's global
-  // system holds no bonds to measure them with). Empty: relax_to_equilibrium here.
-  std::function<std::pair<long long, Energies>(PdSystem&, bool progress)> relax;
+  // system holds no bonds to measure them with); it writes the output group itself (the root's
+  // writer is null on the other ranks). Empty: relax_to_equilibrium here.
+  std::function<std::pair<long long, Energies>(PdSystem&, const RunOptions&, ResultsWriter*)> relax;
 };
 
 struct RunResult {

@@ -62,9 +62,10 @@ ForcePass mpi_stable_step_forces(PdSystem& global);
 DistributedSetup mpi_distributed_setup();
 
 // RunOptions::relax for a distributed run: dynamic relaxation on every rank's share, the
-// state gathered into `global` on rank 0; returns the iterations (-1: not converged) and the
-// final energies summed over ranks.
-std::pair<long long, Energies> mpi_relax(PdSystem& global, bool progress);
+// state gathered into `global` on rank 0, and the output group written (with parallel HDF5
+// by every rank together: each its rows, nothing gathered; else by rank 0's `results`, null
+// elsewhere); returns the iterations (-1: not converged) and the final energies summed over ranks.
+std::pair<long long, Energies> mpi_relax(PdSystem& global, const RunOptions& options, ResultsWriter* results);
 
 // RunOptions::backend_loop for a distributed run (options.backend "cuda": on the ranks' GPUs).
 RunResult mpi_time_loop(PdSystem& global, const RunOptions& options, ResultsWriter* results,

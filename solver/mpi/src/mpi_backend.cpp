@@ -982,6 +982,20 @@ public:
 #endif
   }
 
+  // results.h5's bond list when a run (time loop or dynamic relaxation) starts: with parallel
+  // HDF5 written by the ranks together and a restart's file checked by them together
+  // (results_bonds); else rank 0 holds the list and checks a restart's file alone (an error
+  // there reaches every rank through mpi_abort_all). Collective.
+  void start_results(const PdSystem& g, ResultsWriter* results, const std::string& out_dir) {
+#ifdef BRECCIA_PARALLEL_HDF5
+    results_bonds(g, results, out_dir);
+#else
+    (void)g;
+    (void)out_dir;
+    if (results) results->check_bond_count(results->bond_list_size());
+#endif
+  }
+
   // results.h5's /bonds/offsets (HalfBondList::offsets) on every rank, counted once: each
   // rank its own rows' partners of higher file index, summed over ranks (counts: exact).
   const std::vector<int64_t>& file_bond_offsets(const PdSystem& g) {
@@ -1029,9 +1043,7 @@ public:
   // with parallel HDF5 by every rank together (write_output; no rank gathers a bond state or
   // a partner), else by rank 0's writer from its staging.
   std::pair<long long, Energies> relax(PdSystem& g, const RunOptions& o, ResultsWriter* results) {
-#ifdef BRECCIA_PARALLEL_HDF5
-    results_bonds(g, results, o.out_dir);  // the bond list when the run starts, as the time loop's
-#endif
+    start_results(g, results, o.out_dir);  // as the time loop's
     RelaxHooks hooks;
     hooks.forces = [this](PdSystem& l) {
       l.diagnostics = true;
@@ -1214,11 +1226,7 @@ RunResult mpi_time_loop(PdSystem& global, const RunOptions& o, ResultsWriter* re
   const auto backend = std::make_unique<MpiBackend>(global, MPI_COMM_WORLD, cuda);
   try {
     if (cuda) print_rank_devices(MPI_COMM_WORLD, o.progress);
-#ifdef BRECCIA_PARALLEL_HDF5
-    backend->results_bonds(global, results, o.out_dir);  // a new results.h5's bond list, by rows
-#else
-    if (results) results->check_bond_count(results->bond_list_size());  // rank 0 holds the list here
-#endif
+    backend->start_results(global, results, o.out_dir);
     RunResult r = run_time_loop(global, o, *backend, results, history);
     // Every rank's resident set at the end of its loop, to rank 0 (summary.json).
     double mine = r.loop_resident_mb.empty() ? -1.0 : r.loop_resident_mb[0];

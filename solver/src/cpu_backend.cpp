@@ -181,16 +181,16 @@ class LinearForceProbe {
     if (forces_ && !sys_.distributed_rows.empty()) forces_(sys_);
     else cpu_compute_forces(sys_);
   }
-  // The forces at u = amplitude x / norm (the same displacement scale whatever x's norm).
-  // `rows` (optional, one process only): x is zero outside rows.force, so only those rows'
+  // The forces at the displacement the caller wrote to sys.u (amplitude x / |x|: the same
+  // displacement scale whatever x's norm).
+  // `rows` (optional, one process only): u is zero outside rows.force, so only those rows'
   // forces are read; they need the dilatation of rows.dilatation (LPS: the force rows and
   // their partners). The same kernels on the same inputs give those rows the whole pass's
   // forces bit for bit; the other rows' forces are left stale.
   struct Rows {
     std::vector<int64_t> force, dilatation;
   };
-  void push(const std::vector<double>& x, double norm, const Rows* rows = nullptr) {
-    for (size_t k = 0; k < x.size(); ++k) sys_.u[k] = amplitude * x[k] / norm;
+  void push(const Rows* rows = nullptr) {
     if (forces_) forces_(sys_);
     else if (rows) restricted_pass(*rows);
     else cpu_compute_forces(sys_);
@@ -232,7 +232,7 @@ class LinearForceProbe {
 std::vector<uint8_t> stable_step_region(const PdSystem& sys, double ratio) {
   // Each particle's local frequency scale omega_i^2 ~ E / (rho_i delta_i^2) (a bond's
   // stiffness over its mass at a fixed horizon ratio); the region holds those at least
-  // `ratio` of the largest (the set-up's 1/4: omega_i >= omega_max / 2). Where that is half
+  // `ratio` of the largest (the set-up's 0.35: omega_i >= 0.59 omega_max). Where that is half
   // the particles or more (a uniform lattice: all of them) the estimate runs on the whole
   // system, as it did.
   if (sys.n == 0 || !(ratio > 0.0)) return {};
@@ -272,10 +272,12 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
   // whose rows and columns are that region's, with every other particle held at rest. The
   // block's largest eigenvalue is at most the whole matrix's (Cauchy interlacing), so the
   // estimate stays a bound from below, and the top mode, which decays fast where the local
-  // frequency is half the largest or less, loses almost nothing: on the full concrete case
-  // 17% of the particles and the stable step 0.013% smaller than the whole system's, on its
-  // demo 19% and 0.001% larger (docs/performance.md; a region of frequency above 0.35 or
-  // 0.5 of the largest moved the demo's by 0.19% and 0.69%). One process then runs only the rows that block reads; a
+  // frequency is well below the largest, loses little: at 0.35 of the largest frequency scale
+  // the full concrete case moves 9% of its particles and its step is 0.21% larger than with
+  // the region at 1/4 (17%), the demo 11% and 0.19%, the quick case 0.05%; the 1/4 region was
+  // 0.013% from the whole system's (docs/performance.md). The top mode sits on LPS surface
+  // rows at 0.4-0.8 of the largest scale, not at the finest particles: a region at 1/2 missed
+  // it by 1.4%. One process then runs only the rows that block reads; a
   // distributed set-up runs its whole pass, whose forces on the region are the same bits.
   const size_t n3 = 3 * sys.n;
   const std::vector<uint8_t> region = stable_step_region(sys, region_ratio);
@@ -301,33 +303,40 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
     LinearForceProbe probe(sys, forces);
     const double amplitude = probe.amplitude;
     const bool planar = sys.dimension == 2;  // z is no degree of freedom
-    // A degree of freedom outside the region is held at rest: zero in every vector.
-    auto free_dof = [&](size_t k) { return !(planar && k % 3 == 2) && (!restricted || region[k / 3]); };
-    std::vector<double> mass(n3);
-    for (size_t k = 0; k < n3; ++k) mass[k] = free_dof(k) ? sys.density[k / 3] * sys.volume[k / 3] : 0.0;
+    // The vectors hold the free degrees of freedom only (ascending): one outside the region
+    // is held at rest, zero in every vector, so leaving it out changes no sum (it added +0)
+    // and spares each pass seven loops over the whole system's 3 N (a tenth of a pass over
+    // the full concrete case's region).
+    std::vector<size_t> dofs;
+    for (size_t k = 0; k < n3; ++k)
+      if (!(planar && k % 3 == 2) && (!restricted || region[k / 3])) dofs.push_back(k);
+    const size_t m = dofs.size();
+    std::vector<double> mass(m);
+    for (size_t c = 0; c < m; ++c) mass[c] = sys.density[dofs[c] / 3] * sys.volume[dofs[c] / 3];
     // Sums in one fixed order (no thread reduction): the stable step must not depend on the
     // thread count, nor on how a distributed run shares the force passes.
     auto dot = [&](const std::vector<double>& x, const std::vector<double>& y) {
       double sum = 0.0;
-      for (size_t k = 0; k < n3; ++k) sum += mass[k] * x[k] * y[k];
+      for (size_t c = 0; c < m; ++c) sum += mass[c] * x[c] * y[c];
       return sum;
     };
     // y = M^-1 K x: the force pass at u = amplitude x / |x| (the same displacement scale
-    // whatever x's norm), scaled back.
+    // whatever x's norm), scaled back; u is zero on every other degree of freedom.
+    std::fill(sys.u.begin(), sys.u.end(), 0.0);
     auto apply = [&](const std::vector<double>& x, std::vector<double>& y) {
       double norm = 0.0;
-      for (size_t k = 0; k < n3; ++k) norm += x[k] * x[k];
+      for (size_t c = 0; c < m; ++c) norm += x[c] * x[c];
       norm = std::sqrt(norm);
-      probe.push(x, norm, row_subset ? &rows : nullptr);
-      for (size_t k = 0; k < n3; ++k)
-        y[k] = free_dof(k) ? -sys.force[k] / sys.density[k / 3] / amplitude * norm : 0.0;
+      for (size_t c = 0; c < m; ++c) sys.u[dofs[c]] = amplitude * x[c] / norm;
+      probe.push(row_subset ? &rows : nullptr);
+      for (size_t c = 0; c < m; ++c) y[c] = -sys.force[dofs[c]] / sys.density[dofs[c] / 3] / amplitude * norm;
     };
     std::mt19937_64 rng(12345);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
-    std::vector<double> q(n3), q_prev(n3, 0.0), w(n3);
-    for (size_t k = 0; k < n3; ++k) {
+    std::vector<double> q(m), q_prev(m, 0.0), w(m);
+    for (size_t k = 0, c = 0; k < n3; ++k) {
       const double r = uni(rng);  // drawn for every degree of freedom: the region's are the whole start's
-      q[k] = free_dof(k) ? r : 0.0;
+      if (c < m && dofs[c] == k) q[c++] = r;
     }
     double q_norm = std::sqrt(dot(q, q));
     for (double& qk : q) qk /= q_norm;
@@ -338,15 +347,14 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
     const StableStepStartWave found = wave ? StableStepStartWave{} : stable_step_start_wave(sys);
     if (!wave) wave = &found;
     if (wave->found) {
-      std::vector<double> g(n3, 0.0);
-      for (size_t i = 0; i < sys.n; ++i) {
-        const double* x = &sys.x0[3 * i];
-        const double c = std::cos(wave->k[0] * x[0] + wave->k[1] * x[1] + wave->k[2] * x[2]);
-        for (size_t d = 0; d < 3; ++d) g[3 * i + d] = free_dof(3 * i + d) ? c * wave->p[d] : 0.0;
+      std::vector<double> g(m);
+      for (size_t c = 0; c < m; ++c) {
+        const double* x = &sys.x0[3 * (dofs[c] / 3)];
+        g[c] = std::cos(wave->k[0] * x[0] + wave->k[1] * x[1] + wave->k[2] * x[2]) * wave->p[dofs[c] % 3];
       }
       const double g_norm = std::sqrt(dot(g, g));
       if (g_norm > 0.0) {
-        for (size_t k = 0; k < n3; ++k) q[k] += 2.0 * g[k] / g_norm;
+        for (size_t c = 0; c < m; ++c) q[c] += 2.0 * g[c] / g_norm;
         q_norm = std::sqrt(dot(q, q));
         for (double& qk : q) qk /= q_norm;
       }
@@ -358,7 +366,7 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
       apply(q, w);
       const double a = dot(w, q);
       const double b_prev = beta.empty() ? 0.0 : beta.back();
-      for (size_t k = 0; k < n3; ++k) w[k] -= a * q[k] + b_prev * q_prev[k];
+      for (size_t c = 0; c < m; ++c) w[c] -= a * q[c] + b_prev * q_prev[c];
       alpha.push_back(a);
       const double estimate = largest_tridiagonal_eigenvalue(alpha, beta);
       sys.stable_step_passes = pass + 1;
@@ -370,7 +378,7 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
       if (!(b > 1e-12 * std::fabs(a))) break;  // an invariant subspace: the estimate is exact
       beta.push_back(b);
       q_prev.swap(q);
-      for (size_t k = 0; k < n3; ++k) q[k] = w[k] / b;
+      for (size_t c = 0; c < m; ++c) q[c] = w[c] / b;
     }
   }  // the probe puts the system back
   // 2% margin keeps 'stable' honest: the estimate approaches omega_max^2 from below.
@@ -394,7 +402,8 @@ double estimate_max_frequency(PdSystem& sys, int iterations, const ForcePass& fo
       for (double xk : x) norm += xk * xk;
       norm = std::sqrt(norm);
       if (norm == 0) break;
-      probe.push(x, norm);
+      for (size_t k = 0; k < n3; ++k) sys.u[k] = amplitude * x[k] / norm;
+      probe.push();
       double rayleigh = 0.0;
       for (size_t k = 0; k < n3; ++k) {
         const double y = -sys.force[k] / sys.density[k / 3] / amplitude;  // (M^-1 K) x_hat

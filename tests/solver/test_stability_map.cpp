@@ -325,6 +325,12 @@ TEST_P(StableStepEstimate, GradedBodyEstimatedOnItsStiffRegionAgreesWithTheWhole
   const size_t inside = static_cast<size_t>(std::count(region.begin(), region.end(), uint8_t{1}));
   EXPECT_GT(inside, 0u);
   EXPECT_LT(2 * inside, s.n);
+  // The set-up's region (0.35 of the largest frequency scale) is smaller than the 1/4 it
+  // replaced: the point of the change (docs/performance.md, "The stable step on a smaller
+  // stiff region"); its estimate must still meet the band below.
+  const std::vector<uint8_t> quarter = stable_step_region(s, 0.25);
+  ASSERT_EQ(quarter.size(), s.n);
+  EXPECT_LT(inside, static_cast<size_t>(std::count(quarter.begin(), quarter.end(), uint8_t{1})));
   const double whole = estimate_max_frequency_lanczos(s, 60, {}, 0.0);
   EXPECT_EQ(s.stable_step_particles, s.n);
   const double part = estimate_max_frequency_lanczos(s);

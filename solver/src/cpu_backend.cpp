@@ -275,9 +275,9 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
   // frequency is well below the largest, loses little: at 0.35 of the largest frequency scale
   // the full concrete case moves 9% of its particles and its step is 0.21% larger than with
   // the region at 1/4 (17%), the demo 11% and 0.19%, the quick case 0.05%; the 1/4 region was
-  // 0.013% from the whole system's (docs/performance.md). The top mode sits on LPS surface
-  // rows at 0.4-0.8 of the largest scale, not at the finest particles: a region at 1/2 missed
-  // it by 1.4%. One process then runs only the rows that block reads; a
+  // 0.013% from the whole system's (docs/performance.md). The top mode sits at the charge
+  // hole's rim on the top face (LPS rows whose families two faces cut), at 0.4-0.8 of the
+  // largest scale, not at the finest particles: a region at 1/2 missed it by 1.4%. One process then runs only the rows that block reads; a
   // distributed set-up runs its whole pass, whose forces on the region are the same bits.
   const size_t n3 = 3 * sys.n;
   const std::vector<uint8_t> region = stable_step_region(sys, region_ratio);

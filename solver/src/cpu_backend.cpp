@@ -305,8 +305,8 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
     const bool planar = sys.dimension == 2;  // z is no degree of freedom
     // The vectors hold the free degrees of freedom only (ascending): one outside the region
     // is held at rest, zero in every vector, so leaving it out changes no sum (it added +0)
-    // and spares each pass seven loops over the whole system's 3 N (a tenth of a pass over
-    // the full concrete case's region).
+    // and spares each pass seven loops over the whole system's 3 N (873,333 on the full
+    // concrete case, against 81,153 of its region).
     std::vector<size_t> dofs;
     for (size_t k = 0; k < n3; ++k)
       if (!(planar && k % 3 == 2) && (!restricted || region[k / 3])) dofs.push_back(k);

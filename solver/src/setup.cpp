@@ -803,6 +803,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   for (size_t m = 0; m < c.materials.size(); ++m)
     if (c.materials[m].weibull_modulus > 0)
       weibull_scale[m] = c.materials[m].fracture_energy / std::tgamma(1.0 + 1.0 / c.materials[m].weibull_modulus);
+  std::vector<LpsCriticalStretch> lps_stretch;  // per material: its factors once, not per bond
+  for (const auto& e : elastic) lps_stretch.emplace_back(e, c.influence);
   auto fill_strengths = [&](int64_t i, int64_t j, int64_t out, CalibrationMemo& s0_memo) {
     const int weak = weak_material(i, j);
     const MaterialSpec& wm = c.materials[weak];
@@ -820,8 +822,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     auto s0 = [&](double delta) {
       if (!c.fracture || G0 <= 0 || no_fail[i] || no_fail[j]) return FLT_MAX;
       const double v = s0_memo(weak, weak, delta, G0, [&] {
-        return lps ? lps_critical_stretch(elastic[weak], c.influence, delta, G0)
-                   : pmb_critical_stretch(elastic[weak], c.influence, delta, G0);
+        return lps ? lps_stretch[weak](delta, G0) : pmb_critical_stretch(elastic[weak], c.influence, delta, G0);
       });
       return static_cast<float>(v);
     };
@@ -841,6 +842,12 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   const bool weibull = std::any_of(c.materials.begin(), c.materials.end(),
                                    [](const MaterialSpec& m) { return m.fracture_energy > 0 && m.weibull_modulus > 0; });
   const bool copy_strengths = !dist_rows.active && weibull;
+  // LPS weights w = omega(|xi| / delta) beta are a pair's too: (i -> j)'s own weight is
+  // (j -> i)'s dual, bit for bit (the same |xi|, horizon and count), so where the reverse pass
+  // runs anyway the weights of an influence function (an exp per half-bond for the Gaussian)
+  // are computed at the lower row's entry and copied to the other.
+  const bool weighted = c.influence != Influence::Constant;
+  const bool copy_weights = copy_strengths && lps && weighted;
   // Every row (a distributed set-up's rows other than its own are empty).
   const int64_t rows_begin = 0, rows_end = static_cast<int64_t>(n);
 #pragma omp parallel for schedule(dynamic, 256)
@@ -855,13 +862,19 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       double r2 = 0;
       for (int d = 0; d < 3; ++d) r2 += std::pow(s.x0[3 * j + d] - s.x0[3 * i + d], 2);
       const double xi = std::sqrt(r2);
-      // The constant influence's 1 is skipped: 1 * beta is beta, without a division per half-bond.
-      const bool weighted = c.influence != Influence::Constant;
-      const double w_own = beta_own > 0 ? (weighted ? influence(c.influence, xi / s.horizon[i]) * beta_own : beta_own) : 0.0;
-      const double w_dual = beta_dual > 0 ? (weighted ? influence(c.influence, xi / s.horizon[j]) * beta_dual : beta_dual) : 0.0;
       s.neighbor[out] = j;
       s.xi_len[out] = xi;
       s.vol_own[out] = beta_own * s.volume[j];
+      if (beta_own <= 0) s.state[out] &= static_cast<uint8_t>(~kOwnIntact);
+      if (beta_dual <= 0) s.state[out] &= static_cast<uint8_t>(~kDualIntact);
+      if (copy_weights && j < i) {  // the weights and the shared strengths are copied below
+        if (!strengths_shared(i, j)) fill_strengths(i, j, out, s0_memo);
+        ++out;
+        continue;
+      }
+      // The constant influence's 1 is skipped: 1 * beta is beta, without a division per half-bond.
+      const double w_own = beta_own > 0 ? (weighted ? influence(c.influence, xi / s.horizon[i]) * beta_own : beta_own) : 0.0;
+      const double w_dual = beta_dual > 0 ? (weighted ? influence(c.influence, xi / s.horizon[j]) * beta_dual : beta_dual) : 0.0;
       if (lps) {
         s.k_own[out] = w_own;
         s.k_dual[out] = w_dual;
@@ -874,8 +887,6 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         s.k_own[out] = 0.5 * c_own * w_own * s.volume[j];
         s.k_dual[out] = 0.5 * c_dual * w_dual * s.volume[j];
       }
-      if (beta_own <= 0) s.state[out] &= static_cast<uint8_t>(~kOwnIntact);
-      if (beta_dual <= 0) s.state[out] &= static_cast<uint8_t>(~kDualIntact);
       // The strengths of a pair shared by both its entries are drawn at one (the entry of
       // the lower row); the other's are copied below.
       if (!copy_strengths || j > i || !strengths_shared(i, j)) fill_strengths(i, j, out, s0_memo);
@@ -891,7 +902,12 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     // either end) and rows stay sorted, so the kept lists have reverse entries too.
     for_each_entry_with_reverse(s.offsets, s.neighbor, 0, static_cast<int64_t>(n), [&](int64_t i, int64_t k, int64_t r) {
       const int32_t j = s.neighbor[k];
-      if (j > i || !strengths_shared(i, j)) return;
+      if (j > i) return;
+      if (copy_weights) {
+        s.k_own[k] = s.k_dual[r];
+        s.k_dual[k] = s.k_own[r];
+      }
+      if (!strengths_shared(i, j)) return;
       s.s0_own[k] = s.s0_dual[r];
       s.s0_dual[k] = s.s0_own[r];
       if (c.softening) s.s_onset[k] = s.s_onset[r];

@@ -56,7 +56,7 @@ struct CountMemo {
     int count_plus_one;      // 0: empty; kSeen: counted once, not kept; kNear: a sample near the sphere
   };
   static constexpr int kSeen = -1, kNear = -2;
-  Slot slot[1 << kBits];
+  Slot slot[1 << kBits] = {};
   int calls = 0, hits = 0, resting = 0;  // in the current window; windows left to stand aside
 
   // Whether this full count consults the memo; the window's bookkeeping.
@@ -70,7 +70,7 @@ struct CountMemo {
   }
 };
 constexpr double kGridStep = 0x1p-30;  // of the horizon
-thread_local CountMemo count_memo;
+constinit thread_local CountMemo count_memo;
 
 // Each axis's squared sample coordinates of j's cell at offset xi; 2D's single z "sample" is
 // the point's own z, and its unused lanes +inf (s + inf is never inside).

@@ -203,8 +203,9 @@ double median(std::vector<double> v) {
 // sorted rows, r being its reverse entry (j -> i), threaded over blocks of rows. No search per
 // entry: the rows that hold j, met in ascending order, are j's own entries in ascending order,
 // so a block keeps a cursor per row j it meets, placed by one binary search at the first meeting
-// and advanced by one at each later one. Each thread's cursors live in two arrays of N, made
-// once per thread; a block's stamp marks the cursors it has placed.
+// and advanced by one at each later one. Each thread's cursors live in an array of N, made
+// once per thread, each beside its stamp (one cache line per row met, not two): a block's stamp
+// marks the cursors it has placed.
 template <class F>
 void for_each_entry_with_reverse(const std::vector<int64_t>& offsets, const std::vector<int32_t>& neighbors,
                                  int64_t first, int64_t last, F&& f) {
@@ -214,24 +215,25 @@ void for_each_entry_with_reverse(const std::vector<int64_t>& offsets, const std:
   bool asymmetric = false;
 #pragma omp parallel reduction(|| : asymmetric)
   {
-    std::vector<int64_t> cursor;
-    std::vector<int64_t> stamp;
+    struct Cursor {
+      int64_t next;   // row j's entry for the next row that meets j
+      int64_t stamp;  // the block that placed it
+    };
+    std::vector<Cursor> cursor;
 #pragma omp for schedule(dynamic, 1)
     for (int64_t b = 0; b < blocks; ++b) {
-      if (cursor.empty()) {
-        cursor.assign(static_cast<size_t>(n), 0);
-        stamp.assign(static_cast<size_t>(n), -1);
-      }
+      if (cursor.empty()) cursor.assign(static_cast<size_t>(n), Cursor{0, -1});
       const int64_t row_end = std::min(last, first + (b + 1) * block);
       for (int64_t i = first + b * block; i < row_end; ++i)
         for (int64_t k = offsets[i]; k < offsets[i + 1]; ++k) {
           const int32_t j = neighbors[k];
-          if (stamp[j] != b) {
-            stamp[j] = b;
-            cursor[j] = std::lower_bound(neighbors.begin() + offsets[j], neighbors.begin() + offsets[j + 1],
-                                         static_cast<int32_t>(i)) - neighbors.begin();
+          Cursor& c = cursor[j];
+          if (c.stamp != b) {
+            c.stamp = b;
+            c.next = std::lower_bound(neighbors.begin() + offsets[j], neighbors.begin() + offsets[j + 1],
+                                      static_cast<int32_t>(i)) - neighbors.begin();
           }
-          const int64_t r = cursor[j]++;
+          const int64_t r = c.next++;
           if (r >= offsets[j + 1] || neighbors[r] != i) {
             asymmetric = true;  // never so for the families set-up builds; refused below
             continue;

@@ -78,13 +78,19 @@ double pmb_critical_stretch(const ElasticInput& in, Influence kind, double delta
   return std::sqrt(G0 / (in.thickness * c0 * std::pow(delta, 4) * influence_moment(kind, 3)));
 }
 
-double lps_critical_stretch(const ElasticInput& in, Influence kind, double delta, double G0) {
+// 3D: G0 = 15 mu delta J5 / (4 J4) s0^2;  2D: G0 = 8 mu delta J4 / (pi J3) s0^2.
+LpsCriticalStretch::LpsCriticalStretch(const ElasticInput& in, Influence kind) {
   using std::numbers::pi;
   const double mu = shear_modulus(in);
-  // 3D: G0 = 15 mu delta J5 / (4 J4) s0^2;  2D: G0 = 8 mu delta J4 / (pi J3) s0^2.
-  if (in.dimension == 3)
-    return std::sqrt(G0 * 4.0 * influence_moment(kind, 4) / (15.0 * mu * delta * influence_moment(kind, 5)));
-  return std::sqrt(G0 * pi * influence_moment(kind, 3) / (8.0 * mu * delta * influence_moment(kind, 4)));
+  const bool three = in.dimension == 3;
+  energy_factor_ = three ? 4.0 : pi;
+  energy_moment_ = influence_moment(kind, three ? 4 : 3);
+  shear_factor_ = (three ? 15.0 : 8.0) * mu;
+  shear_moment_ = influence_moment(kind, three ? 5 : 4);
+}
+
+double lps_critical_stretch(const ElasticInput& in, Influence kind, double delta, double G0) {
+  return LpsCriticalStretch(in, kind)(delta, G0);
 }
 
 // Same keeps the expression the set-up has always used (strength x draw / mean), so runs

@@ -58,9 +58,17 @@ HorizonGrading horizon_grading(const PdSystem& s) {
     if (2.0 * s.half_cell[i] >= kCoarseSpacingFactor * median && s.horizon[i] < limit * 2.0 * s.half_cell[i])
       ++g.under_resolved;
   g.spacing_ratio = h_max / h_min;
-  for (size_t i = 0; i < s.n; ++i)
-    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k)
-      g.max_neighbour_jump = std::max(g.max_neighbour_jump, s.half_cell[s.neighbor[k]] / s.half_cell[i]);
+  // The largest neighbour's cell over one's own, one division a row: dividing by the same
+  // positive number rounds monotonically, so the largest quotient is the largest numerator's,
+  // bit for bit (a division per entry was 61 million on the full concrete case).
+  double jump = 0.0;
+#pragma omp parallel for schedule(dynamic, 1024) reduction(max : jump)
+  for (size_t i = 0; i < s.n; ++i) {
+    double widest = 0.0;
+    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) widest = std::max(widest, s.half_cell[s.neighbor[k]]);
+    if (s.offsets[i + 1] > s.offsets[i]) jump = std::max(jump, widest / s.half_cell[i]);
+  }
+  g.max_neighbour_jump = std::max(g.max_neighbour_jump, jump);
   return g;
 }
 

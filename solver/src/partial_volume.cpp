@@ -16,9 +16,10 @@ namespace breccia::solver {
 // - the samples' box: the sample with the smallest square on each axis is a sample, and so is
 //   the one with the largest, and floating-point addition is monotonic, so when the first is
 //   outside every sample is and when the second is inside every sample is;
-// - else every sample point is tested, without a branch: the 6 z squares in pairs, each
-//   comparison giving -1 or 0 per lane (GCC/Clang vector extension: SSE2 on x86-64, NEON on
-//   ARM, scalar elsewhere). The per-row shortcuts it replaced mispredicted a branch a row;
+// - else every sample point is tested, without a branch (count_every_sample; the per-row
+//   shortcuts it replaced mispredicted a branch a row). Settling whole slabs of 36 samples
+//   first by the same monotonicity (2.6 of 6 slabs left on average) was measured too: no
+//   faster, the branches' mispredictions eating the comparisons saved (docs/performance.md);
 // - a count asked before by this thread for an offset within a grid step (2^-30 horizons)
 //   is looked up where every sample is farther than that from the sphere, where such counts
 //   recur (a lattice); where they do not (a graded mesh) the memo steps aside.
@@ -40,8 +41,11 @@ namespace {
 // 6-10% of the bond-coefficient phase for nothing (full concrete case, paired runs,
 // docs/performance.md). So the memo watches its hits over windows of kWindow full counts, and
 // after a window with under one hit in eight it stands aside for kRest windows, then
-// tries again (a graded case then pays for a sixteenth of its counts' lookups). The counts
-// are the same either way: the memo only decides whether a count is computed or looked up.
+// tries again (a graded case then pays for a sixteenth of its counts' lookups). A key's
+// first count only marks its slot (kSeen): the margin check, 216 scalar distances, a quarter
+// of the graded mesh's count time when every first count paid it (docs/performance.md), is
+// done at a key's second count, when keys recur. The counts are the same either way: the
+// memo only decides whether a count is computed or looked up.
 struct CountMemo {
   static constexpr int kBits = 13;
   static constexpr int kWindow = 4096, kRest = 15;
@@ -49,9 +53,10 @@ struct CountMemo {
     int64_t offset[3];       // x_j - x_i in grid steps (kGridStep horizons)
     uint64_t exact[2];       // the horizon's and the half cell's bits
     int dimension;
-    int count_plus_one;
+    int count_plus_one;      // 0: empty; kSeen: counted once, not kept; kNear: a sample near the sphere
   };
-  Slot slot[1 << kBits];
+  static constexpr int kSeen = -1, kNear = -2;
+  Slot slot[1 << kBits] = {};
   int calls = 0, hits = 0, resting = 0;  // in the current window; windows left to stand aside
 
   // Whether this full count consults the memo; the window's bookkeeping.
@@ -65,7 +70,7 @@ struct CountMemo {
   }
 };
 constexpr double kGridStep = 0x1p-30;  // of the horizon
-thread_local CountMemo count_memo;
+constinit thread_local CountMemo count_memo;
 
 // Each axis's squared sample coordinates of j's cell at offset xi; 2D's single z "sample" is
 // the point's own z, and its unused lanes +inf (s + inf is never inside).
@@ -108,11 +113,60 @@ double sample_shift_bound(const double xi[3], double half_cell_j, double step, d
          1e-12 * r2;
 }
 
+// Every sample tested, without a branch: each row's sum (x^2 + y^2) against the 6 z squares,
+// each comparison giving -1 or 0 per lane (GCC/Clang vector extension). Two bodies, the same
+// sums and comparisons (the same count, bit for bit), the loader picking one for the CPU
+// (GCC's function multiversioning): the portable one (SSE2 on x86-64, NEON on ARM, scalar
+// elsewhere) the z squares in pairs, and with AVX2 four and two, which compares a row in
+// two instructions instead of three, with no register copies (VEX's three operands): 45
+// against 53 ns per candidate entry of the mid-size concrete case (docs/performance.md).
+// 2D: one z sample, the other z lanes +inf (s + inf is never inside).
+__attribute__((target("default"))) int count_every_sample(const double sq[3][kPartialVolumeSamples], double r2) {
+  constexpr int n = kPartialVolumeSamples;
+  static_assert(n % 2 == 0, "the z samples are taken in pairs");
+  typedef double Pair __attribute__((vector_size(16)));
+  typedef long long Mask __attribute__((vector_size(16)));
+  Pair z[n / 2];
+  for (int c = 0; c < n / 2; ++c) z[c] = Pair{sq[2][2 * c], sq[2][2 * c + 1]};
+  const Pair limit = {r2, r2};
+  Mask inside = {0, 0};
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) {
+      const double row = sq[0][a] + sq[1][b];
+      const Pair s = {row, row};
+      for (int c = 0; c < n / 2; ++c) inside -= (s + z[c] <= limit);  // true is -1
+    }
+  return static_cast<int>(inside[0] + inside[1]);
+}
+
+__attribute__((target("avx2"))) int count_every_sample(const double sq[3][kPartialVolumeSamples], double r2) {
+  static_assert(kPartialVolumeSamples == 6, "four z squares and two");
+  constexpr int n = kPartialVolumeSamples;
+  typedef double Pair __attribute__((vector_size(16)));
+  typedef long long Mask __attribute__((vector_size(16)));
+  typedef double Quad __attribute__((vector_size(32)));
+  typedef long long QuadMask __attribute__((vector_size(32)));
+  const Quad z4 = {sq[2][0], sq[2][1], sq[2][2], sq[2][3]};
+  const Pair z2 = {sq[2][4], sq[2][5]};
+  const Quad limit4 = {r2, r2, r2, r2};
+  const Pair limit2 = {r2, r2};
+  QuadMask inside4 = {0, 0, 0, 0};
+  Mask inside2 = {0, 0};
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) {
+      const double row = sq[0][a] + sq[1][b];
+      const Quad s4 = {row, row, row, row};
+      const Pair s2 = {row, row};
+      inside4 -= (s4 + z4 <= limit4);
+      inside2 -= (s2 + z2 <= limit2);
+    }
+  return static_cast<int>((inside4[0] + inside4[1]) + (inside4[2] + inside4[3]) + (inside2[0] + inside2[1]));
+}
+
 }  // namespace
 
 int partial_volume_samples_inside(const double xi[3], double horizon, double half_cell_j, int dimension) {
   constexpr int n = kPartialVolumeSamples;
-  static_assert(n % 2 == 0, "the z samples are taken in pairs");
   const double reach = partial_volume_half_diagonal(half_cell_j, dimension);
   const double len = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
   if (len + reach <= horizon) return partial_volume_sample_total(dimension);
@@ -137,6 +191,7 @@ int partial_volume_samples_inside(const double xi[3], double horizon, double hal
   int64_t offset[3];
   uint64_t exact[2];
   CountMemo::Slot* slot = nullptr;
+  bool seen = false;  // the slot holds this key
   if (memo) {
     // Rounded to the nearest step by the 1.5 * 2^52 shift (exact for |v| < 2^51; |xi| / step
     // is below 2^32): no division, no library call per count.
@@ -154,35 +209,26 @@ int partial_volume_samples_inside(const double xi[3], double horizon, double hal
     for (int64_t k : offset) mix(static_cast<uint64_t>(k));
     for (uint64_t k : exact) mix(k);
     slot = &count_memo.slot[hash >> (64 - CountMemo::kBits)];
-    if (slot->count_plus_one != 0 && slot->dimension == dimension && std::memcmp(slot->offset, offset, sizeof offset) == 0 &&
-        std::memcmp(slot->exact, exact, sizeof exact) == 0) {
+    seen = slot->count_plus_one != 0 && slot->dimension == dimension && std::memcmp(slot->offset, offset, sizeof offset) == 0 &&
+           std::memcmp(slot->exact, exact, sizeof exact) == 0;
+    if (seen && slot->count_plus_one > 0) {
       ++count_memo.hits;
       return slot->count_plus_one - 1;
     }
   }
-  typedef double Pair __attribute__((vector_size(16)));
-  typedef long long Mask __attribute__((vector_size(16)));
-  Pair z[n / 2];
-  for (int c = 0; c < n / 2; ++c) z[c] = Pair{sq[2][2 * c], sq[2][2 * c + 1]};
-  const Pair limit = {r2, r2};
-  Mask inside = {0, 0};
-  for (int a = 0; a < n; ++a)
-    for (int b = 0; b < n; ++b) {
-      const double row = sq[0][a] + sq[1][b];
-      const Pair s = {row, row};
-      for (int c = 0; c < n / 2; ++c) inside -= (s + z[c] <= limit);  // true is -1
-    }
-  const int count = static_cast<int>(inside[0] + inside[1]);
-  if (memo) {
-    // Every sample's distance from the sphere, in the sums just compared, against how far
-    // another offset of the key moves it: two offsets of one key differ by at most a grid
-    // step per axis.
-    if (sample_margin(sq, r2, dimension) > sample_shift_bound(xi, half_cell_j, step, r2)) {
-      std::memcpy(slot->offset, offset, sizeof offset);
-      std::memcpy(slot->exact, exact, sizeof exact);
-      slot->dimension = dimension;
-      slot->count_plus_one = count + 1;
-    }
+  const int count = count_every_sample(sq, r2);
+  if (memo && !seen) {  // the key's first count here: marked only
+    std::memcpy(slot->offset, offset, sizeof offset);
+    std::memcpy(slot->exact, exact, sizeof exact);
+    slot->dimension = dimension;
+    slot->count_plus_one = CountMemo::kSeen;
+  } else if (memo && slot->count_plus_one == CountMemo::kSeen) {
+    // The key recurs. Every sample's distance from the sphere, in the sums just compared,
+    // against how far another offset of the key moves it: two offsets of one key differ by at
+    // most a grid step per axis. A key that fails is not checked again (kNear).
+    slot->count_plus_one = sample_margin(sq, r2, dimension) > sample_shift_bound(xi, half_cell_j, step, r2)
+                               ? count + 1
+                               : CountMemo::kNear;
   }
   return count;
 }

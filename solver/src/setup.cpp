@@ -203,8 +203,9 @@ double median(std::vector<double> v) {
 // sorted rows, r being its reverse entry (j -> i), threaded over blocks of rows. No search per
 // entry: the rows that hold j, met in ascending order, are j's own entries in ascending order,
 // so a block keeps a cursor per row j it meets, placed by one binary search at the first meeting
-// and advanced by one at each later one. Each thread's cursors live in two arrays of N, made
-// once per thread; a block's stamp marks the cursors it has placed.
+// and advanced by one at each later one. Each thread's cursors live in an array of N, made
+// once per thread, each beside its stamp (one cache line per row met, not two): a block's stamp
+// marks the cursors it has placed.
 template <class F>
 void for_each_entry_with_reverse(const std::vector<int64_t>& offsets, const std::vector<int32_t>& neighbors,
                                  int64_t first, int64_t last, F&& f) {
@@ -214,24 +215,25 @@ void for_each_entry_with_reverse(const std::vector<int64_t>& offsets, const std:
   bool asymmetric = false;
 #pragma omp parallel reduction(|| : asymmetric)
   {
-    std::vector<int64_t> cursor;
-    std::vector<int64_t> stamp;
+    struct Cursor {
+      int64_t next;   // row j's entry for the next row that meets j
+      int64_t stamp;  // the block that placed it
+    };
+    std::vector<Cursor> cursor;
 #pragma omp for schedule(dynamic, 1)
     for (int64_t b = 0; b < blocks; ++b) {
-      if (cursor.empty()) {
-        cursor.assign(static_cast<size_t>(n), 0);
-        stamp.assign(static_cast<size_t>(n), -1);
-      }
+      if (cursor.empty()) cursor.assign(static_cast<size_t>(n), Cursor{0, -1});
       const int64_t row_end = std::min(last, first + (b + 1) * block);
       for (int64_t i = first + b * block; i < row_end; ++i)
         for (int64_t k = offsets[i]; k < offsets[i + 1]; ++k) {
           const int32_t j = neighbors[k];
-          if (stamp[j] != b) {
-            stamp[j] = b;
-            cursor[j] = std::lower_bound(neighbors.begin() + offsets[j], neighbors.begin() + offsets[j + 1],
-                                         static_cast<int32_t>(i)) - neighbors.begin();
+          Cursor& c = cursor[j];
+          if (c.stamp != b) {
+            c.stamp = b;
+            c.next = std::lower_bound(neighbors.begin() + offsets[j], neighbors.begin() + offsets[j + 1],
+                                      static_cast<int32_t>(i)) - neighbors.begin();
           }
-          const int64_t r = cursor[j]++;
+          const int64_t r = c.next++;
           if (r >= offsets[j + 1] || neighbors[r] != i) {
             asymmetric = true;  // never so for the families set-up builds; refused below
             continue;
@@ -803,6 +805,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   for (size_t m = 0; m < c.materials.size(); ++m)
     if (c.materials[m].weibull_modulus > 0)
       weibull_scale[m] = c.materials[m].fracture_energy / std::tgamma(1.0 + 1.0 / c.materials[m].weibull_modulus);
+  std::vector<LpsCriticalStretch> lps_stretch;  // per material: its factors once, not per bond
+  for (const auto& e : elastic) lps_stretch.emplace_back(e, c.influence);
   auto fill_strengths = [&](int64_t i, int64_t j, int64_t out, CalibrationMemo& s0_memo) {
     const int weak = weak_material(i, j);
     const MaterialSpec& wm = c.materials[weak];
@@ -820,8 +824,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     auto s0 = [&](double delta) {
       if (!c.fracture || G0 <= 0 || no_fail[i] || no_fail[j]) return FLT_MAX;
       const double v = s0_memo(weak, weak, delta, G0, [&] {
-        return lps ? lps_critical_stretch(elastic[weak], c.influence, delta, G0)
-                   : pmb_critical_stretch(elastic[weak], c.influence, delta, G0);
+        return lps ? lps_stretch[weak](delta, G0) : pmb_critical_stretch(elastic[weak], c.influence, delta, G0);
       });
       return static_cast<float>(v);
     };
@@ -841,6 +844,12 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   const bool weibull = std::any_of(c.materials.begin(), c.materials.end(),
                                    [](const MaterialSpec& m) { return m.fracture_energy > 0 && m.weibull_modulus > 0; });
   const bool copy_strengths = !dist_rows.active && weibull;
+  // LPS weights w = omega(|xi| / delta) beta are a pair's too: (i -> j)'s own weight is
+  // (j -> i)'s dual, bit for bit (the same |xi|, horizon and count), so where the reverse pass
+  // runs anyway the weights of an influence function (an exp per half-bond for the Gaussian)
+  // are computed at the lower row's entry and copied to the other.
+  const bool weighted = c.influence != Influence::Constant;
+  const bool copy_weights = copy_strengths && lps && weighted;
   // Every row (a distributed set-up's rows other than its own are empty).
   const int64_t rows_begin = 0, rows_end = static_cast<int64_t>(n);
 #pragma omp parallel for schedule(dynamic, 256)
@@ -855,13 +864,19 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       double r2 = 0;
       for (int d = 0; d < 3; ++d) r2 += std::pow(s.x0[3 * j + d] - s.x0[3 * i + d], 2);
       const double xi = std::sqrt(r2);
-      // The constant influence's 1 is skipped: 1 * beta is beta, without a division per half-bond.
-      const bool weighted = c.influence != Influence::Constant;
-      const double w_own = beta_own > 0 ? (weighted ? influence(c.influence, xi / s.horizon[i]) * beta_own : beta_own) : 0.0;
-      const double w_dual = beta_dual > 0 ? (weighted ? influence(c.influence, xi / s.horizon[j]) * beta_dual : beta_dual) : 0.0;
       s.neighbor[out] = j;
       s.xi_len[out] = xi;
       s.vol_own[out] = beta_own * s.volume[j];
+      if (beta_own <= 0) s.state[out] &= static_cast<uint8_t>(~kOwnIntact);
+      if (beta_dual <= 0) s.state[out] &= static_cast<uint8_t>(~kDualIntact);
+      if (copy_weights && j < i) {  // the weights and the shared strengths are copied below
+        if (!strengths_shared(i, j)) fill_strengths(i, j, out, s0_memo);
+        ++out;
+        continue;
+      }
+      // The constant influence's 1 is skipped: 1 * beta is beta, without a division per half-bond.
+      const double w_own = beta_own > 0 ? (weighted ? influence(c.influence, xi / s.horizon[i]) * beta_own : beta_own) : 0.0;
+      const double w_dual = beta_dual > 0 ? (weighted ? influence(c.influence, xi / s.horizon[j]) * beta_dual : beta_dual) : 0.0;
       if (lps) {
         s.k_own[out] = w_own;
         s.k_dual[out] = w_dual;
@@ -874,8 +889,6 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         s.k_own[out] = 0.5 * c_own * w_own * s.volume[j];
         s.k_dual[out] = 0.5 * c_dual * w_dual * s.volume[j];
       }
-      if (beta_own <= 0) s.state[out] &= static_cast<uint8_t>(~kOwnIntact);
-      if (beta_dual <= 0) s.state[out] &= static_cast<uint8_t>(~kDualIntact);
       // The strengths of a pair shared by both its entries are drawn at one (the entry of
       // the lower row); the other's are copied below.
       if (!copy_strengths || j > i || !strengths_shared(i, j)) fill_strengths(i, j, out, s0_memo);
@@ -891,7 +904,12 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     // either end) and rows stay sorted, so the kept lists have reverse entries too.
     for_each_entry_with_reverse(s.offsets, s.neighbor, 0, static_cast<int64_t>(n), [&](int64_t i, int64_t k, int64_t r) {
       const int32_t j = s.neighbor[k];
-      if (j > i || !strengths_shared(i, j)) return;
+      if (j > i) return;
+      if (copy_weights) {
+        s.k_own[k] = s.k_dual[r];
+        s.k_dual[k] = s.k_own[r];
+      }
+      if (!strengths_shared(i, j)) return;
       s.s0_own[k] = s.s0_dual[r];
       s.s0_dual[k] = s.s0_own[r];
       if (c.softening) s.s_onset[k] = s.s_onset[r];

@@ -451,6 +451,67 @@ TEST(PartialVolume, SampleCountEqualsThePointByPointQuadrature) {
   }
 }
 
+TEST(PartialVolume, KnifeEdgeCountsEqualThePointByPointQuadrature) {
+  // The count on the sphere: xi placed so that one sample's squared distance lies on it
+  // (horizon 3, r^2 = 9 exactly), then moved 0-3 ulp either way along xi's largest axis, the
+  // sample the nearest to the centre on every axis (k even: the samples' box's "wholly
+  // outside" edge) or the farthest (k odd: "wholly inside"), 3D and 2D. Every count, whichever
+  // body of count_every_sample the CPU runs (partial_volume.cpp), must be the plain
+  // quadrature's exactly; the test fails if the box's "wholly outside" is decided on >= (a
+  // sample on the sphere is inside: the quadrature's is <=).
+  SplitMixUniform uniform{37};  // in [0, 1)
+  const double delta = 3.0;
+  int on_sphere = 0, partial = 0, per_axis[3] = {0, 0, 0};
+  for (int dimension : {3, 2})
+    for (int k = 0; k < 60000; ++k) {
+      const int axis = dimension == 3 ? k % 3 : k % 2;  // xi's largest component
+      const double half = 0.15 + 0.5 * uniform(), h = 2.0 * half / 6;
+      int index[3];
+      double p[3], xi[3] = {0.0, 0.0, 0.0};
+      for (int d = 0; d < 3; ++d) {
+        index[d] = static_cast<int>(6.0 * uniform());
+        if (d == axis || (d == 2 && dimension == 2)) continue;
+        xi[d] = (uniform() - 0.5) * 2.4;
+        // The sample nearest the centre on this axis (k even) or the farthest (k odd).
+        double best = k % 2 == 0 ? INFINITY : -1.0;
+        for (int a = 0; a < 6; ++a) {
+          const double q = xi[d] - half + (a + 0.5) * h;  // the sample's coordinate, as the count forms it
+          if (k % 2 == 0 ? q * q < best : q * q > best) {
+            best = q * q;
+            index[d] = a;
+          }
+        }
+        p[d] = xi[d] - half + (index[d] + 0.5) * h;
+      }
+      if (dimension == 2) p[2] = 0.0;
+      double rest = 0.0;
+      for (int d = 0; d < 3; ++d)
+        if (d != axis) rest += p[d] * p[d];
+      const double pe = (uniform() < 0.5 ? -1.0 : 1.0) * std::sqrt(delta * delta - rest);
+      // Along xi's axis too the sample nearest the centre (k even) or the farthest (k odd):
+      // every sample of the cell lies on pe's side of it (|pe| > 2.4, half cells under 0.65).
+      index[axis] = ((pe > 0) == (k % 2 == 0)) ? 0 : 5;
+      xi[axis] = pe + half - (index[axis] + 0.5) * h;
+      const int ulps = static_cast<int>(7.0 * uniform()) - 3;
+      for (int u = 0; u < std::abs(ulps); ++u) xi[axis] = std::nextafter(xi[axis], ulps > 0 ? 10.0 : -10.0);
+      const double len = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
+      const double reach = half * (dimension == 3 ? std::sqrt(3.0) : std::sqrt(2.0));
+      if (len + reach <= delta || len - reach >= delta) continue;  // the definition's own early decisions
+      const int expected = plain_sample_count(xi, delta, half, dimension);
+      ASSERT_EQ(partial_volume_samples_inside(xi, delta, half, dimension), expected)
+          << xi[0] << " " << xi[1] << " " << xi[2] << " half " << half << " dimension " << dimension;
+      double s[3];
+      for (int d = 0; d < 3; ++d) s[d] = xi[d] - half + (index[d] + 0.5) * h;
+      if (dimension == 2) s[2] = xi[2];
+      on_sphere += s[0] * s[0] + s[1] * s[1] + s[2] * s[2] == delta * delta;
+      partial += expected > 0 && expected < partial_volume_sample_total(dimension);
+      ++per_axis[axis];
+    }
+  EXPECT_GT(on_sphere, 5000) << "samples exactly on the sphere";
+  EXPECT_GT(partial, 30000);
+  for (int n : per_axis) EXPECT_GT(n, 10000);
+}
+
 TEST(PartialVolume, CountsLookedUpByRoundedOffsetEqualTheQuadrature) {
   // The memo keys a count by x_j - x_i rounded to 2^-30 horizons and keeps it only where no
   // sample lies within reach of the sphere (partial_volume.cpp): offsets of one lattice

@@ -350,7 +350,7 @@ BRECCIA_HD bool fast_bond_loop(const PdViewT<Real>& p) {
   return !p.min_stretch && !p.min_stretch_next && !p.bond_damage;
 }
 
-// LPS's brittle terms, for one entry (V = Real) or a pack of entries (the host's PackD,
+// LPS's brittle terms, for one entry (V = Real) or a pack of entries (the host's PackD2/PackD4,
 // lps_packed_dilatation_row and lps_packed_row): the first pass's omega beta |xi| e V_j, and
 // the force pass's force density over length t V_j / |xi + eta| with t = omega ((A_i + A_j)
 // |xi| + (B_i + B_j) e) (lps_symmetric_force_kernel).
@@ -391,33 +391,37 @@ BRECCIA_HD void lps_store_dilatation(const PdViewT<Real>& p, int64_t i, Real sum
 }
 
 #if defined(BRECCIA_HOST_PACK)
-// The host's bond vectors of entries k .. k + kPackWidth - 1 from particle i (origin) in
-// double: x_j - x_i per component (BondOriginT::bond_vector, lane by lane).
+// The host's bond vectors of entries k .. k + lanes - 1 from particle i (origin) in double, P
+// a host pack (host_pack.hpp): x_j - x_i per component (BondOriginT::bond_vector, lane by lane).
+template <class P>
 struct PackedBond {
-  PackD dx, dy, dz;
-  PackD squared_length() const { return dx * dx + dy * dy + dz * dz; }
+  P dx, dy, dz;
+  BRECCIA_PACK_INLINE P squared_length() const { return dx * dx + dy * dy + dz * dz; }
 };
-inline PackedBond packed_bond(const PdViewT<double>& p, const BondOriginT<double>& origin, int64_t k) {
+template <class P>
+BRECCIA_PACK_INLINE PackedBond<P> packed_bond(const PdViewT<double>& p, const BondOriginT<double>& origin, int64_t k) {
   const int32_t* j = p.neighbor + k;
-  return {gather_pack(p.x, j, 3, 0) - origin.px, gather_pack(p.x, j, 3, 1) - origin.py,
-          gather_pack(p.x, j, 3, 2) - origin.pz};
+  return {gather_pack<P>(p.x, j, 3, 0) - origin.px, gather_pack<P>(p.x, j, 3, 1) - origin.py,
+          gather_pack<P>(p.x, j, 3, 2) - origin.pz};
 }
 
 // LPS's first pass in double on the host for a row whose own halves are all intact: the terms
-// kPackWidth at a time and their sum in the entry order in the same loop (pmb_packed_row), so
-// the sum is the two-stage loop's bit for bit. False, with `sum` untouched, for a row with an
-// own half broken (the two-stage loop selects).
+// a pack P at a time and their sum in the entry order in the same loop (pmb_packed_row), so
+// the sum is the two-stage loop's bit for bit, at either width. False, with `sum` untouched,
+// for a row with an own half broken (the two-stage loop selects).
+template <class P>
 inline bool lps_packed_dilatation_row(const PdViewT<double>& p, int64_t i, const BondOriginT<double>& origin,
                                       double& sum) {
+  constexpr int kLanes = kPackLanes<P>;
   const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
   if (end > begin && !chunk_intact(p, begin, static_cast<int>(end - begin))) return false;
   double total = 0.0;
   int64_t k = begin;
-  for (; k + kPackWidth <= end; k += kPackWidth) {
-    const PackD xi = load_pack(p.xi_len + k);
-    const PackD extension = sqrt_of(packed_bond(p, origin, k).squared_length()) - xi;  // BondOriginT::extension_from
-    const PackD term = lps_dilatation_term(load_pack(p.k_own + k), xi, extension, gather_pack(p.volume, p.neighbor + k, 1, 0));
-    for (int l = 0; l < kPackWidth; ++l) total += term[l];
+  for (; k + kLanes <= end; k += kLanes) {
+    const P xi = load_pack<P>(p.xi_len + k);
+    const P extension = sqrt_of(packed_bond<P>(p, origin, k).squared_length()) - xi;  // BondOriginT::extension_from
+    const P term = lps_dilatation_term(load_pack<P>(p.k_own + k), xi, extension, gather_pack<P>(p.volume, p.neighbor + k, 1, 0));
+    for (int l = 0; l < kLanes; ++l) total += term[l];
   }
   for (; k < end; ++k) total += lps_dilatation_entry<false>(p, origin, k);
   sum = total;
@@ -434,7 +438,9 @@ BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
 #if !defined(__CUDA_ARCH__)
 #if defined(BRECCIA_HOST_PACK)
   if constexpr (!BondOriginT<Real>::kRelative)
-    if (gather && !p.bond_damage && lps_packed_dilatation_row(p, i, origin, sum)) {
+    if (gather && !p.bond_damage && on_host_pack([&](auto pack) {
+          return lps_packed_dilatation_row<typename decltype(pack)::type>(p, i, origin, sum);
+        })) {
       lps_store_dilatation(p, i, sum);
       return;
     }
@@ -639,24 +645,25 @@ struct LpsFastPath {
 };
 
 #if defined(BRECCIA_HOST_PACK)
-// The packed force rows' loop (pmb_packed_row, lps_packed_row), written once: kPackWidth entries
+// The packed force rows' loop (pmb_packed_row, lps_packed_row), written once: a pack P of entries
 // at a time through `pack_term` (their force components and a mask of entries past their
 // critical extension), the rest one at a time through `entry_term`, every term added to the
 // sums in entry order (the one-entry loop's order, so the bits are its). False, having written
 // nothing, for a row with a broken entry, or one past its critical extension with fracture on:
 // the two-stage loop then runs it (the selection, the breaks and their released energy).
-template <class PackTerm, class EntryTerm>
+template <class P, class PackTerm, class EntryTerm>
 inline bool packed_row_force(const PdViewT<double>& p, int64_t i, PackTerm&& pack_term, EntryTerm&& entry_term) {
+  constexpr int kLanes = kPackLanes<P>;
   const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
   if (end > begin && !chunk_intact(p, begin, static_cast<int>(end - begin))) return false;
   double fx = 0.0, fy = 0.0, fz = 0.0;
-  PackMask over_any = {};
+  PackMaskOf<P> over_any = {};
   bool over_tail = false;
   int64_t k = begin;
-  for (; k + kPackWidth <= end; k += kPackWidth) {
-    PackD cx, cy, cz;
+  for (; k + kLanes <= end; k += kLanes) {
+    P cx, cy, cz;
     over_any |= pack_term(k, cx, cy, cz);
-    for (int l = 0; l < kPackWidth; ++l) {
+    for (int l = 0; l < kLanes; ++l) {
       fx += cx[l];
       fy += cy[l];
       fz += cz[l];
@@ -680,22 +687,23 @@ inline bool packed_row_force(const PdViewT<double>& p, int64_t i, PackTerm&& pac
 
 #if defined(BRECCIA_HOST_PACK)
 // The fast LPS force pass in double on the host for a row whose entries are all intact (one
-// constant horizon): as pmb_packed_row, kPackWidth entries at a time and the ordered sums in
+// constant horizon): as pmb_packed_row, a pack P of entries at a time and the ordered sums in
 // one loop. False, having written nothing, for a row with a broken entry or one past its
 // critical extension with fracture on (the two-stage loop selects and breaks).
+template <class P>
 inline bool lps_packed_row(const PdViewT<double>& p, int64_t i, const BondOriginT<double>& origin, double a_i,
                            double b_i) {
-  return packed_row_force(
+  return packed_row_force<P>(
       p, i,
-      [&](int64_t k, PackD& cx, PackD& cy, PackD& cz) {
+      [&](int64_t k, P& cx, P& cy, P& cz) {
         const int32_t* j = p.neighbor + k;
-        const PackedBond b = packed_bond(p, origin, k);
-        const PackD xi = load_pack(p.xi_len + k);
-        const PackD len = sqrt_of(b.squared_length());
-        const PackD e = len - xi;  // BondOriginT::extension_from
-        const PackMask over = e > widen_floats(p.s0_own + k) * xi;
-        const PackD f = lps_fast_density(load_pack(p.k_own + k), a_i + gather_pack(p.lps_a, j, 1, 0),
-                                         b_i + gather_pack(p.lps_b, j, 1, 0), xi, e, gather_pack(p.volume, j, 1, 0), len);
+        const PackedBond<P> b = packed_bond<P>(p, origin, k);
+        const P xi = load_pack<P>(p.xi_len + k);
+        const P len = sqrt_of(b.squared_length());
+        const P e = len - xi;  // BondOriginT::extension_from
+        const PackMaskOf<P> over = e > widen_floats(p.s0_own + k, P{}) * xi;
+        const P f = lps_fast_density(load_pack<P>(p.k_own + k), a_i + gather_pack<P>(p.lps_a, j, 1, 0),
+                                     b_i + gather_pack<P>(p.lps_b, j, 1, 0), xi, e, gather_pack<P>(p.volume, j, 1, 0), len);
         cx = f * b.dx;
         cy = f * b.dy;
         cz = f * b.dz;
@@ -711,7 +719,10 @@ template <class Real>
 BRECCIA_HD void lps_fast_force_loop(const PdViewT<Real>& p, int64_t i, const BondOriginT<Real>& origin) {
 #if defined(BRECCIA_HOST_PACK) && !defined(__CUDA_ARCH__)
   if constexpr (!BondOriginT<Real>::kRelative)
-    if (lps_packed_row(p, i, origin, p.lps_a[i], p.lps_b[i])) return;
+    if (on_host_pack([&](auto pack) {
+          return lps_packed_row<typename decltype(pack)::type>(p, i, origin, p.lps_a[i], p.lps_b[i]);
+        }))
+      return;
 #endif
   two_stage_force_loop<double>(p, i, LpsFastPath<Real>{origin, p.lps_a[i], p.lps_b[i]});
 }
@@ -832,7 +843,7 @@ BRECCIA_HD bool pmb_fast_select(const PdViewT<Real>& p, int64_t k, bool over, Re
 // Double's PMB entry from its squared deformed length r2 (BondOriginT::bond_vector), its
 // reference length xi, own modulus and critical stretch (widened from float): its force
 // density over length f = c s / |xi + eta|, and whether its extension |xi + eta| - |xi| passed
-// the critical one (`over`). V is double (one entry) or the host's PackD (kPackWidth entries,
+// the critical one (`over`). V is double (one entry) or a host pack (2 or 4 entries,
 // pmb_packed_row), whose lanes round as the scalar operations do: one expression for both.
 BRECCIA_HD double sqrt_of(double v) { return std::sqrt(v); }
 template <class V>
@@ -917,22 +928,24 @@ using PmbReleased = std::conditional_t<BondOriginT<Real>::kRelative, Real, doubl
 
 #if defined(BRECCIA_HOST_PACK)
 // PMB in double on the host, a row whose entries are all intact (between output steps nearly
-// every row): one loop forms kPackWidth entries at a time (gathers, squared length, square
+// every row): one loop forms a pack P of entries at a time (gathers, squared length, square
 // root, division, force: pmb_density_from on packs) and adds their forces to the sums in the
 // entry order, so the sums and every value are two_stage_force_loop's bit for bit. In one loop
 // the gathers, products and the ordered sum run while the divider works on the square roots
 // and divisions, which the two-stage loop's separate stages serialised (docs/performance.md,
 // "PMB in double: one packed loop per row"). Returns false, having written nothing, for a row
 // with an entry broken, or past its critical extension with fracture on: the two-stage loop
-// then runs it (the selection, the breaks and their released energy).
+// then runs it (the selection, the breaks and their released energy). P is PackD2 or PackD4
+// (the same bits); pmb_fast_force_loop runs the widest the CPU has (on_host_pack).
+template <class P>
 inline bool pmb_packed_row(const PdViewT<double>& p, int64_t i, const BondOriginT<double>& origin) {
-  return packed_row_force(
+  return packed_row_force<P>(
       p, i,
-      [&](int64_t k, PackD& cx, PackD& cy, PackD& cz) {
-        const PackedBond b = packed_bond(p, origin, k);
-        PackMask over;
-        const PackD f = pmb_density_from<PackD>(b.squared_length(), load_pack(p.xi_len + k), load_pack(p.k_own + k),
-                                                widen_floats(p.s0_own + k), over);
+      [&](int64_t k, P& cx, P& cy, P& cz) {
+        const PackedBond<P> b = packed_bond<P>(p, origin, k);
+        PackMaskOf<P> over;
+        const P f = pmb_density_from<P>(b.squared_length(), load_pack<P>(p.xi_len + k), load_pack<P>(p.k_own + k),
+                                        widen_floats(p.s0_own + k, P{}), over);
         cx = f * b.dx;
         cy = f * b.dy;
         cz = f * b.dz;
@@ -954,7 +967,7 @@ template <class Real>
 BRECCIA_HD void pmb_fast_force_loop(const PdViewT<Real>& p, int64_t i, const BondOriginT<Real>& origin) {
 #if defined(BRECCIA_HOST_PACK) && !defined(__CUDA_ARCH__)
   if constexpr (!BondOriginT<Real>::kRelative)
-    if (pmb_packed_row(p, i, origin)) return;
+    if (on_host_pack([&](auto pack) { return pmb_packed_row<typename decltype(pack)::type>(p, i, origin); })) return;
 #endif
   two_stage_force_loop<PmbReleased<Real>>(p, i, PmbFastPath<Real>{origin});
 }

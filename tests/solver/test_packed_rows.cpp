@@ -55,6 +55,7 @@ void compare(const char* model) {
   deform(packed);
   PdSystem one_by_one = packed;
   one_by_one.x = packed.x;
+  const std::vector<uint8_t> one_by_one_state_before = one_by_one.state;
   const PdView p = packed.view(), q = one_by_one.view();
   ASSERT_TRUE(p.x && !p.diagnostics && fast_bond_loop(p));
   const bool lps = p.model == static_cast<int>(PdModel::LPS);
@@ -100,6 +101,30 @@ void compare(const char* model) {
       ordered_fast_loop<double>(q, i, count, PmbFastPath<double>{origin}, CsrRow{begin}, NoBreakHook{});
   }
   expect_same(packed, one_by_one, model);
+  if (!lps) {
+    // PMB's order (RowForceSums): entry q of the row to partial sum q mod 4, in row order, the
+    // four combined as (s0 + s1) + (s2 + s3); formed here from the entries' terms, the deformed
+    // block's state before the pass (`reference`), and compared with the one-entry loop's forces.
+    PdSystem reference = packed;
+    reference.x = packed.x;
+    reference.state = one_by_one_state_before;
+    const PdView r = reference.view();
+    for (int64_t i = 0; i < n; ++i) {
+      const BondOriginT<double> origin(r, i);
+      double sx[4] = {0.0, 0.0, 0.0, 0.0}, sy[4] = {0.0, 0.0, 0.0, 0.0}, sz[4] = {0.0, 0.0, 0.0, 0.0};
+      for (int64_t k = r.offsets[i]; k < r.offsets[i + 1]; ++k) {
+        double cx, cy, cz;
+        pmb_fast_entry(r, origin, k, cx, cy, cz);
+        const int64_t q = (k - r.offsets[i]) % 4;
+        sx[q] += cx;
+        sy[q] += cy;
+        sz[q] += cz;
+      }
+      const double expected[3] = {(sx[0] + sx[1]) + (sx[2] + sx[3]), (sy[0] + sy[1]) + (sy[2] + sy[3]),
+                                  (sz[0] + sz[1]) + (sz[2] + sz[3])};
+      ASSERT_EQ(0, std::memcmp(expected, &one_by_one.force[3 * i], sizeof expected)) << "row " << i;
+    }
+  }
   int64_t broke = 0;
   for (size_t k = 0; k < packed.state.size(); k += 1) broke += packed.state[k] == 0 && k % 997 != 0;
   EXPECT_GT(broke, 0) << model << ": bonds past s0 should break in the pass";

@@ -29,6 +29,11 @@
 #define BRECCIA_TARGET_AVX __attribute__((target("avx")))
 #define BRECCIA_PACK_INLINE inline __attribute__((always_inline))
 
+// GCC warns that a 32-byte vector returned without AVX enabled changes the ABI (-Wpsabi): the
+// helpers below are always inlined, into AVX functions for PackD4, so no such value crosses a call.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 namespace breccia::solver {
 
 typedef double PackD2 __attribute__((vector_size(16)));
@@ -115,4 +120,6 @@ inline auto on_host_pack(const Row& row) {
 }
 
 }  // namespace breccia::solver
+
+#pragma GCC diagnostic pop
 #endif

@@ -10,6 +10,13 @@
 #include "breccia/solver/host_pack.hpp"
 #include "breccia/solver/pd_physics.hpp"
 
+#if defined(BRECCIA_HOST_PACK)
+// The packed rows' helpers return 32-byte packs (PackedBond<PackD4>): always inlined into AVX
+// functions (host_pack.hpp, on_avx_pack), so GCC's ABI note (-Wpsabi) does not apply.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
 namespace breccia::solver {
 
 // Everything a kernel reads or writes, as raw pointers (structure of arrays). Real is the
@@ -313,6 +320,34 @@ BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double uni
   return d;
 }
 
+// Particle i's force sums over its row. PMB with one constant horizon (every path: the packed
+// rows, the two-stage and one-entry loops, the device's, the SELL lanes', the diagnostic loop)
+// keeps four partial sums per component, entry q of the row added to sum q mod 4 in row order,
+// and combines them as (s0 + s1) + (s2 + s3) (kFour). One sum per component, every entry added
+// in row order, would be a chain of dependent additions, one per entry: on the host that chain
+// bounded the packed PMB loop once its square roots and divisions ran 4 wide (docs/performance.md,
+// "The packed rows 4 wide, four partial sums"); four sums run four chains side by side. LPS and
+// the general loops keep one sum (kFour false: every add goes to s0). A sum starts at +0 and
+// never becomes -0, so adding a masked entry's +0 leaves it unchanged whichever sum it goes to.
+template <class Real, bool kFour>
+struct RowForceSums {
+  Real x[4] = {Real(0), Real(0), Real(0), Real(0)}, y[4] = {Real(0), Real(0), Real(0), Real(0)},
+       z[4] = {Real(0), Real(0), Real(0), Real(0)};
+  // Entry q's force, r = q mod 4 (a constant where the caller's loop is unrolled by 4).
+  BRECCIA_HD void add(int r, Real cx, Real cy, Real cz) {
+    const int s = kFour ? r : 0;
+    x[s] += cx;
+    y[s] += cy;
+    z[s] += cz;
+  }
+  BRECCIA_HD static Real total(const Real (&v)[4]) { return kFour ? (v[0] + v[1]) + (v[2] + v[3]) : v[0]; }
+  BRECCIA_HD void store(Real* force) const {
+    force[0] = total(x);
+    force[1] = total(y);
+    force[2] = total(z);
+  }
+};
+
 // The fast bond loops between output steps (one constant horizon, brittle bonds, no
 // compressive enhancement) run in two stages over chunks of kBondChunk entries: a
 // branch-free stage that computes every entry's force contribution and whether it breaks
@@ -323,6 +358,7 @@ BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double uni
 // set, and the CUDA build (one entry per iteration, no buffer) agrees with it. Adding the +0
 // of a masked entry changes nothing: a sum that starts at +0 never becomes -0.
 inline constexpr int kBondChunk = 64;
+static_assert(kBondChunk % 4 == 0, "a chunk starts at a multiple of 4 entries from its row's start (RowForceSums)");
 
 // Are the own halves of all m entries of a chunk from `base` intact? Then the host's two
 // stages run a copy of the entry without its state test (kCheckState false): in a run most
@@ -527,25 +563,29 @@ struct NoBreakHook {
   BRECCIA_HD void operator()(int64_t) const {}
 };
 
+// Does a path's particle keep four force sums (`Path::kFourSums` true: PMB, RowForceSums)?
+template <class Path>
+inline constexpr bool kPathFourSums = requires { requires Path::kFourSums; };
+
 template <class Released, class Real, class Path, class At, class Broke>
 BRECCIA_HD void ordered_fast_loop(const PdViewT<Real>& p, int64_t i, int64_t count, const Path& path, const At& at,
                                   const Broke& broke) {
-  Real fx = Real(0), fy = Real(0), fz = Real(0);
+  RowForceSums<Real, kPathFourSums<Path>> sums;
   Released released = Released(0);
-  for (int64_t q = 0; q < count; ++q) {
-    const int64_t k = at(q);
-    Real cx, cy, cz;
-    if (path.entry(p, k, cx, cy, cz)) {
-      released += static_cast<Released>(path.release(p, i, k));
-      broke(k);
+  for (int64_t q0 = 0; q0 < count; q0 += 4) {
+BRECCIA_UNROLL4
+    for (int r = 0; r < 4; ++r) {
+      if (q0 + r >= count) break;
+      const int64_t k = at(q0 + r);
+      Real cx, cy, cz;
+      if (path.entry(p, k, cx, cy, cz)) {
+        released += static_cast<Released>(path.release(p, i, k));
+        broke(k);
+      }
+      sums.add(r, cx, cy, cz);
     }
-    fx += cx;
-    fy += cy;
-    fz += cz;
   }
-  p.force[3 * i] = fx;
-  p.force[3 * i + 1] = fy;
-  p.force[3 * i + 2] = fz;
+  sums.store(p.force + 3 * i);
   p.dissipated[i] = released;
 }
 
@@ -560,7 +600,7 @@ BRECCIA_HD void two_stage_force_loop(const PdViewT<Real>& p, int64_t i, const Pa
 #if defined(__CUDA_ARCH__)
   ordered_fast_loop<Released>(p, i, end - begin, path, CsrRow{begin}, NoBreakHook{});
 #else
-  Real fx = Real(0), fy = Real(0), fz = Real(0);
+  RowForceSums<Real, kPathFourSums<Path>> sums;
   Released released = Released(0);
   // A local copy of the view: its pointers are then loop invariants GCC keeps in registers
   // (read through `p` they are loads it will not vectorise).
@@ -616,18 +656,17 @@ BRECCIA_SIMD_COUNT(count)
       };
       breaking = chunk_intact(v, base, m) ? stage(std::false_type{}) : stage(std::true_type{});
     }
-    for (int q = 0; q < m; ++q) {
-      fx += cx[q];
-      fy += cy[q];
-      fz += cz[q];
+    // In entry order; a chunk starts at a multiple of 4 from the row's start (kBondChunk).
+    for (int q0 = 0; q0 < m; q0 += 4) {
+BRECCIA_UNROLL4
+      for (int r = 0; r < 4; ++r)
+        if (q0 + r < m) sums.add(r, cx[q0 + r], cy[q0 + r], cz[q0 + r]);
     }
     if (breaking)  // rare: in entry order, as the scalar loop sums the released energy
       for (int q = 0; q < m; ++q)
         if (breaks[q]) released += static_cast<Released>(path.release(p, i, base + q));
   }
-  p.force[3 * i] = fx;
-  p.force[3 * i + 1] = fy;
-  p.force[3 * i + 2] = fz;
+  sums.store(p.force + 3 * i);
   p.dissipated[i] = released;
 #endif
 }
@@ -651,35 +690,55 @@ struct LpsFastPath {
 // sums in entry order (the one-entry loop's order, so the bits are its). False, having written
 // nothing, for a row with a broken entry, or one past its critical extension with fracture on:
 // the two-stage loop then runs it (the selection, the breaks and their released energy).
-template <class P, class PackTerm, class EntryTerm>
+template <class P, bool kFour, class PackTerm, class EntryTerm>
 inline bool packed_row_force(const PdViewT<double>& p, int64_t i, PackTerm&& pack_term, EntryTerm&& entry_term) {
   constexpr int kLanes = kPackLanes<P>;
   const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
   if (end > begin && !chunk_intact(p, begin, static_cast<int>(end - begin))) return false;
-  double fx = 0.0, fy = 0.0, fz = 0.0;
+  RowForceSums<double, kFour> sums;
   PackMaskOf<P> over_any = {};
   bool over_tail = false;
   int64_t k = begin;
-  for (; k + kLanes <= end; k += kLanes) {
-    P cx, cy, cz;
-    over_any |= pack_term(k, cx, cy, cz);
-    for (int l = 0; l < kLanes; ++l) {
-      fx += cx[l];
-      fy += cy[l];
-      fz += cz[l];
+  if constexpr (kFour) {
+    // The four sums as packs: entry q's lane of pack g (q mod 4 = g kLanes + lane, the packs of
+    // each 4 entries in turn), so each lane adds the entries of its sum in row order.
+    constexpr int kGroups = 4 / kLanes;
+    static_assert(kGroups * kLanes == 4, "a pack holds 2 or 4 of the four sums");
+    P sx[kGroups] = {}, sy[kGroups] = {}, sz[kGroups] = {};
+    for (; k + 4 <= end; k += 4)
+      for (int g = 0; g < kGroups; ++g) {
+        P cx, cy, cz;
+        over_any |= pack_term(k + g * kLanes, cx, cy, cz);
+        sx[g] += cx;
+        sy[g] += cy;
+        sz[g] += cz;
+      }
+    for (int g = 0; g < kGroups; ++g)
+      for (int l = 0; l < kLanes; ++l) {
+        sums.x[g * kLanes + l] = sx[g][l];
+        sums.y[g * kLanes + l] = sy[g][l];
+        sums.z[g * kLanes + l] = sz[g][l];
+      }
+    // The row's last 0-3 entries, k - begin a multiple of 4: entry k + r goes to sum r.
+    for (int r = 0; k + r < end; ++r) {
+      double cx, cy, cz;
+      over_tail |= entry_term(k + r, cx, cy, cz);
+      sums.add(r, cx, cy, cz);
+    }
+  } else {
+    for (; k + kLanes <= end; k += kLanes) {
+      P cx, cy, cz;
+      over_any |= pack_term(k, cx, cy, cz);
+      for (int l = 0; l < kLanes; ++l) sums.add(0, cx[l], cy[l], cz[l]);
+    }
+    for (; k < end; ++k) {
+      double cx, cy, cz;
+      over_tail |= entry_term(k, cx, cy, cz);
+      sums.add(0, cx, cy, cz);
     }
   }
-  for (; k < end; ++k) {
-    double cx, cy, cz;
-    over_tail |= entry_term(k, cx, cy, cz);
-    fx += cx;
-    fy += cy;
-    fz += cz;
-  }
   if (p.fracture && (over_tail || any_lane(over_any))) return false;
-  p.force[3 * i] = fx;
-  p.force[3 * i + 1] = fy;
-  p.force[3 * i + 2] = fz;
+  sums.store(p.force + 3 * i);
   p.dissipated[i] = 0.0;
   return true;
 }
@@ -693,7 +752,7 @@ inline bool packed_row_force(const PdViewT<double>& p, int64_t i, PackTerm&& pac
 template <class P>
 inline bool lps_packed_row(const PdViewT<double>& p, int64_t i, const BondOriginT<double>& origin, double a_i,
                            double b_i) {
-  return packed_row_force<P>(
+  return packed_row_force<P, false>(
       p, i,
       [&](int64_t k, P& cx, P& cy, P& cz) {
         const int32_t* j = p.neighbor + k;
@@ -909,6 +968,7 @@ struct PmbFastPath {
   }
   // Double gathers its bond vectors in a stage of their own on the host (two_stage_force_loop).
   static constexpr bool kGathers = !BondOriginT<Real>::kRelative;
+  static constexpr bool kFourSums = true;  // RowForceSums
   BRECCIA_HD Real gather(const PdViewT<Real>& v, int64_t k, Real& dx, Real& dy, Real& dz) const {
     return origin.bond_vector(v.x, v.neighbor[k], dx, dy, dz);
   }
@@ -939,7 +999,7 @@ using PmbReleased = std::conditional_t<BondOriginT<Real>::kRelative, Real, doubl
 // (the same bits); pmb_fast_force_loop runs the widest the CPU has (on_host_pack).
 template <class P>
 inline bool pmb_packed_row(const PdViewT<double>& p, int64_t i, const BondOriginT<double>& origin) {
-  return packed_row_force<P>(
+  return packed_row_force<P, true>(
       p, i,
       [&](int64_t k, P& cx, P& cy, P& cz) {
         const PackedBond<P> b = packed_bond<P>(p, origin, k);
@@ -986,12 +1046,12 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
       return;
     }
   }
-  Real fx = Real(0), fy = Real(0), fz = Real(0);
+  RowForceSums<Real, true> sums;  // the fast loops' four sums: the same bits
   double w = 0.0, released = 0.0, smax = 0.0, smin = 1e300;
   double intact_vol = 0.0, total_vol = 0.0;
   bool any = false;
-  const int64_t end = p.offsets[i + 1];
-  for (int64_t k = p.offsets[i]; k < end; ++k) {
+  const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
+  for (int64_t k = begin; k < end; ++k) {
     if (kDiagnostics) total_vol += p.vol_own[k];
     if (!p.state[k]) continue;
     const int64_t j = p.neighbor[k];
@@ -1027,9 +1087,7 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
       }
     }
     const Real f = static_cast<Real>(share) * k2 * extension / (xi * len);  // (1 - d) c s / |xi + eta|
-    fx += f * dx;
-    fy += f * dy;
-    fz += f * dz;
+    sums.add(static_cast<int>((k - begin) & 3), f * dx, f * dy, f * dz);
     if (kDiagnostics && !breaking) {
       const double stretch = double(extension) / xi;
       w += share * 0.25 * k2 * stretch * stretch * xi;
@@ -1037,9 +1095,7 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
       if (stretch > smax) smax = stretch;
     }
   }
-  p.force[3 * i] = fx;
-  p.force[3 * i + 1] = fy;
-  p.force[3 * i + 2] = fz;
+  sums.store(p.force + 3 * i);
   p.dissipated[i] = released;
   store_min_stretch(p, i, smin, any);
   if (kDiagnostics) {
@@ -1328,3 +1384,7 @@ BRECCIA_HD void kick_drift_kernel(const PdViewT<Real>& p, int64_t i, double half
 }
 
 }  // namespace breccia::solver
+
+#if defined(BRECCIA_HOST_PACK)
+#pragma GCC diagnostic pop
+#endif

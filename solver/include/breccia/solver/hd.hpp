@@ -21,8 +21,10 @@
 
 // BRECCIA_UNROLL4: unroll the next loop (4 iterations at most) fully, on the host and the device,
 // so that an index it runs over is a constant in each copy (registers, not memory).
-#if defined(__CUDACC__)
+#if defined(__CUDA_ARCH__)
 #define BRECCIA_UNROLL4 BRECCIA_PRAGMA(unroll 4)
+#elif defined(__CUDACC__)
+#define BRECCIA_UNROLL4  // nvcc's host pass: the CPU build's loops are GCC's own
 #else
 #define BRECCIA_UNROLL4 BRECCIA_PRAGMA(GCC unroll 4)
 #endif

@@ -8,8 +8,10 @@
 // two-stage loop, which selects and breaks).
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstring>
 #include <random>
+#include <vector>
 
 #include "breccia/solver/pd_kernels.hpp"
 #include "helpers.hpp"
@@ -53,6 +55,7 @@ void compare(const char* model) {
   deform(packed);
   PdSystem one_by_one = packed;
   one_by_one.x = packed.x;
+  const std::vector<uint8_t> one_by_one_state_before = one_by_one.state;
   const PdView p = packed.view(), q = one_by_one.view();
   ASSERT_TRUE(p.x && !p.diagnostics && fast_bond_loop(p));
   const bool lps = p.model == static_cast<int>(PdModel::LPS);
@@ -66,8 +69,11 @@ void compare(const char* model) {
     const PdView t = scratch.view();
     for (int64_t i = 0; i < n; ++i) {
       double sum = 0.0;
-      accepted += lps ? lps_packed_dilatation_row(t, i, BondOriginT<double>(t, i), sum)
-                      : pmb_packed_row(t, i, BondOriginT<double>(t, i));
+      accepted += on_host_pack([&](auto pack) {
+        using P = typename decltype(pack)::type;
+        return lps ? lps_packed_dilatation_row<P>(t, i, BondOriginT<double>(t, i), sum)
+                   : pmb_packed_row<P>(t, i, BondOriginT<double>(t, i));
+      });
     }
   }
   EXPECT_GT(accepted, n / 2) << model;
@@ -95,13 +101,125 @@ void compare(const char* model) {
       ordered_fast_loop<double>(q, i, count, PmbFastPath<double>{origin}, CsrRow{begin}, NoBreakHook{});
   }
   expect_same(packed, one_by_one, model);
+  if (!lps) {
+    // PMB's order (RowForceSums): entry q of the row to partial sum q mod 4, in row order, the
+    // four combined as (s0 + s1) + (s2 + s3); formed here from the entries' terms, the deformed
+    // block's state before the pass (`reference`), and compared with the one-entry loop's forces.
+    PdSystem reference = packed;
+    reference.x = packed.x;
+    reference.state = one_by_one_state_before;
+    const PdView r = reference.view();
+    for (int64_t i = 0; i < n; ++i) {
+      const BondOriginT<double> origin(r, i);
+      double sx[4] = {0.0, 0.0, 0.0, 0.0}, sy[4] = {0.0, 0.0, 0.0, 0.0}, sz[4] = {0.0, 0.0, 0.0, 0.0};
+      for (int64_t k = r.offsets[i]; k < r.offsets[i + 1]; ++k) {
+        double cx, cy, cz;
+        pmb_fast_entry(r, origin, k, cx, cy, cz);
+        const int64_t q = (k - r.offsets[i]) % 4;
+        sx[q] += cx;
+        sy[q] += cy;
+        sz[q] += cz;
+      }
+      const double expected[3] = {(sx[0] + sx[1]) + (sx[2] + sx[3]), (sy[0] + sy[1]) + (sy[2] + sy[3]),
+                                  (sz[0] + sz[1]) + (sz[2] + sz[3])};
+      ASSERT_EQ(0, std::memcmp(expected, &one_by_one.force[3 * i], sizeof expected)) << "row " << i;
+    }
+  }
   int64_t broke = 0;
   for (size_t k = 0; k < packed.state.size(); k += 1) broke += packed.state[k] == 0 && k % 997 != 0;
   EXPECT_GT(broke, 0) << model << ": bonds past s0 should break in the pass";
 }
+
+#if defined(BRECCIA_HOST_PACK)
+// `row` at the given width: 4 lanes through the AVX function the solver runs on a CPU with AVX
+// (on_avx_pack), 2 lanes as on one without.
+template <class Row>
+bool at_width(int lanes, const Row& row) {
+  if (lanes == 4) return on_avx_pack(row);
+  return row(PackKind<PackD2>{});
+}
+
+// Each width's packed rows against the one-entry loop, row by row: the rows a width accepts
+// must hold the one-entry loop's forces (and, for LPS, dilatation sums) bit for bit, and both
+// widths must accept the same rows. The solver runs one width per CPU (on_host_pack), so
+// without this a CPU with AVX would never check the 2-lane rows, nor one without the 4-lane.
+void compare_widths(const char* model) {
+  PdSystem base = system_from_yaml(std::string("packed_widths_") + model, block(model));
+  deform(base);
+  PdSystem reference = base;
+  reference.x = base.x;
+  const PdView q = reference.view();
+  const bool lps = q.model == static_cast<int>(PdModel::LPS);
+  const int64_t n = q.n;
+  std::vector<double> theta_sum(n, 0.0);
+  for (int64_t i = 0; i < n; ++i) {
+    const BondOriginT<double> origin(q, i);
+    for (int64_t k = q.offsets[i]; k < q.offsets[i + 1]; ++k)
+      theta_sum[i] += lps ? lps_dilatation_entry(q, origin, k) : 0.0;
+    if (lps) lps_store_dilatation(q, i, theta_sum[i]);
+  }
+  for (int64_t i = 0; i < n; ++i) {
+    const BondOriginT<double> origin(q, i);
+    const int64_t begin = q.offsets[i], count = q.offsets[i + 1] - begin;
+    if (lps)
+      ordered_fast_loop<double>(q, i, count, LpsFastPath<double>{origin, q.lps_a[i], q.lps_b[i]}, CsrRow{begin},
+                                NoBreakHook{});
+    else
+      ordered_fast_loop<double>(q, i, count, PmbFastPath<double>{origin}, CsrRow{begin}, NoBreakHook{});
+  }
+  std::vector<uint8_t> accepted_at[2];
+  for (int lanes : {2, 4}) {
+    if (lanes == 4 && !host_runs_avx()) {
+      std::printf("[ SKIPPED  ] %s: 4-lane rows, this CPU has no AVX\n", model);
+      continue;
+    }
+    PdSystem s = base;
+    s.x = base.x;
+    if (lps) {  // the factors the force rows read: the reference's (its rows equal, checked below)
+      s.dilatation = reference.dilatation;
+      s.lps_a = reference.lps_a;
+      s.lps_b = reference.lps_b;
+    }
+    const PdView t = s.view();
+    std::vector<uint8_t>& accepted = accepted_at[lanes / 4];
+    accepted.assign(n, 0);
+    int64_t rows = 0;
+    for (int64_t i = 0; i < n; ++i) {
+      const BondOriginT<double> origin(t, i);
+      double sum = 0.0;
+      bool took;
+      if (lps) {
+        const bool summed = at_width(lanes, [&](auto pack) {
+          return lps_packed_dilatation_row<typename decltype(pack)::type>(t, i, origin, sum);
+        });
+        if (summed) EXPECT_EQ(0, std::memcmp(&sum, &theta_sum[i], sizeof sum)) << model << " lanes " << lanes << " row " << i;
+        took = at_width(lanes, [&](auto pack) {
+          return lps_packed_row<typename decltype(pack)::type>(t, i, origin, t.lps_a[i], t.lps_b[i]);
+        });
+      } else {
+        took = at_width(lanes, [&](auto pack) { return pmb_packed_row<typename decltype(pack)::type>(t, i, origin); });
+      }
+      accepted[i] = took;
+      rows += took;
+      if (took)
+        EXPECT_EQ(0, std::memcmp(&s.force[3 * i], &reference.force[3 * i], 3 * sizeof(double)))
+            << model << " lanes " << lanes << " row " << i;
+    }
+    EXPECT_GT(rows, n / 2) << model << " lanes " << lanes;
+    EXPECT_LT(rows, n) << model << " lanes " << lanes;
+  }
+  if (!accepted_at[1].empty()) EXPECT_EQ(accepted_at[0], accepted_at[1]) << model;
+}
+#endif
 
 }  // namespace
 
 TEST(PackedRows, PmbRowsEqualTheOneEntryLoopBitForBit) { compare("pmb"); }
 
 TEST(PackedRows, LpsRowsEqualTheOneEntryLoopsBitForBit) { compare("lps"); }
+
+#if defined(BRECCIA_HOST_PACK)
+TEST(PackedRows, PmbRowsOfBothWidthsEqualTheOneEntryLoop) { compare_widths("pmb"); }
+
+TEST(PackedRows, LpsRowsOfBothWidthsEqualTheOneEntryLoops) { compare_widths("lps"); }
+#endif

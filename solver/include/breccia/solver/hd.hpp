@@ -18,3 +18,13 @@
 #define BRECCIA_SIMD BRECCIA_PRAGMA(omp simd)
 #define BRECCIA_SIMD_COUNT(n) BRECCIA_PRAGMA(omp simd reduction(+ : n))
 #endif
+
+// BRECCIA_UNROLL4: unroll the next loop (4 iterations at most) fully, on the host and the device,
+// so that an index it runs over is a constant in each copy (registers, not memory).
+#if defined(__CUDA_ARCH__)
+#define BRECCIA_UNROLL4 BRECCIA_PRAGMA(unroll 4)
+#elif defined(__CUDACC__)
+#define BRECCIA_UNROLL4  // nvcc's host pass: the CPU build's loops are GCC's own
+#else
+#define BRECCIA_UNROLL4 BRECCIA_PRAGMA(GCC unroll 4)
+#endif

@@ -10,6 +10,13 @@
 #include "breccia/solver/host_pack.hpp"
 #include "breccia/solver/pd_physics.hpp"
 
+#if defined(BRECCIA_HOST_PACK)
+// The packed rows' helpers return 32-byte packs (PackedBond<PackD4>): always inlined into AVX
+// functions (host_pack.hpp, on_avx_pack), so GCC's ABI note (-Wpsabi) does not apply.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
 namespace breccia::solver {
 
 // Everything a kernel reads or writes, as raw pointers (structure of arrays). Real is the
@@ -313,6 +320,34 @@ BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double uni
   return d;
 }
 
+// Particle i's force sums over its row. PMB with one constant horizon (every path: the packed
+// rows, the two-stage and one-entry loops, the device's, the SELL lanes', the diagnostic loop)
+// keeps four partial sums per component, entry q of the row added to sum q mod 4 in row order,
+// and combines them as (s0 + s1) + (s2 + s3) (kFour). One sum per component, every entry added
+// in row order, would be a chain of dependent additions, one per entry: on the host that chain
+// bounded the packed PMB loop once its square roots and divisions ran 4 wide (docs/performance.md,
+// "The packed rows 4 wide, four partial sums"); four sums run four chains side by side. LPS and
+// the general loops keep one sum (kFour false: every add goes to s0). A sum starts at +0 and
+// never becomes -0, so adding a masked entry's +0 leaves it unchanged whichever sum it goes to.
+template <class Real, bool kFour>
+struct RowForceSums {
+  Real x[4] = {Real(0), Real(0), Real(0), Real(0)}, y[4] = {Real(0), Real(0), Real(0), Real(0)},
+       z[4] = {Real(0), Real(0), Real(0), Real(0)};
+  // Entry q's force, r = q mod 4 (a constant where the caller's loop is unrolled by 4).
+  BRECCIA_HD void add(int r, Real cx, Real cy, Real cz) {
+    const int s = kFour ? r : 0;
+    x[s] += cx;
+    y[s] += cy;
+    z[s] += cz;
+  }
+  BRECCIA_HD static Real total(const Real (&v)[4]) { return kFour ? (v[0] + v[1]) + (v[2] + v[3]) : v[0]; }
+  BRECCIA_HD void store(Real* force) const {
+    force[0] = total(x);
+    force[1] = total(y);
+    force[2] = total(z);
+  }
+};
+
 // The fast bond loops between output steps (one constant horizon, brittle bonds, no
 // compressive enhancement) run in two stages over chunks of kBondChunk entries: a
 // branch-free stage that computes every entry's force contribution and whether it breaks
@@ -323,6 +358,7 @@ BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double uni
 // set, and the CUDA build (one entry per iteration, no buffer) agrees with it. Adding the +0
 // of a masked entry changes nothing: a sum that starts at +0 never becomes -0.
 inline constexpr int kBondChunk = 64;
+static_assert(kBondChunk % 4 == 0, "a chunk starts at a multiple of 4 entries from its row's start (RowForceSums)");
 
 // Are the own halves of all m entries of a chunk from `base` intact? Then the host's two
 // stages run a copy of the entry without its state test (kCheckState false): in a run most
@@ -350,7 +386,7 @@ BRECCIA_HD bool fast_bond_loop(const PdViewT<Real>& p) {
   return !p.min_stretch && !p.min_stretch_next && !p.bond_damage;
 }
 
-// LPS's brittle terms, for one entry (V = Real) or a pack of entries (the host's PackD,
+// LPS's brittle terms, for one entry (V = Real) or a pack of entries (the host's PackD2/PackD4,
 // lps_packed_dilatation_row and lps_packed_row): the first pass's omega beta |xi| e V_j, and
 // the force pass's force density over length t V_j / |xi + eta| with t = omega ((A_i + A_j)
 // |xi| + (B_i + B_j) e) (lps_symmetric_force_kernel).
@@ -391,33 +427,37 @@ BRECCIA_HD void lps_store_dilatation(const PdViewT<Real>& p, int64_t i, Real sum
 }
 
 #if defined(BRECCIA_HOST_PACK)
-// The host's bond vectors of entries k .. k + kPackWidth - 1 from particle i (origin) in
-// double: x_j - x_i per component (BondOriginT::bond_vector, lane by lane).
+// The host's bond vectors of entries k .. k + lanes - 1 from particle i (origin) in double, P
+// a host pack (host_pack.hpp): x_j - x_i per component (BondOriginT::bond_vector, lane by lane).
+template <class P>
 struct PackedBond {
-  PackD dx, dy, dz;
-  PackD squared_length() const { return dx * dx + dy * dy + dz * dz; }
+  P dx, dy, dz;
+  BRECCIA_PACK_INLINE P squared_length() const { return dx * dx + dy * dy + dz * dz; }
 };
-inline PackedBond packed_bond(const PdViewT<double>& p, const BondOriginT<double>& origin, int64_t k) {
+template <class P>
+BRECCIA_PACK_INLINE PackedBond<P> packed_bond(const PdViewT<double>& p, const BondOriginT<double>& origin, int64_t k) {
   const int32_t* j = p.neighbor + k;
-  return {gather_pack(p.x, j, 3, 0) - origin.px, gather_pack(p.x, j, 3, 1) - origin.py,
-          gather_pack(p.x, j, 3, 2) - origin.pz};
+  return {gather_pack<P>(p.x, j, 3, 0) - origin.px, gather_pack<P>(p.x, j, 3, 1) - origin.py,
+          gather_pack<P>(p.x, j, 3, 2) - origin.pz};
 }
 
 // LPS's first pass in double on the host for a row whose own halves are all intact: the terms
-// kPackWidth at a time and their sum in the entry order in the same loop (pmb_packed_row), so
-// the sum is the two-stage loop's bit for bit. False, with `sum` untouched, for a row with an
-// own half broken (the two-stage loop selects).
+// a pack P at a time and their sum in the entry order in the same loop (pmb_packed_row), so
+// the sum is the two-stage loop's bit for bit, at either width. False, with `sum` untouched,
+// for a row with an own half broken (the two-stage loop selects).
+template <class P>
 inline bool lps_packed_dilatation_row(const PdViewT<double>& p, int64_t i, const BondOriginT<double>& origin,
                                       double& sum) {
+  constexpr int kLanes = kPackLanes<P>;
   const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
   if (end > begin && !chunk_intact(p, begin, static_cast<int>(end - begin))) return false;
   double total = 0.0;
   int64_t k = begin;
-  for (; k + kPackWidth <= end; k += kPackWidth) {
-    const PackD xi = load_pack(p.xi_len + k);
-    const PackD extension = sqrt_of(packed_bond(p, origin, k).squared_length()) - xi;  // BondOriginT::extension_from
-    const PackD term = lps_dilatation_term(load_pack(p.k_own + k), xi, extension, gather_pack(p.volume, p.neighbor + k, 1, 0));
-    for (int l = 0; l < kPackWidth; ++l) total += term[l];
+  for (; k + kLanes <= end; k += kLanes) {
+    const P xi = load_pack<P>(p.xi_len + k);
+    const P extension = sqrt_of(packed_bond<P>(p, origin, k).squared_length()) - xi;  // BondOriginT::extension_from
+    const P term = lps_dilatation_term(load_pack<P>(p.k_own + k), xi, extension, gather_pack<P>(p.volume, p.neighbor + k, 1, 0));
+    for (int l = 0; l < kLanes; ++l) total += term[l];
   }
   for (; k < end; ++k) total += lps_dilatation_entry<false>(p, origin, k);
   sum = total;
@@ -434,7 +474,9 @@ BRECCIA_HD void lps_dilatation_kernel(const PdViewT<Real>& p, int64_t i) {
 #if !defined(__CUDA_ARCH__)
 #if defined(BRECCIA_HOST_PACK)
   if constexpr (!BondOriginT<Real>::kRelative)
-    if (gather && !p.bond_damage && lps_packed_dilatation_row(p, i, origin, sum)) {
+    if (gather && !p.bond_damage && on_host_pack([&](auto pack) {
+          return lps_packed_dilatation_row<typename decltype(pack)::type>(p, i, origin, sum);
+        })) {
       lps_store_dilatation(p, i, sum);
       return;
     }
@@ -521,25 +563,29 @@ struct NoBreakHook {
   BRECCIA_HD void operator()(int64_t) const {}
 };
 
+// Does a path's particle keep four force sums (`Path::kFourSums` true: PMB, RowForceSums)?
+template <class Path>
+inline constexpr bool kPathFourSums = requires { requires Path::kFourSums; };
+
 template <class Released, class Real, class Path, class At, class Broke>
 BRECCIA_HD void ordered_fast_loop(const PdViewT<Real>& p, int64_t i, int64_t count, const Path& path, const At& at,
                                   const Broke& broke) {
-  Real fx = Real(0), fy = Real(0), fz = Real(0);
+  RowForceSums<Real, kPathFourSums<Path>> sums;
   Released released = Released(0);
-  for (int64_t q = 0; q < count; ++q) {
-    const int64_t k = at(q);
-    Real cx, cy, cz;
-    if (path.entry(p, k, cx, cy, cz)) {
-      released += static_cast<Released>(path.release(p, i, k));
-      broke(k);
+  for (int64_t q0 = 0; q0 < count; q0 += 4) {
+BRECCIA_UNROLL4
+    for (int r = 0; r < 4; ++r) {
+      if (q0 + r >= count) break;
+      const int64_t k = at(q0 + r);
+      Real cx, cy, cz;
+      if (path.entry(p, k, cx, cy, cz)) {
+        released += static_cast<Released>(path.release(p, i, k));
+        broke(k);
+      }
+      sums.add(r, cx, cy, cz);
     }
-    fx += cx;
-    fy += cy;
-    fz += cz;
   }
-  p.force[3 * i] = fx;
-  p.force[3 * i + 1] = fy;
-  p.force[3 * i + 2] = fz;
+  sums.store(p.force + 3 * i);
   p.dissipated[i] = released;
 }
 
@@ -554,7 +600,7 @@ BRECCIA_HD void two_stage_force_loop(const PdViewT<Real>& p, int64_t i, const Pa
 #if defined(__CUDA_ARCH__)
   ordered_fast_loop<Released>(p, i, end - begin, path, CsrRow{begin}, NoBreakHook{});
 #else
-  Real fx = Real(0), fy = Real(0), fz = Real(0);
+  RowForceSums<Real, kPathFourSums<Path>> sums;
   Released released = Released(0);
   // A local copy of the view: its pointers are then loop invariants GCC keeps in registers
   // (read through `p` they are loads it will not vectorise).
@@ -610,18 +656,17 @@ BRECCIA_SIMD_COUNT(count)
       };
       breaking = chunk_intact(v, base, m) ? stage(std::false_type{}) : stage(std::true_type{});
     }
-    for (int q = 0; q < m; ++q) {
-      fx += cx[q];
-      fy += cy[q];
-      fz += cz[q];
+    // In entry order; a chunk starts at a multiple of 4 from the row's start (kBondChunk).
+    for (int q0 = 0; q0 < m; q0 += 4) {
+BRECCIA_UNROLL4
+      for (int r = 0; r < 4; ++r)
+        if (q0 + r < m) sums.add(r, cx[q0 + r], cy[q0 + r], cz[q0 + r]);
     }
     if (breaking)  // rare: in entry order, as the scalar loop sums the released energy
       for (int q = 0; q < m; ++q)
         if (breaks[q]) released += static_cast<Released>(path.release(p, i, base + q));
   }
-  p.force[3 * i] = fx;
-  p.force[3 * i + 1] = fy;
-  p.force[3 * i + 2] = fz;
+  sums.store(p.force + 3 * i);
   p.dissipated[i] = released;
 #endif
 }
@@ -639,40 +684,61 @@ struct LpsFastPath {
 };
 
 #if defined(BRECCIA_HOST_PACK)
-// The packed force rows' loop (pmb_packed_row, lps_packed_row), written once: kPackWidth entries
+// The packed force rows' loop (pmb_packed_row, lps_packed_row), written once: a pack P of entries
 // at a time through `pack_term` (their force components and a mask of entries past their
 // critical extension), the rest one at a time through `entry_term`, every term added to the
 // sums in entry order (the one-entry loop's order, so the bits are its). False, having written
 // nothing, for a row with a broken entry, or one past its critical extension with fracture on:
 // the two-stage loop then runs it (the selection, the breaks and their released energy).
-template <class PackTerm, class EntryTerm>
+template <class P, bool kFour, class PackTerm, class EntryTerm>
 inline bool packed_row_force(const PdViewT<double>& p, int64_t i, PackTerm&& pack_term, EntryTerm&& entry_term) {
+  constexpr int kLanes = kPackLanes<P>;
   const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
   if (end > begin && !chunk_intact(p, begin, static_cast<int>(end - begin))) return false;
-  double fx = 0.0, fy = 0.0, fz = 0.0;
-  PackMask over_any = {};
+  RowForceSums<double, kFour> sums;
+  PackMaskOf<P> over_any = {};
   bool over_tail = false;
   int64_t k = begin;
-  for (; k + kPackWidth <= end; k += kPackWidth) {
-    PackD cx, cy, cz;
-    over_any |= pack_term(k, cx, cy, cz);
-    for (int l = 0; l < kPackWidth; ++l) {
-      fx += cx[l];
-      fy += cy[l];
-      fz += cz[l];
+  if constexpr (kFour) {
+    // The four sums as packs: entry q's lane of pack g (q mod 4 = g kLanes + lane, the packs of
+    // each 4 entries in turn), so each lane adds the entries of its sum in row order.
+    constexpr int kGroups = 4 / kLanes;
+    static_assert(kGroups * kLanes == 4, "a pack holds 2 or 4 of the four sums");
+    P sx[kGroups] = {}, sy[kGroups] = {}, sz[kGroups] = {};
+    for (; k + 4 <= end; k += 4)
+      for (int g = 0; g < kGroups; ++g) {
+        P cx, cy, cz;
+        over_any |= pack_term(k + g * kLanes, cx, cy, cz);
+        sx[g] += cx;
+        sy[g] += cy;
+        sz[g] += cz;
+      }
+    for (int g = 0; g < kGroups; ++g)
+      for (int l = 0; l < kLanes; ++l) {
+        sums.x[g * kLanes + l] = sx[g][l];
+        sums.y[g * kLanes + l] = sy[g][l];
+        sums.z[g * kLanes + l] = sz[g][l];
+      }
+    // The row's last 0-3 entries, k - begin a multiple of 4: entry k + r goes to sum r.
+    for (int r = 0; k + r < end; ++r) {
+      double cx, cy, cz;
+      over_tail |= entry_term(k + r, cx, cy, cz);
+      sums.add(r, cx, cy, cz);
+    }
+  } else {
+    for (; k + kLanes <= end; k += kLanes) {
+      P cx, cy, cz;
+      over_any |= pack_term(k, cx, cy, cz);
+      for (int l = 0; l < kLanes; ++l) sums.add(0, cx[l], cy[l], cz[l]);
+    }
+    for (; k < end; ++k) {
+      double cx, cy, cz;
+      over_tail |= entry_term(k, cx, cy, cz);
+      sums.add(0, cx, cy, cz);
     }
   }
-  for (; k < end; ++k) {
-    double cx, cy, cz;
-    over_tail |= entry_term(k, cx, cy, cz);
-    fx += cx;
-    fy += cy;
-    fz += cz;
-  }
   if (p.fracture && (over_tail || any_lane(over_any))) return false;
-  p.force[3 * i] = fx;
-  p.force[3 * i + 1] = fy;
-  p.force[3 * i + 2] = fz;
+  sums.store(p.force + 3 * i);
   p.dissipated[i] = 0.0;
   return true;
 }
@@ -680,22 +746,23 @@ inline bool packed_row_force(const PdViewT<double>& p, int64_t i, PackTerm&& pac
 
 #if defined(BRECCIA_HOST_PACK)
 // The fast LPS force pass in double on the host for a row whose entries are all intact (one
-// constant horizon): as pmb_packed_row, kPackWidth entries at a time and the ordered sums in
+// constant horizon): as pmb_packed_row, a pack P of entries at a time and the ordered sums in
 // one loop. False, having written nothing, for a row with a broken entry or one past its
 // critical extension with fracture on (the two-stage loop selects and breaks).
+template <class P>
 inline bool lps_packed_row(const PdViewT<double>& p, int64_t i, const BondOriginT<double>& origin, double a_i,
                            double b_i) {
-  return packed_row_force(
+  return packed_row_force<P, false>(
       p, i,
-      [&](int64_t k, PackD& cx, PackD& cy, PackD& cz) {
+      [&](int64_t k, P& cx, P& cy, P& cz) {
         const int32_t* j = p.neighbor + k;
-        const PackedBond b = packed_bond(p, origin, k);
-        const PackD xi = load_pack(p.xi_len + k);
-        const PackD len = sqrt_of(b.squared_length());
-        const PackD e = len - xi;  // BondOriginT::extension_from
-        const PackMask over = e > widen_floats(p.s0_own + k) * xi;
-        const PackD f = lps_fast_density(load_pack(p.k_own + k), a_i + gather_pack(p.lps_a, j, 1, 0),
-                                         b_i + gather_pack(p.lps_b, j, 1, 0), xi, e, gather_pack(p.volume, j, 1, 0), len);
+        const PackedBond<P> b = packed_bond<P>(p, origin, k);
+        const P xi = load_pack<P>(p.xi_len + k);
+        const P len = sqrt_of(b.squared_length());
+        const P e = len - xi;  // BondOriginT::extension_from
+        const PackMaskOf<P> over = e > widen_floats(p.s0_own + k, P{}) * xi;
+        const P f = lps_fast_density(load_pack<P>(p.k_own + k), a_i + gather_pack<P>(p.lps_a, j, 1, 0),
+                                     b_i + gather_pack<P>(p.lps_b, j, 1, 0), xi, e, gather_pack<P>(p.volume, j, 1, 0), len);
         cx = f * b.dx;
         cy = f * b.dy;
         cz = f * b.dz;
@@ -711,7 +778,10 @@ template <class Real>
 BRECCIA_HD void lps_fast_force_loop(const PdViewT<Real>& p, int64_t i, const BondOriginT<Real>& origin) {
 #if defined(BRECCIA_HOST_PACK) && !defined(__CUDA_ARCH__)
   if constexpr (!BondOriginT<Real>::kRelative)
-    if (lps_packed_row(p, i, origin, p.lps_a[i], p.lps_b[i])) return;
+    if (on_host_pack([&](auto pack) {
+          return lps_packed_row<typename decltype(pack)::type>(p, i, origin, p.lps_a[i], p.lps_b[i]);
+        }))
+      return;
 #endif
   two_stage_force_loop<double>(p, i, LpsFastPath<Real>{origin, p.lps_a[i], p.lps_b[i]});
 }
@@ -832,7 +902,7 @@ BRECCIA_HD bool pmb_fast_select(const PdViewT<Real>& p, int64_t k, bool over, Re
 // Double's PMB entry from its squared deformed length r2 (BondOriginT::bond_vector), its
 // reference length xi, own modulus and critical stretch (widened from float): its force
 // density over length f = c s / |xi + eta|, and whether its extension |xi + eta| - |xi| passed
-// the critical one (`over`). V is double (one entry) or the host's PackD (kPackWidth entries,
+// the critical one (`over`). V is double (one entry) or a host pack (2 or 4 entries,
 // pmb_packed_row), whose lanes round as the scalar operations do: one expression for both.
 BRECCIA_HD double sqrt_of(double v) { return std::sqrt(v); }
 template <class V>
@@ -898,6 +968,7 @@ struct PmbFastPath {
   }
   // Double gathers its bond vectors in a stage of their own on the host (two_stage_force_loop).
   static constexpr bool kGathers = !BondOriginT<Real>::kRelative;
+  static constexpr bool kFourSums = true;  // RowForceSums
   BRECCIA_HD Real gather(const PdViewT<Real>& v, int64_t k, Real& dx, Real& dy, Real& dz) const {
     return origin.bond_vector(v.x, v.neighbor[k], dx, dy, dz);
   }
@@ -917,22 +988,24 @@ using PmbReleased = std::conditional_t<BondOriginT<Real>::kRelative, Real, doubl
 
 #if defined(BRECCIA_HOST_PACK)
 // PMB in double on the host, a row whose entries are all intact (between output steps nearly
-// every row): one loop forms kPackWidth entries at a time (gathers, squared length, square
+// every row): one loop forms a pack P of entries at a time (gathers, squared length, square
 // root, division, force: pmb_density_from on packs) and adds their forces to the sums in the
 // entry order, so the sums and every value are two_stage_force_loop's bit for bit. In one loop
 // the gathers, products and the ordered sum run while the divider works on the square roots
 // and divisions, which the two-stage loop's separate stages serialised (docs/performance.md,
 // "PMB in double: one packed loop per row"). Returns false, having written nothing, for a row
 // with an entry broken, or past its critical extension with fracture on: the two-stage loop
-// then runs it (the selection, the breaks and their released energy).
+// then runs it (the selection, the breaks and their released energy). P is PackD2 or PackD4
+// (the same bits); pmb_fast_force_loop runs the widest the CPU has (on_host_pack).
+template <class P>
 inline bool pmb_packed_row(const PdViewT<double>& p, int64_t i, const BondOriginT<double>& origin) {
-  return packed_row_force(
+  return packed_row_force<P, true>(
       p, i,
-      [&](int64_t k, PackD& cx, PackD& cy, PackD& cz) {
-        const PackedBond b = packed_bond(p, origin, k);
-        PackMask over;
-        const PackD f = pmb_density_from<PackD>(b.squared_length(), load_pack(p.xi_len + k), load_pack(p.k_own + k),
-                                                widen_floats(p.s0_own + k), over);
+      [&](int64_t k, P& cx, P& cy, P& cz) {
+        const PackedBond<P> b = packed_bond<P>(p, origin, k);
+        PackMaskOf<P> over;
+        const P f = pmb_density_from<P>(b.squared_length(), load_pack<P>(p.xi_len + k), load_pack<P>(p.k_own + k),
+                                        widen_floats(p.s0_own + k, P{}), over);
         cx = f * b.dx;
         cy = f * b.dy;
         cz = f * b.dz;
@@ -954,7 +1027,7 @@ template <class Real>
 BRECCIA_HD void pmb_fast_force_loop(const PdViewT<Real>& p, int64_t i, const BondOriginT<Real>& origin) {
 #if defined(BRECCIA_HOST_PACK) && !defined(__CUDA_ARCH__)
   if constexpr (!BondOriginT<Real>::kRelative)
-    if (pmb_packed_row(p, i, origin)) return;
+    if (on_host_pack([&](auto pack) { return pmb_packed_row<typename decltype(pack)::type>(p, i, origin); })) return;
 #endif
   two_stage_force_loop<PmbReleased<Real>>(p, i, PmbFastPath<Real>{origin});
 }
@@ -973,12 +1046,12 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
       return;
     }
   }
-  Real fx = Real(0), fy = Real(0), fz = Real(0);
+  RowForceSums<Real, true> sums;  // the fast loops' four sums: the same bits
   double w = 0.0, released = 0.0, smax = 0.0, smin = 1e300;
   double intact_vol = 0.0, total_vol = 0.0;
   bool any = false;
-  const int64_t end = p.offsets[i + 1];
-  for (int64_t k = p.offsets[i]; k < end; ++k) {
+  const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
+  for (int64_t k = begin; k < end; ++k) {
     if (kDiagnostics) total_vol += p.vol_own[k];
     if (!p.state[k]) continue;
     const int64_t j = p.neighbor[k];
@@ -1014,9 +1087,7 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
       }
     }
     const Real f = static_cast<Real>(share) * k2 * extension / (xi * len);  // (1 - d) c s / |xi + eta|
-    fx += f * dx;
-    fy += f * dy;
-    fz += f * dz;
+    sums.add(static_cast<int>((k - begin) & 3), f * dx, f * dy, f * dz);
     if (kDiagnostics && !breaking) {
       const double stretch = double(extension) / xi;
       w += share * 0.25 * k2 * stretch * stretch * xi;
@@ -1024,9 +1095,7 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
       if (stretch > smax) smax = stretch;
     }
   }
-  p.force[3 * i] = fx;
-  p.force[3 * i + 1] = fy;
-  p.force[3 * i + 2] = fz;
+  sums.store(p.force + 3 * i);
   p.dissipated[i] = released;
   store_min_stretch(p, i, smin, any);
   if (kDiagnostics) {
@@ -1315,3 +1384,7 @@ BRECCIA_HD void kick_drift_kernel(const PdViewT<Real>& p, int64_t i, double half
 }
 
 }  // namespace breccia::solver
+
+#if defined(BRECCIA_HOST_PACK)
+#pragma GCC diagnostic pop
+#endif

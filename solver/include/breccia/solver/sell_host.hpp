@@ -19,7 +19,10 @@ void sell_fast_force_slice_host(const PdViewT<Real>& e, const SellView& s, int64
   using Released = double;  // float's PMB loop sums in float: converted per break below
   int32_t particle[C];
   BondOriginT<Real> origin[C];
-  Real a_i[C], b_i[C], fx[C], fy[C], fz[C];
+  Real a_i[C], b_i[C];
+  // Each lane's force sums: four for PMB, entry k of the row to sum k mod 4 (RowForceSums),
+  // one for LPS (sum 0).
+  Real fx[4][C], fy[4][C], fz[4][C];
   PmbReleased<Real> released_pmb[C];
   Released released_lps[C];
   for (int l = 0; l < C; ++l) {
@@ -28,7 +31,7 @@ void sell_fast_force_slice_host(const PdViewT<Real>& e, const SellView& s, int64
     origin[l] = BondOriginT<Real>(e, i < 0 ? 0 : i);  // an empty lane reads particle 0's padding
     a_i[l] = pmb || i < 0 ? Real(0) : e.lps_a[i];
     b_i[l] = pmb || i < 0 ? Real(0) : e.lps_b[i];
-    fx[l] = fy[l] = fz[l] = Real(0);
+    for (int r = 0; r < 4; ++r) fx[r][l] = fy[r][l] = fz[r][l] = Real(0);
     released_pmb[l] = PmbReleased<Real>(0);
     released_lps[l] = 0.0;
   }
@@ -39,13 +42,14 @@ void sell_fast_force_slice_host(const PdViewT<Real>& e, const SellView& s, int64
     bool breaks[C];
     int breaking = 0;
     if (pmb) {
+      const int r = static_cast<int>(k & 3);
 BRECCIA_SIMD_COUNT(breaking)
       for (int l = 0; l < C; ++l) {
         Real cx, cy, cz;
         breaks[l] = pmb_fast_entry(v, origin[l], base + l, cx, cy, cz);
-        fx[l] += cx;
-        fy[l] += cy;
-        fz[l] += cz;
+        fx[r][l] += cx;
+        fy[r][l] += cy;
+        fz[r][l] += cz;
         breaking += breaks[l] ? 1 : 0;
       }
     } else {
@@ -53,9 +57,9 @@ BRECCIA_SIMD_COUNT(breaking)
       for (int l = 0; l < C; ++l) {
         Real cx, cy, cz;
         breaks[l] = lps_fast_entry(v, origin[l], base + l, a_i[l], b_i[l], cx, cy, cz);
-        fx[l] += cx;
-        fy[l] += cy;
-        fz[l] += cz;
+        fx[0][l] += cx;
+        fy[0][l] += cy;
+        fz[0][l] += cz;
         breaking += breaks[l] ? 1 : 0;
       }
     }
@@ -71,9 +75,12 @@ BRECCIA_SIMD_COUNT(breaking)
   for (int l = 0; l < C; ++l) {
     const int32_t i = particle[l];
     if (i < 0) continue;
-    e.force[3 * i] = fx[l];
-    e.force[3 * i + 1] = fy[l];
-    e.force[3 * i + 2] = fz[l];
+    const auto total = [&](const Real (&f)[4][C]) {
+      return pmb ? RowForceSums<Real, true>::total({f[0][l], f[1][l], f[2][l], f[3][l]}) : f[0][l];
+    };
+    e.force[3 * i] = total(fx);
+    e.force[3 * i + 1] = total(fy);
+    e.force[3 * i + 2] = total(fz);
     e.dissipated[i] = pmb ? double(released_pmb[l]) : released_lps[l];
   }
 }

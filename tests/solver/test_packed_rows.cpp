@@ -49,6 +49,21 @@ void expect_same(const PdSystem& a, const PdSystem& b, const char* what) {
   EXPECT_EQ(a.state, b.state) << what;
 }
 
+// The one-entry fast loop's force pass over every row of q (LPS after its dilatation is stored):
+// the order the packed rows must reproduce.
+void one_entry_force_rows(const PdView& q) {
+  const bool lps = q.model == static_cast<int>(PdModel::LPS);
+  for (int64_t i = 0; i < q.n; ++i) {
+    const BondOriginT<double> origin(q, i);
+    const int64_t begin = q.offsets[i], count = q.offsets[i + 1] - begin;
+    if (lps)
+      ordered_fast_loop<double>(q, i, count, LpsFastPath<double>{origin, q.lps_a[i], q.lps_b[i]}, CsrRow{begin},
+                                NoBreakHook{});
+    else
+      ordered_fast_loop<double>(q, i, count, PmbFastPath<double>{origin}, CsrRow{begin}, NoBreakHook{});
+  }
+}
+
 void compare(const char* model) {
   PdSystem packed = system_from_yaml(std::string("packed_rows_") + model, block(model));
   ASSERT_TRUE(packed.symmetric_halves) << model << ": one constant horizon, the fast loops' case";
@@ -91,15 +106,7 @@ void compare(const char* model) {
     EXPECT_EQ(0, std::memcmp(packed.lps_a.data(), one_by_one.lps_a.data(), n * sizeof(double))) << model;
   }
   for (int64_t i = 0; i < n; ++i) force_kernel(p, i);
-  for (int64_t i = 0; i < n; ++i) {
-    const BondOriginT<double> origin(q, i);
-    const int64_t begin = q.offsets[i], count = q.offsets[i + 1] - begin;
-    if (lps)
-      ordered_fast_loop<double>(q, i, count, LpsFastPath<double>{origin, q.lps_a[i], q.lps_b[i]}, CsrRow{begin},
-                                NoBreakHook{});
-    else
-      ordered_fast_loop<double>(q, i, count, PmbFastPath<double>{origin}, CsrRow{begin}, NoBreakHook{});
-  }
+  one_entry_force_rows(q);
   expect_same(packed, one_by_one, model);
   if (!lps) {
     // PMB's order (RowForceSums): entry q of the row to partial sum q mod 4, in row order, the
@@ -158,15 +165,7 @@ void compare_widths(const char* model) {
       theta_sum[i] += lps ? lps_dilatation_entry(q, origin, k) : 0.0;
     if (lps) lps_store_dilatation(q, i, theta_sum[i]);
   }
-  for (int64_t i = 0; i < n; ++i) {
-    const BondOriginT<double> origin(q, i);
-    const int64_t begin = q.offsets[i], count = q.offsets[i + 1] - begin;
-    if (lps)
-      ordered_fast_loop<double>(q, i, count, LpsFastPath<double>{origin, q.lps_a[i], q.lps_b[i]}, CsrRow{begin},
-                                NoBreakHook{});
-    else
-      ordered_fast_loop<double>(q, i, count, PmbFastPath<double>{origin}, CsrRow{begin}, NoBreakHook{});
-  }
+  one_entry_force_rows(q);
   std::vector<uint8_t> accepted_at[2];
   for (int lanes : {2, 4}) {
     if (lanes == 4 && !host_runs_avx()) {

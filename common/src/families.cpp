@@ -218,6 +218,43 @@ Families build_families(std::span<const double> x, std::span<const double> horiz
       if (j >= 0 && family::within_reach(xi, horizon_i, pad_i, p.x + 3 * j, p.horizon[j], p.pad_of(j))) emit(j);
     }
   };
+  // One thread on a lattice, every row: the rows by transposition, with no sort. Row i's
+  // search counts its partners; then for i ascending each partner j gets i appended to its
+  // row, so every row is written in ascending order. Partnership is symmetric (within_reach
+  // gives the same bits from either end: x_i - x_j = -(x_j - x_i) exactly, and every horizon
+  // and pad is the same here), so row j receives exactly the partners its own search finds,
+  // and count[j] of them. The sorts took 0.26 CPU s of the 41^3 set-up.
+#if defined(_OPENMP)
+  const bool one_thread = omp_get_max_threads() == 1;
+#else
+  const bool one_thread = true;
+#endif
+  if (lattice && one_thread && plan.row_begin == 0 && plan.row_end == static_cast<int64_t>(n)) {
+    struct Count {
+      int64_t found = 0;
+      void operator()(int32_t) { ++found; }
+    };
+    for (size_t i = 0; i < n; ++i) {
+      Count c;
+      search(static_cast<int64_t>(i), c);
+      fam.offsets[i + 1] = fam.offsets[i] + c.found;
+    }
+    assign_on_huge_pages(fam.neighbors, static_cast<size_t>(fam.offsets[n]));
+    std::vector<int64_t> cursor(fam.offsets.begin(), fam.offsets.end() - 1);
+    struct Append {
+      int32_t* neighbors;
+      int64_t* cursor;
+      int32_t row;
+      void operator()(int32_t j) { neighbors[cursor[j]++] = row; }
+    };
+    for (size_t i = 0; i < n; ++i) {
+      Append a{fam.neighbors.data(), cursor.data(), static_cast<int32_t>(i)};
+      search(static_cast<int64_t>(i), a);
+    }
+    for (size_t j = 0; j < n; ++j)
+      if (cursor[j] != fam.offsets[j + 1]) throw std::logic_error("build_families: a lattice row is not symmetric");
+    return fam;
+  }
   // The rows: build_families_with's kernels would search each row twice (count, then write);
   // here each is searched once (search_row, the same kernel) and kept. Each block of 512 rows
   // is searched into a scratch buffer of its thread (sorted per row), then appended to the

@@ -15,6 +15,10 @@
 #include <utility>
 #include <vector>
 
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
+
 #include "breccia/common/family_build.hpp"
 #include "breccia/solver/exec_openmp.hpp"
 #include "family_clouds.hpp"
@@ -187,6 +191,15 @@ TEST(FamilyBuild, LatticeOffsetRowsEqualTheCellSearch) {
       ASSERT_TRUE(families_on_lattice(s.x, s.horizon, s.pad)) << what;
       const Families want = through(openmp, s);
       expect_same(build_families(s.x, s.horizon, s.pad), want, what);
+#if defined(_OPENMP)
+      // one thread takes the rows by transposition (no sort), more threads search and sort each
+      const int threads = omp_get_max_threads();
+      for (const int t : {1, 2}) {
+        omp_set_num_threads(t);
+        expect_same(build_families(s.x, s.horizon, s.pad), want, what + ", threads " + std::to_string(t));
+      }
+      omp_set_num_threads(threads);
+#endif
       const int64_t rows = static_cast<int64_t>(n);
       expect_same(build_families(s.x, s.horizon, s.pad, rows / 3, 2 * rows / 3), through(openmp, s, rows / 3, 2 * rows / 3),
                   what + ", a third of the rows");

@@ -15,6 +15,10 @@
 #include <utility>
 #include <vector>
 
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
+
 #include "breccia/common/family_build.hpp"
 #include "breccia/solver/exec_openmp.hpp"
 #include "family_clouds.hpp"
@@ -147,4 +151,64 @@ TEST(FamilyBuild, RowSortOrdersAnyInput) {
       EXPECT_EQ(*v, want) << "length " << m;
     }
   }
+}
+
+// build_families on a uniform lattice takes each row from the lattice's offsets and the
+// site-to-point map (families.cpp) instead of the cell search, which build_families_with
+// still runs: the rows must be the same entry for entry. Points in a shuffled order (as the
+// set-up's Morton order), sites missing, a box not a cube (every face an edge of some rows),
+// an origin off zero (the differences round), horizons of m = 3.015 and 2.6 spacings (not
+// integers), the partial-volume pad, 3D and 2D; and a lattice jittered past the tolerance,
+// which must take the cell search.
+TEST(FamilyBuild, LatticeOffsetRowsEqualTheCellSearch) {
+  PdSystem sys;
+  const OpenMpExec openmp(sys);
+  std::mt19937 rng(11);
+  for (const int dimension : {3, 2})
+    for (const double m : {3.015, 2.6}) {
+      const double dx = 0.37e-3;
+      const int nx = 13, ny = 9, nz = dimension == 3 ? 7 : 1;
+      Cloud c;
+      for (int k = 0; k < nz; ++k)
+        for (int j = 0; j < ny; ++j)
+          for (int i = 0; i < nx; ++i) {
+            if ((i * 7 + j * 3 + k * 5) % 11 == 0) continue;  // a missing site
+            c.x.insert(c.x.end(), {0.0123 + (i + 0.5) * dx, -0.007 + (j + 0.5) * dx, 0.5 * dx + k * dx});
+            c.horizon.push_back(m * dx);
+            c.pad.push_back(0.5 * std::sqrt(static_cast<double>(dimension)) * dx * (5.0 / 6.0) * (1.0 + 1e-6));
+          }
+      const size_t n = c.horizon.size();
+      std::vector<size_t> order(n);
+      for (size_t q = 0; q < n; ++q) order[q] = q;
+      std::shuffle(order.begin(), order.end(), rng);
+      Cloud s;
+      for (const size_t q : order) {
+        s.x.insert(s.x.end(), {c.x[3 * q], c.x[3 * q + 1], c.x[3 * q + 2]});
+        s.horizon.push_back(c.horizon[q]);
+        s.pad.push_back(c.pad[q]);
+      }
+      const std::string what = std::to_string(dimension) + "D, m " + std::to_string(m);
+      ASSERT_TRUE(families_on_lattice(s.x, s.horizon, s.pad)) << what;
+      const Families want = through(openmp, s);
+      expect_same(build_families(s.x, s.horizon, s.pad), want, what);
+#if defined(_OPENMP)
+      // one thread takes the rows by transposition (no sort), more threads search and sort each
+      const int threads = omp_get_max_threads();
+      for (const int t : {1, 2}) {
+        omp_set_num_threads(t);
+        expect_same(build_families(s.x, s.horizon, s.pad), want, what + ", threads " + std::to_string(t));
+      }
+      omp_set_num_threads(threads);
+#endif
+      const int64_t rows = static_cast<int64_t>(n);
+      expect_same(build_families(s.x, s.horizon, s.pad, rows / 3, 2 * rows / 3), through(openmp, s, rows / 3, 2 * rows / 3),
+                  what + ", a third of the rows");
+      // a row in the middle has partners, so the comparison is not of empty rows
+      EXPECT_GT(want.offsets[n / 2 + 1] - want.offsets[n / 2], 10) << what;
+      // moved by 1e-5 spacings: no longer a lattice to the tolerance, the cell search
+      Cloud moved = s;
+      moved.x[3] += 1e-5 * dx;
+      EXPECT_FALSE(families_on_lattice(moved.x, moved.horizon, moved.pad)) << what;
+      expect_same(build_families(moved.x, moved.horizon, moved.pad), through(openmp, moved), what + ", jittered");
+    }
 }

@@ -32,4 +32,10 @@ struct Families {
 Families build_families(std::span<const double> position, std::span<const double> horizon_m,
                         std::span<const double> pad_m = {}, int64_t row_begin = 0, int64_t row_end = -1);
 
+// Whether build_families takes its rows from a uniform lattice's offsets (one horizon, one
+// pad, at most one point per site of a lattice of one spacing) rather than a cell search: the
+// same rows either way; this says which path a test exercised.
+bool families_on_lattice(std::span<const double> position, std::span<const double> horizon_m,
+                         std::span<const double> pad_m = {});
+
 }  // namespace breccia

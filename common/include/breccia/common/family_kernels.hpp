@@ -255,6 +255,20 @@ struct ScanBlockWrite {
 // h_j) + max(p_i, p_j): r2 is the same bits from i or from j (x_i - x_j = -(x_j - x_i)
 // exactly), so the rows come out symmetric. A cell is skipped when its box lies beyond the
 // reach of its own particles' largest horizon and pad.
+// j is i's partner (the test every row search makes, the cells' and the lattice's in
+// families.cpp alike): r2 <= reach^2 from either end.
+BRECCIA_FAMILY_HD bool within_reach(const double xi[3], double horizon_i, double pad_i, const double xj[3],
+                                    double horizon_j, double pad_j) {
+  const double pad = larger(pad_i, pad_j);
+  const double reach = horizon_i + pad, reach_j = horizon_j + pad;
+  double r2 = 0.0;
+  for (int d = 0; d < 3; ++d) {
+    const double e = xj[d] - xi[d];
+    r2 += e * e;
+  }
+  return r2 <= reach * reach || r2 <= reach_j * reach_j;
+}
+
 template <class Emit>
 BRECCIA_FAMILY_HD void search_grid(const Points& p, int64_t i, const GridView& g, Emit& emit) {
   if (g.size == 0) return;
@@ -294,14 +308,7 @@ BRECCIA_FAMILY_HD void search_grid(const Points& p, int64_t i, const GridView& g
         for (int64_t k = begin; k < end; ++k) {
           const Candidate& cj = g.sorted[k];
           if (cj.index == i) continue;
-          const double pad = larger(pad_i, cj.pad);
-          const double reach = horizon_i + pad, reach_j = cj.horizon + pad;
-          double r2 = 0.0;
-          for (int d = 0; d < 3; ++d) {
-            const double e = cj.x[d] - xi[d];
-            r2 += e * e;
-          }
-          if (r2 <= reach * reach || r2 <= reach_j * reach_j) emit(cj.index);
+          if (within_reach(xi, horizon_i, pad_i, cj.x, cj.horizon, cj.pad)) emit(cj.index);
         }
       }
     }

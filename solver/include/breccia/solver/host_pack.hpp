@@ -31,7 +31,8 @@
 
 // GCC warns that a 32-byte vector returned without AVX enabled changes the ABI (-Wpsabi): the
 // helpers below are always inlined, into AVX functions for PackD4, so no such value crosses a call.
-#pragma GCC diagnostic push
+// The note is silenced for the rest of the including file, not popped at this header's end: GCC
+// emits it when it writes the instantiations out, at the end of the translation unit.
 #pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace breccia::solver {
@@ -121,5 +122,4 @@ inline auto on_host_pack(const Row& row) {
 
 }  // namespace breccia::solver
 
-#pragma GCC diagnostic pop
 #endif

@@ -224,18 +224,43 @@ BRECCIA_HD double bond_stretch_rate(const PdViewT<Real>& p, const BondMotionT<Re
 // alone, and equals that mixture's static peak per unit onset Phi(r) (the Calibration table)
 // within 1% from r = 3 to 100, so c = Phi(r), interpolated in ln r from the values below
 // (180 directions, steps of s_t/100; 1 at r = 1, where the law is brittle; held above 1000).
+// The table's point q (0 to 13): r and Phi(r). A switch, not an array: an array indexed at run
+// time lives in local memory on the device (ptxas gave every force kernel with a softening path
+// a 224-byte stack frame for these two tables).
+BRECCIA_HD void bond_rate_point(int q, double& r, double& phi) {
+  switch (q) {
+    case 0: r = 1.0, phi = 1.0; return;
+    case 1: r = 1.5, phi = 1.0842; return;
+    case 2: r = 2.0, phi = 1.1434; return;
+    case 3: r = 3.0, phi = 1.2248; return;
+    case 4: r = 5.0, phi = 1.3228; return;
+    case 5: r = 7.0, phi = 1.3838; return;
+    case 6: r = 10.0, phi = 1.4449; return;
+    case 7: r = 20.0, phi = 1.5521; return;
+    case 8: r = 30.0, phi = 1.6073; return;
+    case 9: r = 50.0, phi = 1.6692; return;
+    case 10: r = 100.0, phi = 1.7402; return;
+    case 11: r = 200.0, phi = 1.7976; return;
+    case 12: r = 500.0, phi = 1.8558; return;
+    default: r = 1000.0, phi = 1.8891; return;
+  }
+}
 BRECCIA_HD double bond_rate_factor(double ultimate_over_onset) {
   constexpr int kPoints = 14;
-  constexpr double r_at[kPoints] = {1.0, 1.5, 2.0, 3.0, 5.0, 7.0, 10.0, 20.0, 30.0, 50.0, 100.0, 200.0, 500.0, 1000.0};
-  constexpr double phi[kPoints] = {1.0,    1.0842, 1.1434, 1.2248, 1.3228, 1.3838, 1.4449,
-                                   1.5521, 1.6073, 1.6692, 1.7402, 1.7976, 1.8558, 1.8891};
-  if (!(ultimate_over_onset > r_at[0])) return phi[0];
-  for (int q = 1; q < kPoints; ++q)
-    if (ultimate_over_onset <= r_at[q]) {
-      const double t = std::log(ultimate_over_onset / r_at[q - 1]) / std::log(r_at[q] / r_at[q - 1]);
-      return phi[q - 1] + t * (phi[q] - phi[q - 1]);
+  double r0, phi0;
+  bond_rate_point(0, r0, phi0);
+  if (!(ultimate_over_onset > r0)) return phi0;
+  for (int q = 1; q < kPoints; ++q) {
+    double r1, phi1;
+    bond_rate_point(q, r1, phi1);
+    if (ultimate_over_onset <= r1) {
+      const double t = std::log(ultimate_over_onset / r0) / std::log(r1 / r0);
+      return phi0 + t * (phi1 - phi0);
     }
-  return phi[kPoints - 1];
+    r0 = r1;
+    phi0 = phi1;
+  }
+  return phi0;
 }
 
 // The ultimate stretch of an entry whose onset the rate law raised from `onset` to `raised`:
@@ -335,10 +360,31 @@ struct RowForceSums {
        z[4] = {Real(0), Real(0), Real(0), Real(0)};
   // Entry q's force, r = q mod 4 (a constant where the caller's loop is unrolled by 4).
   BRECCIA_HD void add(int r, Real cx, Real cy, Real cz) {
+#if defined(__CUDA_ARCH__)
+    // On the device a run-time index into the sums puts all twelve in local memory (ptxas
+    // reported a 320-byte stack frame for the CSR force kernel): the switch keeps them in
+    // registers, and folds away where r is a constant. The same additions, the same bits.
+    if constexpr (kFour) {
+      switch (r) {
+        case 0: add_to<0>(cx, cy, cz); return;
+        case 1: add_to<1>(cx, cy, cz); return;
+        case 2: add_to<2>(cx, cy, cz); return;
+        default: add_to<3>(cx, cy, cz); return;
+      }
+    }
+    add_to<0>(cx, cy, cz);
+#else
     const int s = kFour ? r : 0;
     x[s] += cx;
     y[s] += cy;
     z[s] += cz;
+#endif
+  }
+  template <int kS>
+  BRECCIA_HD void add_to(Real cx, Real cy, Real cz) {
+    x[kS] += cx;
+    y[kS] += cy;
+    z[kS] += cz;
   }
   BRECCIA_HD static Real total(const Real (&v)[4]) { return kFour ? (v[0] + v[1]) + (v[2] + v[3]) : v[0]; }
   BRECCIA_HD void store(Real* force) const {

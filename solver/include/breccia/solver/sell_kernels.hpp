@@ -151,18 +151,21 @@ struct SellDilatation {
 };
 template <class Real>
 struct SellPmbForces {
+  static constexpr int kMinBlocksPerSm = 2;  // CUDA launch bounds (cuda_launch.cuh)
   PdViewT<Real> e;
   SellView s;
   BRECCIA_HD void operator()(int64_t lane) const { sell_pmb_force_lane(e, s, lane); }
 };
 template <class Real>
 struct SellLpsForces {
+  static constexpr int kMinBlocksPerSm = 2;  // CUDA launch bounds (cuda_launch.cuh)
   PdViewT<Real> e;
   SellView s;
   BRECCIA_HD void operator()(int64_t lane) const { sell_lps_force_lane(e, s, lane); }
 };
 template <class Real, bool kDiagnostics>
 struct SellGeneralForces {
+  static constexpr int kMinBlocksPerSm = 2;  // CUDA launch bounds (cuda_launch.cuh)
   PdViewT<Real> e;
   SellView s;
   BRECCIA_HD void operator()(int64_t lane) const { sell_general_force_lane<kDiagnostics>(e, s, lane); }

@@ -182,6 +182,7 @@ struct Dilatation {
 
 template <class Real>
 struct BondForces {
+  static constexpr int kMinBlocksPerSm = 2;  // CUDA launch bounds: at most 128 registers (cuda_launch.cuh)
   PdViewT<Real> p;
   BRECCIA_HD void operator()(int64_t i) const { force_kernel(p, i); }
 };

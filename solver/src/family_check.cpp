@@ -7,6 +7,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/solver/calibration.hpp"
+#include "breccia/solver/exec_openmp.hpp"
 
 namespace breccia::solver {
 

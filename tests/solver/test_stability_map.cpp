@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "breccia/common/error.hpp"
+#include "breccia/solver/exec_openmp.hpp"
 #include "breccia/solver/family_check.hpp"
 #include "breccia/solver/run.hpp"
 #include "helpers.hpp"

@@ -179,14 +179,6 @@ FacetLayout group_facets_by_particle(const PdSystem& s);
 void cpu_step(PdSystem& sys);
 // Internal forces (and LPS dilatation) at the current displacement; fills energy/damage.
 void cpu_compute_forces(PdSystem& sys);
-// cpu_compute_forces for some rows only (one process; PMB or LPS without short-range forces):
-// the positions of every particle, LPS's dilatation of `dilatation_rows` (the force rows and
-// their partners, ascending), then the bond forces of `force_rows` (with the energy density,
-// damage and max stretch where sys.diagnostics is on). The same kernels on the same inputs,
-// so those rows get the whole pass's values bit for bit; the other rows' are left as they
-// were. No released-energy sum.
-void cpu_compute_forces_on_rows(PdSystem& sys, std::span<const int64_t> force_rows,
-                                std::span<const int64_t> dilatation_rows);
 // What every step (and ADR iteration) starts with: the compressive enhancement's minimum
 // stretches of the last step's force pass become the ones this step's pass reads (a swap).
 // Not done per force pass: a pass repeated at the same configuration (a restart, an

@@ -51,7 +51,8 @@ EnergyScatter energy_scatter(PdSystem& s, const DistributedSetup& d, const Distr
   // Only the sampled particles' energy densities are read, and each reads its own row alone
   // (its bonds and, LPS, its own dilatation): one process passes over those rows only (the
   // same kernels on the same inputs: the whole pass's energies, bit for bit), which skips
-  // the surface layers' rows, a third of the full concrete case's.
+  // the rows of the surface layers, interfaces and cracks: 19 % of the full concrete case's
+  // rows, 35 % of its demo's.
   const bool rows_only = !rows.active && !s.f32.active && s.short_range_k.empty() &&
                          (s.config.model == PdModel::PMB || s.config.model == PdModel::LPS);
   if (rows_only) {

@@ -192,32 +192,12 @@ class LinearForceProbe {
   };
   void push(const Rows* rows = nullptr) {
     if (forces_) forces_(sys_);
-    else if (rows) restricted_pass(*rows);
+    else if (rows) cpu_compute_forces_on_rows(sys_, rows->force, rows->dilatation);
     else cpu_compute_forces(sys_);
   }
   double amplitude = 0.0;
 
  private:
-  void restricted_pass(const Rows& rows) {
-    const StepArrays<double> a = cpu_step_arrays(sys_);
-    const int64_t n3 = static_cast<int64_t>(3 * sys_.n);
-    const CurrentPositions positions{a.p.x0, a.p.u, a.x};
-    const Dilatation<double> dilatation{a.p};
-    const BondForces<double> bond_forces{a.p};
-    const bool lps = a.p.model == static_cast<int>(PdModel::LPS);
-    const int64_t nd = static_cast<int64_t>(rows.dilatation.size()), nf = static_cast<int64_t>(rows.force.size());
-#pragma omp parallel
-    {
-#pragma omp for schedule(static)
-      for (int64_t k = 0; k < n3; ++k) positions(k);
-      if (lps) {
-#pragma omp for schedule(dynamic, 256)
-        for (int64_t q = 0; q < nd; ++q) dilatation(rows.dilatation[q]);
-      }
-#pragma omp for schedule(dynamic, 256)
-      for (int64_t q = 0; q < nf; ++q) bond_forces(rows.force[q]);
-    }
-  }
   PdSystem& sys_;
   const ForcePass& forces_;
   const std::vector<double> u_saved_;
@@ -228,6 +208,28 @@ class LinearForceProbe {
   const bool diagnostics_;
 };
 }  // namespace
+
+void cpu_compute_forces_on_rows(PdSystem& sys, std::span<const int64_t> force_rows,
+                                std::span<const int64_t> dilatation_rows) {
+  const StepArrays<double> a = cpu_step_arrays(sys);
+  const int64_t n3 = static_cast<int64_t>(3 * sys.n);
+  const CurrentPositions positions{a.p.x0, a.p.u, a.x};
+  const Dilatation<double> dilatation{a.p};
+  const BondForces<double> bond_forces{a.p};
+  const bool lps = a.p.model == static_cast<int>(PdModel::LPS);
+  const int64_t nd = static_cast<int64_t>(dilatation_rows.size()), nf = static_cast<int64_t>(force_rows.size());
+#pragma omp parallel
+  {
+#pragma omp for schedule(static)
+    for (int64_t k = 0; k < n3; ++k) positions(k);
+    if (lps) {
+#pragma omp for schedule(dynamic, 256)
+      for (int64_t q = 0; q < nd; ++q) dilatation(dilatation_rows[q]);
+    }
+#pragma omp for schedule(dynamic, 256)
+    for (int64_t q = 0; q < nf; ++q) bond_forces(force_rows[q]);
+  }
+}
 
 std::vector<uint8_t> stable_step_region(const PdSystem& sys, double ratio) {
   // Each particle's local frequency scale omega_i^2 ~ E / (rho_i delta_i^2) (a bond's

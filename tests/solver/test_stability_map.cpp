@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "breccia/common/error.hpp"
+#include "breccia/solver/exec_openmp.hpp"
 #include "breccia/solver/family_check.hpp"
 #include "breccia/solver/run.hpp"
 #include "helpers.hpp"
@@ -138,6 +140,46 @@ TEST_P(StabilityMapHorizon, TetCentroidsAtThreeSpacingsPassTheStartUpCheck) {
   PdSystem s = system_from_yaml(std::string("stability_tet_m3_") + GetParam(), tet_yaml(GetParam(), 3.015, true));
   // Measured (docs/atlas.md): the scatter at m = 3 is 7-8 %, well under the 20 % limit.
   EXPECT_LT(energy_scatter(s).rms, kMaxEnergyScatter);
+}
+
+// The energy-scatter check passes over its sampled rows only (cpu_compute_forces_on_rows,
+// with the dilatation of those rows alone): it relies on their energy densities being the
+// whole pass's, bit for bit, which holds when a particle's energy density reads its own row
+// alone. Checked on a lattice (one horizon: the symmetric loops) and on the tet centroids with
+// dual horizon (the general loop), every third row, at a strain with shear.
+TEST_P(StabilityMapHorizon, RowsPassGivesTheWholePassEnergyDensitiesBitForBit) {
+  ASSERT_FALSE(tet_cube().empty()) << "could not mesh the cube";
+  std::string dual = tet_yaml(GetParam(), 3.015, false);
+  dual.replace(dual.find("horizon_factor:"), 15, "variable_horizon: true, horizon_factor:");
+  const std::string lattice = std::string("specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], "
+                                          "spacing: 0.5 mm}}\nmodel: {type: ") + GetParam() + ", horizon_factor: 3.015}\n"
+                              "materials: [{name: solid, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25}]\n"
+                              "time: {steps: 1}\n";
+  for (const bool symmetric : {true, false}) {
+    PdSystem s = system_from_yaml(std::string("stability_rows_pass_") + GetParam() + (symmetric ? "_lattice" : "_dual"),
+                                  symmetric ? lattice : dual);
+    ASSERT_EQ(s.symmetric_halves, symmetric) << "the case must exercise the loop it names";
+    s.config.fracture = false;
+    s.diagnostics = true;
+    for (size_t i = 0; i < s.n; ++i) {
+      s.u[3 * i] = 1e-6 * s.x0[3 * i] + 4e-7 * s.x0[3 * i + 1];
+      s.u[3 * i + 2] = -3e-7 * s.x0[3 * i + 2];
+    }
+    cpu_compute_forces(s);
+    const std::vector<double> whole(s.energy_density);
+    std::vector<int64_t> rows;
+    for (size_t i = 0; i < s.n; i += 3) rows.push_back(static_cast<int64_t>(i));
+    std::fill(s.energy_density.begin(), s.energy_density.end(), -1.0);
+    std::fill(s.dilatation.begin(), s.dilatation.end(), 0.0);
+    cpu_compute_forces_on_rows(s, rows, rows);
+    size_t differ = 0, strained = 0;
+    for (const int64_t i : rows) {
+      differ += std::memcmp(&s.energy_density[i], &whole[i], sizeof(double)) != 0;
+      strained += whole[i] > 0.0;
+    }
+    EXPECT_EQ(differ, 0u) << (symmetric ? "lattice, one horizon" : "tets, dual horizon");
+    EXPECT_EQ(strained, rows.size()) << "every row must hold strain energy, else the comparison shows little";
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Models, StabilityMapHorizon, ::testing::Values("pmb", "lps"),

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <span>
 #include <type_traits>
 
 #include "breccia/solver/pd_system.hpp"
@@ -107,5 +108,13 @@ void fill_load_sets(const PdSystem& s, StepArrays<Real>& a) {
 // (float32_backend.cpp, the float state of float32_state.hpp with the double mirror as `d`).
 StepArrays<double> cpu_step_arrays(PdSystem& s);
 StepArrays<float> float32_step_arrays(PdSystem& s);
+// cpu_compute_forces (pd_system.hpp) for some rows only (one process; PMB or LPS without
+// short-range forces): the positions of every particle, LPS's dilatation of `dilatation_rows` (the force rows and
+// their partners, ascending), then the bond forces of `force_rows` (with the energy density,
+// damage and max stretch where sys.diagnostics is on). The same kernels on the same inputs,
+// so those rows get the whole pass's values bit for bit; the other rows' are left as they
+// were. No released-energy sum.
+void cpu_compute_forces_on_rows(PdSystem& sys, std::span<const int64_t> force_rows,
+                                std::span<const int64_t> dilatation_rows);
 
 }  // namespace breccia::solver

@@ -176,7 +176,6 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
     g.arrival.assign(n, std::numeric_limits<double>::infinity());
     for (int64_t p : sf.particle) g.arrival[s.internal_index[p]] = 0.0;  // the wall is wetted
     g.arrival_next = g.arrival;
-    if (g.crack_pass_every > 1) g.arrival_hop = g.arrival;  // the front's later hops (GasFront)
     g.push.assign(3 * n, 0.0);
     g.front_done.assign(n, 0);
     g.attached.assign(n, 1);

@@ -686,7 +686,6 @@ void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
         g.crack_pass_countdown = static_cast<int>(pass[0]);
         g.crack_pass_done = pass[1] != 0.0;
         g.crack_pass_interval = static_cast<int>(pass[2]);
-        g.arrival_hop = g.arrival;
       }
     }
   }

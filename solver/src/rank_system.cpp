@@ -291,8 +291,6 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
   if (G.crack_entry) {
     r.arrival = take(G.arrival, ids, 1, n);
     r.arrival_next = r.arrival;  // as read_checkpoint and setup_gas leave it
-    // The front's later hops read the snapshot of every partner, ghosts included (gas_update).
-    if (G.crack_pass_every > 1) r.arrival_hop = r.arrival;
     r.push = take(G.push, ids, 3, n);
     r.front_done = take(G.front_done, ids, 1, n);
     r.attached = take(G.attached, ids, 1, n);
@@ -350,7 +348,7 @@ std::vector<const void*> release_global_for_loop(PdSystem& g, bool root) {
   }
   // The gas's set-up and scratch arrays; its front, entered cracks and wall shares are state.
   GasState& gas = g.gas;
-  for (auto* a : {&gas.arrival_next, &gas.arrival_hop, &gas.kappa_volume, &gas.vent_facet_area, &gas.position,
+  for (auto* a : {&gas.arrival_next, &gas.kappa_volume, &gas.vent_facet_area, &gas.position,
                   &gas.wall_left})
     drop(*a);
   for (auto* a : {&gas.front_done, &gas.attached, &gas.halves}) drop(*a);

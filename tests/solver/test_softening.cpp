@@ -428,7 +428,8 @@ std::pair<double, bool> rate_bar_peak_over_dynamic_strength(double rate) {
 
 // The bar pulled at a fast constant strain rate peaks at DIF(rate) x tensile_strength, DIF from
 // fib Model Code 2010 (strength_dif) on its cube-root branch, where blasts load: 30 /s (DIF
-// 1.93) and 100 /s (2.88); measured 0.989 and 0.988. Tolerance 5%: the static bar's (its peak is
+// 1.93) and 100 /s (2.88); measured 0.999 and 0.989 (0.989 and 0.988 before an entry's
+// onset waited for its stretch to grow, soften). Tolerance 5%: the static bar's (its peak is
 // sigma_t within 2%, SofteningBar above); the homogeneous model of the bond mixture the rate
 // factor (bond_rate_factor) was calibrated on gives 0.996-1.000 at these rates (docs/theory.md
 // "Rate-dependent strength"), so what is left is the bar's own discretisation. Before the
@@ -441,13 +442,13 @@ TEST(StrengthRate, BarPeakStressIsTheDynamicStrengthAtFastRates) {
   }
 }
 
-// On the slow branch (3.3 /s, DIF 1.31) the same bar peaks at 0.926 DIF sigma_t (3.64 MPa at
-// 367 us of 476): NOT within 5%, though the homogeneous model gives 1.000 there. Not
-// investigated; the likely cause is that the law takes the bond's rate at each step until it
-// softens, so the smallest DIF along the way counts, and at 3.3 /s the particles' vibrations are
-// comparable to a bond's stretch rate (a rate at or below zero gives DIF 1). Kept as a
-// measurement that fails: --gtest_also_run_disabled_tests --gtest_filter='StrengthRate.*'.
-TEST(StrengthRate, DISABLED_BarPeakStressIsTheDynamicStrengthOnTheSlowBranch) {
+// On the slow branch (3.3 /s, DIF 1.31) the same bar peaks at DIF sigma_t within the same 5%;
+// measured 0.998 (3.92 MPa at 354 us of 476). It peaked at 0.926 while a bond past its static
+// onset could begin to soften at a step where its stretch was falling (a particle's vibration:
+// DIF 1 at a rate at or below zero): at the peak 34,648 of the 76,752 softening entries had
+// DIF 1, the others about 1.31. Since damage grows only while the bond is stretched (soften),
+// none has DIF 1 (mean raised onset / static 1.29 at the run's end, against 1.17 before).
+TEST(StrengthRate, BarPeakStressIsTheDynamicStrengthOnTheSlowBranch) {
   const auto [ratio, peaked] = rate_bar_peak_over_dynamic_strength(3.3);
   EXPECT_NEAR(ratio, 1.0, 0.05);
   EXPECT_TRUE(peaked);
@@ -559,8 +560,13 @@ TEST(Crushing, BarInCompressionPeaksWhereTheHomogeneousPointDoes) {
 // softens in tension. Target: the bar's compressive peak is the homogeneous point's within 5%.
 // Measured: 44.78 MPa at 34 us against 36.12 MPa (1.24) at this bar's s_u / s_t = 294 (the
 // homogeneous peak is reached at a strain 12 times the onset; the bar's discrete families and
-// its lateral inertia at 100 /s are not in the quadrature). Not understood yet: run with
-// --gtest_also_run_disabled_tests --gtest_filter='Crushing.*'.
+// its lateral inertia at 100 /s are not in the quadrature). Diagnosed in part (2026-12-05, the
+// same bar at other rates, peak / homogeneous: 1.240 at 100 /s, 1.141 at 30, 1.127 at 10,
+// 1.121 at 3; the peak at 58-66 onset strains at every rate): about half the excess at 100 /s
+// is the bar's lateral inertia (the softened lateral bonds let it widen, which takes time),
+// and a rate-free 12% remains, the bar peaking 5 times later in strain than the point; that
+// part is not understood (the 6 x 6 section's surface families are the next suspect; not
+// measured). Run with --gtest_also_run_disabled_tests --gtest_filter='Crushing.*'.
 TEST(Crushing, DISABLED_BarInCompressionWithoutCrushingPeaksWhereTheHomogeneousPointDoes) {
   const auto run = compression_bar("", 0.0, 40.0 * 3e6 / 30e9 / 100.0);
   EXPECT_NEAR(run.measured / run.expected, 1.0, 0.05);

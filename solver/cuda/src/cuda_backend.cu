@@ -228,7 +228,7 @@ struct CudaSystem::Impl {
   // the gas load (gas.hpp): device copies of GasState's arrays, and the partial sums of its
   // fixed-order sums (GasBuffers' device path); the scalars stay on the host
   DeviceArray<double> gas_wall_dv, gas_wall_left, gas_arrival, gas_arrival_next, gas_kappa_volume, gas_vent_area;
-  DeviceArray<double> gas_position, gas_push, gas_arrival_hop;
+  DeviceArray<double> gas_position, gas_push;
   DeviceArray<uint8_t> gas_wall_on, gas_halves, gas_front_done, gas_in_crack, gas_attached;
   DeviceArray<GasSums> gas_block_sums, gas_particle_sums;
   GasBuffers gas{};
@@ -698,10 +698,6 @@ void CudaSystem::Impl::upload_gas(const GasState& g, int64_t n) {
     v.front_done = gas_front_done.get();
     v.in_crack = gas_in_crack.get();
     v.attached = gas_attached.get();
-    if (!g.arrival_hop.empty()) {  // crack_pass_every > 1: the front's later hops
-      gas_arrival_hop.upload(g.arrival_hop, "gas arrival_hop");
-      v.arrival_hop = gas_arrival_hop.get();
-    }
   }
   const int64_t count = std::max<int64_t>(n, static_cast<int64_t>(g.wall_dv.size()));
   gas_particle_sums.allocate(static_cast<size_t>(std::max<int64_t>(count, 1)), "gas per-particle sums");

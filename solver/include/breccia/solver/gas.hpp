@@ -49,7 +49,6 @@ struct GasView {
   double* wall_left = nullptr;     // per facet particle: the dV of this step's motion of one that left now
   double* arrival = nullptr;       // per particle: time the gas reached it (+inf: dry); null: no crack entry
   double* arrival_next = nullptr;  // the front pass writes here, then copies back
-  double* arrival_hop = nullptr;   // crack_pass_every > 1: arrival_next after the last hop (GasFront)
   // per particle: kappa_i = 2 d / sum_j V_j |xi| and V_i side by side (one cache line per
   // partner in the crack pass)
   const double* kappa_volume = nullptr;
@@ -147,29 +146,23 @@ struct GasFrontCopy {
   const double* u;
   BRECCIA_HD void operator()(int64_t i) const {
     g.arrival_next[i] = g.arrival[i];
-    if (g.front_done[i] == 2) g.front_done[i] = 0;  // a later hop's mark (GasFront)
     for (int d = 0; d < 3; ++d) g.position[3 * i + d] = x0[3 * i + d] + u[3 * i + d];
   }
 };
 
 // A wetted particle all of whose partners are wetted has nothing left to push (wetting is
 // for good): it is marked once and skipped from then on.
-// With the crack pass every k steps (crack_pass_every) the front runs at those steps only and
-// takes up to k hops there, so that it moves as far as every step would (each hop bound by
-// reached <= t as before). The first hop pushes from every wetted particle (`from` is
-// arrival); each further one only from the particles the hop before reached (`from` is
-// arrival_hop, the snapshot of arrival_next after it, read-only during the hop, so the hops
-// do not depend on the thread count): the others would push what they pushed already.
+// With the crack pass every k steps (crack_pass_every) the front runs at the exact passes only,
+// one hop as every step: a step between passes is one where it would reach nothing
+// (GasCrackChange forces the pass at any step where it would).
 struct GasFront {
   PdView p;
   GasView g;
   double t, speed;
-  const double* from = nullptr;  // null: arrival (the first hop)
-  BRECCIA_HD bool wet(int64_t j) const { return (from ? from[j] : g.arrival[j]) < 1e300; }
+  BRECCIA_HD bool wet(int64_t j) const { return gas_wetted(g, j); }
   BRECCIA_HD void operator()(int64_t i) const {
     if (!wet(i) || g.front_done[i]) return;
-    if (from && gas_wetted(g, i)) return;  // a later hop: only the ones reached at this pass
-    const double arrival_i = from ? from[i] : g.arrival[i];
+    const double arrival_i = g.arrival[i];
     bool dry_partner = false;
     for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
       if (g.in_crack[k]) continue;  // both ends wetted
@@ -184,17 +177,8 @@ struct GasFront {
       const double reached = arrival_i + p.xi_len[k] / speed;
       if (reached <= t) atomic_min(&g.arrival_next[j], reached);
     }
-    // A later hop marks the particles it has pushed from (2) so that the hops after it skip
-    // them; the next pass's copy clears the mark (GasFrontCopy), and its first hop sees them again.
     if (!dry_partner) g.front_done[i] = 1;
-    else if (from) g.front_done[i] = 2;
   }
-};
-
-// The snapshot a later hop of the front reads (GasFront).
-struct GasFrontHopCopy {
-  GasView g;
-  BRECCIA_HD void operator()(int64_t i) const { g.arrival_hop[i] = g.arrival_next[i]; }
 };
 
 struct GasSums {
@@ -415,6 +399,41 @@ struct GasCrackDrift {
   }
 };
 
+// Between two crack passes (crack_pass_every > 1): would this step's exact pass change which
+// entries are in the gas's volume? That is what the drift cannot follow: the front reaching a
+// dry particle through an open entry (the front pass's own test, reached <= t), an entry
+// opening between two wetted particles (a bond broken since the last pass: it joins), or a
+// wetted particle that has lost its last bond (its entries in the volume leave it: debris).
+// Any of these forces the exact pass at this step, so that the sparse passes find every
+// change at the step the every-step passes do (found a step late, the first crack's gas
+// entered late and the answer of a disc breaking into grains moved by 3-4%: docs/performance.md).
+// The check reads bytes per entry of the wetted particles (state, halves, in_crack) and the
+// partner's arrival only where an entry is open and not yet in the volume: no openings.
+// A partner's attachment is the last pass's (GasAttached; it only goes from 1 to 0), so a
+// stale one can only force a pass that finds nothing. Returns the count in `volume`.
+struct GasCrackChange {
+  using Value = GasSums;
+  PdView p;
+  GasView g;
+  double t, speed;
+  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
+  BRECCIA_HD static Value combine(Value a, Value b) { return gas_sums_add(a, b); }
+  BRECCIA_HD Value operator()(int64_t i) const {
+    if (!gas_wetted(g, i)) return identity();
+    bool intact = false, in_volume = false, change = false;
+    for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
+      const uint8_t counted = g.in_crack[k];
+      intact |= p.state[k] != 0;
+      in_volume |= counted == 1;
+      if (counted != 0 || !gas_entry_open(p.state, g.halves, k)) continue;
+      const int32_t j = p.neighbor[k];
+      if (gas_wetted(g, j) ? !gas_debris_entry(g, i, j) : g.arrival[i] + p.xi_len[k] / speed <= t) change = true;
+    }
+    if (!intact && g.attached[i] && in_volume) change = true;  // debris now (gas_debris_entry)
+    return {change ? 1.0 : 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  }
+};
+
 // Gas pressure on the faces of the cracks it fills: -p a_k e_hat on i for each open wetted
 // entry (the derivative of p V_crack), as a force density: -p push_i (GasCrackSum).
 struct GasCrackPressure {
@@ -486,7 +505,7 @@ struct GasState {
   bool crack_entry = false;
   int crack_pass_every = 1;       // at most this many steps between exact crack passes (GasCrackDrift between)
   double crack_pass_tolerance = 1e-3;  // missed crack volume over V at a pass (gas_crack_pass_interval)
-  std::vector<double> wall_dv, arrival, arrival_next, arrival_hop, kappa_volume, push, vent_facet_area;
+  std::vector<double> wall_dv, arrival, arrival_next, kappa_volume, push, vent_facet_area;
   std::vector<uint8_t> front_done, in_crack, wall_on;
   std::vector<uint8_t> attached;  // per particle (GasView::attached; derived each pass, not checkpointed)
   std::vector<uint8_t> halves;    // per bond entry (gas_entry_open; set-up, not checkpointed)
@@ -523,7 +542,6 @@ struct GasState {
     v.wall_left = wall_left.data();
     v.arrival = crack_entry ? arrival.data() : nullptr;
     v.arrival_next = crack_entry ? arrival_next.data() : nullptr;
-    v.arrival_hop = arrival_hop.empty() ? nullptr : arrival_hop.data();
     v.kappa_volume = kappa_volume.data();
     v.vent_area = vent_facet_area.data();
     v.halves = halves.data();
@@ -675,10 +693,12 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
     // between. The interval adapts (gas_crack_pass_interval): 1 while the passes find the
     // gas spreading into new crack, up to k while the crack it fills only moves.
     const int every = gas.crack_pass_every;
-    const bool exact = every <= 1 || !gas.crack_pass_done || (dt > 0.0 && gas.crack_pass_countdown == 0);
+    bool exact = every <= 1 || !gas.crack_pass_done || (dt > 0.0 && gas.crack_pass_countdown == 0);
+    if (!exact && dt > 0.0)
+      exact = gas_fixed_order_sum(exec, d.n, GasCrackChange{d, g, t, gas.front_speed()}, buffers, gas,
+                                  "gas crack change", GasSumOver::Particles)
+                  .volume > 0.0;
     if (every > 1 && dt > 0.0 && !exact) --gas.crack_pass_countdown;
-    // the front catches up the steps since the last pass, a hop each
-    const int hops = every > 1 && dt > 0.0 && gas.crack_pass_done ? gas.crack_pass_interval : 1;
     if (exact) {
       // The step's motion along the vectors its forces had (the last pass's): the work.
       const double moved = every > 1 && gas.crack_pass_done
@@ -697,20 +717,10 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
       // The front's minima do not depend on the order: a device takes a thread per particle,
       // the host the scrambled blocks (balanced between its few threads).
       const int64_t blocks = gas_blocks(d.n);
-      for (int hop = 0; hop < hops; ++hop) {
-        if (hop > 0) {
-          // On ranks a hop reads the ghosts' snapshot too: what every rank reached by the hop
-          // before, its smallest on the owner and back (gas_front_to_ghosts also commits the
-          // ghosts' arrival, which no later hop reads: they read the snapshot).
-          if constexpr (GasOnRanks<Exec>::value) exec.gas_front_to_ghosts(g);
-          exec.for_each(d.n + ghosts, GasFrontHopCopy{g}, "gas_front_hop");
-          front.from = g.arrival_hop;
-        }
-        if (buffers.particle_sums)
-          exec.for_each(d.n, front, "gas_front");
-        else
-          exec.for_each(blocks, GasBlocks<GasFront>{front, d.n, blocks, gas_block_stride(blocks)}, "gas_front");
-      }
+      if (buffers.particle_sums)
+        exec.for_each(d.n, front, "gas_front");
+      else
+        exec.for_each(blocks, GasBlocks<GasFront>{front, d.n, blocks, gas_block_stride(blocks)}, "gas_front");
       // A ghost reached here is reached on its owner's rank too; a minimum, so exact.
       if constexpr (GasOnRanks<Exec>::value) exec.gas_front_to_ghosts(g);
       crack = gas_fixed_order_sum(exec, d.n, GasCrackSum<UBefore>{d, g, u_before}, buffers, gas, "gas crack volume",
@@ -724,6 +734,10 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
       // drift followed the entries that left now along their old push: their step's motion,
       // which `left` counts.
       if (every > 1 && gas.crack_pass_done) {
+        // The drift's own error (second order in the motion since the last pass): the old
+        // entries' exact volume less the volume followed. New crack is not a miss: the pass
+        // comes at the step it joins (GasCrackChange), as it does every step.
+        const double drift_error = crack.volume_before - (gas.crack_volume + moved - crack.left);
         crack.volume_before = gas.crack_volume + moved - crack.left;
         // The step's work trapezoid takes the forces at its start along the old push vectors
         // and at its end along this pass's: 1/2 p_old dV(old push) + 1/2 p_new dV(new push).
@@ -739,9 +753,7 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
         }
         if (dt > 0.0) {
           gas.crack_pass_interval =
-              gas_crack_pass_interval(gas.crack_pass_interval, every,
-                                      std::fabs(crack.volume - crack.volume_before - crack.left) + crack.frozen,
-                                      gas.volume, gas.crack_pass_tolerance);
+              gas_crack_pass_interval(gas.crack_pass_interval, every, drift_error, gas.volume, gas.crack_pass_tolerance);
           gas.crack_pass_countdown = gas.crack_pass_interval - 1;
         }
       }

@@ -328,7 +328,14 @@ BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double uni
   }
   const bool dynamic_onset = p.strength_rate && d_old <= 0.0 && s > onset;
   if (dynamic_onset) {
-    const double uniaxial_rate = bond_rate_factor(ultimate / onset) * bond_stretch_rate(p, motion);
+    const double stretch_rate = bond_stretch_rate(p, motion);
+    // Damage grows only while the bond is loaded (the loading condition of damage mechanics):
+    // an entry past its static onset whose stretch is falling (a particle's vibration) does
+    // not begin to soften at this step; it does at the next step that stretches it, at the DIF
+    // of that step's rate. Taken here instead, a falling stretch gave DIF 1, and the smallest
+    // DIF along the way set the bond's law (docs/theory.md "Rate-dependent strength").
+    if (stretch_rate < 0.0) return d_old;
+    const double uniaxial_rate = bond_rate_factor(ultimate / onset) * stretch_rate;
     const float raised = static_cast<float>(onset * strength_dif(p.strength_rate, uniaxial_rate));
     ultimate = raised_ultimate(p.s_onset[k], raised, p.s0_own[k]);
     onset = raised;

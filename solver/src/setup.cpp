@@ -913,7 +913,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       }
       // The constant influence's 1 is skipped: 1 * beta is beta, without a division per half-bond.
       const double w_own = beta_own > 0 ? (weighted ? influence(c.influence, xi / s.horizon[i]) * beta_own : beta_own) : 0.0;
-      const double w_dual = beta_dual > 0 ? (weighted ? influence(c.influence, xi / s.horizon[j]) * beta_dual : beta_dual) : 0.0;
+      // (Shared dual halves: no dual weight to form, the own one serves.)
+      const double w_dual = store_dual && beta_dual > 0
+                                ? (weighted ? influence(c.influence, xi / s.horizon[j]) * beta_dual : beta_dual)
+                                : 0.0;
       if (lps) {
         s.k_own[out] = w_own;
         if (store_dual) s.k_dual[out] = w_dual;
@@ -922,7 +925,9 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         // per half-bond ([Fukuda PD], eq. 2/11).
         const int mi = s.material[i], mj = s.material[j];
         const double c_own = modulus_own(mi, mj, s.horizon[i], 0.0, [&] { return pair_micromodulus(mi, mj, s.horizon[i]); });
-        const double c_dual = modulus_dual(mi, mj, s.horizon[j], 0.0, [&] { return pair_micromodulus(mi, mj, s.horizon[j]); });
+        const double c_dual =
+            store_dual ? modulus_dual(mi, mj, s.horizon[j], 0.0, [&] { return pair_micromodulus(mi, mj, s.horizon[j]); })
+                       : 0.0;
         s.k_own[out] = 0.5 * c_own * w_own * s.volume[j];
         if (store_dual) s.k_dual[out] = 0.5 * c_dual * w_dual * s.volume[j];
       }

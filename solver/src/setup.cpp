@@ -925,9 +925,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         // per half-bond ([Fukuda PD], eq. 2/11).
         const int mi = s.material[i], mj = s.material[j];
         const double c_own = modulus_own(mi, mj, s.horizon[i], 0.0, [&] { return pair_micromodulus(mi, mj, s.horizon[i]); });
-        const double c_dual =
-            store_dual ? modulus_dual(mi, mj, s.horizon[j], 0.0, [&] { return pair_micromodulus(mi, mj, s.horizon[j]); })
-                       : 0.0;
+        auto dual_modulus = [&] { return pair_micromodulus(mi, mj, s.horizon[j]); };
+        const double c_dual = store_dual ? modulus_dual(mi, mj, s.horizon[j], 0.0, dual_modulus) : 0.0;
         s.k_own[out] = 0.5 * c_own * w_own * s.volume[j];
         if (store_dual) s.k_dual[out] = 0.5 * c_dual * w_dual * s.volume[j];
       }

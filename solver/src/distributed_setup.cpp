@@ -116,7 +116,8 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   if (writer_bonds) {
     gather_entries(d, s.neighbor, false);
     gather_entries(d, s.vol_own, false);
-    gather_entries(d, s.k_dual, false);
+    // Shared dual halves (pd_system.hpp k_dual_halves): the own moduli, which the rank kept here.
+    gather_entries(d, s.dual_halves_shared ? s.k_own : s.k_dual, false);
   }
   s.offsets = rows.full_offsets;
   for_each_bond_state_array(s, [&](auto& a) {

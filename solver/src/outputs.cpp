@@ -42,7 +42,7 @@ bool fracture_broken(const PdSystem& s, int64_t k) {
   const uint8_t st = s.state[k];
   if (st == (kOwnIntact | kDualIntact)) return false;
   const bool own_broken = s.vol_own[k] > 0 && !(st & kOwnIntact);
-  const bool dual_broken = s.k_dual[k] > 0 && !(st & kDualIntact);
+  const bool dual_broken = s.k_dual_halves()[k] > 0 && !(st & kDualIntact);
   return own_broken || dual_broken;
 }
 

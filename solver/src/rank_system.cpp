@@ -133,6 +133,7 @@ PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) {
   s.s_onset = slice(g.s_onset, eb, ee);
   s.contact_cell_edge = g.contact_cell_edge;
   s.symmetric_halves = g.symmetric_halves;
+  s.dual_halves_shared = g.dual_halves_shared;
 
   // Loads and constraints on the owned particles, in the global lists' order.
   auto owned_local = [&](const std::vector<int32_t>& list) {
@@ -172,7 +173,9 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   std::vector<uint8_t> gas_halves;  // set-up data of the bonds; in_crack is state (restrict_gas)
   gas_halves.swap(g.gas.halves);
   xi_len.swap(g.xi_len);
-  k_own.swap(g.k_own);
+  // Shared dual halves (pd_system.hpp k_dual_halves): the writers' dual moduli are the own ones.
+  if (g.dual_halves_shared && root_gathers_bond_list(g.config)) k_own = g.k_own;
+  else k_own.swap(g.k_own);
   s0_own.swap(g.s0_own);
   s0_dual.swap(g.s0_dual);
   // Under a rate law the onsets are state (raised as bonds begin to soften): the global
@@ -180,7 +183,7 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   if (g.config.strength_rate != StrengthRateLaw::None) s_onset = g.s_onset;
   else s_onset.swap(g.s_onset);
   if (root_gathers_bond_list(g.config)) {  // rank 0's writers read them (finish_distributed_setup)
-    k_dual = g.k_dual;
+    k_dual = g.k_dual;  // empty where shared: g keeps k_own instead (above)
     vol_own = g.vol_own;
   } else {
     k_dual.swap(g.k_dual);

@@ -42,7 +42,7 @@ void on_sigint(int) { g_interrupted = true; }
 
 void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, double setup_s) {
   const double bytes_per_particle =
-      (s.bond_count() * (sizeof(int32_t) + 4 * sizeof(double) + 2 * sizeof(float) + 1) +
+      (s.bond_count() * s.bytes_per_bond_entry() +
        s.n * (13 * sizeof(double) + sizeof(int64_t) + sizeof(int32_t) + 1)) / std::max<double>(1.0, s.n);
   // json_file.hpp escapes the strings (a message may quote a path); a value that is not
   // finite (a run stopped for blowing up) is written as null and named in non_finite, so

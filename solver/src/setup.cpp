@@ -298,17 +298,22 @@ static std::vector<double> softening_onset_per_strength(const PdSystem& s, const
 // halves' (exact where the horizons agree; on a graded mesh neighbours' differ by a few %).
 static void convert_to_softening(PdSystem& s) {
   const int64_t nb = static_cast<int64_t>(s.s0_own.size());
+  const bool shared = s.dual_halves_shared;  // then the dual halves are the own ones (pd_system.hpp)
+  const double* k_dual = s.k_dual_halves().data();
+  const float* s0_dual = s.s0_dual_halves().data();
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < nb; ++k) {
     const float onset = s.s_onset[k];
     if (!(onset < FLT_MAX) || !(s.s0_own[k] < FLT_MAX)) continue;  // brittle material or unbreakable bond
     double s_g = s.s0_own[k];
-    if (s.s0_dual[k] < FLT_MAX && s.vol_own[k] > 0 && s.k_dual[k] > 0)
-      s_g = std::sqrt(0.5 * (s_g * s_g + double(s.s0_dual[k]) * s.s0_dual[k]));
-    else if (!(s.vol_own[k] > 0) && s.s0_dual[k] < FLT_MAX)
-      s_g = s.s0_dual[k];
+    const float s_g_dual = s0_dual[k];  // read before the own half is written (the same float when shared)
+    if (s_g_dual < FLT_MAX && s.vol_own[k] > 0 && k_dual[k] > 0)
+      s_g = std::sqrt(0.5 * (s_g * s_g + double(s_g_dual) * s_g_dual));
+    else if (!(s.vol_own[k] > 0) && s_g_dual < FLT_MAX)
+      s_g = s_g_dual;
     const float ultimate = static_cast<float>(std::max(s_g * s_g / onset, double(onset)));
-    s.s0_own[k] = s.s0_dual[k] = ultimate;
+    s.s0_own[k] = ultimate;
+    if (!shared) s.s0_dual[k] = ultimate;
   }
 }
 
@@ -518,8 +523,8 @@ PdView PdSystem::view() {
   p.force = force.data(); p.body = body.data();
   p.volume = volume.data(); p.density = density.data(); p.fixed_dof = fixed_dof.data();
   p.offsets = offsets.data(); p.neighbor = neighbor.data(); p.xi_len = xi_len.data();
-  p.k_own = k_own.data(); p.k_dual = k_dual.data(); p.vol_own = vol_own.data();
-  p.s0_own = s0_own.data(); p.s0_dual = s0_dual.data(); p.state = state.data();
+  p.k_own = k_own.data(); p.k_dual = k_dual_halves().data(); p.vol_own = vol_own.data();
+  p.s0_own = s0_own.data(); p.s0_dual = s0_dual_halves().data(); p.state = state.data();
   if (!min_stretch.empty() && n) {
     p.alpha = static_cast<float>(config.compressive_enhancement);
     p.min_stretch = min_stretch.data();
@@ -687,6 +692,19 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   std::unique_ptr<const LatticeSampleCounts> lattice_counts;
   if (uniform) lattice_counts = std::make_unique<LatticeSampleCounts>(s.horizon[0], s.half_cell[0], s.dimension);
   const bool dual_by_reverse = sampled && !dist_rows.active && !uniform;
+  // Correspondence shares LPS's bond data: weights w = omega beta, no modulus per bond, LPS critical stretch.
+  const bool lps = c.model == PdModel::LPS || c.model == PdModel::Correspondence;
+  // Shared dual halves (pd_system.hpp k_dual_halves): an entry's two halves are the same
+  // functions of (horizon, partial volume) at its two ends -- modulus, influence, critical
+  // stretch (the pair's weaker material and Weibull draw either way), the state bits -- and
+  // every later step scales both by one factor (the 2D reweighting, the PMB calibration, the
+  // surface correction) or sets both to one value (softening), except the 2D LPS critical
+  // stretch's per-end scale. So with one horizon they are equal bit for bit wherever each
+  // entry's two partial volumes are: checked exactly below, in the pass that counts them.
+  bool one_horizon = n > 0 && !hooks.store_dual_halves && !(lps && c.fracture && s.dimension == 2);
+  for (size_t i = 1; i < n && one_horizon; ++i) one_horizon = s.horizon[i] == s.horizon[0];
+  bool betas_equal = one_horizon;
+  const bool compare_betas = one_horizon;  // (betas_equal is a thread's own copy in the reductions below)
   std::vector<uint8_t> samples_inside, dual_inside;
   std::vector<int64_t> keep_count(n, 0);
   {
@@ -710,8 +728,13 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         dual_inside[k] = samples_inside[r];
         keep_count[i] += samples_inside[k] > 0 || samples_inside[r] > 0;
       });
+      if (betas_equal) {
+        const int64_t entries = static_cast<int64_t>(dual_inside.size());
+#pragma omp parallel for schedule(static) reduction(&& : betas_equal)
+        for (int64_t k = 0; k < entries; ++k) betas_equal = betas_equal && samples_inside[k] == dual_inside[k];
+      }
     } else {
-#pragma omp parallel for schedule(dynamic, 256)
+#pragma omp parallel for schedule(dynamic, 256) reduction(&& : betas_equal)
       for (int64_t i = first; i < last; ++i)
         for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
           const int32_t j = fam.neighbors[k];
@@ -722,8 +745,18 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
             int own, reverse;
             lattice_counts->counts(xv, own, reverse);
             keep = own > 0 || reverse > 0;
+            betas_equal = betas_equal && own == reverse;
+          } else if (sampled && compare_betas && betas_equal) {  // both counts, until a thread finds them unequal
+            const int reverse = partial_volume_samples_inside(xm, s.horizon[j], s.half_cell[i], s.dimension);
+            keep = samples_inside[k] > 0 || reverse > 0;
+            betas_equal = samples_inside[k] == reverse;
           } else if (sampled) {  // dist: j's row may be another rank's; the same count, from this end
             keep = samples_inside[k] > 0 || partial_volume_samples_inside(xm, s.horizon[j], s.half_cell[i], s.dimension) > 0;
+          } else if (compare_betas && betas_equal) {
+            const double own = partial_volume(c.partial_volume, xv, s.horizon[i], s.half_cell[j], s.dimension);
+            const double reverse = partial_volume(c.partial_volume, xm, s.horizon[j], s.half_cell[i], s.dimension);
+            keep = own > 0 || reverse > 0;
+            betas_equal = own == reverse;
           } else {
             keep = partial_volume(c.partial_volume, xv, s.horizon[i], s.half_cell[j], s.dimension) > 0 ||
                    partial_volume(c.partial_volume, xm, s.horizon[j], s.half_cell[i], s.dimension) > 0;
@@ -732,6 +765,12 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         }
     }
   }
+  if (dist_rows.active) {  // dist: one layout on every rank (an AND over their entries)
+    const std::vector<uint8_t> all = concat_over_ranks(dist, std::vector<uint8_t>{static_cast<uint8_t>(betas_equal)});
+    betas_equal = std::find(all.begin(), all.end(), 0) == all.end();
+  }
+  const bool store_dual = !betas_equal;  // else k_dual, s0_dual stay empty: the own halves serve
+  s.dual_halves_shared = !store_dual;
   const double sample_total = partial_volume_sample_total(s.dimension);
   // count / sample_total for every count, the same division's bits (a division per half-bond
   // was a quarter of the lattice's fill loop).
@@ -776,20 +815,18 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     for (int a = 0; a < arrays; ++a) {
       switch (a) {
         case 0: assign_on_huge_pages(s.k_own, nb); break;
-        case 1: assign_on_huge_pages(s.k_dual, nb); break;
+        case 1: if (store_dual) assign_on_huge_pages(s.k_dual, nb); break;
         case 2: assign_on_huge_pages(s.xi_len, nb); break;
         case 3: assign_on_huge_pages(s.vol_own, nb); break;
         case 4: assign_on_huge_pages(s.neighbor, nb); break;
         case 5: assign_on_huge_pages(s.s0_own, nb); break;
-        case 6: assign_on_huge_pages(s.s0_dual, nb); break;
+        case 6: if (store_dual) assign_on_huge_pages(s.s0_dual, nb); break;
         case 7: assign_on_huge_pages(s.state, nb, static_cast<uint8_t>(kOwnIntact | kDualIntact)); break;
         case 8: assign_on_huge_pages(s.s_onset, nb, FLT_MAX); break;
         case 9: assign_on_huge_pages(s.bond_damage, nb, 0.0f); break;
       }
     }
   }
-  // Correspondence shares LPS's bond data: weights w = omega beta, no modulus per bond, LPS critical stretch.
-  const bool lps = c.model == PdModel::LPS || c.model == PdModel::Correspondence;
   // Critical stretches (and softening onsets) of entry `out` = (i -> j) from the bond's
   // fracture energy, Weibull per bond: the draw is a function of the pair (bond_uniform is
   // symmetric in its ids) and the weaker material, so (j -> i)'s values are (i -> j)'s with
@@ -829,7 +866,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       return static_cast<float>(v);
     };
     s.s0_own[out] = s0(s.horizon[i]);
-    s.s0_dual[out] = s0(s.horizon[j]);
+    if (store_dual) s.s0_dual[out] = s0(s.horizon[j]);
     if (c.softening) {
       // Onset stretch of the weaker material, scattered as weibull.scales says;
       // s0 becomes the ultimate stretch in convert_to_softening.
@@ -876,18 +913,22 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       }
       // The constant influence's 1 is skipped: 1 * beta is beta, without a division per half-bond.
       const double w_own = beta_own > 0 ? (weighted ? influence(c.influence, xi / s.horizon[i]) * beta_own : beta_own) : 0.0;
-      const double w_dual = beta_dual > 0 ? (weighted ? influence(c.influence, xi / s.horizon[j]) * beta_dual : beta_dual) : 0.0;
+      // (Shared dual halves: no dual weight to form, the own one serves.)
+      const double w_dual = store_dual && beta_dual > 0
+                                ? (weighted ? influence(c.influence, xi / s.horizon[j]) * beta_dual : beta_dual)
+                                : 0.0;
       if (lps) {
         s.k_own[out] = w_own;
-        s.k_dual[out] = w_dual;
+        if (store_dual) s.k_dual[out] = w_dual;
       } else {
         // Dual-horizon PD sums each bond from both horizons, hence half the textbook modulus
         // per half-bond ([Fukuda PD], eq. 2/11).
         const int mi = s.material[i], mj = s.material[j];
         const double c_own = modulus_own(mi, mj, s.horizon[i], 0.0, [&] { return pair_micromodulus(mi, mj, s.horizon[i]); });
-        const double c_dual = modulus_dual(mi, mj, s.horizon[j], 0.0, [&] { return pair_micromodulus(mi, mj, s.horizon[j]); });
+        auto dual_modulus = [&] { return pair_micromodulus(mi, mj, s.horizon[j]); };
+        const double c_dual = store_dual ? modulus_dual(mi, mj, s.horizon[j], 0.0, dual_modulus) : 0.0;
         s.k_own[out] = 0.5 * c_own * w_own * s.volume[j];
-        s.k_dual[out] = 0.5 * c_dual * w_dual * s.volume[j];
+        if (store_dual) s.k_dual[out] = 0.5 * c_dual * w_dual * s.volume[j];
       }
       // The strengths of a pair shared by both its entries are drawn at one (the entry of
       // the lower row); the other's are copied below.
@@ -905,13 +946,14 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     for_each_entry_with_reverse(s.offsets, s.neighbor, 0, static_cast<int64_t>(n), [&](int64_t i, int64_t k, int64_t r) {
       const int32_t j = s.neighbor[k];
       if (j > i) return;
+      // Shared halves: (j -> i)'s dual is its own half (store_dual above).
       if (copy_weights) {
-        s.k_own[k] = s.k_dual[r];
-        s.k_dual[k] = s.k_own[r];
+        s.k_own[k] = store_dual ? s.k_dual[r] : s.k_own[r];
+        if (store_dual) s.k_dual[k] = s.k_own[r];
       }
       if (!strengths_shared(i, j)) return;
-      s.s0_own[k] = s.s0_dual[r];
-      s.s0_dual[k] = s.s0_own[r];
+      s.s0_own[k] = store_dual ? s.s0_dual[r] : s.s0_own[r];
+      if (store_dual) s.s0_dual[k] = s.s0_own[r];
       if (c.softening) s.s_onset[k] = s.s_onset[r];
     });
   }
@@ -1003,7 +1045,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         harmonics(i, k, c4, s4);
         const double f = 1.0 + 0.5 * (ca[i] + ca[j]) * c4 + 0.5 * (cb[i] + cb[j]) * s4;
         s.k_own[k] *= f;
-        s.k_dual[k] *= f;
+        if (store_dual) s.k_dual[k] *= f;
       }
   }
 
@@ -1091,6 +1133,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       for (size_t i = 0; i < n; ++i)
         for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
           if (s.s0_own[k] < FLT_MAX) s.s0_own[k] = static_cast<float>(s.s0_own[k] * scale[i]);
+          // (one_horizon excludes this case: here the two halves differ)
           if (s.s0_dual[k] < FLT_MAX) s.s0_dual[k] = static_cast<float>(s.s0_dual[k] * scale[s.neighbor[k]]);
         }
     }
@@ -1110,15 +1153,16 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     std::vector<double> iso(n, 0.0), family_volume(n, 0.0);
     std::vector<double> uni(3 * n, 0.0);  // PD energy under unit uniaxial strain along each axis
     const int uni_dims = c.surface_correction ? dims : 0;  // only the surface correction reads them
+    const double* k_dual = s.k_dual_halves().data();
 #pragma omp parallel for
     for (size_t i = 0; i < n; ++i) {
       for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
-        iso[i] += pmb_energy_density(s.k_own[k], s.k_dual[k], s.state[k], 1.0, s.xi_len[k]);
+        iso[i] += pmb_energy_density(s.k_own[k], k_dual[k], s.state[k], 1.0, s.xi_len[k]);
         family_volume[i] += s.vol_own[k];
         const int32_t j = s.neighbor[k];
         for (int d = 0; d < uni_dims; ++d) {
           const double nd = (s.x0[3 * j + d] - s.x0[3 * i + d]) / s.xi_len[k];
-          uni[3 * i + d] += pmb_energy_density(s.k_own[k], s.k_dual[k], s.state[k], nd * nd, s.xi_len[k]);
+          uni[3 * i + d] += pmb_energy_density(s.k_own[k], k_dual[k], s.state[k], nd * nd, s.xi_len[k]);
         }
       }
     }
@@ -1201,7 +1245,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
             const double f = ellipsoid_bond_factor(s, axis_factor, i, k);
             for (int a = 0; a < dims; ++a) {
               const double na = (s.x0[3 * j + a] - s.x0[3 * i + a]) / s.xi_len[k];
-              w[a] += f * pmb_energy_density(s.k_own[k], s.k_dual[k], s.state[k], na * na, s.xi_len[k]);
+              w[a] += f * pmb_energy_density(s.k_own[k], k_dual[k], s.state[k], na * na, s.xi_len[k]);
             }
           }
           for (int a = 0; a < dims; ++a)
@@ -1390,12 +1434,15 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   for (int d = 0; d < 3; ++d) s.indenter_position[d] = c.indenter.center[d];
 
   // One constant horizon makes both halves of every entry identical: the fast kernel.
+  // (Shared dual halves are equal by construction: then only the state bits are compared.)
   {
     bool same = true;
     const int64_t entries = static_cast<int64_t>(s.state.size());
+    const double* k_dual = s.k_dual_halves().data();
+    const float* s0_dual = s.s0_dual_halves().data();
 #pragma omp parallel for schedule(static) reduction(&& : same)
     for (int64_t k = 0; k < entries; ++k)
-      same = same && s.k_own[k] == s.k_dual[k] && s.s0_own[k] == s.s0_dual[k] &&
+      same = same && s.k_own[k] == k_dual[k] && s.s0_own[k] == s0_dual[k] &&
              (s.state[k] == 0 || s.state[k] == (kOwnIntact | kDualIntact));
     if (dist_rows.active) {  // dist: an AND over every entry
       const std::vector<uint8_t> all = concat_over_ranks(dist, std::vector<uint8_t>{static_cast<uint8_t>(same)});
@@ -1435,10 +1482,11 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   if (!lps) {
     row_stiffness.assign(n, 0.0);
     double dt_min = 1e300;
+    const double* k_dual = s.k_dual_halves().data();
 #pragma omp parallel for schedule(dynamic, 1024) reduction(min : dt_min)
     for (size_t i = 0; i < n; ++i) {
       double sum = 0.0;
-      for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) sum += (s.k_own[k] + s.k_dual[k]) / s.xi_len[k];
+      for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) sum += (s.k_own[k] + k_dual[k]) / s.xi_len[k];
       row_stiffness[i] = sum;
       if (sum > 0) dt_min = std::min(dt_min, std::sqrt(2.0 * s.density[i] / sum));
     }

@@ -28,9 +28,9 @@ double largest_eigenpair(const double m[6], double v[3]) {
 
 StableStepStartWave stable_step_start_wave(const PdSystem& sys, const std::vector<double>* row_sums) {
   StableStepStartWave wave;
-  if (sys.config.model != PdModel::PMB || sys.n == 0 || sys.offsets.size() != sys.n + 1 || sys.k_own.empty() ||
-      sys.k_dual.empty())
+  if (sys.config.model != PdModel::PMB || sys.n == 0 || sys.offsets.size() != sys.n + 1 || sys.k_own.empty())
     return wave;
+  const std::vector<double>& k_dual = sys.k_dual_halves();  // the own halves where shared (pd_system.hpp)
   // A lattice only: one spacing and one horizon. A graded body's top mode is no plane wave
   // (its fine region's wave fits nowhere else), and the wave there slowed the estimate.
   for (size_t i = 1; i < sys.n; ++i)
@@ -45,7 +45,7 @@ StableStepStartWave stable_step_start_wave(const PdSystem& sys, const std::vecto
     if (row_sums) {
       sum = (*row_sums)[i];
     } else {
-      for (int64_t k = sys.offsets[i]; k < sys.offsets[i + 1]; ++k) sum += (sys.k_own[k] + sys.k_dual[k]) / sys.xi_len[k];
+      for (int64_t k = sys.offsets[i]; k < sys.offsets[i + 1]; ++k) sum += (sys.k_own[k] + k_dual[k]) / sys.xi_len[k];
     }
     sum /= sys.density[i];
     if (sum > wave.score) {
@@ -71,7 +71,7 @@ StableStepStartWave stable_step_start_wave(const PdSystem& sys, const std::vecto
     const double len = sys.xi_len[k];
     entries.push_back(
         {{sys.x0[3 * j] - sys.x0[3 * i], sys.x0[3 * j + 1] - sys.x0[3 * i + 1], sys.x0[3 * j + 2] - sys.x0[3 * i + 2]},
-         (sys.k_own[k] + sys.k_dual[k]) / (len * len * len)});  // xi xi^T / |xi|^2 = e e^T
+         (sys.k_own[k] + k_dual[k]) / (len * len * len)});  // xi xi^T / |xi|^2 = e e^T
   }
   double best = -1.0;
   auto evaluate = [&](const double k[3]) {

@@ -104,12 +104,13 @@ std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<Elasti
 }
 
 void scale_bonds_by_axis_factors(PdSystem& s, const std::vector<double>& axis_factor) {
+  const bool dual = !s.dual_halves_shared;  // shared dual halves are the own ones (pd_system.hpp)
 #pragma omp parallel for
   for (size_t i = 0; i < s.n; ++i)
     for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
       const double f = ellipsoid_bond_factor(s, axis_factor, i, k);
       s.k_own[k] *= f;
-      s.k_dual[k] *= f;
+      if (dual) s.k_dual[k] *= f;
     }
 }
 

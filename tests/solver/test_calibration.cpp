@@ -178,7 +178,7 @@ double fracture_energy_ratio(int dimension, const char* planar, const char* mode
       const double s2 = s.bond_damage.empty() ? double(s.s0_own[k]) * s.s0_own[k] : double(s.s_onset[k]) * s.s0_own[k];
       double pair_energy_from_i;
       if (std::string(model) == "pmb") {
-        pair_energy_from_i = s.volume[i] * pmb_energy_density(s.k_own[k], s.k_dual[k], 3, 1.0, s.xi_len[k]) * s2;
+        pair_energy_from_i = s.volume[i] * pmb_energy_density(s.k_own[k], s.k_dual_halves()[k], 3, 1.0, s.xi_len[k]) * s2;
       } else {
         // LPS deviatoric pair energy at the critical extension with theta = 0.
         pair_energy_from_i = 0.5 * s.lps[i].shear_term / s.weighted_volume[i] * s.k_own[k] * s2 * s.xi_len[k] *

@@ -169,7 +169,8 @@ namespace {
 // launcher gathers them), and the step's arrays pointing at them.
 SellBondArrays<double> gather_bonds(const SellLayout& layout, const PdSystem& s) {
   if (s.symmetric_halves) return gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state);
-  return gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state, s.k_dual, s.s0_dual, s.vol_own);
+  return gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state, s.k_dual_halves(),
+                           s.s0_dual_halves(), s.vol_own);
 }
 struct HostSell {
   SellLayout layout;

@@ -72,8 +72,8 @@ TEST_P(SofteningFractureEnergy, EqualsTheBrittleBondsEnergyWhateverTheStrength) 
       if ((brittle.x0[3 * i] < 0) == (brittle.x0[3 * j] < 0)) continue;
       const double e = brittle.s0_own[k] * brittle.xi_len[k];
       reference += std::string(model) == "pmb"
-                       ? brittle.volume[i] * pmb_energy_density(brittle.k_own[k], brittle.k_dual[k], 3, brittle.s0_own[k],
-                                                                brittle.xi_len[k])
+                       ? brittle.volume[i] * pmb_energy_density(brittle.k_own[k], brittle.k_dual_halves()[k], 3,
+                                                                brittle.s0_own[k], brittle.xi_len[k])
                        : 0.5 * brittle.lps[i].shear_term / brittle.weighted_volume[i] * brittle.k_own[k] * e * e *
                              brittle.volume[j] * brittle.volume[i];
     }

@@ -174,7 +174,7 @@ double fracture_energy_ratio(const PdSystem& s, double window, double G0) {
       if (y < -window / 2 || y >= window / 2 || z < -window / 2 || z >= window / 2) continue;
       double pair_energy_from_i;
       if (!lps) {
-        pair_energy_from_i = s.volume[i] * solver::pmb_energy_density(s.k_own[k], s.k_dual[k], 3, s.s0_own[k], s.xi_len[k]);
+        pair_energy_from_i = s.volume[i] * solver::pmb_energy_density(s.k_own[k], s.k_dual_halves()[k], 3, s.s0_own[k], s.xi_len[k]);
       } else {  // LPS deviatoric pair energy at the critical extension, theta = 0
         const double e = s.s0_own[k] * s.xi_len[k];
         pair_energy_from_i =

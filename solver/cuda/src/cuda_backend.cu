@@ -444,7 +444,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   m.neighbor.upload(s.neighbor, "neighbor");
   m.xi_len.upload(s.xi_len, "xi_len");
   m.k_own.upload(s.k_own, "k_own");
-  m.k_dual.upload(s.k_dual, "k_dual");
+  m.k_dual.upload(s.k_dual, "k_dual");  // empty where the dual halves are shared (pd_system.hpp): none on the device
   m.vol_own.upload(s.vol_own, "vol_own");
   m.s0_own.upload(s.s0_own, "s0_own");
   m.s0_dual.upload(s.s0_dual, "s0_dual");
@@ -510,8 +510,9 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   p.force = m.force.get(); p.body = m.body.get();
   p.volume = m.volume.get(); p.density = m.density.get(); p.fixed_dof = m.fixed_dof.get();
   p.offsets = m.offsets.get(); p.neighbor = m.neighbor.get(); p.xi_len = m.xi_len.get();
-  p.k_own = m.k_own.get(); p.k_dual = m.k_dual.get(); p.vol_own = m.vol_own.get();
-  p.s0_own = m.s0_own.get(); p.s0_dual = m.s0_dual.get(); p.state = m.state.get();
+  const bool dual_shared = s.dual_halves_shared;  // the own arrays serve as the dual ones
+  p.k_own = m.k_own.get(); p.k_dual = dual_shared ? p.k_own : m.k_dual.get(); p.vol_own = m.vol_own.get();
+  p.s0_own = m.s0_own.get(); p.s0_dual = dual_shared ? p.s0_own : m.s0_dual.get(); p.state = m.state.get();
   if (m.min_stretch.size() > 0) {
     p.alpha = static_cast<float>(s.config.compressive_enhancement);
     p.min_stretch = m.min_stretch.get();
@@ -537,7 +538,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     q.u = m.fu.get(); q.v = m.fv.get(); q.a = m.fa.get(); q.force = m.fforce.get(); q.body = m.fbody.get();
     q.volume = m.fvolume.get(); q.density = m.fdensity.get(); q.fixed_dof = p.fixed_dof;
     q.offsets = p.offsets; q.neighbor = p.neighbor; q.xi_len = m.fxi_len.get();
-    q.k_own = m.fk_own.get(); q.k_dual = m.fk_dual.get(); q.vol_own = m.fvol_own.get();
+    q.k_own = m.fk_own.get(); q.k_dual = dual_shared ? q.k_own : m.fk_dual.get(); q.vol_own = m.fvol_own.get();
     q.s0_own = p.s0_own; q.s0_dual = p.s0_dual; q.state = p.state; q.lps = p.lps;
     q.alpha = p.alpha; q.min_stretch = p.min_stretch; q.min_stretch_next = p.min_stretch_next;
     q.break_after_force = p.break_after_force;
@@ -632,8 +633,8 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     m.sell_particle.upload(layout.particle, "SELL lane particles");
     m.sell_row_length.upload(layout.row_length, "SELL row lengths");
     const SellBondArrays<double> b =
-        dual ? gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state, s.k_dual, s.s0_dual,
-                                 s.vol_own)
+        dual ? gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state, s.k_dual_halves(),
+                                 s.s0_dual_halves(), s.vol_own)
              : gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state);
     m.sell_neighbor.upload(b.neighbor, "SELL neighbours");
     m.sell_xi_len.upload(b.xi_len, "SELL bond lengths");
@@ -655,7 +656,8 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
       m.sell_fxi_len.upload(layout.gather(s.f32.xi_len, 1.0f), "SELL float bond lengths");
       m.sell_fk_own.upload(layout.gather(s.f32.k_own, 0.0f), "SELL float moduli");
       if (dual) {
-        m.sell_fk_dual.upload(layout.gather(s.f32.k_dual, 0.0f), "SELL float dual moduli");
+        m.sell_fk_dual.upload(layout.gather(s.dual_halves_shared ? s.f32.k_own : s.f32.k_dual, 0.0f),
+                              "SELL float dual moduli");
         m.sell_fvol_own.upload(layout.gather(s.f32.vol_own, 0.0f), "SELL float damage weights");
       }
       m.farrays.sell = view;

@@ -58,6 +58,21 @@ struct PdSystem {
   std::vector<double> xi_len, k_own, k_dual, vol_own;
   std::vector<float> s0_own, s0_dual;
   std::vector<uint8_t> state;
+  // Where every entry's dual half equals its own half bit for bit (one horizon and equal
+  // partial volumes both ways; setup_system decides before the bond arrays exist), k_dual and
+  // s0_dual stay empty and the dual halves are the own ones: 12 B per entry fewer. Read the
+  // dual halves through these (and PdView's k_dual / s0_dual, which point at the own arrays
+  // then), never k_dual / s0_dual directly. The strength-rate law writes raised ultimates
+  // into s0_own alone: a softening entry never reads s0_dual (soften, pd_kernels.hpp), so
+  // sharing the array changes nothing it reads.
+  bool dual_halves_shared = false;
+  const std::vector<double>& k_dual_halves() const { return dual_halves_shared ? k_own : k_dual; }
+  const std::vector<float>& s0_dual_halves() const { return dual_halves_shared ? s0_own : s0_dual; }
+  // The bond arrays' bytes per entry (summary.json's bytes_per_particle; softening's two
+  // arrays not counted): neighbor, xi_len, k_own, vol_own, s0_own, state, and the dual halves.
+  size_t bytes_per_bond_entry() const {
+    return sizeof(int32_t) + 3 * sizeof(double) + sizeof(float) + 1 + (dual_halves_shared ? 0 : sizeof(double) + sizeof(float));
+  }
   // model.compressive_enhancement: each particle's smallest bond stretch at the last force
   // pass and the one being written (pd_kernels.hpp, stretch_shift); empty without it.
   std::vector<float> min_stretch, min_stretch_next;
@@ -161,6 +176,9 @@ struct SetupHooks {
   std::function<Families(std::span<const double> position, std::span<const double> horizon_m,
                          std::span<const double> pad_m, int64_t row_begin, int64_t row_end)>
       families;
+  // Store k_dual and s0_dual even where they equal the own halves (tests compare the two
+  // layouts; pd_system.hpp k_dual_halves). False: shared where set-up finds them equal.
+  bool store_dual_halves = false;
 };
 
 // Points per axis of a `specimen: {lattice: ...}` box (1 on the axes it does not have).

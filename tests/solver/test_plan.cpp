@@ -126,6 +126,40 @@ time: {steps: 1}
   }
 }
 
+// The estimate's bytes per bond entry are what set-up allocates (PdSystem::bytes_per_bond_entry):
+// a lattice with one horizon shares the dual halves (33 B), 2D LPS with fracture stores them
+// (45 B), softening adds its two floats.
+TEST(PlanCost, BytesPerBondEntryAreWhatSetUpHolds) {
+  const Throughputs rates = load_throughputs(default_throughputs_path());
+  omp_set_num_threads(1);
+  int k = 0;
+  for (const char* yaml : {R"(
+specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.003, 0.003], spacing: 0.5 mm}}
+model: {type: pmb, horizon_factor: 3.015}
+materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.25, fracture_energy: 3.8}]
+time: {steps: 1}
+)",
+                           R"(
+specimen: {lattice: {dimension: 2, box: [0, 0, 0.006, 0.004], spacing: 0.5 mm}}
+model: {type: lps, planar: plane_strain, horizon_factor: 3.015}
+materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.25, fracture_energy: 3.8}]
+time: {steps: 1}
+)",
+                           R"(
+specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.003, 0.003], spacing: 0.5 mm}}
+model: {type: pmb, horizon_factor: 3.015}
+materials: [{name: rock, density: 2660, youngs_modulus: 50 GPa, poisson_ratio: 0.25, fracture_energy: 200, tensile_strength: 12 MPa}]
+time: {steps: 1}
+)"}) {
+    const CaseConfig c = case_from_yaml("entry_bytes" + std::to_string(k++), yaml);
+    const CostEstimate e = estimate_cost(c, rates);
+    const solver::PdSystem sys = solver::setup_system(c);
+    // bytes_per_bond_entry leaves out softening's s_onset and bond_damage (a float each).
+    const size_t softening = sys.s_onset.empty() ? 0 : sizeof(float) * (sys.s_onset.size() + sys.bond_damage.size()) / sys.state.size();
+    EXPECT_EQ(e.bond_entry_bytes, static_cast<double>(sys.bytes_per_bond_entry() + softening)) << "case " << k;
+  }
+}
+
 // The estimate on three cases of different dimension and model. Particles, bonds and steps
 // of a case small enough to set up are the solver's own numbers and must equal them
 // exactly. Seconds must be within a factor 1.5 of the measured cost, with the throughput

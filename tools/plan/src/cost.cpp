@@ -202,10 +202,21 @@ double bytes_per_particle(int dimension, PdModel model) {
   return doubles * sizeof(double) + 3 * sizeof(int32_t) + sizeof(uint8_t) + 2 * sizeof(int64_t);
 }
 
-// Per bond entry: neighbor (int32); xi_len k_own k_dual vol_own (4 doubles); s0_own
-// s0_dual (2 floats); state (1 byte); softening bonds add s_onset and bond_damage (2 floats).
-double bytes_per_bond(bool softening) {
-  return sizeof(int32_t) + 4 * sizeof(double) + (softening ? 4 : 2) * sizeof(float) + sizeof(uint8_t);
+// Per bond entry: neighbor (int32); xi_len k_own vol_own (3 doubles); s0_own (a float); state
+// (1 byte); the dual halves k_dual and s0_dual (a double, a float) unless set-up shares them;
+// softening bonds add s_onset and bond_damage (2 floats).
+double bytes_per_bond(bool softening, bool shared_dual_halves) {
+  return sizeof(int32_t) + (shared_dual_halves ? 3 : 4) * sizeof(double) +
+         ((shared_dual_halves ? 1 : 2) + (softening ? 2 : 0)) * sizeof(float) + sizeof(uint8_t);
+}
+
+// Does set-up share the dual halves with the own ones (setup.cpp: one horizon, every entry's two
+// partial volumes equal, not an LPS-type model with fracture in 2D)? A lattice has one spacing and
+// so one horizon and equal partial volumes both ways; on tets the cells differ, so the estimate
+// takes the halves as stored there.
+static bool shares_dual_halves(const CaseConfig& c, const std::string& particles_kind, int dimension) {
+  const bool lps_type = c.model == PdModel::LPS || c.model == PdModel::Correspondence;
+  return particles_kind == "lattice" && !(lps_type && c.fracture && dimension == 2);
 }
 
 CostEstimate estimate_cost(const CaseConfig& c, const Throughputs& rates, const CostOptions& o) {
@@ -296,7 +307,8 @@ CostEstimate estimate_cost(const CaseConfig& c, const Throughputs& rates, const 
   // Memory: the run's arrays; set-up also holds the padded families and a few per-particle
   // temporaries (spacing, pad, counts, calibration sums: about 12 doubles).
   const PdModel model = c.model;
-  e.run_bytes = e.particles * bytes_per_particle(e.dimension, model) + e.bonds * bytes_per_bond(c.softening && c.fracture);
+  e.bond_entry_bytes = bytes_per_bond(c.softening && c.fracture, shares_dual_halves(c, e.particles_kind, e.dimension));
+  e.run_bytes = e.particles * bytes_per_particle(e.dimension, model) + e.bonds * e.bond_entry_bytes;
   e.setup_bytes = e.run_bytes + padded * sizeof(int32_t) + e.particles * (sizeof(int64_t) + 12 * sizeof(double));
 
   // Seconds: bond-updates over the measured per-core rate of the model and precision times

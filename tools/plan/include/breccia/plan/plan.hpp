@@ -107,6 +107,7 @@ struct CostEstimate {
   bool quasi_static = false;
   std::string steps_method;
   double run_bytes = 0.0;    // resident during the time loop (PdSystem arrays)
+  double bond_entry_bytes = 0.0;  // of which per bond entry (bytes_per_bond)
   double setup_bytes = 0.0;  // peak during set-up (families under construction as well)
   int threads = 1;
   double loop_s = 0.0;   // time loop, CPU, wall-clock on a quiet machine
@@ -128,7 +129,9 @@ long long lattice_bond_count(const std::array<long long, 3>& particles_per_axis,
 
 // Bytes the PdSystem holds per particle and per bond entry (pd_system.hpp, as allocated).
 double bytes_per_particle(int dimension, solver::PdModel model);
-double bytes_per_bond(bool softening = false);  // softening: + s_onset, bond_damage
+// softening: + s_onset, bond_damage; shared_dual_halves: without k_dual, s0_dual (set-up shares
+// them with the own halves where they are equal: PdSystem::dual_halves_shared).
+double bytes_per_bond(bool softening = false, bool shared_dual_halves = false);
 
 // ---- atlas ------------------------------------------------------------------------------
 

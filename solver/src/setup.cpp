@@ -701,7 +701,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // surface correction) or sets both to one value (softening), except the 2D LPS critical
   // stretch's per-end scale. So with one horizon they are equal bit for bit wherever each
   // entry's two partial volumes are: checked exactly below, in the pass that counts them.
-  bool one_horizon = n > 0 && !hooks.store_dual_halves && !(lps && c.fracture && s.dimension == 2);
+  bool one_horizon = n > 0 && !hooks.store_dual_halves && !model_separates_dual_halves(c, s.dimension);
   for (size_t i = 1; i < n && one_horizon; ++i) one_horizon = s.horizon[i] == s.horizon[0];
   bool betas_equal = one_horizon;
   const bool compare_betas = one_horizon;  // (betas_equal is a thread's own copy in the reductions below)

@@ -13,6 +13,7 @@
 #include "breccia/common/particle_file.hpp"
 #include "breccia/plan/plan.hpp"
 #include "breccia/solver/family.hpp"
+#include "breccia/solver/pd_system.hpp"
 #include "breccia/solver/pd_physics.hpp"
 #include "breccia/solver/pd_system.hpp"
 
@@ -20,6 +21,8 @@ namespace breccia::plan {
 
 using solver::CaseConfig;
 using solver::PdModel;
+using solver::bond_entry_bytes;
+using solver::model_separates_dual_halves;
 
 namespace {
 
@@ -202,21 +205,18 @@ double bytes_per_particle(int dimension, PdModel model) {
   return doubles * sizeof(double) + 3 * sizeof(int32_t) + sizeof(uint8_t) + 2 * sizeof(int64_t);
 }
 
-// Per bond entry: neighbor (int32); xi_len k_own vol_own (3 doubles); s0_own (a float); state
-// (1 byte); the dual halves k_dual and s0_dual (a double, a float) unless set-up shares them;
-// softening bonds add s_onset and bond_damage (2 floats).
+// Per bond entry: the bond arrays set-up holds (pd_system.hpp bond_entry_bytes); softening bonds
+// add s_onset and bond_damage (2 floats).
 double bytes_per_bond(bool softening, bool shared_dual_halves) {
-  return sizeof(int32_t) + (shared_dual_halves ? 3 : 4) * sizeof(double) +
-         ((shared_dual_halves ? 1 : 2) + (softening ? 2 : 0)) * sizeof(float) + sizeof(uint8_t);
+  return static_cast<double>(bond_entry_bytes(shared_dual_halves) + (softening ? 2 : 0) * sizeof(float));
 }
 
 // Does set-up share the dual halves with the own ones (setup.cpp: one horizon, every entry's two
-// partial volumes equal, not an LPS-type model with fracture in 2D)? A lattice has one spacing and
+// partial volumes equal, and a model that does not separate them)? A lattice has one spacing and
 // so one horizon and equal partial volumes both ways; on tets the cells differ, so the estimate
 // takes the halves as stored there.
 static bool shares_dual_halves(const CaseConfig& c, const std::string& particles_kind, int dimension) {
-  const bool lps_type = c.model == PdModel::LPS || c.model == PdModel::Correspondence;
-  return particles_kind == "lattice" && !(lps_type && c.fracture && dimension == 2);
+  return particles_kind == "lattice" && !model_separates_dual_halves(c, dimension);
 }
 
 CostEstimate estimate_cost(const CaseConfig& c, const Throughputs& rates, const CostOptions& o) {

@@ -29,6 +29,22 @@ struct PressureFacet {  // a boundary facet carrying pressure or traction
   double normal[3];     // outward unit normal
 };
 
+// The bond arrays' bytes per entry: neighbor (int32), xi_len, k_own, vol_own (doubles), s0_own
+// (a float), state (a byte), and the dual halves k_dual and s0_dual (a double, a float) unless
+// set-up shares them (PdSystem::dual_halves_shared). Softening's two floats are not counted.
+constexpr size_t bond_entry_bytes(bool dual_halves_shared) {
+  return sizeof(int32_t) + 3 * sizeof(double) + sizeof(float) + 1 + (dual_halves_shared ? 0 : sizeof(double) + sizeof(float));
+}
+
+// An LPS-type model (correspondence shares LPS's bond data) with fracture in 2D scales each end's
+// critical stretch by its own factor, so an entry's two halves differ even with one horizon and
+// set-up keeps them apart. Set-up's decision (setup.cpp) and the planner's memory estimate
+// (tools/plan) both read this.
+inline bool model_separates_dual_halves(const CaseConfig& c, int dimension) {
+  const bool lps_type = c.model == PdModel::LPS || c.model == PdModel::Correspondence;
+  return lps_type && c.fracture && dimension == 2;
+}
+
 struct PdSystem {
   CaseConfig config;
   ParticleModel particles;  // as read (file order)
@@ -70,9 +86,7 @@ struct PdSystem {
   const std::vector<float>& s0_dual_halves() const { return dual_halves_shared ? s0_own : s0_dual; }
   // The bond arrays' bytes per entry (summary.json's bytes_per_particle; softening's two
   // arrays not counted): neighbor, xi_len, k_own, vol_own, s0_own, state, and the dual halves.
-  size_t bytes_per_bond_entry() const {
-    return sizeof(int32_t) + 3 * sizeof(double) + sizeof(float) + 1 + (dual_halves_shared ? 0 : sizeof(double) + sizeof(float));
-  }
+  size_t bytes_per_bond_entry() const { return bond_entry_bytes(dual_halves_shared); }
   // model.compressive_enhancement: each particle's smallest bond stretch at the last force
   // pass and the one being written (pd_kernels.hpp, stretch_shift); empty without it.
   std::vector<float> min_stretch, min_stretch_next;

@@ -19,15 +19,20 @@ constexpr int kLaunchBlock = 256;  // threads per block
 // of 256 per SM, 8 warps of 64); with 2 no fast path spills (scripts/cuda_registers.sh,
 // docs/cuda.md "Registers"). The other kernels keep no bound: with one, even (256, 1), the
 // compiler gave the small ones up to twice the registers they take without. Not yet timed on a GPU.
+// (__launch_bounds__ must sit on the kernel's own declaration, so the two kernels share their
+// body through this.)
 template <class F>
-__global__ void forall_cuda(int64_t n, F f) {
+__device__ __forceinline__ void call_at_thread_index(int64_t n, const F& f) {
   const int64_t i = static_cast<int64_t>(blockIdx.x) * blockDim.x + threadIdx.x;
   if (i < n) f(i);
 }
 template <class F>
+__global__ void forall_cuda(int64_t n, F f) {
+  call_at_thread_index(n, f);
+}
+template <class F>
 __global__ void __launch_bounds__(kLaunchBlock, F::kMinBlocksPerSm) forall_cuda_bounded(int64_t n, F f) {
-  const int64_t i = static_cast<int64_t>(blockIdx.x) * blockDim.x + threadIdx.x;
-  if (i < n) f(i);
+  call_at_thread_index(n, f);
 }
 
 // f(i) for every i in [0, n), in no particular order; the launch checked under `name`.

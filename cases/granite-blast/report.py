@@ -14,7 +14,8 @@ The same measures are taken twice: from the damage field, and from the broken-bo
 each snapshot), with the same threshold. Without softening bonds the two agree (the damage is
 the weighted broken fraction); with softening bonds the damage also counts the share a bond
 has lost while it softens, which the broken fraction leaves out.
-Writes OUT/report.json, OUT/damage_<RUN>.png, OUT/cracks_vs_radius.png.
+Writes OUT/report.json, OUT/damage_<RUN>.png (at 11.25 and 18.75 us, the end, and the end zoomed on the
+hole), OUT/cracks_vs_radius.png.
 """
 import json
 import math
@@ -133,13 +134,22 @@ def main(argv):
         res, (x, times, damage, dx) = analyse(out, name)
         report["runs"].append(res)
         picks = [int(np.argmin(np.abs(times * 1e6 - t))) for t in SNAPSHOT_TIMES_US] + [len(times) - 1]
-        fig, axs = plt.subplots(1, 3, figsize=(14, 4.9))
+        fig, axs = plt.subplots(1, 4, figsize=(18, 4.9))
         size = (72.0 * dx * 1e3 / 18.0) ** 2 * 9
-        for ax, k in zip(axs, picks):
-            ax.scatter(x[:, 0] * 1e3, x[:, 1] * 1e3, c=damage[k], s=size, marker="s", cmap="jet", vmin=0, vmax=1,
-                       linewidths=0)
+        # The fourth panel: the last output again, zoomed on the hole, so that damage of a few
+        # hole radii (e.g. with the rate law) is readable; half-width 1.3 x the farthest damaged
+        # particle, at least 4 mm.
+        zoom_mm = max(4.0, 1.3e3 * res["final"]["max_damaged_radius_m"])
+        for ax, k, half in zip(axs, picks + [picks[-1]], [None] * 3 + [zoom_mm]):
+            scale = 1.0 if half is None else (36.0 / half) ** 2
+            ax.scatter(x[:, 0] * 1e3, x[:, 1] * 1e3, c=damage[k], s=size * scale, marker="s", cmap="jet", vmin=0,
+                       vmax=1, linewidths=0)
             ax.set_aspect("equal")
-            ax.set_title(f"t = {times[k] * 1e6:.1f} us", fontsize=10)
+            ax.set_title(f"t = {times[k] * 1e6:.1f} us" + ("" if half is None else f", zoom +-{half:.1f} mm"),
+                         fontsize=10)
+            if half is not None:
+                ax.set_xlim(-half, half)
+                ax.set_ylim(-half, half)
             ax.set_xlabel("x (mm)")
         axs[0].set_ylabel("y (mm)")
         fig.suptitle(f"granite-blast {name} (mean G0 {res['mean_fracture_energy_J_m2']:g} J/m2, dx = {dx * 1e3:g} mm): "

@@ -23,8 +23,9 @@ mkdir -p "$OUT"
 # calibration). On request (GRANITE_RUNS=...): softening (G0 = 200 J/m2 and a tensile strength,
 # STRENGTH, default 12 MPa, a placeholder, through softening bonds: docs/theory.md "Quasi-brittle
 # bonds"; README.md; softening_sqrt and softening_none: the strength x the square root of each
-# bond's G0 draw, or not scattered: docs/theory.md "Weibull heterogeneity") and gas (the borehole history as a gas load's closed-cavity pressure: docs/theory.md
-# "Borehole gas"; README.md).
+# bond's G0 draw, or not scattered: docs/theory.md "Weibull heterogeneity"; softening_rate,
+# softening_gas, softening_rate_gas: softening_sqrt with fib's rate law and/or the gas load) and gas
+# (the borehole history as a gas load's closed-cavity pressure: docs/theory.md "Borehole gas"; README.md).
 RUNS=()
 for run in ${GRANITE_RUNS:-g0_200 seed_s0}; do
   extra=()

@@ -594,12 +594,7 @@ CentreFamily centre_family(double spacing, double horizon_factor) {
                 "fracture_energy: 100, tensile_strength: 3 MPa}]\ntime: {steps: 1}\n",
                 side, side, side, spacing, horizon_factor);
   const PdSystem s = system_from_yaml("centre_family", deck);
-  size_t c = 0;
-  double nearest = 1e9;
-  for (size_t i = 0; i < s.n; ++i) {
-    const double r = std::hypot(s.x0[3 * i] - 0.5 * side, s.x0[3 * i + 1] - 0.5 * side, s.x0[3 * i + 2] - 0.5 * side);
-    if (r < nearest) nearest = r, c = i;
-  }
+  const int64_t c = nearest(s, 0.5 * side, 0.5 * side, 0.5 * side);
   CentreFamily out{{}, s.s_onset.at(s.offsets[c]), s.s0_own.at(s.offsets[c])};
   for (int64_t k = s.offsets[c]; k < s.offsets[c + 1]; ++k) {
     const size_t j = s.neighbor[k];

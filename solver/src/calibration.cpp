@@ -119,43 +119,55 @@ double softening_onset_stretch(const ElasticInput& in, double tensile_strength) 
 // which is linear in el once the damage is fixed, so each strain step iterates (el, damage) to
 // a fixed point, the damage never decreasing along the path.
 namespace {
-// sign +1: uniaxial tension (the strain ex grows); -1: uniaxial compression (ex falls), the bonds
-// crushing past crush_ratio x onset when crush_ratio > 0. Returns sign x the first peak of sigma_xx.
-double homogeneous_uniaxial_peak(const ElasticInput& in, PdModel model, double onset, double ultimate, double sign,
-                                 double crush_ratio) {
-  const int d = in.dimension;
-  const bool lps = model != PdModel::PMB;
-  const LpsCoefficients lc = lps_coefficients(in);
-  const double pmb_scale = d * d * dimensional_bulk_modulus(in);
-  // Directions: 3D uniform in n_x = cos(angle) on [0, 1] (the azimuth averages out: the
-  // lateral stress is half of <g (1 - n_x^2)>); 2D uniform in the angle on [0, pi/2].
+// The isotropic family of the continuum: 720 directions, 3D uniform in n_x = cos(angle) on
+// [0, 1], 2D uniform in the angle on [0, pi/2]; each of weight 1.
+HomogeneousFamily isotropic_family(int dimension) {
   const int nq = 720;
-  std::vector<double> cx2(nq), dmg(nq, 0.0), trial(nq);
+  HomogeneousFamily f;
   for (int q = 0; q < nq; ++q) {
     const double t = (q + 0.5) / nq;
-    const double c = d == 3 ? t : std::cos(0.5 * std::numbers::pi * t);
-    cx2[q] = c * c;
+    const double c = dimension == 3 ? t : std::cos(0.5 * std::numbers::pi * t);
+    f.axial2.push_back(c * c);
+    f.weight.push_back(1.0);
   }
-  const double lateral_share = d == 3 ? 0.5 : 1.0;
+  return f;
+}
+
+// sign +1: uniaxial tension (the strain ex grows); -1: uniaxial compression (ex falls), the bonds
+// crushing past crush_ratio x onset when crush_ratio > 0. Returns sign x the first peak of sigma_xx.
+double homogeneous_uniaxial_peak(const ElasticInput& in, PdModel model, const HomogeneousFamily& family, double onset,
+                                 double ultimate, double sign, double crush_ratio) {
+  const bool lps = model != PdModel::PMB;
+  const LpsCoefficients lc = lps_coefficients(in);
+  const double pmb_scale = in.dimension * in.dimension * dimensional_bulk_modulus(in);
+  const std::vector<double>& cx2 = family.axial2;
+  const std::vector<double>& weight = family.weight;
+  const size_t nq = cx2.size();
+  std::vector<double> dmg(nq, 0.0), trial(nq);
+  double weight_sum = 0.0;
+  for (const double w : weight) weight_sum += w;
+  // The mean lateral stress is (3D) half of <g (1 - n_x^2)> (the azimuth averages out; a
+  // lattice family, symmetric under y <-> z, has sigma_yy = sigma_zz), 2D all of it.
+  const double lateral_share = in.dimension == 3 ? 0.5 : 1.0;
   // Stresses for strain (ex, el) and damage D: returns sigma_xx, sets sigma_yy.
   auto stress = [&](double ex, double el, const std::vector<double>& D, double& syy) {
     double theta = 0.0;
     if (lps) {
-      for (int q = 0; q < nq; ++q) theta += (1.0 - D[q]) * (ex * cx2[q] + el * (1.0 - cx2[q]));
-      theta *= lc.dilatation_factor / nq;
+      for (size_t q = 0; q < nq; ++q) theta += weight[q] * (1.0 - D[q]) * (ex * cx2[q] + el * (1.0 - cx2[q]));
+      theta *= lc.dilatation_factor / weight_sum;
     }
     double sxx = 0.0;
     syy = 0.0;
-    for (int q = 0; q < nq; ++q) {
+    for (size_t q = 0; q < nq; ++q) {
       const double s = ex * cx2[q] + el * (1.0 - cx2[q]);
-      const double g = (1.0 - D[q]) * (lps ? (lc.bulk_term - lc.shear_term / lc.dilatation_factor) * theta +
-                                                 lc.shear_term * s
-                                           : pmb_scale * s);
+      const double g = weight[q] * (1.0 - D[q]) *
+                       (lps ? (lc.bulk_term - lc.shear_term / lc.dilatation_factor) * theta + lc.shear_term * s
+                            : pmb_scale * s);
       sxx += g * cx2[q];
       syy += g * (1.0 - cx2[q]);
     }
-    syy *= lateral_share / nq;
-    return sxx / nq;
+    syy *= lateral_share / weight_sum;
+    return sxx / weight_sum;
   };
   // Damage of a bond at stretch s: the tension law, and in compression the crushing law.
   auto law = [&](double s) {
@@ -169,7 +181,7 @@ double homogeneous_uniaxial_peak(const ElasticInput& in, PdModel model, double o
   for (double mag = sign > 0.0 ? onset : step; mag < reach; mag += step) {
     const double ex = sign * mag;
     for (int it = 0; it < 100; ++it) {
-      for (int q = 0; q < nq; ++q)
+      for (size_t q = 0; q < nq; ++q)
         trial[q] = std::max(dmg[q], law(ex * cx2[q] + el * (1.0 - cx2[q])));
       double s0y, s1y;
       stress(ex, 0.0, trial, s0y);
@@ -179,7 +191,7 @@ double homogeneous_uniaxial_peak(const ElasticInput& in, PdModel model, double o
       el = next;
       if (settled) break;
     }
-    for (int q = 0; q < nq; ++q)
+    for (size_t q = 0; q < nq; ++q)
       dmg[q] = std::max(dmg[q], law(ex * cx2[q] + el * (1.0 - cx2[q])));
     double syy;
     const double sxx = sign * stress(ex, el, dmg, syy);
@@ -191,12 +203,17 @@ double homogeneous_uniaxial_peak(const ElasticInput& in, PdModel model, double o
 }  // namespace
 
 double homogeneous_tension_peak(const ElasticInput& in, PdModel model, double onset, double ultimate) {
-  return homogeneous_uniaxial_peak(in, model, onset, ultimate, 1.0, 0.0);
+  return homogeneous_uniaxial_peak(in, model, isotropic_family(in.dimension), onset, ultimate, 1.0, 0.0);
 }
 
 double homogeneous_compression_peak(const ElasticInput& in, PdModel model, double onset, double ultimate,
                                     double crush_ratio) {
-  return homogeneous_uniaxial_peak(in, model, onset, ultimate, -1.0, crush_ratio);
+  return homogeneous_uniaxial_peak(in, model, isotropic_family(in.dimension), onset, ultimate, -1.0, crush_ratio);
+}
+
+double homogeneous_compression_peak(const ElasticInput& in, PdModel model, const HomogeneousFamily& family,
+                                    double onset, double ultimate, double crush_ratio) {
+  return homogeneous_uniaxial_peak(in, model, family, onset, ultimate, -1.0, crush_ratio);
 }
 
 double calibrated_onset_stretch(const ElasticInput& in, PdModel model, double tensile_strength, double brittle_stretch) {

@@ -3,6 +3,7 @@
 // LPS coefficients. The continuum calibration integrals are written with the influence
 // function's moments J_k = int_0^1 omega(q) q^k dq (docs/theory.md has the derivations).
 #include <cmath>
+#include <vector>
 
 #include "breccia/solver/pd_physics.hpp"
 
@@ -64,6 +65,16 @@ double homogeneous_tension_peak(const ElasticInput& in, PdModel model, double on
 // signs). Without crushing the lateral bonds' tension sets it (docs/theory.md "Crushing").
 double homogeneous_compression_peak(const ElasticInput& in, PdModel model, double onset, double ultimate,
                                     double crush_ratio);
+// The same point over a given family of bond directions instead of the isotropic continuum's:
+// each bond's n_x^2 (the load along x) and its weight (LPS: omega beta V_j |xi|^2, the weight
+// m sums). The lateral strain makes the mean lateral stress zero; for a lattice family (its
+// y and z directions alike) that is uniaxial stress. Tells what the discrete family of a
+// particle gives against the continuum (docs/theory.md "Crushing").
+struct HomogeneousFamily {
+  std::vector<double> axial2, weight;
+};
+double homogeneous_compression_peak(const ElasticInput& in, PdModel model, const HomogeneousFamily& family,
+                                    double onset, double ultimate, double crush_ratio);
 // The onset stretch whose homogeneous peak (above) is the tensile strength, the ultimate
 // stretch being brittle_stretch^2 / onset (G0 kept): the law's calibration. Returns the
 // uncalibrated sigma_t / E' when brittle_stretch is below it (the horizon is too large).

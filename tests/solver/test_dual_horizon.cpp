@@ -130,11 +130,12 @@ TEST(DualHorizon, WaveCrossesATwoToOneResolutionChangeWithLittleReflection) {
 }
 
 namespace {
-std::string graded_weibull_case(const std::string& particles, const std::string& model) {
+// `strength`: e.g. " tensile_strength: 3 MPa," for quasi-brittle (softening) bonds.
+std::string graded_weibull_case(const std::string& particles, const std::string& model, const std::string& strength = "") {
   return "specimen: {particles: " + particles + "}\n"
          "model: {type: " + model + ", planar: plane_strain, variable_horizon: true, horizon_factor: 3.015}\n"
-         "materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25, fracture_energy: 20,"
-         " weibull: {modulus: 3, seed: 5}}]\n"
+         "materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25, fracture_energy: 20," +
+         strength + " weibull: {modulus: 3, seed: 5}}]\n"
          "time: {steps: 1}\n";
 }
 }  // namespace
@@ -188,12 +189,7 @@ TEST(DiagnosticsOff, ForcesBreaksAndReleasedEnergyEqualTheDiagnosticPassBitForBi
 TEST(DamageHidden, LinearPassesGiveTheSameForcesAndDilatationBitForBit) {
   const std::string strip = graded_strip("graded_damage_hidden", 0.02, 0.01, 0.5e-3);
   for (const std::string model : {"pmb", "lps"}) {
-    const std::string deck =
-        "specimen: {particles: " + strip + "}\n"
-        "model: {type: " + model + ", planar: plane_strain, variable_horizon: true, horizon_factor: 3.015}\n"
-        "materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25, fracture_energy: 20,"
-        " tensile_strength: 3 MPa, weibull: {modulus: 3, seed: 5}}]\n"
-        "time: {steps: 1}\n";
+    const std::string deck = graded_weibull_case(strip, model, " tensile_strength: 3 MPa,");
     PdSystem s = setup_system(parse_case_file(write_case("damage_hidden_" + model, deck)));
     ASSERT_FALSE(s.bond_damage.empty()) << model << ": quasi-brittle bonds hold a damage per entry";
     ASSERT_FALSE(s.symmetric_halves) << model << ": the general loop";

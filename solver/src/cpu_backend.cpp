@@ -2,6 +2,7 @@
 // plus the host-side pieces outside a step (energies, the stable-step estimate).
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <random>
 
 #include "breccia/solver/correspondence.hpp"
@@ -163,6 +164,9 @@ class LinearForceProbe {
     sys.f32.active = false;
     sys.config.fracture = false;
     sys.diagnostics = false;
+    // The kernels' unbroken paths where no bond is damaged yet; a distributed or device pass
+    // (forces) reads its own copy of the bonds.
+    if (!forces) undamaged_.emplace(sys);
     double length_scale = 0.0;
     for (size_t i = 0; i < sys.n; ++i) length_scale = std::max(length_scale, 2.0 * sys.half_cell[i]);
     amplitude = 1e-9 * length_scale;
@@ -170,6 +174,7 @@ class LinearForceProbe {
   LinearForceProbe(const LinearForceProbe&) = delete;
   LinearForceProbe& operator=(const LinearForceProbe&) = delete;
   ~LinearForceProbe() {
+    undamaged_.reset();  // the damage back before the pass at the real displacement
     sys_.u = u_saved_;
     sys_.state = state_saved_;
     sys_.config.fracture = fracture_;
@@ -206,6 +211,7 @@ class LinearForceProbe {
   const double dissipated_;
   const bool float32_;
   const bool diagnostics_;
+  std::optional<DamageHiddenWhileUndamaged> undamaged_;
 };
 }  // namespace
 

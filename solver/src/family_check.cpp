@@ -55,13 +55,16 @@ EnergyScatter energy_scatter(PdSystem& s, const DistributedSetup& d, const Distr
   // rows, 35 % of its demo's.
   const bool rows_only = !rows.active && !s.f32.active && s.short_range_k.empty() &&
                          (s.config.model == PdModel::PMB || s.config.model == PdModel::LPS);
-  if (rows_only) {
-    std::vector<int64_t> sampled_rows;
-    for (size_t i = 0; i < n; ++i)
-      if (fill[i] >= complete_fill) sampled_rows.push_back(static_cast<int64_t>(i));
-    cpu_compute_forces_on_rows(s, sampled_rows, sampled_rows);
-  } else {
-    cpu_compute_forces(s);
+  {
+    const DamageHiddenWhileUndamaged undamaged(s);  // the unbroken dilatation loop: the same bits
+    if (rows_only) {
+      std::vector<int64_t> sampled_rows;
+      for (size_t i = 0; i < n; ++i)
+        if (fill[i] >= complete_fill) sampled_rows.push_back(static_cast<int64_t>(i));
+      cpu_compute_forces_on_rows(s, sampled_rows, sampled_rows);
+    } else {
+      cpu_compute_forces(s);
+    }
   }
   s.config.fracture = fracture;
   s.diagnostics = diagnostics;

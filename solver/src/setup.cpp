@@ -206,9 +206,13 @@ double median(std::vector<double> v) {
 // and advanced by one at each later one. Each thread's cursors live in an array of N, made
 // once per thread, each beside its stamp (one cache line per row met, not two): a block's stamp
 // marks the cursors it has placed.
+// `lower_partners_only`: only the entries whose partner j is a lower row (j < i); the others
+// touch no cursor (half the cursor work where the caller needs only those). The rows that meet
+// j from above in a block are still every such row of the block between two meetings, so a
+// cursor placed at the first advances by one as before.
 template <class F>
 void for_each_entry_with_reverse(const std::vector<int64_t>& offsets, const std::vector<int32_t>& neighbors,
-                                 int64_t first, int64_t last, F&& f) {
+                                 int64_t first, int64_t last, F&& f, bool lower_partners_only = false) {
   const int64_t n = static_cast<int64_t>(offsets.size()) - 1;
   constexpr int64_t block = 1024;  // rows: a block meets about its own rows plus a halo of a horizon
   const int64_t blocks = last > first ? (last - first + block - 1) / block : 0;
@@ -227,6 +231,7 @@ void for_each_entry_with_reverse(const std::vector<int64_t>& offsets, const std:
       for (int64_t i = first + b * block; i < row_end; ++i)
         for (int64_t k = offsets[i]; k < offsets[i + 1]; ++k) {
           const int32_t j = neighbors[k];
+          if (lower_partners_only && j > i) continue;
           Cursor& c = cursor[j];
           if (c.stamp != b) {
             c.stamp = b;
@@ -943,9 +948,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     // The other entry of each shared pair: its reverse's values, own and dual swapped. Kept
     // entries are symmetric (beta_own > 0 || beta_dual > 0 reads the same two counts from
     // either end) and rows stay sorted, so the kept lists have reverse entries too.
-    for_each_entry_with_reverse(s.offsets, s.neighbor, 0, static_cast<int64_t>(n), [&](int64_t i, int64_t k, int64_t r) {
+    const auto copy = [&](int64_t i, int64_t k, int64_t r) {
       const int32_t j = s.neighbor[k];
-      if (j > i) return;
       // Shared halves: (j -> i)'s dual is its own half (store_dual above).
       if (copy_weights) {
         s.k_own[k] = store_dual ? s.k_dual[r] : s.k_own[r];
@@ -955,7 +959,9 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       s.s0_own[k] = store_dual ? s.s0_dual[r] : s.s0_own[r];
       if (store_dual) s.s0_dual[k] = s.s0_own[r];
       if (c.softening) s.s_onset[k] = s.s_onset[r];
-    });
+    };
+    // Only the entries of the higher row of each pair (j < i) take a copy.
+    for_each_entry_with_reverse(s.offsets, s.neighbor, 0, static_cast<int64_t>(n), copy, true);
   }
 
   // 2D: make each family's fourth-order moment isotropic. A square lattice at m = 3 has a

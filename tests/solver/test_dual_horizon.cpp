@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "breccia/common/particle_file.hpp"
+#include "breccia/solver/exec_openmp.hpp"
 #include "helpers.hpp"
 #include "measures.hpp"
 
@@ -129,11 +130,12 @@ TEST(DualHorizon, WaveCrossesATwoToOneResolutionChangeWithLittleReflection) {
 }
 
 namespace {
-std::string graded_weibull_case(const std::string& particles, const std::string& model) {
+// `strength`: e.g. " tensile_strength: 3 MPa," for quasi-brittle (softening) bonds.
+std::string graded_weibull_case(const std::string& particles, const std::string& model, const std::string& strength = "") {
   return "specimen: {particles: " + particles + "}\n"
          "model: {type: " + model + ", planar: plane_strain, variable_horizon: true, horizon_factor: 3.015}\n"
-         "materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25, fracture_energy: 20,"
-         " weibull: {modulus: 3, seed: 5}}]\n"
+         "materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25, fracture_energy: 20," +
+         strength + " weibull: {modulus: 3, seed: 5}}]\n"
          "time: {steps: 1}\n";
 }
 }  // namespace
@@ -175,6 +177,43 @@ TEST(DiagnosticsOff, ForcesBreaksAndReleasedEnergyEqualTheDiagnosticPassBitForBi
       EXPECT_EQ(0, std::memcmp(released_off.data(), s.dissipated.data(), s.n * sizeof(double)))
           << model << (graded ? " graded" : " lattice");
     }
+}
+
+// The set-up's linear passes (the stable-step probe, the energy-scatter check: fracture off)
+// hide a softening system's bond damage while every bond's is 0 (DamageHiddenWhileUndamaged),
+// so that the kernels take the unbroken loops. With fracture off soften() returns the stored
+// damage, so each entry keeps 1.0 of its force and dilatation weight: the forces and the
+// dilatation must be the same bits either way. On the graded strip (the general loop, dual
+// horizons) with quasi-brittle bonds, PMB and LPS, at a small random displacement; and a
+// damaged bond must keep the damage where the kernels read it.
+TEST(DamageHidden, LinearPassesGiveTheSameForcesAndDilatationBitForBit) {
+  const std::string strip = graded_strip("graded_damage_hidden", 0.02, 0.01, 0.5e-3);
+  for (const std::string model : {"pmb", "lps"}) {
+    const std::string deck = graded_weibull_case(strip, model, " tensile_strength: 3 MPa,");
+    PdSystem s = setup_system(parse_case_file(write_case("damage_hidden_" + model, deck)));
+    ASSERT_FALSE(s.bond_damage.empty()) << model << ": quasi-brittle bonds hold a damage per entry";
+    ASSERT_FALSE(s.symmetric_halves) << model << ": the general loop";
+    SplitMixUniform uniform{7};
+    for (size_t k = 0; k < 3 * s.n; ++k) s.u[k] = (k % 3 == 2) ? 0.0 : 1e-9 * uniform();
+    s.config.fracture = false;
+    s.diagnostics = false;
+    cpu_compute_forces(s);
+    const std::vector<double> force_with = s.force, dilatation_with = s.dilatation;
+    {
+      const DamageHiddenWhileUndamaged hidden(s);
+      EXPECT_TRUE(s.bond_damage.empty()) << model;
+      std::fill(s.force.begin(), s.force.end(), 0.0);
+      std::fill(s.dilatation.begin(), s.dilatation.end(), 0.0);
+      cpu_compute_forces(s);
+    }
+    ASSERT_EQ(s.bond_damage.size(), s.state.size()) << model << ": the damage is back";
+    EXPECT_TRUE(std::all_of(s.bond_damage.begin(), s.bond_damage.end(), [](float d) { return d == 0.0f; }));
+    EXPECT_EQ(0, std::memcmp(force_with.data(), s.force.data(), s.force.size() * sizeof(double))) << model;
+    EXPECT_EQ(0, std::memcmp(dilatation_with.data(), s.dilatation.data(), s.n * sizeof(double))) << model;
+    s.bond_damage[s.bond_damage.size() / 2] = 0.5f;  // one damaged bond: its force is half, so nothing is hidden
+    const DamageHiddenWhileUndamaged kept(s);
+    EXPECT_FALSE(s.bond_damage.empty()) << model;
+  }
 }
 
 // The Weibull draw (and the critical stretches from it) is computed once per bond and copied

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <span>
 #include <type_traits>
+#include <vector>
 
 #include "breccia/solver/pd_system.hpp"
 #include "breccia/solver/step.hpp"
@@ -116,5 +117,35 @@ StepArrays<float> float32_step_arrays(PdSystem& s);
 // were. No released-energy sum.
 void cpu_compute_forces_on_rows(PdSystem& sys, std::span<const int64_t> force_rows,
                                 std::span<const int64_t> dilatation_rows);
+
+// The set-up's linear passes (fracture off: the stable-step estimate, the energy-scatter
+// check) on a softening system whose bonds hold no damage yet: with fracture off, soften()
+// returns the stored damage, 0, so every entry keeps 1.0 of its force and 1.0 of its
+// dilatation weight, and 1.0 * x is x: the kernels give the same bits with the damage array
+// hidden from them, and then take the unbroken paths (fast_bond_loop: the two-stage general
+// loop and dilatation) instead of the per-entry softening loop, which the probe's passes ran
+// at twice the cost on the full concrete case (docs/performance.md). Hidden only while this
+// lives, only where no bond has any damage; put back untouched (a move, no copy).
+class DamageHiddenWhileUndamaged {
+ public:
+  explicit DamageHiddenWhileUndamaged(PdSystem& sys) : sys_(sys) {
+    if (sys.config.fracture || sys.bond_damage.empty()) return;  // (callers turn fracture off first)
+    const int64_t entries = static_cast<int64_t>(sys.bond_damage.size());
+    const float* d = sys.bond_damage.data();
+    bool undamaged = true;
+#pragma omp parallel for schedule(static) reduction(&& : undamaged)
+    for (int64_t k = 0; k < entries; ++k) undamaged = undamaged && d[k] == 0.0f;
+    if (undamaged) hidden_.swap(sys.bond_damage);
+  }
+  DamageHiddenWhileUndamaged(const DamageHiddenWhileUndamaged&) = delete;
+  DamageHiddenWhileUndamaged& operator=(const DamageHiddenWhileUndamaged&) = delete;
+  ~DamageHiddenWhileUndamaged() {
+    if (!hidden_.empty()) hidden_.swap(sys_.bond_damage);
+  }
+
+ private:
+  PdSystem& sys_;
+  std::vector<float> hidden_;
+};
 
 }  // namespace breccia::solver

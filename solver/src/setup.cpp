@@ -689,8 +689,9 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // The counts (at most 216) fit a byte: the fraction count / 216 is the quadrature's exactly.
   // A distributed set-up holds only its own rows: there the dual is counted from this end.
   // A uniform lattice (one spacing, one horizon) looks both counts up by the entry's integer
-  // offset (LatticeSampleCounts: the same counts, bit for bit), with no count bytes and no
-  // pass over the reverse entries.
+  // offset (LatticeSampleCounts: the same counts, bit for bit), with no pass over the reverse
+  // entries; the pass that counts the kept entries keeps both counts in the count bytes, so
+  // the fill below reads them instead of looking each entry up a second time.
   const bool sampled = c.partial_volume == PartialVolume::Sampled;
   bool uniform = sampled && n > 0;
   for (size_t i = 1; i < n && uniform; ++i) uniform = s.half_cell[i] == s.half_cell[0] && s.horizon[i] == s.horizon[0];
@@ -739,6 +740,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         for (int64_t k = 0; k < entries; ++k) betas_equal = betas_equal && samples_inside[k] == dual_inside[k];
       }
     } else {
+      if (uniform) {
+        assign_on_huge_pages(samples_inside, fam.neighbors.size());
+        assign_on_huge_pages(dual_inside, fam.neighbors.size());
+      }
 #pragma omp parallel for schedule(dynamic, 256) reduction(&& : betas_equal)
       for (int64_t i = first; i < last; ++i)
         for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
@@ -749,6 +754,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
           if (uniform) {
             int own, reverse;
             lattice_counts->counts(xv, own, reverse);
+            samples_inside[k] = static_cast<uint8_t>(own);  // at most 216 (partial_volume_sample_total)
+            dual_inside[k] = static_cast<uint8_t>(reverse);
             keep = own > 0 || reverse > 0;
             betas_equal = betas_equal && own == reverse;
           } else if (sampled && compare_betas && betas_equal) {  // both counts, until a thread finds them unequal
@@ -784,20 +791,13 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // beta of entry k = (i -> j): its own half-bond (j's cell in i's horizon) and its dual (i's cell in j's).
   auto beta_own_dual = [&](int64_t i, int64_t k, double& beta_own, double& beta_dual) {
     const int32_t j = fam.neighbors[k];
-    if (dual_by_reverse) {
+    if (dual_by_reverse || uniform) {  // both counts kept in the count bytes
       beta_own = sample_fraction[samples_inside[k]];
       beta_dual = sample_fraction[dual_inside[k]];
       return;
     }
     const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1], s.x0[3 * j + 2] - s.x0[3 * i + 2]};
     const double xm[3] = {-xv[0], -xv[1], -xv[2]};
-    if (uniform) {
-      int own, reverse;
-      lattice_counts->counts(xv, own, reverse);
-      beta_own = sample_fraction[own];
-      beta_dual = sample_fraction[reverse];
-      return;
-    }
     if (sampled) {  // dist: j's row may be another rank's; the same count, from this end
       beta_own = sample_fraction[samples_inside[k]];
       beta_dual = partial_volume_samples_inside(xm, s.horizon[j], s.half_cell[i], s.dimension) / sample_total;

@@ -898,29 +898,19 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   for (int64_t i = rows_begin; i < rows_end; ++i) {
     int64_t out = s.offsets[i];
     CalibrationMemo modulus_own, modulus_dual, s0_memo;  // one row: one horizon, mostly one material
-    // The arrays' storage in locals: the state byte's store may alias any object (a char
-    // type), so read through `s` each pointer was loaded again after it, per entry.
-    const double* const x0 = s.x0.data();
-    const double* const volume = s.volume.data();
-    int32_t* const neighbor_out = s.neighbor.data();
-    double* const xi_out = s.xi_len.data();
-    double* const vol_out = s.vol_own.data();
-    double* const k_own_out = s.k_own.data();
-    double* const k_dual_out = s.k_dual.data();
-    uint8_t* const state_out = s.state.data();
     for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
       double beta_own, beta_dual;
       beta_own_dual(i, k, beta_own, beta_dual);
       if (beta_own <= 0 && beta_dual <= 0) continue;
       const int32_t j = fam.neighbors[k];
       double r2 = 0;
-      for (int d = 0; d < 3; ++d) r2 += std::pow(x0[3 * j + d] - x0[3 * i + d], 2);
+      for (int d = 0; d < 3; ++d) r2 += std::pow(s.x0[3 * j + d] - s.x0[3 * i + d], 2);
       const double xi = std::sqrt(r2);
-      neighbor_out[out] = j;
-      xi_out[out] = xi;
-      vol_out[out] = beta_own * volume[j];
-      // The fill's value (both bits) less each half without volume.
-      state_out[out] = static_cast<uint8_t>((beta_own <= 0 ? 0 : kOwnIntact) | (beta_dual <= 0 ? 0 : kDualIntact));
+      s.neighbor[out] = j;
+      s.xi_len[out] = xi;
+      s.vol_own[out] = beta_own * s.volume[j];
+      if (beta_own <= 0) s.state[out] &= static_cast<uint8_t>(~kOwnIntact);
+      if (beta_dual <= 0) s.state[out] &= static_cast<uint8_t>(~kDualIntact);
       if (copy_weights && j < i) {  // the weights and the shared strengths are copied below
         if (!strengths_shared(i, j)) fill_strengths(i, j, out, s0_memo);
         ++out;
@@ -933,8 +923,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
                                 ? (weighted ? influence(c.influence, xi / s.horizon[j]) * beta_dual : beta_dual)
                                 : 0.0;
       if (lps) {
-        k_own_out[out] = w_own;
-        if (store_dual) k_dual_out[out] = w_dual;
+        s.k_own[out] = w_own;
+        if (store_dual) s.k_dual[out] = w_dual;
       } else {
         // Dual-horizon PD sums each bond from both horizons, hence half the textbook modulus
         // per half-bond ([Fukuda PD], eq. 2/11).
@@ -942,8 +932,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         const double c_own = modulus_own(mi, mj, s.horizon[i], 0.0, [&] { return pair_micromodulus(mi, mj, s.horizon[i]); });
         auto dual_modulus = [&] { return pair_micromodulus(mi, mj, s.horizon[j]); };
         const double c_dual = store_dual ? modulus_dual(mi, mj, s.horizon[j], 0.0, dual_modulus) : 0.0;
-        k_own_out[out] = 0.5 * c_own * w_own * volume[j];
-        if (store_dual) k_dual_out[out] = 0.5 * c_dual * w_dual * volume[j];
+        s.k_own[out] = 0.5 * c_own * w_own * s.volume[j];
+        if (store_dual) s.k_dual[out] = 0.5 * c_dual * w_dual * s.volume[j];
       }
       // The strengths of a pair shared by both its entries are drawn at one (the entry of
       // the lower row); the other's are copied below.

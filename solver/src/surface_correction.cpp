@@ -105,35 +105,6 @@ std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<Elasti
 
 void scale_bonds_by_axis_factors(PdSystem& s, const std::vector<double>& axis_factor) {
   const bool dual = !s.dual_halves_shared;  // shared dual halves are the own ones (pd_system.hpp)
-  // One factor everywhere (PMB's bulk calibration without the surface correction): every
-  // bond's g = 0.5 (a + a) is one value, so ellipsoid_bond_factor's operations are done with
-  // g g formed once and no factor read per bond (the same operations, the same bits).
-  const bool one_factor =
-      !axis_factor.empty() && std::all_of(axis_factor.begin(), axis_factor.end(), [&](double a) { return a == axis_factor[0]; });
-  if (one_factor) {
-    const double g = 0.5 * (axis_factor[0] + axis_factor[0]), g2 = g * g;
-    const int dims = s.dimension;
-#pragma omp parallel for
-    for (size_t i = 0; i < s.n; ++i) {
-      const double* const x0 = s.x0.data();
-      const int32_t* const neighbor = s.neighbor.data();
-      const double* const xi_len = s.xi_len.data();
-      double* const k_own = s.k_own.data();
-      double* const k_dual = s.k_dual.data();
-      for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
-        const int32_t j = neighbor[k];
-        double inv2 = 0.0;
-        for (int a = 0; a < dims; ++a) {
-          const double na = (x0[3 * j + a] - x0[3 * i + a]) / xi_len[k];
-          inv2 += na * na / g2;
-        }
-        const double f = 1.0 / std::sqrt(inv2);
-        k_own[k] *= f;
-        if (dual) k_dual[k] *= f;
-      }
-    }
-    return;
-  }
 #pragma omp parallel for
   for (size_t i = 0; i < s.n; ++i)
     for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {

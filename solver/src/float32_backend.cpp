@@ -95,7 +95,7 @@ PdViewT<float> float32_view(PdSystem& s) {
   p.volume = f.volume.data(); p.density = f.density.data(); p.fixed_dof = s.fixed_dof.data();
   p.offsets = s.offsets.data(); p.neighbor = s.neighbor.data(); p.xi_len = f.xi_len.data();
   // Shared dual halves (pd_system.hpp k_dual_halves): no float copy either, the own ones serve.
-  p.k_own = f.k_own.data(); p.k_dual = s.dual_halves_shared ? f.k_own.data() : f.k_dual.data(); p.vol_own = f.vol_own.data();
+  p.k_own = f.k_own.data(); p.k_dual = s.f32_k_dual_halves().data(); p.vol_own = f.vol_own.data();
   p.s0_own = s.s0_own.data(); p.s0_dual = s.s0_dual_halves().data(); p.state = s.state.data();
   if (!s.min_stretch.empty() && s.n) {  // shared with the double view: float in both
     p.alpha = static_cast<float>(s.config.compressive_enhancement);

@@ -656,7 +656,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
       m.sell_fxi_len.upload(layout.gather(s.f32.xi_len, 1.0f), "SELL float bond lengths");
       m.sell_fk_own.upload(layout.gather(s.f32.k_own, 0.0f), "SELL float moduli");
       if (dual) {
-        m.sell_fk_dual.upload(layout.gather(s.dual_halves_shared ? s.f32.k_own : s.f32.k_dual, 0.0f),
+        m.sell_fk_dual.upload(layout.gather(s.f32_k_dual_halves(), 0.0f),
                               "SELL float dual moduli");
         m.sell_fvol_own.upload(layout.gather(s.f32.vol_own, 0.0f), "SELL float damage weights");
       }

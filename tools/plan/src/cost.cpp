@@ -13,7 +13,6 @@
 #include "breccia/common/particle_file.hpp"
 #include "breccia/plan/plan.hpp"
 #include "breccia/solver/family.hpp"
-#include "breccia/solver/pd_system.hpp"
 #include "breccia/solver/pd_physics.hpp"
 #include "breccia/solver/pd_system.hpp"
 

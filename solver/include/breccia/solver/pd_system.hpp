@@ -84,6 +84,8 @@ struct PdSystem {
   bool dual_halves_shared = false;
   const std::vector<double>& k_dual_halves() const { return dual_halves_shared ? k_own : k_dual; }
   const std::vector<float>& s0_dual_halves() const { return dual_halves_shared ? s0_own : s0_dual; }
+  // The float copy's dual moduli (model.precision: float32; float32_state.hpp), the same way.
+  const std::vector<float>& f32_k_dual_halves() const { return dual_halves_shared ? f32.k_own : f32.k_dual; }
   // The bond arrays' bytes per entry (summary.json's bytes_per_particle; softening's two
   // arrays not counted): neighbor, xi_len, k_own, vol_own, s0_own, state, and the dual halves.
   size_t bytes_per_bond_entry() const { return bond_entry_bytes(dual_halves_shared); }

@@ -656,4 +656,3 @@ TEST(Crushing, BadInputNamesTheKey) {
   expect_error(", compressive_strength: 30 MPa", "without a tensile_strength");
   expect_error(", tensile_strength: 3 MPa, compressive_strength: 2 MPa", "below the tensile_strength");
 }
-

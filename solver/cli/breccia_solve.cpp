@@ -256,6 +256,7 @@ int main(int argc, char** argv) {
       opt.backend_loop = solver::mpi_time_loop;
       opt.relax = solver::mpi_relax;
       opt.setup_hooks.stable_step_forces = solver::mpi_stable_step_forces;
+      opt.setup_hooks.stable_step_ranks = solver::mpi_stable_step_ranks;
       opt.setup_hooks.distributed = solver::mpi_distributed_setup();
       // Only rank 0 writes: make sure it can before the others set up and wait for it.
       std::string why;

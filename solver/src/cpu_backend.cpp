@@ -157,8 +157,11 @@ double largest_tridiagonal_eigenvalue(const std::vector<double>& alpha, const st
 // displacement.
 class LinearForceProbe {
  public:
-  LinearForceProbe(PdSystem& sys, const ForcePass& forces)
-      : sys_(sys), forces_(forces), u_saved_(sys.u), state_saved_(sys.state), fracture_(sys.config.fracture),
+  // keeps_u: the caller writes no displacement to sys (a distributed estimate writes the
+  // ranks' systems'), so sys.u is not saved.
+  LinearForceProbe(PdSystem& sys, const ForcePass& forces, bool keeps_u = false)
+      : sys_(sys), forces_(forces), keeps_u_(keeps_u), u_saved_(keeps_u ? std::vector<double>{} : sys.u),
+        state_saved_(sys.state), fracture_(sys.config.fracture),
         dissipated_(sys.dissipated_energy), float32_(sys.f32.active), diagnostics_(sys.diagnostics) {
     // Strains of 1e-9 are below float's resolution: the estimate is always made in double.
     sys.f32.active = false;
@@ -175,7 +178,7 @@ class LinearForceProbe {
   LinearForceProbe& operator=(const LinearForceProbe&) = delete;
   ~LinearForceProbe() {
     undamaged_.reset();  // the damage back before the pass at the real displacement
-    sys_.u = u_saved_;
+    if (!keeps_u_) sys_.u = u_saved_;
     sys_.state = state_saved_;
     sys_.config.fracture = fracture_;
     sys_.dissipated_energy = dissipated_;
@@ -205,6 +208,7 @@ class LinearForceProbe {
  private:
   PdSystem& sys_;
   const ForcePass& forces_;
+  const bool keeps_u_;
   const std::vector<double> u_saved_;
   const std::vector<uint8_t> state_saved_;
   const bool fracture_;
@@ -262,7 +266,7 @@ std::vector<uint8_t> stable_step_region(const PdSystem& sys, double ratio) {
 }
 
 double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const ForcePass& forces, double region_ratio,
-                                      const StableStepStartWave* wave) {
+                                      const StableStepStartWave* wave, const StableStepRanks* ranks) {
   // Lanczos on M^-1 K, self-adjoint in the mass inner product <x, y> = sum rho_i V_i x_i y_i,
   // with K applied through the force kernel at a displacement small enough to be linear
   // (fracture off, state restored afterwards). The largest Ritz value approaches omega_max^2
@@ -308,42 +312,64 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
   }
   double lambda = 0.0;
   {
-    LinearForceProbe probe(sys, forces);
+    // A distributed run (ranks): each rank holds the vectors' entries of its own particles'
+    // degrees of freedom only, a contiguous piece of one process's (the rank owns a range of
+    // the internal order), and every sum over them is chained over the ranks in rank order
+    // (StableStepRanks::chain): rank r continues rank r - 1's running sum, so each sum is
+    // one process's loop, term by term, and the estimate one process's to the last bit.
+    const bool shared = ranks && ranks->pass;
+    const size_t k_begin = shared ? 3 * static_cast<size_t>(ranks->begin) : 0;
+    const size_t k_end = shared ? 3 * static_cast<size_t>(ranks->end) : n3;
+    LinearForceProbe probe(sys, forces, shared);
     const double amplitude = probe.amplitude;
     const bool planar = sys.dimension == 2;  // z is no degree of freedom
     // The vectors hold the free degrees of freedom only (ascending): one outside the region
     // is held at rest, zero in every vector, so leaving it out changes no sum (it added +0)
     // and spares each pass seven loops over the whole system's 3 N (873,333 on the full
     // concrete case, against 81,153 of its region).
+    auto free_dof = [&](size_t k) { return !(planar && k % 3 == 2) && (!restricted || region[k / 3]); };
     std::vector<size_t> dofs;
-    for (size_t k = 0; k < n3; ++k)
-      if (!(planar && k % 3 == 2) && (!restricted || region[k / 3])) dofs.push_back(k);
+    size_t free_count = 0;  // reserved first: grown by push_back it held up to twice its size
+    for (size_t k = k_begin; k < k_end; ++k) free_count += free_dof(k);
+    dofs.reserve(free_count);
+    for (size_t k = k_begin; k < k_end; ++k)
+      if (free_dof(k)) dofs.push_back(k);
     const size_t m = dofs.size();
     std::vector<double> mass(m);
     for (size_t c = 0; c < m; ++c) mass[c] = sys.density[dofs[c] / 3] * sys.volume[dofs[c] / 3];
+    // A sum over every degree of freedom: `f` continues it over this process's from `start`.
+    auto whole_sum = [&](const std::function<double(double)>& f) { return shared ? ranks->chain(f) : f(0.0); };
     // Sums in one fixed order (no thread reduction): the stable step must not depend on the
     // thread count, nor on how a distributed run shares the force passes.
     auto dot = [&](const std::vector<double>& x, const std::vector<double>& y) {
-      double sum = 0.0;
-      for (size_t c = 0; c < m; ++c) sum += mass[c] * x[c] * y[c];
-      return sum;
+      return whole_sum([&](double sum) {
+        for (size_t c = 0; c < m; ++c) sum += mass[c] * x[c] * y[c];
+        return sum;
+      });
     };
     // y = M^-1 K x: the force pass at u = amplitude x / |x| (the same displacement scale
-    // whatever x's norm), scaled back; u is zero on every other degree of freedom.
-    std::fill(sys.u.begin(), sys.u.end(), 0.0);
+    // whatever x's norm), scaled back; u is zero on every other degree of freedom. A
+    // distributed run writes its owned displacements into its rank's system (the ghosts'
+    // come from their owners in the pass) and reads its owned forces there.
+    double* const u = shared ? ranks->u : sys.u.data();
+    const double* const force = shared ? ranks->force : sys.force.data();
+    std::fill(u, u + (k_end - k_begin), 0.0);
     auto apply = [&](const std::vector<double>& x, std::vector<double>& y) {
-      double norm = 0.0;
-      for (size_t c = 0; c < m; ++c) norm += x[c] * x[c];
+      double norm = whole_sum([&](double sum) {
+        for (size_t c = 0; c < m; ++c) sum += x[c] * x[c];
+        return sum;
+      });
       norm = std::sqrt(norm);
-      for (size_t c = 0; c < m; ++c) sys.u[dofs[c]] = amplitude * x[c] / norm;
-      probe.push(row_subset ? &rows : nullptr);
-      for (size_t c = 0; c < m; ++c) y[c] = -sys.force[dofs[c]] / sys.density[dofs[c] / 3] / amplitude * norm;
+      for (size_t c = 0; c < m; ++c) u[dofs[c] - k_begin] = amplitude * x[c] / norm;
+      if (shared) ranks->pass(sys);
+      else probe.push(row_subset ? &rows : nullptr);
+      for (size_t c = 0; c < m; ++c) y[c] = -force[dofs[c] - k_begin] / sys.density[dofs[c] / 3] / amplitude * norm;
     };
     std::mt19937_64 rng(12345);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
     std::vector<double> q(m), q_prev(m, 0.0), w(m);
     for (size_t k = 0, c = 0; k < n3; ++k) {
-      const double r = uni(rng);  // drawn for every degree of freedom: the region's are the whole start's
+      const double r = uni(rng);  // drawn for every degree of freedom: the region's (the rank's) are the whole start's
       if (c < m && dofs[c] == k) q[c++] = r;
     }
     double q_norm = std::sqrt(dot(q, q));

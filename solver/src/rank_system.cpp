@@ -90,9 +90,9 @@ std::vector<int32_t> local_to_global(const RankLayout& L) {
   return ids;
 }
 
-}  // namespace
-
-PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) {
+// restrict_to_rank; `partners`: the owned rows' partners, renumbered to local indices in
+// place and kept (restrict_to_rank_taking_bonds), or null: copied from g's and renumbered.
+PdSystem restrict_rank(const PdSystem& g, const RankLayout& L, std::vector<int32_t>* partners) {
   PdSystem s;
   s.config = g.config;
   s.dimension = g.dimension;
@@ -122,8 +122,13 @@ PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) {
   const int64_t eb = g.offsets[b], ee = g.offsets[b + owned];
   s.offsets.resize(static_cast<size_t>(owned) + 1);
   for (int64_t i = 0; i <= owned; ++i) s.offsets[i] = g.offsets[b + i] - eb;
-  s.neighbor.resize(static_cast<size_t>(ee - eb));
-  for (int64_t k = eb; k < ee; ++k) s.neighbor[k - eb] = static_cast<int32_t>(L.local_index(g.neighbor[k]));
+  if (partners) {
+    for (int32_t& j : *partners) j = static_cast<int32_t>(L.local_index(j));
+    s.neighbor = std::move(*partners);
+  } else {
+    s.neighbor.resize(static_cast<size_t>(ee - eb));
+    for (int64_t k = eb; k < ee; ++k) s.neighbor[k - eb] = static_cast<int32_t>(L.local_index(g.neighbor[k]));
+  }
   s.xi_len = slice(g.xi_len, eb, ee);
   s.k_own = slice(g.k_own, eb, ee);
   s.k_dual = slice(g.k_dual, eb, ee);
@@ -163,6 +168,10 @@ PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) {
   return s;
 }
 
+}  // namespace
+
+PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) { return restrict_rank(g, L, nullptr); }
+
 PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
   if (g.distributed_rows.empty() || eb != 0 || ee != static_cast<int64_t>(g.neighbor.size())) return restrict_to_rank(g, L);
@@ -189,7 +198,12 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
     k_dual.swap(g.k_dual);
     vol_own.swap(g.vol_own);
   }
-  PdSystem s = restrict_to_rank(g, L);
+  // The partners too, renumbered in place (a copy was 4 B per entry more at the peak), unless
+  // rank 0's writers read the global ones (root_gathers_bond_list: then copied).
+  std::vector<int32_t> partners;
+  if (root_gathers_bond_list(g.config)) partners = g.neighbor;
+  else partners.swap(g.neighbor);
+  PdSystem s = restrict_rank(g, L, &partners);
   s.xi_len = std::move(xi_len);
   s.k_own = std::move(k_own);
   s.k_dual = std::move(k_dual);
@@ -198,7 +212,6 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   s.s0_dual = std::move(s0_dual);
   s.s_onset = std::move(s_onset);
   s.gas.halves = std::move(gas_halves);
-  if (!root_gathers_bond_list(g.config)) std::vector<int32_t>().swap(g.neighbor);  // renumbered in s
   return s;
 }
 

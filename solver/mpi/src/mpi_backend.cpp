@@ -1148,9 +1148,11 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
   // A distributed set-up's bonds move into the rank's system: the global one lets them go.
   auto sh = make_rank_share(global, MPI_COMM_WORLD, global.distributed_rows.empty() ? nullptr : &global);
   g_setup_share = sh;
-  // Each rank computes its rows at the iteration's displacement and all gather the forces:
-  // every rank then holds one process's force array, bit for bit, and takes the power
-  // iteration's sums in its order, so the stable step is one process's to the last bit.
+  // Each rank computes its rows at the global system's displacement and all gather the
+  // forces: every rank then holds one process's force array, bit for bit. The set-up's
+  // Lanczos estimate runs its iterations on the ranks' shares instead (mpi_stable_step_ranks:
+  // no vector whole on any rank) and calls this pass once, at the real displacement, at its
+  // end; the power iteration (estimate_max_frequency) still takes every pass here.
   return [sh](PdSystem& g) {
     PdSystem& l = sh->local;
     const RankLayout& L = sh->layout;
@@ -1181,6 +1183,39 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
       g.dissipated_energy = l.dissipated_energy;
     }
   };
+}
+
+StableStepRanks mpi_stable_step_ranks() {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  std::shared_ptr<RankShare> sh = g_setup_share;  // mpi_stable_step_forces's, just built
+  if (size == 1 || !sh) return {};
+  StableStepRanks r;
+  r.begin = sh->layout.begin();
+  r.end = r.begin + sh->layout.owned();
+  r.u = sh->local.u.data();
+  r.force = sh->local.force.data();
+  r.pass = [sh](PdSystem& g) {
+    PdSystem& l = sh->local;
+    l.config.fracture = g.config.fracture;  // the estimate turns fracture off
+    l.diagnostics = g.diagnostics;
+    MpiExec exec(l, *sh->halo, sh->contact.get(), sh->gas.get());
+    StepArrays<double> a = cpu_step_arrays(l);
+    a.ghosts = sh->layout.ghosts();
+    pd_force_pass(exec, a, true);  // the ghosts' displacements from their owners first
+  };
+  // Rank r continues rank r - 1's running sum over its own terms and hands it on; the last
+  // rank's is the sum, one process's bits (its loop term by term), sent to every rank.
+  r.chain = [rank, size](const std::function<double(double)>& f) {
+    double sum = 0.0;
+    if (rank > 0) MPI_Recv(&sum, 1, MPI_DOUBLE, rank - 1, 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    sum = f(sum);
+    if (rank + 1 < size) MPI_Send(&sum, 1, MPI_DOUBLE, rank + 1, 0, MPI_COMM_WORLD);
+    MPI_Bcast(&sum, 1, MPI_DOUBLE, size - 1, MPI_COMM_WORLD);
+    return sum;
+  };
+  return r;
 }
 
 DistributedSetup mpi_distributed_setup() {

@@ -173,6 +173,22 @@ struct PdSystem {
 using ForcePass = std::function<void(PdSystem&)>;
 using ForcePassFactory = std::function<ForcePass(PdSystem&)>;
 
+// The stable-step estimate of a distributed run (solver/mpi/), each rank holding its own share
+// of the Lanczos vectors: the rank's particles [begin, end) (one contiguous range of the
+// internal order), its system's displacement and force arrays (owned particles first, in that
+// order: 3 values each), `pass` fills the owned forces from the owned displacements (the
+// ghosts' come from their owners), and `chain` sums over every rank in one process's order:
+// rank r continues the sum `f` from rank r - 1's result (rank 0 from 0), and every rank
+// gets the last rank's, so a sum over the whole system has one process's bits at any rank
+// count. Empty (pass unset): one process, the vectors whole.
+struct StableStepRanks {
+  int64_t begin = 0, end = 0;
+  double* u = nullptr;
+  const double* force = nullptr;
+  std::function<void(PdSystem& global)> pass;
+  std::function<double(const std::function<double(double)>& f)> chain;
+};
+
 // A distributed set-up's one collective (solver/mpi/): every rank's `count` elements of
 // `element_bytes` at `data`, concatenated in rank order, returned on every rank (everyone)
 // or on rank 0 only (the others get nothing). With it each rank builds the bonds of the
@@ -186,6 +202,9 @@ struct DistributedSetup {
 // What a distributed run changes in the set-up (solver/mpi/); empty: one process.
 struct SetupHooks {
   ForcePassFactory stable_step_forces;
+  // Once stable_step_forces has built its pass: the ranks' shares of the estimate's vectors
+  // (StableStepRanks). Empty: the vectors whole on every rank.
+  std::function<StableStepRanks()> stable_step_ranks;
   DistributedSetup distributed;
   // Builds the bond families in build_families' place (its arguments, its result bit for
   // bit): the CUDA backend's device build (cuda_families.hpp). Empty: build_families.
@@ -266,9 +285,11 @@ double estimate_max_frequency(PdSystem& sys, int iterations = 60, const ForcePas
 // null: found here from the system's rows.
 inline constexpr double kStableStepRegionRatio = 0.35;
 struct StableStepStartWave;
+// `ranks` (a distributed run, StableStepRanks): each rank holds the vectors of its own
+// particles only, its sums chained over the ranks; the same bits as one process's.
 double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes = 60, const ForcePass& forces = {},
                                       double region_ratio = kStableStepRegionRatio,
-                                      const StableStepStartWave* wave = nullptr);
+                                      const StableStepStartWave* wave = nullptr, const StableStepRanks* ranks = nullptr);
 // The particles the Lanczos estimate moves: 1 where the local frequency scale
 // E / (rho delta^2) is at least `ratio` of the largest; empty (the whole system) where that
 // is half the particles or more, or ratio <= 0.

@@ -57,6 +57,10 @@ bool mpi_cuda_aware();
 // SetupHooks::stable_step_forces for a distributed run: the set-up's stable-step estimate
 // with its force passes shared between the ranks (the step comes out as one process's).
 ForcePass mpi_stable_step_forces(PdSystem& global);
+// SetupHooks::stable_step_ranks for a distributed run: the rank's share of the estimate's
+// vectors over the system mpi_stable_step_forces built (StableStepRanks: its owned
+// particles, their sums chained over the ranks in rank order). Empty on one process.
+StableStepRanks mpi_stable_step_ranks();
 
 // The distributed set-up's collective (pd_system.hpp, DistributedSetup) over MPI_COMM_WORLD.
 DistributedSetup mpi_distributed_setup();

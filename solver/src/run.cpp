@@ -11,6 +11,9 @@
 #include <filesystem>
 #include <sstream>
 #include <tuple>
+#if defined(__GLIBC__)
+#include <malloc.h>  // malloc_trim
+#endif
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/json_file.hpp"
@@ -394,6 +397,15 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
   if (o.threads > 0) omp_set_num_threads(o.threads);
   const auto t0 = std::chrono::steady_clock::now();
   PdSystem s = setup_system(config, o.setup_hooks);
+#if defined(__GLIBC__)
+  // The set-up's temporaries back to the system: glibc keeps freed heap pages resident, and
+  // once a large block was freed its mmap threshold rises, so later blocks (the stable step's
+  // vectors, the temporaries freed before its end) come from the heap and stayed resident
+  // through the loop (one process, 41^3 lattice: 10 MB more once the set-up freed its sample
+  // counts earlier; docs/parallel.md, Memory). A distributed run trims again when its global
+  // system lets go (release_global_for_loop).
+  malloc_trim(0);
+#endif
   if (!o.restart_file.empty()) read_checkpoint(s, o.restart_file, o.setup_hooks.distributed.rank);
   const double setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (o.progress) {

@@ -410,7 +410,7 @@ CaseConfig parse_case_file(const std::string& path) {
     if (type == "gas")
       l.allow_only({"type", "surface", "history", "eos", "gamma_high", "gamma_low", "switch_pressure", "jwl", "stemming",
                     "vent_surfaces", "front_speed", "crack_entry", "gas_density", "vent_area", "ambient_pressure",
-                    "cavity_volume", "crack_pass_every", "crack_pass_tolerance"});
+                    "cavity_volume", "crack_pass_every", "crack_pass_tolerance", "crack_pass_new_crack"});
     else
       l.allow_only({"type", "surface", "set", "value", "history", "depth"});
     if (type != "traction" && type != "gas" && l.has("depth"))
@@ -469,6 +469,14 @@ CaseConfig parse_case_file(const std::string& path) {
         if (!(g.crack_pass_tolerance < 1.0))
           throw InputError(path, l.field("crack_pass_tolerance"), short_number(g.crack_pass_tolerance),
                            "a fraction of the cavity's volume below 1 (1e-3: the pressure within 0.3% at each pass)");
+      }
+      if (l.has("crack_pass_new_crack")) {
+        const std::string v = l.text("crack_pass_new_crack");
+        if (v != "at_once" && v != "tolerance")
+          throw InputError(path, l.field("crack_pass_new_crack"), "'" + v + "'",
+                           "at_once (a step where the gas can enter new crack is a pass) or tolerance (new crack "
+                           "found at the next pass counts against crack_pass_tolerance)");
+        g.crack_pass_new_crack_at_once = v == "at_once";
       }
       if (l.has("vent_area")) {
         if (l.node()["vent_area"].IsScalar() && l.text("vent_area") == "crack_opening")

@@ -106,6 +106,7 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
   g.crack_entry = spec.crack_entry;
   g.crack_pass_every = spec.crack_pass_every;
   g.crack_pass_tolerance = spec.crack_pass_tolerance;
+  g.crack_pass_new_crack_at_once = spec.crack_pass_new_crack_at_once;
   g.crack_pass_countdown = 0;
   g.crack_pass_interval = 1;
   g.crack_pass_done = false;

@@ -298,6 +298,7 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
   r.crack_entry = G.crack_entry;
   r.crack_pass_every = G.crack_pass_every;
   r.crack_pass_tolerance = G.crack_pass_tolerance;
+  r.crack_pass_new_crack_at_once = G.crack_pass_new_crack_at_once;
   r.copy_scalars(G);
   r.wall_dv = slice(G.wall_dv, fb, fe);
   r.wall_left = slice(G.wall_left, fb, fe);

@@ -68,6 +68,10 @@ struct GasSpec {
   // The interval adapts: the crack volume a pass finds the drift missed, over the cavity's
   // volume, above this halves it, below a quarter of it doubles it (gas_crack_pass_interval).
   double crack_pass_tolerance = 1e-3;
+  // at_once (true, the default): a step where the exact pass would change which entries are in
+  // the volume is a pass (GasCrackChange). tolerance (false): no such check; the new crack a
+  // pass finds counts as missed volume against crack_pass_tolerance, with the drift's error.
+  bool crack_pass_new_crack_at_once = true;
 };
 
 struct LoadSpec {

@@ -61,7 +61,9 @@ EnergyScatter energy_scatter(PdSystem& s, const DistributedSetup& d, const Distr
       std::vector<int64_t> sampled_rows;
       for (size_t i = 0; i < n; ++i)
         if (fill[i] >= complete_fill) sampled_rows.push_back(static_cast<int64_t>(i));
-      cpu_compute_forces_on_rows(s, sampled_rows, sampled_rows);
+      // Only the energy densities where the general loop's pass would give them (the same
+      // bits without its forces: cpu_energy_density_on_rows), else that pass on the rows.
+      if (!cpu_energy_density_on_rows(s, sampled_rows)) cpu_compute_forces_on_rows(s, sampled_rows, sampled_rows);
     } else {
       cpu_compute_forces(s);
     }

@@ -241,6 +241,29 @@ void cpu_compute_forces_on_rows(PdSystem& sys, std::span<const int64_t> force_ro
   }
 }
 
+bool cpu_energy_density_on_rows(PdSystem& sys, std::span<const int64_t> rows) {
+  const StepArrays<double> a = cpu_step_arrays(sys);
+  if (!sys.short_range_k.empty() || !energy_only_row_applies(a.p) || !takes_general_loop(a.p)) return false;
+  const int64_t n3 = static_cast<int64_t>(3 * sys.n);
+  const CurrentPositions positions{a.p.x0, a.p.u, a.x};
+  const Dilatation<double> dilatation{a.p};
+  const PdViewT<double> p = a.p;
+  const bool lps = a.p.model == static_cast<int>(PdModel::LPS);
+  const int64_t nr = static_cast<int64_t>(rows.size());
+#pragma omp parallel
+  {
+#pragma omp for schedule(static)
+    for (int64_t k = 0; k < n3; ++k) positions(k);
+    if (lps) {
+#pragma omp for schedule(dynamic, 256)
+      for (int64_t q = 0; q < nr; ++q) dilatation(rows[q]);
+    }
+#pragma omp for schedule(dynamic, 256)
+    for (int64_t q = 0; q < nr; ++q) general_energy_row(p, rows[q]);
+  }
+  return true;
+}
+
 std::vector<uint8_t> stable_step_region(const PdSystem& sys, double ratio) {
   // Each particle's local frequency scale omega_i^2 ~ E / (rho_i delta_i^2) (a bond's
   // stiffness over its mass at a fixed horizon ratio); the region holds those at least

@@ -40,10 +40,18 @@ EnergyScatter energy_scatter(PdSystem& s, const DistributedSetup& d, const Distr
   // Linear response: a small strain with fracture off (as estimate_max_frequency), bond
   // states and the dissipated energy restored afterwards.
   const double strain = 1e-6;
-  const std::vector<uint8_t> state_saved(s.state);
+  // The bond states and dissipated energies are saved before a force pass only: the energy-only
+  // rows (cpu_energy_density_on_rows) write positions, dilatation and energy densities alone.
+  std::vector<uint8_t> state_saved;
+  std::vector<double> dissipated_saved;
+  bool saved = false;
+  const auto save = [&] {
+    state_saved = s.state;
+    dissipated_saved = s.dissipated;
+    saved = true;
+  };
   const bool fracture = s.config.fracture, diagnostics = s.diagnostics;
   const double dissipated = s.dissipated_energy;
-  const std::vector<double> dissipated_saved(s.dissipated);
   s.config.fracture = false;
   s.diagnostics = true;
   std::fill(s.u.begin(), s.u.end(), 0.0);
@@ -61,16 +69,24 @@ EnergyScatter energy_scatter(PdSystem& s, const DistributedSetup& d, const Distr
       std::vector<int64_t> sampled_rows;
       for (size_t i = 0; i < n; ++i)
         if (fill[i] >= complete_fill) sampled_rows.push_back(static_cast<int64_t>(i));
-      cpu_compute_forces_on_rows(s, sampled_rows, sampled_rows);
+      // Only the energy densities where the general loop's pass would give them (the same
+      // bits without its forces: cpu_energy_density_on_rows), else that pass on the rows.
+      if (!cpu_energy_density_on_rows(s, sampled_rows)) {
+        save();
+        cpu_compute_forces_on_rows(s, sampled_rows, sampled_rows);
+      }
     } else {
+      save();
       cpu_compute_forces(s);
     }
   }
   s.config.fracture = fracture;
   s.diagnostics = diagnostics;
-  s.state = state_saved;
   s.dissipated_energy = dissipated;
-  s.dissipated = dissipated_saved;
+  if (saved) {
+    s.state = state_saved;
+    s.dissipated = dissipated_saved;
+  }
   const std::vector<double> energy(s.energy_density);
   std::fill(s.u.begin(), s.u.end(), 0.0);
   if (s.x.size() == s.x0.size()) s.x = s.x0;

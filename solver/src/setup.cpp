@@ -723,7 +723,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   {
     // Every row (a distributed set-up's rows other than its own are empty).
     const int64_t first = 0, last = static_cast<int64_t>(n);
-    if (sampled && !uniform) {
+    if (sampled && !uniform && !dual_by_reverse) {  // dist: this rank's own counts; the duals below
       assign_on_huge_pages(samples_inside, fam.neighbors.size());
 #pragma omp parallel for schedule(dynamic, 256)
       for (int64_t i = first; i < last; ++i)
@@ -733,18 +733,42 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
           samples_inside[k] = static_cast<uint8_t>(partial_volume_samples_inside(xv, s.horizon[i], s.half_cell[j], s.dimension));
         }
     }
-    // Kept entries (a half-bond with some volume either way), counted per row; with the
-    // sampled rule the same pass copies each entry's dual count from its reverse entry.
+    // Kept entries (a half-bond with some volume either way), counted per row. With the
+    // sampled rule on one process each pair's two counts are made at the entry of its higher
+    // row (k = (i -> j), j < i), which writes them to both entries, own and dual swapped: its
+    // own count, j's cell in i's horizon, is k's own and r = (j -> i)'s dual; the reverse
+    // count (x_i - x_j = -(x_j - x_i) exactly, j's horizon, i's cell) is r's own and k's dual:
+    // the counts each entry's own pass made, the same bits. Only the higher row's entries
+    // touch a cursor (for_each_entry_with_reverse's lower_partners_only), and no pass over
+    // the reverse entries after the counts; each entry is written by its pair alone.
     if (dual_by_reverse) {
+      assign_on_huge_pages(samples_inside, fam.neighbors.size());
       assign_on_huge_pages(dual_inside, fam.neighbors.size());
-      for_each_entry_with_reverse(fam.offsets, fam.neighbors, first, last, [&](int64_t i, int64_t k, int64_t r) {
-        dual_inside[k] = samples_inside[r];
-        keep_count[i] += samples_inside[k] > 0 || samples_inside[r] > 0;
-      });
-      if (betas_equal) {
-        const int64_t entries = static_cast<int64_t>(dual_inside.size());
-#pragma omp parallel for schedule(static) reduction(&& : betas_equal)
-        for (int64_t k = 0; k < entries; ++k) betas_equal = betas_equal && samples_inside[k] == dual_inside[k];
+      for_each_entry_with_reverse(
+          fam.offsets, fam.neighbors, first, last,
+          [&](int64_t i, int64_t k, int64_t r) {
+            const int32_t j = fam.neighbors[k];
+            const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1],
+                                  s.x0[3 * j + 2] - s.x0[3 * i + 2]};
+            const double xm[3] = {-xv[0], -xv[1], -xv[2]};
+            const uint8_t own = static_cast<uint8_t>(partial_volume_samples_inside(xv, s.horizon[i], s.half_cell[j], s.dimension));
+            const uint8_t reverse = static_cast<uint8_t>(partial_volume_samples_inside(xm, s.horizon[j], s.half_cell[i], s.dimension));
+            samples_inside[k] = own;
+            dual_inside[r] = own;
+            samples_inside[r] = reverse;
+            dual_inside[k] = reverse;
+          },
+          true);
+#pragma omp parallel for schedule(dynamic, 1024) reduction(&& : betas_equal)
+      for (int64_t i = first; i < last; ++i) {
+        int64_t kept = 0;
+        bool equal = true;
+        for (int64_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
+          kept += samples_inside[k] > 0 || dual_inside[k] > 0;
+          equal = equal && samples_inside[k] == dual_inside[k];
+        }
+        keep_count[i] = kept;
+        betas_equal = betas_equal && equal;
       }
     } else {
       if (uniform) {
@@ -822,7 +846,11 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   s.setup_kept_entries = {static_cast<int64_t>(nb)};
   // The run's largest arrays (3.3 GB on the full concrete case): huge pages (huge_pages.hpp).
   // Their first touch (the kernel zeroes each page) is most of their cost: the arrays are
-  // touched side by side, one per thread.
+  // touched side by side, one per thread. Where both counts of every candidate are in the
+  // count bytes, the kept entries' partners and states are the candidates' compacted in
+  // place after the fill (below): `neighbor` takes the family lists' storage and `state` the
+  // own counts', pages touched already, instead of 0.3 GB of fresh ones.
+  const bool compact_in_place = dual_by_reverse || uniform;
   {
     const int arrays = c.softening ? 10 : 8;
 #pragma omp parallel for schedule(dynamic, 1)
@@ -832,10 +860,12 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         case 1: if (store_dual) assign_on_huge_pages(s.k_dual, nb); break;
         case 2: assign_on_huge_pages(s.xi_len, nb); break;
         case 3: assign_on_huge_pages(s.vol_own, nb); break;
-        case 4: assign_on_huge_pages(s.neighbor, nb); break;
+        case 4: if (!compact_in_place) assign_on_huge_pages(s.neighbor, nb); break;
         case 5: assign_on_huge_pages(s.s0_own, nb); break;
         case 6: if (store_dual) assign_on_huge_pages(s.s0_dual, nb); break;
-        case 7: assign_on_huge_pages(s.state, nb, static_cast<uint8_t>(kOwnIntact | kDualIntact)); break;
+        case 7:
+          if (!compact_in_place) assign_on_huge_pages(s.state, nb, static_cast<uint8_t>(kOwnIntact | kDualIntact));
+          break;
         case 8: assign_on_huge_pages(s.s_onset, nb, FLT_MAX); break;
         case 9: assign_on_huge_pages(s.bond_damage, nb, 0.0f); break;
       }
@@ -915,11 +945,13 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       double r2 = 0;
       for (int d = 0; d < 3; ++d) r2 += std::pow(s.x0[3 * j + d] - s.x0[3 * i + d], 2);
       const double xi = std::sqrt(r2);
-      s.neighbor[out] = j;
       s.xi_len[out] = xi;
       s.vol_own[out] = beta_own * s.volume[j];
-      if (beta_own <= 0) s.state[out] &= static_cast<uint8_t>(~kOwnIntact);
-      if (beta_dual <= 0) s.state[out] &= static_cast<uint8_t>(~kDualIntact);
+      if (!compact_in_place) {
+        s.neighbor[out] = j;
+        if (beta_own <= 0) s.state[out] &= static_cast<uint8_t>(~kOwnIntact);
+        if (beta_dual <= 0) s.state[out] &= static_cast<uint8_t>(~kDualIntact);
+      }
       if (copy_weights && j < i) {  // the weights and the shared strengths are copied below
         if (!strengths_shared(i, j)) fill_strengths(i, j, out, s0_memo);
         ++out;
@@ -949,6 +981,30 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       if (!copy_strengths || j > i || !strengths_shared(i, j)) fill_strengths(i, j, out, s0_memo);
       ++out;
     }
+  }
+  if (compact_in_place) {
+    // The kept entries' partners and states, compacted in place over the candidates in order
+    // (one thread: entry `out` <= candidate k, so each candidate is read before its slot can be
+    // written): the partner j, and kOwnIntact / kDualIntact where the own / dual count is
+    // nonzero, as the fill wrote them before (beta = count / total > 0 exactly when count > 0).
+    int32_t* partner = fam.neighbors.data();
+    uint8_t* own = samples_inside.data();
+    const uint8_t* dual = dual_inside.data();
+    const int64_t candidates = static_cast<int64_t>(fam.neighbors.size());
+    int64_t out = 0;
+    for (int64_t k = 0; k < candidates; ++k) {
+      const uint8_t bits = static_cast<uint8_t>((own[k] > 0 ? kOwnIntact : 0) | (dual[k] > 0 ? kDualIntact : 0));
+      partner[out] = partner[k];
+      own[out] = bits;
+      out += bits != 0;
+    }
+    if (out != static_cast<int64_t>(nb)) throw std::logic_error("setup_system: the kept entries were miscounted");
+    fam.neighbors.resize(nb);
+    samples_inside.resize(nb);
+    release_unused_capacity(fam.neighbors);
+    release_unused_capacity(samples_inside);
+    s.neighbor = std::move(fam.neighbors);
+    s.state = std::move(samples_inside);
   }
   fam = Families{};
   std::vector<uint8_t>().swap(samples_inside);  // freed (keep_count's note)

@@ -182,6 +182,53 @@ TEST_P(StabilityMapHorizon, RowsPassGivesTheWholePassEnergyDensitiesBitForBit) {
   }
 }
 
+// The energy-scatter check's rows on the general loop take their energy densities alone
+// (cpu_energy_density_on_rows: general_energy_row, no forces): the diagnostic pass's values bit
+// for bit. Checked against the whole pass on the tet centroids with dual horizon, every third
+// row, at a strain with shear (entries with one half only among them); on a lattice (the
+// symmetric loops, which it does not reproduce) it must decline and leave the values alone.
+TEST_P(StabilityMapHorizon, EnergyOnlyRowsGiveTheWholePassEnergyDensitiesBitForBit) {
+  ASSERT_FALSE(tet_cube().empty()) << "could not mesh the cube";
+  std::string dual = tet_yaml(GetParam(), 3.015, false);
+  dual.replace(dual.find("horizon_factor:"), 15, "variable_horizon: true, horizon_factor:");
+  const std::string lattice = std::string("specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], "
+                                          "spacing: 0.5 mm}}\nmodel: {type: ") + GetParam() + ", horizon_factor: 3.015}\n"
+                              "materials: [{name: solid, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25}]\n"
+                              "time: {steps: 1}\n";
+  for (const bool symmetric : {true, false}) {
+    PdSystem s = system_from_yaml(std::string("stability_energy_rows_") + GetParam() + (symmetric ? "_lattice" : "_dual"),
+                                  symmetric ? lattice : dual);
+    ASSERT_EQ(s.symmetric_halves, symmetric) << "the case must exercise the loop it names";
+    s.config.fracture = false;
+    s.diagnostics = true;
+    for (size_t i = 0; i < s.n; ++i) {
+      s.u[3 * i] = 1e-6 * s.x0[3 * i] + 4e-7 * s.x0[3 * i + 1];
+      s.u[3 * i + 2] = -3e-7 * s.x0[3 * i + 2];
+    }
+    cpu_compute_forces(s);
+    const std::vector<double> whole(s.energy_density);
+    std::vector<int64_t> rows;
+    for (size_t i = 0; i < s.n; i += 3) rows.push_back(static_cast<int64_t>(i));
+    std::fill(s.energy_density.begin(), s.energy_density.end(), -1.0);
+    std::fill(s.dilatation.begin(), s.dilatation.end(), 0.0);
+    const bool took = cpu_energy_density_on_rows(s, rows);
+    EXPECT_EQ(took, !symmetric) << "the general loop only";
+    if (symmetric) {
+      EXPECT_EQ(s.energy_density[0], -1.0) << "declined: nothing written";
+      continue;
+    }
+    size_t differ = 0, strained = 0, one_half = 0;
+    for (const int64_t i : rows) {
+      differ += std::memcmp(&s.energy_density[i], &whole[i], sizeof(double)) != 0;
+      strained += whole[i] > 0.0;
+    }
+    for (const uint8_t st : s.state) one_half += st == kOwnIntact || st == kDualIntact;
+    EXPECT_EQ(differ, 0u) << "tets, dual horizon";
+    EXPECT_EQ(strained, rows.size()) << "every row must hold strain energy, else the comparison shows little";
+    EXPECT_GT(one_half, 0u) << "entries with one half intact must be among them";
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Models, StabilityMapHorizon, ::testing::Values("pmb", "lps"),
                          [](const ::testing::TestParamInfo<const char*>& info) { return std::string(info.param); });
 #endif

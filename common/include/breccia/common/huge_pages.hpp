@@ -35,4 +35,17 @@ void assign_on_huge_pages(std::vector<T>& v, size_t count, T value = T{}) {
   v.assign(count, value);
 }
 
+// Gives the whole pages of v's storage past its size back to the system (a vector shrunk in
+// place, whose tail pages were touched): its elements and capacity stay as they are; a page
+// given back reads as zeros if the vector grows into it again.
+template <class T>
+void release_unused_capacity([[maybe_unused]] std::vector<T>& v) {
+#if defined(__linux__) && defined(MADV_DONTNEED)
+  const auto page = static_cast<uintptr_t>(sysconf(_SC_PAGESIZE));
+  const uintptr_t begin = (reinterpret_cast<uintptr_t>(v.data() + v.size()) + page - 1) & ~(page - 1);
+  const uintptr_t end = (reinterpret_cast<uintptr_t>(v.data() + v.capacity())) & ~(page - 1);
+  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_DONTNEED);
+#endif
+}
+
 }  // namespace breccia

@@ -117,6 +117,11 @@ StepArrays<float> float32_step_arrays(PdSystem& s);
 // were. No released-energy sum.
 void cpu_compute_forces_on_rows(PdSystem& sys, std::span<const int64_t> force_rows,
                                 std::span<const int64_t> dilatation_rows);
+// The energy densities of `rows` alone, as cpu_compute_forces_on_rows(sys, rows, rows) with
+// sys.diagnostics on writes them, bit for bit (general_energy_row: no forces), where that pass
+// would take the general loop and can change no bond (energy_only_row_applies); returns false,
+// having done nothing, elsewhere. LPS: the rows' dilatation first, as that pass computes it.
+bool cpu_energy_density_on_rows(PdSystem& sys, std::span<const int64_t> rows);
 
 // The set-up's linear passes (fracture off: the stable-step estimate, the energy-scatter
 // check) on a softening system whose bonds hold no damage yet: with fracture off, soften()

@@ -1326,6 +1326,48 @@ BRECCIA_HD void general_force_row(const PdViewT<Real>& p, int64_t i, int64_t cou
   }
 }
 
+// Particle i's strain-energy density alone, as the general loop's diagnostic pass writes it
+// (general_force_row<true>: the same expressions on the same inputs in the same row order, so
+// the same bits), where that pass can break, soften or reshape nothing: fracture off, no bond
+// damage array, no compressive-enhancement stretches (energy_only_row_applies). No forces,
+// damage or largest stretch are written; LPS reads i's own dilatation, computed before.
+template <class Real>
+BRECCIA_HD bool energy_only_row_applies(const PdViewT<Real>& p) {
+  return !p.fracture && !p.bond_damage && !p.min_stretch_next && p.diagnostics &&
+         (p.model == static_cast<int>(PdModel::PMB) || p.model == static_cast<int>(PdModel::LPS));
+}
+
+template <class Real>
+BRECCIA_HD void general_energy_row(const PdViewT<Real>& p, int64_t i) {
+  double w = 0.0;
+  const bool lps = p.model == static_cast<int>(PdModel::LPS);
+  Real m_i = Real(0), theta_i = Real(0);
+  double dev_sum = 0.0;
+  if (lps) {
+    m_i = p.weighted_volume[i];
+    theta_i = p.dilatation[i];
+  }
+  const double keep = 1.0;  // the general row's share left: 1 with nothing softened
+  for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
+    const uint8_t st = p.state[k];
+    if (!st) continue;
+    const int64_t j = p.neighbor[k];
+    const Real xi = p.xi_len[k];
+    const BondGeometryT<Real> g = bond_geometry(p.x0, p.u, i, j, xi);
+    if (lps) {
+      if (st & kOwnIntact) {
+        const Real e = g.extension;
+        const double dev = double(e) - double(theta_i) * xi / p.lps[i].dilatation_factor;
+        dev_sum += keep * p.k_own[k] * dev * dev * p.volume[j];
+      }
+    } else {
+      w += keep * pmb_energy_density<double>(p.k_own[k], p.k_dual[k], st, g.stretch, xi);
+    }
+  }
+  if (lps) w = lps_bulk_energy(p.lps[i], double(theta_i)) + 0.5 * (p.lps[i].shear_term / m_i) * dev_sum;
+  p.energy_density[i] = w;
+}
+
 template <bool kDiagnostics, class Real>
 BRECCIA_HD void general_force_loop(const PdViewT<Real>& p, int64_t i) {
 #if !defined(__CUDA_ARCH__)

@@ -738,6 +738,14 @@ public:
       checkpointed.restore(local_);
       global.derived_fields_pending = false;
     }
+    // Every rank's system now holds its share: the global one keeps what the loop and the
+    // writers read, the whole state on rank 0 only (release_global_for_loop). Before any
+    // gather: a rank other than 0 may never have held a gather's target (`v`, `a`, `body`:
+    // release_global_for_loop names them as held, so it takes part as rank 0 does).
+    released_ = release_global_for_loop(global, layout_.rank == 0);
+#if defined(__GLIBC__)
+    malloc_trim(0);  // the freed pages back to the system (glibc's heap would keep them resident)
+#endif
     // float32: one process's first measure leaves the float-rounded kinematics in its system,
     // which the first output writes (run_time_loop); later outputs download first anyway.
     if (local_.f32.active) download_kinematics(global);
@@ -750,12 +758,6 @@ public:
       throw InputError("--backend", "cuda", "cuda under mpirun", "cpu (this build's MPI backend has no CUDA)");
 #endif
     }
-    // Every rank's system now holds its share: the global one keeps what the loop and the
-    // writers read, the whole state on rank 0 only (release_global_for_loop).
-    released_ = release_global_for_loop(global, layout_.rank == 0);
-#if defined(__GLIBC__)
-    malloc_trim(0);  // the freed pages back to the system (glibc's heap would keep them resident)
-#endif
   }
 
   void step(PdSystem& g) override {
@@ -1148,6 +1150,12 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
   // A distributed set-up's bonds move into the rank's system: the global one lets them go.
   auto sh = make_rank_share(global, MPI_COMM_WORLD, global.distributed_rows.empty() ? nullptr : &global);
   g_setup_share = sh;
+  // The velocities are in the rank's system now, and nothing reads the global ones before the
+  // loop's backend, which keeps the rank's (copy_rank_state): a distributed set-up's ranks
+  // other than 0 let them go here, before the estimate's peak (24 B per particle).
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (rank != 0 && !global.distributed_rows.empty()) std::vector<double>().swap(global.v);
   // Each rank computes its rows at the global system's displacement and all gather the
   // forces: every rank then holds one process's force array, bit for bit. The set-up's
   // Lanczos estimate runs its iterations on the ranks' shares instead (mpi_stable_step_ranks:

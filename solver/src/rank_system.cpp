@@ -28,8 +28,8 @@ std::vector<T> take(const std::vector<T>& global, const std::vector<int32_t>& id
 
 // A state array a distributed set-up's ranks other than 0 do not hold in their global system
 // (docs/parallel.md, Memory): `a` and `body`, zero at set-up, are never allocated there
-// (setup_system); `v` is let go once the stable-step estimate's cut took it into the rank's
-// system (mpi_stable_step_forces). The rank's system then keeps its own values (nothing
+// (setup_system); `u` and `v` are let go once the stable-step estimate's cut took them into
+// the rank's system (mpi_stable_step_forces). The rank's system then keeps its own values (nothing
 // between that cut and the loop's backend changes them), or, cut afresh, starts from zeros
 // where the set-up's values are zeros (`zero_at_setup`). A held global array (one process,
 // rank 0, a restart's read): its rows, as take.
@@ -240,7 +240,7 @@ void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
   const std::vector<int32_t> ids = local_to_global(L);
   const size_t n = g.n;
   s.config = g.config;  // the stable-step estimate turns fracture off in its copy
-  s.u = take(g.u, ids, 3, n);
+  take_or_keep(s.u, g.u, ids, 3, n, false);
   take_or_keep(s.v, g.v, ids, 3, n, false);
   take_or_keep(s.a, g.a, ids, 3, n, true);
   s.force = take(g.force, ids, 3, n);
@@ -399,13 +399,14 @@ std::vector<const void*> release_global_for_loop(PdSystem& g, bool root) {
   if (!root) {
     // What rank 0 gathers the state into for its files (MpiBackend::download, output).
     // Rank 0 holds these for every particle; a distributed set-up's other ranks never allocate
-    // `a` and `body` and let `v` go at the stable step (setup_system, mpi_stable_step_forces):
-    // named as held all the same, else this rank would skip a gather rank 0 waits in.
-    for (auto* a : {&g.v, &g.a, &g.body}) {
+    // `a` and `body` and let `u` and `v` go at the stable step (setup_system,
+    // mpi_stable_step_forces): named as held all the same, else this rank would skip a gather
+    // rank 0 waits in.
+    for (auto* a : {&g.u, &g.v, &g.a, &g.body}) {
       if (a->empty() && g.n > 0) drop.held.push_back(a);
       drop(*a);
     }
-    for (auto* a : {&g.u, &g.force, &g.energy_density, &g.dissipated, &g.damage, &g.max_stretch, &g.dilatation,
+    for (auto* a : {&g.force, &g.energy_density, &g.dissipated, &g.damage, &g.max_stretch, &g.dilatation,
                     &g.lps_a, &g.lps_b, &g.corr_deformation, &g.corr_force_tensor, &g.corr_nonaffine, &g.gas.arrival,
                     &g.gas.push})
       drop(*a);

@@ -26,6 +26,27 @@ std::vector<T> take(const std::vector<T>& global, const std::vector<int32_t>& id
   return out;
 }
 
+// A state array a distributed set-up's ranks other than 0 do not hold in their global system
+// (docs/parallel.md, Memory): `a` and `body`, zero at set-up, are never allocated there
+// (setup_system); `u` and `v` are let go once the stable-step estimate's cut took them into
+// the rank's system (mpi_stable_step_forces). The rank's system then keeps its own values (nothing
+// between that cut and the loop's backend changes them), or, cut afresh, starts from zeros
+// where the set-up's values are zeros (`zero_at_setup`). A held global array (one process,
+// rank 0, a restart's read): its rows, as take.
+template <class T>
+void take_or_keep(std::vector<T>& local, const std::vector<T>& global, const std::vector<int32_t>& ids, size_t width,
+                  size_t n, bool zero_at_setup) {
+  if (!global.empty() || n == 0) {
+    local = take(global, ids, width, n);
+    return;
+  }
+  const size_t rows = width * ids.size();
+  if (local.size() == rows) return;
+  if (!zero_at_setup)
+    throw std::logic_error("copy_rank_state: a state array held by neither the global system nor the rank's");
+  local.assign(rows, T{});
+}
+
 // Entries [b, e) of a per-entry array; empty stays empty.
 template <class T>
 std::vector<T> slice(const std::vector<T>& global, int64_t b, int64_t e) {
@@ -219,11 +240,11 @@ void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
   const std::vector<int32_t> ids = local_to_global(L);
   const size_t n = g.n;
   s.config = g.config;  // the stable-step estimate turns fracture off in its copy
-  s.u = take(g.u, ids, 3, n);
-  s.v = take(g.v, ids, 3, n);
-  s.a = take(g.a, ids, 3, n);
+  take_or_keep(s.u, g.u, ids, 3, n, false);
+  take_or_keep(s.v, g.v, ids, 3, n, false);
+  take_or_keep(s.a, g.a, ids, 3, n, true);
   s.force = take(g.force, ids, 3, n);
-  s.body = take(g.body, ids, 3, n);
+  take_or_keep(s.body, g.body, ids, 3, n, true);
   s.x = g.x.size() == 3 * n ? take(g.x, ids, 3, n) : std::vector<double>{};
   s.energy_density = take(g.energy_density, ids, 1, n);
   s.dissipated = take(g.dissipated, ids, 1, n);
@@ -378,9 +399,17 @@ std::vector<const void*> release_global_for_loop(PdSystem& g, bool root) {
 #endif
   if (!root) {
     // What rank 0 gathers the state into for its files (MpiBackend::download, output).
-    for (auto* a : {&g.u, &g.v, &g.a, &g.force, &g.body, &g.energy_density, &g.dissipated, &g.damage,
-                    &g.max_stretch, &g.dilatation, &g.lps_a, &g.lps_b, &g.corr_deformation, &g.corr_force_tensor,
-                    &g.corr_nonaffine, &g.gas.arrival, &g.gas.push})
+    // Rank 0 holds these for every particle; a distributed set-up's other ranks never allocate
+    // `a` and `body` and let `u` and `v` go at the stable step (setup_system,
+    // mpi_stable_step_forces): named as held all the same, else this rank would skip a gather
+    // rank 0 waits in.
+    for (auto* a : {&g.u, &g.v, &g.a, &g.body}) {
+      if (a->empty() && g.n > 0) drop.held.push_back(a);
+      drop(*a);
+    }
+    for (auto* a : {&g.force, &g.energy_density, &g.dissipated, &g.damage, &g.max_stretch, &g.dilatation,
+                    &g.lps_a, &g.lps_b, &g.corr_deformation, &g.corr_force_tensor, &g.corr_nonaffine, &g.gas.arrival,
+                    &g.gas.push})
       drop(*a);
     for (auto* a : {&g.min_stretch, &g.min_stretch_next}) drop(*a);
 #ifndef BRECCIA_PARALLEL_HDF5

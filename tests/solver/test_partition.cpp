@@ -271,6 +271,46 @@ TEST(RankSystem, GlobalSystemKeepsWhatTheLoopReadsAfterTheRanksTookTheirShare) {
   }
 }
 
+// A distributed set-up's ranks other than 0 never allocate the global system's accelerations
+// and body forces (zero at set-up) and let its displacements and velocities go once the
+// stable-step estimate cut the rank's system (setup_system, mpi_stable_step_forces): the
+// rank's system starts from zeros where the set-up's values are zeros and otherwise keeps its
+// own (copy_rank_state), and the four are named as held all the same (rank 0 holds them for
+// every particle: a rank that skipped the gather would leave rank 0 waiting in it).
+TEST(RankSystem, StateArraysARankNeverHeldAreZeroOrKeptAndStillNamedAsHeld) {
+  const std::string yaml = "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], spacing: 1 mm}}\n"
+                           "model: {type: pmb, horizon_factor: 3.015}\n"
+                           "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 10}]\n"
+                           "initial: [{type: velocity, value: [1, 2, 3]}]\n"
+                           "time: {steps: 5}\n";
+  PdSystem g = system_from_yaml("never_held", yaml);
+  const RankLayout L = rank_layout(g, 2, 1);
+  const size_t local3 = 3 * static_cast<size_t>(L.owned() + L.ghosts());
+  std::vector<double>().swap(g.a);
+  std::vector<double>().swap(g.body);
+  PdSystem s = restrict_to_rank(g, L);  // cut afresh: zeros for a and body, the velocities taken
+  EXPECT_EQ(s.a, std::vector<double>(local3, 0.0));
+  EXPECT_EQ(s.body, std::vector<double>(local3, 0.0));
+  ASSERT_EQ(s.v.size(), local3);
+  EXPECT_EQ(s.v[0], 1.0);
+  EXPECT_EQ(s.v[local3 - 1], 3.0);
+  // The velocities let go: the rank's system keeps its own when brought up to date.
+  std::vector<double>().swap(g.v);
+  s.v[0] = 7.0;
+  copy_rank_state(s, g, L);
+  ASSERT_EQ(s.v.size(), local3);
+  EXPECT_EQ(s.v[0], 7.0);
+  EXPECT_EQ(s.a.size(), local3);
+  // A system cut afresh from a global one that holds no velocities has none to start from.
+  EXPECT_THROW(restrict_to_rank(g, L), std::logic_error);
+  std::vector<double>().swap(g.u);
+  const std::vector<const void*> held = release_global_for_loop(g, false);
+  const auto named = [&](const void* a) { return std::find(held.begin(), held.end(), a) != held.end(); };
+  for (const std::vector<double>* a : {&g.u, &g.v, &g.a, &g.body}) EXPECT_TRUE(named(a));
+  EXPECT_TRUE(named(&g.force));  // held here, as before
+  EXPECT_FALSE(named(&g.min_stretch)) << "not held on rank 0 either (no compressive enhancement): no gather";
+}
+
 // The lattice stencil the figures without families use (lattice_family_stencil) is the
 // family the set-up builds for a lattice point whose reach stays inside the box: same
 // offsets, none missing, none extra.

@@ -738,6 +738,14 @@ public:
       checkpointed.restore(local_);
       global.derived_fields_pending = false;
     }
+    // Every rank's system now holds its share: the global one keeps what the loop and the
+    // writers read, the whole state on rank 0 only (release_global_for_loop). Before any
+    // gather: a rank other than 0 may never have held a gather's target (`u`, `v`, `a`, `body`:
+    // release_global_for_loop names them as held, so it takes part as rank 0 does).
+    released_ = release_global_for_loop(global, layout_.rank == 0);
+#if defined(__GLIBC__)
+    malloc_trim(0);  // the freed pages back to the system (glibc's heap would keep them resident)
+#endif
     // float32: one process's first measure leaves the float-rounded kinematics in its system,
     // which the first output writes (run_time_loop); later outputs download first anyway.
     if (local_.f32.active) download_kinematics(global);
@@ -750,12 +758,6 @@ public:
       throw InputError("--backend", "cuda", "cuda under mpirun", "cpu (this build's MPI backend has no CUDA)");
 #endif
     }
-    // Every rank's system now holds its share: the global one keeps what the loop and the
-    // writers read, the whole state on rank 0 only (release_global_for_loop).
-    released_ = release_global_for_loop(global, layout_.rank == 0);
-#if defined(__GLIBC__)
-    malloc_trim(0);  // the freed pages back to the system (glibc's heap would keep them resident)
-#endif
   }
 
   void step(PdSystem& g) override {
@@ -1148,18 +1150,37 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
   // A distributed set-up's bonds move into the rank's system: the global one lets them go.
   auto sh = make_rank_share(global, MPI_COMM_WORLD, global.distributed_rows.empty() ? nullptr : &global);
   g_setup_share = sh;
+  // The displacements and velocities are in the rank's system now: a distributed set-up's
+  // ranks other than 0 let the global ones go here, before the estimate's peak (48 B per
+  // particle). The loop's backend keeps the rank's (copy_rank_state); the pass below, which
+  // ends the estimate at the set-up's displacement, takes the rank's rows of it from `u0`
+  // (the estimate's iterations write their probes to the rank's system's u).
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  std::vector<double> u0;
+  if (rank != 0 && !global.distributed_rows.empty()) {
+    u0 = sh->local.u;
+    std::vector<double>().swap(global.u);
+    std::vector<double>().swap(global.v);
+  }
   // Each rank computes its rows at the global system's displacement and all gather the
   // forces: every rank then holds one process's force array, bit for bit. The set-up's
   // Lanczos estimate runs its iterations on the ranks' shares instead (mpi_stable_step_ranks:
   // no vector whole on any rank) and calls this pass once, at the real displacement, at its
-  // end; the power iteration (estimate_max_frequency) still takes every pass here.
-  return [sh](PdSystem& g) {
+  // end; the power iteration (estimate_max_frequency, which the set-up does not call) would
+  // take every pass here, on a whole system's u (not one whose u was let go above).
+  return [sh, u0 = std::move(u0)](PdSystem& g) {
     PdSystem& l = sh->local;
     const RankLayout& L = sh->layout;
     const int64_t b = L.begin(), owned = L.owned();
-    std::copy(g.u.begin() + 3 * b, g.u.begin() + 3 * (b + owned), l.u.begin());
-    for (int64_t q = 0; q < L.ghosts(); ++q)
-      std::copy_n(g.u.begin() + 3 * static_cast<int64_t>(L.halo.ghosts[q]), 3, l.u.begin() + 3 * (owned + q));
+    if (g.u.empty()) {  // let go above: the set-up's displacements of the rank's particles
+      if (u0.size() != l.u.size()) throw std::logic_error("stable step: the rank's displacements");
+      std::copy(u0.begin(), u0.end(), l.u.begin());
+    } else {
+      std::copy(g.u.begin() + 3 * b, g.u.begin() + 3 * (b + owned), l.u.begin());
+      for (int64_t q = 0; q < L.ghosts(); ++q)
+        std::copy_n(g.u.begin() + 3 * static_cast<int64_t>(L.halo.ghosts[q]), 3, l.u.begin() + 3 * (owned + q));
+    }
     l.config.fracture = g.config.fracture;  // the estimate turns fracture off
     l.diagnostics = g.diagnostics;
     MpiExec exec(l, *sh->halo, sh->contact.get(), sh->gas.get());

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <numbers>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "breccia/common/error.hpp"
@@ -142,6 +143,55 @@ TEST_P(StabilityMapHorizon, TetCentroidsAtThreeSpacingsPassTheStartUpCheck) {
   EXPECT_LT(energy_scatter(s).rms, kMaxEnergyScatter);
 }
 
+namespace {
+
+// The two row tests below share one set-up: the case (a lattice with one horizon: the
+// symmetric loops; or the tet centroids with dual horizon: the general loop) strained with
+// shear, one whole diagnostic pass, its energy densities kept, then every third row named and
+// the fields the row passes write reset, so that what they write is seen.
+struct StrainedRows {
+  PdSystem s;
+  std::vector<double> whole;   // the whole pass's energy densities
+  std::vector<int64_t> rows;   // every third row
+};
+
+StrainedRows strained_rows(const std::string& model, bool symmetric, const std::string& name) {
+  std::string dual = tet_yaml(model, 3.015, false);
+  dual.replace(dual.find("horizon_factor:"), 15, "variable_horizon: true, horizon_factor:");
+  const std::string lattice = "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], "
+                              "spacing: 0.5 mm}}\nmodel: {type: " + model + ", horizon_factor: 3.015}\n"
+                              "materials: [{name: solid, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25}]\n"
+                              "time: {steps: 1}\n";
+  StrainedRows r{system_from_yaml(name + "_" + model + (symmetric ? "_lattice" : "_dual"), symmetric ? lattice : dual),
+                 {}, {}};
+  PdSystem& s = r.s;
+  s.config.fracture = false;
+  s.diagnostics = true;
+  for (size_t i = 0; i < s.n; ++i) {
+    s.u[3 * i] = 1e-6 * s.x0[3 * i] + 4e-7 * s.x0[3 * i + 1];
+    s.u[3 * i + 2] = -3e-7 * s.x0[3 * i + 2];
+  }
+  cpu_compute_forces(s);
+  r.whole = s.energy_density;
+  for (size_t i = 0; i < s.n; i += 3) r.rows.push_back(static_cast<int64_t>(i));
+  std::fill(s.energy_density.begin(), s.energy_density.end(), -1.0);
+  std::fill(s.dilatation.begin(), s.dilatation.end(), 0.0);
+  return r;
+}
+
+// Rows whose energy density differs from the whole pass's by a bit, and rows with strain
+// energy (the comparison shows little where there is none).
+std::pair<size_t, size_t> rows_differing_and_strained(const StrainedRows& r) {
+  size_t differ = 0, strained = 0;
+  for (const int64_t i : r.rows) {
+    differ += std::memcmp(&r.s.energy_density[i], &r.whole[i], sizeof(double)) != 0;
+    strained += r.whole[i] > 0.0;
+  }
+  return {differ, strained};
+}
+
+}  // namespace
+
 // The energy-scatter check passes over its sampled rows only (cpu_compute_forces_on_rows,
 // with the dilatation of those rows alone): it relies on their energy densities being the
 // whole pass's, bit for bit, which holds when a particle's energy density reads its own row
@@ -149,36 +199,13 @@ TEST_P(StabilityMapHorizon, TetCentroidsAtThreeSpacingsPassTheStartUpCheck) {
 // dual horizon (the general loop), every third row, at a strain with shear.
 TEST_P(StabilityMapHorizon, RowsPassGivesTheWholePassEnergyDensitiesBitForBit) {
   ASSERT_FALSE(tet_cube().empty()) << "could not mesh the cube";
-  std::string dual = tet_yaml(GetParam(), 3.015, false);
-  dual.replace(dual.find("horizon_factor:"), 15, "variable_horizon: true, horizon_factor:");
-  const std::string lattice = std::string("specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], "
-                                          "spacing: 0.5 mm}}\nmodel: {type: ") + GetParam() + ", horizon_factor: 3.015}\n"
-                              "materials: [{name: solid, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25}]\n"
-                              "time: {steps: 1}\n";
   for (const bool symmetric : {true, false}) {
-    PdSystem s = system_from_yaml(std::string("stability_rows_pass_") + GetParam() + (symmetric ? "_lattice" : "_dual"),
-                                  symmetric ? lattice : dual);
-    ASSERT_EQ(s.symmetric_halves, symmetric) << "the case must exercise the loop it names";
-    s.config.fracture = false;
-    s.diagnostics = true;
-    for (size_t i = 0; i < s.n; ++i) {
-      s.u[3 * i] = 1e-6 * s.x0[3 * i] + 4e-7 * s.x0[3 * i + 1];
-      s.u[3 * i + 2] = -3e-7 * s.x0[3 * i + 2];
-    }
-    cpu_compute_forces(s);
-    const std::vector<double> whole(s.energy_density);
-    std::vector<int64_t> rows;
-    for (size_t i = 0; i < s.n; i += 3) rows.push_back(static_cast<int64_t>(i));
-    std::fill(s.energy_density.begin(), s.energy_density.end(), -1.0);
-    std::fill(s.dilatation.begin(), s.dilatation.end(), 0.0);
-    cpu_compute_forces_on_rows(s, rows, rows);
-    size_t differ = 0, strained = 0;
-    for (const int64_t i : rows) {
-      differ += std::memcmp(&s.energy_density[i], &whole[i], sizeof(double)) != 0;
-      strained += whole[i] > 0.0;
-    }
+    StrainedRows r = strained_rows(GetParam(), symmetric, "stability_rows_pass");
+    ASSERT_EQ(r.s.symmetric_halves, symmetric) << "the case must exercise the loop it names";
+    cpu_compute_forces_on_rows(r.s, r.rows, r.rows);
+    const auto [differ, strained] = rows_differing_and_strained(r);
     EXPECT_EQ(differ, 0u) << (symmetric ? "lattice, one horizon" : "tets, dual horizon");
-    EXPECT_EQ(strained, rows.size()) << "every row must hold strain energy, else the comparison shows little";
+    EXPECT_EQ(strained, r.rows.size()) << "every row must hold strain energy, else the comparison shows little";
   }
 }
 
@@ -189,42 +216,20 @@ TEST_P(StabilityMapHorizon, RowsPassGivesTheWholePassEnergyDensitiesBitForBit) {
 // symmetric loops, which it does not reproduce) it must decline and leave the values alone.
 TEST_P(StabilityMapHorizon, EnergyOnlyRowsGiveTheWholePassEnergyDensitiesBitForBit) {
   ASSERT_FALSE(tet_cube().empty()) << "could not mesh the cube";
-  std::string dual = tet_yaml(GetParam(), 3.015, false);
-  dual.replace(dual.find("horizon_factor:"), 15, "variable_horizon: true, horizon_factor:");
-  const std::string lattice = std::string("specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], "
-                                          "spacing: 0.5 mm}}\nmodel: {type: ") + GetParam() + ", horizon_factor: 3.015}\n"
-                              "materials: [{name: solid, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25}]\n"
-                              "time: {steps: 1}\n";
   for (const bool symmetric : {true, false}) {
-    PdSystem s = system_from_yaml(std::string("stability_energy_rows_") + GetParam() + (symmetric ? "_lattice" : "_dual"),
-                                  symmetric ? lattice : dual);
-    ASSERT_EQ(s.symmetric_halves, symmetric) << "the case must exercise the loop it names";
-    s.config.fracture = false;
-    s.diagnostics = true;
-    for (size_t i = 0; i < s.n; ++i) {
-      s.u[3 * i] = 1e-6 * s.x0[3 * i] + 4e-7 * s.x0[3 * i + 1];
-      s.u[3 * i + 2] = -3e-7 * s.x0[3 * i + 2];
-    }
-    cpu_compute_forces(s);
-    const std::vector<double> whole(s.energy_density);
-    std::vector<int64_t> rows;
-    for (size_t i = 0; i < s.n; i += 3) rows.push_back(static_cast<int64_t>(i));
-    std::fill(s.energy_density.begin(), s.energy_density.end(), -1.0);
-    std::fill(s.dilatation.begin(), s.dilatation.end(), 0.0);
-    const bool took = cpu_energy_density_on_rows(s, rows);
+    StrainedRows r = strained_rows(GetParam(), symmetric, "stability_energy_rows");
+    ASSERT_EQ(r.s.symmetric_halves, symmetric) << "the case must exercise the loop it names";
+    const bool took = cpu_energy_density_on_rows(r.s, r.rows);
     EXPECT_EQ(took, !symmetric) << "the general loop only";
     if (symmetric) {
-      EXPECT_EQ(s.energy_density[0], -1.0) << "declined: nothing written";
+      EXPECT_EQ(r.s.energy_density[0], -1.0) << "declined: nothing written";
       continue;
     }
-    size_t differ = 0, strained = 0, one_half = 0;
-    for (const int64_t i : rows) {
-      differ += std::memcmp(&s.energy_density[i], &whole[i], sizeof(double)) != 0;
-      strained += whole[i] > 0.0;
-    }
-    for (const uint8_t st : s.state) one_half += st == kOwnIntact || st == kDualIntact;
+    const auto [differ, strained] = rows_differing_and_strained(r);
+    size_t one_half = 0;
+    for (const uint8_t st : r.s.state) one_half += st == kOwnIntact || st == kDualIntact;
     EXPECT_EQ(differ, 0u) << "tets, dual horizon";
-    EXPECT_EQ(strained, rows.size()) << "every row must hold strain energy, else the comparison shows little";
+    EXPECT_EQ(strained, r.rows.size()) << "every row must hold strain energy, else the comparison shows little";
     EXPECT_GT(one_half, 0u) << "entries with one half intact must be among them";
   }
 }

@@ -219,15 +219,18 @@ class LinearForceProbe {
 };
 }  // namespace
 
-void cpu_compute_forces_on_rows(PdSystem& sys, std::span<const int64_t> force_rows,
-                                std::span<const int64_t> dilatation_rows) {
-  const StepArrays<double> a = cpu_step_arrays(sys);
-  const int64_t n3 = static_cast<int64_t>(3 * sys.n);
+namespace {
+// A pass over named rows, in one parallel region: every particle's current position (the rows
+// read their partners'), LPS's dilatation of `dilatation_rows`, then `row(i)` for each of
+// `rows`. The force pass and the energy-only pass over a start-up check's sampled rows.
+template <class RowKernel>
+void pass_over_rows(const StepArrays<double>& a, size_t n, std::span<const int64_t> rows,
+                    std::span<const int64_t> dilatation_rows, const RowKernel& row) {
+  const int64_t n3 = static_cast<int64_t>(3 * n);
   const CurrentPositions positions{a.p.x0, a.p.u, a.x};
   const Dilatation<double> dilatation{a.p};
-  const BondForces<double> bond_forces{a.p};
   const bool lps = a.p.model == static_cast<int>(PdModel::LPS);
-  const int64_t nd = static_cast<int64_t>(dilatation_rows.size()), nf = static_cast<int64_t>(force_rows.size());
+  const int64_t nd = static_cast<int64_t>(dilatation_rows.size()), nr = static_cast<int64_t>(rows.size());
 #pragma omp parallel
   {
 #pragma omp for schedule(static)
@@ -237,30 +240,23 @@ void cpu_compute_forces_on_rows(PdSystem& sys, std::span<const int64_t> force_ro
       for (int64_t q = 0; q < nd; ++q) dilatation(dilatation_rows[q]);
     }
 #pragma omp for schedule(dynamic, 256)
-    for (int64_t q = 0; q < nf; ++q) bond_forces(force_rows[q]);
+    for (int64_t q = 0; q < nr; ++q) row(rows[q]);
   }
+}
+}  // namespace
+
+void cpu_compute_forces_on_rows(PdSystem& sys, std::span<const int64_t> force_rows,
+                                std::span<const int64_t> dilatation_rows) {
+  const StepArrays<double> a = cpu_step_arrays(sys);
+  const BondForces<double> bond_forces{a.p};
+  pass_over_rows(a, sys.n, force_rows, dilatation_rows, [&](int64_t i) { bond_forces(i); });
 }
 
 bool cpu_energy_density_on_rows(PdSystem& sys, std::span<const int64_t> rows) {
   const StepArrays<double> a = cpu_step_arrays(sys);
   if (!sys.short_range_k.empty() || !energy_only_row_applies(a.p) || !takes_general_loop(a.p)) return false;
-  const int64_t n3 = static_cast<int64_t>(3 * sys.n);
-  const CurrentPositions positions{a.p.x0, a.p.u, a.x};
-  const Dilatation<double> dilatation{a.p};
   const PdViewT<double> p = a.p;
-  const bool lps = a.p.model == static_cast<int>(PdModel::LPS);
-  const int64_t nr = static_cast<int64_t>(rows.size());
-#pragma omp parallel
-  {
-#pragma omp for schedule(static)
-    for (int64_t k = 0; k < n3; ++k) positions(k);
-    if (lps) {
-#pragma omp for schedule(dynamic, 256)
-      for (int64_t q = 0; q < nr; ++q) dilatation(rows[q]);
-    }
-#pragma omp for schedule(dynamic, 256)
-    for (int64_t q = 0; q < nr; ++q) general_energy_row(p, rows[q]);
-  }
+  pass_over_rows(a, sys.n, rows, rows, [&](int64_t i) { general_energy_row(p, i); });
   return true;
 }
 

@@ -1142,6 +1142,21 @@ std::unique_ptr<StepBackend> make_mpi_backend(PdSystem& global, MPI_Comm comm, b
   return std::make_unique<MpiBackend>(global, comm, cuda);
 }
 
+namespace {
+// One force pass of the stable-step estimate on the rank's system, with the global system's
+// switches (the estimate turns fracture and diagnostics off in it): the ghosts' displacements
+// from their owners first, then the owned rows' forces.
+void rank_force_pass(RankShare& sh, const PdSystem& g) {
+  PdSystem& l = sh.local;
+  l.config.fracture = g.config.fracture;
+  l.diagnostics = g.diagnostics;
+  MpiExec exec(l, *sh.halo, sh.contact.get(), sh.gas.get());
+  StepArrays<double> a = cpu_step_arrays(l);
+  a.ghosts = sh.layout.ghosts();
+  pd_force_pass(exec, a, true);
+}
+}  // namespace
+
 ForcePass mpi_stable_step_forces(PdSystem& global) {
   int size = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
@@ -1181,12 +1196,7 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
       for (int64_t q = 0; q < L.ghosts(); ++q)
         std::copy_n(g.u.begin() + 3 * static_cast<int64_t>(L.halo.ghosts[q]), 3, l.u.begin() + 3 * (owned + q));
     }
-    l.config.fracture = g.config.fracture;  // the estimate turns fracture off
-    l.diagnostics = g.diagnostics;
-    MpiExec exec(l, *sh->halo, sh->contact.get(), sh->gas.get());
-    StepArrays<double> a = cpu_step_arrays(l);
-    a.ghosts = L.ghosts();
-    pd_force_pass(exec, a, true);
+    rank_force_pass(*sh, g);
     std::copy(l.force.begin(), l.force.begin() + 3 * owned, g.force.begin() + 3 * b);
     allgather_ranges(g.force.data(), sizeof(double), particle_ranges(L.part, 3), MPI_COMM_WORLD);
     if (!g.distributed_rows.empty()) {
@@ -1217,15 +1227,7 @@ StableStepRanks mpi_stable_step_ranks() {
   r.end = r.begin + sh->layout.owned();
   r.u = sh->local.u.data();
   r.force = sh->local.force.data();
-  r.pass = [sh](PdSystem& g) {
-    PdSystem& l = sh->local;
-    l.config.fracture = g.config.fracture;  // the estimate turns fracture off
-    l.diagnostics = g.diagnostics;
-    MpiExec exec(l, *sh->halo, sh->contact.get(), sh->gas.get());
-    StepArrays<double> a = cpu_step_arrays(l);
-    a.ghosts = sh->layout.ghosts();
-    pd_force_pass(exec, a, true);  // the ghosts' displacements from their owners first
-  };
+  r.pass = [sh](PdSystem& g) { rank_force_pass(*sh, g); };
   // Rank r continues rank r - 1's running sum over its own terms and hands it on; the last
   // rank's is the sum, one process's bits (its loop term by term), sent to every rank.
   r.chain = [rank, size](const std::function<double(double)>& f) {

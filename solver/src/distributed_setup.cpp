@@ -80,14 +80,11 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   // where it writes the files alone (serial HDF5).
   const bool writer_bonds = root_gathers_bond_list(s.config);
   // The force pass that ended the stable-step estimate filled the fields of this rank's
-  // particles only (the others' rows are empty here): the owners' values, which the first
-  // output writes (a pre-crack's damage) and the ranks' systems start from.
-  // LPS: the dilatation (and the fast path's two factors) that pass left, which the ranks'
-  // systems start from as one process's would.
-  // Correspondence: its deformation gradient, force tensor and non-affine energy
-  // (kForcePassFields).
-  for (const auto& [field, width] : kForcePassFields) gather_owned(d, rows, s.*field, static_cast<size_t>(width));
-  gather_owned(d, rows, s.force, 3);
+  // particles in the rank's system (the owners' values, which the first output writes: a
+  // pre-crack's damage; LPS's dilatation and the fast path's two factors, correspondence's
+  // deformation gradient, force tensor and non-affine energy: kForcePassFields) and the
+  // forces; its ghosts took their owners' values there, and rank 0 gathered them whole into
+  // this system for its writers (mpi_stable_step_forces): the other ranks hold none here.
   {
     const std::vector<double> all = concat_over_ranks(d, std::vector<double>{s.dissipated_energy});
     double sum = 0.0;  // bonds broken by that pass: in rank order (one process sums in its own)

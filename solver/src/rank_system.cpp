@@ -47,6 +47,20 @@ void take_or_keep(std::vector<T>& local, const std::vector<T>& global, const std
   local.assign(rows, T{});
 }
 
+// take_or_keep for a field only some models hold (LPS's fast-path factors, correspondence's
+// tensors): held by neither system, it stays empty (the model has none); the rank's own, of
+// its particles' size, is kept where the global system let it go (mpi_stable_step_forces).
+template <class T>
+void take_or_keep_if_held(std::vector<T>& local, const std::vector<T>& global, const std::vector<int32_t>& ids,
+                          size_t width, size_t n) {
+  if (!global.empty() || n == 0 || local.empty()) {
+    local = take(global, ids, width, n);
+    return;
+  }
+  if (local.size() != width * ids.size())
+    throw std::logic_error("copy_rank_state: a field the rank's system holds for other particles");
+}
+
 // Entries [b, e) of a per-entry array; empty stays empty.
 template <class T>
 std::vector<T> slice(const std::vector<T>& global, int64_t b, int64_t e) {
@@ -243,19 +257,23 @@ void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
   take_or_keep(s.u, g.u, ids, 3, n, false);
   take_or_keep(s.v, g.v, ids, 3, n, false);
   take_or_keep(s.a, g.a, ids, 3, n, true);
-  s.force = take(g.force, ids, 3, n);
+  take_or_keep(s.force, g.force, ids, 3, n, false);
   take_or_keep(s.body, g.body, ids, 3, n, true);
   s.x = g.x.size() == 3 * n ? take(g.x, ids, 3, n) : std::vector<double>{};
-  s.energy_density = take(g.energy_density, ids, 1, n);
-  s.dissipated = take(g.dissipated, ids, 1, n);
-  s.damage = take(g.damage, ids, 1, n);
-  s.max_stretch = take(g.max_stretch, ids, 1, n);
-  s.dilatation = take(g.dilatation, ids, 1, n);
-  s.lps_a = take(g.lps_a, ids, 1, n);
-  s.lps_b = take(g.lps_b, ids, 1, n);
-  s.corr_deformation = take(g.corr_deformation, ids, 9, n);
-  s.corr_force_tensor = take(g.corr_force_tensor, ids, 9, n);
-  s.corr_nonaffine = take(g.corr_nonaffine, ids, 1, n);
+  // The fields the set-up's last force pass fills (kForcePassFields): a distributed set-up's
+  // ranks other than 0 hold them in the rank's system only (mpi_stable_step_forces). Those
+  // every model has must be held by one of the two; the model's own (LPS's factors,
+  // correspondence's tensors) may be held by neither (the model has none).
+  take_or_keep(s.energy_density, g.energy_density, ids, 1, n, false);
+  take_or_keep(s.dissipated, g.dissipated, ids, 1, n, false);
+  take_or_keep(s.damage, g.damage, ids, 1, n, false);
+  take_or_keep(s.max_stretch, g.max_stretch, ids, 1, n, false);
+  take_or_keep(s.dilatation, g.dilatation, ids, 1, n, false);
+  take_or_keep_if_held(s.lps_a, g.lps_a, ids, 1, n);
+  take_or_keep_if_held(s.lps_b, g.lps_b, ids, 1, n);
+  take_or_keep_if_held(s.corr_deformation, g.corr_deformation, ids, 9, n);
+  take_or_keep_if_held(s.corr_force_tensor, g.corr_force_tensor, ids, 9, n);
+  take_or_keep_if_held(s.corr_nonaffine, g.corr_nonaffine, ids, 1, n);
   s.min_stretch = take(g.min_stretch, ids, 1, n);
   s.min_stretch_next = take(g.min_stretch_next, ids, 1, n);
   const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
@@ -305,6 +323,14 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
   std::vector<uint8_t> halves = std::move(r.halves), in_crack = std::move(r.in_crack);
   take_entry_rows(halves, G.halves, g.bond_count(), eb, ee);
   take_entry_rows(in_crack, G.in_crack, g.bond_count(), eb, ee);
+  // The per-particle arrays: a distributed set-up's ranks other than 0 let the global ones go
+  // once the stable-step estimate cut this system (release_global_at_stable_step); this
+  // system's own then stay (nothing between that cut and the loop's backend moves the gas),
+  // as the state arrays' do (take_or_keep). A held global array (one process, rank 0, a
+  // restart's read of the front): its rows.
+  std::vector<double> kappa_volume = std::move(r.kappa_volume), vent_facet_area = std::move(r.vent_facet_area),
+                      arrival = std::move(r.arrival), push = std::move(r.push), position = std::move(r.position);
+  std::vector<uint8_t> front_done = std::move(r.front_done), attached = std::move(r.attached);
   r = GasState{};
   r.active = true;
   r.load = G.load;
@@ -324,15 +350,19 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
   r.wall_dv = slice(G.wall_dv, fb, fe);
   r.wall_left = slice(G.wall_left, fb, fe);
   r.wall_on = slice(G.wall_on, fb, fe);
-  r.kappa_volume = take(G.kappa_volume, ids, 2, n);
-  r.vent_facet_area = take(G.vent_facet_area, ids, 1, n);
+  auto take_or_keep_gas = [&](auto& mine, const auto& global, auto& kept, size_t width) {
+    mine = std::move(kept);
+    take_or_keep(mine, global, ids, width, n, false);
+  };
+  take_or_keep_gas(r.kappa_volume, G.kappa_volume, kappa_volume, 2);
+  take_or_keep_gas(r.vent_facet_area, G.vent_facet_area, vent_facet_area, 1);
   if (G.crack_entry) {
-    r.arrival = take(G.arrival, ids, 1, n);
+    take_or_keep_gas(r.arrival, G.arrival, arrival, 1);
     r.arrival_next = r.arrival;  // as read_checkpoint and setup_gas leave it
-    r.push = take(G.push, ids, 3, n);
-    r.front_done = take(G.front_done, ids, 1, n);
-    r.attached = take(G.attached, ids, 1, n);
-    r.position = take(G.position, ids, 3, n);
+    take_or_keep_gas(r.push, G.push, push, 3);
+    take_or_keep_gas(r.front_done, G.front_done, front_done, 1);
+    take_or_keep_gas(r.attached, G.attached, attached, 1);
+    take_or_keep_gas(r.position, G.position, position, 3);
     r.in_crack = std::move(in_crack);
     r.halves = std::move(halves);
   }
@@ -353,7 +383,23 @@ struct Release {
 };
 }  // namespace
 
-std::vector<const void*> release_global_for_loop(PdSystem& g, bool root) {
+void release_global_at_stable_step(PdSystem& g) {
+  Release drop;
+  drop(g.u);
+  drop(g.v);
+  drop(g.force);
+  for (const auto& [field, width] : kForcePassFields) drop(g.*field);
+  drop(g.weighted_volume);  // LPS's m: the rank's system took its particles' at the cut
+  // A gas load's per-particle arrays: its front (arrival times, their next copy, the pushes),
+  // the crack pass's positions and marks, the crack faces' factors and the vent areas.
+  GasState& gas = g.gas;
+  for (auto* a : {&gas.arrival, &gas.arrival_next, &gas.kappa_volume, &gas.push, &gas.vent_facet_area, &gas.position})
+    drop(*a);
+  drop(gas.front_done);
+  drop(gas.attached);
+}
+
+std::vector<const void*> release_global_for_loop(PdSystem& g, bool root, const PdSystem* rank_system) {
   Release drop;
   // What the set-up read: each rank's system holds its particles' (owned and ghosts) rows.
   for (auto* a : {&g.density, &g.horizon, &g.half_cell, &g.weighted_volume, &g.calibration_factor, &g.corr_moduli,
@@ -403,14 +449,29 @@ std::vector<const void*> release_global_for_loop(PdSystem& g, bool root) {
     // `a` and `body` and let `u` and `v` go at the stable step (setup_system,
     // mpi_stable_step_forces): named as held all the same, else this rank would skip a gather
     // rank 0 waits in.
-    for (auto* a : {&g.u, &g.v, &g.a, &g.body}) {
+    // So do the forces and the fields every model has (energy density, dissipated energy,
+    // damage, largest stretch, dilatation), which they let go at the stable step too; the
+    // model's own fields (LPS's factors, correspondence's tensors) are named as held where
+    // the rank's system holds them (rank 0 then holds them whole), or where this system does.
+    for (auto* a : {&g.u, &g.v, &g.a, &g.body, &g.force, &g.energy_density, &g.dissipated, &g.damage,
+                    &g.max_stretch, &g.dilatation}) {
       if (a->empty() && g.n > 0) drop.held.push_back(a);
       drop(*a);
     }
-    for (auto* a : {&g.force, &g.energy_density, &g.dissipated, &g.damage, &g.max_stretch, &g.dilatation,
-                    &g.lps_a, &g.lps_b, &g.corr_deformation, &g.corr_force_tensor, &g.corr_nonaffine, &g.gas.arrival,
-                    &g.gas.push})
-      drop(*a);
+    for (auto field : {&PdSystem::lps_a, &PdSystem::lps_b, &PdSystem::corr_deformation, &PdSystem::corr_force_tensor,
+                       &PdSystem::corr_nonaffine}) {
+      std::vector<double>& a = g.*field;
+      if (a.empty() && g.n > 0 && rank_system && !(rank_system->*field).empty()) drop.held.push_back(&a);
+      drop(a);
+    }
+    // A gas load's front (its arrival times; between two crack passes the pushes), which
+    // rank 0 gathers for its checkpoint: let go at the stable step too, named as held where
+    // rank 0 holds them (crack_entry; the pushes with crack_pass_every > 1: download).
+    if (g.gas.active && g.gas.crack_entry) {
+      if (g.gas.arrival.empty() && g.n > 0) drop.held.push_back(&g.gas.arrival);
+      if (g.gas.push.empty() && g.n > 0 && g.gas.crack_pass_every > 1) drop.held.push_back(&g.gas.push);
+    }
+    for (auto* a : {&g.gas.arrival, &g.gas.push}) drop(*a);
     for (auto* a : {&g.min_stretch, &g.min_stretch_next}) drop(*a);
 #ifndef BRECCIA_PARALLEL_HDF5
     // The bond states: a distributed set-up left them on rank 0 alone (a restart read this

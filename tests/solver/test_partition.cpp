@@ -311,6 +311,105 @@ TEST(RankSystem, StateArraysARankNeverHeldAreZeroOrKeptAndStillNamedAsHeld) {
   EXPECT_FALSE(named(&g.min_stretch)) << "not held on rank 0 either (no compressive enhancement): no gather";
 }
 
+// A distributed set-up's ranks other than 0 also let go of the forces and of the fields the
+// stable-step estimate's last pass fills (release_global_at_stable_step, called by
+// mpi_stable_step_forces once the rank's system is cut): none of them is left in the global
+// system, not even as capacity; the rank's system keeps its own values when brought up to date
+// (copy_rank_state), and each array is named as held for rank 0's gathers, the model's own
+// fields (here LPS's two factors) only where the rank's system holds them.
+TEST(RankSystem, ForcesAndFieldsLetGoAtTheStableStepAreKeptByTheRankAndStillNamedAsHeld) {
+  const std::string yaml = "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], spacing: 1 mm}}\n"
+                           "model: {type: lps, horizon_factor: 3.015}\n"
+                           "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 10}]\n"
+                           "initial: [{type: velocity, value: [1, 2, 3]}]\n"
+                           "time: {steps: 5}\n";
+  PdSystem g = system_from_yaml("fields_let_go", yaml);
+  ASSERT_FALSE(g.lps_a.empty()) << "a uniform LPS lattice takes the fast path (its factors are what this checks)";
+  ASSERT_TRUE(g.corr_deformation.empty());
+  const RankLayout L = rank_layout(g, 2, 1);
+  const size_t local = static_cast<size_t>(L.owned() + L.ghosts());
+  PdSystem s = restrict_to_rank(g, L);
+  // The rank's own values, as the estimate's last pass and the ghosts' exchange leave them.
+  s.force.assign(3 * local, 0.25);
+  for (std::vector<double>* a : {&s.energy_density, &s.dissipated, &s.damage, &s.max_stretch, &s.dilatation,
+                                 &s.lps_a, &s.lps_b})
+    a->assign(local, 0.5);
+  release_global_at_stable_step(g);
+  for (const std::vector<double>* a : {&g.u, &g.v, &g.force, &g.energy_density, &g.dissipated, &g.damage,
+                                       &g.max_stretch, &g.dilatation, &g.lps_a, &g.lps_b, &g.weighted_volume})
+    EXPECT_EQ(a->capacity(), 0u) << "an array the rank's system holds is still held whole";
+  EXPECT_EQ(g.x0.size(), 3 * g.n) << "the reference positions stay (the family builds read them)";
+  copy_rank_state(s, g, L);
+  EXPECT_EQ(s.force, std::vector<double>(3 * local, 0.25));
+  for (const std::vector<double>* a : {&s.energy_density, &s.dissipated, &s.damage, &s.max_stretch, &s.dilatation,
+                                       &s.lps_a, &s.lps_b})
+    EXPECT_EQ(*a, std::vector<double>(local, 0.5)) << "the rank's own field lost";
+  EXPECT_TRUE(s.corr_deformation.empty()) << "a field neither system holds stays empty";
+  // Held by neither: a system cut afresh has no forces to start from.
+  EXPECT_THROW(restrict_to_rank(g, L), std::logic_error);
+  const std::vector<const void*> held = release_global_for_loop(g, false, &s);
+  const auto named = [&](const void* a) { return std::find(held.begin(), held.end(), a) != held.end(); };
+  for (const std::vector<double>* a : {&g.force, &g.energy_density, &g.dissipated, &g.damage, &g.max_stretch,
+                                       &g.dilatation, &g.lps_a, &g.lps_b})
+    EXPECT_TRUE(named(a)) << "rank 0 gathers into it: this rank must take part";
+  for (const std::vector<double>* a : {&g.corr_deformation, &g.corr_force_tensor, &g.corr_nonaffine})
+    EXPECT_FALSE(named(a)) << "LPS has no correspondence tensors: no rank gathers them";
+}
+
+// The same for a gas load's per-particle arrays (its front, the crack pass's positions and
+// marks, the crack faces' factors, the vent areas: about 90 B per particle): let go at the
+// stable step on the ranks other than 0, kept by the rank's system, the front named as held
+// (rank 0 gathers it for its checkpoint). The gas state is filled by hand on a lattice (a gas
+// case needs a meshed cavity); the facet lists stay empty.
+TEST(RankSystem, GasArraysLetGoAtTheStableStepAreKeptByTheRankAndTheFrontStillNamedAsHeld) {
+  const std::string yaml = "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], spacing: 1 mm}}\n"
+                           "model: {type: pmb, horizon_factor: 3.015}\n"
+                           "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 10}]\n"
+                           "time: {steps: 5}\n";
+  PdSystem g = system_from_yaml("gas_let_go", yaml);
+  GasState& G = g.gas;
+  G.active = true;
+  G.crack_entry = true;
+  G.crack_pass_every = 4;
+  const size_t n = g.n;
+  G.arrival.assign(n, 1.0);
+  G.arrival_next = G.arrival;
+  G.push.assign(3 * n, 2.0);
+  G.kappa_volume.assign(2 * n, 3.0);
+  G.vent_facet_area.assign(n, 4.0);
+  G.position.assign(3 * n, 5.0);
+  G.front_done.assign(n, 1);
+  G.attached.assign(n, 1);
+  G.in_crack.assign(g.bond_count(), 0);
+  G.halves.assign(g.bond_count(), 3);
+  const RankLayout L = rank_layout(g, 2, 1);
+  const size_t local = static_cast<size_t>(L.owned() + L.ghosts());
+  PdSystem s = restrict_to_rank(g, L);
+  ASSERT_EQ(s.gas.arrival, std::vector<double>(local, 1.0));
+  ASSERT_EQ(s.gas.position, std::vector<double>(3 * local, 5.0));
+  s.gas.arrival.assign(local, 0.5);  // the rank's own values, to tell them from the global ones
+  s.gas.push.assign(3 * local, 0.25);
+  release_global_at_stable_step(g);
+  for (const std::vector<double>* a : {&G.arrival, &G.arrival_next, &G.push, &G.kappa_volume, &G.vent_facet_area,
+                                       &G.position})
+    EXPECT_EQ(a->capacity(), 0u) << "a gas array the rank's system holds is still held whole";
+  EXPECT_EQ(G.front_done.capacity(), 0u);
+  EXPECT_EQ(G.attached.capacity(), 0u);
+  copy_rank_state(s, g, L);
+  EXPECT_EQ(s.gas.arrival, std::vector<double>(local, 0.5)) << "the rank's front lost";
+  EXPECT_EQ(s.gas.arrival_next, std::vector<double>(local, 0.5));
+  EXPECT_EQ(s.gas.push, std::vector<double>(3 * local, 0.25));
+  EXPECT_EQ(s.gas.kappa_volume, std::vector<double>(2 * local, 3.0));
+  EXPECT_EQ(s.gas.vent_facet_area, std::vector<double>(local, 4.0));
+  EXPECT_EQ(s.gas.position, std::vector<double>(3 * local, 5.0));
+  EXPECT_EQ(s.gas.front_done, std::vector<uint8_t>(local, 1));
+  EXPECT_EQ(s.gas.attached, std::vector<uint8_t>(local, 1));
+  const std::vector<const void*> held = release_global_for_loop(g, false, &s);
+  const auto named = [&](const void* a) { return std::find(held.begin(), held.end(), a) != held.end(); };
+  EXPECT_TRUE(named(&G.arrival)) << "rank 0 gathers the front: this rank must take part";
+  EXPECT_TRUE(named(&G.push)) << "and, between crack passes, the pushes";
+}
+
 // The lattice stencil the figures without families use (lattice_family_stencil) is the
 // family the set-up builds for a lattice point whose reach stays inside the box: same
 // offsets, none missing, none extra.

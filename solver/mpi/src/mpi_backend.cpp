@@ -742,7 +742,7 @@ public:
     // writers read, the whole state on rank 0 only (release_global_for_loop). Before any
     // gather: a rank other than 0 may never have held a gather's target (`u`, `v`, `a`, `body`:
     // release_global_for_loop names them as held, so it takes part as rank 0 does).
-    released_ = release_global_for_loop(global, layout_.rank == 0);
+    released_ = release_global_for_loop(global, layout_.rank == 0, &local_);
 #if defined(__GLIBC__)
     malloc_trim(0);  // the freed pages back to the system (glibc's heap would keep them resident)
 #endif
@@ -1170,21 +1170,26 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
   // particle). The loop's backend keeps the rank's (copy_rank_state); the pass below, which
   // ends the estimate at the set-up's displacement, takes the rank's rows of it from `u0`
   // (the estimate's iterations write their probes to the rank's system's u).
+  // So do the forces and the fields the pass below fills (kForcePassFields: 72 B per particle
+  // on PMB, more with LPS's factors and correspondence's tensors): the pass leaves the owned
+  // values in the rank's system, the ghosts' come from their owners (the halo exchange), and
+  // only rank 0, whose writers read them, gathers them whole; and LPS's weighted volume, which
+  // the rank's system took at its cut and no one reads in the global system after it.
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  const bool distributed = !global.distributed_rows.empty();
   std::vector<double> u0;
-  if (rank != 0 && !global.distributed_rows.empty()) {
+  if (rank != 0 && distributed) {
     u0 = sh->local.u;
-    std::vector<double>().swap(global.u);
-    std::vector<double>().swap(global.v);
+    release_global_at_stable_step(global);
   }
-  // Each rank computes its rows at the global system's displacement and all gather the
-  // forces: every rank then holds one process's force array, bit for bit. The set-up's
-  // Lanczos estimate runs its iterations on the ranks' shares instead (mpi_stable_step_ranks:
-  // no vector whole on any rank) and calls this pass once, at the real displacement, at its
-  // end; the power iteration (estimate_max_frequency, which the set-up does not call) would
-  // take every pass here, on a whole system's u (not one whose u was let go above).
-  return [sh, u0 = std::move(u0)](PdSystem& g) {
+  // The whole-system set-up's ranks compute their rows at the global system's displacement
+  // and all gather the forces: every rank then holds one process's force array, bit for bit
+  // (the power iteration, estimate_max_frequency, which the set-up does not call, takes every
+  // pass here, on a whole system's u). The set-up's Lanczos estimate runs its iterations on
+  // the ranks' shares instead (mpi_stable_step_ranks: no vector whole on any rank) and calls
+  // this pass once, at the real displacement, at its end.
+  return [sh, u0 = std::move(u0), rank](PdSystem& g) {
     PdSystem& l = sh->local;
     const RankLayout& L = sh->layout;
     const int64_t b = L.begin(), owned = L.owned();
@@ -1197,22 +1202,32 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
         std::copy_n(g.u.begin() + 3 * static_cast<int64_t>(L.halo.ghosts[q]), 3, l.u.begin() + 3 * (owned + q));
     }
     rank_force_pass(*sh, g);
-    std::copy(l.force.begin(), l.force.begin() + 3 * owned, g.force.begin() + 3 * b);
-    allgather_ranges(g.force.data(), sizeof(double), particle_ranges(L.part, 3), MPI_COMM_WORLD);
-    if (!g.distributed_rows.empty()) {
-      // The global system holds no bonds to run the pass that ends the estimate (at the real
-      // displacement, fracture on): the owned fields and bond states come from this one,
-      // where finish_distributed_setup gathers them.
-      // Correspondence's deformation gradient, force tensor and non-affine energy too (9, 9
-      // and 1 per particle): the owned values the first output's zero-energy check and the
-      // ranks' systems start from, as the whole system's pass leaves them on one process.
-      for (const auto& [field, width] : kForcePassFields)
-        if (!(l.*field).empty())  // LPS's and correspondence's: held or not
-          std::copy((l.*field).begin(), (l.*field).begin() + width * owned, (g.*field).begin() + width * b);
-      std::copy(l.state.begin(), l.state.end(), g.state.begin());
-      std::copy(l.bond_damage.begin(), l.bond_damage.end(), g.bond_damage.begin());  // softening bonds
-      g.dissipated_energy = l.dissipated_energy;
+    if (g.distributed_rows.empty()) {
+      std::copy(l.force.begin(), l.force.begin() + 3 * owned, g.force.begin() + 3 * b);
+      allgather_ranges(g.force.data(), sizeof(double), particle_ranges(L.part, 3), MPI_COMM_WORLD);
+      return;
     }
+    // The global system holds no bonds to run the pass that ends the estimate (at the real
+    // displacement, fracture on): the rank's system keeps what it computed, its ghosts taking
+    // their owners' values (what the rank's system took from the whole arrays before), and
+    // rank 0 gathers every rank's owned values whole, for its writers (the first output, the
+    // first history line) and the start of its own system. Correspondence's deformation
+    // gradient, force tensor and non-affine energy too (9, 9 and 1 per particle): the owned
+    // values the first output's zero-energy check and the ranks' systems start from, as the
+    // whole system's pass leaves them on one process. Every rank holds the same fields (the
+    // case decides which): the same exchanges and gathers on every rank.
+    const bool root = rank == 0;
+    auto share = [&](std::vector<double>& local, std::vector<double>& whole, size_t width) {
+      if (local.empty()) return;  // the model has none (every rank alike)
+      sh->halo->exchange({{local.data(), width * sizeof(double)}});
+      if (root && whole.size() != width * g.n) throw std::logic_error("stable step: rank 0's whole " + std::to_string(width) + "-wide field");
+      gather_ranges(local, whole, particle_ranges(L.part, width), L.rank, MPI_COMM_WORLD, true);
+    };
+    share(l.force, g.force, 3);
+    for (const auto& [field, width] : kForcePassFields) share(l.*field, g.*field, static_cast<size_t>(width));
+    std::copy(l.state.begin(), l.state.end(), g.state.begin());
+    std::copy(l.bond_damage.begin(), l.bond_damage.end(), g.bond_damage.begin());  // softening bonds
+    g.dissipated_energy = l.dissipated_energy;
   };
 }
 

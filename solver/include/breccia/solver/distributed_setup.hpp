@@ -78,9 +78,11 @@ MaterialSums sum_marked_by_material(const DistributedSetup& d, const Distributed
 
 // The per-particle fields the stable-step estimate's last force pass fills (at the real
 // displacement, fracture on), with their values per particle. Under the distributed set-up
-// that pass runs on the ranks' systems: each copies its owned rows into the global system
-// (mpi_stable_step_forces) and finish_distributed_setup gathers them, so every rank starts
-// from one process's fields. LPS's dilatation and fast-path factors, and correspondence's
+// that pass runs on the ranks' systems, which keep them (their ghosts' from the owners, by the
+// halo exchange), and rank 0 gathers them whole into its global system for its writers
+// (mpi_stable_step_forces); the other ranks' global systems hold none (they let them go when
+// the rank's system was cut: release_global_at_stable_step), so every rank starts from one
+// process's fields. LPS's dilatation and fast-path factors, and correspondence's
 // deformation gradient, force tensor (sigma K^-1) and non-affine energy, are empty when the
 // model has none (on every rank alike).
 struct ForcePassField {

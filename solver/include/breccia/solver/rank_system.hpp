@@ -56,6 +56,16 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& global, const RankLayout& layou
 // built again.
 void copy_rank_state(PdSystem& local, const PdSystem& global, const RankLayout& layout);
 
+// What a distributed set-up's ranks other than 0 let go of in their global system once the
+// stable-step estimate has cut the rank's system from it (mpi_stable_step_forces), before the
+// estimate's peak: the displacements and velocities, the forces and the fields the estimate's
+// last pass fills (kForcePassFields: energy density, dissipated energy, damage, largest
+// stretch, dilatation, and the model's own), and LPS's weighted volume. The rank's system
+// holds its particles' values from then on (copy_rank_state keeps them); rank 0 keeps the
+// whole arrays, which its writers read and its gathers fill (release_global_for_loop names
+// them as held on the other ranks).
+void release_global_at_stable_step(PdSystem& global);
+
 // The global system of a distributed run once every rank's system has been cut from it and
 // brought up to date (by the time loop's or dynamic relaxation's backend, solver/mpi/): the
 // rank's own system holds what its steps need, so the global one keeps only what the time
@@ -68,8 +78,12 @@ void copy_rank_state(PdSystem& local, const PdSystem& global, const RankLayout& 
 // file indices). What stays: the scalars, the row offsets (the entry ranges, the bond
 // count), the configuration, the particle model's content id, the gas's scalars and its per-
 // facet shares. Returns the arrays released that were held: a gather into them on rank 0
-// (solver/mpi/) still takes every rank's part, though only rank 0 holds the target.
-std::vector<const void*> release_global_for_loop(PdSystem& global, bool root);
+// (solver/mpi/) still takes every rank's part, though only rank 0 holds the target. On the
+// ranks that do not write, an array a distributed set-up never held or let go before (the
+// state arrays and the fields of the stable step's last pass: mpi_stable_step_forces) is
+// named as held all the same where rank 0 holds it: the model's own fields (LPS's factors,
+// correspondence's tensors) where `rank_system`, the rank's own system, holds them.
+std::vector<const void*> release_global_for_loop(PdSystem& global, bool root, const PdSystem* rank_system = nullptr);
 
 // A distributed run on the CUDA backend (one GPU per rank, docs/parallel.md) runs what the
 // CUDA step runs on one process, less what a distributed run adds on the host: throws

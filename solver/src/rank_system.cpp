@@ -127,8 +127,8 @@ std::vector<int32_t> local_to_global(const RankLayout& L) {
 
 // restrict_to_rank; `partners`: the owned rows' partners, renumbered to local indices in
 // place and kept (restrict_to_rank_taking_bonds), or null: copied from g's and renumbered.
-PdSystem restrict_rank(const PdSystem& g, const RankLayout& L, std::vector<int32_t>* partners) {
-  PdSystem s;
+// `s`: the arrays already taken (take_releasing), which stay where the global system let them go.
+PdSystem restrict_rank(const PdSystem& g, const RankLayout& L, std::vector<int32_t>* partners, PdSystem s = {}) {
   s.config = g.config;
   s.dimension = g.dimension;
   s.thickness = g.thickness;
@@ -146,7 +146,7 @@ PdSystem restrict_rank(const PdSystem& g, const RankLayout& L, std::vector<int32
   s.half_cell = take(g.half_cell, ids, 1, n);
   s.material = take(g.material, ids, 1, n);
   s.fixed_dof = take(g.fixed_dof, ids, 1, n);
-  s.weighted_volume = take(g.weighted_volume, ids, 1, n);
+  take_or_keep_if_held(s.weighted_volume, g.weighted_volume, ids, 1, n);
   s.lps = take(g.lps, ids, 1, n);
   s.calibration_factor = take(g.calibration_factor, ids, 1, n);
   s.corr_moduli = take(g.corr_moduli, ids, kCorrModuli, n);
@@ -207,6 +207,34 @@ PdSystem restrict_rank(const PdSystem& g, const RankLayout& L, std::vector<int32
 
 PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) { return restrict_rank(g, L, nullptr); }
 
+namespace {
+// The rank's rows (owned, then ghosts) of each array release_global_at_stable_step lets go
+// of, into `s`, each global array freed as soon as its rows are copied.
+void take_releasing(PdSystem& s, PdSystem& g, const RankLayout& L) {
+  const std::vector<int32_t> ids = local_to_global(L);
+  const size_t n = g.n;
+  auto one = [&](auto& mine, auto& global, size_t width) {
+    mine = take(global, ids, width, n);
+    std::remove_reference_t<decltype(global)>().swap(global);
+  };
+  one(s.u, g.u, 3);
+  one(s.v, g.v, 3);
+  one(s.force, g.force, 3);
+  for (const auto& [field, width] : kForcePassFields) one(s.*field, g.*field, static_cast<size_t>(width));
+  one(s.weighted_volume, g.weighted_volume, 1);
+  if (!g.gas.active) return;
+  GasState &G = g.gas, &r = s.gas;
+  one(r.kappa_volume, G.kappa_volume, 2);
+  one(r.vent_facet_area, G.vent_facet_area, 1);
+  one(r.arrival, G.arrival, 1);
+  one(r.push, G.push, 3);
+  one(r.position, G.position, 3);
+  one(r.front_done, G.front_done, 1);
+  one(r.attached, G.attached, 1);
+  std::vector<double>().swap(G.arrival_next);
+}
+}  // namespace
+
 PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
   if (g.distributed_rows.empty() || eb != 0 || ee != static_cast<int64_t>(g.neighbor.size())) return restrict_to_rank(g, L);
@@ -238,7 +266,12 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   std::vector<int32_t> partners;
   if (root_gathers_bond_list(g.config)) partners = g.neighbor;
   else partners.swap(g.neighbor);
-  PdSystem s = restrict_rank(g, L, &partners);
+  // The ranks other than 0 let go of the arrays release_global_at_stable_step names as each is
+  // taken, before the rest is cut: the whole array and the rank's rows of it are not held
+  // side by side for all of them at once (the cut's growth was the stable step's peak).
+  PdSystem taken;
+  if (L.rank != 0) take_releasing(taken, g, L);
+  PdSystem s = restrict_rank(g, L, &partners, std::move(taken));
   s.xi_len = std::move(xi_len);
   s.k_own = std::move(k_own);
   s.k_dual = std::move(k_dual);

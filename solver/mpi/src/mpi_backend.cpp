@@ -1173,15 +1173,20 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
   // So do the forces and the fields the pass below fills (kForcePassFields: 72 B per particle
   // on PMB, more with LPS's factors and correspondence's tensors): the pass leaves the owned
   // values in the rank's system, the ghosts' come from their owners (the halo exchange), and
-  // only rank 0, whose writers read them, gathers them whole; and LPS's weighted volume, which
-  // the rank's system took at its cut and no one reads in the global system after it.
+  // only rank 0, whose writers read them, gathers them whole; LPS's weighted volume, which
+  // the rank's system took at its cut and no one reads in the global system after it; and a
+  // gas load's per-particle arrays. The cut itself lets each go as soon as it has taken the
+  // rank's rows of it (restrict_to_rank_taking_bonds: the cut's growth was the estimate's peak).
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   const bool distributed = !global.distributed_rows.empty();
   std::vector<double> u0;
   if (rank != 0 && distributed) {
     u0 = sh->local.u;
-    release_global_at_stable_step(global);
+    release_global_at_stable_step(global);  // the cut took and let go of most already (take_releasing)
+#if defined(__GLIBC__)
+    malloc_trim(0);  // what the cut left of the whole arrays back to the system, before the Lanczos vectors
+#endif
   }
   // The whole-system set-up's ranks compute their rows at the global system's displacement
   // and all gather the forces: every rank then holds one process's force array, bit for bit

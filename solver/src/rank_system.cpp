@@ -145,13 +145,13 @@ PdSystem restrict_rank(const PdSystem& g, const RankLayout& L, std::vector<int32
   s.horizon = take(g.horizon, ids, 1, n);
   s.half_cell = take(g.half_cell, ids, 1, n);
   s.material = take(g.material, ids, 1, n);
-  s.fixed_dof = take(g.fixed_dof, ids, 1, n);
+  take_or_keep_if_held(s.fixed_dof, g.fixed_dof, ids, 1, n);
   take_or_keep_if_held(s.weighted_volume, g.weighted_volume, ids, 1, n);
-  s.lps = take(g.lps, ids, 1, n);
-  s.calibration_factor = take(g.calibration_factor, ids, 1, n);
-  s.corr_moduli = take(g.corr_moduli, ids, kCorrModuli, n);
-  s.short_range_k = take(g.short_range_k, ids, 1, n);
-  s.spacing = take(g.spacing, ids, 1, n);
+  take_or_keep_if_held(s.lps, g.lps, ids, 1, n);
+  take_or_keep_if_held(s.calibration_factor, g.calibration_factor, ids, 1, n);
+  take_or_keep_if_held(s.corr_moduli, g.corr_moduli, ids, kCorrModuli, n);
+  take_or_keep_if_held(s.short_range_k, g.short_range_k, ids, 1, n);
+  take_or_keep_if_held(s.spacing, g.spacing, ids, 1, n);
 
   // The owned rows, partners renumbered (ghosts are sorted: a binary search each).
   const int64_t eb = g.offsets[b], ee = g.offsets[b + owned];
@@ -222,6 +222,13 @@ void take_releasing(PdSystem& s, PdSystem& g, const RankLayout& L) {
   one(s.force, g.force, 3);
   for (const auto& [field, width] : kForcePassFields) one(s.*field, g.*field, static_cast<size_t>(width));
   one(s.weighted_volume, g.weighted_volume, 1);
+  one(s.calibration_factor, g.calibration_factor, 1);
+  one(s.fixed_dof, g.fixed_dof, 1);
+  one(s.lps, g.lps, 1);
+  one(s.corr_moduli, g.corr_moduli, kCorrModuli);
+  one(s.short_range_k, g.short_range_k, 1);
+  one(s.spacing, g.spacing, 1);
+  std::vector<LpsForceFactors<double>>().swap(g.lps_factors);  // the global system's own passes' only
   if (!g.gas.active) return;
   GasState &G = g.gas, &r = s.gas;
   one(r.kappa_volume, G.kappa_volume, 2);
@@ -423,6 +430,17 @@ void release_global_at_stable_step(PdSystem& g) {
   drop(g.force);
   for (const auto& [field, width] : kForcePassFields) drop(g.*field);
   drop(g.weighted_volume);  // LPS's m: the rank's system took its particles' at the cut
+  // The set-up values the estimate does not read (the rank's system took its particles' at
+  // the cut): the calibration factors, the constrained components, LPS's coefficients,
+  // correspondence's moduli, the short-range forces' constants; and the general LPS loop's
+  // factors, which only the global system's own force passes (the start-up checks) used.
+  drop(g.calibration_factor);
+  drop(g.fixed_dof);
+  drop(g.lps);
+  drop(g.lps_factors);
+  drop(g.corr_moduli);
+  drop(g.short_range_k);
+  drop(g.spacing);
   // A gas load's per-particle arrays: its front (arrival times, their next copy, the pushes),
   // the crack pass's positions and marks, the crack faces' factors and the vent areas.
   GasState& gas = g.gas;

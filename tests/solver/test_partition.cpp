@@ -326,6 +326,9 @@ TEST(RankSystem, ForcesAndFieldsLetGoAtTheStableStepAreKeptByTheRankAndStillName
   PdSystem g = system_from_yaml("fields_let_go", yaml);
   ASSERT_FALSE(g.lps_a.empty()) << "a uniform LPS lattice takes the fast path (its factors are what this checks)";
   ASSERT_TRUE(g.corr_deformation.empty());
+  ASSERT_EQ(g.fixed_dof.size(), g.n);
+  ASSERT_EQ(g.lps.size(), g.n);
+  g.calibration_factor.assign(g.n, 1.0);  // the PMB surface correction's; filled here to see it let go
   const RankLayout L = rank_layout(g, 2, 1);
   const size_t local = static_cast<size_t>(L.owned() + L.ghosts());
   PdSystem s = restrict_to_rank(g, L);
@@ -338,7 +341,12 @@ TEST(RankSystem, ForcesAndFieldsLetGoAtTheStableStepAreKeptByTheRankAndStillName
   for (const std::vector<double>* a : {&g.u, &g.v, &g.force, &g.energy_density, &g.dissipated, &g.damage,
                                        &g.max_stretch, &g.dilatation, &g.lps_a, &g.lps_b, &g.weighted_volume})
     EXPECT_EQ(a->capacity(), 0u) << "an array the rank's system holds is still held whole";
-  EXPECT_EQ(g.x0.size(), 3 * g.n) << "the reference positions stay (the family builds read them)";
+  for (const std::vector<double>* a : {&g.calibration_factor})
+    EXPECT_EQ(a->capacity(), 0u) << "a set-up value the estimate does not read is still held whole";
+  EXPECT_EQ(g.fixed_dof.capacity(), 0u);
+  EXPECT_EQ(g.lps.capacity(), 0u);
+  EXPECT_EQ(g.x0.size(), 3 * g.n) << "the reference positions stay (the estimate reads them)";
+  EXPECT_EQ(g.density.size(), g.n) << "and the densities (its masses, its stiff region)";
   copy_rank_state(s, g, L);
   EXPECT_EQ(s.force, std::vector<double>(3 * local, 0.25));
   for (const std::vector<double>* a : {&s.energy_density, &s.dissipated, &s.damage, &s.max_stretch, &s.dilatation,

@@ -218,7 +218,7 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
     g.front_done.assign(n, 0);
     g.attached.assign(n, 1);
     g.row_mark.assign(n, 1);  // every row picked in full at the first pass (GasView::row_mark)
-    g.row_live.assign(n, 0);
+    g.chunk_live.assign(s.neighbor.size(), 0);
     // Per entry: the rank's rows under a distributed set-up (finish_distributed_setup gathers
     // in_crack whole, the state a checkpoint keeps; halves move into the rank's system).
     g.in_crack.assign(s.neighbor.size(), 0);

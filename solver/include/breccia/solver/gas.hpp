@@ -68,14 +68,16 @@ struct GasView {
   // Per particle (owned and ghosts): it keeps at least one intact bond (GasAttached, each
   // exact crack pass). A particle that has lost every bond is debris (gas_debris_entry).
   uint8_t* attached = nullptr;
-  // Per particle, the settled rows (null: none, every pass picks every row's entries in full;
-  // a distributed run's ranks, whose ghosts have no rows to mark from). row_mark: 1 when the
-  // next crack pass has to pick the row's entries in full (set-up, a restart; the particle or
-  // one of its partners reached by the front or become debris at this pass: GasMarkNewlyWetted,
-  // GasAttached). row_live: the row's sum of the intact halves (gas_row_live) at its last full
-  // pick; it only falls, as halves break. Neither is checkpointed (a restart marks every row).
+  // The settled chunks of the crack pass (null: none, every pass picks every entry in full;
+  // a distributed run's ranks, whose ghosts have no rows to mark from). row_mark, per
+  // particle: 1 when the next crack pass has to pick the row's entries in full (set-up, a
+  // restart; the particle or one of its partners reached by the front or become debris at
+  // this pass: GasMarkNewlyWetted, GasAttached). chunk_live, per bond entry, at the first
+  // entry of each chunk of kBondChunk entries of a row: the chunk's sum of the intact halves
+  // (gas_chunk_live) at the last pass; it only falls, as halves break. Neither is
+  // checkpointed (a restart marks every row).
   uint8_t* row_mark = nullptr;
-  int32_t* row_live = nullptr;
+  uint8_t* chunk_live = nullptr;
 };
 
 inline constexpr uint8_t kGasFrontDone = 1;
@@ -104,13 +106,13 @@ BRECCIA_HD void gas_mark_row_and_partners(uint8_t* row_mark, const int64_t* offs
   for (int64_t k = offsets[i]; k < offsets[i + 1]; ++k) gas_mark_row(row_mark, neighbor[k]);
 }
 
-// Sum over row [begin, end) of the intact halves that exist (gas_entry_open's bits): it falls
-// whenever a half breaks (bonds do not heal), so an unchanged sum means no entry of the row
-// has changed its state.
-BRECCIA_HD int32_t gas_row_live(const uint8_t* state, const uint8_t* halves, int64_t begin, int64_t end) {
-  int32_t live = 0;
+// Sum over the entries [begin, end) of a chunk (at most kBondChunk) of the intact halves that
+// exist (gas_entry_open's bits; at most 3 x 64, a byte): it falls whenever a half breaks
+// (bonds do not heal), so an unchanged sum means no entry of the chunk has changed its state.
+BRECCIA_HD uint8_t gas_chunk_live(const uint8_t* state, const uint8_t* halves, int64_t begin, int64_t end) {
+  unsigned live = 0;
   for (int64_t k = begin; k < end; ++k) live += state[k] & halves[k];
-  return live;
+  return static_cast<uint8_t>(live);
 }
 BRECCIA_HD bool gas_wetted_next(const GasView& g, int64_t i) { return g.arrival_next[i] < 1e300; }
 
@@ -425,27 +427,33 @@ struct GasCrackSum {
     const double kappa_i = kv[2 * i], volume_i = kv[2 * i + 1];
     const double xx = position[3 * i], xy = position[3 * i + 1], xz = position[3 * i + 2];
     const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
-    // A settled row: no entry of it changed its state since its last full pick, and neither
-    // it nor a partner was reached by the front or became debris (GasView::row_mark). Every
-    // input of entry_mode is then as it was at that pick, where each entry that could join or
-    // leave did (in_crack), so its entries in the volume (1) are kept and the others (0, 2)
-    // are not in it: the pick reads in_crack alone and stores nothing. The same modes, so the
-    // same sums bit for bit.
-    bool settled = false;
-    if (gv.row_mark) {
-      const int32_t live = gas_row_live(state, gv.halves, begin, end);
-      settled = gv.row_mark[i] == 0 && live == gv.row_live[i];
-      gv.row_mark[i] = 0;
-      gv.row_live[i] = live;
-    }
+    // A settled chunk: none of its entries changed its state since the last pass, and neither
+    // the particle nor a partner was reached by the front or became debris at this pass
+    // (GasView::row_mark). Every input of entry_mode is then as it was at the last pass, where
+    // each entry that could join or leave did (in_crack), so its entries in the volume (1) are
+    // kept and the others (0, 2) are not in it: the pick reads in_crack alone and stores
+    // nothing. The same modes, so the same sums bit for bit.
+    const bool row_marked = !gv.row_mark || gv.row_mark[i];
+    if (gv.row_mark) gv.row_mark[i] = 0;
+    const auto chunk_settled = [&](int64_t base, int64_t stop) {
+      if (!gv.chunk_live) return false;
+      const uint8_t live = gas_chunk_live(state, gv.halves, base, stop);
+      const bool same = !row_marked && gv.chunk_live[base] == live;
+      gv.chunk_live[base] = live;
+      return same;
+    };
 #if defined(__CUDA_ARCH__)
-    for (int64_t k = begin; k < end; ++k) {
-      const uint8_t mode =
-          settled ? (in_crack[k] == 1 ? uint8_t(kKept) : uint8_t(kNone)) : entry_mode(gv, state, in_crack, neighbor, i, k);
-      if (mode == kNone) continue;
-      double ux, uy, uz, a;
-      const double e = gas_entry_opening(position, kv, neighbor, xi_len, kappa_i, xx, xy, xz, k, ux, uy, uz, a);
-      s.add(entry_terms(e, ux, uy, uz, a, mode, volume_i, du));
+    for (int64_t base = begin; base < end; base += kBondChunk) {
+      const int64_t stop = end - base < kBondChunk ? end : base + kBondChunk;
+      const bool settled = chunk_settled(base, stop);
+      for (int64_t k = base; k < stop; ++k) {
+        const uint8_t mode = settled ? (in_crack[k] == 1 ? uint8_t(kKept) : uint8_t(kNone))
+                                     : entry_mode(gv, state, in_crack, neighbor, i, k);
+        if (mode == kNone) continue;
+        double ux, uy, uz, a;
+        const double e = gas_entry_opening(position, kv, neighbor, xi_len, kappa_i, xx, xy, xz, k, ux, uy, uz, a);
+        s.add(entry_terms(e, ux, uy, uz, a, mode, volume_i, du));
+      }
     }
 #else
     int32_t pick[kBondChunk];
@@ -457,7 +465,7 @@ struct GasCrackSum {
       const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
       int count = 0;  // branch-free (entry_mode): every entry is written, the count says which stay
       int changes = 0;  // entries that join or leave the volume now (most chunks: none)
-      if (settled) {
+      if (chunk_settled(base, base + m)) {
         const uint8_t* chunk_in_crack = in_crack + base;
         for (int q = 0; q < m; ++q) {
           pick[count] = q;
@@ -643,10 +651,9 @@ struct GasState {
   std::vector<uint8_t> front_done, in_crack, wall_on;
   std::vector<uint8_t> attached;  // per particle (GasView::attached; derived each pass, not checkpointed)
   std::vector<uint8_t> halves;    // per bond entry (gas_entry_open; set-up, not checkpointed)
-  // per particle (GasView::row_mark, row_live; set-up, not checkpointed; empty on a
-  // distributed run's ranks: every row picked in full)
-  std::vector<uint8_t> row_mark;
-  std::vector<int32_t> row_live;
+  // GasView::row_mark (per particle) and chunk_live (per bond entry); set-up, not
+  // checkpointed; empty on a distributed run's ranks: every entry picked in full
+  std::vector<uint8_t> row_mark, chunk_live;
   std::vector<double> position;   // 3 per particle: the crack pass's x0 + u
   std::vector<GasSums> block_sums;  // gas_fixed_order_sum's per-block sums (setup_gas sizes it once)
   std::vector<double> wall_left;
@@ -689,7 +696,7 @@ struct GasState {
     v.in_crack = in_crack.data();
     v.attached = attached.data();
     v.row_mark = row_mark.empty() ? nullptr : row_mark.data();
-    v.row_live = row_live.empty() ? nullptr : row_live.data();
+    v.chunk_live = chunk_live.empty() ? nullptr : chunk_live.data();
     return v;
   }
   // The area the gas escapes through once vented [m2]: the fixed part and the cracks' mouths.

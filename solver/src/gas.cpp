@@ -12,6 +12,43 @@
 
 namespace breccia::solver {
 
+// GCC and Clang on x86-64 compile it twice and pick the AVX2 one at load time where the CPU
+// has it (ifunc): 4 square roots and divisions at once instead of 2. No "fma" in the target
+// (and no -ffast-math): every operation rounds as in the portable build, so the sums and the
+// motion are the same bit for bit on either (Gas.TheChunkedCrackPassSumsAsTheOneEntryLoopBitForBit).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__NVCC__) && defined(__has_attribute)
+#if __has_attribute(target_clones)
+#define BRECCIA_GAS_CLONES __attribute__((target_clones("avx2", "default")))
+#endif
+#endif
+#ifndef BRECCIA_GAS_CLONES
+#define BRECCIA_GAS_CLONES
+#endif
+
+BRECCIA_GAS_CLONES void gas_chunk_openings(const double* position, const double* kappa_volume, const int32_t* neighbor,
+                                           const double* xi_len, const int32_t* pick, int count, double kappa_i,
+                                           double volume_i, double xx, double xy, double xz, GasChunkTerms& out) {
+  double* e = out.e;
+  double* ux = out.ux;
+  double* uy = out.uy;
+  double* uz = out.uz;
+  double* a = out.a;
+  double* share = out.share;
+  double* px = out.px;
+  double* py = out.py;
+  double* pz = out.pz;
+BRECCIA_SIMD
+  for (int c = 0; c < count; ++c) {
+    e[c] = gas_entry_opening(position, kappa_volume, neighbor, xi_len, kappa_i, xx, xy, xz, pick[c], ux[c], uy[c],
+                             uz[c], a[c]);
+    const bool open = e[c] > 0.0;
+    share[c] = open ? a[c] * volume_i * e[c] * 0.5 : 0.0;
+    px[c] = open ? a[c] * ux[c] : 0.0;
+    py[c] = open ? a[c] * uy[c] : 0.0;
+    pz[c] = open ? a[c] * uz[c] : 0.0;
+  }
+}
+
 double GasState::front_speed() const {
   if (fixed_front_speed > 0.0) return fixed_front_speed;
   // A gas expanding into an empty channel cannot move faster than its escape speed (the
@@ -180,6 +217,8 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
     g.push.assign(3 * n, 0.0);
     g.front_done.assign(n, 0);
     g.attached.assign(n, 1);
+    g.row_mark.assign(n, 1);  // every row picked in full at the first pass (GasView::row_mark)
+    g.chunk_live.assign(s.neighbor.size(), 0);
     // Per entry: the rank's rows under a distributed set-up (finish_distributed_setup gathers
     // in_crack whole, the state a checkpoint keeps; halves move into the rank's system).
     g.in_crack.assign(s.neighbor.size(), 0);

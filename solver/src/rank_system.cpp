@@ -486,7 +486,7 @@ std::vector<const void*> release_global_for_loop(PdSystem& g, bool root, const P
   for (auto* a : {&gas.arrival_next, &gas.kappa_volume, &gas.vent_facet_area, &gas.position,
                   &gas.wall_left})
     drop(*a);
-  for (auto* a : {&gas.front_done, &gas.attached, &gas.halves}) drop(*a);
+  for (auto* a : {&gas.front_done, &gas.attached, &gas.halves, &gas.row_mark, &gas.chunk_live}) drop(*a);
   drop(gas.block_sums);
 #ifdef BRECCIA_PARALLEL_HDF5
   // The bond states: each rank writes its own rows (checkpoint.h5) and forms its part of the

@@ -229,7 +229,8 @@ struct CudaSystem::Impl {
   // fixed-order sums (GasBuffers' device path); the scalars stay on the host
   DeviceArray<double> gas_wall_dv, gas_wall_left, gas_arrival, gas_arrival_next, gas_kappa_volume, gas_vent_area;
   DeviceArray<double> gas_position, gas_push;
-  DeviceArray<uint8_t> gas_wall_on, gas_halves, gas_front_done, gas_in_crack, gas_attached;
+  DeviceArray<uint8_t> gas_wall_on, gas_halves, gas_front_done, gas_in_crack, gas_attached, gas_row_mark,
+      gas_chunk_live;
   DeviceArray<GasSums> gas_block_sums, gas_particle_sums;
   GasBuffers gas{};
   void upload_gas(const GasState& g, int64_t n);
@@ -692,6 +693,8 @@ void CudaSystem::Impl::upload_gas(const GasState& g, int64_t n) {
     gas_front_done.upload(g.front_done, "gas front_done");
     gas_in_crack.upload(g.in_crack, "gas in_crack");
     gas_attached.upload(g.attached, "gas attached");
+    gas_row_mark.upload(g.row_mark, "gas row_mark");
+    gas_chunk_live.upload(g.chunk_live, "gas chunk_live");
     v.arrival = gas_arrival.get();
     v.arrival_next = gas_arrival_next.get();
     v.halves = gas_halves.get();
@@ -700,6 +703,8 @@ void CudaSystem::Impl::upload_gas(const GasState& g, int64_t n) {
     v.front_done = gas_front_done.get();
     v.in_crack = gas_in_crack.get();
     v.attached = gas_attached.get();
+    v.row_mark = g.row_mark.empty() ? nullptr : gas_row_mark.get();
+    v.chunk_live = g.chunk_live.empty() ? nullptr : gas_chunk_live.get();
   }
   const int64_t count = std::max<int64_t>(n, static_cast<int64_t>(g.wall_dv.size()));
   gas_particle_sums.allocate(static_cast<size_t>(std::max<int64_t>(count, 1)), "gas per-particle sums");

@@ -68,6 +68,16 @@ struct GasView {
   // Per particle (owned and ghosts): it keeps at least one intact bond (GasAttached, each
   // exact crack pass). A particle that has lost every bond is debris (gas_debris_entry).
   uint8_t* attached = nullptr;
+  // The settled chunks of the crack pass (null: none, every pass picks every entry in full;
+  // a distributed run's ranks, whose ghosts have no rows to mark from). row_mark, per
+  // particle: 1 when the next crack pass has to pick the row's entries in full (set-up, a
+  // restart; the particle or one of its partners reached by the front or become debris at
+  // this pass: GasMarkNewlyWetted, GasAttached). chunk_live, per bond entry, at the first
+  // entry of each chunk of kBondChunk entries of a row: the chunk's sum of the intact halves
+  // (gas_chunk_live) at the last pass; it only falls, as halves break. Neither is
+  // checkpointed (a restart marks every row).
+  uint8_t* row_mark = nullptr;
+  uint8_t* chunk_live = nullptr;
 };
 
 inline constexpr uint8_t kGasFrontDone = 1;
@@ -78,6 +88,32 @@ inline constexpr uint8_t kGasFrontDone = 1;
 inline constexpr uint8_t kGasCrackDone = 2;
 
 BRECCIA_HD bool gas_wetted(const GasView& g, int64_t i) { return g.arrival[i] < 1e300; }
+
+// Row i's entries to be picked in full at the next crack pass (GasView::row_mark). Several
+// threads may mark one row in a pass: the same byte, the same value.
+BRECCIA_HD void gas_mark_row(uint8_t* row_mark, int64_t i) {
+#if defined(__CUDA_ARCH__)
+  row_mark[i] = 1;
+#else
+  std::atomic_ref<uint8_t>(row_mark[i]).store(1, std::memory_order_relaxed);
+#endif
+}
+
+// Particle i's row and its partners' (the families are symmetric: j in i's iff i in j's).
+BRECCIA_HD void gas_mark_row_and_partners(uint8_t* row_mark, const int64_t* offsets, const int32_t* neighbor,
+                                          int64_t i) {
+  gas_mark_row(row_mark, i);
+  for (int64_t k = offsets[i]; k < offsets[i + 1]; ++k) gas_mark_row(row_mark, neighbor[k]);
+}
+
+// Sum over the entries [begin, end) of a chunk (at most kBondChunk) of the intact halves that
+// exist (gas_entry_open's bits; at most 3 x 64, a byte): it falls whenever a half breaks
+// (bonds do not heal), so an unchanged sum means no entry of the chunk has changed its state.
+BRECCIA_HD uint8_t gas_chunk_live(const uint8_t* state, const uint8_t* halves, int64_t begin, int64_t end) {
+  unsigned live = 0;
+  for (int64_t k = begin; k < end; ++k) live += state[k] & halves[k];
+  return static_cast<uint8_t>(live);
+}
 BRECCIA_HD bool gas_wetted_next(const GasView& g, int64_t i) { return g.arrival_next[i] < 1e300; }
 
 // Is entry i -> j a debris entry: has either end lost every bond? A crack is the gap between
@@ -95,7 +131,21 @@ struct GasAttached {
   GasView g;
   BRECCIA_HD void operator()(int64_t i) const {
     // Bonds do not heal: a particle found detached stays so (its row is not read again).
-    if (g.attached[i]) g.attached[i] = particle_attached(p.offsets, p.state, i) ? 1 : 0;
+    if (!g.attached[i] || particle_attached(p.offsets, p.state, i)) return;
+    g.attached[i] = 0;
+    // Its entries and its partners' entries to it leave the volume at this pass.
+    if (g.row_mark) gas_mark_row_and_partners(g.row_mark, p.offsets, p.neighbor, i);
+  }
+};
+
+// After the front, before the crack pass: the particles the front has just reached (wetted
+// in arrival_next, not yet in arrival: the crack pass commits it) have their rows and their
+// partners' picked in full (their entries may join the volume now).
+struct GasMarkNewlyWetted {
+  PdView p;
+  GasView g;
+  BRECCIA_HD void operator()(int64_t i) const {
+    if (gas_wetted_next(g, i) && !gas_wetted(g, i)) gas_mark_row_and_partners(g.row_mark, p.offsets, p.neighbor, i);
   }
 };
 
@@ -238,6 +288,19 @@ BRECCIA_HD double gas_entry_opening(const double* position, const double* kappa_
   return len - xi_len[k];
 }
 
+// The host crack pass's vectorised stage over one chunk of picked entries (GasCrackSum): each
+// entry's opening e, direction u, a_k / V_i (gas_entry_opening) and, where open, its share
+// a_k/V_i V_i e / 2 and push a_k/V_i u (+0 where closed). Compiled in gas.cpp for the portable
+// target and for AVX2 (chosen at run time; no FMA, so the same roundings: square root,
+// divisions and products are correctly rounded at any vector width), bit for bit the same.
+struct GasChunkTerms {
+  double e[kBondChunk], ux[kBondChunk], uy[kBondChunk], uz[kBondChunk], a[kBondChunk];
+  double share[kBondChunk], px[kBondChunk], py[kBondChunk], pz[kBondChunk];
+};
+void gas_chunk_openings(const double* position, const double* kappa_volume, const int32_t* neighbor,
+                        const double* xi_len, const int32_t* pick, int count, double kappa_i, double volume_i,
+                        double xx, double xy, double xz, GasChunkTerms& out);
+
 // Crack volume the gas fills (each pair seen from both ends, hence the half) with the front
 // this step has reached (arrival_next). The entries already in the volume at the last update
 // (in_crack) give volume_before: an entry that joins now (the front has just reached it, or
@@ -364,43 +427,63 @@ struct GasCrackSum {
     const double kappa_i = kv[2 * i], volume_i = kv[2 * i + 1];
     const double xx = position[3 * i], xy = position[3 * i + 1], xz = position[3 * i + 2];
     const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
+    // A settled chunk: none of its entries changed its state since the last pass, and neither
+    // the particle nor a partner was reached by the front or became debris at this pass
+    // (GasView::row_mark). Every input of entry_mode is then as it was at the last pass, where
+    // each entry that could join or leave did (in_crack), so its entries in the volume (1) are
+    // kept and the others (0, 2) are not in it: the pick reads in_crack alone and stores
+    // nothing. The same modes, so the same sums bit for bit.
+    const bool row_marked = !gv.row_mark || gv.row_mark[i];
+    if (gv.row_mark) gv.row_mark[i] = 0;
+    const auto chunk_settled = [&](int64_t base, int64_t stop) {
+      if (!gv.chunk_live) return false;
+      const uint8_t live = gas_chunk_live(state, gv.halves, base, stop);
+      const bool same = !row_marked && gv.chunk_live[base] == live;
+      gv.chunk_live[base] = live;
+      return same;
+    };
 #if defined(__CUDA_ARCH__)
-    for (int64_t k = begin; k < end; ++k) {
-      const uint8_t mode = entry_mode(gv, state, in_crack, neighbor, i, k);
-      if (mode == kNone) continue;
-      double ux, uy, uz, a;
-      const double e = gas_entry_opening(position, kv, neighbor, xi_len, kappa_i, xx, xy, xz, k, ux, uy, uz, a);
-      s.add(entry_terms(e, ux, uy, uz, a, mode, volume_i, du));
+    for (int64_t base = begin; base < end; base += kBondChunk) {
+      const int64_t stop = end - base < kBondChunk ? end : base + kBondChunk;
+      const bool settled = chunk_settled(base, stop);
+      for (int64_t k = base; k < stop; ++k) {
+        const uint8_t mode = settled ? (in_crack[k] == 1 ? uint8_t(kKept) : uint8_t(kNone))
+                                     : entry_mode(gv, state, in_crack, neighbor, i, k);
+        if (mode == kNone) continue;
+        double ux, uy, uz, a;
+        const double e = gas_entry_opening(position, kv, neighbor, xi_len, kappa_i, xx, xy, xz, k, ux, uy, uz, a);
+        s.add(entry_terms(e, ux, uy, uz, a, mode, volume_i, du));
+      }
     }
 #else
     int32_t pick[kBondChunk];
     uint8_t modes[kBondChunk];
-    double e[kBondChunk], ux[kBondChunk], uy[kBondChunk], uz[kBondChunk], a[kBondChunk];
-    double share[kBondChunk], px[kBondChunk], py[kBondChunk], pz[kBondChunk];
+    GasChunkTerms terms;
+    const double *e = terms.e, *ux = terms.ux, *uy = terms.uy, *uz = terms.uz, *a = terms.a;
+    const double *share = terms.share, *px = terms.px, *py = terms.py, *pz = terms.pz;
     for (int64_t base = begin; base < end; base += kBondChunk) {
       const int m = static_cast<int>(end - base < kBondChunk ? end - base : kBondChunk);
       int count = 0;  // branch-free (entry_mode): every entry is written, the count says which stay
       int changes = 0;  // entries that join or leave the volume now (most chunks: none)
-      for (int q = 0; q < m; ++q) {
-        const uint8_t mode = entry_mode(gv, state, in_crack, neighbor, i, base + q);
-        pick[count] = q;
-        modes[count] = mode;
-        count += mode != kNone;
-        changes += (mode == kJoined) | (mode == kLeft);
+      if (chunk_settled(base, base + m)) {
+        const uint8_t* chunk_in_crack = in_crack + base;
+        for (int q = 0; q < m; ++q) {
+          pick[count] = q;
+          count += chunk_in_crack[q] == 1;
+        }
+      } else {
+        for (int q = 0; q < m; ++q) {
+          const uint8_t mode = entry_mode(gv, state, in_crack, neighbor, i, base + q);
+          pick[count] = q;
+          modes[count] = mode;
+          count += mode != kNone;
+          changes += (mode == kJoined) | (mode == kLeft);
+        }
       }
-      const int32_t* chunk_neighbor = neighbor + base;
-      const double* chunk_xi = xi_len + base;
       // The openings and, for a kept entry, its nonzero terms (entry_terms' products, the same
       // operations in the same order): the vectorised stage.
-BRECCIA_SIMD
-      for (int c = 0; c < count; ++c) {
-        e[c] = gas_entry_opening(position, kv, chunk_neighbor, chunk_xi, kappa_i, xx, xy, xz, pick[c], ux[c], uy[c], uz[c], a[c]);
-        const bool open = e[c] > 0.0;
-        share[c] = open ? a[c] * volume_i * e[c] * 0.5 : 0.0;
-        px[c] = open ? a[c] * ux[c] : 0.0;
-        py[c] = open ? a[c] * uy[c] : 0.0;
-        pz[c] = open ? a[c] * uz[c] : 0.0;
-      }
+      gas_chunk_openings(position, kv, neighbor + base, xi_len + base, pick, count, kappa_i, volume_i, xx, xy, xz,
+                         terms);
       if (changes == 0) {
         // Every entry kept: its terms are share (volume and volume_before), push and, at a
         // vent, the density; joined, left and frozen are +0, which leave a sum as it is (one
@@ -568,6 +651,9 @@ struct GasState {
   std::vector<uint8_t> front_done, in_crack, wall_on;
   std::vector<uint8_t> attached;  // per particle (GasView::attached; derived each pass, not checkpointed)
   std::vector<uint8_t> halves;    // per bond entry (gas_entry_open; set-up, not checkpointed)
+  // GasView::row_mark (per particle) and chunk_live (per bond entry); set-up, not
+  // checkpointed; empty on a distributed run's ranks: every entry picked in full
+  std::vector<uint8_t> row_mark, chunk_live;
   std::vector<double> position;   // 3 per particle: the crack pass's x0 + u
   std::vector<GasSums> block_sums;  // gas_fixed_order_sum's per-block sums (setup_gas sizes it once)
   std::vector<double> wall_left;
@@ -609,6 +695,8 @@ struct GasState {
     v.front_done = front_done.data();
     v.in_crack = in_crack.data();
     v.attached = attached.data();
+    v.row_mark = row_mark.empty() ? nullptr : row_mark.data();
+    v.chunk_live = chunk_live.empty() ? nullptr : chunk_live.data();
     return v;
   }
   // The area the gas escapes through once vented [m2]: the fixed part and the cracks' mouths.
@@ -789,6 +877,8 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
         exec.for_each(blocks, GasBlocks<GasFront>{front, d.n, blocks, gas_block_stride(blocks)}, "gas_front");
       // A ghost reached here is reached on its owner's rank too; a minimum, so exact.
       if constexpr (GasOnRanks<Exec>::value) exec.gas_front_to_ghosts(g);
+      // The rows the crack pass has to pick in full because the front reached them or a partner.
+      if (g.row_mark) exec.for_each(d.n, GasMarkNewlyWetted{d, g}, "gas_mark_wetted");
       crack = gas_fixed_order_sum(exec, d.n, GasCrackSum<UBefore>{d, g, u_before}, buffers, gas, "gas crack volume",
                                   GasSumOver::Particles);
       // The debris entries' frozen shares stay in the volume; those frozen now join them.

@@ -38,7 +38,7 @@ std::string lattice_deck(const std::string& model, const std::string& extra_mode
 struct PassResult {
   std::vector<double> force, dissipated, damage;
   std::vector<uint8_t> state;
-  std::vector<float> bond_damage;
+  decltype(PdSystem::bond_damage) bond_damage;
 };
 PassResult random_pass(PdSystem& s, uint64_t seed) {
   SplitMixUniform uniform{seed};

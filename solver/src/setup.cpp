@@ -306,30 +306,25 @@ static std::vector<double> softening_onset_per_strength(const PdSystem& s, const
 // Dual horizon: the two halves of an entry have the s_G of their own horizons, but one damage
 // per entry drives both, and (i, j) and (j, i) must soften alike: s_G^2 is the mean of the two
 // halves' (exact where the horizons agree; on a graded mesh neighbours' differ by a few %).
-// Entry k's conversion (convert_to_softening's loop body): k_dual / s0_dual are the dual halves
-// (PdSystem::k_dual_halves, s0_dual_halves), `shared` whether they are the own arrays.
-static inline void convert_entry_to_softening(PdSystem& s, const double* k_dual, const float* s0_dual, bool shared,
-                                              int64_t k) {
-  const float onset = s.s_onset[k];
-  if (!(onset < FLT_MAX) || !(s.s0_own[k] < FLT_MAX)) return;  // brittle material or unbreakable bond
-  double s_g = s.s0_own[k];
-  const float s_g_dual = s0_dual[k];  // read before the own half is written (the same float when shared)
-  if (s_g_dual < FLT_MAX && s.vol_own[k] > 0 && k_dual[k] > 0)
-    s_g = std::sqrt(0.5 * (s_g * s_g + double(s_g_dual) * s_g_dual));
-  else if (!(s.vol_own[k] > 0) && s_g_dual < FLT_MAX)
-    s_g = s_g_dual;
-  const float ultimate = static_cast<float>(std::max(s_g * s_g / onset, double(onset)));
-  s.s0_own[k] = ultimate;
-  if (!shared) s.s0_dual[k] = ultimate;
-}
-
 static void convert_to_softening(PdSystem& s) {
   const int64_t nb = static_cast<int64_t>(s.s0_own.size());
   const bool shared = s.dual_halves_shared;  // then the dual halves are the own ones (pd_system.hpp)
   const double* k_dual = s.k_dual_halves().data();
   const float* s0_dual = s.s0_dual_halves().data();
 #pragma omp parallel for schedule(static)
-  for (int64_t k = 0; k < nb; ++k) convert_entry_to_softening(s, k_dual, s0_dual, shared, k);
+  for (int64_t k = 0; k < nb; ++k) {
+    const float onset = s.s_onset[k];
+    if (!(onset < FLT_MAX) || !(s.s0_own[k] < FLT_MAX)) continue;  // brittle material or unbreakable bond
+    double s_g = s.s0_own[k];
+    const float s_g_dual = s0_dual[k];  // read before the own half is written (the same float when shared)
+    if (s_g_dual < FLT_MAX && s.vol_own[k] > 0 && k_dual[k] > 0)
+      s_g = std::sqrt(0.5 * (s_g * s_g + double(s_g_dual) * s_g_dual));
+    else if (!(s.vol_own[k] > 0) && s_g_dual < FLT_MAX)
+      s_g = s_g_dual;
+    const float ultimate = static_cast<float>(std::max(s_g * s_g / onset, double(onset)));
+    s.s0_own[k] = ultimate;
+    if (!shared) s.s0_dual[k] = ultimate;
+  }
 }
 
 // near_surface: the particles whose reference position lies within r.distance of the named
@@ -1014,39 +1009,21 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   fam = Families{};
   std::vector<uint8_t>().swap(samples_inside);  // freed (keep_count's note)
   std::vector<uint8_t>().swap(dual_inside);
-  // The other entry k of a shared pair from its reverse r: r's values, own and dual swapped.
-  const auto copy_pair = [&](int64_t i, int64_t k, int64_t r) {
-    const int32_t j = s.neighbor[k];
-    // Shared halves: (j -> i)'s dual is its own half (store_dual above).
-    if (copy_weights) {
-      s.k_own[k] = store_dual ? s.k_dual[r] : s.k_own[r];
-      if (store_dual) s.k_dual[k] = s.k_own[r];
-    }
-    if (!strengths_shared(i, j)) return;
-    s.s0_own[k] = store_dual ? s.s0_dual[r] : s.s0_own[r];
-    if (store_dual) s.s0_dual[k] = s.s0_own[r];
-    if (c.softening) s.s_onset[k] = s.s_onset[r];
-  };
-  // Softening (convert_to_softening, after the pre-cracks below) done in the copy pass instead,
-  // on both entries of each pair, where nothing in between writes what it reads (s0, s_onset,
-  // vol_own, the dual weights): 3D LPS without the surface correction (2D reweights the weights
-  // and LPS rescales s0, PMB's calibration and the surface correction scale the weights; the
-  // pre-cracks write states only). The copy pass visits every kept entry once, as k (its partner
-  // a lower row) or as r; each entry's conversion is convert_to_softening's, on the same values
-  // (k's after their copy), so the same bits, and no pass over every entry after it.
-  const bool soften_in_copy = copy_strengths && c.softening && lps && s.dimension == 3 && !c.surface_correction;
   if (copy_strengths) {
-    const double* k_dual_halves = s.k_dual_halves().data();
-    const float* s0_dual_halves = s.s0_dual_halves().data();
     // The other entry of each shared pair: its reverse's values, own and dual swapped. Kept
     // entries are symmetric (beta_own > 0 || beta_dual > 0 reads the same two counts from
     // either end) and rows stay sorted, so the kept lists have reverse entries too.
     const auto copy = [&](int64_t i, int64_t k, int64_t r) {
-      copy_pair(i, k, r);
-      if (soften_in_copy) {
-        convert_entry_to_softening(s, k_dual_halves, s0_dual_halves, !store_dual, k);
-        convert_entry_to_softening(s, k_dual_halves, s0_dual_halves, !store_dual, r);
+      const int32_t j = s.neighbor[k];
+      // Shared halves: (j -> i)'s dual is its own half (store_dual above).
+      if (copy_weights) {
+        s.k_own[k] = store_dual ? s.k_dual[r] : s.k_own[r];
+        if (store_dual) s.k_dual[k] = s.k_own[r];
       }
+      if (!strengths_shared(i, j)) return;
+      s.s0_own[k] = store_dual ? s.s0_dual[r] : s.s0_own[r];
+      if (store_dual) s.s0_dual[k] = s.s0_own[r];
+      if (c.softening) s.s_onset[k] = s.s_onset[r];
     };
     // Only the entries of the higher row of each pair (j < i) take a copy.
     for_each_entry_with_reverse(s.offsets, s.neighbor, 0, static_cast<int64_t>(n), copy, true);
@@ -1406,7 +1383,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     std::sort(s.precrack_pairs.begin(), s.precrack_pairs.end());
   }
 
-  if (c.softening && !soften_in_copy) convert_to_softening(s);
+  if (c.softening) convert_to_softening(s);
   phase("pre-cracks");
 
   // Loads.

@@ -34,10 +34,10 @@ namespace {
 
 // Every rank's entries of a per-entry array (its rows are one run of the whole system's
 // entries, in rank order), on every rank or on rank 0 only.
-template <class T>
-void gather_entries(const DistributedSetup& d, std::vector<T>& a, bool everyone) {
+template <class T, class A>
+void gather_entries(const DistributedSetup& d, std::vector<T, A>& a, bool everyone) {
   std::vector<char> bytes = d.concat(a.data(), a.size(), sizeof(T), everyone);
-  std::vector<T> whole(bytes.size() / sizeof(T));
+  std::vector<T, A> whole(bytes.size() / sizeof(T));
   if (!bytes.empty()) std::memcpy(static_cast<void*>(whole.data()), bytes.data(), bytes.size());
   a.swap(whole);
 }

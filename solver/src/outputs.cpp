@@ -470,7 +470,7 @@ void HistoryWriter::write(const PdSystem& s, const Energies& e) {
 namespace {
 
 // The doubles of the first `count` elements of a float or double array.
-template <class T> std::vector<double> doubles_of(const std::vector<T>& a, size_t count) {
+template <class T, class A> std::vector<double> doubles_of(const std::vector<T, A>& a, size_t count) {
   return std::vector<double>(a.begin(), a.begin() + static_cast<std::ptrdiff_t>(count));
 }
 
@@ -625,7 +625,8 @@ void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
     if (!f.exists("/bond_damage"))
       throw InputError(path, "/bond_damage", "missing (written without materials[].tensile_strength)",
                        "a checkpoint of this case with the same materials");
-    s.bond_damage = entry_floats("/bond_damage");
+    const std::vector<float> damage = entry_floats("/bond_damage");
+    s.bond_damage.assign(damage.begin(), damage.end());
   }
   if (s.config.strength_rate != StrengthRateLaw::None) {
     if (!f.exists("/bond_onset"))

@@ -62,10 +62,10 @@ void take_or_keep_if_held(std::vector<T>& local, const std::vector<T>& global, c
 }
 
 // Entries [b, e) of a per-entry array; empty stays empty.
-template <class T>
-std::vector<T> slice(const std::vector<T>& global, int64_t b, int64_t e) {
+template <class T, class A>
+std::vector<T, A> slice(const std::vector<T, A>& global, int64_t b, int64_t e) {
   if (global.empty()) return {};
-  return std::vector<T>(global.begin() + b, global.begin() + e);
+  return std::vector<T, A>(global.begin() + b, global.begin() + e);
 }
 
 // A rank's rows [eb, ee) of a global per-entry state array (the bond states, a gas load's
@@ -73,8 +73,8 @@ std::vector<T> slice(const std::vector<T>& global, int64_t b, int64_t e) {
 // staging: its slice), or as this rank's rows alone (a distributed restart's read_checkpoint:
 // a copy), or not at all: then `mine`, the rank's system's own rows, is already the state
 // and stays.
-template <class T>
-void take_entry_rows(std::vector<T>& mine, const std::vector<T>& global, size_t entries, int64_t eb, int64_t ee) {
+template <class T, class A>
+void take_entry_rows(std::vector<T, A>& mine, const std::vector<T, A>& global, size_t entries, int64_t eb, int64_t ee) {
   if (global.empty()) return;
   mine = global.size() == entries ? slice(global, eb, ee) : global;
 }

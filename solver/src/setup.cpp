@@ -867,7 +867,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
           if (!compact_in_place) assign_on_huge_pages(s.state, nb, static_cast<uint8_t>(kOwnIntact | kDualIntact));
           break;
         case 8: assign_on_huge_pages(s.s_onset, nb, FLT_MAX); break;
-        case 9: assign_on_huge_pages(s.bond_damage, nb, 0.0f); break;
+        case 9: zeroed_on_huge_pages(s.bond_damage, nb); break;
       }
     }
   }

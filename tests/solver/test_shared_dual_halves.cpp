@@ -19,8 +19,8 @@ using namespace breccia::solver::testing;
 
 namespace {
 
-template <class T>
-bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+template <class T, class A>
+bool same_bits(const std::vector<T, A>& a, const std::vector<T, A>& b) {
   return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
@@ -38,7 +38,7 @@ std::string lattice_deck(const std::string& model, const std::string& extra_mode
 struct PassResult {
   std::vector<double> force, dissipated, damage;
   std::vector<uint8_t> state;
-  std::vector<float> bond_damage;
+  decltype(PdSystem::bond_damage) bond_damage;
 };
 PassResult random_pass(PdSystem& s, uint64_t seed) {
   SplitMixUniform uniform{seed};

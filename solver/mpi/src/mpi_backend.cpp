@@ -618,8 +618,8 @@ void allgather_ranges(void* data, size_t bytes, const std::vector<int64_t>& begi
 // `global`. `held`: whether rank 0 holds `global` (the feature is on), the same on every
 // rank, so every rank takes part or none; the other ranks need not hold it (their global
 // system lets go of the gathers' targets: release_global_for_loop).
-template <class T>
-void gather_ranges(const std::vector<T>& local, std::vector<T>& global, const std::vector<int64_t>& begin, int rank,
+template <class T, class A>
+void gather_ranges(const std::vector<T, A>& local, std::vector<T, A>& global, const std::vector<int64_t>& begin, int rank,
                    MPI_Comm comm, bool held) {
   if (!held) return;
   const ElementRanges e(sizeof(T), begin);
@@ -1091,13 +1091,13 @@ public:
 private:
   // Whether rank 0 holds `global` (a gather's target): the other ranks let it go
   // (release_global_for_loop) but take part in the gather alike.
-  template <class T>
-  bool held(const std::vector<T>& global) const {
+  template <class T, class A>
+  bool held(const std::vector<T, A>& global) const {
     return !global.empty() ||
            std::find(released_.begin(), released_.end(), static_cast<const void*>(&global)) != released_.end();
   }
-  template <class T>
-  void gather(const std::vector<T>& local, std::vector<T>& global, const std::vector<int64_t>& begin) {
+  template <class T, class A>
+  void gather(const std::vector<T, A>& local, std::vector<T, A>& global, const std::vector<int64_t>& begin) {
     gather_ranges(local, global, begin, layout_.rank, comm_, held(global));
   }
 

@@ -6,6 +6,10 @@
 // against 0.2-2 s per GB on 2 MiB pages (docs/performance.md). The hint changes no value.
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
+#include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -33,6 +37,55 @@ void assign_on_huge_pages(std::vector<T>& v, size_t count, T value = T{}) {
   v.reserve(count);
   advise_huge_pages(v.data(), count * sizeof(T));
   v.assign(count, value);
+}
+
+// Storage that starts as zeros the process has not touched: calloc's (for a block this large
+// glibc maps fresh pages, which read as zeros, and writes nothing), and a value-initialisation
+// that writes nothing either (construct() without arguments default-initialises: the bytes stay
+// calloc's zeros). Reading such pages maps the kernel's shared zero page; only a page written
+// later is allocated and cleared. For an array that starts at zero and is mostly never written
+// (the softening bonds' damage: 4 B per entry, 0.24 GB on the full concrete case), the set-up
+// pays no page clearing for it. Only for trivial types, and only where a vector grows from
+// empty or from a copy: a resize that grows back into capacity a shrink left holds the old
+// values there, not zeros (bond arrays are sized once).
+template <class T>
+struct ZeroedAllocator {
+  static_assert(std::is_trivially_default_constructible_v<T> && std::is_trivially_destructible_v<T>);
+  using value_type = T;
+  ZeroedAllocator() = default;
+  template <class U>
+  ZeroedAllocator(const ZeroedAllocator<U>&) noexcept {}
+  T* allocate(size_t count) {
+    if (count == 0) return nullptr;
+    void* p = std::calloc(count, sizeof(T));
+    if (!p) throw std::bad_alloc();
+    return static_cast<T*>(p);
+  }
+  void deallocate(T* p, size_t) noexcept { std::free(p); }
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;  // default-initialised: calloc's zeros stay as they are
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+  template <class U>
+  bool operator==(const ZeroedAllocator<U>&) const noexcept {
+    return true;
+  }
+};
+template <class T>
+using ZeroedVector = std::vector<T, ZeroedAllocator<T>>;
+
+// v = `count` zeros in fresh storage none of whose pages is touched, the huge-page hint given
+// first (so a page written later is a huge one, and reads map the huge zero page).
+template <class T>
+void zeroed_on_huge_pages(ZeroedVector<T>& v, size_t count) {
+  ZeroedVector<T>().swap(v);
+  v.reserve(count);
+  advise_huge_pages(v.data(), count * sizeof(T));
+  v.resize(count);  // writes nothing (ZeroedAllocator::construct)
 }
 
 // Gives the whole pages of v's storage past its size back to the system (a vector shrunk in

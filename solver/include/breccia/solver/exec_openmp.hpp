@@ -150,7 +150,7 @@ class DamageHiddenWhileUndamaged {
 
  private:
   PdSystem& sys_;
-  std::vector<float> hidden_;
+  decltype(PdSystem::bond_damage) hidden_;
 };
 
 }  // namespace breccia::solver

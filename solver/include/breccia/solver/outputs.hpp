@@ -158,7 +158,8 @@ private:
   std::vector<double> force_;
   bool keep_bonds_ = false;
   std::vector<uint8_t> state_;
-  std::vector<float> damage_, onset_, ultimate_;
+  decltype(PdSystem::bond_damage) damage_;
+  std::vector<float> onset_, ultimate_;
 };
 
 }  // namespace breccia::solver

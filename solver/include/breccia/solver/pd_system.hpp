@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "breccia/common/families.hpp"
+#include "breccia/common/huge_pages.hpp"
 #include "breccia/common/particle_file.hpp"
 #include "breccia/solver/case_config.hpp"
 #include "breccia/solver/contact_cells.hpp"
@@ -94,7 +95,10 @@ struct PdSystem {
   std::vector<float> min_stretch, min_stretch_next;
   // Softening bonds (materials[].tensile_strength): each entry's onset stretch s_t (s0_own and
   // s0_dual then hold the ultimate stretch s_u) and its damage d in [0, 1]; empty without.
-  std::vector<float> s_onset, bond_damage;
+  // bond_damage starts as untouched zero pages (huge_pages.hpp ZeroedVector): pages of entries
+  // never damaged are never allocated.
+  std::vector<float> s_onset;
+  ZeroedVector<float> bond_damage;
   // model.short_range_forces: per particle 15 c / delta and spacing (short_range_kernel).
   std::vector<double> short_range_k, spacing;
   ContactCells contact_cells;      // scratch: the pairs outside the families (contact_cells.hpp)

@@ -51,20 +51,23 @@ public:
     if (count == 0) return;
     check(cudaMalloc(&ptr_, count * sizeof(T)), std::string("cudaMalloc of ") + name);
   }
-  void upload(const std::vector<T>& host, const char* name) {
+  template <class A>
+  void upload(const std::vector<T, A>& host, const char* name) {
     allocate(host.size(), name);
     if (count_ == 0) return;
     check(cudaMemcpy(ptr_, host.data(), count_ * sizeof(T), cudaMemcpyHostToDevice),
           std::string("upload of ") + name);
   }
   // Into the present allocation (its device pointer stays valid in the views that hold it).
-  void copy_in(const std::vector<T>& host, const char* name) {
+  template <class A>
+  void copy_in(const std::vector<T, A>& host, const char* name) {
     if (host.size() != count_)
       throw std::runtime_error(std::string("copy of ") + name + ": size differs from the device array's");
     if (count_ == 0) return;
     check(cudaMemcpy(ptr_, host.data(), count_ * sizeof(T), cudaMemcpyHostToDevice), std::string("copy of ") + name);
   }
-  void download(std::vector<T>& host, const char* name) const {
+  template <class A>
+  void download(std::vector<T, A>& host, const char* name) const {
     if (count_ == 0) return;
     host.resize(count_);
     check(cudaMemcpy(host.data(), ptr_, count_ * sizeof(T), cudaMemcpyDeviceToHost),

@@ -45,6 +45,23 @@ std::string disc_case(const std::string& gas_extra, const std::string& rest,
          ", ambient_pressure: 0" + gas_extra + "}\n" + rest;
 }
 
+// Two runs of one gas case that must agree bit for bit (two code paths, two thread counts):
+// the gas's sums, its front, the entries in its volume, the bonds and the motion. `what` says
+// which two runs differ in the messages.
+void expect_same_gas_and_motion(const PdSystem& a, const PdSystem& b, const std::string& what) {
+  ASSERT_GT(a.gas.crack_volume, 0.0) << "the gas must be in cracks";
+  EXPECT_EQ(a.step, b.step) << what;
+  EXPECT_EQ(a.gas.volume, b.gas.volume) << what;
+  EXPECT_EQ(a.gas.crack_volume, b.gas.crack_volume) << what;
+  EXPECT_EQ(a.gas.debris_volume, b.gas.debris_volume) << what;
+  EXPECT_EQ(a.gas.work, b.gas.work) << what;
+  EXPECT_EQ(a.gas.mass_fraction, b.gas.mass_fraction) << what;
+  EXPECT_TRUE(a.gas.arrival == b.gas.arrival) << "the fronts differ: " << what;
+  EXPECT_TRUE(a.gas.in_crack == b.gas.in_crack) << "the cracks in the gas's volume differ: " << what;
+  EXPECT_TRUE(a.state == b.state) << "the bonds differ: " << what;
+  EXPECT_TRUE(a.u == b.u) << "the displacements differ: " << what;
+}
+
 // The two-gamma isentrope through (V0, p0), written here independently of gas.hpp.
 double isentrope(double v0_over_v) {
   const double rho_switch = std::pow(kSwitch / kP0, 1.0 / kGammaHigh);
@@ -417,11 +434,7 @@ void expect_same_on_one_and_two_threads(const std::string& gas_extra) {
   };
   const PdSystem one = run(1), two = run(2);
   omp_set_num_threads(threads_before);
-  ASSERT_GT(one.gas.crack_volume, 0.0) << "the gas must be in cracks";
-  EXPECT_EQ(one.gas.volume, two.gas.volume);
-  EXPECT_EQ(one.gas.crack_volume, two.gas.crack_volume);
-  EXPECT_EQ(one.gas.work, two.gas.work);
-  EXPECT_TRUE(one.u == two.u) << "the displacements differ between 1 and 2 threads";
+  expect_same_gas_and_motion(one, two, "1 and 2 threads");
 }
 
 }  // namespace
@@ -598,13 +611,7 @@ void expect_device_path_as_host(const std::string& gas_extra) {
     StepArrays<double> a = cpu_step_arrays(device);
     pd_step(exec, a, device);
   }
-  ASSERT_GT(host.gas.crack_volume, 0.0) << "the gas must be in cracks";
-  EXPECT_EQ(host.gas.volume, device.gas.volume);
-  EXPECT_EQ(host.gas.crack_volume, device.gas.crack_volume);
-  EXPECT_EQ(host.gas.work, device.gas.work);
-  EXPECT_TRUE(host.gas.arrival == device.gas.arrival) << "the fronts differ";
-  EXPECT_TRUE(host.gas.in_crack == device.gas.in_crack) << "the cracks in the gas's volume differ";
-  EXPECT_TRUE(host.u == device.u) << "the displacements differ between the host and the device path";
+  expect_same_gas_and_motion(host, device, "the host and the device path");
 }
 
 }  // namespace
@@ -910,17 +917,7 @@ double expect_settled_rows_as_full_picks(const std::string& name, const std::str
     }
   }
   while (full.time < end) cpu_step(full);
-  EXPECT_EQ(settled.step, full.step);
-  EXPECT_GT(settled.gas.crack_volume, 0.0) << "the gas must be in cracks";
-  EXPECT_EQ(settled.gas.volume, full.gas.volume);
-  EXPECT_EQ(settled.gas.crack_volume, full.gas.crack_volume);
-  EXPECT_EQ(settled.gas.debris_volume, full.gas.debris_volume);
-  EXPECT_EQ(settled.gas.work, full.gas.work);
-  EXPECT_EQ(settled.gas.mass_fraction, full.gas.mass_fraction);
-  EXPECT_TRUE(settled.gas.arrival == full.gas.arrival) << "the fronts differ";
-  EXPECT_TRUE(settled.gas.in_crack == full.gas.in_crack) << "the cracks in the gas's volume differ";
-  EXPECT_TRUE(settled.state == full.state) << "the bonds differ";
-  EXPECT_TRUE(settled.u == full.u) << "the displacements differ";
+  expect_same_gas_and_motion(settled, full, "settled chunks and full picks");
   const double share = visited > 0 ? static_cast<double>(taken) / static_cast<double>(visited) : 0.0;
   std::printf("%s: %lld of %lld visited chunks settled (%.3f), %lld passes in %lld steps\n", name.c_str(),
               static_cast<long long>(taken), static_cast<long long>(visited), share, static_cast<long long>(passes),

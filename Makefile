@@ -11,12 +11,12 @@ PYTHON   ?= /usr/bin/python3
 QUICK    ?=
 export PYTHON
 
-.PHONY: all deps configure build test demo bench bench-pipeline clean help lammps-peri package check-package install
+.PHONY: all deps configure build test test-serial-hdf5 demo bench bench-pipeline clean help lammps-peri package check-package install
 
 all: build
 
 help:
-	@echo "make deps | build | test | demo | bench | case-NAME [QUICK=1] | install PREFIX=P | package | check-package | clean"
+	@echo "make deps | build | test | test-serial-hdf5 | demo | bench | case-NAME [QUICK=1] | install PREFIX=P | package | check-package | clean"
 
 deps:
 	@bash scripts/install-deps.sh
@@ -31,6 +31,17 @@ build: configure
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 900
+
+# make test-serial-hdf5: the distributed tests in a second build folder with MPI and the serial
+# HDF5 (rank 0 gathers and writes every file), the path make test's build (parallel HDF5) does
+# not take; no CUDA (docs/parallel.md, "One HDF5 per process").
+SERIAL_HDF5_BUILD ?= $(BUILD)-serial-hdf5
+test-serial-hdf5: deps
+	cmake -S . -B $(SERIAL_HDF5_BUILD) -DCMAKE_BUILD_TYPE=Release -DBRECCIA_CUDA=OFF -DBRECCIA_NATIVE=$(NATIVE) \
+	  -DHDF5_C_COMPILER_EXECUTABLE=/usr/bin/h5cc
+	cmake --build $(SERIAL_HDF5_BUILD) -j $(JOBS) --target breccia-solve breccia-mesh breccia-place test_distributed test_solver
+	ldd $(SERIAL_HDF5_BUILD)/bin/breccia-solve | grep -q libhdf5_serial || { echo "$(SERIAL_HDF5_BUILD): not the serial HDF5"; exit 1; }
+	cd $(SERIAL_HDF5_BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 900 -R "Distributed|SameAnswer|RankSystem|Partition"
 
 demo: build
 	bash scripts/run_case.sh $(BUILD) cases/concrete-blast $(if $(QUICK),quick,demo)

@@ -984,20 +984,6 @@ public:
 #endif
   }
 
-  // results.h5's bond list when a run (time loop or dynamic relaxation) starts: with parallel
-  // HDF5 written by the ranks together and a restart's file checked by them together
-  // (results_bonds); else rank 0 holds the list and checks a restart's file alone (an error
-  // there reaches every rank through mpi_abort_all). Collective.
-  void start_results(const PdSystem& g, ResultsWriter* results, const std::string& out_dir) {
-#ifdef BRECCIA_PARALLEL_HDF5
-    results_bonds(g, results, out_dir);
-#else
-    (void)g;
-    (void)out_dir;
-    if (results) results->check_bond_count(results->bond_list_size());
-#endif
-  }
-
   // results.h5's /bonds/offsets (HalfBondList::offsets) on every rank, counted once: each
   // rank its own rows' partners of higher file index, summed over ranks (counts: exact).
   const std::vector<int64_t>& file_bond_offsets(const PdSystem& g) {
@@ -1028,6 +1014,21 @@ public:
     write_checkpoint(g, path, mine, comm_, root);
   }
 #endif
+
+  // results.h5's bond list when a run (time loop or dynamic relaxation) starts: with parallel
+  // HDF5 written by the ranks together and a restart's file checked by them together
+  // (results_bonds); else rank 0 holds the list and checks a restart's file alone (an error
+  // there reaches every rank through mpi_abort_all). Collective; outside the
+  // parallel-HDF5 block above, since both builds call it (relax, mpi_time_loop).
+  void start_results(const PdSystem& g, ResultsWriter* results, const std::string& out_dir) {
+#ifdef BRECCIA_PARALLEL_HDF5
+    results_bonds(g, results, out_dir);
+#else
+    (void)g;
+    (void)out_dir;
+    if (results) results->check_bond_count(results->bond_list_size());
+#endif
+  }
 
   void download_kinematics(PdSystem& g) override {
     if (device_) device_->download_kinematics(local_);

@@ -11,12 +11,12 @@ PYTHON   ?= /usr/bin/python3
 QUICK    ?=
 export PYTHON
 
-.PHONY: all deps configure build test test-serial-hdf5 demo bench bench-pipeline clean help lammps-peri package check-package install
+.PHONY: all deps configure build test test-serial-hdf5 compile-serial-hdf5 demo bench bench-pipeline clean help lammps-peri package check-package install
 
 all: build
 
 help:
-	@echo "make deps | build | test | test-serial-hdf5 | demo | bench | case-NAME [QUICK=1] | install PREFIX=P | package | check-package | clean"
+	@echo "make deps | build | test | test-serial-hdf5 | compile-serial-hdf5 | demo | bench | case-NAME [QUICK=1] | install PREFIX=P | package | check-package | clean"
 
 deps:
 	@bash scripts/install-deps.sh
@@ -42,6 +42,19 @@ test-serial-hdf5: deps
 	cmake --build $(SERIAL_HDF5_BUILD) -j $(JOBS) --target breccia-solve breccia-mesh breccia-place test_distributed test_solver
 	ldd $(SERIAL_HDF5_BUILD)/bin/breccia-solve | grep -q libhdf5_serial || { echo "$(SERIAL_HDF5_BUILD): not the serial HDF5"; exit 1; }
 	cd $(SERIAL_HDF5_BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 900 -R "Distributed|SameAnswer|RankSystem|Partition"
+
+# make compile-serial-hdf5: only the sources whose code differs with a serial HDF5
+# (BRECCIA_PARALLEL_HDF5 unset) compiled in that folder, no link, no tests: the cheap check CI
+# runs so that the serial path cannot stop compiling unnoticed (make test's build takes the
+# parallel HDF5); make test-serial-hdf5 runs its tests.
+compile-serial-hdf5: deps
+	cmake -S . -B $(SERIAL_HDF5_BUILD) -DCMAKE_BUILD_TYPE=Release -DBRECCIA_CUDA=OFF -DBRECCIA_NATIVE=$(NATIVE) \
+	  -DHDF5_C_COMPILER_EXECUTABLE=/usr/bin/h5cc
+	! grep -q BRECCIA_PARALLEL_HDF5 $(SERIAL_HDF5_BUILD)/common/CMakeFiles/breccia_common.dir/flags.make || \
+	  { echo "$(SERIAL_HDF5_BUILD): configured with the parallel HDF5, not the serial one"; exit 1; }
+	$(MAKE) -C $(SERIAL_HDF5_BUILD)/common src/h5.o
+	$(MAKE) -C $(SERIAL_HDF5_BUILD)/solver src/rank_system.o src/outputs.o src/distributed_setup.o mpi/src/mpi_backend.o
+	$(MAKE) -C $(SERIAL_HDF5_BUILD)/tests/solver test_partition.o
 
 demo: build
 	bash scripts/run_case.sh $(BUILD) cases/concrete-blast $(if $(QUICK),quick,demo)

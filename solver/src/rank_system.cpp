@@ -415,10 +415,10 @@ namespace {
 // Empties arrays and frees their memory, keeping the addresses of those that were held.
 struct Release {
   std::vector<const void*> held;
-  template <class T>
-  void operator()(std::vector<T>& a) {
+  template <class T, class A>
+  void operator()(std::vector<T, A>& a) {
     if (!a.empty()) held.push_back(&a);
-    std::vector<T>().swap(a);
+    std::vector<T, A>().swap(a);
   }
 };
 }  // namespace

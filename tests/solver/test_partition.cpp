@@ -26,6 +26,21 @@ PdSystem lattice(const std::string& name, const std::string& model_extra = "") {
                                 "time: {steps: 1}\n");
 }
 
+// The rank-system tests' block: a 6 x 5 x 4 mm lattice at 1 mm with one material, model
+// `type` at horizon factor 3.015, 5 steps; `extra`: the case's other lines (loads, initial state).
+std::string rank_block(const std::string& type, const std::string& extra = "") {
+  return "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], spacing: 1 mm}}\n"
+         "model: {type: " + type + ", horizon_factor: 3.015}\n"
+         "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 10}]\n" +
+         extra + "time: {steps: 5}\n";
+}
+
+// Whether release_global_for_loop named array `a` as held (rank 0 gathers into it: every
+// rank takes part).
+bool named_as_held(const std::vector<const void*>& held, const void* a) {
+  return std::find(held.begin(), held.end(), a) != held.end();
+}
+
 // The halo of rank r by brute force: every off-rank partner of an owned particle's row.
 std::set<int32_t> brute_ghosts(const PdSystem& s, const Partition& p, int r) {
   std::set<int32_t> g;
@@ -183,11 +198,7 @@ TEST(Partition, LatticeFiguresWithoutFamiliesEqualThoseOfTheBuiltFamilies) {
 // The rank's system (no MPI needed): each owned row reads the same partners, through local
 // indices, with the same bond data, as the global row; ghosts hold the partners' values.
 TEST(RankSystem, OwnedRowsReadTheGlobalPartnersThroughLocalIndices) {
-  PdSystem g = system_from_yaml("rank_rows", "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], spacing: 1 mm}}\n"
-                                             "model: {type: lps, horizon_factor: 3.015}\n"
-                                             "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 10}]\n"
-                                             "boundary: [{type: velocity, set: xmin, value: [-1, 0, 0], components: [x]}]\n"
-                                             "time: {steps: 5}\n");
+  PdSystem g = system_from_yaml("rank_rows", rank_block("lps", "boundary: [{type: velocity, set: xmin, value: [-1, 0, 0], components: [x]}]\n"));
   for (int ranks : {1, 3, 5}) {
     for (int r = 0; r < ranks; ++r) {
       const RankLayout L = rank_layout(g, ranks, r);
@@ -219,16 +230,12 @@ TEST(RankSystem, OwnedRowsReadTheGlobalPartnersThroughLocalIndices) {
 // arrays a gather targets are named as held on every rank (else the other ranks would skip
 // a collective rank 0 enters).
 TEST(RankSystem, GlobalSystemKeepsWhatTheLoopReadsAfterTheRanksTookTheirShare) {
-  const std::string yaml = "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], spacing: 1 mm}}\n"
-                           "model: {type: lps, horizon_factor: 3.015}\n"
-                           "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 10}]\n"
-                           "boundary: [{type: velocity, set: xmin, value: [-1, 0, 0], components: [x]}]\n"
-                           "time: {steps: 5}\n";
+  const std::string yaml = rank_block("lps", "boundary: [{type: velocity, set: xmin, value: [-1, 0, 0], components: [x]}]\n");
   const PdSystem whole = system_from_yaml("release_whole", yaml);
   for (const bool root : {true, false}) {
     PdSystem g = system_from_yaml("release_global", yaml);
     const std::vector<const void*> held = release_global_for_loop(g, root);
-    const auto named = [&](const void* a) { return std::find(held.begin(), held.end(), a) != held.end(); };
+    const auto named = [&](const void* a) { return named_as_held(held, a); };
     // Every rank: the counts, offsets and content id (the checkpoint's sizes and identity).
     EXPECT_EQ(g.n, whole.n);
     EXPECT_EQ(g.bond_count(), whole.bond_count());
@@ -278,11 +285,7 @@ TEST(RankSystem, GlobalSystemKeepsWhatTheLoopReadsAfterTheRanksTookTheirShare) {
 // own (copy_rank_state), and the four are named as held all the same (rank 0 holds them for
 // every particle: a rank that skipped the gather would leave rank 0 waiting in it).
 TEST(RankSystem, StateArraysARankNeverHeldAreZeroOrKeptAndStillNamedAsHeld) {
-  const std::string yaml = "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], spacing: 1 mm}}\n"
-                           "model: {type: pmb, horizon_factor: 3.015}\n"
-                           "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 10}]\n"
-                           "initial: [{type: velocity, value: [1, 2, 3]}]\n"
-                           "time: {steps: 5}\n";
+  const std::string yaml = rank_block("pmb", "initial: [{type: velocity, value: [1, 2, 3]}]\n");
   PdSystem g = system_from_yaml("never_held", yaml);
   const RankLayout L = rank_layout(g, 2, 1);
   const size_t local3 = 3 * static_cast<size_t>(L.owned() + L.ghosts());
@@ -305,7 +308,7 @@ TEST(RankSystem, StateArraysARankNeverHeldAreZeroOrKeptAndStillNamedAsHeld) {
   EXPECT_THROW(restrict_to_rank(g, L), std::logic_error);
   std::vector<double>().swap(g.u);
   const std::vector<const void*> held = release_global_for_loop(g, false);
-  const auto named = [&](const void* a) { return std::find(held.begin(), held.end(), a) != held.end(); };
+  const auto named = [&](const void* a) { return named_as_held(held, a); };
   for (const std::vector<double>* a : {&g.u, &g.v, &g.a, &g.body}) EXPECT_TRUE(named(a));
   EXPECT_TRUE(named(&g.force));  // held here, as before
   EXPECT_FALSE(named(&g.min_stretch)) << "not held on rank 0 either (no compressive enhancement): no gather";
@@ -318,11 +321,7 @@ TEST(RankSystem, StateArraysARankNeverHeldAreZeroOrKeptAndStillNamedAsHeld) {
 // (copy_rank_state), and each array is named as held for rank 0's gathers, the model's own
 // fields (here LPS's two factors) only where the rank's system holds them.
 TEST(RankSystem, ForcesAndFieldsLetGoAtTheStableStepAreKeptByTheRankAndStillNamedAsHeld) {
-  const std::string yaml = "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], spacing: 1 mm}}\n"
-                           "model: {type: lps, horizon_factor: 3.015}\n"
-                           "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 10}]\n"
-                           "initial: [{type: velocity, value: [1, 2, 3]}]\n"
-                           "time: {steps: 5}\n";
+  const std::string yaml = rank_block("lps", "initial: [{type: velocity, value: [1, 2, 3]}]\n");
   PdSystem g = system_from_yaml("fields_let_go", yaml);
   ASSERT_FALSE(g.lps_a.empty()) << "a uniform LPS lattice takes the fast path (its factors are what this checks)";
   ASSERT_TRUE(g.corr_deformation.empty());
@@ -356,7 +355,7 @@ TEST(RankSystem, ForcesAndFieldsLetGoAtTheStableStepAreKeptByTheRankAndStillName
   // Held by neither: a system cut afresh has no forces to start from.
   EXPECT_THROW(restrict_to_rank(g, L), std::logic_error);
   const std::vector<const void*> held = release_global_for_loop(g, false, &s);
-  const auto named = [&](const void* a) { return std::find(held.begin(), held.end(), a) != held.end(); };
+  const auto named = [&](const void* a) { return named_as_held(held, a); };
   for (const std::vector<double>* a : {&g.force, &g.energy_density, &g.dissipated, &g.damage, &g.max_stretch,
                                        &g.dilatation, &g.lps_a, &g.lps_b})
     EXPECT_TRUE(named(a)) << "rank 0 gathers into it: this rank must take part";
@@ -370,10 +369,7 @@ TEST(RankSystem, ForcesAndFieldsLetGoAtTheStableStepAreKeptByTheRankAndStillName
 // (rank 0 gathers it for its checkpoint). The gas state is filled by hand on a lattice (a gas
 // case needs a meshed cavity); the facet lists stay empty.
 TEST(RankSystem, GasArraysLetGoAtTheStableStepAreKeptByTheRankAndTheFrontStillNamedAsHeld) {
-  const std::string yaml = "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.006, 0.005, 0.004], spacing: 1 mm}}\n"
-                           "model: {type: pmb, horizon_factor: 3.015}\n"
-                           "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 10}]\n"
-                           "time: {steps: 5}\n";
+  const std::string yaml = rank_block("pmb");
   PdSystem g = system_from_yaml("gas_let_go", yaml);
   GasState& G = g.gas;
   G.active = true;
@@ -413,7 +409,7 @@ TEST(RankSystem, GasArraysLetGoAtTheStableStepAreKeptByTheRankAndTheFrontStillNa
   EXPECT_EQ(s.gas.front_done, std::vector<uint8_t>(local, 1));
   EXPECT_EQ(s.gas.attached, std::vector<uint8_t>(local, 1));
   const std::vector<const void*> held = release_global_for_loop(g, false, &s);
-  const auto named = [&](const void* a) { return std::find(held.begin(), held.end(), a) != held.end(); };
+  const auto named = [&](const void* a) { return named_as_held(held, a); };
   EXPECT_TRUE(named(&G.arrival)) << "rank 0 gathers the front: this rank must take part";
   EXPECT_TRUE(named(&G.push)) << "and, between crack passes, the pushes";
 }

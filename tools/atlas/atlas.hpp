@@ -4,10 +4,12 @@
 // columns are a contract read by breccia-plan (docs/atlas/atlas.csv).
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "breccia/common/csv.hpp"
 #include "breccia/solver/pd_system.hpp"
 #include "measures.hpp"
 
@@ -81,6 +83,16 @@ inline std::string num(double v) {
   char b[64];
   std::snprintf(b, sizeof b, "%.9g", v);
   return b;
+}
+
+// A run's message as a CSV field, with the working folder's prefix cut from the paths it
+// names: the sweeps' work folder is made absolute (the mesher runs as a subprocess), and the
+// committed tables should not carry the path of the machine that made them.
+inline std::string message_field(std::string message) {
+  const std::string here = std::filesystem::current_path().string() + "/";
+  for (size_t at = message.find(here); at != std::string::npos; at = message.find(here, at))
+    message.erase(at, here.size());
+  return csv_plain_field(std::move(message));
 }
 
 using RowSink = std::function<void(const AtlasRow&)>;

@@ -48,7 +48,7 @@ std::string line_of(const GradedRow& r) {
                 r.grading, r.dual_horizon ? 1 : 0, r.particles, r.bonds, static_cast<long long>(r.min_family),
                 r.min_local_m, r.coarse_energy_error, r.fine_energy_error, r.ghost_force, r.net_force, r.reflected, r.steps,
                 r.status.c_str(), r.detected_by.c_str(), r.energy_ratio);
-  return std::string(b) + csv_plain_field(r.message);
+  return std::string(b) + message_field(r.message);
 }
 
 // Affine strains (uniaxial and shear): the energy of the interiors of both halves against the

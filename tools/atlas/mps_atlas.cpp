@@ -255,7 +255,7 @@ void mps_tension_stability(const SweepPlan& plan, CsvTable& table) {
         std::snprintf(line, sizeof line, "%.3g,%s,%.3g,%.4g,%zu,%zu,%lld,%.4g,%.4g,%s,%s,", ramp_transits, repulsive ? "repulsive" : "conservative",
                       alpha, strain, solid.size(), solid.bonds().size(), solid.steps(), min_ratio,
                       max_speed / (strain * c_l + 1e-300), status.c_str(), detected.c_str());
-        table.add(std::string(line) + csv_plain_field(message));
+        table.add(std::string(line) + message_field(message));
         std::fprintf(stderr, "[atlas] stability mps ramp %.1f %s alpha %.2f strain %.3g: %s, min neighbour ratio %.3g at (%.1f, %.1f) mm (%s)\n",
                      ramp_transits, repulsive ? "repulsive" : "conservative", alpha, strain, status.c_str(), min_ratio, worst_x * 1e3, worst_y * 1e3, detected.c_str());
       }

@@ -57,7 +57,7 @@ std::string line_of(const StabilityRow& r) {
                 static_cast<long long>(r.min_family), r.steps);
   char e[96];
   std::snprintf(e, sizeof e, ",%.4g,%.4g,", r.energy_ratio, r.energy_scatter);
-  return std::string(b) + r.status + "," + r.detected_by + e + csv_plain_field(r.message);
+  return std::string(b) + r.status + "," + r.detected_by + e + message_field(r.message);
 }
 
 // A smooth standing-wave velocity field (as tests/solver/test_dynamics.cpp): energy in long

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "breccia/common/families.hpp"
+#include "breccia/solver/distributed_setup.hpp"
 #include "breccia/solver/partition.hpp"
 #include "breccia/solver/rank_system.hpp"
 #include "helpers.hpp"
@@ -520,6 +521,54 @@ TEST(Partition, FamilySizesOfAGradedCloudMatchBuiltFamiliesFiltered) {
     }
     EXPECT_GT(total, 20 * n);  // the families are not trivially empty
   }
+}
+
+// A distributed set-up's ranks each count the family sizes of their family_slice only and
+// concatenate them (plan_distributed_rows): on the graded cloud (horizons varying threefold:
+// pairs found from one end only, near a slice's edge too) the concatenated slices must be
+// the whole count, integer for integer, at every rank count, so the partition cut from them
+// is the same. The slices must tile [0, n) in rank order, equal to within one particle.
+TEST(Partition, FamilySizesCountedBySlicesAreTheWholeCount) {
+  const GradedCloud cloud;
+  const int64_t n = cloud.n;
+  for (const PartialVolume kind : {PartialVolume::Sampled, PartialVolume::Lammps}) {
+    const std::vector<int64_t> whole = family_sizes(cloud.x, cloud.horizon, cloud.half_cell, 3, kind);
+    ASSERT_EQ(static_cast<int64_t>(whole.size()), n);
+    std::vector<int64_t> offsets{0};
+    for (const int64_t c : whole) offsets.push_back(offsets.back() + c);
+    for (const int ranks : {1, 2, 3, 4, 7, 16}) {
+      std::vector<int64_t> joined;
+      int64_t next = 0;
+      for (int r = 0; r < ranks; ++r) {
+        const FamilySlice sl = family_slice(n, r, ranks);
+        ASSERT_EQ(sl.begin, next) << ranks << " ranks, rank " << r;  // contiguous, in rank order
+        ASSERT_LE(sl.end - sl.begin, n / ranks + 1);
+        ASSERT_GE(sl.end - sl.begin, n / ranks);
+        next = sl.end;
+        const std::vector<int64_t> part =
+            family_sizes(cloud.x, cloud.horizon, cloud.half_cell, 3, kind, sl.begin, sl.end);
+        ASSERT_EQ(static_cast<int64_t>(part.size()), sl.end - sl.begin);
+        joined.insert(joined.end(), part.begin(), part.end());
+      }
+      EXPECT_EQ(next, n);
+      ASSERT_EQ(joined, whole) << ranks << " ranks";
+      std::vector<int64_t> joined_offsets{0};
+      for (const int64_t c : joined) joined_offsets.push_back(joined_offsets.back() + c);
+      EXPECT_EQ(MortonRangePartitioner().partition(joined_offsets, ranks).begin,
+                MortonRangePartitioner().partition(offsets, ranks).begin);
+    }
+    // A slice is the whole count's rows, not a renumbered count: a slice shifted by one
+    // particle differs (the graded cloud's neighbouring rows differ in size).
+    const std::vector<int64_t> shifted = family_sizes(cloud.x, cloud.horizon, cloud.half_cell, 3, kind, 501, 1001);
+    EXPECT_NE(shifted, std::vector<int64_t>(whole.begin() + 500, whole.begin() + 1000));
+    EXPECT_EQ(shifted, std::vector<int64_t>(whole.begin() + 501, whole.begin() + 1001));
+  }
+  EXPECT_TRUE(family_sizes(cloud.x, cloud.horizon, cloud.half_cell, 3, PartialVolume::Sampled, 7, 7).empty());
+  EXPECT_THROW(family_sizes(cloud.x, cloud.horizon, cloud.half_cell, 3, PartialVolume::Sampled, 10, 5),
+               std::invalid_argument);
+  EXPECT_THROW(family_sizes(cloud.x, cloud.horizon, cloud.half_cell, 3, PartialVolume::Sampled, 0, n + 1),
+               std::invalid_argument);
+  EXPECT_THROW(family_slice(n, 4, 4), std::invalid_argument);
 }
 
 // The set-up's family search pads each horizon by the reach of a cell's outermost sample

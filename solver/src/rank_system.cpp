@@ -139,12 +139,14 @@ PdSystem restrict_rank(const PdSystem& g, const RankLayout& L, std::vector<int32
   // What the set-up fixes before its stable-step estimate: geometry, materials, families and
   // their coefficients, loads and constraints. The state follows (copy_rank_state).
   s.original_index = take(g.original_index, ids, 1, n);
-  s.x0 = take(g.x0, ids, 3, n);
-  s.volume = take(g.volume, ids, 1, n);
-  s.density = take(g.density, ids, 1, n);
-  s.horizon = take(g.horizon, ids, 1, n);
-  s.half_cell = take(g.half_cell, ids, 1, n);
-  s.material = take(g.material, ids, 1, n);
+  // The reference arrays: a distributed set-up's ranks other than 0 let go of the whole ones as
+  // the cut takes them (take_releasing): the rank's rows taken then stay.
+  take_or_keep_if_held(s.x0, g.x0, ids, 3, n);
+  take_or_keep_if_held(s.volume, g.volume, ids, 1, n);
+  take_or_keep_if_held(s.density, g.density, ids, 1, n);
+  take_or_keep_if_held(s.horizon, g.horizon, ids, 1, n);
+  take_or_keep_if_held(s.half_cell, g.half_cell, ids, 1, n);
+  take_or_keep_if_held(s.material, g.material, ids, 1, n);
   take_or_keep_if_held(s.fixed_dof, g.fixed_dof, ids, 1, n);
   take_or_keep_if_held(s.weighted_volume, g.weighted_volume, ids, 1, n);
   take_or_keep_if_held(s.lps, g.lps, ids, 1, n);
@@ -226,6 +228,16 @@ void for_each_released_at_stable_step(PdSystem* s, PdSystem& g, F&& f) {
   one(&PdSystem::force, 3);
   for (const auto& [field, width] : kForcePassFields) one(field, static_cast<size_t>(width));
   one(&PdSystem::weighted_volume, 1);
+  // The reference arrays, which every family build read for a partner anywhere: the estimate
+  // reads its own particles' from the rank's system (StableStepRanks::system), the largest
+  // cell and the stiff region's scale over the ranks; rank 0 keeps them whole (its writers:
+  // the probes, the instability message, the indenter, results.h5).
+  one(&PdSystem::x0, 3);
+  one(&PdSystem::volume, 1);
+  one(&PdSystem::density, 1);
+  one(&PdSystem::horizon, 1);
+  one(&PdSystem::half_cell, 1);
+  one(&PdSystem::material, 1);
   // The set-up values the estimate does not read: the calibration factors, the constrained
   // components, LPS's coefficients, correspondence's moduli, the short-range forces'
   // constants; and the general LPS loop's factors, which only the global system's own force

@@ -169,8 +169,10 @@ std::vector<T> copy_on_huge_pages(const std::vector<T>& v) {
 class LinearForceProbe {
  public:
   // keeps_u: the caller writes no displacement to sys (a distributed estimate writes the
-  // ranks' systems'), so sys.u is not saved.
-  LinearForceProbe(PdSystem& sys, const ForcePass& forces, bool keeps_u = false)
+  // ranks' systems'), so sys.u is not saved. `ranks` (a distributed estimate): the largest
+  // cell is taken over the ranks' own particles (their systems' half cells, chained: a
+  // maximum, the same bits), the global system's ranks other than 0 holding none.
+  LinearForceProbe(PdSystem& sys, const ForcePass& forces, bool keeps_u = false, const StableStepRanks* ranks = nullptr)
       : sys_(sys), forces_(forces), keeps_u_(keeps_u), u_saved_(keeps_u ? std::vector<double>{} : sys.u),
         state_saved_(copy_on_huge_pages(sys.state)), fracture_(sys.config.fracture),
         dissipated_(sys.dissipated_energy), float32_(sys.f32.active), diagnostics_(sys.diagnostics) {
@@ -182,7 +184,16 @@ class LinearForceProbe {
     // (forces) reads its own copy of the bonds.
     if (!forces) undamaged_.emplace(sys);
     double length_scale = 0.0;
-    for (size_t i = 0; i < sys.n; ++i) length_scale = std::max(length_scale, 2.0 * sys.half_cell[i]);
+    if (ranks && ranks->pass) {
+      const std::vector<double>& half_cell = ranks->system->half_cell;
+      const size_t own = static_cast<size_t>(ranks->end - ranks->begin);
+      length_scale = ranks->chain([&](double scale) {
+        for (size_t i = 0; i < own; ++i) scale = std::max(scale, 2.0 * half_cell[i]);
+        return scale;
+      });
+    } else {
+      for (size_t i = 0; i < sys.n; ++i) length_scale = std::max(length_scale, 2.0 * sys.half_cell[i]);
+    }
     amplitude = 1e-9 * length_scale;
   }
   LinearForceProbe(const LinearForceProbe&) = delete;
@@ -271,6 +282,50 @@ bool cpu_energy_density_on_rows(PdSystem& sys, std::span<const int64_t> rows) {
   return true;
 }
 
+namespace {
+// stable_step_region for the estimate: one process's marks of every particle, or under a
+// distributed run (`ranks`) the rank's own particles' (i - begin), from its system's
+// reference arrays, the largest scale and the count taken over every rank (the chain: a
+// maximum and a sum of integers, exact, so one process's region). `count`: the particles
+// the estimate moves (every particle where the marks are empty).
+struct StableStepRegion {
+  std::vector<uint8_t> marks;
+  size_t count = 0;
+};
+StableStepRegion stable_step_region_of(const PdSystem& sys, double ratio, const StableStepRanks* ranks) {
+  StableStepRegion r;
+  if (!(ranks && ranks->pass)) {
+    r.marks = stable_step_region(sys, ratio);
+    for (size_t i = 0; i < sys.n; ++i) r.count += r.marks.empty() ? 1 : r.marks[i];
+    return r;
+  }
+  r.count = sys.n;
+  if (sys.n == 0 || !(ratio > 0.0)) return r;
+  const PdSystem& l = *ranks->system;
+  const size_t own = static_cast<size_t>(ranks->end - ranks->begin);
+  std::vector<double> scale(own);
+  for (size_t i = 0; i < own; ++i) {  // stable_step_region's arithmetic
+    const double delta = l.horizon[i];
+    scale[i] = sys.config.materials[l.material[i]].youngs_modulus / (l.density[i] * delta * delta);
+  }
+  const double top = ranks->chain([&](double t) {
+    for (const double v : scale) t = std::max(t, v);
+    return t;
+  });
+  std::vector<uint8_t> marks(own, 0);
+  size_t mine = 0;
+  for (size_t i = 0; i < own; ++i) {
+    marks[i] = scale[i] >= ratio * top;
+    mine += marks[i];
+  }
+  const size_t count = static_cast<size_t>(ranks->chain([&](double c) { return c + static_cast<double>(mine); }));
+  if (!(top > 0.0) || 2 * count >= sys.n) return r;
+  r.marks = std::move(marks);
+  r.count = count;
+  return r;
+}
+}  // namespace
+
 std::vector<uint8_t> stable_step_region(const PdSystem& sys, double ratio) {
   // Each particle's local frequency scale omega_i^2 ~ E / (rho_i delta_i^2) (a bond's
   // stiffness over its mass at a fixed horizon ratio); the region holds those at least
@@ -322,10 +377,17 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
   // largest scale, not at the finest particles: a region at 1/2 missed it by 1.4%. One process then runs only the rows that block reads; a
   // distributed set-up runs its whole pass, whose forces on the region are the same bits.
   const size_t n3 = 3 * sys.n;
-  const std::vector<uint8_t> region = stable_step_region(sys, region_ratio);
+  // A distributed run (ranks) reads its own particles' reference values from the rank's
+  // system (`ref`, particle i at i - begin: the same doubles), the global system of its
+  // ranks other than 0 holding none once the rank's system is cut (StableStepRanks).
+  const bool shared = ranks && ranks->pass;
+  const PdSystem& ref = shared ? *ranks->system : sys;
+  const size_t first = shared ? static_cast<size_t>(ranks->begin) : 0;
+  auto at = [first](size_t i) { return i - first; };
+  const StableStepRegion stiff = stable_step_region_of(sys, region_ratio, ranks);
+  const std::vector<uint8_t>& region = stiff.marks;  // one process: every particle's; else the rank's own
   const bool restricted = !region.empty();
-  sys.stable_step_particles = 0;
-  for (size_t i = 0; i < sys.n; ++i) sys.stable_step_particles += restricted ? region[i] : 1;
+  sys.stable_step_particles = stiff.count;
   LinearForceProbe::Rows rows;
   const bool row_subset = restricted && !forces && sys.short_range_k.empty() && sys.offsets.size() == sys.n + 1 &&
                           sys.config.model != PdModel::Correspondence;
@@ -347,17 +409,16 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
     // the internal order), and every sum over them is chained over the ranks in rank order
     // (StableStepRanks::chain): rank r continues rank r - 1's running sum, so each sum is
     // one process's loop, term by term, and the estimate one process's to the last bit.
-    const bool shared = ranks && ranks->pass;
     const size_t k_begin = shared ? 3 * static_cast<size_t>(ranks->begin) : 0;
     const size_t k_end = shared ? 3 * static_cast<size_t>(ranks->end) : n3;
-    LinearForceProbe probe(sys, forces, shared);
+    LinearForceProbe probe(sys, forces, shared, ranks);
     const double amplitude = probe.amplitude;
     const bool planar = sys.dimension == 2;  // z is no degree of freedom
     // The vectors hold the free degrees of freedom only (ascending): one outside the region
     // is held at rest, zero in every vector, so leaving it out changes no sum (it added +0)
     // and spares each pass seven loops over the whole system's 3 N (873,333 on the full
     // concrete case, against 81,153 of its region).
-    auto free_dof = [&](size_t k) { return !(planar && k % 3 == 2) && (!restricted || region[k / 3]); };
+    auto free_dof = [&](size_t k) { return !(planar && k % 3 == 2) && (!restricted || region[at(k / 3)]); };
     std::vector<size_t> dofs;
     size_t free_count = 0;  // reserved first: grown by push_back it held up to twice its size
     for (size_t k = k_begin; k < k_end; ++k) free_count += free_dof(k);
@@ -366,7 +427,7 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
       if (free_dof(k)) dofs.push_back(k);
     const size_t m = dofs.size();
     std::vector<double> mass(m);
-    for (size_t c = 0; c < m; ++c) mass[c] = sys.density[dofs[c] / 3] * sys.volume[dofs[c] / 3];
+    for (size_t c = 0; c < m; ++c) mass[c] = ref.density[at(dofs[c] / 3)] * ref.volume[at(dofs[c] / 3)];
     // A sum over every degree of freedom: `f` continues it over this process's from `start`.
     auto whole_sum = [&](const std::function<double(double)>& f) { return shared ? ranks->chain(f) : f(0.0); };
     // Sums in one fixed order (no thread reduction): the stable step must not depend on the
@@ -393,7 +454,7 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
       for (size_t c = 0; c < m; ++c) u[dofs[c] - k_begin] = amplitude * x[c] / norm;
       if (shared) ranks->pass(sys);
       else probe.push(row_subset ? &rows : nullptr);
-      for (size_t c = 0; c < m; ++c) y[c] = -force[dofs[c] - k_begin] / sys.density[dofs[c] / 3] / amplitude * norm;
+      for (size_t c = 0; c < m; ++c) y[c] = -force[dofs[c] - k_begin] / ref.density[at(dofs[c] / 3)] / amplitude * norm;
     };
     std::mt19937_64 rng(12345);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
@@ -413,7 +474,7 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
     if (wave->found) {
       std::vector<double> g(m);
       for (size_t c = 0; c < m; ++c) {
-        const double* x = &sys.x0[3 * (dofs[c] / 3)];
+        const double* x = &ref.x0[3 * at(dofs[c] / 3)];
         g[c] = std::cos(wave->k[0] * x[0] + wave->k[1] * x[1] + wave->k[2] * x[2]) * wave->p[dofs[c] % 3];
       }
       const double g_norm = std::sqrt(dot(g, g));

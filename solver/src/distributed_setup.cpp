@@ -7,14 +7,24 @@
 
 namespace breccia::solver {
 
+FamilySlice family_slice(int64_t n, int rank, int ranks) {
+  if (ranks < 1 || rank < 0 || rank >= ranks || n < 0) throw std::invalid_argument("family_slice: rank in [0, ranks)");
+  return {n * rank / ranks, n * (rank + 1) / ranks};
+}
+
 DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d) {
   DistributedRows rows;
   rows.end = static_cast<int64_t>(s.n);
   if (!d.active()) return rows;
   // The row lengths the set-up will build, counted without a bond stored: the whole
   // system's offsets and the partition MortonRangePartitioner cuts from them (the one the
-  // whole-system set-up's ranks cut).
-  const std::vector<int64_t> sizes = family_sizes(s.x0, s.horizon, s.half_cell, s.dimension, s.config.partial_volume);
+  // whole-system set-up's ranks cut). Each rank counts an equal slice of the particles
+  // (family_slice) and the slices are concatenated in rank order: the same integers as
+  // one count of every particle, so the same partition.
+  const FamilySlice slice = family_slice(static_cast<int64_t>(s.n), d.rank, d.ranks);
+  const std::vector<int64_t> sizes = concat_over_ranks(
+      d, family_sizes(s.x0, s.horizon, s.half_cell, s.dimension, s.config.partial_volume, slice.begin, slice.end));
+  if (sizes.size() != s.n) throw std::logic_error("distributed set-up: the ranks' family sizes do not cover the particles");
   rows.full_offsets.assign(s.n + 1, 0);
   for (size_t i = 0; i < s.n; ++i) rows.full_offsets[i + 1] = rows.full_offsets[i] + sizes[i];
   Partition part;

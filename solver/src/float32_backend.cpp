@@ -23,6 +23,20 @@ void convert(const std::vector<From>& from, std::vector<To>& to) {
 
 }  // namespace
 
+std::array<double, 3> float32_origin(const std::vector<double>& x0) {
+  std::array<double, 3> origin{};
+  const size_t held = x0.size() / 3;
+  for (int d = 0; d < 3; ++d) {
+    double lo = 1e300, hi = -1e300;
+    for (size_t i = 0; i < held; ++i) {
+      lo = std::min(lo, x0[3 * i + d]);
+      hi = std::max(hi, x0[3 * i + d]);
+    }
+    origin[d] = held ? 0.5 * (lo + hi) : 0.0;
+  }
+  return origin;
+}
+
 void float32_enable(PdSystem& s, const double* origin) {
   Float32State& f = s.f32;
   // Coordinates relative to the bounding box centre: float resolves 6e-8 of |x0 - origin|,
@@ -31,18 +45,8 @@ void float32_enable(PdSystem& s, const double* origin) {
   // a distributed run takes the whole body's origin, so its float coordinates are the serial
   // run's. x0 may hold more particles than s.n (a rank's ghosts): all are converted.
   const size_t held = s.x0.size() / 3;
-  for (int d = 0; d < 3; ++d) {
-    if (origin) {
-      f.origin[d] = origin[d];
-      continue;
-    }
-    double lo = 1e300, hi = -1e300;
-    for (size_t i = 0; i < held; ++i) {
-      lo = std::min(lo, s.x0[3 * i + d]);
-      hi = std::max(hi, s.x0[3 * i + d]);
-    }
-    f.origin[d] = held ? 0.5 * (lo + hi) : 0.0;
-  }
+  const std::array<double, 3> centre = origin ? std::array<double, 3>{origin[0], origin[1], origin[2]} : float32_origin(s.x0);
+  for (int d = 0; d < 3; ++d) f.origin[d] = centre[d];
   if (!s.distributed_rows.empty()) {
     // A distributed set-up's global system holds no bonds (they live in the ranks' systems):
     // it keeps the flag and the origin, with which each rank's system converts its own

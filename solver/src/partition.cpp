@@ -61,10 +61,19 @@ Partition MortonRangePartitioner::partition(const std::vector<int64_t>& offsets,
 
 std::vector<int64_t> family_sizes(const std::vector<double>& x, const std::vector<double>& horizon,
                                   const std::vector<double>& half_cell, int dimension, PartialVolume kind) {
+  return family_sizes(x, horizon, half_cell, dimension, kind, 0, static_cast<int64_t>(horizon.size()));
+}
+
+std::vector<int64_t> family_sizes(const std::vector<double>& x, const std::vector<double>& horizon,
+                                  const std::vector<double>& half_cell, int dimension, PartialVolume kind,
+                                  int64_t row_begin, int64_t row_end) {
   const size_t n = horizon.size();
   if (x.size() != 3 * n || half_cell.size() != n) throw std::invalid_argument("family_sizes: x0 3N, horizon and half_cell N");
-  std::vector<int64_t> count(n, 0);
-  if (n == 0) return count;
+  if (row_begin < 0 || row_begin > row_end || row_end > static_cast<int64_t>(n))
+    throw std::invalid_argument("family_sizes: rows [begin, end) within [0, N]");
+  const size_t b = static_cast<size_t>(row_begin), e = static_cast<size_t>(row_end);
+  std::vector<int64_t> count(e - b, 0);
+  if (b == e) return count;
   // The set-up's pad (setup.cpp): a neighbour's outermost sample may reach into the horizon.
   auto pad = [&](size_t i) { return partial_volume_reach(half_cell[i], dimension); };
   double max_pad = 0.0, min_horizon = horizon[0], max_horizon = horizon[0];
@@ -80,8 +89,9 @@ std::vector<int64_t> family_sizes(const std::vector<double>& x, const std::vecto
   const CellList cells = sort_into_cells(CellGrid::covering(bounding_box(x), cell), x);
   const CellGrid& grid = cells.grid;
   const long long ring = static_cast<long long>(std::ceil(max_reach / cell));
+  // The rows counted: [b, e); every particle is still a partner (the cells hold them all).
 #pragma omp parallel for schedule(dynamic, 256)
-  for (size_t i = 0; i < n; ++i) {
+  for (size_t i = b; i < e; ++i) {
     long long ci[3];
     for (int d = 0; d < 3; ++d) ci[d] = grid.coordinate(d, x[3 * i + d]);
     int64_t kept = 0;
@@ -109,7 +119,7 @@ std::vector<int64_t> family_sizes(const std::vector<double>& x, const std::vecto
               ++kept;
           }
         }
-    count[i] = kept;
+    count[i - b] = kept;
   }
   return count;
 }

@@ -139,12 +139,14 @@ PdSystem restrict_rank(const PdSystem& g, const RankLayout& L, std::vector<int32
   // What the set-up fixes before its stable-step estimate: geometry, materials, families and
   // their coefficients, loads and constraints. The state follows (copy_rank_state).
   s.original_index = take(g.original_index, ids, 1, n);
-  s.x0 = take(g.x0, ids, 3, n);
-  s.volume = take(g.volume, ids, 1, n);
-  s.density = take(g.density, ids, 1, n);
-  s.horizon = take(g.horizon, ids, 1, n);
-  s.half_cell = take(g.half_cell, ids, 1, n);
-  s.material = take(g.material, ids, 1, n);
+  // The reference arrays: a distributed set-up's ranks other than 0 let go of the whole ones as
+  // the cut takes them (take_releasing): the rank's rows taken then stay.
+  take_or_keep_if_held(s.x0, g.x0, ids, 3, n);
+  take_or_keep_if_held(s.volume, g.volume, ids, 1, n);
+  take_or_keep_if_held(s.density, g.density, ids, 1, n);
+  take_or_keep_if_held(s.horizon, g.horizon, ids, 1, n);
+  take_or_keep_if_held(s.half_cell, g.half_cell, ids, 1, n);
+  take_or_keep_if_held(s.material, g.material, ids, 1, n);
   take_or_keep_if_held(s.fixed_dof, g.fixed_dof, ids, 1, n);
   take_or_keep_if_held(s.weighted_volume, g.weighted_volume, ids, 1, n);
   take_or_keep_if_held(s.lps, g.lps, ids, 1, n);
@@ -208,37 +210,66 @@ PdSystem restrict_rank(const PdSystem& g, const RankLayout& L, std::vector<int32
 PdSystem restrict_to_rank(const PdSystem& g, const RankLayout& L) { return restrict_rank(g, L, nullptr); }
 
 namespace {
+// The arrays a distributed set-up's ranks other than 0 let go of in their global system `g`
+// at the stable step's cut (release_global_at_stable_step; docs/parallel.md, Memory), each
+// with the same array of the rank's system `s` and its values per particle: f(mine, global,
+// width), `mine` null where no rank's system is given. Width 0: the rank's system takes none
+// of it (only the global system's own passes read it: the general LPS loop's factors, the
+// front's next arrival times). One list for the cut (take_releasing) and the release, so the
+// two let go of the same arrays. The gas's arrays are empty without a gas load.
+template <class F>
+void for_each_released_at_stable_step(PdSystem* s, PdSystem& g, F&& f) {
+  auto one = [&](auto member, size_t width) { f(s ? &(s->*member) : nullptr, g.*member, width); };
+  auto gas = [&](auto member, size_t width) { f(s ? &(s->gas.*member) : nullptr, g.gas.*member, width); };
+  // The displacements and velocities, the forces and the fields the estimate's last pass
+  // fills (kForcePassFields), LPS's weighted volume.
+  one(&PdSystem::u, 3);
+  one(&PdSystem::v, 3);
+  one(&PdSystem::force, 3);
+  for (const auto& [field, width] : kForcePassFields) one(field, static_cast<size_t>(width));
+  one(&PdSystem::weighted_volume, 1);
+  // The reference arrays, which every family build read for a partner anywhere: the estimate
+  // reads its own particles' from the rank's system (StableStepRanks::system), the largest
+  // cell and the stiff region's scale over the ranks; rank 0 keeps them whole (its writers:
+  // the probes, the instability message, the indenter, results.h5).
+  one(&PdSystem::x0, 3);
+  one(&PdSystem::volume, 1);
+  one(&PdSystem::density, 1);
+  one(&PdSystem::horizon, 1);
+  one(&PdSystem::half_cell, 1);
+  one(&PdSystem::material, 1);
+  // The set-up values the estimate does not read: the calibration factors, the constrained
+  // components, LPS's coefficients, correspondence's moduli, the short-range forces'
+  // constants; and the general LPS loop's factors, which only the global system's own force
+  // passes (the start-up checks) used.
+  one(&PdSystem::calibration_factor, 1);
+  one(&PdSystem::fixed_dof, 1);
+  one(&PdSystem::lps, 1);
+  one(&PdSystem::lps_factors, 0);
+  one(&PdSystem::corr_moduli, kCorrModuli);
+  one(&PdSystem::short_range_k, 1);
+  one(&PdSystem::spacing, 1);
+  // A gas load's per-particle arrays: the crack faces' factors and the vent areas, its front
+  // (arrival times, their next copy, the pushes), the crack pass's positions and marks.
+  gas(&GasState::kappa_volume, 2);
+  gas(&GasState::vent_facet_area, 1);
+  gas(&GasState::arrival, 1);
+  gas(&GasState::arrival_next, 0);
+  gas(&GasState::push, 3);
+  gas(&GasState::position, 3);
+  gas(&GasState::front_done, 1);
+  gas(&GasState::attached, 1);
+}
+
 // The rank's rows (owned, then ghosts) of each array release_global_at_stable_step lets go
 // of, into `s`, each global array freed as soon as its rows are copied.
 void take_releasing(PdSystem& s, PdSystem& g, const RankLayout& L) {
   const std::vector<int32_t> ids = local_to_global(L);
   const size_t n = g.n;
-  auto one = [&](auto& mine, auto& global, size_t width) {
-    mine = take(global, ids, width, n);
+  for_each_released_at_stable_step(&s, g, [&](auto* mine, auto& global, size_t width) {
+    if (width > 0) *mine = take(global, ids, width, n);
     std::remove_reference_t<decltype(global)>().swap(global);
-  };
-  one(s.u, g.u, 3);
-  one(s.v, g.v, 3);
-  one(s.force, g.force, 3);
-  for (const auto& [field, width] : kForcePassFields) one(s.*field, g.*field, static_cast<size_t>(width));
-  one(s.weighted_volume, g.weighted_volume, 1);
-  one(s.calibration_factor, g.calibration_factor, 1);
-  one(s.fixed_dof, g.fixed_dof, 1);
-  one(s.lps, g.lps, 1);
-  one(s.corr_moduli, g.corr_moduli, kCorrModuli);
-  one(s.short_range_k, g.short_range_k, 1);
-  one(s.spacing, g.spacing, 1);
-  std::vector<LpsForceFactors<double>>().swap(g.lps_factors);  // the global system's own passes' only
-  if (!g.gas.active) return;
-  GasState &G = g.gas, &r = s.gas;
-  one(r.kappa_volume, G.kappa_volume, 2);
-  one(r.vent_facet_area, G.vent_facet_area, 1);
-  one(r.arrival, G.arrival, 1);
-  one(r.push, G.push, 3);
-  one(r.position, G.position, 3);
-  one(r.front_done, G.front_done, 1);
-  one(r.attached, G.attached, 1);
-  std::vector<double>().swap(G.arrival_next);
+  });
 }
 }  // namespace
 
@@ -425,29 +456,7 @@ struct Release {
 
 void release_global_at_stable_step(PdSystem& g) {
   Release drop;
-  drop(g.u);
-  drop(g.v);
-  drop(g.force);
-  for (const auto& [field, width] : kForcePassFields) drop(g.*field);
-  drop(g.weighted_volume);  // LPS's m: the rank's system took its particles' at the cut
-  // The set-up values the estimate does not read (the rank's system took its particles' at
-  // the cut): the calibration factors, the constrained components, LPS's coefficients,
-  // correspondence's moduli, the short-range forces' constants; and the general LPS loop's
-  // factors, which only the global system's own force passes (the start-up checks) used.
-  drop(g.calibration_factor);
-  drop(g.fixed_dof);
-  drop(g.lps);
-  drop(g.lps_factors);
-  drop(g.corr_moduli);
-  drop(g.short_range_k);
-  drop(g.spacing);
-  // A gas load's per-particle arrays: its front (arrival times, their next copy, the pushes),
-  // the crack pass's positions and marks, the crack faces' factors and the vent areas.
-  GasState& gas = g.gas;
-  for (auto* a : {&gas.arrival, &gas.arrival_next, &gas.kappa_volume, &gas.push, &gas.vent_facet_area, &gas.position})
-    drop(*a);
-  drop(gas.front_done);
-  drop(gas.attached);
+  for_each_released_at_stable_step(nullptr, g, [&](auto*, auto& global, size_t) { drop(global); });
 }
 
 std::vector<const void*> release_global_for_loop(PdSystem& g, bool root, const PdSystem* rank_system) {

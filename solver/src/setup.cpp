@@ -1600,6 +1600,11 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         wave = other;
   }
   std::vector<double>().swap(row_stiffness);
+  // float32's origin, the bounding box centre of every particle, taken while every rank holds
+  // the reference positions: a distributed set-up's ranks other than 0 let them go at the
+  // estimate's cut (release_global_at_stable_step).
+  const std::array<double, 3> f32_origin =
+      c.precision == CaseConfig::Precision::Float32 ? float32_origin(s.x0) : std::array<double, 3>{};
   // A distributed run's ranks each hold their own particles' share of its vectors
   // (StableStepRanks), the rank's system built by stable_step_forces.
   const ForcePass stable_step_pass = hooks.stable_step_forces ? hooks.stable_step_forces(s) : ForcePass{};
@@ -1627,7 +1632,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   phase("stable step");
   // Float state last: everything above (calibration, stable step) is computed in double.
   if (c.precision == CaseConfig::Precision::Float32) {
-    float32_enable(s);
+    float32_enable(s, f32_origin.data());
     phase("float32 state");
   }
   // The bonds now live in the rank's own system (cut by the stable-step estimate).

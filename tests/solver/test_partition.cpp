@@ -5,11 +5,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <set>
 #include <stdexcept>
+#include <type_traits>
 
 #include "breccia/common/families.hpp"
+#include "breccia/solver/distributed_setup.hpp"
 #include "breccia/solver/partition.hpp"
 #include "breccia/solver/rank_system.hpp"
 #include "helpers.hpp"
@@ -39,6 +42,31 @@ std::string rank_block(const std::string& type, const std::string& extra = "") {
 // rank takes part).
 bool named_as_held(const std::vector<const void*>& held, const void* a) {
   return std::find(held.begin(), held.end(), a) != held.end();
+}
+
+// A distributed set-up's global system as rank `rank` holds it before the stable step's cut
+// (distributed_setup.hpp), from a whole one: the per-particle arrays whole, the other ranks'
+// rows empty (their offsets flat), the per-entry arrays the rank's rows only, the partition
+// in distributed_rows.
+PdSystem rank_rows_only(const PdSystem& whole, const Partition& part, int rank) {
+  PdSystem g = whole;
+  const int64_t eb = whole.offsets[part.begin[rank]], ee = whole.offsets[part.begin[rank + 1]];
+  for (int64_t& o : g.offsets) o = std::clamp(o, eb, ee) - eb;
+  const size_t entries = whole.bond_count();
+  auto rows = [&](auto& a) {
+    if (a.size() == entries) a = std::remove_reference_t<decltype(a)>(a.begin() + eb, a.begin() + ee);
+  };
+  rows(g.neighbor);
+  rows(g.xi_len);
+  rows(g.k_own);
+  rows(g.k_dual);
+  rows(g.vol_own);
+  rows(g.s0_own);
+  rows(g.s0_dual);
+  rows(g.s_onset);
+  rows(g.state);
+  g.distributed_rows = part.begin;
+  return g;
 }
 
 // The halo of rank r by brute force: every off-rank partner of an owned particle's row.
@@ -344,8 +372,9 @@ TEST(RankSystem, ForcesAndFieldsLetGoAtTheStableStepAreKeptByTheRankAndStillName
     EXPECT_EQ(a->capacity(), 0u) << "a set-up value the estimate does not read is still held whole";
   EXPECT_EQ(g.fixed_dof.capacity(), 0u);
   EXPECT_EQ(g.lps.capacity(), 0u);
-  EXPECT_EQ(g.x0.size(), 3 * g.n) << "the reference positions stay (the estimate reads them)";
-  EXPECT_EQ(g.density.size(), g.n) << "and the densities (its masses, its stiff region)";
+  for (const std::vector<double>* a : {&g.x0, &g.volume, &g.density, &g.horizon, &g.half_cell})
+    EXPECT_EQ(a->capacity(), 0u) << "a reference array the estimate reads from the rank's system";
+  EXPECT_EQ(g.material.capacity(), 0u);
   copy_rank_state(s, g, L);
   EXPECT_EQ(s.force, std::vector<double>(3 * local, 0.25));
   for (const std::vector<double>* a : {&s.energy_density, &s.dissipated, &s.damage, &s.max_stretch, &s.dilatation,
@@ -361,6 +390,80 @@ TEST(RankSystem, ForcesAndFieldsLetGoAtTheStableStepAreKeptByTheRankAndStillName
     EXPECT_TRUE(named(a)) << "rank 0 gathers into it: this rank must take part";
   for (const std::vector<double>* a : {&g.corr_deformation, &g.corr_force_tensor, &g.corr_nonaffine})
     EXPECT_FALSE(named(a)) << "LPS has no correspondence tensors: no rank gathers them";
+}
+
+// The reference arrays (positions, volumes, densities, horizons, cells, materials: 60 B per
+// particle) at the stable step's cut of a distributed set-up (restrict_to_rank_taking_bonds,
+// then release_global_at_stable_step, as mpi_stable_step_forces calls them): on a rank other
+// than 0 they hold no memory in the global system afterwards, the rank's system holding its
+// particles' rows (the same values as a cut of the whole system, kept when its state is
+// brought up to date); rank 0 keeps them whole (its writers read them); the file order stays
+// on every rank.
+TEST(RankSystem, ReferenceArraysHoldNoMemoryOnANonZeroRankAfterTheStableStepCut) {
+  const PdSystem whole = system_from_yaml("reference_let_go", rank_block("pmb"));
+  const Partition part = MortonRangePartitioner().partition(whole.offsets, 2);
+  for (const int rank : {0, 1}) {
+    PdSystem g = rank_rows_only(whole, part, rank);
+    const RankLayout L = rank_layout(g, 2, rank);
+    ASSERT_EQ(L.part.begin, part.begin);
+    const PdSystem expected = restrict_to_rank(whole, rank_layout(whole, 2, rank));
+    PdSystem s = restrict_to_rank_taking_bonds(g, L);
+    ASSERT_EQ(s.neighbor, expected.neighbor) << "rank " << rank << ": the cut's rows";
+    if (rank != 0) release_global_at_stable_step(g);
+    for (const auto field : {&PdSystem::x0, &PdSystem::volume, &PdSystem::density, &PdSystem::horizon,
+                             &PdSystem::half_cell}) {
+      EXPECT_EQ(s.*field, expected.*field) << "rank " << rank;
+      if (rank == 0) EXPECT_EQ(g.*field, whole.*field) << "rank 0's writers read them whole";
+      else EXPECT_EQ((g.*field).capacity(), 0u) << "a reference array still held whole on rank 1";
+    }
+    EXPECT_EQ(s.material, expected.material);
+    EXPECT_EQ(g.material.capacity(), rank == 0 ? whole.material.capacity() : 0u);
+    EXPECT_EQ(g.original_index, whole.original_index) << "the file order stays (rank 0's gathers, the files)";
+    copy_rank_state(s, g, L);  // as the loop's backend brings the rank's system up to date
+    EXPECT_EQ(s.x0, expected.x0);
+    EXPECT_EQ(s.half_cell, expected.half_cell);
+    EXPECT_EQ(s.material, expected.material);
+  }
+}
+
+// The stable-step estimate of a distributed run (StableStepRanks) reads its particles'
+// reference arrays from the rank's system, and takes the largest cell (the probe's amplitude)
+// and the stiff region's scale and count over the ranks: with the global system's reference
+// arrays let go it gives one process's frequency, bit for bit, on a body whose stiff third
+// (a quarter of the density: four times the frequency scale) is the region it moves. One
+// rank owning every particle (the chain is its own sum; more ranks: the distributed set-up
+// tests, test_distributed.cpp, which compare the whole run with one process's).
+TEST(RankSystem, StableStepEstimateOverTheRanksReadsNoReferenceArrayOfTheGlobalSystem) {
+  PdSystem one = system_from_yaml("estimate_reference", rank_block("pmb"));
+  for (size_t i = 0; i < one.n / 3; ++i) one.density[i] /= 4.0;
+  PdSystem g = one;
+  const StableStepStartWave wave = stable_step_start_wave(one);
+  ASSERT_TRUE(wave.found);
+  const double omega_one = estimate_max_frequency_lanczos(one, 60, {}, kStableStepRegionRatio, &wave);
+  ASSERT_GT(one.stable_step_particles, 0u);
+  ASSERT_LT(2 * one.stable_step_particles, one.n) << "the estimate must work on a region";
+  const RankLayout L = rank_layout(g, 1, 0);
+  PdSystem local = restrict_to_rank(g, L);
+  for (std::vector<double>* a : {&g.x0, &g.volume, &g.density, &g.horizon, &g.half_cell}) std::vector<double>().swap(*a);
+  std::vector<int32_t>().swap(g.material);
+  g.distributed_rows = {0, static_cast<int64_t>(g.n)};  // the probe's closing pass runs on the rank's system
+  const ForcePass pass = [&](PdSystem& global) {  // as mpi_stable_step_forces's rank_force_pass
+    local.config.fracture = global.config.fracture;
+    local.diagnostics = global.diagnostics;
+    cpu_compute_forces(local);
+  };
+  StableStepRanks ranks;
+  ranks.begin = 0;
+  ranks.end = static_cast<int64_t>(g.n);
+  ranks.u = local.u.data();
+  ranks.force = local.force.data();
+  ranks.system = &local;
+  ranks.pass = pass;
+  ranks.chain = [](const std::function<double(double)>& f) { return f(0.0); };
+  const double omega_ranks = estimate_max_frequency_lanczos(g, 60, pass, kStableStepRegionRatio, &wave, &ranks);
+  EXPECT_EQ(omega_ranks, omega_one);
+  EXPECT_EQ(g.stable_step_particles, one.stable_step_particles);
+  EXPECT_EQ(g.stable_step_passes, one.stable_step_passes);
 }
 
 // The same for a gas load's per-particle arrays (its front, the crack pass's positions and
@@ -520,6 +623,54 @@ TEST(Partition, FamilySizesOfAGradedCloudMatchBuiltFamiliesFiltered) {
     }
     EXPECT_GT(total, 20 * n);  // the families are not trivially empty
   }
+}
+
+// A distributed set-up's ranks each count the family sizes of their family_slice only and
+// concatenate them (plan_distributed_rows): on the graded cloud (horizons varying threefold:
+// pairs found from one end only, near a slice's edge too) the concatenated slices must be
+// the whole count, integer for integer, at every rank count, so the partition cut from them
+// is the same. The slices must tile [0, n) in rank order, equal to within one particle.
+TEST(Partition, FamilySizesCountedBySlicesAreTheWholeCount) {
+  const GradedCloud cloud;
+  const int64_t n = cloud.n;
+  for (const PartialVolume kind : {PartialVolume::Sampled, PartialVolume::Lammps}) {
+    const std::vector<int64_t> whole = family_sizes(cloud.x, cloud.horizon, cloud.half_cell, 3, kind);
+    ASSERT_EQ(static_cast<int64_t>(whole.size()), n);
+    std::vector<int64_t> offsets{0};
+    for (const int64_t c : whole) offsets.push_back(offsets.back() + c);
+    for (const int ranks : {1, 2, 3, 4, 7, 16}) {
+      std::vector<int64_t> joined;
+      int64_t next = 0;
+      for (int r = 0; r < ranks; ++r) {
+        const FamilySlice sl = family_slice(n, r, ranks);
+        ASSERT_EQ(sl.begin, next) << ranks << " ranks, rank " << r;  // contiguous, in rank order
+        ASSERT_LE(sl.end - sl.begin, n / ranks + 1);
+        ASSERT_GE(sl.end - sl.begin, n / ranks);
+        next = sl.end;
+        const std::vector<int64_t> part =
+            family_sizes(cloud.x, cloud.horizon, cloud.half_cell, 3, kind, sl.begin, sl.end);
+        ASSERT_EQ(static_cast<int64_t>(part.size()), sl.end - sl.begin);
+        joined.insert(joined.end(), part.begin(), part.end());
+      }
+      EXPECT_EQ(next, n);
+      ASSERT_EQ(joined, whole) << ranks << " ranks";
+      std::vector<int64_t> joined_offsets{0};
+      for (const int64_t c : joined) joined_offsets.push_back(joined_offsets.back() + c);
+      EXPECT_EQ(MortonRangePartitioner().partition(joined_offsets, ranks).begin,
+                MortonRangePartitioner().partition(offsets, ranks).begin);
+    }
+    // A slice is the whole count's rows, not a renumbered count: a slice shifted by one
+    // particle differs (the graded cloud's neighbouring rows differ in size).
+    const std::vector<int64_t> shifted = family_sizes(cloud.x, cloud.horizon, cloud.half_cell, 3, kind, 501, 1001);
+    EXPECT_NE(shifted, std::vector<int64_t>(whole.begin() + 500, whole.begin() + 1000));
+    EXPECT_EQ(shifted, std::vector<int64_t>(whole.begin() + 501, whole.begin() + 1001));
+  }
+  EXPECT_TRUE(family_sizes(cloud.x, cloud.horizon, cloud.half_cell, 3, PartialVolume::Sampled, 7, 7).empty());
+  EXPECT_THROW(family_sizes(cloud.x, cloud.horizon, cloud.half_cell, 3, PartialVolume::Sampled, 10, 5),
+               std::invalid_argument);
+  EXPECT_THROW(family_sizes(cloud.x, cloud.horizon, cloud.half_cell, 3, PartialVolume::Sampled, 0, n + 1),
+               std::invalid_argument);
+  EXPECT_THROW(family_slice(n, 4, 4), std::invalid_argument);
 }
 
 // The set-up's family search pads each horizon by the reach of a cell's outermost sample

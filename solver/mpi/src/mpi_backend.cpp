@@ -1248,6 +1248,7 @@ StableStepRanks mpi_stable_step_ranks() {
   r.end = r.begin + sh->layout.owned();
   r.u = sh->local.u.data();
   r.force = sh->local.force.data();
+  r.system = &sh->local;
   r.pass = [sh](PdSystem& g) { rank_force_pass(*sh, g); };
   // Rank r continues rank r - 1's running sum over its own terms and hands it on; the last
   // rank's is the sum, one process's bits (its loop term by term), sent to every rank.

@@ -37,8 +37,19 @@ struct DistributedRows {
 
 // Called once the internal order and horizons are set: counts the family sizes, cuts the
 // partition (s.distributed_rows) and returns the rank's rows (inactive on one process).
+// Each rank counts the sizes of its family_slice only (family_sizes with a row range); the
+// slices, concatenated in rank order on every rank, are the whole count (collective).
 // Throws InputError for more ranks than particles.
 DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d);
+
+// The particles whose family sizes `rank` of `ranks` counts for plan_distributed_rows:
+// [n rank / ranks, n (rank + 1) / ranks), equal in count to within one, contiguous and
+// in rank order, so their concatenation is [0, n). Not the partition (which is cut from
+// these sizes): an equal share of the counting, cut before any size is known.
+struct FamilySlice {
+  int64_t begin = 0, end = 0;
+};
+FamilySlice family_slice(int64_t n, int rank, int ranks);
 
 // Every rank's elements of `mine`, concatenated in rank order, on every rank.
 template <class T>

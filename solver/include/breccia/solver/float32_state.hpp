@@ -12,6 +12,7 @@
 //           the stable step, outputs and checkpoints.
 // The double arrays of PdSystem stay allocated (set-up, outputs, checkpoints, ADR read
 // them); they are brought up to date by float32_download when a file or a check needs them.
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -40,6 +41,10 @@ struct Float32State {
 // `origin`: the point float coordinates are relative to (default: the bounding box centre).
 // A distributed set-up's global system (no bonds held) takes the flag and origin only.
 void float32_enable(PdSystem& sys, const double* origin = nullptr);
+// The default origin: the centre of the bounding box of `x0`'s positions (3 per particle;
+// 0 without any). The set-up takes it before its stable-step estimate, whose cut lets a
+// distributed set-up's ranks other than 0 drop the reference positions.
+std::array<double, 3> float32_origin(const std::vector<double>& x0);
 PdViewT<float> float32_view(PdSystem& sys);
 // Double -> float: displacement, velocity, acceleration, external force density.
 void float32_upload(PdSystem& sys);

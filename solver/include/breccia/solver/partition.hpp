@@ -56,6 +56,14 @@ private:
 // rank's families alone. Memory: the cell list (about 12 B per particle) and the counts.
 std::vector<int64_t> family_sizes(const std::vector<double>& x0, const std::vector<double>& horizon,
                                   const std::vector<double>& half_cell, int dimension, PartialVolume kind);
+// The same for rows [row_begin, row_end) only (row_end - row_begin counts, the first of row
+// row_begin), every particle still a partner: the same integers as the whole count's slice,
+// so the ranks of a distributed set-up each count a slice and concatenate them
+// (plan_distributed_rows). The cell list still holds every particle. Throws
+// std::invalid_argument for a range outside [0, N].
+std::vector<int64_t> family_sizes(const std::vector<double>& x0, const std::vector<double>& horizon,
+                                  const std::vector<double>& half_cell, int dimension, PartialVolume kind,
+                                  int64_t row_begin, int64_t row_end);
 
 // What one rank exchanges each step. Ghosts are sorted by internal index; since ranks own
 // contiguous ranges, the ghosts from one source rank are one contiguous run of `ghosts`.

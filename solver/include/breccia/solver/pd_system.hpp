@@ -184,11 +184,16 @@ using ForcePassFactory = std::function<ForcePass(PdSystem&)>;
 // ghosts' come from their owners), and `chain` sums over every rank in one process's order:
 // rank r continues the sum `f` from rank r - 1's result (rank 0 from 0), and every rank
 // gets the last rank's, so a sum over the whole system has one process's bits at any rank
-// count. Empty (pass unset): one process, the vectors whole.
+// count (a maximum too: `f` takes the larger). `system`: the rank's system, its owned
+// particles first (particle i at i - begin), whose reference arrays (positions, volumes,
+// densities, horizons, cells, materials) the estimate reads for its own particles: the
+// global system's ranks other than 0 let theirs go at the cut (release_global_at_stable_step).
+// Empty (pass unset): one process, the vectors whole.
 struct StableStepRanks {
   int64_t begin = 0, end = 0;
   double* u = nullptr;
   const double* force = nullptr;
+  const PdSystem* system = nullptr;
   std::function<void(PdSystem& global)> pass;
   std::function<double(const std::function<double(double)>& f)> chain;
 };

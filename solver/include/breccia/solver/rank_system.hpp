@@ -60,11 +60,14 @@ void copy_rank_state(PdSystem& local, const PdSystem& global, const RankLayout& 
 // stable-step estimate has cut the rank's system from it (mpi_stable_step_forces), before the
 // estimate's peak: the displacements and velocities, the forces and the fields the estimate's
 // last pass fills (kForcePassFields: energy density, dissipated energy, damage, largest
-// stretch, dilatation, and the model's own), LPS's weighted volume, the set-up values the
+// stretch, dilatation, and the model's own), LPS's weighted volume, the reference arrays
+// (positions, volumes, densities, horizons, cells, materials: the estimate reads its own
+// particles' from the rank's system, StableStepRanks::system), the set-up values the
 // estimate does not read (calibration factors, constrained components, LPS's coefficients and
 // general-loop factors, correspondence's moduli, the short-range constants) and a gas load's
 // per-particle arrays. The cut (restrict_to_rank_taking_bonds) already lets each go as it
-// takes the rank's rows of it; this lets go of what is left. The rank's system
+// takes the rank's rows of it (one list for both: rank_system.cpp); this lets go of what is
+// left. The rank's system
 // holds its particles' values from then on (copy_rank_state keeps them); rank 0 keeps the
 // whole arrays, which its writers read and its gathers fill (release_global_for_loop names
 // them as held on the other ranks).

@@ -63,6 +63,14 @@ inline double partial_volume_half_diagonal(double half_cell, int dimension) {
 inline double partial_volume_reach(double half_cell, int dimension) {
   return partial_volume_half_diagonal(half_cell, dimension) * (static_cast<double>(kPartialVolumeSamples - 1) / kPartialVolumeSamples) * (1.0 + 1e-6);
 }
+// The own half's volume beta V_j of an entry whose partial volume was counted (model.
+// partial_volume: sampled): count / total times the partner's volume, the set-up's expression
+// (its table holds count / total for each count: the same division's bits), so that every
+// place that forms it from the count (PdSystem::own_volume, pd_kernels.hpp own_volume) has
+// the bits the 8 B array of these volumes held.
+BRECCIA_HD double counted_own_volume(uint8_t count, double sample_total, double volume_j) {
+  return static_cast<double>(count) / sample_total * volume_j;
+}
 // Host only (solver/src/partial_volume.cpp): the set-up runs it once per candidate entry.
 int partial_volume_samples_inside(const double xi[3], double horizon, double half_cell_j, int dimension);
 inline double partial_volume_sampled(const double xi[3], double horizon, double half_cell_j, int dimension) {

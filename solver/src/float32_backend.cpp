@@ -101,7 +101,7 @@ PdViewT<float> float32_view(PdSystem& s) {
   p.vol_own = s.own_count.empty() ? f.vol_own.data() : nullptr;
   p.own_count = s.own_count.empty() ? nullptr : s.own_count.data();
   p.volume_exact = s.volume.data();
-  p.sample_total = s.own_count_total();
+  p.sample_fraction = s.own_count_fractions();
   p.s0_own = s.s0_own.data(); p.s0_dual = s.s0_dual_halves().data(); p.state = s.state.data();
   if (!s.min_stretch.empty() && s.n) {  // shared with the double view: float in both
     p.alpha = static_cast<float>(s.config.compressive_enhancement);

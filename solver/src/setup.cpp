@@ -539,7 +539,7 @@ PdView PdSystem::view() {
   p.vol_own = own_count.empty() ? vol_own.data() : nullptr;
   p.own_count = own_count.empty() ? nullptr : own_count.data();
   p.volume_exact = volume.data();
-  p.sample_total = own_count_total();
+  p.sample_fraction = own_count_fractions();
   p.s0_own = s0_own.data(); p.s0_dual = s0_dual_halves().data(); p.state = state.data();
   if (!min_stretch.empty() && n) {
     p.alpha = static_cast<float>(config.compressive_enhancement);

@@ -33,6 +33,7 @@ constexpr int kMaxReduceBlocks = 1024;  // partial sums per reduction: fixed, so
 // model.cuda_layout: sell: a slice is a warp; rows sorted by length within 32 slices (docs/cuda.md).
 constexpr int kSellChunk = 32;
 constexpr int kSellSigma = 1024;
+constexpr int kSampleFractions = partial_volume_sample_total(3) + 1;  // the host table's length (pd_physics.hpp)
 
 using cuda::check;
 using cuda::check_launch;
@@ -202,6 +203,7 @@ struct CudaSystem::Impl {
   DeviceArray<float> s0_own, s0_dual;
   DeviceArray<uint8_t> state;
   DeviceArray<uint8_t> own_count;  // the own halves' sample counts, where vol_own is not held (pd_system.hpp)
+  DeviceArray<double> sample_fraction;  // their fractions (pd_physics.hpp partial_volume_sample_fractions)
   // compressive enhancement: s_min read and written by a pass (swapped at each step's start,
   // commit_min_stretch); short-range forces per particle (double and float copies)
   DeviceArray<float> min_stretch, min_stretch_next;
@@ -520,7 +522,9 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   p.vol_own = counted ? nullptr : m.vol_own.get();
   p.own_count = counted ? m.own_count.get() : nullptr;
   p.volume_exact = m.volume.get();
-  p.sample_total = s.own_count_total();
+  m.sample_fraction.upload(std::vector<double>(s.own_count_fractions(), s.own_count_fractions() + kSampleFractions),
+                           "sample fractions");
+  p.sample_fraction = counted ? m.sample_fraction.get() : nullptr;
   p.s0_own = m.s0_own.get(); p.s0_dual = dual_shared ? p.s0_own : m.s0_dual.get(); p.state = m.state.get();
   if (m.min_stretch.size() > 0) {
     p.alpha = static_cast<float>(s.config.compressive_enhancement);
@@ -549,7 +553,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     q.offsets = p.offsets; q.neighbor = p.neighbor; q.xi_len = m.fxi_len.get();
     q.k_own = m.fk_own.get(); q.k_dual = dual_shared ? q.k_own : m.fk_dual.get();
     q.vol_own = counted ? nullptr : m.fvol_own.get();  // float32_view's choice
-    q.own_count = p.own_count; q.volume_exact = p.volume_exact; q.sample_total = p.sample_total;
+    q.own_count = p.own_count; q.volume_exact = p.volume_exact; q.sample_fraction = p.sample_fraction;
     q.s0_own = p.s0_own; q.s0_dual = p.s0_dual; q.state = p.state; q.lps = p.lps;
     q.alpha = p.alpha; q.min_stretch = p.min_stretch; q.min_stretch_next = p.min_stretch_next;
     q.break_after_force = p.break_after_force;

@@ -56,11 +56,12 @@ struct PdViewT {
   // the default) vol_own is null and own_count holds each entry's own sample count, the
   // volume formed from it (counted_own_volume, pd_physics.hpp) from the partner's volume in
   // double (volume_exact: `volume` in the double view, the double copy in the float one) and
-  // sample_total: the bits the array held, 1 B per entry instead of 8 (4 in float).
+  // the count's fraction (sample_fraction: partial_volume_sample_fractions, pd_physics.hpp, or
+  // its device copy): the bits the array held, 1 B per entry instead of 8 (4 in float).
   const Real* vol_own = nullptr;
   const uint8_t* own_count = nullptr;
   const double* volume_exact = nullptr;
-  double sample_total = 0.0;
+  const double* sample_fraction = nullptr;
   const float* s0_own = nullptr;   // critical stretch of each half-bond
   const float* s0_dual = nullptr;
   uint8_t* state = nullptr;        // kOwnIntact | kDualIntact
@@ -117,7 +118,7 @@ using PdView = PdViewT<double>;
 // formed from its sample count, rounded to Real as the float copy of the array was.
 template <class Real>
 BRECCIA_HD Real own_volume(const PdViewT<Real>& p, int64_t k) {
-  if (p.own_count) return static_cast<Real>(counted_own_volume(p.own_count[k], p.sample_total, p.volume_exact[p.neighbor[k]]));
+  if (p.own_count) return static_cast<Real>(counted_own_volume(p.own_count[k], p.sample_fraction, p.volume_exact[p.neighbor[k]]));
   return p.vol_own[k];
 }
 // Does entry k's own half exist (j in i's horizon: beta*V_j > 0)? A count > 0 exactly when

@@ -106,11 +106,11 @@ struct PdSystem {
   // arrays not counted): neighbor, xi_len, k_own, own_count or vol_own, s0_own, state, and the
   // dual halves.
   size_t bytes_per_bond_entry() const { return bond_entry_bytes(dual_halves_shared, own_volumes_counted(config)); }
-  // The partial-volume sample total of the counts in own_count (pd_physics.hpp).
-  double own_count_total() const { return partial_volume_sample_total(dimension); }
+  // The fraction of each count in own_count, count / total (pd_physics.hpp).
+  const double* own_count_fractions() const { return partial_volume_sample_fractions(dimension); }
   // Entry k's own half's volume beta_own V_j (vol_own's note): stored, or formed from its count.
   double own_volume(int64_t k) const {
-    return own_count.empty() ? vol_own[k] : counted_own_volume(own_count[k], own_count_total(), volume[neighbor[k]]);
+    return own_count.empty() ? vol_own[k] : counted_own_volume(own_count[k], own_count_fractions(), volume[neighbor[k]]);
   }
   // Entry k's own half exists (beta_own > 0): its count is nonzero, or its stored volume positive.
   bool own_half_exists(int64_t k) const { return own_count.empty() ? vol_own[k] > 0.0 : own_count[k] != 0; }

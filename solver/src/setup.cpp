@@ -853,9 +853,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // The run's largest arrays (3.3 GB on the full concrete case): huge pages (huge_pages.hpp).
   // Their first touch (the kernel zeroes each page) is most of their cost: the arrays are
   // touched side by side, one per thread. Where both counts of every candidate are in the
-  // count bytes, the kept entries' partners and states are the candidates' compacted in
-  // place after the fill (below): `neighbor` takes the family lists' storage and `state` the
-  // own counts', pages touched already, instead of 0.3 GB of fresh ones.
+  // count bytes, the kept entries' partners, own counts and states are the candidates'
+  // compacted in place after the fill (below): `neighbor` takes the family lists' storage,
+  // `own_count` the own counts' and `state` the dual counts', pages touched already, instead
+  // of 0.4 GB of fresh ones.
   const bool compact_in_place = dual_by_reverse || uniform;
   // The own halves' volumes as their sample counts (pd_system.hpp own_count): beta_own is
   // sample_fraction[samples_inside[k]] in every sampled path above (beta_own_dual), so the

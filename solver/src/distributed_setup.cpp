@@ -122,7 +122,8 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
     throw std::logic_error("distributed set-up without the stable-step hook that cuts the rank's system");
   if (writer_bonds) {
     gather_entries(d, s.neighbor, false);
-    gather_entries(d, s.vol_own, false);
+    gather_entries(d, s.vol_own, false);    // empty where the own counts serve (pd_system.hpp)
+    gather_entries(d, s.own_count, false);  // empty with the analytic partial volume
     // Shared dual halves (pd_system.hpp k_dual_halves): the own moduli, which the rank kept here.
     gather_entries(d, s.dual_halves_shared ? s.k_own : s.k_dual, false);
   }

@@ -29,7 +29,7 @@ EnergyScatter energy_scatter(PdSystem& s, const DistributedSetup& d, const Distr
     bool one_material = true;
     for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
       if (s.state[k] == 0) continue;
-      family_volume += s.vol_own[k];
+      family_volume += s.own_volume(k);
       one_material = one_material && s.material[s.neighbor[k]] == s.material[i];
     }
     const double h = s.horizon[i];

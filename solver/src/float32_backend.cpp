@@ -64,7 +64,7 @@ void float32_enable(PdSystem& s, const double* origin) {
   convert(s.lps_b, f.lps_b);
   convert(s.k_own, f.k_own);
   convert(s.k_dual, f.k_dual);
-  convert(s.vol_own, f.vol_own);
+  convert(s.vol_own, f.vol_own);  // empty where the own counts serve (pd_system.hpp own_count)
   convert(s.short_range_k, f.short_range_k);
   convert(s.spacing, f.spacing);
   f.xi_len.resize(s.bond_count());
@@ -99,7 +99,13 @@ PdViewT<float> float32_view(PdSystem& s) {
   p.volume = f.volume.data(); p.density = f.density.data(); p.fixed_dof = s.fixed_dof.data();
   p.offsets = s.offsets.data(); p.neighbor = s.neighbor.data(); p.xi_len = f.xi_len.data();
   // Shared dual halves (pd_system.hpp k_dual_halves): no float copy either, the own ones serve.
-  p.k_own = f.k_own.data(); p.k_dual = s.f32_k_dual_halves().data(); p.vol_own = f.vol_own.data();
+  p.k_own = f.k_own.data(); p.k_dual = s.f32_k_dual_halves().data();
+  // The own halves' volumes (pd_kernels.hpp own_volume): from the counts and the double
+  // volumes, rounded to float once as convert() rounded the double array; else the float copy.
+  p.vol_own = s.own_count.empty() ? f.vol_own.data() : nullptr;
+  p.own_count = s.own_count.empty() ? nullptr : s.own_count.data();
+  p.volume_exact = s.volume.data();
+  p.sample_fraction = s.own_count_fractions();
   p.s0_own = s.s0_own.data(); p.s0_dual = s.s0_dual_halves().data(); p.state = s.state.data();
   if (!s.min_stretch.empty() && s.n) {  // shared with the double view: float in both
     p.alpha = static_cast<float>(s.config.compressive_enhancement);

@@ -231,7 +231,7 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
     assign_on_huge_pages(g.halves, s.neighbor.size());
     const std::vector<double>& k_dual = s.k_dual_halves();
     for (size_t k = 0; k < s.neighbor.size(); ++k)
-      g.halves[k] = static_cast<uint8_t>((s.vol_own[k] > 0.0 ? kOwnIntact : 0) | (k_dual[k] > 0.0 ? kDualIntact : 0));
+      g.halves[k] = static_cast<uint8_t>((s.own_half_exists(static_cast<int64_t>(k)) ? kOwnIntact : 0) | (k_dual[k] > 0.0 ? kDualIntact : 0));
   }
   // gas_fixed_order_sum's block sums, for the walls' and the particles' sums alike: sized
   // once here, so that no step allocates.

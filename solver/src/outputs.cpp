@@ -41,7 +41,7 @@ bool is_precrack(const std::vector<std::pair<int64_t, int64_t>>& precrack_pairs,
 bool fracture_broken(const PdSystem& s, int64_t k) {
   const uint8_t st = s.state[k];
   if (st == (kOwnIntact | kDualIntact)) return false;
-  const bool own_broken = s.vol_own[k] > 0 && !(st & kOwnIntact);
+  const bool own_broken = s.own_half_exists(k) && !(st & kOwnIntact);
   const bool dual_broken = s.k_dual_halves()[k] > 0 && !(st & kDualIntact);
   return own_broken || dual_broken;
 }

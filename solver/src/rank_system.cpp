@@ -170,6 +170,7 @@ PdSystem restrict_rank(const PdSystem& g, const RankLayout& L, std::vector<int32
   s.k_own = slice(g.k_own, eb, ee);
   s.k_dual = slice(g.k_dual, eb, ee);
   s.vol_own = slice(g.vol_own, eb, ee);
+  s.own_count = slice(g.own_count, eb, ee);
   s.s0_own = slice(g.s0_own, eb, ee);
   s.s0_dual = slice(g.s0_dual, eb, ee);
   s.s_onset = slice(g.s_onset, eb, ee);
@@ -279,6 +280,7 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   // The slices restrict_to_rank would copy are the whole arrays: take them, and restrict the
   // rest (an empty array slices as empty).
   std::vector<double> xi_len, k_own, k_dual, vol_own;
+  std::vector<uint8_t> own_count;
   std::vector<float> s0_own, s0_dual, s_onset;
   std::vector<uint8_t> gas_halves;  // set-up data of the bonds; in_crack is state (restrict_gas)
   gas_halves.swap(g.gas.halves);
@@ -295,9 +297,11 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   if (root_gathers_bond_list(g.config)) {  // rank 0's writers read them (finish_distributed_setup)
     k_dual = g.k_dual;  // empty where shared: g keeps k_own instead (above)
     vol_own = g.vol_own;
+    own_count = g.own_count;
   } else {
     k_dual.swap(g.k_dual);
     vol_own.swap(g.vol_own);
+    own_count.swap(g.own_count);
   }
   // The partners too, renumbered in place (a copy was 4 B per entry more at the peak), unless
   // rank 0's writers read the global ones (root_gathers_bond_list: then copied).
@@ -314,6 +318,7 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   s.k_own = std::move(k_own);
   s.k_dual = std::move(k_dual);
   s.vol_own = std::move(vol_own);
+  s.own_count = std::move(own_count);
   s.s0_own = std::move(s0_own);
   s.s0_dual = std::move(s0_dual);
   s.s_onset = std::move(s_onset);
@@ -552,6 +557,7 @@ std::vector<const void*> release_global_for_loop(PdSystem& g, bool root, const P
 #endif
     drop(g.neighbor);
     drop(g.vol_own);
+    drop(g.own_count);
     drop(g.k_dual);
   }
   return drop.held;

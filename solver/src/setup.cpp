@@ -317,9 +317,10 @@ static void convert_to_softening(PdSystem& s) {
     if (!(onset < FLT_MAX) || !(s.s0_own[k] < FLT_MAX)) continue;  // brittle material or unbreakable bond
     double s_g = s.s0_own[k];
     const float s_g_dual = s0_dual[k];  // read before the own half is written (the same float when shared)
-    if (s_g_dual < FLT_MAX && s.vol_own[k] > 0 && k_dual[k] > 0)
+    const bool own_half = s.own_half_exists(k);
+    if (s_g_dual < FLT_MAX && own_half && k_dual[k] > 0)
       s_g = std::sqrt(0.5 * (s_g * s_g + double(s_g_dual) * s_g_dual));
-    else if (!(s.vol_own[k] > 0) && s_g_dual < FLT_MAX)
+    else if (!own_half && s_g_dual < FLT_MAX)
       s_g = s_g_dual;
     const float ultimate = static_cast<float>(std::max(s_g * s_g / onset, double(onset)));
     s.s0_own[k] = ultimate;
@@ -533,7 +534,12 @@ PdView PdSystem::view() {
   p.force = force.data(); p.body = body.data();
   p.volume = volume.data(); p.density = density.data(); p.fixed_dof = fixed_dof.data();
   p.offsets = offsets.data(); p.neighbor = neighbor.data(); p.xi_len = xi_len.data();
-  p.k_own = k_own.data(); p.k_dual = k_dual_halves().data(); p.vol_own = vol_own.data();
+  p.k_own = k_own.data(); p.k_dual = k_dual_halves().data();
+  // The own halves' volumes (pd_kernels.hpp own_volume): the counts where held, else vol_own.
+  p.vol_own = own_count.empty() ? vol_own.data() : nullptr;
+  p.own_count = own_count.empty() ? nullptr : own_count.data();
+  p.volume_exact = volume.data();
+  p.sample_fraction = own_count_fractions();
   p.s0_own = s0_own.data(); p.s0_dual = s0_dual_halves().data(); p.state = state.data();
   if (!min_stretch.empty() && n) {
     p.alpha = static_cast<float>(config.compressive_enhancement);
@@ -847,10 +853,16 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // The run's largest arrays (3.3 GB on the full concrete case): huge pages (huge_pages.hpp).
   // Their first touch (the kernel zeroes each page) is most of their cost: the arrays are
   // touched side by side, one per thread. Where both counts of every candidate are in the
-  // count bytes, the kept entries' partners and states are the candidates' compacted in
-  // place after the fill (below): `neighbor` takes the family lists' storage and `state` the
-  // own counts', pages touched already, instead of 0.3 GB of fresh ones.
+  // count bytes, the kept entries' partners, own counts and states are the candidates'
+  // compacted in place after the fill (below): `neighbor` takes the family lists' storage,
+  // `own_count` the own counts' and `state` the dual counts', pages touched already, instead
+  // of 0.4 GB of fresh ones.
   const bool compact_in_place = dual_by_reverse || uniform;
+  // The own halves' volumes as their sample counts (pd_system.hpp own_count): beta_own is
+  // sample_fraction[samples_inside[k]] in every sampled path above (beta_own_dual), so the
+  // volume formed from the count where read, count / total x V_j, is beta_own * V_j's bits.
+  const bool counted = own_volumes_counted(c);
+  if (counted != sampled) throw std::logic_error("setup_system: own counts without the sampled partial volume");
   {
     const int arrays = c.softening ? 10 : 8;
 #pragma omp parallel for schedule(dynamic, 1)
@@ -859,7 +871,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         case 0: assign_on_huge_pages(s.k_own, nb); break;
         case 1: if (store_dual) assign_on_huge_pages(s.k_dual, nb); break;
         case 2: assign_on_huge_pages(s.xi_len, nb); break;
-        case 3: assign_on_huge_pages(s.vol_own, nb); break;
+        case 3:  // the own halves' volumes: their counts (compacted in place below), or the volumes
+          if (!counted) assign_on_huge_pages(s.vol_own, nb);
+          else if (!compact_in_place) assign_on_huge_pages(s.own_count, nb);
+          break;
         case 4: if (!compact_in_place) assign_on_huge_pages(s.neighbor, nb); break;
         case 5: assign_on_huge_pages(s.s0_own, nb); break;
         case 6: if (store_dual) assign_on_huge_pages(s.s0_dual, nb); break;
@@ -946,8 +961,9 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       for (int d = 0; d < 3; ++d) r2 += std::pow(s.x0[3 * j + d] - s.x0[3 * i + d], 2);
       const double xi = std::sqrt(r2);
       s.xi_len[out] = xi;
-      s.vol_own[out] = beta_own * s.volume[j];
+      if (!counted) s.vol_own[out] = beta_own * s.volume[j];
       if (!compact_in_place) {
+        if (counted) s.own_count[out] = samples_inside[k];
         s.neighbor[out] = j;
         if (beta_own <= 0) s.state[out] &= static_cast<uint8_t>(~kOwnIntact);
         if (beta_dual <= 0) s.state[out] &= static_cast<uint8_t>(~kDualIntact);
@@ -983,28 +999,34 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     }
   }
   if (compact_in_place) {
-    // The kept entries' partners and states, compacted in place over the candidates in order
-    // (one thread: entry `out` <= candidate k, so each candidate is read before its slot can be
-    // written): the partner j, and kOwnIntact / kDualIntact where the own / dual count is
-    // nonzero, as the fill wrote them before (beta = count / total > 0 exactly when count > 0).
+    // The kept entries' partners, own counts and states, compacted in place over the candidates
+    // in order (one thread: entry `out` <= candidate k, so each candidate is read before its
+    // slot can be written): the partner j, the own count (own_count), and kOwnIntact /
+    // kDualIntact where the own / dual count is nonzero, as the fill wrote them before (beta =
+    // count / total > 0 exactly when count > 0), written over the dual counts.
     int32_t* partner = fam.neighbors.data();
     uint8_t* own = samples_inside.data();
-    const uint8_t* dual = dual_inside.data();
+    uint8_t* dual = dual_inside.data();
     const int64_t candidates = static_cast<int64_t>(fam.neighbors.size());
     int64_t out = 0;
     for (int64_t k = 0; k < candidates; ++k) {
-      const uint8_t bits = static_cast<uint8_t>((own[k] > 0 ? kOwnIntact : 0) | (dual[k] > 0 ? kDualIntact : 0));
+      const uint8_t own_k = own[k];
+      const uint8_t bits = static_cast<uint8_t>((own_k > 0 ? kOwnIntact : 0) | (dual[k] > 0 ? kDualIntact : 0));
       partner[out] = partner[k];
-      own[out] = bits;
+      own[out] = own_k;
+      dual[out] = bits;
       out += bits != 0;
     }
     if (out != static_cast<int64_t>(nb)) throw std::logic_error("setup_system: the kept entries were miscounted");
     fam.neighbors.resize(nb);
     samples_inside.resize(nb);
+    dual_inside.resize(nb);
     release_unused_capacity(fam.neighbors);
     release_unused_capacity(samples_inside);
+    release_unused_capacity(dual_inside);
     s.neighbor = std::move(fam.neighbors);
-    s.state = std::move(samples_inside);
+    s.own_count = std::move(samples_inside);
+    s.state = std::move(dual_inside);
   }
   fam = Families{};
   std::vector<uint8_t>().swap(samples_inside);  // freed (keep_count's note)
@@ -1085,7 +1107,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
 #pragma omp parallel for
       for (size_t i = 0; i < n; ++i) {
         double family_volume = s.volume[i];  // the horizon disc holds the particle's own cell too
-        for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) family_volume += s.vol_own[k];
+        for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) family_volume += s.own_volume(k);
         complete[i] = family_volume >= 0.99 * M_PI * s.horizon[i] * s.horizon[i] * s.thickness;
       }
       gather_owned(dist, dist_rows, complete, 1);  // dist: the ghosts' completeness
@@ -1175,7 +1197,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       for (size_t i = 0; i < n; ++i) {
         double family_volume = s.volume[i], cube_sum = 0.0;  // own cell + the neighbours' parts
         for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
-          family_volume += s.vol_own[k];
+          family_volume += s.own_volume(k);
           cube_sum += s.k_own[k] * s.volume[s.neighbor[k]] * std::pow(s.xi_len[k], 3);
         }
         const double h = s.horizon[i];
@@ -1229,7 +1251,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     for (size_t i = 0; i < n; ++i) {
       for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
         iso[i] += pmb_energy_density(s.k_own[k], k_dual[k], s.state[k], 1.0, s.xi_len[k]);
-        family_volume[i] += s.vol_own[k];
+        family_volume[i] += s.own_volume(k);
         const int32_t j = s.neighbor[k];
         for (int d = 0; d < uni_dims; ++d) {
           const double nd = (s.x0[3 * j + d] - s.x0[3 * i + d]) / s.xi_len[k];

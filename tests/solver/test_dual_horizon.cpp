@@ -245,3 +245,62 @@ TEST(WeibullPerBond, ReverseEntriesHoldTheSameDrawWithOwnAndDualSwapped) {
     EXPECT_GT(distinct, checked / 20) << model << ": the Weibull draw should scatter the critical stretches";
   }
 }
+
+// The own halves' volumes beta_own V_j (damage weights, family volumes; pd_system.hpp
+// own_count): with the sampled partial volume set-up keeps each entry's own sample count (a
+// byte) and forms the volume where it is read; it must be the set-up's former value, the
+// quadrature's fraction times the partner's volume, bit for bit: on the graded strip (counts
+// made per pair, from both ends) and on a 3D lattice (counts looked up by offset), in double
+// and rounded once to float in the float32 view; with the analytic partial volume (lammps)
+// the volumes themselves are kept. Reference: partial_volume (pd_physics.hpp), evaluated here
+// per entry from the positions, not read from the system.
+TEST(DualHorizon, OwnVolumesFormedFromSampleCountsAreTheQuadratureTimesTheVolume) {
+  const std::string strip = graded_strip("graded_own_counts", 0.02, 0.01, 0.5e-3);
+  struct Deck {
+    std::string name, yaml;
+    bool counted;
+  };
+  const std::string lattice = "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.003, 0.003], spacing: 0.5 mm}}\n"
+                              "model: {type: lps, horizon_factor: 3.015, precision: float32}\n"
+                              "materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, "
+                              "fracture_energy: 10}]\n"
+                              "time: {steps: 1}\n";
+  std::string lammps = graded_case(strip);
+  lammps.replace(lammps.find("variable_horizon"), 0, "partial_volume: lammps, ");
+  const std::vector<Deck> decks = {{"graded", graded_case(strip), true}, {"lattice_float32", lattice, true},
+                                   {"graded_lammps", lammps, false}};
+  size_t counted_bytes = 0, stored_bytes = 0;
+  for (const Deck& d : decks) {
+    SCOPED_TRACE(d.name);
+    const CaseConfig config = parse_case_file(write_case("own_counts_" + d.name, d.yaml));
+    PdSystem s = setup_system(config);
+    ASSERT_GT(s.bond_count(), 0u);
+    EXPECT_EQ(s.own_count.size(), d.counted ? s.bond_count() : 0u);
+    EXPECT_EQ(s.vol_own.size(), d.counted ? 0u : s.bond_count());
+    if (!s.symmetric_halves) (d.counted ? counted_bytes : stored_bytes) = s.bytes_per_bond_entry();
+    if (config.precision == CaseConfig::Precision::Float32 && !s.f32.active) float32_enable(s);
+    const PdView p = s.view();
+    const PdViewT<float> q = s.f32.active ? float32_view(s) : PdViewT<float>{};
+    long long partial = 0;
+    for (size_t i = 0; i < s.n; ++i)
+      for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
+        const int32_t j = s.neighbor[k];
+        const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1], s.x0[3 * j + 2] - s.x0[3 * i + 2]};
+        const double beta = partial_volume(config.partial_volume, xv, s.horizon[i], s.half_cell[j], s.dimension);
+        const double expected = beta * s.volume[j];
+        partial += beta > 0 && beta < 1;
+        const double held = s.own_volume(k), viewed = own_volume(p, k);
+        ASSERT_EQ(std::memcmp(&expected, &held, sizeof(double)), 0) << "entry " << k << ": " << expected << " " << held;
+        ASSERT_EQ(std::memcmp(&expected, &viewed, sizeof(double)), 0) << "entry " << k;
+        ASSERT_EQ(s.own_half_exists(k), expected > 0) << "entry " << k;
+        ASSERT_EQ(own_half_exists(p, k), expected > 0) << "entry " << k;
+        if (q.n) {
+          const float expected_f = static_cast<float>(expected), viewed_f = own_volume(q, k);
+          ASSERT_EQ(std::memcmp(&expected_f, &viewed_f, sizeof(float)), 0) << "entry " << k;
+        }
+      }
+    EXPECT_GT(partial, 0) << "some entries should hold a partial volume (0 < beta < 1)";
+  }
+  // A double per entry replaced by a byte (both graded decks store their dual halves).
+  EXPECT_EQ(counted_bytes + sizeof(double) - sizeof(uint8_t), stored_bytes);
+}

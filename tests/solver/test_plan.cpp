@@ -127,8 +127,8 @@ time: {steps: 1}
 }
 
 // The estimate's bytes per bond entry are what set-up allocates (PdSystem::bytes_per_bond_entry):
-// a lattice with one horizon shares the dual halves (33 B), 2D LPS with fracture stores them
-// (45 B), softening adds its two floats.
+// a lattice with one horizon shares the dual halves (26 B with the sampled partial volume's
+// own counts), 2D LPS with fracture stores them (38 B), softening adds its two floats.
 TEST(PlanCost, BytesPerBondEntryAreWhatSetUpHolds) {
   const Throughputs rates = load_throughputs(default_throughputs_path());
   omp_set_num_threads(1);

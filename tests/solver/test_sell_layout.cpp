@@ -170,7 +170,7 @@ namespace {
 SellBondArrays<double> gather_bonds(const SellLayout& layout, const PdSystem& s) {
   if (s.symmetric_halves) return gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state);
   return gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state, s.k_dual_halves(),
-                           s.s0_dual_halves(), s.vol_own);
+                           s.s0_dual_halves(), s.vol_own, s.own_count);
 }
 struct HostSell {
   SellLayout layout;
@@ -182,7 +182,8 @@ struct HostSell {
     a.sell_entries = {bonds.neighbor.data(), bonds.xi_len.data(), bonds.k_own.data(), bonds.s0_own.data(),
                       bonds.state.data(),    bonds.k_dual.empty() ? nullptr : bonds.k_dual.data(),
                       bonds.s0_dual.empty() ? nullptr : bonds.s0_dual.data(),
-                      bonds.vol_own.empty() ? nullptr : bonds.vol_own.data()};
+                      bonds.vol_own.empty() ? nullptr : bonds.vol_own.data(),
+                      bonds.own_count.empty() ? nullptr : bonds.own_count.data()};
   }
 };
 

@@ -82,6 +82,7 @@ TEST(SharedDualHalves, OneHorizonHoldsNoDualHalvesAndGivesTheStoredLayoutsForces
     EXPECT_TRUE(same_bits(shared.k_own, stored.k_own));
     EXPECT_TRUE(same_bits(shared.s0_own, stored.s0_own));
     EXPECT_TRUE(same_bits(shared.vol_own, stored.vol_own));
+    EXPECT_TRUE(same_bits(shared.own_count, stored.own_count));
     EXPECT_TRUE(same_bits(shared.state, stored.state));
     EXPECT_TRUE(same_bits(shared.s_onset, stored.s_onset));
     EXPECT_TRUE(same_bits(shared.calibration_factor, stored.calibration_factor));

@@ -33,6 +33,7 @@ constexpr int kMaxReduceBlocks = 1024;  // partial sums per reduction: fixed, so
 // model.cuda_layout: sell: a slice is a warp; rows sorted by length within 32 slices (docs/cuda.md).
 constexpr int kSellChunk = 32;
 constexpr int kSellSigma = 1024;
+constexpr int kSampleFractions = partial_volume_sample_total(3) + 1;  // the host table's length (pd_physics.hpp)
 
 using cuda::check;
 using cuda::check_launch;
@@ -201,6 +202,8 @@ struct CudaSystem::Impl {
   DeviceArray<double> xi_len, k_own, k_dual, vol_own;
   DeviceArray<float> s0_own, s0_dual;
   DeviceArray<uint8_t> state;
+  DeviceArray<uint8_t> own_count;  // the own halves' sample counts, where vol_own is not held (pd_system.hpp)
+  DeviceArray<double> sample_fraction;  // their fractions (pd_physics.hpp partial_volume_sample_fractions)
   // compressive enhancement: s_min read and written by a pass (swapped at each step's start,
   // commit_min_stretch); short-range forces per particle (double and float copies)
   DeviceArray<float> min_stretch, min_stretch_next;
@@ -214,7 +217,7 @@ struct CudaSystem::Impl {
   DeviceArray<int32_t> sell_particle, sell_row_length, sell_neighbor;
   DeviceArray<double> sell_xi_len, sell_k_own, sell_k_dual, sell_vol_own;
   DeviceArray<float> sell_fxi_len, sell_fk_own, sell_fk_dual, sell_fvol_own, sell_s0_own, sell_s0_dual;
-  DeviceArray<uint8_t> sell_state;
+  DeviceArray<uint8_t> sell_state, sell_own_count;
   // step scratch
   DeviceArray<double> u_before, f_before;
   // loads and constraints (index lists uploaded once)
@@ -446,7 +449,8 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   m.xi_len.upload(s.xi_len, "xi_len");
   m.k_own.upload(s.k_own, "k_own");
   m.k_dual.upload(s.k_dual, "k_dual");  // empty where the dual halves are shared (pd_system.hpp): none on the device
-  m.vol_own.upload(s.vol_own, "vol_own");
+  m.vol_own.upload(s.vol_own, "vol_own");        // empty where the own counts serve
+  m.own_count.upload(s.own_count, "own_count");  // empty with the analytic partial volume
   m.s0_own.upload(s.s0_own, "s0_own");
   m.s0_dual.upload(s.s0_dual, "s0_dual");
   m.state.upload(s.state, "state");
@@ -512,7 +516,15 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   p.volume = m.volume.get(); p.density = m.density.get(); p.fixed_dof = m.fixed_dof.get();
   p.offsets = m.offsets.get(); p.neighbor = m.neighbor.get(); p.xi_len = m.xi_len.get();
   const bool dual_shared = s.dual_halves_shared;  // the own arrays serve as the dual ones
-  p.k_own = m.k_own.get(); p.k_dual = dual_shared ? p.k_own : m.k_dual.get(); p.vol_own = m.vol_own.get();
+  p.k_own = m.k_own.get(); p.k_dual = dual_shared ? p.k_own : m.k_dual.get();
+  // The own halves' volumes (pd_kernels.hpp own_volume): the counts with the double volumes, else vol_own.
+  const bool counted = !s.own_count.empty();
+  p.vol_own = counted ? nullptr : m.vol_own.get();
+  p.own_count = counted ? m.own_count.get() : nullptr;
+  p.volume_exact = m.volume.get();
+  m.sample_fraction.upload(std::vector<double>(s.own_count_fractions(), s.own_count_fractions() + kSampleFractions),
+                           "sample fractions");
+  p.sample_fraction = counted ? m.sample_fraction.get() : nullptr;
   p.s0_own = m.s0_own.get(); p.s0_dual = dual_shared ? p.s0_own : m.s0_dual.get(); p.state = m.state.get();
   if (m.min_stretch.size() > 0) {
     p.alpha = static_cast<float>(s.config.compressive_enhancement);
@@ -539,7 +551,9 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     q.u = m.fu.get(); q.v = m.fv.get(); q.a = m.fa.get(); q.force = m.fforce.get(); q.body = m.fbody.get();
     q.volume = m.fvolume.get(); q.density = m.fdensity.get(); q.fixed_dof = p.fixed_dof;
     q.offsets = p.offsets; q.neighbor = p.neighbor; q.xi_len = m.fxi_len.get();
-    q.k_own = m.fk_own.get(); q.k_dual = dual_shared ? q.k_own : m.fk_dual.get(); q.vol_own = m.fvol_own.get();
+    q.k_own = m.fk_own.get(); q.k_dual = dual_shared ? q.k_own : m.fk_dual.get();
+    q.vol_own = counted ? nullptr : m.fvol_own.get();  // float32_view's choice
+    q.own_count = p.own_count; q.volume_exact = p.volume_exact; q.sample_fraction = p.sample_fraction;
     q.s0_own = p.s0_own; q.s0_dual = p.s0_dual; q.state = p.state; q.lps = p.lps;
     q.alpha = p.alpha; q.min_stretch = p.min_stretch; q.min_stretch_next = p.min_stretch_next;
     q.break_after_force = p.break_after_force;
@@ -635,7 +649,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     m.sell_row_length.upload(layout.row_length, "SELL row lengths");
     const SellBondArrays<double> b =
         dual ? gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state, s.k_dual_halves(),
-                                 s.s0_dual_halves(), s.vol_own)
+                                 s.s0_dual_halves(), s.vol_own, s.own_count)
              : gather_sell_bonds(layout, s.neighbor, s.xi_len, s.k_own, s.s0_own, s.state);
     m.sell_neighbor.upload(b.neighbor, "SELL neighbours");
     m.sell_xi_len.upload(b.xi_len, "SELL bond lengths");
@@ -645,26 +659,29 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     if (dual) {
       m.sell_k_dual.upload(b.k_dual, "SELL dual moduli");
       m.sell_s0_dual.upload(b.s0_dual, "SELL dual critical stretches");
-      m.sell_vol_own.upload(b.vol_own, "SELL damage weights");
+      m.sell_vol_own.upload(b.vol_own, "SELL damage weights");             // or
+      m.sell_own_count.upload(b.own_count, "SELL damage weights' counts");  // (pd_system.hpp own_count)
     }
     const SellView view{layout.lanes(), kSellChunk, m.sell_slice_offset.get(), m.sell_particle.get(),
                         m.sell_row_length.get(), m.sell_csr_entry.get(), m.state.get()};
     m.arrays.sell = view;
     m.arrays.sell_entries = {m.sell_neighbor.get(), m.sell_xi_len.get(), m.sell_k_own.get(), m.sell_s0_own.get(),
                              m.sell_state.get(),    dual ? m.sell_k_dual.get() : nullptr,
-                             dual ? m.sell_s0_dual.get() : nullptr, dual ? m.sell_vol_own.get() : nullptr};
+                             dual ? m.sell_s0_dual.get() : nullptr, dual ? m.sell_vol_own.get() : nullptr,
+                             dual ? m.sell_own_count.get() : nullptr};
     if (m.f32) {
       m.sell_fxi_len.upload(layout.gather(s.f32.xi_len, 1.0f), "SELL float bond lengths");
       m.sell_fk_own.upload(layout.gather(s.f32.k_own, 0.0f), "SELL float moduli");
       if (dual) {
         m.sell_fk_dual.upload(layout.gather(s.f32_k_dual_halves(), 0.0f),
                               "SELL float dual moduli");
-        m.sell_fvol_own.upload(layout.gather(s.f32.vol_own, 0.0f), "SELL float damage weights");
+        if (!s.f32.vol_own.empty()) m.sell_fvol_own.upload(layout.gather(s.f32.vol_own, 0.0f), "SELL float damage weights");
       }
       m.farrays.sell = view;
       m.farrays.sell_entries = {m.sell_neighbor.get(), m.sell_fxi_len.get(), m.sell_fk_own.get(), m.sell_s0_own.get(),
                                 m.sell_state.get(),    dual ? m.sell_fk_dual.get() : nullptr,
-                                dual ? m.sell_s0_dual.get() : nullptr, dual ? m.sell_fvol_own.get() : nullptr};
+                                dual ? m.sell_s0_dual.get() : nullptr, dual ? m.sell_fvol_own.get() : nullptr,
+                                dual ? m.sell_own_count.get() : nullptr};
     }
   }
   m.refresh_step_views();

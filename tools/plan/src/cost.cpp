@@ -206,8 +206,8 @@ double bytes_per_particle(int dimension, PdModel model) {
 
 // Per bond entry: the bond arrays set-up holds (pd_system.hpp bond_entry_bytes); softening bonds
 // add s_onset and bond_damage (2 floats).
-double bytes_per_bond(bool softening, bool shared_dual_halves) {
-  return static_cast<double>(bond_entry_bytes(shared_dual_halves) + (softening ? 2 : 0) * sizeof(float));
+double bytes_per_bond(bool softening, bool shared_dual_halves, bool own_volumes_counted) {
+  return static_cast<double>(bond_entry_bytes(shared_dual_halves, own_volumes_counted) + (softening ? 2 : 0) * sizeof(float));
 }
 
 // Does set-up share the dual halves with the own ones (setup.cpp: one horizon, every entry's two
@@ -306,7 +306,8 @@ CostEstimate estimate_cost(const CaseConfig& c, const Throughputs& rates, const 
   // Memory: the run's arrays; set-up also holds the padded families and a few per-particle
   // temporaries (spacing, pad, counts, calibration sums: about 12 doubles).
   const PdModel model = c.model;
-  e.bond_entry_bytes = bytes_per_bond(c.softening && c.fracture, shares_dual_halves(c, e.particles_kind, e.dimension));
+  e.bond_entry_bytes = bytes_per_bond(c.softening && c.fracture, shares_dual_halves(c, e.particles_kind, e.dimension),
+                                    solver::own_volumes_counted(c));
   e.run_bytes = e.particles * bytes_per_particle(e.dimension, model) + e.bonds * e.bond_entry_bytes;
   e.setup_bytes = e.run_bytes + padded * sizeof(int32_t) + e.particles * (sizeof(int64_t) + 12 * sizeof(double));
 

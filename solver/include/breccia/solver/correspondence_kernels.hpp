@@ -105,7 +105,7 @@ BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int
   double K[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, N[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
   double released = 0.0, smax = 0.0, intact_vol = 0.0, total_vol = 0.0;
   for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
-    total_vol += p.vol_own[k];
+    total_vol += own_volume(p, k);
     uint8_t st = p.state[k];
     if (!st) continue;
     const int64_t j = p.neighbor[k];
@@ -126,7 +126,7 @@ BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int
       }
     }
     if (!(st & kOwnIntact)) continue;
-    intact_vol += p.vol_own[k];
+    intact_vol += own_volume(p, k);
     if (stretch > smax) smax = stretch;
     const double wv = p.k_own[k] * p.volume[j];
     for (int a = 0; a < d; ++a)

@@ -30,7 +30,7 @@ struct Float32State {
   std::vector<float> x0, u, v, a, force, body;                        // 3N
   std::vector<float> volume, density, weighted_volume, dilatation;    // N
   std::vector<float> lps_a, lps_b;                                    // N (LPS fast path)
-  std::vector<float> xi_len, k_own, k_dual, vol_own;                  // per bond entry
+  std::vector<float> xi_len, k_own, k_dual, vol_own;                  // per bond entry (vol_own: lammps partial volume only)
   std::vector<float> short_range_k, spacing;                          // N (short-range forces)
   std::vector<float> u_before;   // scratch for the external-work trapezoid
   std::vector<double> f_before;

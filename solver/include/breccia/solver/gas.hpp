@@ -35,7 +35,7 @@ namespace breccia::solver {
 
 // Can the gas pass between the two ends of entry k? Only when no half-bond that exists is
 // intact (a bond carrying no force: broken, or cut by a pre-crack). `halves`: per entry, the
-// intact bits of the halves that exist (kOwnIntact: j in i's horizon, vol_own > 0;
+// intact bits of the halves that exist (kOwnIntact: j in i's horizon, PdSystem::own_half_exists;
 // kDualIntact: i in j's, k_dual > 0; setup_gas), so the test reads two bytes, not two doubles.
 BRECCIA_HD bool gas_entry_open(const uint8_t* state, const uint8_t* halves, int64_t k) {
   return (state[k] & halves[k]) == 0;

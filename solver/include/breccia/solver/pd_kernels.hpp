@@ -50,7 +50,18 @@ struct PdViewT {
   const Real* xi_len = nullptr;
   const Real* k_own = nullptr;   // PMB: c_half*omega*beta*V_j; LPS: omega*beta (own horizon)
   const Real* k_dual = nullptr;  // same for the neighbour's horizon
-  const Real* vol_own = nullptr; // beta*V_j in the own horizon (damage weights)
+  // The own halves' volumes beta*V_j in the own horizon (damage weights): read through
+  // own_volume / own_half_exists below, never directly. With the analytic partial volume
+  // (model.partial_volume: lammps) vol_own holds them; where set-up counted samples (sampled,
+  // the default) vol_own is null and own_count holds each entry's own sample count, the
+  // volume formed from it (counted_own_volume, pd_physics.hpp) from the partner's volume in
+  // double (volume_exact: `volume` in the double view, the double copy in the float one) and
+  // the count's fraction (sample_fraction: partial_volume_sample_fractions, pd_physics.hpp, or
+  // its device copy): the bits the array held, 1 B per entry instead of 8 (4 in float).
+  const Real* vol_own = nullptr;
+  const uint8_t* own_count = nullptr;
+  const double* volume_exact = nullptr;
+  const double* sample_fraction = nullptr;
   const float* s0_own = nullptr;   // critical stretch of each half-bond
   const float* s0_dual = nullptr;
   uint8_t* state = nullptr;        // kOwnIntact | kDualIntact
@@ -102,6 +113,20 @@ struct PdViewT {
   double* max_stretch = nullptr;      // optional
 };
 using PdView = PdViewT<double>;
+
+// Entry k's own half's volume beta*V_j (vol_own's note above): the stored value, or the one
+// formed from its sample count, rounded to Real as the float copy of the array was.
+template <class Real>
+BRECCIA_HD Real own_volume(const PdViewT<Real>& p, int64_t k) {
+  if (p.own_count) return static_cast<Real>(counted_own_volume(p.own_count[k], p.sample_fraction, p.volume_exact[p.neighbor[k]]));
+  return p.vol_own[k];
+}
+// Does entry k's own half exist (j in i's horizon: beta*V_j > 0)? A count > 0 exactly when
+// the volume formed from it is (volumes are positive: particle_file.cpp).
+template <class Real>
+BRECCIA_HD bool own_half_exists(const PdViewT<Real>& p, int64_t k) {
+  return p.own_count ? p.own_count[k] != 0 : p.vol_own[k] > Real(0);
+}
 
 // The deformed bond vector j - i and its extension |xi + eta| - |xi|, computed the way each
 // precision keeps them. Double gathers the current positions x (one array) and subtracts
@@ -857,7 +882,7 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
   bool any = false;
   const int64_t end = p.offsets[i + 1];
   for (int64_t k = p.offsets[i]; k < end; ++k) {
-    if (p.diagnostics) total_vol += p.vol_own[k];
+    if (p.diagnostics) total_vol += own_volume(p, k);
     if (!p.state[k]) continue;
     const int64_t j = p.neighbor[k];
     const Real xi = p.xi_len[k];
@@ -897,7 +922,7 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
     if (p.diagnostics && !breaking) {
       const double dev = double(e) - double(theta_i) * xi / d;
       dev_sum += double(keep) * omega * dev * dev * p.volume[j];
-      intact_vol += double(keep) * p.vol_own[k];
+      intact_vol += double(keep) * own_volume(p, k);
       if (double(e) / xi > smax) smax = double(e) / xi;
     }
   }
@@ -918,7 +943,7 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
 template <class Real>
 BRECCIA_HD bool entry_broken(const PdViewT<Real>& p, int64_t k) {
   const uint8_t st = p.state[k];
-  const bool own_lost = p.vol_own[k] > Real(0) && !(st & kOwnIntact);
+  const bool own_lost = own_half_exists(p, k) && !(st & kOwnIntact);
   const bool dual_lost = p.k_dual[k] > Real(0) && !(st & kDualIntact);
   return own_lost || dual_lost;
 }
@@ -1105,7 +1130,7 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
   bool any = false;
   const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
   for (int64_t k = begin; k < end; ++k) {
-    if (kDiagnostics) total_vol += p.vol_own[k];
+    if (kDiagnostics) total_vol += own_volume(p, k);
     if (!p.state[k]) continue;
     const int64_t j = p.neighbor[k];
     const Real xi = p.xi_len[k];
@@ -1144,7 +1169,7 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
     if (kDiagnostics && !breaking) {
       const double stretch = double(extension) / xi;
       w += share * 0.25 * k2 * stretch * stretch * xi;
-      intact_vol += share * p.vol_own[k];
+      intact_vol += share * own_volume(p, k);
       if (stretch > smax) smax = stretch;
     }
   }
@@ -1237,7 +1262,7 @@ BRECCIA_HD void general_force_row(const PdViewT<Real>& p, int64_t i, int64_t cou
   }
   for (int64_t q = 0; q < count; ++q) {
     const int64_t k = at(q);
-    if (kDiagnostics) total_vol += p.vol_own[k];
+    if (kDiagnostics) total_vol += own_volume(p, k);
     uint8_t st = p.state[k];
     if (!st) continue;
     const uint8_t state_before = st;
@@ -1284,7 +1309,7 @@ BRECCIA_HD void general_force_row(const PdViewT<Real>& p, int64_t i, int64_t cou
         broke(k);
       }
     }
-    if (kDiagnostics && (st & kOwnIntact)) intact_vol += keep * p.vol_own[k];
+    if (kDiagnostics && (st & kOwnIntact)) intact_vol += keep * own_volume(p, k);
     // The halves that push this pass: those intact now, or with break_after_force those
     // intact when it began (the energy of the ones that broke is in `released`).
     const uint8_t active = p.break_after_force ? state_before : st;

@@ -1,6 +1,7 @@
 #pragma once
 // Peridynamic physics written once, as plain functions on plain data, callable from the
 // OpenMP loops and from CUDA kernels (BRECCIA_HD). Derivations: docs/theory.md.
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <type_traits>
@@ -62,6 +63,28 @@ inline double partial_volume_half_diagonal(double half_cell, int dimension) {
 // lattice at m = 3, all of them dropped by the keep test); the Lammps rule needs no pad.
 inline double partial_volume_reach(double half_cell, int dimension) {
   return partial_volume_half_diagonal(half_cell, dimension) * (static_cast<double>(kPartialVolumeSamples - 1) / kPartialVolumeSamples) * (1.0 + 1e-6);
+}
+// count / total for every count 0 .. total (the sampled partial volume's fractions), built
+// once per dimension: the same division as the set-up's own table, so the same bits. A table
+// read, not a division per entry, where the loops form the own halves' volumes (below).
+inline const double* partial_volume_sample_fractions(int dimension) {
+  static const std::array<std::array<double, partial_volume_sample_total(3) + 1>, 2> table = [] {
+    std::array<std::array<double, partial_volume_sample_total(3) + 1>, 2> t{};
+    for (int d : {2, 3}) {
+      const double total = partial_volume_sample_total(d);
+      for (int q = 0; q <= partial_volume_sample_total(d); ++q) t[d == 3][q] = static_cast<double>(q) / total;
+    }
+    return t;
+  }();
+  return table[dimension == 3].data();
+}
+// The own half's volume beta V_j of an entry whose partial volume was counted (model.
+// partial_volume: sampled): fraction[count] times the partner's volume, the set-up's
+// expression (`fraction`: partial_volume_sample_fractions, or a device copy of it), so that
+// every place that forms it from the count (PdSystem::own_volume, pd_kernels.hpp own_volume)
+// has the bits the 8 B array of these volumes held.
+BRECCIA_HD double counted_own_volume(uint8_t count, const double* fraction, double volume_j) {
+  return fraction[count] * volume_j;
 }
 // Host only (solver/src/partial_volume.cpp): the set-up runs it once per candidate entry.
 int partial_volume_samples_inside(const double xi[3], double horizon, double half_cell_j, int dimension);

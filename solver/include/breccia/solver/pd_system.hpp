@@ -30,12 +30,18 @@ struct PressureFacet {  // a boundary facet carrying pressure or traction
   double normal[3];     // outward unit normal
 };
 
-// The bond arrays' bytes per entry: neighbor (int32), xi_len, k_own, vol_own (doubles), s0_own
-// (a float), state (a byte), and the dual halves k_dual and s0_dual (a double, a float) unless
-// set-up shares them (PdSystem::dual_halves_shared). Softening's two floats are not counted.
-constexpr size_t bond_entry_bytes(bool dual_halves_shared) {
-  return sizeof(int32_t) + 3 * sizeof(double) + sizeof(float) + 1 + (dual_halves_shared ? 0 : sizeof(double) + sizeof(float));
+// The bond arrays' bytes per entry: neighbor (int32), xi_len, k_own (doubles), the own halves'
+// volumes (own_count, a byte, where the partial volumes were counted: model.partial_volume
+// sampled; else vol_own, a double), s0_own (a float), state (a byte), and the dual halves
+// k_dual and s0_dual (a double, a float) unless set-up shares them (PdSystem::
+// dual_halves_shared). Softening's two floats are not counted.
+constexpr size_t bond_entry_bytes(bool dual_halves_shared, bool own_volumes_counted) {
+  return sizeof(int32_t) + 2 * sizeof(double) + (own_volumes_counted ? sizeof(uint8_t) : sizeof(double)) + sizeof(float) +
+         1 + (dual_halves_shared ? 0 : sizeof(double) + sizeof(float));
 }
+// Are the own halves' volumes kept as sample counts (PdSystem::own_count)? Where the partial
+// volume is the sampled one (the default): beta = count / total then, for every entry.
+inline bool own_volumes_counted(const CaseConfig& c) { return c.partial_volume == PartialVolume::Sampled; }
 
 // An LPS-type model (correspondence shares LPS's bond data) with fracture in 2D scales each end's
 // critical stretch by its own factor, so an entry's two halves differ even with one horizon and
@@ -72,7 +78,16 @@ struct PdSystem {
   // bonds (CSR over full families)
   std::vector<int64_t> offsets;
   std::vector<int32_t> neighbor;
-  std::vector<double> xi_len, k_own, k_dual, vol_own;
+  std::vector<double> xi_len, k_own, k_dual;
+  // The own halves' volumes beta_own V_j (damage weights, family volumes): read them through
+  // own_volume / own_half_exists (and PdView's, pd_kernels.hpp), never the arrays directly.
+  // Where set-up counted the partial volumes (own_volumes_counted: model.partial_volume
+  // sampled) own_count holds each entry's own sample count (at most 216, a byte) and vol_own
+  // stays empty: the volume is formed where read, count / total x V_j (counted_own_volume,
+  // pd_physics.hpp), the set-up's expression, the same bits; 7 B per entry fewer. With the
+  // analytic partial volume (lammps) vol_own holds them and own_count stays empty.
+  std::vector<double> vol_own;
+  std::vector<uint8_t> own_count;
   std::vector<float> s0_own, s0_dual;
   std::vector<uint8_t> state;
   // Where every entry's dual half equals its own half bit for bit (one horizon and equal
@@ -88,8 +103,17 @@ struct PdSystem {
   // The float copy's dual moduli (model.precision: float32; float32_state.hpp), the same way.
   const std::vector<float>& f32_k_dual_halves() const { return dual_halves_shared ? f32.k_own : f32.k_dual; }
   // The bond arrays' bytes per entry (summary.json's bytes_per_particle; softening's two
-  // arrays not counted): neighbor, xi_len, k_own, vol_own, s0_own, state, and the dual halves.
-  size_t bytes_per_bond_entry() const { return bond_entry_bytes(dual_halves_shared); }
+  // arrays not counted): neighbor, xi_len, k_own, own_count or vol_own, s0_own, state, and the
+  // dual halves.
+  size_t bytes_per_bond_entry() const { return bond_entry_bytes(dual_halves_shared, own_volumes_counted(config)); }
+  // The fraction of each count in own_count, count / total (pd_physics.hpp).
+  const double* own_count_fractions() const { return partial_volume_sample_fractions(dimension); }
+  // Entry k's own half's volume beta_own V_j (vol_own's note): stored, or formed from its count.
+  double own_volume(int64_t k) const {
+    return own_count.empty() ? vol_own[k] : counted_own_volume(own_count[k], own_count_fractions(), volume[neighbor[k]]);
+  }
+  // Entry k's own half exists (beta_own > 0): its count is nonzero, or its stored volume positive.
+  bool own_half_exists(int64_t k) const { return own_count.empty() ? vol_own[k] > 0.0 : own_count[k] != 0; }
   // model.compressive_enhancement: each particle's smallest bond stretch at the last force
   // pass and the one being written (pd_kernels.hpp, stretch_shift); empty without it.
   std::vector<float> min_stretch, min_stretch_next;

@@ -45,7 +45,7 @@ PdSystem restrict_to_rank(const PdSystem& global, const RankLayout& layout);
 // restrict_to_rank for a distributed set-up's global system (distributed_setup.hpp), whose
 // only rows are this rank's: the per-entry coefficients move from it into the rank's system
 // instead of being copied (the peak of set-up memory); what rank 0's results writer reads of
-// the bond list (partners, vol_own, k_dual) is copied where it gathers them
+// the bond list (partners, own_count or vol_own, k_dual) is copied where it gathers them
 // (root_gathers_bond_list: serial HDF5 with results written). Any other system: restrict_to_rank.
 PdSystem restrict_to_rank_taking_bonds(PdSystem& global, const RankLayout& layout);
 

@@ -29,6 +29,7 @@ struct SellEntriesT {
   const Real* k_dual = nullptr;
   const float* s0_dual = nullptr;
   const Real* vol_own = nullptr;
+  const uint8_t* own_count = nullptr;  // the damage weights as own counts (pd_kernels.hpp own_volume)
 };
 
 // `p` with its per-entry arrays replaced by the layout's; the arrays the layout's passes never
@@ -42,6 +43,7 @@ BRECCIA_HD PdViewT<Real> sell_entry_view(PdViewT<Real> p, const SellEntriesT<Rea
   p.k_own = e.k_own;
   p.k_dual = e.k_dual;
   p.vol_own = e.vol_own;
+  p.own_count = e.own_count;
   p.s0_own = e.s0_own;
   p.s0_dual = e.s0_dual;
   p.state = e.state;
@@ -64,12 +66,13 @@ BRECCIA_HD bool sell_fast_pass(const PdViewT<Real>& p) {
 // general_force_loop (variable horizons), with brittle bonds (a softening entry's damage and
 // onset are per-entry state the layout does not hold); gathered bond vectors for LPS's first
 // pass; the layout's dual halves (gathered where the set-up found variable horizons).
-// Diagnostic passes too where the layout holds the damage weights (`e.vol_own`). The
+// Diagnostic passes too where the layout holds the damage weights (`e.vol_own`, or the own
+// counts `e.own_count` with which own_volume forms them from the lane's neighbour). The
 // compressive enhancement's s_min is per particle, so it runs here too.
 template <class Real>
 BRECCIA_HD bool sell_general_pass(const PdViewT<Real>& p, const SellEntriesT<Real>& e) {
   if (p.bond_damage || !has_bond_vectors(p) || !takes_general_loop(p) || !e.k_dual || !e.s0_dual) return false;
-  if (p.diagnostics && !e.vol_own) return false;
+  if (p.diagnostics && !e.vol_own && !e.own_count) return false;
   return p.model == static_cast<int>(PdModel::PMB) || p.model == static_cast<int>(PdModel::LPS);
 }
 

@@ -84,7 +84,8 @@ struct SellLayout {
 // The per-entry arrays of the layout's passes (sell_kernels.hpp SellEntriesT) in the layout's
 // order, from the CSR's; padding: the lane's particle as neighbour, length 1, moduli and
 // critical stretches 0, state 0 (broken: a loop that reads it adds +0). The dual halves and
-// the damage weights vol_own only where given (variable horizons; empty otherwise).
+// the damage weights (vol_own, or the own counts own_count where the system holds those:
+// pd_system.hpp; padding 0) only where given (variable horizons; empty otherwise).
 template <class Real>
 struct SellBondArrays {
   std::vector<int32_t> neighbor;
@@ -94,13 +95,15 @@ struct SellBondArrays {
   std::vector<Real> k_dual;
   std::vector<float> s0_dual;
   std::vector<Real> vol_own;
+  std::vector<uint8_t> own_count;
 };
 template <class Real>
 SellBondArrays<Real> gather_sell_bonds(const SellLayout& layout, const std::vector<int32_t>& neighbor,
                                        const std::vector<Real>& xi_len, const std::vector<Real>& k_own,
                                        const std::vector<float>& s0_own, const std::vector<uint8_t>& state,
                                        const std::vector<Real>& k_dual = {}, const std::vector<float>& s0_dual = {},
-                                       const std::vector<Real>& vol_own = {}) {
+                                       const std::vector<Real>& vol_own = {},
+                                       const std::vector<uint8_t>& own_count = {}) {
   return {layout.gather_neighbors(neighbor),
           layout.gather(xi_len, Real(1)),
           layout.gather(k_own, Real(0)),
@@ -108,7 +111,8 @@ SellBondArrays<Real> gather_sell_bonds(const SellLayout& layout, const std::vect
           layout.gather(state, uint8_t{0}),
           k_dual.empty() ? std::vector<Real>{} : layout.gather(k_dual, Real(0)),
           s0_dual.empty() ? std::vector<float>{} : layout.gather(s0_dual, 0.0f),
-          vol_own.empty() ? std::vector<Real>{} : layout.gather(vol_own, Real(0))};
+          vol_own.empty() ? std::vector<Real>{} : layout.gather(vol_own, Real(0)),
+          own_count.empty() ? std::vector<uint8_t>{} : layout.gather(own_count, uint8_t{0})};
 }
 
 // Builds SELL-C-sigma from CSR row offsets (n + 1 values). `chunk` >= 1; `sigma` 1 (no

@@ -130,8 +130,10 @@ long long lattice_bond_count(const std::array<long long, 3>& particles_per_axis,
 // Bytes the PdSystem holds per particle and per bond entry (pd_system.hpp, as allocated).
 double bytes_per_particle(int dimension, solver::PdModel model);
 // softening: + s_onset, bond_damage; shared_dual_halves: without k_dual, s0_dual (set-up shares
-// them with the own halves where they are equal: PdSystem::dual_halves_shared).
-double bytes_per_bond(bool softening = false, bool shared_dual_halves = false);
+// them with the own halves where they are equal: PdSystem::dual_halves_shared);
+// own_volumes_counted: the own halves' volumes as a sample count (a byte) instead of a double
+// (model.partial_volume: sampled, the default; PdSystem::own_count).
+double bytes_per_bond(bool softening = false, bool shared_dual_halves = false, bool own_volumes_counted = true);
 
 // ---- atlas ------------------------------------------------------------------------------
 

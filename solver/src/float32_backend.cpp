@@ -100,12 +100,9 @@ PdViewT<float> float32_view(PdSystem& s) {
   p.offsets = s.offsets.data(); p.neighbor = s.neighbor.data(); p.xi_len = f.xi_len.data();
   // Shared dual halves (pd_system.hpp k_dual_halves): no float copy either, the own ones serve.
   p.k_own = f.k_own.data(); p.k_dual = s.f32_k_dual_halves().data();
-  // The own halves' volumes (pd_kernels.hpp own_volume): from the counts and the double
-  // volumes, rounded to float once as convert() rounded the double array; else the float copy.
-  p.vol_own = s.own_count.empty() ? f.vol_own.data() : nullptr;
-  p.own_count = s.own_count.empty() ? nullptr : s.own_count.data();
-  p.volume_exact = s.volume.data();
-  p.sample_fraction = s.own_count_fractions();
+  // The own halves' volumes: from the counts and the double volumes, rounded to float once as
+  // convert() rounded the double array; else the float copy.
+  s.point_at_own_volumes(p, f.vol_own.data());
   p.s0_own = s.s0_own.data(); p.s0_dual = s.s0_dual_halves().data(); p.state = s.state.data();
   if (!s.min_stretch.empty() && s.n) {  // shared with the double view: float in both
     p.alpha = static_cast<float>(s.config.compressive_enhancement);

@@ -535,11 +535,7 @@ PdView PdSystem::view() {
   p.volume = volume.data(); p.density = density.data(); p.fixed_dof = fixed_dof.data();
   p.offsets = offsets.data(); p.neighbor = neighbor.data(); p.xi_len = xi_len.data();
   p.k_own = k_own.data(); p.k_dual = k_dual_halves().data();
-  // The own halves' volumes (pd_kernels.hpp own_volume): the counts where held, else vol_own.
-  p.vol_own = own_count.empty() ? vol_own.data() : nullptr;
-  p.own_count = own_count.empty() ? nullptr : own_count.data();
-  p.volume_exact = volume.data();
-  p.sample_fraction = own_count_fractions();
+  point_at_own_volumes(p, vol_own.data());
   p.s0_own = s0_own.data(); p.s0_dual = s0_dual_halves().data(); p.state = state.data();
   if (!min_stretch.empty() && n) {
     p.alpha = static_cast<float>(config.compressive_enhancement);

@@ -112,6 +112,16 @@ struct PdSystem {
   double own_volume(int64_t k) const {
     return own_count.empty() ? vol_own[k] : counted_own_volume(own_count[k], own_count_fractions(), volume[neighbor[k]]);
   }
+  // Points a host view (double, or the float copy's with `stored` its float vol_own) at the own
+  // halves' volumes (pd_kernels.hpp own_volume): the counts where held, vol_own then null; else
+  // the stored volumes. Both host views take it, so they cannot disagree on which one serves.
+  template <class Real>
+  void point_at_own_volumes(PdViewT<Real>& p, const Real* stored) const {
+    p.vol_own = own_count.empty() ? stored : nullptr;
+    p.own_count = own_count.empty() ? nullptr : own_count.data();
+    p.volume_exact = volume.data();
+    p.sample_fraction = own_count_fractions();
+  }
   // Entry k's own half exists (beta_own > 0): its count is nonzero, or its stored volume positive.
   bool own_half_exists(int64_t k) const { return own_count.empty() ? vol_own[k] > 0.0 : own_count[k] != 0; }
   // model.compressive_enhancement: each particle's smallest bond stretch at the last force

@@ -14,6 +14,7 @@
 #include "helpers.hpp"
 #include "../common/cli_contract.hpp"
 #include "breccia/common/particle_file.hpp"
+#include "atlas.hpp"
 
 #include <sstream>
 
@@ -124,6 +125,21 @@ TEST(AtlasCli, FollowsTheToolsCommandLineContract) {
   EXPECT_FALSE(std::filesystem::exists(dir + "/atlas.csv"));
 }
 #endif
+
+// The atlas's tables record each run's message; the sweeps name their work folder by its
+// absolute path, and a committed table must not carry the path of the machine that made it.
+// So every occurrence of the working folder's prefix is cut, a path elsewhere is kept, and
+// the message stays one CSV field (its commas and line breaks replaced).
+TEST(AtlasTables, RunMessageLosesTheWorkingFolderPrefixAndStaysOneCsvField) {
+  const std::string here = std::filesystem::current_path().string() + "/";
+  const std::string message = "breccia-mesh failed on " + here + "atlas_work/a.msh, see\n" +
+                              here + "atlas_work/a.log; /elsewhere/b.log kept";
+  EXPECT_EQ(breccia::atlas::message_field(message),
+            "breccia-mesh failed on atlas_work/a.msh; see atlas_work/a.log; /elsewhere/b.log kept");
+  EXPECT_EQ(breccia::atlas::message_field("line one\nline two, \"quoted\""),
+            "line one line two;  quoted ");
+  EXPECT_EQ(breccia::atlas::message_field(""), "");
+}
 
 // --set KEY=VALUE overrides a value of the case file for this run (the variants of a case
 // without editing it): the step count, a material's modulus, an initial velocity (its

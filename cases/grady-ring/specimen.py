@@ -11,19 +11,12 @@ Lengths in metres.
 import argparse
 import math
 import os
+import sys
 
-import h5py
 import numpy as np
 
-
-def fnv1a64(*arrays):
-    """content_id of common/src/particle_file.cpp: FNV-1a 64 over the raw bytes."""
-    h = 1469598103934665603
-    for a in arrays:
-        for byte in np.ascontiguousarray(a).tobytes():
-            h ^= byte
-            h = (h * 1099511628211) & 0xFFFFFFFFFFFFFFFF
-    return f"{h:016x}"
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from case_specimen import write_particles  # noqa: E402  (cases/case_specimen.py)
 
 
 def main():
@@ -50,23 +43,8 @@ def main():
         spacing.append(np.full(n_theta, math.sqrt(area)))
     pos, vol, spacing = np.vstack(pos), np.concatenate(vol), np.concatenate(spacing)
     n = len(vol)
-    tmp = a.out + ".partial"
-    with h5py.File(tmp, "w") as f:
-        f.attrs["format"] = np.bytes_("breccia-particles")
-        f.attrs["format_version"] = np.int64(1)
-        f.attrs["dimension"] = np.int64(2)
-        f.attrs["thickness_m"] = float(a.thickness)
-        f.attrs["units"] = np.bytes_("SI (m, m3, kg, s)")
-        f.attrs["source"] = np.bytes_(f"polar ring R {a.radius} m, width {a.width} m, {nw} x {n_theta} particles")
-        f.attrs["content_id"] = np.bytes_(fnv1a64(pos, vol))
-        f["particles/position"] = pos
-        f["particles/volume"] = vol
-        f["particles/spacing"] = spacing
-        f["particles/material_id"] = np.zeros(n, dtype=np.int32)
-        f.create_dataset("materials/names", data=[b"default"], dtype=h5py.string_dtype(encoding="ascii"))
-        f.create_group("sets")
-        f.create_group("surfaces")
-    os.replace(tmp, a.out)
+    source = f"polar ring R {a.radius} m, width {a.width} m, {nw} x {n_theta} particles"
+    write_particles(a.out, pos, vol, spacing, 2, a.thickness, source)
     print(f"{a.out}: {n} particles ({nw} circles x {n_theta}), arc spacing {2 * math.pi * a.radius / n_theta:.3e} m")
 
 

@@ -10,19 +10,13 @@ pushes the wall outwards with the exact total force p * 2 pi r * t. Lengths in m
 """
 import argparse
 import math
+import os
+import sys
 
-import h5py
 import numpy as np
 
-
-def fnv1a64(*arrays):
-    """content_id of common/src/particle_file.cpp: FNV-1a 64 over the raw bytes."""
-    h = 1469598103934665603
-    for a in arrays:
-        for byte in np.ascontiguousarray(a).tobytes():
-            h ^= byte
-            h = (h * 1099511628211) & 0xFFFFFFFFFFFFFFFF
-    return f"{h:016x}"
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from case_specimen import write_particles  # noqa: E402  (cases/case_specimen.py)
 
 
 def annulus(outer, inner, dx):
@@ -40,29 +34,7 @@ def write(path, xy, dx, thickness, sets, surfaces, source, dimension=2):
     pos = np.zeros((n, 3))
     pos[:, : xy.shape[1]] = xy
     vol = np.full(n, dx * dx * (thickness if dimension == 2 else dx))
-    with h5py.File(path + ".partial", "w") as f:
-        f.attrs["format"] = np.bytes_("breccia-particles")
-        f.attrs["format_version"] = np.int64(1)
-        f.attrs["dimension"] = np.int64(dimension)
-        f.attrs["thickness_m"] = float(thickness)
-        f.attrs["units"] = np.bytes_("SI (m, m3, kg, s)")
-        f.attrs["source"] = np.bytes_(source)
-        f.attrs["content_id"] = np.bytes_(fnv1a64(pos, vol))
-        f["particles/position"] = pos
-        f["particles/volume"] = vol
-        f["particles/spacing"] = np.full(n, dx)
-        f["particles/material_id"] = np.zeros(n, dtype=np.int32)
-        f.create_dataset("materials/names", data=[b"default"], dtype=h5py.string_dtype(encoding="ascii"))
-        f.create_group("sets")
-        for name, idx in sets.items():
-            f["sets"][name] = np.asarray(idx, dtype=np.int64)
-        f.create_group("surfaces")
-        for name, s in surfaces.items():
-            g = f["surfaces"].create_group(name)
-            for key in ("area", "normal", "centroid", "particle"):
-                g[key] = s[key]
-    import os
-    os.replace(path + ".partial", path)
+    write_particles(path, pos, vol, np.full(n, dx), dimension, thickness, source, sets, surfaces)
 
 
 def main():

@@ -29,15 +29,22 @@ double uniaxial_strain_sigma_xx(double eps, double hardening) {
   return kBulk * eps + 2.0 / 3.0 * (kYield + hardening * gamma);
 }
 
-SymTensor run_uniaxial_strain(const VonMisesHardening& m, double eps_end, int increments, double& eq_plastic) {
-  SymTensor stress;
-  eq_plastic = 0.0;
+// Strain eps_xx changed by `change` in equal increments from the given state (stress and
+// equivalent plastic strain), each a Hooke trial and a radial return.
+void strain_uniaxially(const VonMisesHardening& m, SymTensor& stress, double change, int increments,
+                       double& eq_plastic) {
   for (int k = 0; k < increments; ++k) {
     SymTensor d;
-    d.xx = eps_end / increments;
+    d.xx = change / increments;
     add_hooke_increment(stress, d, kLambda, kShear);
     radial_return(m, stress, eq_plastic);
   }
+}
+
+SymTensor run_uniaxial_strain(const VonMisesHardening& m, double eps_end, int increments, double& eq_plastic) {
+  SymTensor stress;
+  eq_plastic = 0.0;
+  strain_uniaxially(m, stress, eps_end, increments, eq_plastic);
   return stress;
 }
 
@@ -82,12 +89,7 @@ TEST(MpsReturnMapping, PartialUnloadingIsElasticAndFollowsTheElasticSlope) {
   double eq_plastic = 0.0;
   SymTensor s = run_uniaxial_strain(m, eps_max, 100, eq_plastic);
   const double plastic_after_loading = eq_plastic;
-  for (int k = 0; k < 100; ++k) {
-    SymTensor d;
-    d.xx = -eps_back / 100;
-    add_hooke_increment(s, d, kLambda, kShear);
-    radial_return(m, s, eq_plastic);
-  }
+  strain_uniaxially(m, s, -eps_back, 100, eq_plastic);
   EXPECT_EQ(eq_plastic, plastic_after_loading);  // no plastic flow on unloading
   const double expected = uniaxial_strain_sigma_xx(eps_max, hardening) - (kLambda + 2.0 * kShear) * eps_back;
   EXPECT_NEAR(s.xx, expected, 1e-9 * kYield);  // rounding only
@@ -102,12 +104,7 @@ TEST(MpsReturnMapping, FullUnloadingYieldsInReverseAtTheHardenedYieldStress) {
   double eq_plastic = 0.0;
   SymTensor s = run_uniaxial_strain(m, eps_max, 100, eq_plastic);
   const double after_loading = eq_plastic;
-  for (int k = 0; k < 100; ++k) {
-    SymTensor d;
-    d.xx = -eps_max / 100;
-    add_hooke_increment(s, d, kLambda, kShear);
-    radial_return(m, s, eq_plastic);
-  }
+  strain_uniaxially(m, s, -eps_max, 100, eq_plastic);
   EXPECT_GT(eq_plastic, after_loading);
   EXPECT_LT(s.xx - s.yy, 0.0);  // compressive deviator after reverse yield
   EXPECT_NEAR(von_mises_stress(s), m.yield_stress_at(eq_plastic), 1e-9 * kYield);  // rounding only

@@ -8,6 +8,7 @@
 
 #include "breccia/solver/calibration.hpp"
 #include "helpers.hpp"
+#include "measures.hpp"  // tools/atlas: the energy to break the bonds crossing a plane
 
 using namespace breccia::solver;
 using namespace breccia::solver::testing;
@@ -159,37 +160,12 @@ double fracture_energy_ratio(int dimension, const char* planar, const char* mode
        ", fracture_energy: " + std::to_string(G0) + strength + "}\ntime: {steps: 1}\n";
   PdSystem s = system_from_yaml(std::string("gc_") + model + std::to_string(dimension) + planar + influence, y);
   if (!strength.empty() && s.bond_damage.empty()) return 0.0;  // not softening: fail the caller's check
-  const double window = 2 * dx;
-  double energy = 0.0;
-  for (size_t i = 0; i < s.n; ++i)
-    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
-      const int32_t j = s.neighbor[k];
-      const double xi = s.x0[3 * i], xj = s.x0[3 * j];
-      if (!(xi < 0 && xj > 0)) continue;
-      // Crossing point of the bond with the plane x = 0.
-      const double t = -xi / (xj - xi);
-      const double yc = s.x0[3 * i + 1] + t * (s.x0[3 * j + 1] - s.x0[3 * i + 1]);
-      const double zc = s.x0[3 * i + 2] + t * (s.x0[3 * j + 2] - s.x0[3 * i + 2]);
-      // Half-open window: crossing points repeat with the lattice period, so a window of two
-      // periods counts each kind of crossing exactly twice.
-      if (yc < -window / 2 || yc >= window / 2 || (dimension == 3 && (zc < -window / 2 || zc >= window / 2))) continue;
-      // Both entries of the pair (i->j here, j->i from j's list) each hold their part.
-      // s^2 of the energy at breaking: s0^2 brittle, s_t s_u softening.
-      const double s2 = s.bond_damage.empty() ? double(s.s0_own[k]) * s.s0_own[k] : double(s.s_onset[k]) * s.s0_own[k];
-      double pair_energy_from_i;
-      if (std::string(model) == "pmb") {
-        pair_energy_from_i = s.volume[i] * pmb_energy_density(s.k_own[k], s.k_dual_halves()[k], 3, 1.0, s.xi_len[k]) * s2;
-      } else {
-        // LPS deviatoric pair energy at the critical extension with theta = 0.
-        pair_energy_from_i = 0.5 * s.lps[i].shear_term / s.weighted_volume[i] * s.k_own[k] * s2 * s.xi_len[k] *
-                             s.xi_len[k] * s.volume[j] * s.volume[i];
-      }
-      energy += 2.0 * pair_energy_from_i;  // the j->i entry holds the same amount
-    }
-  const double area = dimension == 3 ? window * window : window * s.thickness;
+  // Two lattice periods: crossing points repeat with the lattice period, so the window counts
+  // each kind of crossing exactly twice.
+  const double ratio = breccia::atlas::crossing_fracture_energy_ratio(s, 2 * dx, 0.0, G0);
   std::printf("fracture energy / G0, %s %dD %s m = %g%s: %.4f\n", model, dimension, planar, m, strength.c_str(),
-              energy / area / G0);
-  return energy / area / G0;
+              ratio);
+  return ratio;
 }
 
 }  // namespace

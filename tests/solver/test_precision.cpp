@@ -58,12 +58,14 @@ time: {steps: 1}
 }
 
 TEST(Precision, Float32RunsReallyHoldTheStateInFloat) {
-  PdSystem s = system_in("active", R"(
+  // A 4 mm square plate, run in float and, for the reference force, in double.
+  const char* plate = R"(
 specimen: {lattice: {dimension: 2, box: [0, 0, 0.004, 0.004], spacing: 1 mm, thickness: 1 mm}}
 model: {type: pmb, planar: plane_stress}
 materials: [{name: m, density: 1000, youngs_modulus: 10 GPa, poisson_ratio: 0.3333333333333333}]
 time: {steps: 1}
-)", "float32");
+)";
+  PdSystem s = system_in("active", plate, "float32");
   ASSERT_TRUE(s.f32.active);
   EXPECT_EQ(s.f32.u.size(), 3 * s.n);
   EXPECT_EQ(s.f32.k_own.size(), s.bond_count());
@@ -73,12 +75,7 @@ time: {steps: 1}
   cpu_compute_forces(s);
   double f64 = 0.0;
   {
-    PdSystem d = system_in("active", R"(
-specimen: {lattice: {dimension: 2, box: [0, 0, 0.004, 0.004], spacing: 1 mm, thickness: 1 mm}}
-model: {type: pmb, planar: plane_stress}
-materials: [{name: m, density: 1000, youngs_modulus: 10 GPa, poisson_ratio: 0.3333333333333333}]
-time: {steps: 1}
-)", "float64");
+    PdSystem d = system_in("active", plate, "float64");
     d.u[0] = 1e-12;
     cpu_compute_forces(d);
     f64 = d.force[0];

@@ -216,8 +216,7 @@ std::string block3d() {
          "time: {steps: 1}\n";
 }
 
-std::string plate(const char* model) {
-  if (std::string(model) == "lps") return block3d();
+std::string plate_2d(const char* model) {
   return std::string("specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.01], spacing: 0.5 mm, thickness: 1 mm}}\n") +
          "model: {type: " + model + ", planar: plane_strain, horizon_factor: 3.015}\n"
          "materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.25, fracture_energy: 3.8, "
@@ -230,20 +229,14 @@ std::string plate(const char* model) {
          "time: {steps: 1}\n";
 }
 
+std::string plate(const char* model) {
+  if (std::string(model) == "lps") return block3d();
+  return plate_2d(model);
+}
+
 // The dual-horizon cases. 2D LPS with fracture: each complete family's s0 is rescaled
 // (setup.cpp), so the halves of an entry differ and force_kernel takes the general loop.
-std::string lps_plate_2d() {
-  return "specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.01], spacing: 0.5 mm, thickness: 1 mm}}\n"
-         "model: {type: lps, planar: plane_strain, horizon_factor: 3.015}\n"
-         "materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.25, fracture_energy: 3.8, "
-         "weibull: {modulus: 5, seed: 3}}]\n"
-         "precracks: [{type: segment, from: [0, 0.005], to: [0.008, 0.005]}]\n"
-         "loads:\n"
-         "  - {type: traction, surface: ymax, value: [0, 12 MPa, 0], history: {type: ramp, value: 1, ramp_time: 20 us}}\n"
-         "boundary:\n"
-         "  - {type: fixed, set: ymin}\n"
-         "time: {steps: 1}\n";
-}
+std::string lps_plate_2d() { return plate_2d("lps"); }
 // A graded strip (spacing 0.5 mm, then 1 mm beyond the middle) with variable horizons, its ends
 // pulled apart: the dual horizon proper (own and dual halves of different horizons).
 std::string graded_pmb_strip(const std::string& extra_model_keys) {

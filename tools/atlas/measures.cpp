@@ -172,4 +172,43 @@ std::string softening_bar_case_text(int dimension, double grip_depth_m, double p
          "time: {end: 300 us}\n";
 }
 
+double crossing_fracture_energy_ratio(const solver::PdSystem& s, double window, double shift, double g0) {
+  const bool lps = s.config.model == solver::PdModel::LPS;
+  const bool softening = !s.bond_damage.empty();
+  const bool planar = s.dimension == 2;
+  double energy = 0.0;
+  for (size_t i = 0; i < s.n; ++i)
+    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
+      const int32_t j = s.neighbor[k];
+      const double xi = s.x0[3 * i], xj = s.x0[3 * j];
+      if (!(xi < 0 && xj > 0)) continue;
+      // Crossing point of the bond with the plane x = 0.
+      const double t = -xi / (xj - xi);
+      const double yc = s.x0[3 * i + 1] + t * (s.x0[3 * j + 1] - s.x0[3 * i + 1]);
+      const double zc = s.x0[3 * i + 2] + t * (s.x0[3 * j + 2] - s.x0[3 * i + 2]);
+      // Half-open window: on a lattice the crossing points repeat with the lattice period,
+      // so a window of whole periods counts each kind of crossing equally often.
+      const double y = yc - shift * window, z = zc - shift * window;
+      if (y < -window / 2 || y >= window / 2 || (!planar && (z < -window / 2 || z >= window / 2))) continue;
+      // s_t s_u of a softening entry's work to break (SofteningLaw.* checks that integral).
+      const double st_su = softening ? double(s.s_onset[k]) * s.s0_own[k] : 0.0;
+      double pair_energy_from_i;
+      if (!lps) {
+        const double k_own = s.k_own[k], k_dual = s.k_dual_halves()[k], len = s.xi_len[k];
+        pair_energy_from_i = softening ? s.volume[i] * solver::pmb_energy_density(k_own, k_dual, 3, 1.0, len) * st_su
+                                       : s.volume[i] * solver::pmb_energy_density(k_own, k_dual, 3, s.s0_own[k], len);
+      } else if (softening) {  // LPS deviatoric pair energy at the critical extension, theta = 0
+        pair_energy_from_i = 0.5 * s.lps[i].shear_term / s.weighted_volume[i] * s.k_own[k] * st_su * s.xi_len[k] *
+                             s.xi_len[k] * s.volume[j] * s.volume[i];
+      } else {
+        const double e = s.s0_own[k] * s.xi_len[k];
+        pair_energy_from_i =
+            0.5 * s.lps[i].shear_term / s.weighted_volume[i] * s.k_own[k] * e * e * s.volume[j] * s.volume[i];
+      }
+      energy += 2.0 * pair_energy_from_i;  // the j -> i entry holds the same amount
+    }
+  const double area = planar ? window * s.thickness : window * window;
+  return energy / area / g0;
+}
+
 }  // namespace breccia::atlas

@@ -54,6 +54,15 @@ struct SofteningBar {
 std::string softening_bar_case_text(int dimension, double grip_depth_m, double poisson_ratio,
                                     const std::string& tensile_strength);
 
+// Work to break every bond crossing the plane x = 0, per unit area of the plane, over g0: the
+// bonds whose crossing point lies in a half-open window of the plane, |y| and |z| below
+// window / 2 after a shift of shift x window (2D: |y| only, the area window x thickness;
+// a shift off the lattice's symmetry planes keeps crossing points off the window's edges).
+// Both entries of a pair hold their part. A brittle bond's work is its energy at s0, a
+// softening bond's U s_t s_u along its law. The calibration test and the atlas's
+// fracture_energy rows share it.
+double crossing_fracture_energy_ratio(const solver::PdSystem& s, double window, double shift, double g0);
+
 // A right-going P pulse in uniaxial strain (the caller holds y) along a strip whose
 // resolution changes at x = interface_x: Gaussian u = A exp(-(x - x0)^2 / 2 w^2) moving
 // at c_p, run until its centre is four widths past the change. Returns the share of the

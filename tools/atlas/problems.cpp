@@ -155,36 +155,6 @@ double strain_energy_error(PdSystem& s, double interior_half) {
   return worst;
 }
 
-double fracture_energy_ratio(const PdSystem& s, double window, double G0) {
-  const bool lps = s.config.model == solver::PdModel::LPS;
-  double energy = 0.0;
-  for (size_t i = 0; i < s.n; ++i)
-    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
-      const int32_t j = s.neighbor[k];
-      const double xi = s.x0[3 * i], xj = s.x0[3 * j];
-      if (!(xi < 0 && xj > 0)) continue;
-      const double t = -xi / (xj - xi);
-      const double yc = s.x0[3 * i + 1] + t * (s.x0[3 * j + 1] - s.x0[3 * i + 1]);
-      const double zc = s.x0[3 * i + 2] + t * (s.x0[3 * j + 2] - s.x0[3 * i + 2]);
-      // Half-open window: on a lattice the crossing points repeat with the lattice period,
-      // so a window of whole periods counts each kind of crossing equally often.
-      // The window is shifted off the lattice's symmetry planes: crossing points that fall
-      // exactly on its edges would otherwise be counted or not by round-off.
-      const double y = yc - 0.1234567 * window, z = zc - 0.1234567 * window;
-      if (y < -window / 2 || y >= window / 2 || z < -window / 2 || z >= window / 2) continue;
-      double pair_energy_from_i;
-      if (!lps) {
-        pair_energy_from_i = s.volume[i] * solver::pmb_energy_density(s.k_own[k], s.k_dual_halves()[k], 3, s.s0_own[k], s.xi_len[k]);
-      } else {  // LPS deviatoric pair energy at the critical extension, theta = 0
-        const double e = s.s0_own[k] * s.xi_len[k];
-        pair_energy_from_i =
-            0.5 * s.lps[i].shear_term / s.weighted_volume[i] * s.k_own[k] * e * e * s.volume[j] * s.volume[i];
-      }
-      energy += 2.0 * pair_energy_from_i;  // the j -> i entry holds the same amount
-    }
-  return energy / (window * window) / G0;
-}
-
 }  // namespace
 
 void static_calibration(const SweepPlan& plan, SpecimenMaker& maker, const RowSink& sink) {
@@ -238,7 +208,9 @@ void static_calibration(const SweepPlan& plan, SpecimenMaker& maker, const RowSi
                              model.c_str(), kind.c_str(), m, dx);
                 return;
               }
-              const double ratio = fracture_energy_ratio(s, window, G0);
+              // The window shifted off the lattice's symmetry planes: crossing points that fall
+              // exactly on its edges would otherwise be counted or not by round-off.
+              const double ratio = crossing_fracture_energy_ratio(s, window, 0.1234567, G0);
               AtlasRow r = row_of("fracture_energy", st, s, plan.threads);
               r.wall_s = setup_s + seconds_since(t1);
               r.error = std::fabs(ratio - 1.0);

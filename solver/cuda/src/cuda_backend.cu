@@ -154,6 +154,60 @@ struct UnpackHalo {
 
 int g_device = 0;  // the device CudaSystems use (cuda_use_device)
 
+// The arrays the kernels stream, in one precision: PdSystem's (double) or its Float32State's
+// (float), which hold them under the same names and rules. Uploaded and pointed at alike.
+template <class Real>
+struct StreamedArrays {
+  DeviceArray<Real> x0, u, v, a, force, body, volume, density, weighted_volume, dilatation, lps_a, lps_b;
+  DeviceArray<Real> xi_len, k_own, k_dual, vol_own, short_range_k, spacing;
+  DeviceArray<Real> u_before;  // step scratch (3n)
+
+  // `held`: the particles held (the n stepped, then a distributed run's ghosts); `label`: the
+  // arrays' names' prefix in messages ("" or "float ").
+  template <class State>
+  void upload(const State& s, size_t n, size_t held, const std::string& label) {
+    auto name = [&](const char* what) { return label + what; };
+    x0.upload(s.x0, name("x0").c_str());
+    u.upload(s.u, name("u").c_str());
+    v.upload(s.v, name("v").c_str());
+    a.upload(s.a, name("a").c_str());
+    force.upload(s.force, name("force").c_str());
+    body.upload(s.body, name("body").c_str());
+    volume.upload(s.volume, name("volume").c_str());
+    density.upload(s.density, name("density").c_str());
+    weighted_volume.upload(s.weighted_volume, name("weighted_volume").c_str());
+    dilatation.upload(s.dilatation, name("dilatation").c_str());
+    // The fast LPS path's per-particle factors exist only where set-up allocated them.
+    if (s.lps_a.size() == held && s.lps_b.size() == held) {
+      lps_a.upload(s.lps_a, name("lps_a").c_str());
+      lps_b.upload(s.lps_b, name("lps_b").c_str());
+    }
+    xi_len.upload(s.xi_len, name("xi_len").c_str());
+    k_own.upload(s.k_own, name("k_own").c_str());
+    // k_dual: empty where the dual halves are shared (pd_system.hpp): none on the device;
+    // vol_own: empty where the own counts serve
+    k_dual.upload(s.k_dual, name("k_dual").c_str());
+    vol_own.upload(s.vol_own, name("vol_own").c_str());
+    if (!s.short_range_k.empty()) {
+      short_range_k.upload(s.short_range_k, name("short_range_k").c_str());
+      spacing.upload(s.spacing, name("spacing").c_str());
+    }
+    u_before.allocate(3 * n, name("u_before").c_str());
+  }
+
+  // The view's fields of these arrays: the own halves serve as the dual ones where they are
+  // shared; vol_own is null where the own counts serve (`counted`, pd_kernels.hpp own_volume).
+  void point(PdViewT<Real>& p, bool dual_shared, bool counted) const {
+    p.x0 = x0.get(); p.u = u.get(); p.v = v.get(); p.a = a.get(); p.force = force.get(); p.body = body.get();
+    p.volume = volume.get(); p.density = density.get(); p.xi_len = xi_len.get();
+    p.k_own = k_own.get(); p.k_dual = dual_shared ? p.k_own : k_dual.get();
+    p.vol_own = counted ? nullptr : vol_own.get();
+    p.short_range_k = short_range_k.get(); p.spacing = spacing.get();
+    p.weighted_volume = weighted_volume.get(); p.dilatation = dilatation.get();
+    p.lps_a = lps_a.get(); p.lps_b = lps_b.get();
+  }
+};
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
@@ -191,25 +245,24 @@ int cuda_use_device(int index) {
 int cuda_device_in_use() { return g_device; }
 
 struct CudaSystem::Impl {
+  // the arrays the kernels stream (double; float below)
+  StreamedArrays<double> doubles;
   // per particle
-  DeviceArray<double> x0, x, u, v, a, force, body, volume, density;
+  DeviceArray<double> x;
   DeviceArray<uint8_t> fixed_dof;
-  DeviceArray<double> energy_density, dissipated, damage, max_stretch, dilatation, weighted_volume, lps_a, lps_b;
+  DeviceArray<double> energy_density, dissipated, damage, max_stretch;
   DeviceArray<LpsCoefficients> lps;
   // bonds
   DeviceArray<int64_t> offsets;
   DeviceArray<int32_t> neighbor;
-  DeviceArray<double> xi_len, k_own, k_dual, vol_own;
   DeviceArray<float> s0_own, s0_dual;
   DeviceArray<uint8_t> state;
   DeviceArray<uint8_t> own_count;  // the own halves' sample counts, where vol_own is not held (pd_system.hpp)
   DeviceArray<double> sample_fraction;  // their fractions (pd_physics.hpp partial_volume_sample_fractions)
   // compressive enhancement: s_min read and written by a pass (swapped at each step's start,
-  // commit_min_stretch); short-range forces per particle (double and float copies)
+  // commit_min_stretch)
   DeviceArray<float> min_stretch, min_stretch_next;
   DeviceArray<float> s_onset, bond_damage;  // softening bonds (pd_kernels.hpp)
-  DeviceArray<double> short_range_k, spacing;
-  DeviceArray<float> fshort_range_k, fspacing;
   // model.cuda_layout: sell (sell_layout.hpp): the layout and, in its order, the per-entry
   // arrays of its passes (double and float copies of the lengths and moduli; the dual halves
   // and the damage weights with variable horizons only, whose diagnostic passes it carries)
@@ -218,8 +271,8 @@ struct CudaSystem::Impl {
   DeviceArray<double> sell_xi_len, sell_k_own, sell_k_dual, sell_vol_own;
   DeviceArray<float> sell_fxi_len, sell_fk_own, sell_fk_dual, sell_fvol_own, sell_s0_own, sell_s0_dual;
   DeviceArray<uint8_t> sell_state, sell_own_count;
-  // step scratch
-  DeviceArray<double> u_before, f_before;
+  // step scratch (u_before: the streamed arrays')
+  DeviceArray<double> f_before;
   // loads and constraints (index lists uploaded once)
   DeviceArray<int32_t> facet_particle, facet_load;
   DeviceArray<int64_t> facet_offsets;
@@ -245,8 +298,7 @@ struct CudaSystem::Impl {
   // the double arrays above keep what a float run keeps in double (loads, constraints'
   // ramps, diagnostics, every reduction) and receive u and v before a measure or download.
   bool f32 = false;
-  DeviceArray<float> fx0, fu, fv, fa, fforce, fbody, fvolume, fdensity, fweighted_volume, fdilatation, flps_a, flps_b;
-  DeviceArray<float> fxi_len, fk_own, fk_dual, fvol_own, fu_before;
+  StreamedArrays<float> floats;
   PdViewT<float> fview;
   // correspondence model: per-particle moduli (kCorrModuli), F and A_i (9 each), non-affine energy
   DeviceArray<double> corr_moduli, corr_deformation, corr_force_tensor, corr_nonaffine;
@@ -283,7 +335,7 @@ struct CudaSystem::Impl {
     view.symmetric_halves = fview.symmetric_halves = sys.symmetric_halves;
     refresh_step_views();
   }
-  void float_kinematics_to_double();  // fu, fv -> u, v (a float run's measure and probes)
+  void float_kinematics_to_double();  // floats' u, v -> doubles' (a float run's measure and probes)
 
   // A distributed run's halo (null on one process): the send list on the device, the packed
   // items on the device, and their pinned host copies for an MPI that takes host memory only.
@@ -417,39 +469,21 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   const char* sync = std::getenv("BRECCIA_CUDA_SYNC");
   m.sync_after_launch = sync && std::string(sync) == "1";
 
-  m.x0.upload(s.x0, "x0");
+  m.doubles.upload(s, s.n, held, "");
   {  // current positions: refreshed by every force pass, but a download before the first one
      // (an output right after a restart) must not read uninitialised memory
     std::vector<double> x(s.x0.size());
     for (size_t k = 0; k < x.size(); ++k) x[k] = s.x0[k] + s.u[k];
     m.x.upload(x, "x");
   }
-  m.u.upload(s.u, "u");
-  m.v.upload(s.v, "v");
-  m.a.upload(s.a, "a");
-  m.force.upload(s.force, "force");
-  m.body.upload(s.body, "body");
-  m.volume.upload(s.volume, "volume");
-  m.density.upload(s.density, "density");
   m.fixed_dof.upload(s.fixed_dof, "fixed_dof");
   m.energy_density.upload(s.energy_density, "energy_density");
   m.dissipated.upload(s.dissipated, "dissipated");
   m.damage.upload(s.damage, "damage");
   m.max_stretch.upload(s.max_stretch, "max_stretch");
-  m.dilatation.upload(s.dilatation, "dilatation");
-  m.weighted_volume.upload(s.weighted_volume, "weighted_volume");
-  // The fast LPS path's per-particle factors exist only where set-up allocated them.
-  if (s.lps_a.size() == held && s.lps_b.size() == held) {
-    m.lps_a.upload(s.lps_a, "lps_a");
-    m.lps_b.upload(s.lps_b, "lps_b");
-  }
   m.lps.upload(s.lps, "lps");
   m.offsets.upload(s.offsets, "offsets");
   m.neighbor.upload(s.neighbor, "neighbor");
-  m.xi_len.upload(s.xi_len, "xi_len");
-  m.k_own.upload(s.k_own, "k_own");
-  m.k_dual.upload(s.k_dual, "k_dual");  // empty where the dual halves are shared (pd_system.hpp): none on the device
-  m.vol_own.upload(s.vol_own, "vol_own");        // empty where the own counts serve
   m.own_count.upload(s.own_count, "own_count");  // empty with the analytic partial volume
   m.s0_own.upload(s.s0_own, "s0_own");
   m.s0_dual.upload(s.s0_dual, "s0_dual");
@@ -462,10 +496,6 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     m.s_onset.upload(s.s_onset, "s_onset");
     m.bond_damage.upload(s.bond_damage, "bond_damage");
   }
-  if (!s.short_range_k.empty()) {
-    m.short_range_k.upload(s.short_range_k, "short_range_k");
-    m.spacing.upload(s.spacing, "spacing");
-  }
   if (s.config.model == PdModel::Correspondence) {
     m.corr_moduli.upload(s.corr_moduli, "correspondence moduli");
     m.corr_deformation.upload(s.corr_deformation, "correspondence F");
@@ -473,33 +503,9 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     m.corr_nonaffine.upload(s.corr_nonaffine, "correspondence non-affine energy");
   }
   m.dimension = s.dimension;
-  m.u_before.allocate(3 * s.n, "u_before");
   if (s.f32.active) {
-    const Float32State& f = s.f32;
     m.f32 = true;
-    m.fx0.upload(f.x0, "float x0");
-    m.fu.upload(f.u, "float u");
-    m.fv.upload(f.v, "float v");
-    m.fa.upload(f.a, "float a");
-    m.fforce.upload(f.force, "float force");
-    m.fbody.upload(f.body, "float body");
-    m.fvolume.upload(f.volume, "float volume");
-    m.fdensity.upload(f.density, "float density");
-    m.fweighted_volume.upload(f.weighted_volume, "float weighted_volume");
-    m.fdilatation.upload(f.dilatation, "float dilatation");
-    if (f.lps_a.size() == held && f.lps_b.size() == held) {
-      m.flps_a.upload(f.lps_a, "float lps_a");
-      m.flps_b.upload(f.lps_b, "float lps_b");
-    }
-    m.fxi_len.upload(f.xi_len, "float xi_len");
-    m.fk_own.upload(f.k_own, "float k_own");
-    m.fk_dual.upload(f.k_dual, "float k_dual");
-    m.fvol_own.upload(f.vol_own, "float vol_own");
-    if (!f.short_range_k.empty()) {
-      m.fshort_range_k.upload(f.short_range_k, "float short_range_k");
-      m.fspacing.upload(f.spacing, "float spacing");
-    }
-    m.fu_before.allocate(3 * s.n, "float u_before");
+    m.floats.upload(s.f32, s.n, held, "float ");
   }
   m.f_before.allocate(3 * s.n, "f_before");
 
@@ -511,17 +517,14 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   p.fracture = s.config.fracture;
   p.diagnostics = s.diagnostics;
   p.symmetric_halves = s.symmetric_halves;
-  p.x0 = m.x0.get(); p.x = m.x.get(); p.u = m.u.get(); p.v = m.v.get(); p.a = m.a.get();
-  p.force = m.force.get(); p.body = m.body.get();
-  p.volume = m.volume.get(); p.density = m.density.get(); p.fixed_dof = m.fixed_dof.get();
-  p.offsets = m.offsets.get(); p.neighbor = m.neighbor.get(); p.xi_len = m.xi_len.get();
   const bool dual_shared = s.dual_halves_shared;  // the own arrays serve as the dual ones
-  p.k_own = m.k_own.get(); p.k_dual = dual_shared ? p.k_own : m.k_dual.get();
   // The own halves' volumes (pd_kernels.hpp own_volume): the counts with the double volumes, else vol_own.
   const bool counted = !s.own_count.empty();
-  p.vol_own = counted ? nullptr : m.vol_own.get();
+  m.doubles.point(p, dual_shared, counted);
+  p.x = m.x.get(); p.fixed_dof = m.fixed_dof.get();
+  p.offsets = m.offsets.get(); p.neighbor = m.neighbor.get();
   p.own_count = counted ? m.own_count.get() : nullptr;
-  p.volume_exact = m.volume.get();
+  p.volume_exact = m.doubles.volume.get();
   m.sample_fraction.upload(std::vector<double>(s.own_count_fractions(), s.own_count_fractions() + kSampleFractions),
                            "sample fractions");
   p.sample_fraction = counted ? m.sample_fraction.get() : nullptr;
@@ -531,7 +534,6 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     p.min_stretch = m.min_stretch.get();
     p.min_stretch_next = m.min_stretch_next.get();
   }
-  p.short_range_k = m.short_range_k.get(); p.spacing = m.spacing.get();
   p.break_after_force = s.config.break_after_force;
   p.s_onset = m.s_onset.get();
   p.s_ultimate = m.s0_own.get();  // the rate law's raised ultimates (pd_kernels.hpp soften)
@@ -539,20 +541,15 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   p.strength_rate = m.bond_damage.size() > 0 ? static_cast<int>(s.config.strength_rate) : 0;
   p.crush_ratio = m.bond_damage.size() > 0 ? static_cast<float>(s.config.crush_ratio) : 0.0f;
   p.lps = m.lps.get();
-  p.weighted_volume = m.weighted_volume.get(); p.dilatation = m.dilatation.get();
-  p.lps_a = m.lps_a.get(); p.lps_b = m.lps_b.get();
   p.energy_density = m.energy_density.get(); p.dissipated = m.dissipated.get();
   p.damage = m.damage.get(); p.max_stretch = m.max_stretch.get();
   if (m.f32) {  // as float32_view: float where the state is float, the shared rest from above
     PdViewT<float>& q = m.fview;
     q.n = p.n; q.model = p.model; q.fracture = p.fracture; q.diagnostics = p.diagnostics;
     q.symmetric_halves = p.symmetric_halves;
-    q.x0 = m.fx0.get(); q.x = nullptr;  // float never forms x0 + u
-    q.u = m.fu.get(); q.v = m.fv.get(); q.a = m.fa.get(); q.force = m.fforce.get(); q.body = m.fbody.get();
-    q.volume = m.fvolume.get(); q.density = m.fdensity.get(); q.fixed_dof = p.fixed_dof;
-    q.offsets = p.offsets; q.neighbor = p.neighbor; q.xi_len = m.fxi_len.get();
-    q.k_own = m.fk_own.get(); q.k_dual = dual_shared ? q.k_own : m.fk_dual.get();
-    q.vol_own = counted ? nullptr : m.fvol_own.get();  // float32_view's choice
+    m.floats.point(q, dual_shared, counted);  // vol_own: float32_view's choice
+    q.x = nullptr;  // float never forms x0 + u
+    q.fixed_dof = p.fixed_dof; q.offsets = p.offsets; q.neighbor = p.neighbor;
     q.own_count = p.own_count; q.volume_exact = p.volume_exact; q.sample_fraction = p.sample_fraction;
     q.s0_own = p.s0_own; q.s0_dual = p.s0_dual; q.state = p.state; q.lps = p.lps;
     q.alpha = p.alpha; q.min_stretch = p.min_stretch; q.min_stretch_next = p.min_stretch_next;
@@ -562,9 +559,6 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     q.bond_damage = p.bond_damage;
     q.strength_rate = p.strength_rate;
     q.crush_ratio = p.crush_ratio;
-    q.short_range_k = m.fshort_range_k.get(); q.spacing = m.fspacing.get();
-    q.weighted_volume = m.fweighted_volume.get(); q.dilatation = m.fdilatation.get();
-    q.lps_a = m.flps_a.get(); q.lps_b = m.flps_b.get();
     q.energy_density = p.energy_density; q.dissipated = p.dissipated; q.damage = p.damage; q.max_stretch = p.max_stretch;
   }
 
@@ -612,7 +606,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     a.dissipated_energy = &m.scalars.get()->dissipated_energy;
   };
   fill(m.arrays);
-  m.arrays.u_before = m.u_before.get();
+  m.arrays.u_before = m.doubles.u_before.get();
   if (halo) {
     m.halo = halo;
     m.rate_law = s.config.strength_rate != StrengthRateLaw::None;
@@ -628,7 +622,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   }
   if (m.f32) {
     fill(m.farrays);
-    m.farrays.u_before = m.fu_before.get();
+    m.farrays.u_before = m.floats.u_before.get();
   }
   if (s.config.cuda_sell_layout) {
     // The layout's passes (step.hpp pd_force_pass): one thread per slice lane. The fast passes
@@ -752,8 +746,8 @@ void CudaSystem::step(PdSystem& sys) {
 }
 
 void CudaSystem::Impl::float_kinematics_to_double() {
-  convert(3 * view.n, fu.get(), u.get(), "float u to double");
-  convert(3 * view.n, fv.get(), v.get(), "float v to double");
+  convert(3 * view.n, floats.u.get(), doubles.u.get(), "float u to double");
+  convert(3 * view.n, floats.v.get(), doubles.v.get(), "float v to double");
 }
 
 Energies CudaSystem::measure(PdSystem& sys) {
@@ -784,28 +778,28 @@ Energies CudaSystem::measure(PdSystem& sys) {
 
 void CudaSystem::download_kinematics(PdSystem& sys) {
   if (impl_->f32) impl_->float_kinematics_to_double();
-  impl_->u.download(sys.u, "u");
-  impl_->v.download(sys.v, "v");
+  impl_->doubles.u.download(sys.u, "u");
+  impl_->doubles.v.download(sys.v, "v");
 }
 
 void CudaSystem::download(PdSystem& sys) {
   Impl& m = *impl_;
   if (m.f32) {  // float32_download: the float state is the truth
     const int64_t n3 = 3 * m.view.n;
-    m.convert(n3, m.fa.get(), m.a.get(), "float a to double");
-    m.convert(n3, m.fforce.get(), m.force.get(), "float force to double");
-    m.convert(m.view.n, m.fdilatation.get(), m.dilatation.get(), "float dilatation to double");
+    m.convert(n3, m.floats.a.get(), m.doubles.a.get(), "float a to double");
+    m.convert(n3, m.floats.force.get(), m.doubles.force.get(), "float force to double");
+    m.convert(m.view.n, m.floats.dilatation.get(), m.doubles.dilatation.get(), "float dilatation to double");
   }
   download_kinematics(sys);
   if (!m.f32) m.x.download(sys.x, "x");  // float runs never form x0 + u
-  m.a.download(sys.a, "a");
-  m.force.download(sys.force, "force");
-  m.body.download(sys.body, "body");
+  m.doubles.a.download(sys.a, "a");
+  m.doubles.force.download(sys.force, "force");
+  m.doubles.body.download(sys.body, "body");
   m.energy_density.download(sys.energy_density, "energy_density");
   m.dissipated.download(sys.dissipated, "dissipated");
   m.damage.download(sys.damage, "damage");
   m.max_stretch.download(sys.max_stretch, "max_stretch");
-  m.dilatation.download(sys.dilatation, "dilatation");
+  m.doubles.dilatation.download(sys.dilatation, "dilatation");
   m.state.download(sys.state, "state");
   m.bond_damage.download(sys.bond_damage, "bond_damage");
   if (sys.config.strength_rate != StrengthRateLaw::None) {  // state with a rate law: the raised laws

@@ -10,6 +10,17 @@ namespace breccia::mps {
 // Below this many particles thread start-up costs more than the loop (as in solid.cpp).
 constexpr long long kFractureParallelMin = 8192;
 
+namespace {
+
+// Cuts bond k, from a to b, in both directions: its weight and that of b's bond back to a set to 0.
+void cut_both_ways(BondList& bonds, long long k, long long a, long long b) {
+  bonds.weight[k] = 0.0;
+  for (long long m = bonds.offset[b]; m < bonds.offset[b + 1]; ++m)
+    if (bonds.neighbour[m] == a) bonds.weight[m] = 0.0;
+}
+
+}  // namespace
+
 FractureModel::FractureModel(const FractureLaw& law, const BondList& bonds, double spacing_m)
     : law_(law), cut_radius_m_(0.5 * spacing_m) {
   const size_t n = bonds.particles();
@@ -111,9 +122,7 @@ void FractureModel::cut_plane(BondList& bonds, const State& s, long long i, cons
       double dist2 = 0.0;
       for (int p = 0; p < 3; ++p) dist2 += std::pow(xa[p] + t * (xb[p] - xa[p]), 2);
       if (dist2 > cut_radius_m_ * cut_radius_m_ * (1.0 + 1e-9)) continue;
-      bonds.weight[k] = 0.0;
-      for (long long m = bonds.offset[b]; m < bonds.offset[b + 1]; ++m)
-        if (bonds.neighbour[m] == a) bonds.weight[m] = 0.0;
+      cut_both_ways(bonds, k, a, b);
       ++cut_bonds_;
       touched.push_back(a);
       touched.push_back(b);
@@ -156,9 +165,7 @@ std::vector<long long> FractureModel::detach_flagged(BondList& bonds) {
     for (long long k = bonds.offset[i]; k < bonds.offset[i + 1]; ++k) {
       if (bonds.weight[k] == 0.0) continue;
       const long long j = bonds.neighbour[k];
-      bonds.weight[k] = 0.0;
-      for (long long m = bonds.offset[j]; m < bonds.offset[j + 1]; ++m)
-        if (bonds.neighbour[m] == i) bonds.weight[m] = 0.0;
+      cut_both_ways(bonds, k, i, j);
       ++cut_bonds_;
       touched.push_back(j);
     }

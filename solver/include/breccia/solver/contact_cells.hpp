@@ -52,26 +52,17 @@ BRECCIA_HD bool family_member(const PdViewT<Real>& p, int64_t i, int64_t j, cons
 template <class Real>
 BRECCIA_HD void short_range_contact_kernel(const PdViewT<Real>& p, const ContactCellsView& g, int64_t i) {
   const BondOriginT<Real> origin(p, i);
-  const long long* ci = &g.cell_of[3 * i];
   const Real l_i = p.spacing[i];
   Real fx = Real(0), fy = Real(0), fz = Real(0);
   double w = 0.0;
-  for (long long oz = -1; oz <= 1; ++oz)
-    for (long long oy = -1; oy <= 1; ++oy)
-      for (long long ox = -1; ox <= 1; ++ox) {
-        const long long c[3] = {ci[0] + ox, ci[1] + oy, ci[2] + oz};
-        const unsigned long long b = grid_bucket(c, g.buckets);
-        for (int64_t q = g.start[b]; q < g.start[b + 1]; ++q) {
-          const int64_t j = g.order[q];
-          const long long* cj = &g.cell_of[3 * j];
-          if (j == i || cj[0] != c[0] || cj[1] != c[1] || cj[2] != c[2]) continue;
-          Real dx, dy, dz, len;
-          origin.to(p, j, Real(0), dx, dy, dz, len);
-          const Real reach = Real(0.675) * (l_i + p.spacing[j]);
-          if (!(len < reach) || !(len > Real(0)) || family_member(p, i, j, g.key)) continue;
-          add_short_range_pair(p, i, j, reach, dx, dy, dz, len, fx, fy, fz, w);
-        }
-      }
+  grid_visit_neighbours(i, g.cell_of, g.buckets, g.start, g.order, 1, [&](int64_t j) {
+    Real dx, dy, dz, len;
+    origin.to(p, j, Real(0), dx, dy, dz, len);
+    const Real reach = Real(0.675) * (l_i + p.spacing[j]);
+    if (!(len < reach) || !(len > Real(0)) || family_member(p, i, j, g.key)) return true;
+    add_short_range_pair(p, i, j, reach, dx, dy, dz, len, fx, fy, fz, w);
+    return true;
+  });
   p.force[3 * i] += fx;
   p.force[3 * i + 1] += fy;
   p.force[3 * i + 2] += fz;

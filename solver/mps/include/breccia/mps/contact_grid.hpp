@@ -48,6 +48,7 @@ struct ContactGrid {
 };
 
 using breccia::grid_bucket;   // common/include/breccia/common/hashed_grid.hpp
+using breccia::grid_visit_neighbours;
 using breccia::grid_cell_of;
 
 // Particle p's contact partners: every j != p closer than `reach` (x: 3N current positions,
@@ -55,34 +56,26 @@ using breccia::grid_cell_of;
 // Returns their number, or -1 when more than `capacity` were found.
 BRECCIA_HD inline int contact_partners_at(long long p, const ContactGrid& g, const double* x, BondsView b, double reach,
                                           int* partners, int capacity) {
-  const long long* cp = &g.cell[3 * p];
-  const int dz = g.dimension == 3 ? 1 : 0;
   int count = 0;
-  for (long long oz = -dz; oz <= dz; ++oz)
-    for (long long oy = -1; oy <= 1; ++oy)
-      for (long long ox = -1; ox <= 1; ++ox) {
-        const long long c[3] = {cp[0] + ox, cp[1] + oy, cp[2] + oz};
-        const unsigned long long bucket = grid_bucket(c, g.buckets);
-        for (int q = g.start[bucket]; q < g.start[bucket + 1]; ++q) {
-          const int j = g.order[q];
-          const long long* cj = &g.cell[3 * j];
-          if (j == p || cj[0] != c[0] || cj[1] != c[1] || cj[2] != c[2]) continue;  // another cell in this bucket
-          const double dx[3] = {x[3 * p] - x[3 * j], x[3 * p + 1] - x[3 * j + 1], x[3 * p + 2] - x[3 * j + 2]};
-          if (dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2] >= reach * reach) continue;
-          bool bonded = false;
-          for (long long m = b.offset[p]; m < b.offset[p + 1] && !bonded; ++m)
-            bonded = b.neighbour[m] == j && b.weight[m] != 0.0;
-          if (bonded) continue;
-          if (count == capacity) return -1;
-          int k = count++;  // insertion in ascending order
-          while (k > 0 && partners[k - 1] > j) {
-            partners[k] = partners[k - 1];
-            --k;
-          }
-          partners[k] = j;
-        }
-      }
-  return count;
+  const int reach_z = g.dimension == 3 ? 1 : 0;
+  const bool all = grid_visit_neighbours(p, g.cell, g.buckets, g.start, g.order, reach_z, [&](long long l) {
+    const int j = static_cast<int>(l);
+    const double dx[3] = {x[3 * p] - x[3 * j], x[3 * p + 1] - x[3 * j + 1], x[3 * p + 2] - x[3 * j + 2]};
+    if (dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2] >= reach * reach) return true;
+    bool bonded = false;
+    for (long long m = b.offset[p]; m < b.offset[p + 1] && !bonded; ++m)
+      bonded = b.neighbour[m] == j && b.weight[m] != 0.0;
+    if (bonded) return true;
+    if (count == capacity) return false;
+    int k = count++;  // insertion in ascending order
+    while (k > 0 && partners[k - 1] > j) {
+      partners[k] = partners[k - 1];
+      --k;
+    }
+    partners[k] = j;
+    return true;
+  });
+  return all ? count : -1;
 }
 
 // The contact force on p from its partners (ascending), as Contact::pair_forces sums it:

@@ -56,13 +56,14 @@ BRECCIA_HD inline double koshizuka_weight(double r, double radius_re) {
   return (r > 0.0 && r < radius_re) ? radius_re / r - 1.0 : 0.0;
 }
 
-// <grad phi>_i = (d/n0) sum_j (phi_j - phi_i) r_ij / |r_ij|^2 w_ij          (eq 1)
-BRECCIA_HD inline void gradient_at(long long i, BondsView b, const double* phi, double scale,
-                                   double out[3]) {
+// The sum of the gradient and of its adjoint below, written once: (d/n0) sum_j
+// (phi_j -/+ phi_i) r_ij / |r_ij|^2 w_ij, with phi_j - phi_i (kAdjoint false) or phi_j + phi_i.
+template <bool kAdjoint>
+BRECCIA_HD inline void gradient_sum_at(long long i, BondsView b, const double* phi, double scale, double out[3]) {
   double gx = 0.0, gy = 0.0, gz = 0.0;
   for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
     const double r2 = b.rx[k] * b.rx[k] + b.ry[k] * b.ry[k] + b.rz[k] * b.rz[k];
-    const double c = (phi[b.neighbour[k]] - phi[i]) * b.weight[k] / r2;
+    const double c = (kAdjoint ? phi[b.neighbour[k]] + phi[i] : phi[b.neighbour[k]] - phi[i]) * b.weight[k] / r2;
     gx += c * b.rx[k];
     gy += c * b.ry[k];
     gz += c * b.rz[k];
@@ -72,23 +73,19 @@ BRECCIA_HD inline void gradient_at(long long i, BondsView b, const double* phi, 
   out[2] = scale * gz;
 }
 
+// <grad phi>_i = (d/n0) sum_j (phi_j - phi_i) r_ij / |r_ij|^2 w_ij          (eq 1)
+BRECCIA_HD inline void gradient_at(long long i, BondsView b, const double* phi, double scale,
+                                   double out[3]) {
+  gradient_sum_at<false>(i, b, phi, scale, out);
+}
+
 // The same gradient with (phi_j + phi_i) instead of (phi_j - phi_i): minus the adjoint of
 // the divergence below. In the interior sum_j r_ij w/r^2 = 0 (point symmetry) and the two
 // forms agree; at a free surface this form is the one that makes grad(div u) derive from
 // the energy (1/2) sum_i (div u)_i^2, so the elastic force conserves energy.
 BRECCIA_HD inline void gradient_adjoint_at(long long i, BondsView b, const double* phi, double scale,
                                            double out[3]) {
-  double gx = 0.0, gy = 0.0, gz = 0.0;
-  for (long long k = b.offset[i]; k < b.offset[i + 1]; ++k) {
-    const double r2 = b.rx[k] * b.rx[k] + b.ry[k] * b.ry[k] + b.rz[k] * b.rz[k];
-    const double c = (phi[b.neighbour[k]] + phi[i]) * b.weight[k] / r2;
-    gx += c * b.rx[k];
-    gy += c * b.ry[k];
-    gz += c * b.rz[k];
-  }
-  out[0] = scale * gx;
-  out[1] = scale * gy;
-  out[2] = scale * gz;
+  gradient_sum_at<true>(i, b, phi, scale, out);
 }
 
 // <div u>_i = (d/n0) sum_j (u_j - u_i) . r_ij / |r_ij|^2 w_ij                (eq 2)

@@ -38,8 +38,8 @@ struct DistributedRows {
 
 // Called once the internal order and horizons are set: counts the family sizes, cuts the
 // partition (s.distributed_rows) and returns the rank's rows (inactive on one process).
-// Each rank counts the sizes of its family_slice only (family_sizes with a row range); the
-// slices, concatenated in rank order on every rank, are the whole count (collective).
+// Each rank counts the sizes of its family_slice only (family_sizes with a row range, on the
+// slice's geometric window: every partner, not the body); the slices, concatenated in rank order on every rank, are the whole count (collective).
 // Throws InputError for more ranks than particles.
 DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d);
 

@@ -59,7 +59,8 @@ std::vector<int64_t> family_sizes(const std::vector<double>& x0, const std::vect
 // The same for rows [row_begin, row_end) only (row_end - row_begin counts, the first of row
 // row_begin), every particle still a partner: the same integers as the whole count's slice,
 // so the ranks of a distributed set-up each count a slice and concatenate them
-// (plan_distributed_rows). The cell list still holds every particle. Throws
+// (plan_distributed_rows, on the slice's geometric_window, below: the arrays then hold the
+// window's particles only). The cell list holds every particle given. Throws
 // std::invalid_argument for a range outside [0, N].
 std::vector<int64_t> family_sizes(const std::vector<double>& x0, const std::vector<double>& horizon,
                                   const std::vector<double>& half_cell, int dimension, PartialVolume kind,
@@ -70,8 +71,8 @@ std::vector<int64_t> family_sizes(const std::vector<double>& x0, const std::vect
 // rows' positions grown by the largest reach any pair may have, the largest horizon plus the
 // largest pad (partial_volume_reach of the largest half cell) of the whole body (a dual
 // horizon's partner reaches with its own horizon, hence the whole body's largest), times
-// 1 + 1e-6 against rounding, and in one of the 27 cells around a row's cell (cells of edge
-// at least that reach over the body: a Morton range's box may hold most of the body). Every
+// 1 + 1e-6 against rounding, and in one of the cells around a row's cell (cells of half that
+// reach over the body, the 125 around: a Morton range's box may hold most of the body). Every
 // partner build_families or family_sizes finds for those rows (|xi| within max(horizon) +
 // max(pad) of the pair) passes both tests, so the halo is a superset of the rows' family
 // ghosts, known from positions alone (docs/parallel.md, Memory, What to take next, item 2

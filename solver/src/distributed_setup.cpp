@@ -12,6 +12,52 @@ FamilySlice family_slice(int64_t n, int rank, int ranks) {
   return {n * rank / ranks, n * (rank + 1) / ranks};
 }
 
+namespace {
+
+// The window's particles' positions, horizons and one more per-particle array, in its order.
+struct WindowArrays {
+  std::vector<double> x0, horizon, other;
+};
+WindowArrays window_arrays(const PdSystem& s, const GeometricWindow& w, const std::vector<double>& other) {
+  WindowArrays a;
+  a.x0.resize(3 * w.index.size());
+  a.horizon.resize(w.index.size());
+  a.other.resize(w.index.size());
+  for (size_t k = 0; k < w.index.size(); ++k) {
+    const size_t i = static_cast<size_t>(w.index[k]);
+    for (int c = 0; c < 3; ++c) a.x0[3 * k + c] = s.x0[3 * i + c];
+    a.horizon[k] = s.horizon[i];
+    a.other[k] = other[i];
+  }
+  return a;
+}
+
+}  // namespace
+
+Families build_own_families(const PdSystem& s, const DistributedRows& rows, const std::vector<double>& pad,
+                            int64_t* window_particles) {
+  if (!rows.active) {
+    if (window_particles) *window_particles = static_cast<int64_t>(s.n);
+    return build_families(s.x0, s.horizon, pad);
+  }
+  const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, s.dimension, rows.begin, rows.end);
+  if (window_particles) *window_particles = static_cast<int64_t>(w.index.size());
+  Families fam;
+  {
+    const WindowArrays a = window_arrays(s, w, pad);
+    fam = build_families(a.x0, a.horizon, a.other, w.row_begin, w.row_end);
+  }
+  // Back to the whole system's indices: the rows outside the window's own range are empty,
+  // and the window's order is the global one (ascending), so each row stays sorted.
+  for (int32_t& j : fam.neighbors) j = w.index[static_cast<size_t>(j)];
+  const int64_t entries = fam.offsets.back();
+  std::vector<int64_t> offsets(s.n + 1, 0);
+  for (int64_t i = rows.begin; i < rows.end; ++i) offsets[i + 1] = fam.offsets[w.row_begin + (i - rows.begin) + 1];
+  for (size_t i = static_cast<size_t>(rows.end); i < s.n; ++i) offsets[i + 1] = entries;
+  fam.offsets.swap(offsets);
+  return fam;
+}
+
 DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d) {
   DistributedRows rows;
   rows.end = static_cast<int64_t>(s.n);
@@ -21,9 +67,16 @@ DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d) {
   // whole-system set-up's ranks cut). Each rank counts an equal slice of the particles
   // (family_slice) and the slices are concatenated in rank order: the same integers as
   // one count of every particle, so the same partition.
+  // The slice's partners are all in its geometric window (geometric_window), so the count
+  // runs on the window's particles alone (its cell list too): the same integers.
   const FamilySlice slice = family_slice(static_cast<int64_t>(s.n), d.rank, d.ranks);
-  const std::vector<int64_t> sizes = concat_over_ranks(
-      d, family_sizes(s.x0, s.horizon, s.half_cell, s.dimension, s.config.partial_volume, slice.begin, slice.end));
+  std::vector<int64_t> slice_sizes;
+  {
+    const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, s.dimension, slice.begin, slice.end);
+    const WindowArrays a = window_arrays(s, w, s.half_cell);
+    slice_sizes = family_sizes(a.x0, a.horizon, a.other, s.dimension, s.config.partial_volume, w.row_begin, w.row_end);
+  }
+  const std::vector<int64_t> sizes = concat_over_ranks(d, slice_sizes);
   if (sizes.size() != s.n) throw std::logic_error("distributed set-up: the ranks' family sizes do not cover the particles");
   rows.full_offsets.assign(s.n + 1, 0);
   for (size_t i = 0; i < s.n; ++i) rows.full_offsets[i + 1] = rows.full_offsets[i] + sizes[i];
@@ -86,6 +139,7 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   // What each rank's set-up built, to every rank (summary.json): its own rows' entries alone.
   s.setup_candidate_entries = concat_over_ranks(d, s.setup_candidate_entries);
   s.setup_kept_entries = concat_over_ranks(d, s.setup_kept_entries);
+  s.setup_window_particles = concat_over_ranks(d, s.setup_window_particles);
   // Rank 0's writers read the bond list of results.h5 (partners, and which halves exist),
   // where it writes the files alone (serial HDF5).
   const bool writer_bonds = root_gathers_bond_list(s.config);

@@ -669,8 +669,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // Families and per-bond coefficients.
   std::vector<double> pad(n);  // a neighbour's outermost partial-volume sample may reach into the horizon
   for (size_t k = 0; k < n; ++k) pad[k] = partial_volume_reach(s.half_cell[k], s.dimension);
-  Families fam = hooks.families ? hooks.families(s.x0, s.horizon, pad, dist_rows.begin, dist_rows.end)
-                               : build_families(s.x0, s.horizon, pad, dist_rows.begin, dist_rows.end);
+  // (a distributed run's ranks on their rows' geometric window, without the hook: one process only)
+  s.setup_window_particles = {static_cast<int64_t>(n)};
+  Families fam = hooks.families && !dist_rows.active ? hooks.families(s.x0, s.horizon, pad, 0, static_cast<int64_t>(n))
+                                                     : build_own_families(s, dist_rows, pad, &s.setup_window_particles[0]);
   s.setup_candidate_entries = {static_cast<int64_t>(fam.neighbors.size())};  // this rank's rows' (summary.json)
   std::vector<double>().swap(pad);
   phase("families");

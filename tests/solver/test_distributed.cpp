@@ -329,6 +329,18 @@ static void expect_each_rank_built_its_own_rows(const std::string& one_dir, cons
     }
     EXPECT_EQ(sum, whole[0].get<long long>()) << out << ": the ranks' " << kind << " are not one process's rows once each";
   }
+  // The family search's particles: one process's every particle, each rank's its rows'
+  // geometric window (build_own_families): its own particles and more, so the windows
+  // together hold every particle at least once, each at most all of them.
+  const auto& window = dist["setup_window_particles_per_rank"];
+  ASSERT_EQ(one["setup_window_particles_per_rank"], nlohmann::json::array({one["particles"]}));
+  ASSERT_EQ(window.size(), static_cast<size_t>(ranks)) << out;
+  long long held = 0;
+  for (const auto& w : window) {
+    EXPECT_LE(w.get<long long>(), one["particles"].get<long long>()) << out;
+    held += w.get<long long>();
+  }
+  EXPECT_GT(held, one["particles"].get<long long>()) << out << ": the windows hold the ranks' particles and their halos";
 }
 
 // A case run by one process and, with the distributed set-up, on each of `ranks`: no fallback

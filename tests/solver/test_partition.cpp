@@ -693,3 +693,219 @@ TEST(Partition, SamplePadKeepsTheCornerPadsEntries) {
     for (int i = 0; i < cloud.n; ++i) ASSERT_EQ(a[i], b[i]) << "particle " << i;
   }
 }
+
+// The geometric halo (geometric_window, partition.hpp; docs/parallel.md, Memory, What to
+// take next, item 2 b): the particles near a rank's owned positions by the body's largest
+// reach (in their box grown by it and in the cells around theirs) must hold every family
+// ghost of the rank, known before any family exists. On a
+// graded tet mesh with the dual horizon (horizons differing threefold between bonded
+// particles: a coarse particle's partner reaches the rank with its own horizon, so the
+// reach must be the whole body's largest) at 2 to 8 ranks, an empty rank, and a family over
+// three ranks; the window's rows built alone (build_own_families, what a distributed set-up
+// runs) are the whole build's rows, partner for partner.
+#if defined(BRECCIA_MESH_EXE) && defined(BRECCIA_PLACE_EXE)
+namespace {
+// test_distributed.cpp's graded, notched block: 0.4 mm tets at the notch grading to 1 mm.
+std::string graded_notch_particles() {
+  static const std::string path = mesh_and_place(
+      "halo_graded_notch",
+      "dimension: 3\n"
+      "body: {shape: box, name: block, size: [12 mm, 6 mm, 3 mm]}\n"
+      "notches: [{name: notch, corner: [6 mm, 0, 0], edge_a: [0, 2 mm, 0], edge_b: [0, 0, 3 mm]}]\n"
+      "mesh: {size: 1 mm, refine: [{near: notch, size: 0.4 mm, distance_min: 0.5 mm, distance_max: 4 mm}]}\n");
+  return path;
+}
+
+// How many off-rank partners of rows [b, e) of the families (offsets, neighbor) the window
+// does not hold.
+int64_t ghosts_outside(const GeometricWindow& w, int64_t b, int64_t e, const std::vector<int64_t>& offsets,
+                       const std::vector<int32_t>& neighbor) {
+  int64_t missing = 0;
+  for (int64_t i = b; i < e; ++i)
+    for (int64_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+      const int32_t j = neighbor[k];
+      if (j >= b && j < e) continue;
+      if (!std::binary_search(w.index.begin(), w.index.end(), j)) ++missing;
+    }
+  return missing;
+}
+}  // namespace
+
+TEST(RankSystem, GeometricHaloHoldsEveryFamilyGhostOfAGradedDualHorizonMesh) {
+  const std::string particles = graded_notch_particles();
+  ASSERT_FALSE(particles.empty()) << "could not mesh the graded block";
+  const PdSystem s = system_from_yaml("halo_graded", "specimen: {particles: " + particles + "}\n"
+                                      "model: {type: pmb, horizon_factor: 3.015, variable_horizon: true}\n"
+                                      "materials: [{name: block, density: 2400, youngs_modulus: 30 GPa, poisson_ratio: 0.25}]\n"
+                                      "time: {steps: 1, check_stability: false}\n");
+  const int64_t n = static_cast<int64_t>(s.n);
+  ASSERT_GT(n, 3000);
+  const auto [hmin, hmax] = std::minmax_element(s.horizon.begin(), s.horizon.end());
+  ASSERT_GT(*hmax / *hmin, 2.0) << "a graded arrangement: horizons differing at least twofold";
+  // The candidate families the set-up searches (a superset of the kept bonds, s.neighbor).
+  std::vector<double> pad(s.n);
+  for (size_t i = 0; i < s.n; ++i) pad[i] = partial_volume_reach(s.half_cell[i], 3);
+  const breccia::Families whole = breccia::build_families(s.x0, s.horizon, pad);
+  int64_t local_reach_misses = 0;  // ghosts beyond the rank's own largest reach (the dual horizon's)
+  for (const int ranks : {2, 3, 4, 8}) {
+    const Partition p = MortonRangePartitioner().partition(s.offsets, ranks);
+    for (int r = 0; r < ranks; ++r) {
+      const int64_t b = p.begin[r], e = p.begin[r + 1];
+      const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, 3, b, e);
+      ASSERT_EQ(w.row_end - w.row_begin, e - b);
+      ASSERT_TRUE(std::is_sorted(w.index.begin(), w.index.end()));
+      ASSERT_EQ(std::adjacent_find(w.index.begin(), w.index.end()), w.index.end());
+      for (int64_t k = w.row_begin; k < w.row_end; ++k) ASSERT_EQ(w.index[k], b + (k - w.row_begin));
+      // Every ghost: of the kept bonds (the rank system's, brute_ghosts) and of the candidates.
+      const std::set<int32_t> ghosts = brute_ghosts(s, p, r);
+      EXPECT_FALSE(ghosts.empty()) << ranks << " ranks, rank " << r;
+      for (const int32_t g : ghosts)
+        ASSERT_TRUE(std::binary_search(w.index.begin(), w.index.end(), g)) << ranks << " ranks, rank " << r << ": " << g;
+      EXPECT_EQ(ghosts_outside(w, b, e, whole.offsets, whole.neighbors), 0) << ranks << " ranks, rank " << r;
+      // The rows built on the window alone: the whole build's rows, the others empty.
+      DistributedRows rows;
+      rows.active = true;
+      rows.begin = b;
+      rows.end = e;
+      const breccia::Families own = build_own_families(s, rows, pad);
+      ASSERT_EQ(own.offsets.size(), s.n + 1);
+      ASSERT_EQ(own.offsets[b], 0);
+      ASSERT_EQ(own.offsets[n], whole.offsets[e] - whole.offsets[b]);
+      for (int64_t i = 0; i <= n; ++i)
+        ASSERT_EQ(own.offsets[i], std::clamp(whole.offsets[i], whole.offsets[b], whole.offsets[e]) - whole.offsets[b]) << i;
+      ASSERT_TRUE(std::equal(own.neighbors.begin(), own.neighbors.end(), whole.neighbors.begin() + whole.offsets[b]));
+      // The same box grown by the rank's own largest reach instead of the body's.
+      double own_h = 0.0, own_pad = 0.0, lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+      for (int64_t i = b; i < e; ++i) {
+        own_h = std::max(own_h, s.horizon[i]);
+        own_pad = std::max(own_pad, pad[i]);
+        for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], s.x0[3 * i + d]), hi[d] = std::max(hi[d], s.x0[3 * i + d]);
+      }
+      for (const int32_t g : ghosts)
+        for (int d = 0; d < 3; ++d)
+          if (lo[d] - s.x0[3 * g + d] > own_h + own_pad || s.x0[3 * g + d] - hi[d] > own_h + own_pad) {
+            ++local_reach_misses;
+            break;
+          }
+    }
+  }
+  EXPECT_GT(local_reach_misses, 0) << "the dual horizon's ghosts reach beyond a rank's own largest reach";
+  // An empty rank: no rows, an empty window; its neighbours' windows still hold their ghosts.
+  Partition p;
+  p.begin = {0, 0, n / 2, n};
+  EXPECT_TRUE(geometric_window(s.x0, s.horizon, s.half_cell, 3, 0, 0).index.empty());
+  for (const int r : {1, 2}) {
+    const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, 3, p.begin[r], p.begin[r + 1]);
+    EXPECT_EQ(ghosts_outside(w, p.begin[r], p.begin[r + 1], whole.offsets, whole.neighbors), 0) << r;
+  }
+  // A family spanning three ranks or more (8 ranks): its partners on every other rank are in
+  // its rank's window.
+  const Partition p8 = MortonRangePartitioner().partition(s.offsets, 8);
+  int64_t found = -1;
+  for (int64_t i = 0; i < n && found < 0; ++i) {
+    std::set<int> o;
+    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) o.insert(p8.owner(s.neighbor[k]));
+    o.erase(p8.owner(i));
+    if (o.size() >= 2) found = i;
+  }
+  ASSERT_GE(found, 0) << "8 ranks of the graded block must have a family over three ranks";
+  const int r = p8.owner(found);
+  const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, 3, p8.begin[r], p8.begin[r + 1]);
+  for (int64_t k = s.offsets[found]; k < s.offsets[found + 1]; ++k)
+    EXPECT_TRUE(std::binary_search(w.index.begin(), w.index.end(), s.neighbor[k])) << s.neighbor[k];
+  EXPECT_THROW(geometric_window(s.x0, s.horizon, s.half_cell, 3, 5, 4), std::invalid_argument);
+}
+#endif
+
+// plan_distributed_rows counts each slice's family sizes on the slice's geometric window:
+// on the graded cloud (horizons varying threefold, both partial-volume rules) the window's
+// counts are the whole count's, integer for integer, at 1 to 16 slices.
+TEST(Partition, FamilySizesCountedOnASlicesGeometricWindowAreTheWholeCount) {
+  const GradedCloud cloud;
+  const int64_t n = cloud.n;
+  for (const PartialVolume kind : {PartialVolume::Sampled, PartialVolume::Lammps}) {
+    const std::vector<int64_t> whole = family_sizes(cloud.x, cloud.horizon, cloud.half_cell, 3, kind);
+    for (const int ranks : {1, 2, 3, 7, 16}) {
+      for (int r = 0; r < ranks; ++r) {
+        const FamilySlice sl = family_slice(n, r, ranks);
+        const GeometricWindow w = geometric_window(cloud.x, cloud.horizon, cloud.half_cell, 3, sl.begin, sl.end);
+        std::vector<double> x, h, c;
+        for (const int32_t i : w.index) {
+          x.insert(x.end(), &cloud.x[3 * i], &cloud.x[3 * i] + 3);
+          h.push_back(cloud.horizon[i]);
+          c.push_back(cloud.half_cell[i]);
+        }
+        ASSERT_EQ(family_sizes(x, h, c, 3, kind, w.row_begin, w.row_end),
+                  std::vector<int64_t>(whole.begin() + sl.begin, whole.begin() + sl.end))
+            << ranks << " slices, slice " << r;
+      }
+    }
+  }
+}
+
+// The window is the rows' neighbourhood, not the body: on a 40 mm bar at 1 mm (m = 3.015,
+// reach 3.015 mm + the pad, 0.77 mm) cut into 4 ranks along its length, each window holds the
+// rank's rows, every particle within the reach of one of them (Euclidean), and only particles
+// within the reach of the rows' box on every axis: under half the bar. On the 41^3 lattice
+// of 4 Morton ranges the box alone held 80 % of the body for one rank (docs/parallel.md): an
+// L-shaped range's, here a range of 7 of a 20 x 10 x 10 block.
+TEST(Partition, GeometricWindowOfABarIsTheRanksNeighbourhood) {
+  const PdSystem s = system_from_yaml("halo_bar", "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.04, 0.004, 0.004], spacing: 1 mm}}\n"
+                                      "model: {type: pmb, horizon_factor: 3.015}\n"
+                                      "materials: [{name: m, density: 1000, youngs_modulus: 1 GPa, poisson_ratio: 0.25}]\n"
+                                      "time: {steps: 1}\n");
+  ASSERT_EQ(s.n, 640u);
+  const double reach = s.horizon[0] + partial_volume_reach(s.half_cell[0], 3);
+  const Partition p = MortonRangePartitioner().partition(s.offsets, 4);
+  for (int r = 0; r < 4; ++r) {
+    const int64_t b = p.begin[r], e = p.begin[r + 1];
+    const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, 3, b, e);
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    for (int64_t i = b; i < e; ++i)
+      for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], s.x0[3 * i + d]), hi[d] = std::max(hi[d], s.x0[3 * i + d]);
+    for (size_t j = 0; j < s.n; ++j) {
+      const bool held = std::binary_search(w.index.begin(), w.index.end(), static_cast<int32_t>(j));
+      const bool own = static_cast<int64_t>(j) >= b && static_cast<int64_t>(j) < e;
+      bool in_box = true, within = false;
+      for (int d = 0; d < 3; ++d) in_box = in_box && lo[d] - s.x0[3 * j + d] <= reach && s.x0[3 * j + d] - hi[d] <= reach;
+      for (int64_t i = b; i < e && !within; ++i) {
+        double r2 = 0.0;
+        for (int d = 0; d < 3; ++d) r2 += (s.x0[3 * j + d] - s.x0[3 * i + d]) * (s.x0[3 * j + d] - s.x0[3 * i + d]);
+        within = r2 <= reach * reach;
+      }
+      if (own || within) EXPECT_TRUE(held) << r << ": " << j;
+      if (held) EXPECT_TRUE(own || in_box) << r << ": " << j;
+    }
+    EXPECT_LT(w.index.size(), s.n / 2) << "rank " << r;
+    EXPECT_GT(w.halo(), 0u) << "rank " << r;
+  }
+  // Ranges whose box holds far more than their neighbourhood (a Morton range across an
+  // octant's boundary is L-shaped): a 20 x 10 x 10 mm block at 1 mm cut into 3, 5, 6 and 7
+  // ranks; the cells drop the box's far corners for some rank.
+  const PdSystem t = system_from_yaml("halo_block", "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.02, 0.01, 0.01], spacing: 1 mm}}\n"
+                                      "model: {type: pmb, horizon_factor: 3.015}\n"
+                                      "materials: [{name: m, density: 1000, youngs_modulus: 1 GPa, poisson_ratio: 0.25}]\n"
+                                      "time: {steps: 1}\n");
+  size_t fewer = 0, most = 0;
+  for (const int ranks : {3, 5, 6, 7}) {
+    const Partition q = MortonRangePartitioner().partition(t.offsets, ranks);
+    for (int r = 0; r < ranks; ++r) {
+      const int64_t b = q.begin[r], e = q.begin[r + 1];
+      const GeometricWindow w = geometric_window(t.x0, t.horizon, t.half_cell, 3, b, e);
+      double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+      for (int64_t i = b; i < e; ++i)
+        for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], t.x0[3 * i + d]), hi[d] = std::max(hi[d], t.x0[3 * i + d]);
+      size_t in_box = 0;
+      for (size_t j = 0; j < t.n; ++j) {
+        bool in = true;
+        for (int d = 0; d < 3; ++d) in = in && lo[d] - t.x0[3 * j + d] <= reach && t.x0[3 * j + d] - hi[d] <= reach;
+        in_box += in;
+      }
+      EXPECT_LE(w.index.size(), in_box);
+      fewer += w.index.size() < in_box;
+      most = std::max(most, in_box - w.index.size());
+    }
+  }
+  std::printf("ranges whose window is smaller than their grown box: %zu, by up to %zu of %zu particles\n", fewer, most, t.n);
+  EXPECT_GT(fewer, 0u) << "the cells must drop some box's corners";
+}

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "breccia/common/families.hpp"
 #include "breccia/solver/partition.hpp"
 #include "breccia/solver/pd_system.hpp"
 
@@ -37,10 +38,20 @@ struct DistributedRows {
 
 // Called once the internal order and horizons are set: counts the family sizes, cuts the
 // partition (s.distributed_rows) and returns the rank's rows (inactive on one process).
-// Each rank counts the sizes of its family_slice only (family_sizes with a row range); the
-// slices, concatenated in rank order on every rank, are the whole count (collective).
+// Each rank counts the sizes of its family_slice only (family_sizes with a row range, on the
+// slice's geometric window: every partner, not the body); the slices, concatenated in rank order on every rank, are the whole count (collective).
 // Throws InputError for more ranks than particles.
 DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d);
+
+// The families of the rank's rows (every row on one process, build_families), the other rows
+// empty: the same rows, partners and order as the whole build's. A distributed set-up builds
+// them on the rows' geometric window (geometric_window, partition.hpp: the rows, then every
+// particle near them by the body's largest reach), which holds every partner, so the search's cell
+// lists and copies hold the window's particles, not the whole body's; the partners are then
+// mapped back to the whole system's indices (the window is ascending, so each row stays sorted).
+// window_particles (if given): the particles the search held (one process: all of them).
+Families build_own_families(const PdSystem& s, const DistributedRows& rows, const std::vector<double>& pad,
+                            int64_t* window_particles = nullptr);
 
 // The particles whose family sizes `rank` of `ranks` counts for plan_distributed_rows:
 // [n rank / ranks, n (rank + 1) / ranks), equal in count to within one, contiguous and

@@ -59,11 +59,36 @@ std::vector<int64_t> family_sizes(const std::vector<double>& x0, const std::vect
 // The same for rows [row_begin, row_end) only (row_end - row_begin counts, the first of row
 // row_begin), every particle still a partner: the same integers as the whole count's slice,
 // so the ranks of a distributed set-up each count a slice and concatenate them
-// (plan_distributed_rows). The cell list still holds every particle. Throws
+// (plan_distributed_rows, on the slice's geometric_window, below: the arrays then hold the
+// window's particles only). The cell list holds every particle given. Throws
 // std::invalid_argument for a range outside [0, N].
 std::vector<int64_t> family_sizes(const std::vector<double>& x0, const std::vector<double>& horizon,
                                   const std::vector<double>& half_cell, int dimension, PartialVolume kind,
                                   int64_t row_begin, int64_t row_end);
+
+// The particles a rank's rows [row_begin, row_end) may read before any family exists: the
+// rows, then the geometric halo, the other particles whose positions lie in the box of the
+// rows' positions grown by the largest reach any pair may have, the largest horizon plus the
+// largest pad (partial_volume_reach of the largest half cell) of the whole body (a dual
+// horizon's partner reaches with its own horizon, hence the whole body's largest), times
+// 1 + 1e-6 against rounding, and in one of the cells around a row's cell (cells of half that
+// reach over the body, the 125 around: a Morton range's box may hold most of the body). Every
+// partner build_families or family_sizes finds for those rows (|xi| within max(horizon) +
+// max(pad) of the pair) passes both tests, so the halo is a superset of the rows' family
+// ghosts, known from positions alone (docs/parallel.md, Memory, What to take next, item 2
+// b). Arrays as family_sizes takes them (set-up internal order). `index` is ascending (the
+// halo below the rows, the rows, the halo above), so a local index orders as the global
+// one: a row built on the window and mapped back through `index` is sorted as the whole
+// build's. An empty range has an empty window. O(N) (passes over the positions, 1 B per
+// cell); throws std::invalid_argument for a range outside [0, N].
+struct GeometricWindow {
+  std::vector<int32_t> index;          // global indices, ascending
+  int64_t row_begin = 0, row_end = 0;  // the rows' local range in index
+  size_t halo() const { return index.size() - static_cast<size_t>(row_end - row_begin); }
+};
+GeometricWindow geometric_window(const std::vector<double>& x0, const std::vector<double>& horizon,
+                                 const std::vector<double>& half_cell, int dimension, int64_t row_begin,
+                                 int64_t row_end);
 
 // What one rank exchanges each step. Ghosts are sorted by internal index; since ranks own
 // contiguous ranges, the ghosts from one source rank are one contiguous run of `ghosts`.

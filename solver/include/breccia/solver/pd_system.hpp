@@ -191,6 +191,10 @@ struct PdSystem {
   // one value per rank, rank 0 first (finish_distributed_setup gathers them): each rank's own
   // rows alone, so they sum to one process's (summary.json's setup_entries_per_rank).
   std::vector<int64_t> setup_candidate_entries, setup_kept_entries;
+  // The particles the family search held (its cell lists, its copies): the rows' geometric
+  // window (build_own_families; one process: every particle), one value per rank the same way
+  // (summary.json's setup_window_particles_per_rank).
+  std::vector<int64_t> setup_window_particles;
   // A checkpoint was read into such a system: the derived fields (damage, energies) of the
   // restored state are still to be computed, by the ranks' systems (read_checkpoint).
   bool derived_fields_pending = false;

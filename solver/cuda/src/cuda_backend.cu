@@ -204,6 +204,7 @@ struct CudaSystem::Impl {
   DeviceArray<uint8_t> state;
   DeviceArray<uint8_t> own_count;  // the own halves' sample counts, where vol_own is not held (pd_system.hpp)
   DeviceArray<double> sample_fraction;  // their fractions (pd_physics.hpp partial_volume_sample_fractions)
+  DeviceArray<double> family_volume, ffamily_volume;  // per particle, the damage's denominator (pd_system.hpp)
   // compressive enhancement: s_min read and written by a pass (swapped at each step's start,
   // commit_min_stretch); short-range forces per particle (double and float copies)
   DeviceArray<float> min_stretch, min_stretch_next;
@@ -451,6 +452,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   m.k_dual.upload(s.k_dual, "k_dual");  // empty where the dual halves are shared (pd_system.hpp): none on the device
   m.vol_own.upload(s.vol_own, "vol_own");        // empty where the own counts serve
   m.own_count.upload(s.own_count, "own_count");  // empty with the analytic partial volume
+  m.family_volume.upload(s.family_volume, "family volumes");  // empty: the passes sum them (pd_kernels.hpp)
   m.s0_own.upload(s.s0_own, "s0_own");
   m.s0_dual.upload(s.s0_dual, "s0_dual");
   m.state.upload(s.state, "state");
@@ -495,6 +497,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     m.fk_own.upload(f.k_own, "float k_own");
     m.fk_dual.upload(f.k_dual, "float k_dual");
     m.fvol_own.upload(f.vol_own, "float vol_own");
+    m.ffamily_volume.upload(f.family_volume, "float family volumes");
     if (!f.short_range_k.empty()) {
       m.fshort_range_k.upload(f.short_range_k, "float short_range_k");
       m.fspacing.upload(f.spacing, "float spacing");
@@ -525,6 +528,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   m.sample_fraction.upload(std::vector<double>(s.own_count_fractions(), s.own_count_fractions() + kSampleFractions),
                            "sample fractions");
   p.sample_fraction = counted ? m.sample_fraction.get() : nullptr;
+  p.family_volume = m.family_volume.get();  // null where none were uploaded
   p.s0_own = m.s0_own.get(); p.s0_dual = dual_shared ? p.s0_own : m.s0_dual.get(); p.state = m.state.get();
   if (m.min_stretch.size() > 0) {
     p.alpha = static_cast<float>(s.config.compressive_enhancement);
@@ -554,6 +558,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     q.k_own = m.fk_own.get(); q.k_dual = dual_shared ? q.k_own : m.fk_dual.get();
     q.vol_own = counted ? nullptr : m.fvol_own.get();  // float32_view's choice
     q.own_count = p.own_count; q.volume_exact = p.volume_exact; q.sample_fraction = p.sample_fraction;
+    q.family_volume = m.ffamily_volume.get();  // the float passes' sums (float32_enable)
     q.s0_own = p.s0_own; q.s0_dual = p.s0_dual; q.state = p.state; q.lps = p.lps;
     q.alpha = p.alpha; q.min_stretch = p.min_stretch; q.min_stretch_next = p.min_stretch_next;
     q.break_after_force = p.break_after_force;

@@ -81,6 +81,8 @@ void float32_enable(PdSystem& s, const double* origin) {
       f.xi_len[k] = static_cast<float>(std::sqrt(len2));
     }
   f.active = true;
+  f.family_volume.clear();
+  f.family_volume = family_volumes(float32_view(s));
   float32_upload(s);
   convert(s.force, f.force);
 }
@@ -103,6 +105,7 @@ PdViewT<float> float32_view(PdSystem& s) {
   // The own halves' volumes: from the counts and the double volumes, rounded to float once as
   // convert() rounded the double array; else the float copy.
   s.point_at_own_volumes(p, f.vol_own.data());
+  p.family_volume = f.family_volume.empty() ? nullptr : f.family_volume.data();
   p.s0_own = s.s0_own.data(); p.s0_dual = s.s0_dual_halves().data(); p.state = s.state.data();
   if (!s.min_stretch.empty() && s.n) {  // shared with the double view: float in both
     p.alpha = static_cast<float>(s.config.compressive_enhancement);

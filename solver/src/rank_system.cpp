@@ -154,6 +154,7 @@ PdSystem restrict_rank(const PdSystem& g, const RankLayout& L, std::vector<int32
   take_or_keep_if_held(s.corr_moduli, g.corr_moduli, ids, kCorrModuli, n);
   take_or_keep_if_held(s.short_range_k, g.short_range_k, ids, 1, n);
   take_or_keep_if_held(s.spacing, g.spacing, ids, 1, n);
+  s.family_volume = take(g.family_volume, ids, 1, n);  // the owned rows' (a distributed set-up's own)
 
   // The owned rows, partners renumbered (ghosts are sorted: a binary search each).
   const int64_t eb = g.offsets[b], ee = g.offsets[b + owned];

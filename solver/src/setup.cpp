@@ -525,6 +525,16 @@ FacetLayout group_facets_by_particle(const PdSystem& s) {
   return out;
 }
 
+template <class Real>
+std::vector<double> family_volumes(const PdViewT<Real>& p) {
+  std::vector<double> out(static_cast<size_t>(p.n));
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < p.n; ++i) out[i] = summed_family_volume(p, i);
+  return out;
+}
+template std::vector<double> family_volumes(const PdViewT<double>&);
+template std::vector<double> family_volumes(const PdViewT<float>&);
+
 PdView PdSystem::view() {
   PdView p;
   p.n = static_cast<int64_t>(n);
@@ -536,6 +546,7 @@ PdView PdSystem::view() {
   p.offsets = offsets.data(); p.neighbor = neighbor.data(); p.xi_len = xi_len.data();
   p.k_own = k_own.data(); p.k_dual = k_dual_halves().data();
   point_at_own_volumes(p, vol_own.data());
+  p.family_volume = family_volume.empty() ? nullptr : family_volume.data();
   p.s0_own = s0_own.data(); p.s0_dual = s0_dual_halves().data(); p.state = state.data();
   if (!min_stretch.empty() && n) {
     p.alpha = static_cast<float>(config.compressive_enhancement);
@@ -1029,6 +1040,11 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   fam = Families{};
   std::vector<uint8_t>().swap(samples_inside);  // freed (keep_count's note)
   std::vector<uint8_t>().swap(dual_inside);
+  // The own halves' volumes are final (counts or vol_own, and the particles' volumes): each
+  // family's volume once (pd_system.hpp family_volume), for the completeness tests below and
+  // every diagnostic pass of the run.
+  s.family_volume.clear();
+  s.family_volume = family_volumes(s.view());
   if (copy_strengths) {
     // The other entry of each shared pair: its reverse's values, own and dual swapped. Kept
     // entries are symmetric (beta_own > 0 || beta_dual > 0 reads the same two counts from
@@ -1104,8 +1120,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       std::vector<uint8_t> complete(n, 0);
 #pragma omp parallel for
       for (size_t i = 0; i < n; ++i) {
-        double family_volume = s.volume[i];  // the horizon disc holds the particle's own cell too
-        for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) family_volume += s.own_volume(k);
+        const double family_volume = s.volume[i] + s.family_volume[i];  // the horizon disc holds the own cell too
         complete[i] = family_volume >= 0.99 * M_PI * s.horizon[i] * s.horizon[i] * s.thickness;
       }
       gather_owned(dist, dist_rows, complete, 1);  // dist: the ghosts' completeness
@@ -1193,11 +1208,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       std::vector<uint8_t> complete(n, 0);
 #pragma omp parallel for
       for (size_t i = 0; i < n; ++i) {
-        double family_volume = s.volume[i], cube_sum = 0.0;  // own cell + the neighbours' parts
-        for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
-          family_volume += s.own_volume(k);
+        const double family_volume = s.volume[i] + s.family_volume[i];  // own cell + the neighbours' parts
+        double cube_sum = 0.0;
+        for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k)
           cube_sum += s.k_own[k] * s.volume[s.neighbor[k]] * std::pow(s.xi_len[k], 3);
-        }
         const double h = s.horizon[i];
         const double horizon_volume = d == 3 ? 4.0 / 3.0 * M_PI * h * h * h : M_PI * h * h * s.thickness;
         complete[i] = family_volume >= 0.99 * horizon_volume && cube_sum > 0;
@@ -1241,7 +1255,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // pairwise antisymmetric and a truncated family is stiffened only along the bonds it lost.
   if (!lps) {
     const int dims = s.dimension;
-    std::vector<double> iso(n, 0.0), family_volume(n, 0.0);
+    std::vector<double> iso(n, 0.0);
+    const std::vector<double>& family_volume = s.family_volume;  // (summed once, above)
     std::vector<double> uni(3 * n, 0.0);  // PD energy under unit uniaxial strain along each axis
     const int uni_dims = c.surface_correction ? dims : 0;  // only the surface correction reads them
     const double* k_dual = s.k_dual_halves().data();
@@ -1249,7 +1264,6 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     for (size_t i = 0; i < n; ++i) {
       for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
         iso[i] += pmb_energy_density(s.k_own[k], k_dual[k], s.state[k], 1.0, s.xi_len[k]);
-        family_volume[i] += s.own_volume(k);
         const int32_t j = s.neighbor[k];
         for (int d = 0; d < uni_dims; ++d) {
           const double nd = (s.x0[3 * j + d] - s.x0[3 * i + d]) / s.xi_len[k];

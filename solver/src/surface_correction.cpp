@@ -54,8 +54,7 @@ std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<Elasti
   // coefficients give for a complete continuous family.
   std::vector<uint8_t> complete(n, 0);
   for (size_t i = 0; i < n; ++i) {
-    double family_volume = s.volume[i];  // the horizon's ball (disc) holds the particle's own cell too
-    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) family_volume += s.own_volume(k);
+    const double family_volume = s.volume[i] + s.family_volume[i];  // the horizon's ball (disc) holds the own cell too
     const double h = s.horizon[i];
     const double horizon_volume = dims == 3 ? 4.0 / 3.0 * M_PI * h * h * h : M_PI * h * h * s.thickness;
     complete[i] = family_volume >= 0.99 * horizon_volume;

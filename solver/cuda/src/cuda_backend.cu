@@ -259,6 +259,7 @@ struct CudaSystem::Impl {
   DeviceArray<uint8_t> state;
   DeviceArray<uint8_t> own_count;  // the own halves' sample counts, where vol_own is not held (pd_system.hpp)
   DeviceArray<double> sample_fraction;  // their fractions (pd_physics.hpp partial_volume_sample_fractions)
+  DeviceArray<double> family_volume, ffamily_volume;  // per particle, the damage's denominator (pd_system.hpp)
   // compressive enhancement: s_min read and written by a pass (swapped at each step's start,
   // commit_min_stretch)
   DeviceArray<float> min_stretch, min_stretch_next;
@@ -485,6 +486,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   m.offsets.upload(s.offsets, "offsets");
   m.neighbor.upload(s.neighbor, "neighbor");
   m.own_count.upload(s.own_count, "own_count");  // empty with the analytic partial volume
+  m.family_volume.upload(s.family_volume, "family volumes");  // empty: the passes sum them (pd_kernels.hpp)
   m.s0_own.upload(s.s0_own, "s0_own");
   m.s0_dual.upload(s.s0_dual, "s0_dual");
   m.state.upload(s.state, "state");
@@ -506,6 +508,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   if (s.f32.active) {
     m.f32 = true;
     m.floats.upload(s.f32, s.n, held, "float ");
+    m.ffamily_volume.upload(s.f32.family_volume, "float family volumes");
   }
   m.f_before.allocate(3 * s.n, "f_before");
 
@@ -528,6 +531,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   m.sample_fraction.upload(std::vector<double>(s.own_count_fractions(), s.own_count_fractions() + kSampleFractions),
                            "sample fractions");
   p.sample_fraction = counted ? m.sample_fraction.get() : nullptr;
+  p.family_volume = m.family_volume.get();  // null where none were uploaded
   p.s0_own = m.s0_own.get(); p.s0_dual = dual_shared ? p.s0_own : m.s0_dual.get(); p.state = m.state.get();
   if (m.min_stretch.size() > 0) {
     p.alpha = static_cast<float>(s.config.compressive_enhancement);
@@ -551,6 +555,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     q.x = nullptr;  // float never forms x0 + u
     q.fixed_dof = p.fixed_dof; q.offsets = p.offsets; q.neighbor = p.neighbor;
     q.own_count = p.own_count; q.volume_exact = p.volume_exact; q.sample_fraction = p.sample_fraction;
+    q.family_volume = m.ffamily_volume.get();  // the float passes' sums (float32_enable)
     q.s0_own = p.s0_own; q.s0_dual = p.s0_dual; q.state = p.state; q.lps = p.lps;
     q.alpha = p.alpha; q.min_stretch = p.min_stretch; q.min_stretch_next = p.min_stretch_next;
     q.break_after_force = p.break_after_force;

@@ -103,9 +103,9 @@ BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int
   const PdView& p = c.p;
   const double* mod = c.moduli + kCorrModuli * i;
   double K[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, N[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-  double released = 0.0, smax = 0.0, intact_vol = 0.0, total_vol = 0.0;
+  double released = 0.0, smax = 0.0, intact_vol = 0.0;
+  const double total_vol = p.diagnostics ? family_volume(p, i) : 0.0;
   for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
-    total_vol += own_volume(p, k);
     uint8_t st = p.state[k];
     if (!st) continue;
     const int64_t j = p.neighbor[k];

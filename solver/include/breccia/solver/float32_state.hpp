@@ -32,6 +32,9 @@ struct Float32State {
   std::vector<float> lps_a, lps_b;                                    // N (LPS fast path)
   std::vector<float> xi_len, k_own, k_dual, vol_own;                  // per bond entry (vol_own: lammps partial volume only)
   std::vector<float> short_range_k, spacing;                          // N (short-range forces)
+  // N: each family's volume as the float passes sum it, the own halves' volumes rounded to float
+  // and added in double (pd_system.hpp family_volume; family_volumes over the float view).
+  std::vector<double> family_volume;
   std::vector<float> u_before;   // scratch for the external-work trapezoid
   std::vector<double> f_before;
 };

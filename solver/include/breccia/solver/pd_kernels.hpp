@@ -62,6 +62,11 @@ struct PdViewT {
   const uint8_t* own_count = nullptr;
   const double* volume_exact = nullptr;
   const double* sample_fraction = nullptr;
+  // Per particle, the damage's denominator: the own halves' volumes of its row (own_volume,
+  // as Real) summed in double in row order from 0, whatever the entries' states, a constant of
+  // the run (family_volume below; PdSystem::family_volume, Float32State::family_volume). Null:
+  // the diagnostic passes sum it over the row themselves (views built by hand).
+  const double* family_volume = nullptr;
   const float* s0_own = nullptr;   // critical stretch of each half-bond
   const float* s0_dual = nullptr;
   uint8_t* state = nullptr;        // kOwnIntact | kDualIntact
@@ -120,6 +125,32 @@ template <class Real>
 BRECCIA_HD Real own_volume(const PdViewT<Real>& p, int64_t k) {
   if (p.own_count) return static_cast<Real>(counted_own_volume(p.own_count[k], p.sample_fraction, p.volume_exact[p.neighbor[k]]));
   return p.vol_own[k];
+}
+// Particle i's family volume summed over its `count` entries, the q-th at index `at(q)`, in
+// row order: the own halves' volumes as Real (own_volume), added in double from 0. The damage
+// weights' total (1 - intact / total) in every diagnostic pass; the one loop that forms
+// PdSystem::family_volume (family_volumes, setup.cpp), so the stored values are its bits.
+template <class Real, class At>
+BRECCIA_HD double summed_family_volume(const PdViewT<Real>& p, int64_t count, const At& at) {
+  double v = 0.0;
+  for (int64_t q = 0; q < count; ++q) v += own_volume(p, at(q));
+  return v;
+}
+template <class Real>
+BRECCIA_HD double summed_family_volume(const PdViewT<Real>& p, int64_t i) {  // i's CSR row
+  double v = 0.0;
+  for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) v += own_volume(p, k);
+  return v;
+}
+// The diagnostic passes' family volume of particle i: the view's stored one where it holds
+// them (summed once by the loop above), else summed over the row here.
+template <class Real, class At>
+BRECCIA_HD double family_volume(const PdViewT<Real>& p, int64_t i, int64_t count, const At& at) {
+  return p.family_volume ? p.family_volume[i] : summed_family_volume(p, count, at);
+}
+template <class Real>
+BRECCIA_HD double family_volume(const PdViewT<Real>& p, int64_t i) {
+  return p.family_volume ? p.family_volume[i] : summed_family_volume(p, i);
 }
 // Does entry k's own half exist (j in i's horizon: beta*V_j > 0)? A count > 0 exactly when
 // the volume formed from it is (volumes are positive: particle_file.cpp).
@@ -878,11 +909,11 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
   const Real theta_i = p.dilatation[i], d = static_cast<Real>(p.lps[i].dilatation_factor);
   Real fx = Real(0), fy = Real(0), fz = Real(0);
   double released = 0.0, dev_sum = 0.0, smax = 0.0, smin = 1e300;
-  double intact_vol = 0.0, total_vol = 0.0;
+  double intact_vol = 0.0;
+  const double total_vol = p.diagnostics ? family_volume(p, i) : 0.0;
   bool any = false;
   const int64_t end = p.offsets[i + 1];
   for (int64_t k = p.offsets[i]; k < end; ++k) {
-    if (p.diagnostics) total_vol += own_volume(p, k);
     if (!p.state[k]) continue;
     const int64_t j = p.neighbor[k];
     const Real xi = p.xi_len[k];
@@ -1126,11 +1157,11 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
   }
   RowForceSums<Real, true> sums;  // the fast loops' four sums: the same bits
   double w = 0.0, released = 0.0, smax = 0.0, smin = 1e300;
-  double intact_vol = 0.0, total_vol = 0.0;
+  double intact_vol = 0.0;
+  const double total_vol = kDiagnostics ? family_volume(p, i) : 0.0;
   bool any = false;
   const int64_t begin = p.offsets[i], end = p.offsets[i + 1];
   for (int64_t k = begin; k < end; ++k) {
-    if (kDiagnostics) total_vol += own_volume(p, k);
     if (!p.state[k]) continue;
     const int64_t j = p.neighbor[k];
     const Real xi = p.xi_len[k];
@@ -1249,7 +1280,8 @@ template <bool kDiagnostics, class Real, class At, class Broke>
 BRECCIA_HD void general_force_row(const PdViewT<Real>& p, int64_t i, int64_t count, const At& at, const Broke& broke) {
   Real fx = Real(0), fy = Real(0), fz = Real(0);
   double w = 0.0, released = 0.0, smax = 0.0, smin = 1e300;
-  double intact_vol = 0.0, total_vol = 0.0;
+  double intact_vol = 0.0;
+  const double total_vol = kDiagnostics ? family_volume(p, i, count, at) : 0.0;
   bool any = false;
   const bool lps = p.model == static_cast<int>(PdModel::LPS);
   Real m_i = Real(0), theta_i = Real(0);
@@ -1262,7 +1294,6 @@ BRECCIA_HD void general_force_row(const PdViewT<Real>& p, int64_t i, int64_t cou
   }
   for (int64_t q = 0; q < count; ++q) {
     const int64_t k = at(q);
-    if (kDiagnostics) total_vol += own_volume(p, k);
     uint8_t st = p.state[k];
     if (!st) continue;
     const uint8_t state_before = st;

@@ -124,6 +124,13 @@ struct PdSystem {
   }
   // Entry k's own half exists (beta_own > 0): its count is nonzero, or its stored volume positive.
   bool own_half_exists(int64_t k) const { return own_count.empty() ? vol_own[k] > 0.0 : own_count[k] != 0; }
+  // Each particle's family volume, the own halves' volumes of its row summed once in row order
+  // from 0 (family_volumes below: pd_kernels.hpp summed_family_volume, the sum every diagnostic
+  // pass formed per entry, so the same bits), filled by setup_system once the bond arrays are
+  // final; a rank's system takes its particles' (rank_system.cpp). The diagnostic passes read it
+  // (PdView::family_volume), and the set-up's completeness tests add the particle's own cell
+  // (volume[i] + family_volume[i]). Empty: the passes sum it over their rows themselves.
+  std::vector<double> family_volume;
   // model.compressive_enhancement: each particle's smallest bond stretch at the last force
   // pass and the one being written (pd_kernels.hpp, stretch_shift); empty without it.
   std::vector<float> min_stretch, min_stretch_next;
@@ -262,6 +269,12 @@ struct SetupHooks {
   // layouts; pd_system.hpp k_dual_halves). False: shared where set-up finds them equal.
   bool store_dual_halves = false;
 };
+
+// Each of the view's p.n particles' family volume summed over its CSR row
+// (pd_kernels.hpp summed_family_volume; p.family_volume is not read), threaded over particles:
+// PdSystem::family_volume from the double view, Float32State::family_volume from the float one.
+template <class Real>
+std::vector<double> family_volumes(const PdViewT<Real>& p);
 
 // Points per axis of a `specimen: {lattice: ...}` box (1 on the axes it does not have).
 std::array<int64_t, 3> lattice_point_counts(const LatticeSpec& lattice);

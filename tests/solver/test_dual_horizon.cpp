@@ -246,6 +246,15 @@ TEST(WeibullPerBond, ReverseEntriesHoldTheSameDrawWithOwnAndDualSwapped) {
   }
 }
 
+// A small 3D LPS lattice in float32: the uniform deck of the own-volume and family-volume tests.
+static std::string small_float32_lps_lattice() {
+  return "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.003, 0.003], spacing: 0.5 mm}}\n"
+         "model: {type: lps, horizon_factor: 3.015, precision: float32}\n"
+         "materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, "
+         "fracture_energy: 10}]\n"
+         "time: {steps: 1}\n";
+}
+
 // The own halves' volumes beta_own V_j (damage weights, family volumes; pd_system.hpp
 // own_count): with the sampled partial volume set-up keeps each entry's own sample count (a
 // byte) and forms the volume where it is read; it must be the set-up's former value, the
@@ -260,11 +269,7 @@ TEST(DualHorizon, OwnVolumesFormedFromSampleCountsAreTheQuadratureTimesTheVolume
     std::string name, yaml;
     bool counted;
   };
-  const std::string lattice = "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.003, 0.003], spacing: 0.5 mm}}\n"
-                              "model: {type: lps, horizon_factor: 3.015, precision: float32}\n"
-                              "materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, "
-                              "fracture_energy: 10}]\n"
-                              "time: {steps: 1}\n";
+  const std::string lattice = small_float32_lps_lattice();
   std::string lammps = graded_case(strip);
   lammps.replace(lammps.find("variable_horizon"), 0, "partial_volume: lammps, ");
   const std::vector<Deck> decks = {{"graded", graded_case(strip), true}, {"lattice_float32", lattice, true},
@@ -314,11 +319,7 @@ TEST(DualHorizon, OwnVolumesFormedFromSampleCountsAreTheQuadratureTimesTheVolume
 // volumes or sums them per entry (the view without them), with a third of the bonds broken.
 TEST(FamilyVolume, StoredPerParticleIsTheRowSumOfTheOwnVolumesBitForBit) {
   const std::string strip = graded_strip("graded_family_volume", 0.02, 0.01, 0.5e-3);
-  const std::string lattice = "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.003, 0.003], spacing: 0.5 mm}}\n"
-                              "model: {type: lps, horizon_factor: 3.015, precision: float32}\n"
-                              "materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25, "
-                              "fracture_energy: 10}]\n"
-                              "time: {steps: 1}\n";
+  const std::string lattice = small_float32_lps_lattice();
   std::string lammps = graded_case(strip);
   lammps.replace(lammps.find("variable_horizon"), 0, "partial_volume: lammps, ");
   std::string graded_lps = graded_case(strip);

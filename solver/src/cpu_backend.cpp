@@ -283,32 +283,32 @@ bool cpu_energy_density_on_rows(PdSystem& sys, std::span<const int64_t> rows) {
 }
 
 namespace {
-// stable_step_region for the estimate: one process's marks of every particle, or under a
-// distributed run (`ranks`) the rank's own particles' (i - begin), from its system's
-// reference arrays, the largest scale and the count taken over every rank (the chain: a
-// maximum and a sum of integers, exact, so one process's region). `count`: the particles
-// the estimate moves (every particle where the marks are empty).
+// The stiff region of the stable-step estimate. Each particle's local frequency scale
+// omega_i^2 ~ E / (rho_i delta_i^2) (a bond's stiffness over its mass at a fixed horizon
+// ratio); the region holds those at least `ratio` of the largest (the set-up's 0.35: omega_i
+// >= 0.59 omega_max). Where that is half the particles or more (a uniform lattice: all of
+// them) the estimate runs on the whole system, as it did: `marks` empty.
+// The marks are of the `own` particles of `ref` (its first ones), read from its reference
+// arrays; the largest scale and the marked count are taken over every rank by `over_ranks`
+// (one process: the sum itself; a distributed run: StableStepRanks::chain, a maximum and a
+// sum of integers, exact, so one process's region). `count`: the particles the estimate
+// moves, of the whole body's sys.n (every particle where the marks are empty).
 struct StableStepRegion {
   std::vector<uint8_t> marks;
   size_t count = 0;
 };
-StableStepRegion stable_step_region_of(const PdSystem& sys, double ratio, const StableStepRanks* ranks) {
+using OverRanks = std::function<double(const std::function<double(double)>&)>;
+StableStepRegion stiff_region(const PdSystem& sys, const PdSystem& ref, size_t own, double ratio,
+                              const OverRanks& over_ranks) {
   StableStepRegion r;
-  if (!(ranks && ranks->pass)) {
-    r.marks = stable_step_region(sys, ratio);
-    for (size_t i = 0; i < sys.n; ++i) r.count += r.marks.empty() ? 1 : r.marks[i];
-    return r;
-  }
   r.count = sys.n;
   if (sys.n == 0 || !(ratio > 0.0)) return r;
-  const PdSystem& l = *ranks->system;
-  const size_t own = static_cast<size_t>(ranks->end - ranks->begin);
   std::vector<double> scale(own);
-  for (size_t i = 0; i < own; ++i) {  // stable_step_region's arithmetic
-    const double delta = l.horizon[i];
-    scale[i] = sys.config.materials[l.material[i]].youngs_modulus / (l.density[i] * delta * delta);
+  for (size_t i = 0; i < own; ++i) {
+    const double delta = ref.horizon[i];
+    scale[i] = sys.config.materials[ref.material[i]].youngs_modulus / (ref.density[i] * delta * delta);
   }
-  const double top = ranks->chain([&](double t) {
+  const double top = over_ranks([&](double t) {
     for (const double v : scale) t = std::max(t, v);
     return t;
   });
@@ -318,36 +318,24 @@ StableStepRegion stable_step_region_of(const PdSystem& sys, double ratio, const 
     marks[i] = scale[i] >= ratio * top;
     mine += marks[i];
   }
-  const size_t count = static_cast<size_t>(ranks->chain([&](double c) { return c + static_cast<double>(mine); }));
+  const size_t count = static_cast<size_t>(over_ranks([&](double c) { return c + static_cast<double>(mine); }));
   if (!(top > 0.0) || 2 * count >= sys.n) return r;
   r.marks = std::move(marks);
   r.count = count;
   return r;
 }
+double one_process(const std::function<double(double)>& f) { return f(0.0); }
+// For the estimate: one process's marks of every particle, or under a distributed run
+// (`ranks`) the rank's own particles' (i - begin) from its system's reference arrays.
+StableStepRegion stable_step_region_of(const PdSystem& sys, double ratio, const StableStepRanks* ranks) {
+  if (ranks && ranks->pass)
+    return stiff_region(sys, *ranks->system, static_cast<size_t>(ranks->end - ranks->begin), ratio, ranks->chain);
+  return stiff_region(sys, sys, sys.n, ratio, one_process);
+}
 }  // namespace
 
 std::vector<uint8_t> stable_step_region(const PdSystem& sys, double ratio) {
-  // Each particle's local frequency scale omega_i^2 ~ E / (rho_i delta_i^2) (a bond's
-  // stiffness over its mass at a fixed horizon ratio); the region holds those at least
-  // `ratio` of the largest (the set-up's 0.35: omega_i >= 0.59 omega_max). Where that is half
-  // the particles or more (a uniform lattice: all of them) the estimate runs on the whole
-  // system, as it did.
-  if (sys.n == 0 || !(ratio > 0.0)) return {};
-  std::vector<double> scale(sys.n);
-  double top = 0.0;
-  for (size_t i = 0; i < sys.n; ++i) {
-    const double delta = sys.horizon[i];
-    scale[i] = sys.config.materials[sys.material[i]].youngs_modulus / (sys.density[i] * delta * delta);
-    top = std::max(top, scale[i]);
-  }
-  std::vector<uint8_t> region(sys.n, 0);
-  size_t count = 0;
-  for (size_t i = 0; i < sys.n; ++i) {
-    region[i] = scale[i] >= ratio * top;
-    count += region[i];
-  }
-  if (!(top > 0.0) || 2 * count >= sys.n) return {};
-  return region;
+  return stiff_region(sys, sys, sys.n, ratio, one_process).marks;
 }
 
 double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const ForcePass& forces, double region_ratio,

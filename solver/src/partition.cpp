@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <stdexcept>
 #include <utility>
@@ -69,13 +70,59 @@ GeometricWindow geometric_window(const std::vector<double>& x, const std::vector
     throw std::invalid_argument("geometric_window: rows [begin, end) within [0, N]");
   GeometricWindow w;
   if (row_begin == row_end) return w;
-  double max_horizon = 0.0, max_half_cell = 0.0;
-  for (size_t i = 0; i < n; ++i) {
-    max_horizon = std::max(max_horizon, horizon[i]);
-    max_half_cell = std::max(max_half_cell, half_cell[i]);
+  constexpr double grow = 1.0 + 1e-6;  // against rounding
+  auto pad = [&](size_t j) { return partial_volume_reach(half_cell[j], dimension); };
+  // Reach classes: a particle's own reach h + pad in geometric bins from the smallest (ratio
+  // q, at most kClasses, the last open-ended), with each class's largest horizon H[c] and
+  // largest pad P[c]. A pair (i, j) is within max(h_i, h_j) + max(p_i, p_j) (build_families'
+  // test from either end), at most max(h_i, H[c]) + max(p_i, P[c]) for j of class c: row i
+  // marks, per class, the cells within that of its position.
+  constexpr int kClasses = 8;
+  double rmin = std::numeric_limits<double>::infinity(), rmax = 0.0;
+  for (size_t j = 0; j < n; ++j) {
+    const double r = horizon[j] + pad(j);
+    rmin = std::min(rmin, r);
+    rmax = std::max(rmax, r);
   }
-  // partial_volume_reach grows with the half cell: the largest pad is the largest cell's.
-  const double reach = (max_horizon + partial_volume_reach(max_half_cell, dimension)) * (1.0 + 1e-6);
+  double bound[kClasses - 1];  // class c: reaches below bound[c] and not below bound[c - 1]
+  const double q = rmin > 0.0 ? std::max(std::pow(2.0, 0.25), std::pow(rmax / rmin, 1.0 / kClasses)) : 2.0;
+  for (int c = 0; c < kClasses - 1; ++c) bound[c] = rmin * std::pow(q, c + 1);
+  auto klass = [&](size_t j) {
+    const double r = horizon[j] + pad(j);
+    int c = 0;
+    while (c < kClasses - 1 && r >= bound[c]) ++c;
+    return c;
+  };
+  double H[kClasses] = {}, P[kClasses] = {};
+  bool present[kClasses] = {};
+  BoundingBox up_to[kClasses];  // the box of classes 0 .. c's particles
+  for (int c = 0; c < kClasses; ++c)
+    for (int d = 0; d < 3; ++d) up_to[c].lo[d] = 1e300, up_to[c].hi[d] = -1e300;
+  for (size_t j = 0; j < n; ++j) {
+    const int c = klass(j);
+    present[c] = true;
+    H[c] = std::max(H[c], horizon[j]);
+    P[c] = std::max(P[c], pad(j));
+    for (int d = 0; d < 3; ++d) {
+      up_to[c].lo[d] = std::min(up_to[c].lo[d], x[3 * j + d]);
+      up_to[c].hi[d] = std::max(up_to[c].hi[d], x[3 * j + d]);
+    }
+  }
+  for (int c = 1; c < kClasses; ++c)
+    for (int d = 0; d < 3; ++d) {
+      up_to[c].lo[d] = std::min(up_to[c].lo[d], up_to[c - 1].lo[d]);
+      up_to[c].hi[d] = std::max(up_to[c].hi[d], up_to[c - 1].hi[d]);
+    }
+  // Row i's reach to class c's particles, times 1 + 1e-6.
+  auto reach_to = [&](int64_t i, int c) {
+    return (std::max(horizon[i], H[c]) + std::max(pad(static_cast<size_t>(i)), P[c])) * grow;
+  };
+  // Grid g holds the marks of the pairs whose coarser end's class is g: rows of class g
+  // towards classes 0 .. g (bits 0 .. g), rows of finer classes towards class g (bit g).
+  // Cells of half class g's largest reach, so about the 125 cells around a row's are
+  // visited whatever its class and the candidates'; the grid covers the rows' box grown by
+  // the largest reach marked in it, cut to the box of classes 0 .. g (only their particles
+  // are looked up in it); 1 B per cell, at most max(N, 65,536) cells per grid.
   double lo[3], hi[3];
   for (int d = 0; d < 3; ++d) lo[d] = hi[d] = x[3 * static_cast<size_t>(row_begin) + d];
   for (int64_t i = row_begin; i < row_end; ++i)
@@ -83,40 +130,95 @@ GeometricWindow geometric_window(const std::vector<double>& x, const std::vector
       lo[d] = std::min(lo[d], x[3 * i + d]);
       hi[d] = std::max(hi[d], x[3 * i + d]);
     }
-  // A Morton range's box can hold most of the body (a range across an octant's boundary is
-  // L-shaped: on the 41^3 lattice one rank of 4 held 80 % of the particles in its grown box),
-  // so a particle must also lie in a cell near a row's: cells of edge `reach` / 2 or larger,
-  // a partner's cell coordinate differing from its row's by at most ring = ceil(reach / edge)
-  // on every axis (2 at the smallest edge: the 125 cells around each row's marked; cells of
-  // a whole reach, ring 1, let a window reach up to two reaches beyond a row: 32,434 instead
-  // of 27,706 particles for the largest of 4 windows of the 41^3 lattice), 1 B per cell, at
-  // most max(N, 65536) cells.
-  const CellGrid all = [&] {
-    const BoundingBox body = bounding_box(x);
-    double cell = std::max(0.5 * reach, 1e-300);
+  double marked_reach[kClasses] = {};
+  for (int64_t i = row_begin; i < row_end; ++i) {
+    const int k = klass(static_cast<size_t>(i));
+    for (int c = 0; c < kClasses; ++c)
+      if (present[c]) marked_reach[std::max(k, c)] = std::max(marked_reach[std::max(k, c)], reach_to(i, c));
+  }
+  struct Marks {
+    bool active = false;
+    BoundingBox box;
+    CellGrid grid;
+    std::vector<uint8_t> bits;
+  };
+  Marks grids[kClasses];
+  for (int g = 0; g < kClasses; ++g) {
+    if (marked_reach[g] <= 0.0) continue;
+    Marks& m = grids[g];
+    m.active = true;
+    for (int d = 0; d < 3; ++d) {
+      m.box.lo[d] = std::max(lo[d] - marked_reach[g], up_to[g].lo[d]);
+      m.box.hi[d] = std::min(hi[d] + marked_reach[g], up_to[g].hi[d]);
+      m.active = m.active && m.box.lo[d] <= m.box.hi[d];
+    }
+    if (!m.active) continue;
+    double cell = std::max((H[g] + P[g]) / 3.0, 1e-300);
     for (;;) {
-      const CellGrid g = CellGrid::covering(body, cell);
-      if (g.cells() <= std::max<long long>(static_cast<long long>(n), 65536)) return g;
+      m.grid = CellGrid::covering(m.box, cell);
+      if (m.grid.cells() <= std::max<long long>(static_cast<long long>(n), 65536)) break;
       cell *= 1.25;
     }
-  }();
-  long long ring = 1;
-  for (int d = 0; d < 3; ++d) ring = std::max(ring, static_cast<long long>(std::ceil(reach / all.cell[d])));
-  std::vector<uint8_t> marked(static_cast<size_t>(all.cells()), 0);
-  for (int64_t i = row_begin; i < row_end; ++i) {
-    long long c[3];
-    for (int d = 0; d < 3; ++d) c[d] = all.coordinate(d, x[3 * i + d]);
-    for (long long az = std::max(0LL, c[2] - ring); az <= std::min(all.count[2] - 1, c[2] + ring); ++az)
-      for (long long ay = std::max(0LL, c[1] - ring); ay <= std::min(all.count[1] - 1, c[1] + ring); ++ay)
-        for (long long ax = std::max(0LL, c[0] - ring); ax <= std::min(all.count[0] - 1, c[0] + ring); ++ax)
-          marked[static_cast<size_t>(all.index(ax, ay, az))] = 1;
+    m.bits.assign(static_cast<size_t>(m.grid.cells()), 0);
   }
-  // A partner's coordinate differs from its row's by at most the pair's distance: within
-  // `reach` of the box on every axis, and in a marked cell.
+  // Row i marks in grid g every cell whose box comes within reach[c] of it with bit c (c
+  // from c_lo to c_hi), plus a margin for a point's rounded cell coordinate. The cells
+  // visited on each axis run from the cell of x - reach to that of x + reach: the
+  // coordinate is monotone in the position, so a point within reach falls in one of them.
+  auto mark = [&](Marks& m, const double* xi, const double* reach, int c_lo, int c_hi) {
+    if (!m.active) return;
+    double most = 0.0;
+    for (int c = c_lo; c <= c_hi; ++c) most = std::max(most, reach[c]);
+    if (most <= 0.0) return;
+    const CellGrid& gr = m.grid;
+    const double margin = 1e-9 * gr.cell[0];
+    long long a0[3], a1[3];
+    for (int d = 0; d < 3; ++d) {
+      a0[d] = gr.coordinate(d, xi[d] - most);
+      a1[d] = gr.coordinate(d, xi[d] + most);
+    }
+    auto gap = [&](int d, long long a) {
+      const double low = gr.origin[d] + static_cast<double>(a) * gr.cell[d], high = low + gr.cell[d];
+      return xi[d] < low ? low - xi[d] : (xi[d] > high ? xi[d] - high : 0.0);
+    };
+    const double skip2 = (most + margin) * (most + margin);
+    for (long long az = a0[2]; az <= a1[2]; ++az) {
+      const double gz = gap(2, az);
+      if (gz * gz > skip2) continue;
+      for (long long ay = a0[1]; ay <= a1[1]; ++ay) {
+        const double gy = gap(1, ay);
+        if (gz * gz + gy * gy > skip2) continue;
+        for (long long ax = a0[0]; ax <= a1[0]; ++ax) {
+          const double gx = gap(0, ax);
+          const double g2 = gz * gz + gy * gy + gx * gx;
+          uint8_t bits = 0;
+          for (int c = c_lo; c <= c_hi; ++c)
+            if (reach[c] > 0.0 && g2 <= (reach[c] + margin) * (reach[c] + margin)) bits |= static_cast<uint8_t>(1u << c);
+          if (bits) m.bits[static_cast<size_t>(gr.index(ax, ay, az))] |= bits;
+        }
+      }
+    }
+  };
+  for (int64_t i = row_begin; i < row_end; ++i) {
+    const int k = klass(static_cast<size_t>(i));
+    double reach[kClasses] = {};
+    for (int c = 0; c < kClasses; ++c)
+      if (present[c]) reach[c] = reach_to(i, c);
+    mark(grids[k], &x[3 * i], reach, 0, k);
+    for (int c = k + 1; c < kClasses; ++c) mark(grids[c], &x[3 * i], reach, c, c);
+  }
+  // Particle j of class c is near the rows when a grid g >= c marks its cell with bit c.
   auto near = [&](size_t j) {
-    for (int d = 0; d < 3; ++d)
-      if (lo[d] - x[3 * j + d] > reach || x[3 * j + d] - hi[d] > reach) return false;
-    return marked[static_cast<size_t>(all.index_of(&x[3 * j]))] != 0;
+    const int c = klass(j);
+    const double* xj = &x[3 * j];
+    for (int g = c; g < kClasses; ++g) {
+      const Marks& m = grids[g];
+      if (!m.active) continue;
+      bool inside = true;
+      for (int d = 0; d < 3; ++d) inside = inside && xj[d] >= m.box.lo[d] && xj[d] <= m.box.hi[d];
+      if (inside && (m.bits[static_cast<size_t>(m.grid.index_of(xj))] >> c & 1u)) return true;
+    }
+    return false;
   };
   for (int64_t j = 0; j < row_begin; ++j)
     if (near(static_cast<size_t>(j))) w.index.push_back(static_cast<int32_t>(j));

@@ -815,6 +815,84 @@ TEST(RankSystem, GeometricHaloHoldsEveryFamilyGhostOfAGradedDualHorizonMesh) {
     EXPECT_TRUE(std::binary_search(w.index.begin(), w.index.end(), s.neighbor[k])) << s.neighbor[k];
   EXPECT_THROW(geometric_window(s.x0, s.horizon, s.half_cell, 3, 5, 4), std::invalid_argument);
 }
+
+// The halo follows each particle's own reach (geometric_window's reach classes): on a
+// strongly graded bar (2 mm tets grading to 0.4 mm at a notch, the dual horizon: horizons
+// differing over fourfold) each rank's window at 2, 3, 4 and 8 ranks holds every family
+// ghost (kept bonds and candidates), yet fewer particles than the window of the body's
+// largest reach (the same function given every particle the largest horizon and half cell:
+// what the window was before the classes); and no particle of a window lies farther from
+// every row than 2.5 times the pair's reach max(h_i, h_j) + max(pad_i, pad_j): a shell about
+// as thick as the local reach (the slack: a marked cell's diagonal, sqrt(3) / 3 of the
+// class's reach, and the class's bin, at most 2^(1/4) wide here; 1.9 measured).
+namespace {
+std::string strongly_graded_notch_particles() {
+  static const std::string path = mesh_and_place(
+      "halo_strongly_graded_notch",
+      "dimension: 3\n"
+      "body: {shape: box, name: block, size: [60 mm, 12 mm, 6 mm]}\n"
+      "notches: [{name: notch, corner: [12 mm, 0, 0], edge_a: [0, 3 mm, 0], edge_b: [0, 0, 6 mm]}]\n"
+      "mesh: {size: 2 mm, refine: [{near: notch, size: 0.4 mm, distance_min: 0.5 mm, distance_max: 5 mm}]}\n");
+  return path;
+}
+}  // namespace
+
+TEST(RankSystem, GeometricHaloFollowsEachParticlesReachOnAStronglyGradedMesh) {
+  const std::string particles = strongly_graded_notch_particles();
+  ASSERT_FALSE(particles.empty()) << "could not mesh the graded block";
+  const PdSystem s = system_from_yaml("halo_strongly_graded", "specimen: {particles: " + particles + "}\n"
+                                      "model: {type: pmb, horizon_factor: 3.015, variable_horizon: true}\n"
+                                      "materials: [{name: block, density: 2400, youngs_modulus: 30 GPa, poisson_ratio: 0.25}]\n"
+                                      "time: {steps: 1, check_stability: false}\n");
+  const int64_t n = static_cast<int64_t>(s.n);
+  const auto [hmin, hmax] = std::minmax_element(s.horizon.begin(), s.horizon.end());
+  ASSERT_GE(*hmax / *hmin, 4.0) << "strongly graded: horizons differing at least fourfold";
+  std::vector<double> pad(s.n);
+  for (size_t i = 0; i < s.n; ++i) pad[i] = partial_volume_reach(s.half_cell[i], 3);
+  const std::vector<double> largest_h(s.n, *hmax),
+      largest_cell(s.n, *std::max_element(s.half_cell.begin(), s.half_cell.end()));
+  const breccia::Families whole = breccia::build_families(s.x0, s.horizon, pad);
+  auto dist2 = [&](int64_t i, int64_t j) {
+    double r2 = 0.0;
+    for (int d = 0; d < 3; ++d) r2 += (s.x0[3 * j + d] - s.x0[3 * i + d]) * (s.x0[3 * j + d] - s.x0[3 * i + d]);
+    return r2;
+  };
+  double worst = 0.0;  // the largest (distance to the nearest row in pair reaches) of a halo particle
+  for (const int ranks : {2, 3, 4, 8}) {
+    const Partition p = MortonRangePartitioner().partition(s.offsets, ranks);
+    int64_t held = 0, body_reach_held = 0;
+    for (int r = 0; r < ranks; ++r) {
+      const int64_t b = p.begin[r], e = p.begin[r + 1];
+      const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, 3, b, e);
+      ASSERT_EQ(w.row_end - w.row_begin, e - b);
+      ASSERT_TRUE(std::is_sorted(w.index.begin(), w.index.end()));
+      ASSERT_EQ(std::adjacent_find(w.index.begin(), w.index.end()), w.index.end());
+      for (int64_t k = w.row_begin; k < w.row_end; ++k) ASSERT_EQ(w.index[k], b + (k - w.row_begin));
+      for (const int32_t g : brute_ghosts(s, p, r))
+        EXPECT_TRUE(std::binary_search(w.index.begin(), w.index.end(), g)) << ranks << " ranks, rank " << r << ": " << g;
+      EXPECT_EQ(ghosts_outside(w, b, e, whole.offsets, whole.neighbors), 0) << ranks << " ranks, rank " << r;
+      const int64_t body_wide =
+          static_cast<int64_t>(geometric_window(s.x0, largest_h, largest_cell, 3, b, e).index.size());
+      EXPECT_LT(static_cast<int64_t>(w.index.size()), body_wide) << ranks << " ranks, rank " << r;
+      held += static_cast<int64_t>(w.index.size());
+      body_reach_held += body_wide;
+      for (size_t k = 0; k < w.index.size(); ++k) {
+        if (static_cast<int64_t>(k) >= w.row_begin && static_cast<int64_t>(k) < w.row_end) continue;
+        const int32_t j = w.index[k];
+        double nearest = 1e300;
+        for (int64_t i = b; i < e; ++i) {
+          const double reach = std::max(s.horizon[i], s.horizon[j]) + std::max(pad[i], pad[j]);
+          nearest = std::min(nearest, std::sqrt(dist2(i, j)) / reach);
+        }
+        worst = std::max(worst, nearest);
+      }
+    }
+    std::printf("%d ranks: the windows hold %lld particles in all, %lld with the body's largest reach (%lld particles)\n",
+                ranks, static_cast<long long>(held), static_cast<long long>(body_reach_held), static_cast<long long>(n));
+  }
+  std::printf("farthest halo particle: %.3f pair reaches from its nearest row\n", worst);
+  EXPECT_LE(worst, 2.5);
+}
 #endif
 
 // plan_distributed_rows counts each slice's family sizes on the slice's geometric window:

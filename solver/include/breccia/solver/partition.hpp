@@ -67,20 +67,26 @@ std::vector<int64_t> family_sizes(const std::vector<double>& x0, const std::vect
                                   int64_t row_begin, int64_t row_end);
 
 // The particles a rank's rows [row_begin, row_end) may read before any family exists: the
-// rows, then the geometric halo, the other particles whose positions lie in the box of the
-// rows' positions grown by the largest reach any pair may have, the largest horizon plus the
-// largest pad (partial_volume_reach of the largest half cell) of the whole body (a dual
-// horizon's partner reaches with its own horizon, hence the whole body's largest), times
-// 1 + 1e-6 against rounding, and in one of the cells around a row's cell (cells of half that
-// reach over the body, the 125 around: a Morton range's box may hold most of the body). Every
-// partner build_families or family_sizes finds for those rows (|xi| within max(horizon) +
-// max(pad) of the pair) passes both tests, so the halo is a superset of the rows' family
-// ghosts, known from positions alone (docs/parallel.md, Memory, What to take next, item 2
-// b). Arrays as family_sizes takes them (set-up internal order). `index` is ascending (the
-// halo below the rows, the rows, the halo above), so a local index orders as the global
-// one: a row built on the window and mapped back through `index` is sorted as the whole
-// build's. An empty range has an empty window. O(N) (passes over the positions, 1 B per
-// cell); throws std::invalid_argument for a range outside [0, N].
+// rows, then the geometric halo, every other particle j within the pair's reach of some row
+// i. build_families pairs i and j when |xi| <= max(h_i, h_j) + max(pad_i, pad_j) (pad:
+// partial_volume_reach of the half cell; the dual horizon's partner reaches with its own
+// horizon), and family_sizes counts the same pairs. The halo follows each particle's own
+// reach: the particles fall in reach classes (h + pad in geometric bins from the smallest, at
+// most 8; class c's largest horizon H_c and pad P_c), and each row i marks, for each class c,
+// the cells within max(h_i, H_c) + max(pad_i, P_c), times 1 + 1e-6 against rounding, of its
+// position (cells of a third of the reach of the pair's coarser class, one grid per class,
+// 1 B per cell: a bit per class). j of class c is in the halo when its cell is marked for c.
+// So a row in a fine region holds the fine particles within a fine reach and the coarse ones
+// within theirs, not the whole body's largest reach: on a graded mesh the window is the rows
+// plus a shell about as thick as the local reach (its slack: a cell's diagonal and a class's
+// bin; docs/parallel.md, Memory, What to take next, item 2 b). A superset of the rows'
+// family ghosts, known from positions alone. Arrays as family_sizes takes them (set-up
+// internal order). `index` is ascending (the halo below the rows, the rows, the halo above),
+// so a local index orders as the global one: a row built on the window and mapped back
+// through `index` is sorted as the whole build's. An empty range has an empty window.
+// O(N + rows x classes x 343 cells) time; memory the window and the grids (each cut to the
+// rows' box grown by its reach, at most max(N, 65,536) cells); throws
+// std::invalid_argument for a range outside [0, N].
 struct GeometricWindow {
   std::vector<int32_t> index;          // global indices, ascending
   int64_t row_begin = 0, row_end = 0;  // the rows' local range in index

@@ -46,7 +46,7 @@ DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d);
 // The families of the rank's rows (every row on one process, build_families), the other rows
 // empty: the same rows, partners and order as the whole build's. A distributed set-up builds
 // them on the rows' geometric window (geometric_window, partition.hpp: the rows, then every
-// particle near them by the body's largest reach), which holds every partner, so the search's cell
+// particle within the pair's reach of one of them), which holds every partner, so the search's cell
 // lists and copies hold the window's particles, not the whole body's; the partners are then
 // mapped back to the whole system's indices (the window is ascending, so each row stays sorted).
 // window_particles (if given): the particles the search held (one process: all of them).

@@ -729,15 +729,38 @@ int64_t ghosts_outside(const GeometricWindow& w, int64_t b, int64_t e, const std
     }
   return missing;
 }
+
+// PMB with the dual horizon on a meshed particle file (the graded tests below).
+PdSystem dual_horizon_system(const std::string& name, const std::string& particles) {
+  return system_from_yaml(name, "specimen: {particles: " + particles + "}\n"
+                          "model: {type: pmb, horizon_factor: 3.015, variable_horizon: true}\n"
+                          "materials: [{name: block, density: 2400, youngs_modulus: 30 GPa, poisson_ratio: 0.25}]\n"
+                          "time: {steps: 1, check_stability: false}\n");
+}
+
+// Rank r's window w under the partition p: ascending, distinct, its rows r's range in
+// order; it holds every ghost of the kept bonds (returned) and of the candidate families
+// `whole`.
+std::set<int32_t> expect_window_holds_rank_ghosts(const PdSystem& s, const Partition& p, int r, const GeometricWindow& w,
+                                                  const breccia::Families& whole) {
+  const int64_t b = p.begin[r], e = p.begin[r + 1];
+  const std::string at = std::to_string(p.ranks()) + " ranks, rank " + std::to_string(r);
+  EXPECT_EQ(w.row_end - w.row_begin, e - b) << at;
+  EXPECT_TRUE(std::is_sorted(w.index.begin(), w.index.end())) << at;
+  EXPECT_EQ(std::adjacent_find(w.index.begin(), w.index.end()), w.index.end()) << at;
+  for (int64_t k = w.row_begin; k < w.row_end && k < static_cast<int64_t>(w.index.size()); ++k)
+    EXPECT_EQ(w.index[k], b + (k - w.row_begin)) << at;
+  const std::set<int32_t> ghosts = brute_ghosts(s, p, r);
+  for (const int32_t g : ghosts) EXPECT_TRUE(std::binary_search(w.index.begin(), w.index.end(), g)) << at << ": " << g;
+  EXPECT_EQ(ghosts_outside(w, b, e, whole.offsets, whole.neighbors), 0) << at;
+  return ghosts;
+}
 }  // namespace
 
 TEST(RankSystem, GeometricHaloHoldsEveryFamilyGhostOfAGradedDualHorizonMesh) {
   const std::string particles = graded_notch_particles();
   ASSERT_FALSE(particles.empty()) << "could not mesh the graded block";
-  const PdSystem s = system_from_yaml("halo_graded", "specimen: {particles: " + particles + "}\n"
-                                      "model: {type: pmb, horizon_factor: 3.015, variable_horizon: true}\n"
-                                      "materials: [{name: block, density: 2400, youngs_modulus: 30 GPa, poisson_ratio: 0.25}]\n"
-                                      "time: {steps: 1, check_stability: false}\n");
+  const PdSystem s = dual_horizon_system("halo_graded", particles);
   const int64_t n = static_cast<int64_t>(s.n);
   ASSERT_GT(n, 3000);
   const auto [hmin, hmax] = std::minmax_element(s.horizon.begin(), s.horizon.end());
@@ -752,16 +775,9 @@ TEST(RankSystem, GeometricHaloHoldsEveryFamilyGhostOfAGradedDualHorizonMesh) {
     for (int r = 0; r < ranks; ++r) {
       const int64_t b = p.begin[r], e = p.begin[r + 1];
       const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, 3, b, e);
-      ASSERT_EQ(w.row_end - w.row_begin, e - b);
-      ASSERT_TRUE(std::is_sorted(w.index.begin(), w.index.end()));
-      ASSERT_EQ(std::adjacent_find(w.index.begin(), w.index.end()), w.index.end());
-      for (int64_t k = w.row_begin; k < w.row_end; ++k) ASSERT_EQ(w.index[k], b + (k - w.row_begin));
       // Every ghost: of the kept bonds (the rank system's, brute_ghosts) and of the candidates.
-      const std::set<int32_t> ghosts = brute_ghosts(s, p, r);
+      const std::set<int32_t> ghosts = expect_window_holds_rank_ghosts(s, p, r, w, whole);
       EXPECT_FALSE(ghosts.empty()) << ranks << " ranks, rank " << r;
-      for (const int32_t g : ghosts)
-        ASSERT_TRUE(std::binary_search(w.index.begin(), w.index.end(), g)) << ranks << " ranks, rank " << r << ": " << g;
-      EXPECT_EQ(ghosts_outside(w, b, e, whole.offsets, whole.neighbors), 0) << ranks << " ranks, rank " << r;
       // The rows built on the window alone: the whole build's rows, the others empty.
       DistributedRows rows;
       rows.active = true;
@@ -824,7 +840,7 @@ TEST(RankSystem, GeometricHaloHoldsEveryFamilyGhostOfAGradedDualHorizonMesh) {
 // what the window was before the classes); and no particle of a window lies farther from
 // every row than 2.5 times the pair's reach max(h_i, h_j) + max(pad_i, pad_j): a shell about
 // as thick as the local reach (the slack: a marked cell's diagonal, sqrt(3) / 3 of the
-// class's reach, and the class's bin, at most 2^(1/4) wide here; 1.9 measured).
+// class's reach, and the class's bin, at most 2^(1/4) wide here; 1.8 measured).
 namespace {
 std::string strongly_graded_notch_particles() {
   static const std::string path = mesh_and_place(
@@ -840,10 +856,7 @@ std::string strongly_graded_notch_particles() {
 TEST(RankSystem, GeometricHaloFollowsEachParticlesReachOnAStronglyGradedMesh) {
   const std::string particles = strongly_graded_notch_particles();
   ASSERT_FALSE(particles.empty()) << "could not mesh the graded block";
-  const PdSystem s = system_from_yaml("halo_strongly_graded", "specimen: {particles: " + particles + "}\n"
-                                      "model: {type: pmb, horizon_factor: 3.015, variable_horizon: true}\n"
-                                      "materials: [{name: block, density: 2400, youngs_modulus: 30 GPa, poisson_ratio: 0.25}]\n"
-                                      "time: {steps: 1, check_stability: false}\n");
+  const PdSystem s = dual_horizon_system("halo_strongly_graded", particles);
   const int64_t n = static_cast<int64_t>(s.n);
   const auto [hmin, hmax] = std::minmax_element(s.horizon.begin(), s.horizon.end());
   ASSERT_GE(*hmax / *hmin, 4.0) << "strongly graded: horizons differing at least fourfold";
@@ -864,13 +877,7 @@ TEST(RankSystem, GeometricHaloFollowsEachParticlesReachOnAStronglyGradedMesh) {
     for (int r = 0; r < ranks; ++r) {
       const int64_t b = p.begin[r], e = p.begin[r + 1];
       const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, 3, b, e);
-      ASSERT_EQ(w.row_end - w.row_begin, e - b);
-      ASSERT_TRUE(std::is_sorted(w.index.begin(), w.index.end()));
-      ASSERT_EQ(std::adjacent_find(w.index.begin(), w.index.end()), w.index.end());
-      for (int64_t k = w.row_begin; k < w.row_end; ++k) ASSERT_EQ(w.index[k], b + (k - w.row_begin));
-      for (const int32_t g : brute_ghosts(s, p, r))
-        EXPECT_TRUE(std::binary_search(w.index.begin(), w.index.end(), g)) << ranks << " ranks, rank " << r << ": " << g;
-      EXPECT_EQ(ghosts_outside(w, b, e, whole.offsets, whole.neighbors), 0) << ranks << " ranks, rank " << r;
+      expect_window_holds_rank_ghosts(s, p, r, w, whole);
       const int64_t body_wide =
           static_cast<int64_t>(geometric_window(s.x0, largest_h, largest_cell, 3, b, e).index.size());
       EXPECT_LT(static_cast<int64_t>(w.index.size()), body_wide) << ranks << " ranks, rank " << r;

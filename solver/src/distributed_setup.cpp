@@ -137,11 +137,19 @@ WindowExchange window_exchange(const DistributedSetup& d, const std::vector<int6
 
 void require_partners_in_window(const DistributedRows& rows, const std::vector<int64_t>& offsets,
                                 const std::vector<int32_t>& neighbor) {
-  if (!rows.active) return;
+  if (!rows.active || rows.end == rows.begin) return;
+  // The window's particles as bits over its span of global indices (at most N / 8 bytes, for
+  // the check alone): one test per entry, not a search.
   const std::vector<int32_t>& index = rows.window.index;  // ascending
+  const int64_t first = index.empty() ? 0 : index.front(), span = index.empty() ? 0 : index.back() - first + 1;
+  std::vector<uint64_t> held(static_cast<size_t>((span + 63) / 64), 0);
+  for (const int32_t j : index) held[static_cast<size_t>((j - first) / 64)] |= uint64_t{1} << ((j - first) % 64);
+  auto in_window = [&](int64_t j) {
+    return j >= first && j - first < span && (held[static_cast<size_t>((j - first) / 64)] >> ((j - first) % 64) & 1u);
+  };
   for (int64_t i = rows.begin; i < rows.end; ++i)
     for (int64_t k = offsets[i]; k < offsets[i + 1]; ++k)
-      if (!std::binary_search(index.begin(), index.end(), neighbor[k]))
+      if (!in_window(neighbor[k]))
         throw std::logic_error("distributed set-up: particle " + std::to_string(neighbor[k]) + ", a partner of row " +
                                std::to_string(i) + ", is outside the rank's geometric window (" +
                                std::to_string(index.size()) + " particles): its owner's values would not reach it");

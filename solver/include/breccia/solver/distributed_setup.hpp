@@ -67,7 +67,7 @@ WindowExchange window_exchange(const DistributedSetup& d, const std::vector<int6
 // partner of one of the rank's rows [rows.begin, rows.end) (`offsets`, `neighbor`: the whole
 // system's rows, global partners) is not in rows.window: exchange_owned fills the window's
 // particles alone, so a pass would read a partner's value that never arrived. Inactive rows:
-// nothing to check.
+// nothing to check. One bit test per entry (the window marked over its span of indices).
 void require_partners_in_window(const DistributedRows& rows, const std::vector<int64_t>& offsets,
                                 const std::vector<int32_t>& neighbor);
 

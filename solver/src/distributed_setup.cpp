@@ -1,6 +1,8 @@
 #include "breccia/solver/distributed_setup.hpp"
 
+#include <algorithm>
 #include <stdexcept>
+#include <string>
 #include <type_traits>
 
 #include "breccia/common/error.hpp"
@@ -40,7 +42,11 @@ Families build_own_families(const PdSystem& s, const DistributedRows& rows, cons
     if (window_particles) *window_particles = static_cast<int64_t>(s.n);
     return build_families(s.x0, s.horizon, pad);
   }
-  const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, s.dimension, rows.begin, rows.end);
+  // The window plan_distributed_rows formed (its exchange's); a hand-made `rows` without one: formed here.
+  GeometricWindow formed;
+  const bool given = !rows.window.index.empty() || rows.end == rows.begin;
+  if (!given) formed = geometric_window(s.x0, s.horizon, s.half_cell, s.dimension, rows.begin, rows.end);
+  const GeometricWindow& w = given ? rows.window : formed;
   if (window_particles) *window_particles = static_cast<int64_t>(w.index.size());
   Families fam;
   {
@@ -90,7 +96,63 @@ DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d) {
   rows.begin = part.begin[d.rank];
   rows.end = part.begin[d.rank + 1];
   s.distributed_rows = part.begin;
+  // The rows' window (every partner of the rows: geometric_window) and how the owners'
+  // values reach it (exchange_owned), formed once here for the family build and every pass.
+  rows.window = geometric_window(s.x0, s.horizon, s.half_cell, s.dimension, rows.begin, rows.end);
+  rows.exchange = window_exchange(d, part.begin, rows.window);
   return rows;
+}
+
+std::vector<int64_t> count_by_owner(const std::vector<int64_t>& part_begin, const std::vector<int32_t>& halo) {
+  if (part_begin.size() < 2) throw std::invalid_argument("count_by_owner: a partition of at least one rank");
+  std::vector<int64_t> counts(part_begin.size() - 1, 0);
+  size_t r = 0;
+  for (size_t q = 0; q < halo.size(); ++q) {
+    if (q > 0 && halo[q] <= halo[q - 1]) throw std::invalid_argument("count_by_owner: a halo not ascending");
+    while (r + 1 < part_begin.size() && halo[q] >= part_begin[r + 1]) ++r;
+    if (r + 1 == part_begin.size() || halo[q] < part_begin[r]) throw std::invalid_argument("count_by_owner: a particle outside the partition");
+    ++counts[r];
+  }
+  return counts;
+}
+
+WindowExchange window_exchange(const DistributedSetup& d, const std::vector<int64_t>& part_begin,
+                               const GeometricWindow& w) {
+  WindowExchange x;
+  x.halo.reserve(w.halo());
+  x.halo.insert(x.halo.end(), w.index.begin(), w.index.begin() + w.row_begin);
+  x.halo.insert(x.halo.end(), w.index.begin() + w.row_end, w.index.end());
+  x.halo_counts = count_by_owner(part_begin, x.halo);
+  if (x.halo_counts[static_cast<size_t>(d.rank)] != 0)
+    throw std::logic_error("distributed set-up: a window's halo holds one of the rank's own rows");
+  // Each owner is told which of its particles this window holds: those it sends here.
+  const std::vector<char> asked = d.exchange(x.halo.data(), x.halo_counts, sizeof(int32_t), x.send_counts);
+  x.send.resize(asked.size() / sizeof(int32_t));
+  if (!asked.empty()) std::memcpy(x.send.data(), asked.data(), asked.size());
+  const int64_t begin = part_begin[static_cast<size_t>(d.rank)], end = part_begin[static_cast<size_t>(d.rank) + 1];
+  for (const int32_t i : x.send)
+    if (i < begin || i >= end) throw std::logic_error("distributed set-up: a rank asked for a particle it does not own");
+  return x;
+}
+
+void require_partners_in_window(const DistributedRows& rows, const std::vector<int64_t>& offsets,
+                                const std::vector<int32_t>& neighbor) {
+  if (!rows.active || rows.end == rows.begin) return;
+  // The window's particles as bits over its span of global indices (at most N / 8 bytes, for
+  // the check alone): one test per entry, not a search.
+  const std::vector<int32_t>& index = rows.window.index;  // ascending
+  const int64_t first = index.empty() ? 0 : index.front(), span = index.empty() ? 0 : index.back() - first + 1;
+  std::vector<uint64_t> held(static_cast<size_t>((span + 63) / 64), 0);
+  for (const int32_t j : index) held[static_cast<size_t>((j - first) / 64)] |= uint64_t{1} << ((j - first) % 64);
+  auto in_window = [&](int64_t j) {
+    return j >= first && j - first < span && (held[static_cast<size_t>((j - first) / 64)] >> ((j - first) % 64) & 1u);
+  };
+  for (int64_t i = rows.begin; i < rows.end; ++i)
+    for (int64_t k = offsets[i]; k < offsets[i + 1]; ++k)
+      if (!in_window(neighbor[k]))
+        throw std::logic_error("distributed set-up: particle " + std::to_string(neighbor[k]) + ", a partner of row " +
+                               std::to_string(i) + ", is outside the rank's geometric window (" +
+                               std::to_string(index.size()) + " particles): its owner's values would not reach it");
 }
 
 namespace {

@@ -685,6 +685,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   Families fam = hooks.families && !dist_rows.active ? hooks.families(s.x0, s.horizon, pad, 0, static_cast<int64_t>(n))
                                                      : build_own_families(s, dist_rows, pad, &s.setup_window_particles[0]);
   s.setup_candidate_entries = {static_cast<int64_t>(fam.neighbors.size())};  // this rank's rows' (summary.json)
+  // dist: every partner in the window, which alone the owners' values reach (exchange_owned)
+  require_partners_in_window(dist_rows, fam.offsets, fam.neighbors);
   std::vector<double>().swap(pad);
   phase("families");
   std::vector<ElasticInput> elastic;
@@ -1109,8 +1111,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       cb[i] = std::clamp((-ss * scc + sc * scs) / det, -0.5, 0.5);
     }
     // dist: each rank's rows give its particles' (a, b); a bond reads both ends'.
-    gather_owned(dist, dist_rows, ca, 1);
-    gather_owned(dist, dist_rows, cb, 1);
+    exchange_owned(dist, dist_rows, ca, 1);
+    exchange_owned(dist, dist_rows, cb, 1);
     // LPS: a family cut by a surface has a 4 theta moment of its own, which is not the
     // lattice's: it takes the mean (a, b) of the complete families among its members (else
     // none). Without this a bulk particle's bonds to surface neighbours carried their large
@@ -1123,7 +1125,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         const double family_volume = s.volume[i] + s.family_volume[i];  // the horizon disc holds the own cell too
         complete[i] = family_volume >= 0.99 * M_PI * s.horizon[i] * s.horizon[i] * s.thickness;
       }
-      gather_owned(dist, dist_rows, complete, 1);  // dist: the ghosts' completeness
+      exchange_owned(dist, dist_rows, complete, 1);  // dist: the ghosts' completeness
       std::vector<double> ca_in(ca), cb_in(cb);
 #pragma omp parallel for
       for (size_t i = 0; i < n; ++i) {
@@ -1140,8 +1142,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         ca[i] = count > 0 ? sa / count : 0.0;
         cb[i] = count > 0 ? sb / count : 0.0;
       }
-      gather_owned(dist, dist_rows, ca, 1);  // dist: the owners' means (other rows are empty here)
-      gather_owned(dist, dist_rows, cb, 1);
+      exchange_owned(dist, dist_rows, ca, 1);  // dist: the owners' means (other rows are empty here)
+      exchange_owned(dist, dist_rows, cb, 1);
     }
 #pragma omp parallel for
     for (size_t i = 0; i < n; ++i)
@@ -1180,7 +1182,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       const std::vector<int64_t> all = concat_over_ranks(dist, std::vector<int64_t>{lonely});
       const auto first = std::find_if(all.begin(), all.end(), [](int64_t i) { return i >= 0; });
       lonely = first == all.end() ? -1 : *first;  // ranks own ascending ranges
-      gather_owned(dist, dist_rows, s.weighted_volume, 1);
+      exchange_owned(dist, dist_rows, s.weighted_volume, 1);
     }
     if (lonely >= 0)
       throw InputError(c.file, "model.horizon", "particle " + std::to_string(s.original_index[lonely]) + " has no neighbours",
@@ -1218,8 +1220,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         const double continuum = h * influence_moment(c.influence, d + 2) / influence_moment(c.influence, d + 1);
         if (complete[i]) scale[i] = std::sqrt(continuum / (cube_sum / s.weighted_volume[i]));
       }
-      gather_owned(dist, dist_rows, complete, 1);  // dist: the ghosts' completeness and scales
-      gather_owned(dist, dist_rows, scale, 1);
+      exchange_owned(dist, dist_rows, complete, 1);  // dist: the ghosts' completeness and scales
+      exchange_owned(dist, dist_rows, scale, 1);
       std::vector<double> own_scale(scale);
 #pragma omp parallel for
       for (size_t i = 0; i < n; ++i) {
@@ -1233,7 +1235,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
           }
         scale[i] = count > 0 ? sum / count : 1.0;
       }
-      gather_owned(dist, dist_rows, scale, 1);  // dist: s0_dual reads the partner's
+      exchange_owned(dist, dist_rows, scale, 1);  // dist: s0_dual reads the partner's
 #pragma omp parallel for
       for (size_t i = 0; i < n; ++i)
         for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) {
@@ -1336,7 +1338,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         for (int a = 0; a < dims; ++a)
           if (uni[3 * i + a] > 0 && count[s.material[i]])
             axis_factor[3 * i + a] = bulk_factor * bulk_uni_by_material[s.material[i]] / uni[3 * i + a];
-      gather_owned(dist, dist_rows, axis_factor, 3);  // dist: the ghosts' factors, which their bonds blend
+      exchange_owned(dist, dist_rows, axis_factor, 3);  // dist: the ghosts' factors, which their bonds blend
       // The ellipsoidal blend over-stiffens oblique bonds of a truncated family; a few
       // fixed-point sweeps make each particle's uniaxial energies (with the blended bond
       // factors) hit their targets exactly.
@@ -1358,7 +1360,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
               next[3 * i + a] = axis_factor[3 * i + a] * bulk_factor * bulk_uni_by_material[s.material[i]] / w[a];
         }
         axis_factor.swap(next);
-        gather_owned(dist, dist_rows, axis_factor, 3);
+        exchange_owned(dist, dist_rows, axis_factor, 3);
       }
     }
     s.calibration_factor.assign(n, bulk_factor);
@@ -1451,7 +1453,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   }
   // dist: the crack-face factors (a sum over each row) of the ghosts, which the crack pass
   // reads for every partner. setup_gas computed its own rows' (the others are empty here).
-  gather_owned(dist, dist_rows, s.gas.kappa_volume, 2);
+  exchange_owned(dist, dist_rows, s.gas.kappa_volume, 2);
 
   // Constraints.
   s.fixed_dof.assign(n, 0);

@@ -87,7 +87,7 @@ std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<Elasti
       }
       for (int a = 0; a < dims; ++a) axis_factor[3 * i + a] /= std::exp(log_mean);
     }
-    gather_owned(dist, rows, axis_factor, 3);  // the ghosts' factors, which their bonds blend
+    exchange_owned(dist, rows, axis_factor, 3);  // the ghosts' factors, which their bonds blend
     measure();
   }
   // The coefficient scale makes the mean of the particle's uniaxial energies the target.
@@ -97,7 +97,7 @@ std::vector<double> lps_surface_correction(PdSystem& s, const std::vector<Elasti
     for (int a = 0; a < dims; ++a) mean += energy[3 * i + a] / dims;
     if (mean > 0) coefficient_scale[i] = target[s.material[i]] / mean;
   }
-  gather_owned(dist, rows, coefficient_scale, 1);  // the ghosts' LPS coefficients carry it
+  exchange_owned(dist, rows, coefficient_scale, 1);  // the ghosts' LPS coefficients carry it
   scale_bonds_by_axis_factors(s, axis_factor);
   return coefficient_scale;
 }

@@ -4,11 +4,13 @@
 
 #include <algorithm>
 #include <array>
+#include <barrier>
 #include <cmath>
 #include <functional>
 #include <map>
 #include <set>
 #include <stdexcept>
+#include <thread>
 #include <type_traits>
 
 #include "breccia/common/families.hpp"
@@ -993,4 +995,128 @@ TEST(Partition, GeometricWindowOfABarIsTheRanksNeighbourhood) {
   }
   std::printf("ranges whose window is smaller than their grown box: %zu, by up to %zu of %zu particles\n", fewer, most, t.n);
   EXPECT_GT(fewer, 0u) << "the cells must drop some box's corners";
+}
+
+// The owners' values to the windows that hold them (exchange_owned, distributed_setup.hpp;
+// docs/parallel.md, Memory, What to take next, item 2 c): every rank's geometric window
+// (partition.hpp) asks each owner for its particles once (window_exchange), and each
+// exchange then fills every particle of the window outside the rank's rows with its owner's
+// value, and no other. The ranks run as threads here, their all-to-all through a barrier
+// (MPI's is the same contract: counts[r] elements to rank r, what arrives in rank order).
+namespace {
+struct ThreadRanks {
+  explicit ThreadRanks(int ranks) : ranks(ranks), box(static_cast<size_t>(ranks * ranks)), sync(ranks) {}
+  DistributedSetup setup(int rank) {
+    DistributedSetup d;
+    d.rank = rank;
+    d.ranks = ranks;
+    d.exchange = [this, rank](const void* data, const std::vector<int64_t>& counts, size_t bytes,
+                              std::vector<int64_t>& received) {
+      const char* p = static_cast<const char*>(data);
+      for (int r = 0; r < ranks; ++r) {
+        box[rank * ranks + r].assign(p, p + counts[r] * bytes);
+        p += counts[r] * bytes;
+      }
+      sync.arrive_and_wait();
+      std::vector<char> out;
+      received.assign(ranks, 0);
+      for (int from = 0; from < ranks; ++from) {
+        const std::vector<char>& b = box[from * ranks + rank];
+        out.insert(out.end(), b.begin(), b.end());
+        received[from] = static_cast<int64_t>(b.size() / bytes);
+      }
+      sync.arrive_and_wait();  // every rank has read its boxes before any writes again
+      return out;
+    };
+    return d;
+  }
+  int ranks;
+  std::vector<std::vector<char>> box;  // [from * ranks + to]
+  std::barrier<> sync;
+};
+}  // namespace
+
+TEST(RankSystem, OwnersValuesReachEveryWindowThatHoldsThemAndNoOtherParticle) {
+  const PdSystem s = lattice("window_exchange");
+  const int64_t n = static_cast<int64_t>(s.n);
+  for (const int ranks : {2, 3, 5}) {
+    const Partition p = MortonRangePartitioner().partition(s.offsets, ranks);
+    ThreadRanks world(ranks);
+    std::vector<int64_t> wrong(ranks, 0), filled(ranks, 0), window(ranks, 0);
+    std::vector<std::string> error(ranks);
+    std::vector<std::thread> threads;
+    for (int r = 0; r < ranks; ++r)
+      threads.emplace_back([&, r] {
+        try {
+          const DistributedSetup d = world.setup(r);
+          DistributedRows rows;
+          rows.active = true;
+          rows.begin = p.begin[r];
+          rows.end = p.begin[r + 1];
+          rows.window = geometric_window(s.x0, s.horizon, s.half_cell, 3, rows.begin, rows.end);
+          rows.exchange = window_exchange(d, p.begin, rows.window);
+          require_partners_in_window(rows, s.offsets, s.neighbor);  // the whole build's partners: all held
+          window[r] = static_cast<int64_t>(rows.window.index.size());
+          // Each rank knows its own particles' values only (3 each); -1 elsewhere.
+          std::vector<double> a(3 * s.n, -1.0);
+          for (int64_t i = rows.begin; i < rows.end; ++i)
+            for (int c = 0; c < 3; ++c) a[3 * i + c] = 10.0 * i + c;
+          exchange_owned(d, rows, a, 3);
+          for (int64_t j = 0; j < n; ++j) {
+            const bool held = std::binary_search(rows.window.index.begin(), rows.window.index.end(), static_cast<int32_t>(j));
+            for (int c = 0; c < 3; ++c) wrong[r] += a[3 * j + c] != (held ? 10.0 * j + c : -1.0);
+            filled[r] += held && (j < rows.begin || j >= rows.end);
+          }
+        } catch (const std::exception& e) {
+          error[r] = e.what();
+        }
+      });
+    for (auto& t : threads) t.join();
+    for (int r = 0; r < ranks; ++r) {
+      EXPECT_EQ(error[r], "") << ranks << " ranks, rank " << r;
+      EXPECT_EQ(wrong[r], 0) << ranks << " ranks, rank " << r;
+      EXPECT_GT(filled[r], 0) << ranks << " ranks, rank " << r << ": a halo to fill";
+      EXPECT_LT(window[r], n) << ranks << " ranks, rank " << r << ": the window, not the body";
+    }
+  }
+  // count_by_owner: a halo over an empty rank, and one outside the partition refused.
+  EXPECT_EQ(count_by_owner({0, 4, 4, 9}, {1, 3, 4, 8}), (std::vector<int64_t>{2, 0, 2}));
+  EXPECT_THROW(count_by_owner({0, 4, 9}, {3, 9}), std::invalid_argument);
+  EXPECT_THROW(count_by_owner({0, 4, 9}, {5, 3}), std::invalid_argument);
+}
+
+// A window that misses a partner of one of the rank's rows fails loudly, naming the row and
+// the partner, before any pass reads that partner's value (which the exchange would never
+// fill: the pass would read another value, not the owner's).
+TEST(RankSystem, AWindowMissingAPartnerFailsNamingTheRowAndThePartner) {
+  const PdSystem s = lattice("window_missing_partner");
+  const Partition p = MortonRangePartitioner().partition(s.offsets, 3);
+  const int r = 1;
+  DistributedRows rows;
+  rows.active = true;
+  rows.begin = p.begin[r];
+  rows.end = p.begin[r + 1];
+  rows.window = geometric_window(s.x0, s.horizon, s.half_cell, 3, rows.begin, rows.end);
+  EXPECT_NO_THROW(require_partners_in_window(rows, s.offsets, s.neighbor));
+  // Drop the last ghost of the rank's last row from the window (one above the rows).
+  int32_t ghost = -1;
+  int64_t row = -1;
+  for (int64_t i = rows.begin; i < rows.end; ++i)
+    for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k)
+      if (s.neighbor[k] >= rows.end) ghost = s.neighbor[k];
+  ASSERT_GE(ghost, 0) << "a partner above the rank's rows";
+  for (int64_t i = rows.begin; i < rows.end && row == -1; ++i)  // the first row that reads it
+    if (std::binary_search(s.neighbor.begin() + s.offsets[i], s.neighbor.begin() + s.offsets[i + 1], ghost)) row = i;
+  auto& index = rows.window.index;
+  index.erase(std::find(index.begin(), index.end(), ghost));
+  try {
+    require_partners_in_window(rows, s.offsets, s.neighbor);
+    ADD_FAILURE() << "a window without partner " << ghost << " passed";
+  } catch (const std::logic_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("particle " + std::to_string(ghost)), std::string::npos) << what;
+    EXPECT_NE(what.find("row " + std::to_string(row) + ","), std::string::npos) << what;
+  }
+  // Inactive rows (one process): nothing to check.
+  EXPECT_NO_THROW(require_partners_in_window(DistributedRows{}, s.offsets, s.neighbor));
 }

@@ -1287,6 +1287,26 @@ DistributedSetup mpi_distributed_setup() {
                   MPI_COMM_WORLD);
     return out;
   };
+  d.exchange = [](const void* data, const std::vector<int64_t>& counts, size_t element_bytes,
+                  std::vector<int64_t>& received) {
+    int ranks = 1;
+    MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+    if (counts.size() != static_cast<size_t>(ranks)) throw std::logic_error("distributed set-up: an exchange's counts");
+    std::vector<long long> send(counts.begin(), counts.end()), recv(static_cast<size_t>(ranks));
+    MPI_Alltoall(send.data(), 1, MPI_LONG_LONG, recv.data(), 1, MPI_LONG_LONG, MPI_COMM_WORLD);
+    received.assign(recv.begin(), recv.end());
+    std::vector<int64_t> send_begin(static_cast<size_t>(ranks) + 1, 0), recv_begin(static_cast<size_t>(ranks) + 1, 0);
+    for (int r = 0; r < ranks; ++r) {
+      send_begin[r + 1] = send_begin[r] + send[r];
+      recv_begin[r + 1] = recv_begin[r] + recv[r];
+    }
+    // Elements of element_bytes each (ElementRanges: displacements in elements, not bytes).
+    const ElementRanges sent(element_bytes, send_begin), arriving(element_bytes, recv_begin);
+    std::vector<char> out(static_cast<size_t>(recv_begin[ranks]) * element_bytes);
+    MPI_Alltoallv(data, sent.counts.data(), sent.displs.data(), sent.type, out.data(), arriving.counts.data(),
+                  arriving.displs.data(), arriving.type, MPI_COMM_WORLD);
+    return out;
+  };
   return d;
 }
 

@@ -12,11 +12,13 @@
 // The set-up then runs as on one process on a system whose rows outside the rank's range are
 // empty: every per-entry loop covers the rank's rows, and the few values a row reads from
 // other rows or every particle (listed at each call in setup.cpp) come through
-// DistributedSetup::concat. Every value is computed by the same code as on one process, so
+// DistributedSetup::concat (a sum or a list over every rank) or, for a value its owner
+// computed per particle, exchange_owned (to the rank's geometric window only). Every value is computed by the same code as on one process, so
 // the run is byte-identical to it. The rank's own system (rank_system.hpp) is cut from this
 // one by the stable-step estimate as before, and the bonds move into it rather than being
 // copied (restrict_to_rank_taking_bonds); finish_distributed_setup then leaves the global
 // system what the time loop and the files need.
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <stdexcept>
@@ -29,12 +31,45 @@
 
 namespace breccia::solver {
 
+// How the owners' values of a per-particle array reach the ranks whose geometric window
+// (partition.hpp) holds them (exchange_owned): the window's particles outside the rank's
+// rows (`halo`, ascending, so grouped by owner in rank order) come from their owners, and
+// the rank sends the particles of its rows that the other ranks' windows hold (`send`, each
+// destination's ascending, destinations in rank order). Formed once from the windows alone
+// (window_exchange: each rank tells each owner which of its particles its window holds), as
+// the contact exchange forms its lists from the ranks' boxes.
+struct WindowExchange {
+  std::vector<int32_t> halo;         // global internal indices, ascending
+  std::vector<int64_t> halo_counts;  // per owner rank (ranks entries)
+  std::vector<int32_t> send;         // global internal indices of this rank's rows, per destination
+  std::vector<int64_t> send_counts;  // per destination rank (ranks entries)
+};
+
 // Which rows this rank builds. inactive: all of them (one process).
 struct DistributedRows {
   bool active = false;
   int64_t begin = 0, end = 0;          // the rank's rows (internal order)
   std::vector<int64_t> full_offsets;   // the whole system's row offsets (n + 1), from the family sizes
+  GeometricWindow window;              // the rows' geometric window (active only): every partner
+  WindowExchange exchange;             // the owners' values to that window (active only)
 };
+
+// How many of `halo` (ascending global indices outside the rank's rows) each rank owns under
+// the partition `part_begin` (ranks + 1 offsets): the counts exchange_owned receives.
+std::vector<int64_t> count_by_owner(const std::vector<int64_t>& part_begin, const std::vector<int32_t>& halo);
+
+// The rank's WindowExchange for `window` (its rows [part_begin[rank], part_begin[rank + 1])
+// then its halo): collective (one all-to-all of the halo's indices to their owners).
+WindowExchange window_exchange(const DistributedSetup& d, const std::vector<int64_t>& part_begin,
+                               const GeometricWindow& window);
+
+// Throws std::logic_error, naming the row and the partner (global internal indices), when a
+// partner of one of the rank's rows [rows.begin, rows.end) (`offsets`, `neighbor`: the whole
+// system's rows, global partners) is not in rows.window: exchange_owned fills the window's
+// particles alone, so a pass would read a partner's value that never arrived. Inactive rows:
+// nothing to check. One bit test per entry (the window marked over its span of indices).
+void require_partners_in_window(const DistributedRows& rows, const std::vector<int64_t>& offsets,
+                                const std::vector<int32_t>& neighbor);
 
 // Called once the internal order and horizons are set: counts the family sizes, cuts the
 // partition (s.distributed_rows) and returns the rank's rows (inactive on one process).
@@ -71,18 +106,25 @@ std::vector<T> concat_over_ranks(const DistributedSetup& d, const std::vector<T>
   return out;
 }
 
-// Every rank's owned range of a per-particle array of `width` values each (computed there
-// from the rank's own rows), on every rank: the ghosts' values a later pass reads, e.g.
-// LPS's weighted volume. Collective; an empty array (the feature is off, on every rank
-// alike) stays empty.
+// The owners' values of a per-particle array of `width` values each (computed there from
+// their own rows) into this rank's window's other particles (rows.exchange): the ghosts'
+// values a later pass reads, e.g. LPS's weighted volume. The particles outside the window
+// keep what this rank holds for them (nothing reads them: require_partners_in_window).
+// Collective; an empty array (the feature is off, on every rank alike) stays empty.
 template <class T>
-void gather_owned(const DistributedSetup& d, const DistributedRows& rows, std::vector<T>& a, size_t width) {
+void exchange_owned(const DistributedSetup& d, const DistributedRows& rows, std::vector<T>& a, size_t width) {
   if (a.empty() || !rows.active) return;
-  const std::vector<T> mine(a.begin() + static_cast<int64_t>(width) * rows.begin,
-                            a.begin() + static_cast<int64_t>(width) * rows.end);
-  std::vector<T> whole = concat_over_ranks(d, mine);
-  if (whole.size() != a.size()) throw std::logic_error("distributed set-up: a gathered per-particle array");
-  a.swap(whole);
+  const WindowExchange& x = rows.exchange;
+  const size_t bytes = width * sizeof(T);
+  std::vector<T> out(width * x.send.size());
+  for (size_t q = 0; q < x.send.size(); ++q)
+    std::copy_n(a.begin() + static_cast<int64_t>(width) * x.send[q], width, out.begin() + static_cast<int64_t>(width * q));
+  std::vector<int64_t> received;
+  const std::vector<char> in = d.exchange(out.data(), x.send_counts, bytes, received);
+  if (received != x.halo_counts || in.size() != bytes * x.halo.size() || a.size() % width != 0)
+    throw std::logic_error("distributed set-up: an exchange of owners' values differs from the window's halo");
+  for (size_t q = 0; q < x.halo.size(); ++q)
+    std::memcpy(static_cast<void*>(a.data() + width * static_cast<size_t>(x.halo[q])), in.data() + bytes * q, bytes);
 }
 
 // Per material: the sum of the first `dims` of each marked particle's 3 `values`, taken in

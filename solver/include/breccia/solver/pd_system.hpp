@@ -243,13 +243,19 @@ struct StableStepRanks {
   std::function<double(const std::function<double(double)>& f)> chain;
 };
 
-// A distributed set-up's one collective (solver/mpi/): every rank's `count` elements of
+// A distributed set-up's collectives (solver/mpi/). concat: every rank's `count` elements of
 // `element_bytes` at `data`, concatenated in rank order, returned on every rank (everyone)
-// or on rank 0 only (the others get nothing). With it each rank builds the bonds of the
-// particles it owns only (distributed_setup.hpp); inactive on one process.
+// or on rank 0 only (the others get nothing). exchange: an all-to-all, `counts[r]` elements
+// (consecutive at `data`, in rank order) to each rank r; returns what arrives, in source
+// rank order, and each source's count in `received` (ranks entries). With them each rank
+// builds the bonds of the particles it owns only (distributed_setup.hpp); inactive on one
+// process.
 struct DistributedSetup {
   int rank = 0, ranks = 1;
   std::function<std::vector<char>(const void* data, size_t count, size_t element_bytes, bool everyone)> concat;
+  std::function<std::vector<char>(const void* data, const std::vector<int64_t>& counts, size_t element_bytes,
+                                  std::vector<int64_t>& received)>
+      exchange;
   bool active() const { return ranks > 1 && static_cast<bool>(concat); }
 };
 

@@ -359,16 +359,21 @@ TEST_P(FastAndGeneralPaths, AgreeOnForcesBreaksAndDiagnostics) {
 INSTANTIATE_TEST_SUITE_P(Models, FastAndGeneralPaths,
                          ::testing::Combine(::testing::Values("pmb", "lps"), ::testing::Values("float64", "float32")));
 
+namespace {
+// A uniform number in [0, 1) from one SplitMix64 step of z: the partial-volume tests' cases.
+double split_mix_uniform(uint64_t& z) {
+  z += 0x9E3779B97F4A7C15ull;
+  uint64_t x = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return double((x ^ (x >> 31)) >> 11) / 9007199254740992.0;
+}
+}  // namespace
+
 TEST(PartialVolume, PositiveTestEqualsTheQuadratureWithoutRunningIt) {
   // The families' counting pass asks only "beta > 0"; its shortcut must agree with the
   // quadrature exactly, edge cases included (points on the sphere, 2D and 3D).
   uint64_t z = 7;
-  auto uniform = [&z] {
-    z += 0x9E3779B97F4A7C15ull;
-    uint64_t x = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-    return double((x ^ (x >> 31)) >> 11) / 9007199254740992.0;
-  };
+  auto uniform = [&z] { return split_mix_uniform(z); };
   int positive = 0, checked = 0;
   for (int dimension : {2, 3})
     for (int k = 0; k < 200000; ++k) {
@@ -413,12 +418,7 @@ TEST(PartialVolume, SampleCountEqualsThePointByPointQuadrature) {
   // points on the sphere included, or the bond coefficients would change.
   const auto brute_force = plain_sample_count;
   uint64_t z = 11;
-  auto uniform = [&z] {
-    z += 0x9E3779B97F4A7C15ull;
-    uint64_t x = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-    return double((x ^ (x >> 31)) >> 11) / 9007199254740992.0;
-  };
+  auto uniform = [&z] { return split_mix_uniform(z); };
   int partial = 0;
   for (int dimension : {2, 3})
     for (int k = 0; k < 200000; ++k) {
@@ -459,12 +459,7 @@ TEST(PartialVolume, PairCountsEqualTheTwoCountsOfItsEntries) {
   // graded mesh), offsets over the half diagonal's early accept and reject and the samples' box,
   // lattice offsets among them (samples exactly on the sphere).
   uint64_t z = 23;
-  auto uniform = [&z] {
-    z += 0x9E3779B97F4A7C15ull;
-    uint64_t x = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-    return double((x ^ (x >> 31)) >> 11) / 9007199254740992.0;
-  };
+  auto uniform = [&z] { return split_mix_uniform(z); };
   int differ = 0, partial = 0;
   for (int dimension : {2, 3})
     for (int k = 0; k < 100000; ++k) {

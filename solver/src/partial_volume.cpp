@@ -35,20 +35,25 @@ namespace {
 // would compute, exactly. Samples on or within that margin of the sphere (a lattice whose
 // horizon is a whole number of half-cells) are counted every time. A slot holds the last key
 // hashed to it (0 in `count_plus_one`: empty; thread_local and zero-initialised, so no guard
-// per call).
+// per call and no initial image of its 400 KB in the binary's thread-local data).
 //
 // On a graded mesh offsets rarely recur: there the hash, the compare and the slot's store cost
 // 6-10% of the bond-coefficient phase for nothing (full concrete case, paired runs,
 // docs/performance.md). So the memo watches its hits over windows of kWindow full counts, and
 // after a window with under one hit in eight it stands aside for kRest windows, then
-// tries again (a graded case then pays for a sixteenth of its counts' lookups). A key's
+// tries again; each trial window that fails again doubles the rest (plus one), up to kRestMost
+// windows, and a window with hits sets it back to kRest. A graded case then pays for a
+// sixteenth of its first 4,096 x 16 counts' lookups and under one in 256 of the rest (the
+// fixed rest's sixteenth was 0.2 CPU s of slot misses on the full concrete case's 71 million
+// candidates, docs/performance.md); a lattice that follows a graded stretch waits at most
+// kRestMost windows (a million counts). A key's
 // first count only marks its slot (kSeen): the margin check, 216 scalar distances, a quarter
 // of the graded mesh's count time when every first count paid it (docs/performance.md), is
 // done at a key's second count, when keys recur. The counts are the same either way: the
 // memo only decides whether a count is computed or looked up.
 struct CountMemo {
   static constexpr int kBits = 13;
-  static constexpr int kWindow = 4096, kRest = 15;
+  static constexpr int kWindow = 4096, kRest = 15, kRestMost = 255;
   struct Slot {
     int64_t offset[3];       // x_j - x_i in grid steps (kGridStep horizons)
     uint64_t exact[2];       // the horizon's and the half cell's bits
@@ -58,12 +63,20 @@ struct CountMemo {
   static constexpr int kSeen = -1, kNear = -2;
   Slot slot[1 << kBits] = {};
   int calls = 0, hits = 0, resting = 0;  // in the current window; windows left to stand aside
+  int failed_trials = 0;                  // trial windows without hits since the last with hits
 
   // Whether this full count consults the memo; the window's bookkeeping.
   bool in_use() {
     if (++calls == kWindow) {
-      if (resting > 0) --resting;
-      else if (hits < kWindow / 8) resting = kRest;
+      if (resting > 0) {
+        --resting;
+      } else if (hits < kWindow / 8) {
+        // kRest, 2 kRest + 1, ...: (kRest + 1) 2^failed - 1 windows, at most kRestMost.
+        resting = failed_trials < 4 ? ((kRest + 1) << failed_trials) - 1 : kRestMost;
+        failed_trials += failed_trials < 4;
+      } else {
+        failed_trials = 0;
+      }
       calls = hits = 0;
     }
     return resting == 0;
@@ -165,10 +178,13 @@ __attribute__((target("avx2"))) int count_every_sample(const double sq[3][kParti
 
 }  // namespace
 
-int partial_volume_samples_inside(const double xi[3], double horizon, double half_cell_j, int dimension) {
+namespace {
+double offset_length(const double xi[3]) { return std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]); }
+
+// The count at offset xi of length len (offset_length(xi)).
+int samples_inside_at(const double xi[3], double len, double horizon, double half_cell_j, int dimension) {
   constexpr int n = kPartialVolumeSamples;
   const double reach = partial_volume_half_diagonal(half_cell_j, dimension);
-  const double len = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
   if (len + reach <= horizon) return partial_volume_sample_total(dimension);
   if (len - reach >= horizon) return 0;
   const int nz = dimension == 3 ? n : 1;
@@ -231,6 +247,20 @@ int partial_volume_samples_inside(const double xi[3], double horizon, double hal
                                : CountMemo::kNear;
   }
   return count;
+}
+}  // namespace
+
+int partial_volume_samples_inside(const double xi[3], double horizon, double half_cell_j, int dimension) {
+  return samples_inside_at(xi, offset_length(xi), horizon, half_cell_j, dimension);
+}
+
+void partial_volume_pair_samples_inside(const double xi[3], double horizon_i, double half_cell_j, double horizon_j,
+                                        double half_cell_i, int dimension, int& own, int& reverse) {
+  // -xi's length is xi's, bit for bit: (-a)(-a) = a a exactly.
+  const double len = offset_length(xi);
+  const double xm[3] = {-xi[0], -xi[1], -xi[2]};
+  own = samples_inside_at(xi, len, horizon_i, half_cell_j, dimension);
+  reverse = samples_inside_at(xm, len, horizon_j, half_cell_i, dimension);
 }
 
 LatticeSampleCounts::LatticeSampleCounts(double horizon, double half_cell, int dimension)

@@ -211,8 +211,9 @@ double median(std::vector<double> v) {
 // and advanced by one at each later one. Each thread's cursors live in an array of N, made
 // once per thread, each beside its stamp (one cache line per row met, not two): a block's stamp
 // marks the cursors it has placed.
-// `lower_partners_only`: only the entries whose partner j is a lower row (j < i); the others
-// touch no cursor (half the cursor work where the caller needs only those). The rows that meet
+// `lower_partners_only`: only the entries whose partner j is a lower row (j < i), a row's first
+// ones (rows are sorted); the others are not visited (half the cursor work where the caller
+// needs only those). The rows that meet
 // j from above in a block are still every such row of the block between two meetings, so a
 // cursor placed at the first advances by one as before.
 template <class F>
@@ -236,7 +237,7 @@ void for_each_entry_with_reverse(const std::vector<int64_t>& offsets, const std:
       for (int64_t i = first + b * block; i < row_end; ++i)
         for (int64_t k = offsets[i]; k < offsets[i + 1]; ++k) {
           const int32_t j = neighbors[k];
-          if (lower_partners_only && j > i) continue;
+          if (lower_partners_only && j > i) break;  // rows are sorted: the rest of the row is above i
           Cursor& c = cursor[j];
           if (c.stamp != b) {
             c.stamp = b;
@@ -767,9 +768,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
             const int32_t j = fam.neighbors[k];
             const double xv[3] = {s.x0[3 * j] - s.x0[3 * i], s.x0[3 * j + 1] - s.x0[3 * i + 1],
                                   s.x0[3 * j + 2] - s.x0[3 * i + 2]};
-            const double xm[3] = {-xv[0], -xv[1], -xv[2]};
-            const uint8_t own = static_cast<uint8_t>(partial_volume_samples_inside(xv, s.horizon[i], s.half_cell[j], s.dimension));
-            const uint8_t reverse = static_cast<uint8_t>(partial_volume_samples_inside(xm, s.horizon[j], s.half_cell[i], s.dimension));
+            int own_count, reverse_count;
+            partial_volume_pair_samples_inside(xv, s.horizon[i], s.half_cell[j], s.horizon[j], s.half_cell[i], s.dimension,
+                                               own_count, reverse_count);
+            const uint8_t own = static_cast<uint8_t>(own_count), reverse = static_cast<uint8_t>(reverse_count);
             samples_inside[k] = own;
             dual_inside[r] = own;
             samples_inside[r] = reverse;

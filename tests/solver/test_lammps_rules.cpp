@@ -359,16 +359,21 @@ TEST_P(FastAndGeneralPaths, AgreeOnForcesBreaksAndDiagnostics) {
 INSTANTIATE_TEST_SUITE_P(Models, FastAndGeneralPaths,
                          ::testing::Combine(::testing::Values("pmb", "lps"), ::testing::Values("float64", "float32")));
 
+namespace {
+// A uniform number in [0, 1) from one SplitMix64 step of z: the partial-volume tests' cases.
+double split_mix_uniform(uint64_t& z) {
+  z += 0x9E3779B97F4A7C15ull;
+  uint64_t x = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return double((x ^ (x >> 31)) >> 11) / 9007199254740992.0;
+}
+}  // namespace
+
 TEST(PartialVolume, PositiveTestEqualsTheQuadratureWithoutRunningIt) {
   // The families' counting pass asks only "beta > 0"; its shortcut must agree with the
   // quadrature exactly, edge cases included (points on the sphere, 2D and 3D).
   uint64_t z = 7;
-  auto uniform = [&z] {
-    z += 0x9E3779B97F4A7C15ull;
-    uint64_t x = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-    return double((x ^ (x >> 31)) >> 11) / 9007199254740992.0;
-  };
+  auto uniform = [&z] { return split_mix_uniform(z); };
   int positive = 0, checked = 0;
   for (int dimension : {2, 3})
     for (int k = 0; k < 200000; ++k) {
@@ -413,12 +418,7 @@ TEST(PartialVolume, SampleCountEqualsThePointByPointQuadrature) {
   // points on the sphere included, or the bond coefficients would change.
   const auto brute_force = plain_sample_count;
   uint64_t z = 11;
-  auto uniform = [&z] {
-    z += 0x9E3779B97F4A7C15ull;
-    uint64_t x = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-    return double((x ^ (x >> 31)) >> 11) / 9007199254740992.0;
-  };
+  auto uniform = [&z] { return split_mix_uniform(z); };
   int partial = 0;
   for (int dimension : {2, 3})
     for (int k = 0; k < 200000; ++k) {
@@ -449,6 +449,47 @@ TEST(PartialVolume, SampleCountEqualsThePointByPointQuadrature) {
     const double* x = k < 12 * 4096 ? xi : lattice_offsets[k % 4];
     ASSERT_EQ(partial_volume_samples_inside(x, 3.0, 0.5, 3), brute_force(x, 3.0, 0.5, 3)) << "call " << k;
   }
+}
+
+TEST(PartialVolume, PairCountsEqualTheTwoCountsOfItsEntries) {
+  // partial_volume_pair_samples_inside (the set-up's count pass) forms the offset's length once
+  // for both ends of a pair; each count must be partial_volume_samples_inside's for its entry,
+  // (i -> j) at xi with i's horizon and j's cell and (j -> i) at -xi with j's horizon and i's
+  // cell, and so the point-by-point quadrature's. Two horizons and two cells that differ (a
+  // graded mesh), offsets over the half diagonal's early accept and reject and the samples' box,
+  // lattice offsets among them (samples exactly on the sphere).
+  uint64_t z = 23;
+  auto uniform = [&z] { return split_mix_uniform(z); };
+  int differ = 0, partial = 0;
+  for (int dimension : {2, 3})
+    for (int k = 0; k < 100000; ++k) {
+      const bool lattice = k % 5 == 0;
+      const double half_i = lattice ? 0.5 : 0.25 + 0.5 * uniform(), half_j = lattice ? 0.5 : 0.25 + 0.5 * uniform();
+      const double horizon_i = lattice ? 3.0 : 6.0 * half_i * (0.9 + 0.2 * uniform());
+      const double horizon_j = lattice ? 3.0 : 6.0 * half_j * (0.9 + 0.2 * uniform());
+      double xi[3];
+      for (int a = 0; a < 3; ++a)
+        xi[a] = lattice ? std::floor(uniform() * 9.0) - 4.0 : (uniform() - 0.5) * 2.4 * std::max(horizon_i, horizon_j);
+      if (dimension == 2) xi[2] = 0.0;
+      const double xm[3] = {-xi[0], -xi[1], -xi[2]};
+      int own = -1, reverse = -1;
+      partial_volume_pair_samples_inside(xi, horizon_i, half_j, horizon_j, half_i, dimension, own, reverse);
+      const int own_alone = partial_volume_samples_inside(xi, horizon_i, half_j, dimension);
+      const int reverse_alone = partial_volume_samples_inside(xm, horizon_j, half_i, dimension);
+      ASSERT_EQ(own, own_alone) << "case " << k << " dimension " << dimension;
+      ASSERT_EQ(reverse, reverse_alone) << "case " << k << " dimension " << dimension;
+      if (k % 50 == 0) {  // and the quadrature's, point by point (a sample of the cases)
+        ASSERT_EQ(own, plain_sample_count(xi, horizon_i, half_j, dimension)) << "case " << k;
+        ASSERT_EQ(reverse, plain_sample_count(xm, horizon_j, half_i, dimension)) << "case " << k;
+      }
+      differ += own != reverse;
+      partial += own > 0 && own < partial_volume_sample_total(dimension);
+    }
+  // The two ends' counts differ often, so a horizon or a cell taken from the wrong end fails
+  // (checked: either swap fails at the first case). (A reverse counted at +xi instead of -xi
+  // is not caught: the mirrored cell's count equals it except on knife edges.)
+  EXPECT_GT(differ, 20000);
+  EXPECT_GT(partial, 20000);  // the full count is exercised, not only the early answers
 }
 
 TEST(PartialVolume, KnifeEdgeCountsEqualThePointByPointQuadrature) {

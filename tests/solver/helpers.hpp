@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <system_error>
 
 #include <unistd.h>
 
@@ -21,13 +22,33 @@ namespace breccia::solver::testing {
 // A scratch folder of this test process. CTest runs every test case as its own process, in
 // parallel (-j), and the cases of one parametrized suite write files of the same name:
 // sharing ::testing::TempDir() made them overwrite each other's inputs.
+// The folder is removed when the process exits (tens of MB per process: a whole test run
+// left gigabytes behind in the temporary folder); set BRECCIA_KEEP_TEST_FILES to keep it
+// for a look at a failing test's files.
+class ProcessTempDir {
+ public:
+  ProcessTempDir() : owner_(::getpid()), path_(::testing::TempDir() + "/breccia_test_" + std::to_string(owner_)) {
+    std::filesystem::create_directories(path_);
+  }
+  ~ProcessTempDir() {
+    // A death test's forked child that exits runs this destructor too: only the process that
+    // made the folder removes it.
+    if (::getpid() != owner_ || std::getenv("BRECCIA_KEEP_TEST_FILES") != nullptr) return;
+    std::error_code ignored;  // a destructor at exit must not throw
+    std::filesystem::remove_all(path_, ignored);
+  }
+  ProcessTempDir(const ProcessTempDir&) = delete;
+  ProcessTempDir& operator=(const ProcessTempDir&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  pid_t owner_;
+  std::string path_;
+};
+
 inline const std::string& process_temp_dir() {
-  static const std::string dir = [] {
-    const std::string d = ::testing::TempDir() + "/breccia_test_" + std::to_string(::getpid());
-    std::filesystem::create_directories(d);
-    return d;
-  }();
-  return dir;
+  static const ProcessTempDir dir;
+  return dir.path();
 }
 
 inline std::string write_case(const std::string& name, const std::string& yaml) {

@@ -84,7 +84,7 @@ std::vector<int64_t> family_sizes(const std::vector<double>& x0, const std::vect
 // internal order). `index` is ascending (the halo below the rows, the rows, the halo above),
 // so a local index orders as the global one: a row built on the window and mapped back
 // through `index` is sorted as the whole build's. An empty range has an empty window.
-// The cells are marked for groups of nearby rows (consecutive rows within 2 cells on each
+// The cells are marked for groups of nearby rows (consecutive rows within 3 cells on each
 // axis), each cell about a group decided once from the group's box and only the doubtful
 // ones row by row: the marks of each row alone at a fifth to a half of their cost. O(N +
 // the cells within reach of each group's box, per grid it marks, + the doubtful cells' row

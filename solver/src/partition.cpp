@@ -184,7 +184,7 @@ GeometricWindow geometric_window(const std::vector<double>& x, const std::vector
   // are exactly those of each row alone, at about the cost of the groups' cells. Groups of
   // 3 cells: of 1 or 2, more groups visit the same cells; of 4, the cells between "none" and
   // "every row" grow, and so do the row tests, for about the same time (demo concrete
-  // block, 4 ranks: 3.1 to 3.7 times faster than row by row at 2 to 4 cells, 2 at 1).
+  // block, 4 ranks: 3.0 to 3.7 times faster than row by row at 2 to 4 cells).
   constexpr double kGroupCells = 3.0;
   struct Group {
     std::vector<int64_t> rows;

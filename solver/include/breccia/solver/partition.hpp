@@ -86,7 +86,7 @@ std::vector<int64_t> family_sizes(const std::vector<double>& x0, const std::vect
 // through `index` is sorted as the whole build's. An empty range has an empty window.
 // The cells are marked for groups of nearby rows (consecutive rows within 3 cells on each
 // axis), each cell about a group decided once from the group's box and only the doubtful
-// ones row by row: the marks of each row alone at a fifth to a half of their cost. O(N +
+// ones row by row: the marks of each row alone at a quarter to a third of their cost. O(N +
 // the cells within reach of each group's box, per grid it marks, + the doubtful cells' row
 // tests) time; memory the window and the grids (each cut to the rows' box grown by its
 // reach, at most max(N, 65,536) cells); throws std::invalid_argument for a range outside

@@ -166,52 +166,196 @@ GeometricWindow geometric_window(const std::vector<double>& x, const std::vector
     }
     m.bits.assign(static_cast<size_t>(m.grid.cells()), 0);
   }
-  // Row i marks in grid g every cell whose box comes within reach[c] of it with bit c (c
-  // from c_lo to c_hi), plus a margin for a point's rounded cell coordinate. The cells
-  // visited on each axis run from the cell of x - reach to that of x + reach: the
-  // coordinate is monotone in the position, so a point within reach falls in one of them.
-  auto mark = [&](Marks& m, const double* xi, const double* reach, int c_lo, int c_hi) {
-    if (!m.active) return;
-    double most = 0.0;
-    for (int c = c_lo; c <= c_hi; ++c) most = std::max(most, reach[c]);
-    if (most <= 0.0) return;
+  // Row i marks in grid g, with bit c (c from c_lo to c_hi: its own grid, bits 0 .. k; a
+  // coarser grid g, bit g), every cell whose box comes within reach[c] of it, plus a margin
+  // for a point's rounded cell coordinate, among the cells from that of x - most to that of
+  // x + most on each axis (most: the largest of those reaches; the coordinate is monotone in
+  // the position, so a point within reach falls in one of them). Row by row that visits
+  // about 343 cells per grid, and most rows mark 3 or 4 grids, while nearby rows mark nearly
+  // the same cells. So the rows are marked in groups: consecutive rows (the Morton order
+  // keeps them close) whose box stays within `kGroupCells` cells of the grid on each axis,
+  // one group per grid and kind of call. Each cell about a group is decided once from the
+  // group's box: the gap from a cell to the box's nearer and farther faces bounds every
+  // row's gap from below and above (the gap, the squares and their sum are monotone in
+  // each coordinate, also rounded), and the coordinates of the box's faces grown by the
+  // smallest and largest `most` bound every row's range. A cell that no row can reach is
+  // skipped, one that every row reaches is marked for the group, and only a cell in
+  // between that is not marked yet is tested row by row with the test above. So the marks
+  // are exactly those of each row alone, at about the cost of the groups' cells. Groups of
+  // 3 cells: of 1 or 2, more groups visit the same cells; of 4, the cells between "none" and
+  // "every row" grow, and so do the row tests, for about the same time (demo concrete
+  // block, 4 ranks: 3.0 to 3.7 times faster than row by row at 2 to 4 cells).
+  constexpr double kGroupCells = 3.0;
+  struct Group {
+    std::vector<int64_t> rows;
+    double lo[3], hi[3];
+  };
+  Group open[kClasses][2];  // [grid][0: rows of the grid's class, 1: rows of finer classes]
+  std::vector<double> row_reach;     // per row of a group: its reach to each class (kClasses each)
+  std::vector<long long> row_range;  // per row of a group: its first and last cell on each axis
+  std::vector<double> least2[3], largest2[3];  // per axis, per cell of a group's range
+  std::vector<double> row_gap2;                // per row of a group, per axis, per cell of its range
+  auto mark_group = [&](Group& grp, int g, bool own) {
+    if (grp.rows.empty()) return;
+    Marks& m = grids[g];
     const CellGrid& gr = m.grid;
     const double margin = 1e-9 * gr.cell[0];
-    long long a0[3], a1[3];
-    for (int d = 0; d < 3; ++d) {
-      a0[d] = gr.coordinate(d, xi[d] - most);
-      a1[d] = gr.coordinate(d, xi[d] + most);
+    const int c_lo = own ? 0 : g, c_hi = g;
+    const size_t rows = grp.rows.size();
+    row_reach.assign(rows * kClasses, 0.0);
+    row_range.assign(rows * 6, 0);
+    double most_min = std::numeric_limits<double>::infinity(), most_max = 0.0;
+    for (size_t r = 0; r < rows; ++r) {
+      const int64_t i = grp.rows[r];
+      double most = 0.0;
+      for (int c = c_lo; c <= c_hi; ++c)
+        if (present[c]) most = std::max(most, row_reach[r * kClasses + c] = reach_to(i, c));
+      most_min = std::min(most_min, most);
+      most_max = std::max(most_max, most);
+      for (int d = 0; d < 3; ++d) {
+        row_range[6 * r + 2 * d] = gr.coordinate(d, x[3 * i + d] - most);
+        row_range[6 * r + 2 * d + 1] = gr.coordinate(d, x[3 * i + d] + most);
+      }
     }
-    auto gap = [&](int d, long long a) {
-      const double low = gr.origin[d] + static_cast<double>(a) * gr.cell[d], high = low + gr.cell[d];
-      return xi[d] < low ? low - xi[d] : (xi[d] > high ? xi[d] - high : 0.0);
+    // Bits whose reach is the same for every row of the group share one test (a row's own
+    // reach towards every finer class, as a rule): a mask each, its smallest and largest reach.
+    struct Mask {
+      uint8_t bits = 0;
+      int first = 0;
+      double sure = 0.0, can = 0.0;  // (smallest reach + margin)^2, (largest + margin)^2
     };
-    const double skip2 = (most + margin) * (most + margin);
-    for (long long az = a0[2]; az <= a1[2]; ++az) {
-      const double gz = gap(2, az);
-      if (gz * gz > skip2) continue;
-      for (long long ay = a0[1]; ay <= a1[1]; ++ay) {
-        const double gy = gap(1, ay);
-        if (gz * gz + gy * gy > skip2) continue;
-        for (long long ax = a0[0]; ax <= a1[0]; ++ax) {
-          const double gx = gap(0, ax);
-          const double g2 = gz * gz + gy * gy + gx * gx;
-          uint8_t bits = 0;
-          for (int c = c_lo; c <= c_hi; ++c)
-            if (reach[c] > 0.0 && g2 <= (reach[c] + margin) * (reach[c] + margin)) bits |= static_cast<uint8_t>(1u << c);
-          if (bits) m.bits[static_cast<size_t>(gr.index(ax, ay, az))] |= bits;
+    Mask masks[kClasses];
+    int n_masks = 0;
+    double can_any = 0.0;
+    for (int c = c_lo; c <= c_hi; ++c) {
+      if (!present[c]) continue;
+      int k = 0;
+      for (; k < n_masks; ++k) {
+        bool same = true;
+        for (size_t r = 0; r < rows && same; ++r) same = row_reach[r * kClasses + c] == row_reach[r * kClasses + masks[k].first];
+        if (same) break;
+      }
+      if (k == n_masks) {
+        double rmin = std::numeric_limits<double>::infinity(), rmax = 0.0;
+        for (size_t r = 0; r < rows; ++r) {
+          rmin = std::min(rmin, row_reach[r * kClasses + c]);
+          rmax = std::max(rmax, row_reach[r * kClasses + c]);
+        }
+        masks[n_masks].first = c;
+        masks[n_masks].sure = (rmin + margin) * (rmin + margin);
+        masks[n_masks].can = (rmax + margin) * (rmax + margin);
+        can_any = std::max(can_any, masks[n_masks].can);
+        ++n_masks;
+      }
+      masks[k].bits |= static_cast<uint8_t>(1u << c);
+    }
+    if (most_max <= 0.0) {
+      grp.rows.clear();
+      return;
+    }
+    long long o0[3], o1[3], s0[3], s1[3];  // the rows' ranges' union and intersection
+    for (int d = 0; d < 3; ++d) {
+      o0[d] = gr.coordinate(d, grp.lo[d] - most_max);
+      o1[d] = gr.coordinate(d, grp.hi[d] + most_max);
+      s0[d] = gr.coordinate(d, grp.hi[d] - most_min);
+      s1[d] = gr.coordinate(d, grp.lo[d] + most_min);
+    }
+    // The gap from a point to cell a on axis d, as each row's test takes it.
+    auto gap = [&](int d, long long a, double xd) {
+      const double low = gr.origin[d] + static_cast<double>(a) * gr.cell[d], high = low + gr.cell[d];
+      return xd < low ? low - xd : (xd > high ? xd - high : 0.0);
+    };
+    // Its least and largest over the group's box, squared, per cell of the group's ranges (the
+    // gap falls, then rises, along an axis, so they are the gaps at the box's faces).
+    for (int d = 0; d < 3; ++d) {
+      const size_t cells = static_cast<size_t>(o1[d] - o0[d] + 1);
+      least2[d].resize(cells);
+      largest2[d].resize(cells);
+      for (long long a = o0[d]; a <= o1[d]; ++a) {
+        const double at_lo = gap(d, a, grp.lo[d]), at_hi = gap(d, a, grp.hi[d]);
+        const double low = gr.origin[d] + static_cast<double>(a) * gr.cell[d], high = low + gr.cell[d];
+        const double least = grp.hi[d] < low ? at_hi : (grp.lo[d] > high ? at_lo : 0.0), largest = std::max(at_lo, at_hi);
+        least2[d][static_cast<size_t>(a - o0[d])] = least * least;
+        largest2[d][static_cast<size_t>(a - o0[d])] = largest * largest;
+      }
+    }
+    // Each row's squared gap to each cell of the group's ranges, infinite outside its own
+    // range: a row marks cell (ax, ay, az) for a reach when gz^2 + gy^2 + gx^2 is within
+    // (reach + margin)^2, the sum taken in that order as above.
+    size_t span[3], at[3];
+    for (int d = 0; d < 3; ++d) span[d] = static_cast<size_t>(o1[d] - o0[d] + 1);
+    at[0] = 0, at[1] = span[0], at[2] = span[0] + span[1];
+    const size_t per_row = span[0] + span[1] + span[2];
+    row_gap2.resize(rows * per_row);
+    for (size_t r = 0; r < rows; ++r)
+      for (int d = 0; d < 3; ++d) {
+        const double xd = x[3 * grp.rows[r] + d];
+        for (long long a = o0[d]; a <= o1[d]; ++a) {
+          const bool in = a >= row_range[6 * r + 2 * d] && a <= row_range[6 * r + 2 * d + 1];
+          const double g = gap(d, a, xd);
+          row_gap2[r * per_row + at[d] + static_cast<size_t>(a - o0[d])] = in ? g * g : std::numeric_limits<double>::infinity();
+        }
+      }
+    auto row_marks = [&](size_t r, long long ax, long long ay, long long az, double reach) {
+      const double* g2 = &row_gap2[r * per_row];
+      return g2[at[2] + static_cast<size_t>(az - o0[2])] + g2[at[1] + static_cast<size_t>(ay - o0[1])] +
+                 g2[at[0] + static_cast<size_t>(ax - o0[0])] <=
+             (reach + margin) * (reach + margin);
+    };
+    for (long long az = o0[2]; az <= o1[2]; ++az) {
+      const double z0 = least2[2][static_cast<size_t>(az - o0[2])], z1 = largest2[2][static_cast<size_t>(az - o0[2])];
+      if (z0 > can_any) continue;
+      for (long long ay = o0[1]; ay <= o1[1]; ++ay) {
+        const double zy0 = z0 + least2[1][static_cast<size_t>(ay - o0[1])], zy1 = z1 + largest2[1][static_cast<size_t>(ay - o0[1])];
+        if (zy0 > can_any) continue;
+        const bool inner_zy = az >= s0[2] && az <= s1[2] && ay >= s0[1] && ay <= s1[1];
+        uint8_t* line = &m.bits[static_cast<size_t>(gr.index(0, ay, az))];
+        for (long long ax = o0[0]; ax <= o1[0]; ++ax) {
+          const double least = zy0 + least2[0][static_cast<size_t>(ax - o0[0])];
+          if (least > can_any) continue;
+          const double largest = zy1 + largest2[0][static_cast<size_t>(ax - o0[0])];
+          const bool inner = inner_zy && ax >= s0[0] && ax <= s1[0];
+          uint8_t& cell_bits = line[ax];
+          for (int k = 0; k < n_masks; ++k) {
+            const Mask& mk = masks[k];
+            if (least > mk.can || (cell_bits & mk.bits) == mk.bits) continue;
+            if (inner && largest <= mk.sure) {
+              cell_bits |= mk.bits;
+              continue;
+            }
+            for (size_t r = 0; r < rows; ++r)
+              if (row_marks(r, ax, ay, az, row_reach[r * kClasses + mk.first])) {
+                cell_bits |= mk.bits;
+                break;
+              }
+          }
         }
       }
     }
+    grp.rows.clear();
+  };
+  auto add_to_group = [&](int64_t i, int g, bool own) {
+    Group& grp = open[g][own ? 0 : 1];
+    const double* xi = &x[3 * i];
+    const double limit = kGroupCells * grids[g].grid.cell[0];
+    if (!grp.rows.empty())
+      for (int d = 0; d < 3; ++d)
+        if (std::max(grp.hi[d], xi[d]) - std::min(grp.lo[d], xi[d]) > limit) {
+          mark_group(grp, g, own);
+          break;
+        }
+    if (grp.rows.empty())
+      for (int d = 0; d < 3; ++d) grp.lo[d] = grp.hi[d] = xi[d];
+    for (int d = 0; d < 3; ++d) grp.lo[d] = std::min(grp.lo[d], xi[d]), grp.hi[d] = std::max(grp.hi[d], xi[d]);
+    grp.rows.push_back(i);
   };
   for (int64_t i = row_begin; i < row_end; ++i) {
     const int k = klass(static_cast<size_t>(i));
-    double reach[kClasses] = {};
-    for (int c = 0; c < kClasses; ++c)
-      if (present[c]) reach[c] = reach_to(i, c);
-    mark(grids[k], &x[3 * i], reach, 0, k);
-    for (int c = k + 1; c < kClasses; ++c) mark(grids[c], &x[3 * i], reach, c, c);
+    for (int g = k; g < kClasses; ++g)
+      if (grids[g].active && (g == k || present[g])) add_to_group(i, g, g == k);
   }
+  for (int g = 0; g < kClasses; ++g)
+    if (grids[g].active) mark_group(open[g][0], g, true), mark_group(open[g][1], g, false);
   // Particle j of class c is near the rows when a grid g >= c marks its cell with bit c.
   auto near = [&](size_t j) {
     const int c = klass(j);

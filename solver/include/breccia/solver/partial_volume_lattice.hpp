@@ -7,13 +7,6 @@
 
 namespace breccia::solver {
 
-// A pair's two counts at once: entry (i -> j)'s own, xi = x_j - x_i (j's cell in i's horizon),
-// and its reverse's, -xi (i's cell in j's horizon); each the count partial_volume_samples_inside
-// (pd_physics.hpp) gives, bit for bit, the offset's length (a square root) formed once for both.
-// The set-up's count pass on a graded mesh (71 million candidates on the full concrete case).
-void partial_volume_pair_samples_inside(const double xi[3], double horizon_i, double half_cell_j, double horizon_j,
-                                        double half_cell_i, int dimension, int& own, int& reverse);
-
 // On a lattice of spacing 2 half_cell every candidate offset x_j - x_i is an integer offset
 // times the spacing, to the rounding of the positions' differences. The set-up asks for the
 // count of every candidate entry and of its reverse (12.6 million calls each at 41^3, each a

@@ -139,7 +139,7 @@ struct RowGroup {
 // the position, so a point within reach falls in one of them). Row by row that visits
 // about 343 cells per grid, and most rows mark 3 or 4 grids, while nearby rows mark nearly
 // the same cells. So the rows are marked in groups: consecutive rows (the Morton order
-// keeps them close) whose box stays within `kGroupCells` cells of the grid on each axis,
+// keeps them close) whose box stays within `group_cells` cells of the grid on each axis,
 // one group per grid and kind of call. Each cell about a group is decided once from the
 // group's box: the gap from a cell to the box's nearer and farther faces bounds every
 // row's gap from below and above (the gap, the squares and their sum are monotone in
@@ -317,16 +317,15 @@ void GroupMarker::mark(RowGroup& grp, int g, bool own) {
   grp.rows.clear();
 }
 
-constexpr double kGroupCells = 3.0;
-
 }  // namespace
 
 GeometricWindow geometric_window(const std::vector<double>& x, const std::vector<double>& horizon,
                                  const std::vector<double>& half_cell, int dimension, int64_t row_begin,
-                                 int64_t row_end) {
+                                 int64_t row_end, double group_cells) {
   const size_t n = horizon.size();
   if (x.size() != 3 * n || half_cell.size() != n)
     throw std::invalid_argument("geometric_window: x0 3N, horizon and half_cell N");
+  if (!(group_cells >= 0.0)) throw std::invalid_argument("geometric_window: a group extent of at least 0 cells");
   if (row_begin < 0 || row_begin > row_end || row_end > static_cast<int64_t>(n))
     throw std::invalid_argument("geometric_window: rows [begin, end) within [0, N]");
   GeometricWindow w;
@@ -378,7 +377,7 @@ GeometricWindow geometric_window(const std::vector<double>& x, const std::vector
   auto add_to_group = [&](int64_t i, int g, bool own) {
     RowGroup& grp = open[g][own ? 0 : 1];
     const double* xi = &x[3 * i];
-    const double limit = kGroupCells * grids[g].grid.cell[0];
+    const double limit = group_cells * grids[g].grid.cell[0];
     if (!grp.rows.empty())
       for (int d = 0; d < 3; ++d)
         if (std::max(grp.hi[d], xi[d]) - std::min(grp.lo[d], xi[d]) > limit) {

@@ -902,6 +902,31 @@ TEST(RankSystem, GeometricHaloFollowsEachParticlesReachOnAStronglyGradedMesh) {
   std::printf("farthest halo particle: %.3f pair reaches from its nearest row\n", worst);
   EXPECT_LE(worst, 2.5);
 }
+
+// The rows mark their cells in groups (geometric_window's group_cells), each cell about a group
+// decided from the group's box and only the doubtful ones row by row; the marks must be each
+// row's alone. So the windows by groups equal, index for index, the windows with every row its
+// own group (group_cells 0), on the strongly graded bar (reach classes over fourfold horizons)
+// at 2, 3, 4 and 8 ranks, and with larger groups (8 cells) too.
+TEST(RankSystem, GeometricWindowByGroupsOfRowsIsTheWindowRowByRow) {
+  const std::string particles = strongly_graded_notch_particles();
+  ASSERT_FALSE(particles.empty()) << "could not mesh the graded block";
+  const PdSystem s = dual_horizon_system("halo_groups", particles);
+  for (const int ranks : {2, 3, 4, 8}) {
+    const Partition p = MortonRangePartitioner().partition(s.offsets, ranks);
+    for (int r = 0; r < ranks; ++r) {
+      const int64_t b = p.begin[r], e = p.begin[r + 1];
+      const GeometricWindow alone = geometric_window(s.x0, s.horizon, s.half_cell, 3, b, e, 0.0);
+      for (const double cells : {kWindowGroupCells, 8.0}) {
+        const GeometricWindow grouped = geometric_window(s.x0, s.horizon, s.half_cell, 3, b, e, cells);
+        EXPECT_EQ(grouped.index, alone.index) << ranks << " ranks, rank " << r << ", groups of " << cells << " cells";
+        EXPECT_EQ(grouped.row_begin, alone.row_begin);
+        EXPECT_EQ(grouped.row_end, alone.row_end);
+      }
+    }
+  }
+  EXPECT_THROW(geometric_window(s.x0, s.horizon, s.half_cell, 3, 0, 10, -1.0), std::invalid_argument);
+}
 #endif
 
 // plan_distributed_rows counts each slice's family sizes on the slice's geometric window:

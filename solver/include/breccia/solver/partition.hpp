@@ -90,7 +90,9 @@ std::vector<int64_t> family_sizes(const std::vector<double>& x0, const std::vect
 // the cells within reach of each group's box, per grid it marks, + the doubtful cells' row
 // tests) time; memory the window and the grids (each cut to the rows' box grown by its
 // reach, at most max(N, 65,536) cells); throws std::invalid_argument for a range outside
-// [0, N].
+// [0, N] or a negative group size. `group_cells`: the groups' extent in cells (0: each row
+// alone, the marking the groups must reproduce exactly; the tests compare the two).
+inline constexpr double kWindowGroupCells = 3.0;
 struct GeometricWindow {
   std::vector<int32_t> index;          // global indices, ascending
   int64_t row_begin = 0, row_end = 0;  // the rows' local range in index
@@ -98,7 +100,7 @@ struct GeometricWindow {
 };
 GeometricWindow geometric_window(const std::vector<double>& x0, const std::vector<double>& horizon,
                                  const std::vector<double>& half_cell, int dimension, int64_t row_begin,
-                                 int64_t row_end);
+                                 int64_t row_end, double group_cells = kWindowGroupCells);
 
 // What one rank exchanges each step. Ghosts are sorted by internal index; since ranks own
 // contiguous ranges, the ghosts from one source rank are one contiguous run of `ghosts`.

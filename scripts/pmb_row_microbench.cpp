@@ -1,5 +1,5 @@
 // A stand-alone copy of the PMB packed row (4 lanes, AVX) on a 41^3 lattice, to cost what
-// bounds it (docs/performance.md, "The packed rows 4 wide, four partial sums"). Not part of the
+// bounds it (docs/performance-log.md, "The packed rows 4 wide, four partial sums"). Not part of the
 // solver. Build and run (CPU time per entry, 20 passes):
 //   g++ -O3 -mavx -ffp-contract=off -fno-math-errno -fno-trapping-math -o /tmp/mb scripts/pmb_row_microbench.cpp
 //   for v in 0 1 2 3 4 5; do /tmp/mb $v; done

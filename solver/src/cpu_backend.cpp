@@ -349,7 +349,7 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
   // passes on the full concrete case, the stable step 0.34% smaller; the set-up's default.
   // Its step is 0.03% (full case) and 0.04% (demo case) larger than with a 1e-4 tolerance,
   // which took 23 and 20 passes, and 0.03% and 0.05% larger than after 40 passes: well
-  // inside the 2% margin below (docs/performance.md). No reorthogonalisation: lost
+  // inside the 2% margin below (docs/performance-log.md). No reorthogonalisation: lost
   // orthogonality only repeats converged Ritz values, it does not move the largest.
   //
   // On a graded body the top of the spectrum lives where the particles are finest: the
@@ -360,7 +360,7 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
   // frequency is well below the largest, loses little: at 0.35 of the largest frequency scale
   // the full concrete case moves 9% of its particles and its step is 0.21% larger than with
   // the region at 1/4 (17%), the demo 11% and 0.19%, the quick case 0.05%; the 1/4 region was
-  // 0.013% from the whole system's (docs/performance.md). The top mode sits at the charge
+  // 0.013% from the whole system's (docs/performance-log.md). The top mode sits at the charge
   // hole's rim on the top face (LPS rows whose families two faces cut), at 0.4-0.8 of the
   // largest scale, not at the finest particles: a region at 1/2 missed it by 1.4%. One process then runs only the rows that block reads; a
   // distributed set-up runs its whole pass, whose forces on the region are the same bits.

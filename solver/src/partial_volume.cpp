@@ -19,7 +19,7 @@ namespace breccia::solver {
 // - else every sample point is tested, without a branch (count_every_sample; the per-row
 //   shortcuts it replaced mispredicted a branch a row). Settling whole slabs of 36 samples
 //   first by the same monotonicity (2.6 of 6 slabs left on average) was measured too: no
-//   faster, the branches' mispredictions eating the comparisons saved (docs/performance.md);
+//   faster, the branches' mispredictions eating the comparisons saved (docs/performance-log.md);
 // - a count asked before by this thread for an offset within a grid step (2^-30 horizons)
 //   is looked up where every sample is farther than that from the sphere, where such counts
 //   recur (a lattice); where they do not (a graded mesh) the memo steps aside.
@@ -39,16 +39,16 @@ namespace {
 //
 // On a graded mesh offsets rarely recur: there the hash, the compare and the slot's store cost
 // 6-10% of the bond-coefficient phase for nothing (full concrete case, paired runs,
-// docs/performance.md). So the memo watches its hits over windows of kWindow full counts, and
+// docs/performance-log.md). So the memo watches its hits over windows of kWindow full counts, and
 // after a window with under one hit in eight it stands aside for kRest windows, then
 // tries again; each trial window that fails again doubles the rest (plus one), up to kRestMost
 // windows, and a window with hits sets it back to kRest. A graded case then pays for a
 // sixteenth of its first 4,096 x 16 counts' lookups and under one in 256 of the rest (the
 // fixed rest's sixteenth was 0.2 CPU s of slot misses on the full concrete case's 71 million
-// candidates, docs/performance.md); a lattice that follows a graded stretch waits at most
+// candidates, docs/performance-log.md); a lattice that follows a graded stretch waits at most
 // kRestMost windows (a million counts). A key's
 // first count only marks its slot (kSeen): the margin check, 216 scalar distances, a quarter
-// of the graded mesh's count time when every first count paid it (docs/performance.md), is
+// of the graded mesh's count time when every first count paid it (docs/performance-log.md), is
 // done at a key's second count, when keys recur. The counts are the same either way: the
 // memo only decides whether a count is computed or looked up.
 struct CountMemo {
@@ -132,7 +132,7 @@ double sample_shift_bound(const double xi[3], double half_cell_j, double step, d
 // (GCC's function multiversioning): the portable one (SSE2 on x86-64, NEON on ARM, scalar
 // elsewhere) the z squares in pairs, and with AVX2 four and two, which compares a row in
 // two instructions instead of three, with no register copies (VEX's three operands): 45
-// against 53 ns per candidate entry of the mid-size concrete case (docs/performance.md).
+// against 53 ns per candidate entry of the mid-size concrete case (docs/performance-log.md).
 // 2D: one z sample, the other z lanes +inf (s + inf is never inside).
 __attribute__((target("default"))) int count_every_sample(const double sq[3][kPartialVolumeSamples], double r2) {
   constexpr int n = kPartialVolumeSamples;

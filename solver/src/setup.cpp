@@ -949,7 +949,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // A distributed set-up holds only its own rows (the reverse entry may be another rank's).
   // The copy saves a Weibull draw's pow and log at one end of each pair; without a draw
   // both ends are filled (memoised per row: the same function of the same arguments, the
-  // same bits), which costs less than the reverse pass (41^3 lattice, docs/performance.md).
+  // same bits), which costs less than the reverse pass (41^3 lattice, docs/performance-log.md,
+  // "The stable step's passes measured, not cut").
   const bool weibull = std::any_of(c.materials.begin(), c.materials.end(),
                                    [](const MaterialSpec& m) { return m.fracture_energy > 0 && m.weibull_modulus > 0; });
   const bool copy_strengths = !dist_rows.active && weibull;
@@ -1626,7 +1627,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // The stable step is that of the bonds: the short-range forces act only under more than
   // 10% compression, which a strain of 1e-9 never reaches (docs/theory.md). Lanczos: the
   // power iteration's value within 0.4% (from below, so dt a little smaller) in 16-32 force
-  // passes instead of 60 (docs/performance.md).
+  // passes instead of 60 (docs/performance-log.md, "Where the set-up's time goes").
   // On a PMB lattice it starts from the lattice's plane wave: a distributed set-up's ranks
   // each find theirs on their own rows and keep the one of the best row, the first on ties,
   // as one process does over all rows (the same row's entries, the same wave).

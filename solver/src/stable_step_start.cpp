@@ -1,5 +1,5 @@
 // The Lanczos stable-step estimate's start on a PMB lattice: the plane wave its largest
-// eigenvalue is made of (docs/performance.md, "The stable step from a plane wave").
+// eigenvalue is made of (docs/performance-log.md, "The stable step from the lattice's plane wave").
 #include <cmath>
 
 #include "breccia/solver/pd_system.hpp"

@@ -420,7 +420,7 @@ TEST_P(StableStepEstimate, GradedBodyEstimatedOnItsStiffRegionAgreesWithTheWhole
   EXPECT_GT(inside, 0u);
   EXPECT_LT(2 * inside, s.n);
   // The set-up's region (0.35 of the largest frequency scale) is smaller than the 1/4 it
-  // replaced: the point of the change (docs/performance.md, "The stable step on a smaller
+  // replaced: the point of the change (docs/performance-log.md, "The stable step on a smaller
   // stiff region"); its estimate must still meet the band below.
   const std::vector<uint8_t> quarter = stable_step_region(s, 0.25);
   ASSERT_EQ(quarter.size(), s.n);

@@ -3,7 +3,8 @@
 // on transparent huge pages. Where a system gives each process 4 KiB pages unless asked
 // (transparent_hugepage "madvise", the default of many distributions), every first touch of a
 // page is a fault; in the virtual build machine that cost about 3.5 CPU s per GB filled
-// against 0.2-2 s per GB on 2 MiB pages (docs/performance.md). The hint changes no value.
+// against 0.2-2 s per GB on 2 MiB pages (docs/performance-log.md, "Lanczos by default, big
+// arrays on huge pages"). The hint changes no value.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>

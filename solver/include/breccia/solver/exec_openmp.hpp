@@ -129,7 +129,7 @@ bool cpu_energy_density_on_rows(PdSystem& sys, std::span<const int64_t> rows);
 // dilatation weight, and 1.0 * x is x: the kernels give the same bits with the damage array
 // hidden from them, and then take the unbroken paths (fast_bond_loop: the two-stage general
 // loop and dilatation) instead of the per-entry softening loop, which the probe's passes ran
-// at twice the cost on the full concrete case (docs/performance.md). Hidden only while this
+// at twice the cost on the full concrete case (docs/performance-log.md). Hidden only while this
 // lives, only where no bond has any damage; put back untouched (a move, no copy).
 class DamageHiddenWhileUndamaged {
  public:

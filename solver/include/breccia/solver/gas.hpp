@@ -542,7 +542,7 @@ struct GasCrackDrift {
 // wetted particle that has lost its last bond (its entries in the volume leave it: debris).
 // Any of these forces the exact pass at this step, so that the sparse passes find every
 // change at the step the every-step passes do (found a step late, the first crack's gas
-// entered late and the answer of a disc breaking into grains moved by 3-4%: docs/performance.md).
+// entered late and the answer of a disc breaking into grains moved by 3-4%: docs/performance-log.md).
 // The check reads bytes per entry of the wetted particles (state, halves, in_crack) and the
 // partner's arrival only where an entry is open and not yet in the volume: no openings.
 // A partner's attachment is the last pass's (GasAttached; it only goes from 1 to 0), so a
@@ -844,7 +844,7 @@ void gas_update(Exec& exec, const PdView& d, const FacetView& f, GasState& gas, 
     // crack_pass_new_crack: tolerance keeps only the front's part of the check once the gas is
     // in cracks; until then all of it, so that the first crack is found at the step it opens (a
     // pass that finds nothing missed doubles the interval, and a first crack found late let a
-    // disc breaking into grains miss 4% of the work: docs/performance.md). The front itself
+    // disc breaking into grains miss 4% of the work: docs/performance-log.md). The front itself
     // takes one hop per pass, so a front held back for k steps would lag (measured: at 20 MPa
     // on the quick concrete block, 41% less gas work without the front's check).
     const bool front_only = !gas.crack_pass_new_crack_at_once && gas.crack_volume > 0.0;

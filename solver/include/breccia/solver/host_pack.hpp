@@ -12,7 +12,7 @@
 // their own compiled for AVX (BRECCIA_TARGET_AVX, everything they call inlined into them), and
 // runs them where the CPU has AVX (host_runs_avx, asked once), PackD2 elsewhere. On this
 // project's CPU a 256-bit square root or division takes the time of a 128-bit one, and those
-// bound the PMB loop (docs/performance.md, "The packed rows 4 wide, four partial sums").
+// bound the PMB loop (docs/performance-log.md, "The packed rows 4 wide, four partial sums").
 // Not compiled for the device, nor where the build targets no x86 SIMD (BRECCIA_HOST_PACK
 // undefined: the loops that use it are skipped).
 #if !defined(__CUDACC__) && defined(__SSE2__)

@@ -10,7 +10,7 @@ namespace breccia::solver {
 // On a lattice of spacing 2 half_cell every candidate offset x_j - x_i is an integer offset
 // times the spacing, to the rounding of the positions' differences. The set-up asks for the
 // count of every candidate entry and of its reverse (12.6 million calls each at 41^3, each a
-// square root, the sample box and a hash of the offset, docs/performance.md): here each integer
+// square root, the sample box and a hash of the offset, docs/performance-log.md): here each integer
 // offset's count is computed once, at the offset itself, and kept only where no sample lies
 // within reach of the sphere for any offset within kLatticeTolerance spacings of it (the same
 // margin argument as the rounded-offset memo's, partial_volume.cpp). count(xi) returns the

@@ -413,7 +413,7 @@ BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double uni
 // keeps four partial sums per component, entry q of the row added to sum q mod 4 in row order,
 // and combines them as (s0 + s1) + (s2 + s3) (kFour). One sum per component, every entry added
 // in row order, would be a chain of dependent additions, one per entry: on the host that chain
-// bounded the packed PMB loop once its square roots and divisions ran 4 wide (docs/performance.md,
+// bounded the packed PMB loop once its square roots and divisions ran 4 wide (docs/performance-log.md,
 // "The packed rows 4 wide, four partial sums"); four sums run four chains side by side. LPS and
 // the general loops keep one sum (kFour false: every add goes to s0). A sum starts at +0 and
 // never becomes -0, so adding a masked entry's +0 leaves it unchanged whichever sum it goes to.
@@ -472,7 +472,7 @@ static_assert(kBondChunk % 4 == 0, "a chunk starts at a multiple of 4 entries fr
 // Are the own halves of all m entries of a chunk from `base` intact? Then the host's two
 // stages run a copy of the entry without its state test (kCheckState false): in a run most
 // chunks have no broken entry, and the test (a byte widened to a lane mask and a select per
-// entry) measured 11 % of LPS's loop (docs/performance.md, "Bond state in bits"). The own bit
+// entry) measured 11 % of LPS's loop (docs/performance-log.md, "Bond state in bits"). The own bit
 // of the AND of the state bytes is set only if every byte has it. The unchecked entries test
 // the own half (lps_dilatation_entry) or, with one constant horizon, where both bits go
 // together, any bit (pmb_fast_entry, lps_fast_entry), so the results are the checked copy's bit
@@ -1101,8 +1101,8 @@ using PmbReleased = std::conditional_t<BondOriginT<Real>::kRelative, Real, doubl
 // root, division, force: pmb_density_from on packs) and adds their forces to the sums in the
 // entry order, so the sums and every value are two_stage_force_loop's bit for bit. In one loop
 // the gathers, products and the ordered sum run while the divider works on the square roots
-// and divisions, which the two-stage loop's separate stages serialised (docs/performance.md,
-// "PMB in double: one packed loop per row"). Returns false, having written nothing, for a row
+// and divisions, which the two-stage loop's separate stages serialised (docs/performance-log.md,
+// "PMB and LPS rows in one packed loop"). Returns false, having written nothing, for a row
 // with an entry broken, or past its critical extension with fracture on: the two-stage loop
 // then runs it (the selection, the breaks and their released energy). P is PackD2 or PackD4
 // (the same bits); pmb_fast_force_loop runs the widest the CPU has (on_host_pack).

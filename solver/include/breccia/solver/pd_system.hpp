@@ -338,7 +338,7 @@ Energies measure(const PdSystem& sys);
 double estimate_max_frequency(PdSystem& sys, int iterations = 60, const ForcePass& forces = {});
 // The same by Lanczos in the mass inner product: at most `max_passes` force passes, fewer
 // once converged (sys.stable_step_passes says how many): 19 instead of 60 on the full
-// concrete case, within 0.4% of the power iteration on five models (docs/performance.md).
+// concrete case, within 0.4% of the power iteration on five models (docs/performance-log.md).
 // The set-up's stable step (setup_system): its dt is up to 0.4% smaller than the power
 // iteration's, as its Ritz value approaches omega_max^2 from below faster.
 // On a graded body it works on the stiff region (stable_step_region with `region_ratio`; 0:
@@ -346,7 +346,7 @@ double estimate_max_frequency(PdSystem& sys, int iterations = 60, const ForcePas
 // case 27,051 particles instead of 50,198, passes 0.2 CPU s instead of 0.34, dt 0.21% larger.
 // On a PMB lattice the estimate starts mostly from the plane wave of stable_step_start_wave
 // (below), the random start kept at a third of its amplitude so that no mode is missed: 9
-// passes instead of 20 at 41^3, its Ritz value above the random start's (docs/performance.md).
+// passes instead of 20 at 41^3, its Ritz value above the random start's (docs/performance-log.md).
 // `wave`: that wave, found by the caller (a distributed set-up's ranks agree on it first);
 // null: found here from the system's rows.
 inline constexpr double kStableStepRegionRatio = 0.35;

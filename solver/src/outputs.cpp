@@ -347,7 +347,7 @@ void ResultsWriter::write_together(const PdSystem& s, ResultsWriter* w, const st
     const std::string g = results_output_group(static_cast<int>(index));
     const std::vector<ResultsField> fields = results_fields(s);
     for (size_t k = 0; k < fields.size(); ++k)
-      f.write_rows(g + "/" + fields[k].name, rows[k].data(), file_first, file_count, field_dims(s.n, fields[k].components));
+      f.write_rows(g + "/" + fields[k].name, rows[k].data(), file_first, file_count, field_dims(s.whole_n(), fields[k].components));
     finish_results_output(f, static_cast<int>(index), static_cast<long long>(s.step), s.time, broken, broken_count);
   }
   if (w) w->count_output(s);
@@ -490,7 +490,7 @@ void write_checkpoint_content(const h5::File& f, const PdSystem& s, const Checkp
     f.set_attr("/", "external_work_J", s.external_work);
     f.set_attr("/", "dissipated_J", s.dissipated_energy);
     f.set_attr("/", "bond_count", static_cast<long long>(s.bond_count()));
-    const size_t n = s.n;
+    const size_t n = s.whole_n();  // a window system's (PdSystem::window_global) too
     const PdSystem& r = *mine.rows;
     const size_t p0 = mine.particle_first, pc = mine.particle_count, e0 = mine.entry_first, ec = mine.entry_count;
     f.write_rows("/u", r.u.data(), p0, pc, {n, 3});
@@ -505,8 +505,8 @@ void write_checkpoint_content(const h5::File& f, const PdSystem& s, const Checkp
     if (s.config.strength_rate != StrengthRateLaw::None)  // the onsets softening bonds were given at their rate
       f.write_rows("/bond_onset", doubles_of(r.s_onset, ec).data(), e0, ec, {entries});
     if (!r.min_stretch.empty()) {  // every rank owns a particle: held alike  // compressive enhancement: the s_min this step's pass read, and its own
-      f.write_rows("/min_stretch_previous", doubles_of(r.min_stretch, pc).data(), p0, pc, {s.n});
-      f.write_rows("/min_stretch", doubles_of(r.min_stretch_next, pc).data(), p0, pc, {s.n});
+      f.write_rows("/min_stretch_previous", doubles_of(r.min_stretch, pc).data(), p0, pc, {n});
+      f.write_rows("/min_stretch", doubles_of(r.min_stretch_next, pc).data(), p0, pc, {n});
     }
     std::vector<double> ind(s.indenter_position, s.indenter_position + 3);
     f.write("/indenter_position", ind, {3});
@@ -682,7 +682,7 @@ void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
                            "a checkpoint of this case with its crack_pass_every");
         g.push = f.read_doubles("/gas/push");
         const auto pass = f.read_doubles("/gas/crack_pass");
-        if (g.push.size() != 3 * s.n || pass.size() != 3)
+        if (g.push.size() != 3 * s.whole_n() || pass.size() != 3)
           throw InputError(path, "/gas/push", "sized for other particles", "a checkpoint of this case");
         g.crack_pass_countdown = static_cast<int>(pass[0]);
         g.crack_pass_done = pass[1] != 0.0;

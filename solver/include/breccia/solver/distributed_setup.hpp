@@ -52,7 +52,27 @@ struct DistributedRows {
   std::vector<int64_t> full_offsets;   // the whole system's row offsets (n + 1), from the family sizes
   GeometricWindow window;              // the rows' geometric window (active only): every partner
   WindowExchange exchange;             // the owners' values to that window (active only)
+  // The set-up system is the window (take_window; PdSystem::window_global): its particles are
+  // window.index in local indices, the rows [window.row_begin, window.row_end). False: it holds
+  // the whole body (one process; rank 0, the writers' rank), the rows [begin, end).
+  bool windowed = false;
+  // The rank's rows in the set-up system's indices (where a pass loops over them).
+  int64_t local_begin() const { return windowed ? window.row_begin : begin; }
+  int64_t local_end() const { return windowed ? window.row_end : end; }
 };
+
+// Whether this rank's set-up runs on a window system (take_window): every rank but 0 (rank 0
+// keeps the whole body: its writers gather into it, I/O staging), unless the case holds a gas
+// load (its facet lists, vents and per-facet wall shares are still whole-body lists: every
+// rank keeps the whole body then, the same code on a window that is everything).
+bool setup_on_window(const CaseConfig& c, const DistributedSetup& d);
+
+// Makes `s` (the whole body's reference arrays, built from the particle file) the rank's
+// window system: every per-particle array held so far (positions, volumes, densities,
+// materials, cells, horizons, file indices) cut to rows.window's particles in its order,
+// s.window_global its global indices, internal_index file -> local (-1 outside the window),
+// s.n the window's count; rows.windowed set. The whole arrays are freed.
+void take_window(PdSystem& s, DistributedRows& rows);
 
 // How many of `halo` (ascending global indices outside the rank's rows) each rank owns under
 // the partition `part_begin` (ranks + 1 offsets): the counts exchange_owned receives.
@@ -111,20 +131,30 @@ std::vector<T> concat_over_ranks(const DistributedSetup& d, const std::vector<T>
 // values a later pass reads, e.g. LPS's weighted volume. The particles outside the window
 // keep what this rank holds for them (nothing reads them: require_partners_in_window).
 // Collective; an empty array (the feature is off, on every rank alike) stays empty.
+// A window system's array (rows.windowed) is addressed by local index: the halo is the
+// window's particles outside its rows, in order, and a row i is at i - begin + row_begin.
 template <class T>
 void exchange_owned(const DistributedSetup& d, const DistributedRows& rows, std::vector<T>& a, size_t width) {
   if (a.empty() || !rows.active) return;
   const WindowExchange& x = rows.exchange;
   const size_t bytes = width * sizeof(T);
+  const int64_t row_shift = rows.windowed ? rows.window.row_begin - rows.begin : 0;
+  const int64_t rows_held = rows.window.row_end - rows.window.row_begin;
+  auto halo_at = [&](size_t q) {
+    if (!rows.windowed) return static_cast<int64_t>(x.halo[q]);
+    const int64_t k = static_cast<int64_t>(q);
+    return k < rows.window.row_begin ? k : k + rows_held;
+  };
   std::vector<T> out(width * x.send.size());
   for (size_t q = 0; q < x.send.size(); ++q)
-    std::copy_n(a.begin() + static_cast<int64_t>(width) * x.send[q], width, out.begin() + static_cast<int64_t>(width * q));
+    std::copy_n(a.begin() + static_cast<int64_t>(width) * (x.send[q] + row_shift), width,
+                out.begin() + static_cast<int64_t>(width * q));
   std::vector<int64_t> received;
   const std::vector<char> in = d.exchange(out.data(), x.send_counts, bytes, received);
   if (received != x.halo_counts || in.size() != bytes * x.halo.size() || a.size() % width != 0)
     throw std::logic_error("distributed set-up: an exchange of owners' values differs from the window's halo");
   for (size_t q = 0; q < x.halo.size(); ++q)
-    std::memcpy(static_cast<void*>(a.data() + width * static_cast<size_t>(x.halo[q])), in.data() + bytes * q, bytes);
+    std::memcpy(static_cast<void*>(a.data() + width * static_cast<size_t>(halo_at(q))), in.data() + bytes * q, bytes);
 }
 
 // Per material: the sum of the first `dims` of each marked particle's 3 `values`, taken in

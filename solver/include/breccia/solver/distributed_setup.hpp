@@ -1,8 +1,11 @@
 #pragma once
 // The distributed set-up (docs/parallel.md, Memory): under mpirun each rank builds the bonds
 // of the particles it owns only, so the bond arrays, the set-up's and the run's largest,
-// fall as 1/ranks. What every rank still holds whole is per particle (positions, volumes,
-// materials, horizons, the state arrays: a few hundred bytes each); the bond states (1 B
+// fall as 1/ranks. The per-particle arrays (positions, volumes, materials, horizons, the
+// state: a few hundred bytes each) are the rank's geometric window's on the ranks other than
+// 0 (take_window: a window system), the whole body's on rank 0 (its writers' staging) and
+// on every rank of a case with a gas load; still whole on every rank: the particle file,
+// the file -> local index and the row offsets (about 60 B per particle); the bond states (1 B
 // per entry, with softening, a rate law or a gas load up to 10 B) are each rank's own rows,
 // in its system, with parallel HDF5; without it whole on rank 0 too, its writers' staging
 // (for_each_bond_state_array).
@@ -10,7 +13,8 @@
 // How: the family sizes are counted from the positions alone (family_sizes, partition.hpp),
 // which gives the whole system's row offsets and the partition before any family exists.
 // The set-up then runs as on one process on a system whose rows outside the rank's range are
-// empty: every per-entry loop covers the rank's rows, and the few values a row reads from
+// empty (a window system: the rank's rows and the window's other particles, local indices;
+// else the whole body): every per-entry loop covers the rank's rows, and the few values a row reads from
 // other rows or every particle (listed at each call in setup.cpp) come through
 // DistributedSetup::concat (a sum or a list over every rank) or, for a value its owner
 // computed per particle, exchange_owned (to the rank's geometric window only). Every value is computed by the same code as on one process, so

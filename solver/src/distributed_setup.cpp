@@ -108,8 +108,8 @@ DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d) {
 }
 
 bool setup_on_window(const CaseConfig& c, const DistributedSetup& d) {
-  if (!d.active() || d.rank == 0) return false;
-  return std::none_of(c.loads.begin(), c.loads.end(), [](const LoadSpec& l) { return l.kind == LoadSpec::Kind::Gas; });
+  (void)c;
+  return d.active() && d.rank != 0;
 }
 
 namespace {
@@ -133,9 +133,6 @@ void take_window(PdSystem& s, DistributedRows& rows) {
   cut_to_window(s.half_cell, index, 1);
   cut_to_window(s.horizon, index, 1);
   cut_to_window(s.original_index, index, 1);
-  // file -> local: the window's particles' file indices, every other -1 (not held here).
-  std::fill(s.internal_index.begin(), s.internal_index.end(), -1);
-  for (size_t k = 0; k < index.size(); ++k) s.internal_index[static_cast<size_t>(s.original_index[k])] = static_cast<int32_t>(k);
   s.body_n = s.n;
   s.window_global = index;
   s.n = index.size();

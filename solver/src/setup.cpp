@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <ctime>
 #include <iterator>
 #include <map>
@@ -193,12 +194,12 @@ const SurfaceFacets& require_surface(const PdSystem& s, const std::string& name,
 }
 
 // The system's indices of file particles, in the list's order; a window system's
-// (PdSystem::window_global) leaves out those outside its window (internal_index -1).
+// (PdSystem::window_global) leaves out those outside its window (system_of_file -1).
 std::vector<int32_t> internal_particles(const PdSystem& s, const std::vector<int64_t>& file_indices) {
   std::vector<int32_t> out;
   out.reserve(file_indices.size());
   for (auto f : file_indices)
-    if (s.internal_index[f] >= 0) out.push_back(s.internal_index[f]);
+    if (const int32_t i = s.system_of_file(f); i >= 0) out.push_back(i);
   return out;
 }
 
@@ -473,9 +474,10 @@ static void add_case_sets(ParticleModel& pm, const CaseConfig& c) {
 // particle's horizon; the layer's volume is the file's, so a window system (PdSystem::
 // window_global) spreads the whole surface's force over the whole layer and keeps the facets
 // of its window's particles.
+// `whole_layer` (if given): every layer particle's internal index, appended.
 static std::vector<PressureFacet> spread_over_layer(const PdSystem& s, const LoadSpec& ls, const SurfaceFacets& sf,
                                                     const std::function<double(int64_t)>& horizon_of_file,
-                                                    const std::string& field) {
+                                                    const std::string& field, std::vector<int32_t>* whole_layer = nullptr) {
   double area = 0, normal[3] = {0, 0, 0}, depth = ls.depth;
   for (size_t f = 0; f < sf.size(); ++f) {
     area += sf.area_m2[f];
@@ -495,7 +497,8 @@ static std::vector<PressureFacet> spread_over_layer(const PdSystem& s, const Loa
   for (const int64_t f : near_surface_set(s.particles, layer, s.config.file)) {
     any = true;
     volume += s.particles.volume_m3[static_cast<size_t>(f)];  // the system's volume of it, the same double
-    const int32_t i = s.internal_index[static_cast<size_t>(f)];
+    if (whole_layer) whole_layer->push_back(s.internal_index[static_cast<size_t>(f)]);
+    const int32_t i = s.system_of_file(f);
     if (i >= 0) particles.push_back(i);
   }
   if (!any || !(volume > 0))
@@ -586,6 +589,13 @@ PdView PdSystem::view() {
   p.diagnostics = diagnostics;
   p.symmetric_halves = symmetric_halves;
   return p;
+}
+
+int32_t PdSystem::system_of_file(int64_t f) const {
+  const int32_t i = internal_index[static_cast<size_t>(f)];
+  if (window_global.empty()) return i;
+  const int64_t k = system_index(i);
+  return k < static_cast<int64_t>(n) && window_global[static_cast<size_t>(k)] == i ? static_cast<int32_t>(k) : -1;
 }
 
 int64_t PdSystem::system_index(int64_t i) const {
@@ -708,8 +718,14 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   const std::array<double, 3> f32_origin =
       c.precision == CaseConfig::Precision::Float32 ? float32_origin(s.x0) : std::array<double, 3>{};
   // One horizon over a graded arrangement under-resolves its coarse part (docs/atlas.md,
-  // stability map, graded_check.hpp): statistics of the whole body, refused before the families.
-  if (c.check_stability) require_graded_horizon(s);
+  // stability map, graded_check.hpp): judged on the whole body here, refused at the start-up
+  // checks below (after the refusals the passes between make, as before).
+  std::exception_ptr graded_refusal;
+  if (c.check_stability) try {
+      require_graded_horizon(s);
+    } catch (const InputError&) {
+      graded_refusal = std::current_exception();
+    }
 
   phase("morton order and horizons");
   // A distributed set-up builds this rank's rows only; the other rows stay empty
@@ -1481,20 +1497,27 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     }
     const SurfaceFacets& sf = require_surface(s, ls.surface, field + ".surface");
     PdSystem::SurfaceLoad sl{&ls, {}};
-    // (a window system: the facets of its window's particles)
-    if (ls.kind == LoadSpec::Kind::Traction && (ls.depth > 0 || ls.depth_horizon))
-      sl.facets = spread_over_layer(s, ls, sf, horizon_of_file, field);
-    else
-      for (size_t f = 0; f < sf.size(); ++f)
-        if (s.internal_index[sf.particle[f]] >= 0)
-          sl.facets.push_back({s.internal_index[sf.particle[f]], sf.area_m2[f],
-                               {sf.normal[3 * f], sf.normal[3 * f + 1], sf.normal[3 * f + 2]}});
+    // (a window system: the facets of its window's particles; every facet's particle in
+    // whole_facet_particles)
+    std::vector<int32_t>* whole = s.window_global.empty() ? nullptr : &s.whole_facet_particles;
+    if (ls.kind == LoadSpec::Kind::Traction && (ls.depth > 0 || ls.depth_horizon)) {
+      sl.facets = spread_over_layer(s, ls, sf, horizon_of_file, field, whole);
+    } else {
+      for (size_t f = 0; f < sf.size(); ++f) {
+        if (whole) whole->push_back(s.internal_index[sf.particle[f]]);
+        if (const int32_t i = s.system_of_file(sf.particle[f]); i >= 0)
+          sl.facets.push_back({i, sf.area_m2[f], {sf.normal[3 * f], sf.normal[3 * f + 1], sf.normal[3 * f + 2]}});
+      }
+    }
     s.surface_loads.push_back(std::move(sl));
   }
   if (s.surface_loads.size() > static_cast<size_t>(kMaxSurfaceLoads))
     throw InputError(c.file, "loads", std::to_string(s.surface_loads.size()) + " pressure/traction loads",
                      "at most " + std::to_string(kMaxSurfaceLoads) + " (their histories travel with each step)");
   s.facets = group_facets_by_particle(s);
+  std::sort(s.whole_facet_particles.begin(), s.whole_facet_particles.end());
+  s.whole_facet_particles.erase(std::unique(s.whole_facet_particles.begin(), s.whole_facet_particles.end()),
+                                s.whole_facet_particles.end());
   for (size_t l = 0, surface = 0; l < c.loads.size(); ++l) {
     if (c.loads[l].kind == LoadSpec::Kind::BodyForce) continue;
     if (c.loads[l].kind == LoadSpec::Kind::Gas)
@@ -1622,8 +1645,9 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // (a graded tet mesh crashed here when they came after).
   if (c.model == PdModel::Correspondence) setup_correspondence(s, elastic);  // correspondence.cpp
 
-  // Dual horizon over steep grading reflects waves (docs/atlas.md, stability map,
-  // graded_check.hpp; a single horizon's check ran before the families, on the whole body).
+  // One horizon over a graded arrangement (judged above), and dual horizon over steep
+  // grading reflects waves (docs/atlas.md, stability map, graded_check.hpp).
+  if (graded_refusal) std::rethrow_exception(graded_refusal);
   if (c.variable_horizon) {
     HorizonGrading g = horizon_grading(s);
     if (dist_rows.active) {  // dist: the largest jump over every rank's rows (a maximum: exact in any order)

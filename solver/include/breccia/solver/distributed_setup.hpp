@@ -3,9 +3,9 @@
 // of the particles it owns only, so the bond arrays, the set-up's and the run's largest,
 // fall as 1/ranks. The per-particle arrays (positions, volumes, materials, horizons, the
 // state: a few hundred bytes each) are the rank's geometric window's on the ranks other than
-// 0 (take_window: a window system), the whole body's on rank 0 (its writers' staging) and
-// on every rank of a case with a gas load; still whole on every rank: the particle file,
-// the file -> local index and the row offsets (about 60 B per particle); the bond states (1 B
+// 0 (take_window: a window system), the whole body's on rank 0 (its writers' staging);
+// still whole on every rank: the particle file, the file -> internal index and the row
+// offsets (about 60 B per particle); the bond states (1 B
 // per entry, with softening, a rate law or a gas load up to 10 B) are each rank's own rows,
 // in its system, with parallel HDF5; without it whole on rank 0 too, its writers' staging
 // (for_each_bond_state_array).
@@ -66,15 +66,14 @@ struct DistributedRows {
 };
 
 // Whether this rank's set-up runs on a window system (take_window): every rank but 0 (rank 0
-// keeps the whole body: its writers gather into it, I/O staging), unless the case holds a gas
-// load (its facet lists, vents and per-facet wall shares are still whole-body lists: every
-// rank keeps the whole body then, the same code on a window that is everything).
+// keeps the whole body: its writers gather into it, I/O staging; the same code on a window
+// that is everything).
 bool setup_on_window(const CaseConfig& c, const DistributedSetup& d);
 
 // Makes `s` (the whole body's reference arrays, built from the particle file) the rank's
 // window system: every per-particle array held so far (positions, volumes, densities,
 // materials, cells, horizons, file indices) cut to rows.window's particles in its order,
-// s.window_global its global indices, internal_index file -> local (-1 outside the window),
+// s.window_global its global indices (internal_index stays whole: PdSystem::system_of_file),
 // s.n the window's count; rows.windowed set. The whole arrays are freed.
 void take_window(PdSystem& s, DistributedRows& rows);
 

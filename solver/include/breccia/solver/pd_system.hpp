@@ -59,7 +59,7 @@ struct PdSystem {
   double thickness = 1.0;
   size_t n = 0;
   std::vector<int64_t> original_index;  // internal -> file index (a global id: files past 2^31 particles)
-  std::vector<int32_t> internal_index;  // file -> internal index (a window system: its local index, -1 outside)
+  std::vector<int32_t> internal_index;  // file -> internal index (whole: a window system too; system_of_file)
   // A distributed set-up's window system (distributed_setup.hpp; the ranks other than 0): its
   // n particles are the rank's geometric window alone, local particle k being the whole body's
   // internal particle window_global[k] (ascending, so the rank's rows are one local range), and
@@ -72,6 +72,13 @@ struct PdSystem {
   // The system's index of the whole body's internal particle `i` (a window system: the first
   // local index at or after it, so a range of internal indices maps to a local range).
   int64_t system_index(int64_t i) const;
+  // The system's index of file particle f: internal_index, or a window system's local index
+  // of it (-1: not in the window).
+  int32_t system_of_file(int64_t f) const;
+  // A window system's per-facet-particle arrays (the gas's wall shares) hold its window's
+  // facet particles (facets.particle); the whole body's facet particles, internal indices
+  // ascending, are these (a checkpoint's rows). Empty: facets.particle is the whole list.
+  std::vector<int32_t> whole_facet_particles;
 
   // per particle (internal order)
   std::vector<double> x0, u, v, a, force, body;  // 3N

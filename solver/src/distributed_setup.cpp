@@ -107,10 +107,7 @@ DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d) {
   return rows;
 }
 
-bool setup_on_window(const CaseConfig& c, const DistributedSetup& d) {
-  (void)c;
-  return d.active() && d.rank != 0;
-}
+bool setup_on_window(const DistributedSetup& d) { return d.active() && d.rank != 0; }
 
 namespace {
 template <class T>

@@ -734,7 +734,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // window system, local indices), rank 0 the whole body (its writers' staging).
   const DistributedSetup& dist = hooks.distributed;
   DistributedRows dist_rows = plan_distributed_rows(s, dist);
-  if (setup_on_window(c, dist)) {
+  if (setup_on_window(dist)) {
     take_window(s, dist_rows);
     n = s.n;
   }

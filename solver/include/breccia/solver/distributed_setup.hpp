@@ -68,7 +68,7 @@ struct DistributedRows {
 // Whether this rank's set-up runs on a window system (take_window): every rank but 0 (rank 0
 // keeps the whole body: its writers gather into it, I/O staging; the same code on a window
 // that is everything).
-bool setup_on_window(const CaseConfig& c, const DistributedSetup& d);
+bool setup_on_window(const DistributedSetup& d);
 
 // Makes `s` (the whole body's reference arrays, built from the particle file) the rank's
 // window system: every per-particle array held so far (positions, volumes, densities,

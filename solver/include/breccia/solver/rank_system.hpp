@@ -54,7 +54,8 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& global, const RankLayout& layou
 // damage, the LPS / correspondence / compressive fields, step, time, dt, the accumulators,
 // the float state): what the set-up sets after its stable-step estimate and a checkpoint
 // restores. A rank system built for the estimate is brought up to date with it rather than
-// built again.
+// built again. A window system's (PdSystem::window_global) arrays are read by local index,
+// whole arrays (a restart's read) by internal index, told apart by their length.
 void copy_rank_state(PdSystem& local, const PdSystem& global, const RankLayout& layout);
 
 // What a distributed set-up's ranks other than 0 let go of in their global system (their

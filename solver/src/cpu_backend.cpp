@@ -299,10 +299,10 @@ struct StableStepRegion {
 };
 using OverRanks = std::function<double(const std::function<double(double)>&)>;
 StableStepRegion stiff_region(const PdSystem& sys, const PdSystem& ref, size_t own, double ratio,
-                              const OverRanks& over_ranks) {
+                              const OverRanks& over_ranks, size_t body) {
   StableStepRegion r;
-  r.count = sys.n;
-  if (sys.n == 0 || !(ratio > 0.0)) return r;
+  r.count = body;
+  if (body == 0 || !(ratio > 0.0)) return r;
   std::vector<double> scale(own);
   for (size_t i = 0; i < own; ++i) {
     const double delta = ref.horizon[i];
@@ -319,7 +319,7 @@ StableStepRegion stiff_region(const PdSystem& sys, const PdSystem& ref, size_t o
     mine += marks[i];
   }
   const size_t count = static_cast<size_t>(over_ranks([&](double c) { return c + static_cast<double>(mine); }));
-  if (!(top > 0.0) || 2 * count >= sys.n) return r;
+  if (!(top > 0.0) || 2 * count >= body) return r;
   r.marks = std::move(marks);
   r.count = count;
   return r;
@@ -329,13 +329,14 @@ double one_process(const std::function<double(double)>& f) { return f(0.0); }
 // (`ranks`) the rank's own particles' (i - begin) from its system's reference arrays.
 StableStepRegion stable_step_region_of(const PdSystem& sys, double ratio, const StableStepRanks* ranks) {
   if (ranks && ranks->pass)
-    return stiff_region(sys, *ranks->system, static_cast<size_t>(ranks->end - ranks->begin), ratio, ranks->chain);
-  return stiff_region(sys, sys, sys.n, ratio, one_process);
+    return stiff_region(sys, *ranks->system, static_cast<size_t>(ranks->end - ranks->begin), ratio, ranks->chain,
+                        ranks->particles > 0 ? static_cast<size_t>(ranks->particles) : sys.n);
+  return stiff_region(sys, sys, sys.n, ratio, one_process, sys.n);
 }
 }  // namespace
 
 std::vector<uint8_t> stable_step_region(const PdSystem& sys, double ratio) {
-  return stiff_region(sys, sys, sys.n, ratio, one_process).marks;
+  return stiff_region(sys, sys, sys.n, ratio, one_process, sys.n).marks;
 }
 
 double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const ForcePass& forces, double region_ratio,
@@ -364,11 +365,12 @@ double estimate_max_frequency_lanczos(PdSystem& sys, int max_passes, const Force
   // hole's rim on the top face (LPS rows whose families two faces cut), at 0.4-0.8 of the
   // largest scale, not at the finest particles: a region at 1/2 missed it by 1.4%. One process then runs only the rows that block reads; a
   // distributed set-up runs its whole pass, whose forces on the region are the same bits.
-  const size_t n3 = 3 * sys.n;
   // A distributed run (ranks) reads its own particles' reference values from the rank's
   // system (`ref`, particle i at i - begin: the same doubles), the global system of its
-  // ranks other than 0 holding none once the rank's system is cut (StableStepRanks).
+  // ranks other than 0 holding none once the rank's system is cut (StableStepRanks), nor
+  // the whole body (a window system): the body's count is the ranks'.
   const bool shared = ranks && ranks->pass;
+  const size_t n3 = 3 * (shared && ranks->particles > 0 ? static_cast<size_t>(ranks->particles) : sys.n);
   const PdSystem& ref = shared ? *ranks->system : sys;
   const size_t first = shared ? static_cast<size_t>(ranks->begin) : 0;
   auto at = [first](size_t i) { return i - first; };

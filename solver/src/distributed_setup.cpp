@@ -42,6 +42,10 @@ Families build_own_families(const PdSystem& s, const DistributedRows& rows, cons
     if (window_particles) *window_particles = static_cast<int64_t>(s.n);
     return build_families(s.x0, s.horizon, pad);
   }
+  if (rows.windowed) {  // the system is the window (take_window): its rows, local partners kept
+    if (window_particles) *window_particles = static_cast<int64_t>(s.n);
+    return build_families(s.x0, s.horizon, pad, rows.window.row_begin, rows.window.row_end);
+  }
   // The window plan_distributed_rows formed (its exchange's); a hand-made `rows` without one: formed here.
   GeometricWindow formed;
   const bool given = !rows.window.index.empty() || rows.end == rows.begin;
@@ -103,6 +107,35 @@ DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d) {
   return rows;
 }
 
+bool setup_on_window(const DistributedSetup& d) { return d.active() && d.rank != 0; }
+
+namespace {
+template <class T>
+void cut_to_window(std::vector<T>& a, const std::vector<int32_t>& index, size_t width) {
+  if (a.empty()) return;
+  std::vector<T> out(width * index.size());
+  for (size_t k = 0; k < index.size(); ++k)
+    std::copy_n(a.begin() + static_cast<int64_t>(width) * index[k], width, out.begin() + static_cast<int64_t>(width * k));
+  a.swap(out);
+}
+}  // namespace
+
+void take_window(PdSystem& s, DistributedRows& rows) {
+  if (!rows.active) throw std::logic_error("take_window: not a distributed set-up");
+  const std::vector<int32_t>& index = rows.window.index;
+  cut_to_window(s.x0, index, 3);
+  cut_to_window(s.volume, index, 1);
+  cut_to_window(s.density, index, 1);
+  cut_to_window(s.material, index, 1);
+  cut_to_window(s.half_cell, index, 1);
+  cut_to_window(s.horizon, index, 1);
+  cut_to_window(s.original_index, index, 1);
+  s.body_n = s.n;
+  s.window_global = index;
+  s.n = index.size();
+  rows.windowed = true;
+}
+
 std::vector<int64_t> count_by_owner(const std::vector<int64_t>& part_begin, const std::vector<int32_t>& halo) {
   if (part_begin.size() < 2) throw std::invalid_argument("count_by_owner: a partition of at least one rank");
   std::vector<int64_t> counts(part_begin.size() - 1, 0);
@@ -138,6 +171,15 @@ WindowExchange window_exchange(const DistributedSetup& d, const std::vector<int6
 void require_partners_in_window(const DistributedRows& rows, const std::vector<int64_t>& offsets,
                                 const std::vector<int32_t>& neighbor) {
   if (!rows.active || rows.end == rows.begin) return;
+  if (rows.windowed) {  // a window system's partners are local indices: each must be one of its particles
+    const int64_t held = static_cast<int64_t>(rows.window.index.size());
+    for (int64_t i = rows.window.row_begin; i < rows.window.row_end; ++i)
+      for (int64_t k = offsets[i]; k < offsets[i + 1]; ++k)
+        if (neighbor[k] < 0 || neighbor[k] >= held)
+          throw std::logic_error("distributed set-up: a partner of local row " + std::to_string(i) +
+                                 " is outside the rank's window system (" + std::to_string(held) + " particles)");
+    return;
+  }
   // The window's particles as bits over its span of global indices (at most N / 8 bytes, for
   // the check alone): one test per entry, not a search.
   const std::vector<int32_t>& index = rows.window.index;  // ascending
@@ -195,13 +237,14 @@ MaterialSums sum_marked_by_material(const DistributedSetup& d, const Distributed
 void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const DistributedSetup& d) {
   if (!rows.active) return;
   const size_t own_entries = s.state.size();
-  if (s.offsets[s.n] != static_cast<int64_t>(own_entries) ||
+  if (s.offsets.back() != static_cast<int64_t>(own_entries) ||
       rows.full_offsets[rows.end] - rows.full_offsets[rows.begin] != static_cast<int64_t>(own_entries))
     throw std::logic_error("distributed set-up: a rank's rows differ from the counted family sizes");
   // What each rank's set-up built, to every rank (summary.json): its own rows' entries alone.
   s.setup_candidate_entries = concat_over_ranks(d, s.setup_candidate_entries);
   s.setup_kept_entries = concat_over_ranks(d, s.setup_kept_entries);
   s.setup_window_particles = concat_over_ranks(d, s.setup_window_particles);
+  s.setup_system_particles = concat_over_ranks(d, s.setup_system_particles);
   // Rank 0's writers read the bond list of results.h5 (partners, and which halves exist),
   // where it writes the files alone (serial HDF5).
   const bool writer_bonds = root_gathers_bond_list(s.config);

@@ -108,6 +108,8 @@ EnergyScatter energy_scatter(PdSystem& s, const DistributedSetup& d, const Distr
     ratio.push_back(energy[i] / classical_energy_density(in, eps));
   }
   if (rows.active) {  // every rank's, in rank order: the ranks own consecutive index ranges
+    if (!s.window_global.empty())  // a window system's local indices to internal ones
+      for (int64_t& i : sampled) i = s.window_global[static_cast<size_t>(i)];
     sampled = concat_over_ranks(d, sampled);
     ratio = concat_over_ranks(d, ratio);
   }
@@ -133,7 +135,12 @@ EnergyScatter energy_scatter(PdSystem& s, const DistributedSetup& d, const Distr
 void require_resolved_families(PdSystem& s, const DistributedSetup& d, const DistributedRows& rows) {
   const EnergyScatter e = energy_scatter(s, d, rows);
   if (e.sampled < kMinScatterSample || e.rms <= kMaxEnergyScatter) return;
-  const int64_t i = e.worst_particle;
+  // (internal index: a window system, PdSystem::window_global, may not hold it; rank 0, which
+  // reports, holds every particle)
+  const int64_t i = s.window_global.empty() ? e.worst_particle : s.system_index(e.worst_particle);
+  if (i >= static_cast<int64_t>(s.n) || (!s.window_global.empty() && s.window_global[static_cast<size_t>(i)] != e.worst_particle))
+    throw InputError(s.config.file, "model.horizon_factor", "per-particle strain energy scatters too much (rank 0 reports)",
+                     "a larger horizon_factor");
   std::ostringstream found;
   found << "per-particle strain energy under uniaxial strain scatters by " << 100.0 * e.rms << " % RMS over "
         << e.sampled << " particles with complete families (limit " << 100.0 * kMaxEnergyScatter

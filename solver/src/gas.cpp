@@ -200,7 +200,8 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
       throw InputError(c.file, field + ".vent_surfaces[" + std::to_string(v) + "]",
                        "'" + spec.vent_surfaces[v] + "' is not a surface of the particle file",
                        "the name of a boundary surface group");
-    for (size_t f = 0; f < vent->size(); ++f) g.vent_facet_area[s.internal_index[vent->particle[f]]] += vent->area_m2[f];
+    for (size_t f = 0; f < vent->size(); ++f)  // (a window system: its window's particles)
+      if (const int32_t i = s.system_of_file(vent->particle[f]); i >= 0) g.vent_facet_area[i] += vent->area_m2[f];
   }
   // Crack-face area factor kappa_i = 2 d / sum_j V_j |xi| (gas.hpp). A distributed set-up
   // holds the rank's rows only (the others are empty here): setup_system gathers the owners'.
@@ -213,7 +214,8 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
   }
   if (g.crack_entry) {
     g.arrival.assign(n, std::numeric_limits<double>::infinity());
-    for (int64_t p : sf.particle) g.arrival[s.internal_index[p]] = 0.0;  // the wall is wetted
+    for (int64_t p : sf.particle)  // the wall is wetted
+      if (const int32_t i = s.system_of_file(p); i >= 0) g.arrival[i] = 0.0;
     g.arrival_next = g.arrival;
     g.push.assign(3 * n, 0.0);
     g.front_done.assign(n, 0);

@@ -347,7 +347,7 @@ void ResultsWriter::write_together(const PdSystem& s, ResultsWriter* w, const st
     const std::string g = results_output_group(static_cast<int>(index));
     const std::vector<ResultsField> fields = results_fields(s);
     for (size_t k = 0; k < fields.size(); ++k)
-      f.write_rows(g + "/" + fields[k].name, rows[k].data(), file_first, file_count, field_dims(s.n, fields[k].components));
+      f.write_rows(g + "/" + fields[k].name, rows[k].data(), file_first, file_count, field_dims(s.whole_n(), fields[k].components));
     finish_results_output(f, static_cast<int>(index), static_cast<long long>(s.step), s.time, broken, broken_count);
   }
   if (w) w->count_output(s);
@@ -490,7 +490,7 @@ void write_checkpoint_content(const h5::File& f, const PdSystem& s, const Checkp
     f.set_attr("/", "external_work_J", s.external_work);
     f.set_attr("/", "dissipated_J", s.dissipated_energy);
     f.set_attr("/", "bond_count", static_cast<long long>(s.bond_count()));
-    const size_t n = s.n;
+    const size_t n = s.whole_n();  // a window system's (PdSystem::window_global) too
     const PdSystem& r = *mine.rows;
     const size_t p0 = mine.particle_first, pc = mine.particle_count, e0 = mine.entry_first, ec = mine.entry_count;
     f.write_rows("/u", r.u.data(), p0, pc, {n, 3});
@@ -505,8 +505,8 @@ void write_checkpoint_content(const h5::File& f, const PdSystem& s, const Checkp
     if (s.config.strength_rate != StrengthRateLaw::None)  // the onsets softening bonds were given at their rate
       f.write_rows("/bond_onset", doubles_of(r.s_onset, ec).data(), e0, ec, {entries});
     if (!r.min_stretch.empty()) {  // every rank owns a particle: held alike  // compressive enhancement: the s_min this step's pass read, and its own
-      f.write_rows("/min_stretch_previous", doubles_of(r.min_stretch, pc).data(), p0, pc, {s.n});
-      f.write_rows("/min_stretch", doubles_of(r.min_stretch_next, pc).data(), p0, pc, {s.n});
+      f.write_rows("/min_stretch_previous", doubles_of(r.min_stretch, pc).data(), p0, pc, {n});
+      f.write_rows("/min_stretch", doubles_of(r.min_stretch_next, pc).data(), p0, pc, {n});
     }
     std::vector<double> ind(s.indenter_position, s.indenter_position + 3);
     f.write("/indenter_position", ind, {3});
@@ -519,8 +519,10 @@ void write_checkpoint_content(const h5::File& f, const PdSystem& s, const Checkp
       // Per facet particle, particle and entry: the rows of `mine` (a rank's own gas arrays).
       const GasState& rg = r.gas;
       const size_t f0 = mine.facet_first, fc = mine.facet_count;
-      f.write_rows("/gas/wall_dv", rg.wall_dv.data(), f0, fc, {g.wall_dv.size()});
-      f.write_rows("/gas/wall_on", rg.wall_on.data(), f0, fc, {g.wall_on.size()});
+      // (the whole body's facet particles: a window system holds its window's, PdSystem::whole_facet_particles)
+      const size_t facets = s.whole_facet_particles.empty() ? g.wall_dv.size() : s.whole_facet_particles.size();
+      f.write_rows("/gas/wall_dv", rg.wall_dv.data(), f0, fc, {facets});
+      f.write_rows("/gas/wall_on", rg.wall_on.data(), f0, fc, {facets});
       if (g.crack_entry) {
         f.write_rows("/gas/arrival", rg.arrival.data(), p0, pc, {n});
         f.write_rows("/gas/in_crack", rg.in_crack.data(), e0, ec, {entries});  // which cracks the work follows
@@ -656,10 +658,28 @@ void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
     if (!f.exists("/gas/scalars"))
       throw InputError(path, "/gas/scalars", "missing (written without a gas load)", "a checkpoint of this case");
     const auto sc = f.read_doubles("/gas/scalars");
-    const auto wall = f.read_doubles("/gas/wall_dv");
+    auto wall = f.read_doubles("/gas/wall_dv");
+    // A window system's wall shares are its window's facet particles' (PdSystem::
+    // whole_facet_particles): their rows of the whole list, in order.
+    const bool window = !s.whole_facet_particles.empty();
+    std::vector<size_t> rows;
+    if (window)
+      for (const int32_t p : s.facets.particle) {
+        const int32_t i = s.window_global[static_cast<size_t>(p)];
+        const auto at = std::lower_bound(s.whole_facet_particles.begin(), s.whole_facet_particles.end(), i);
+        rows.push_back(static_cast<size_t>(at - s.whole_facet_particles.begin()));
+      }
+    auto window_rows = [&](auto whole) {
+      if (!window) return whole;
+      decltype(whole) out(rows.size());
+      for (size_t q = 0; q < rows.size(); ++q) out[q] = whole[rows[q]];
+      return out;
+    };
     // 12 scalars: written before the debris entries' frozen volume (none then).
-    if ((sc.size() != 12 && sc.size() != 13) || wall.size() != g.wall_dv.size())
+    if ((sc.size() != 12 && sc.size() != 13) ||
+        wall.size() != (window ? s.whole_facet_particles.size() : g.wall_dv.size()))
       throw InputError(path, "/gas", "gas state of another cavity", "a checkpoint of this case");
+    wall = window_rows(std::move(wall));
     g.volume = sc[0], g.wall_volume = sc[1], g.crack_volume = sc[2], g.pressure = sc[3], g.pressure_abs = sc[4];
     g.mass_fraction = sc[5], g.work = sc[6], g.vented = sc[7] != 0.0, g.vent_time = sc[8];
     g.peak_pressure = sc[9], g.spent = sc[10] != 0.0, g.crack_vent_area = sc[11];
@@ -668,7 +688,7 @@ void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
     if (!f.exists("/gas/wall_on"))
       throw InputError(path, "/gas/wall_on", "missing (written by an older breccia-solve)",
                        "a checkpoint of this case written by this version");
-    g.wall_on = f.read_uint8("/gas/wall_on");
+    g.wall_on = window_rows(f.read_uint8("/gas/wall_on"));
     if (g.crack_entry) {
       g.arrival = f.read_doubles("/gas/arrival");
       g.arrival_next = g.arrival;
@@ -682,7 +702,7 @@ void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
                            "a checkpoint of this case with its crack_pass_every");
         g.push = f.read_doubles("/gas/push");
         const auto pass = f.read_doubles("/gas/crack_pass");
-        if (g.push.size() != 3 * s.n || pass.size() != 3)
+        if (g.push.size() != 3 * s.whole_n() || pass.size() != 3)
           throw InputError(path, "/gas/push", "sized for other particles", "a checkpoint of this case");
         g.crack_pass_countdown = static_cast<int>(pass[0]);
         g.crack_pass_done = pass[1] != 0.0;

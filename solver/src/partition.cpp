@@ -485,14 +485,17 @@ std::vector<int64_t> family_sizes(const std::vector<double>& x, const std::vecto
 }
 
 Halo build_halo(const Partition& part, int rank, const std::vector<int64_t>& offsets,
-                const std::vector<int32_t>& neighbor) {
+                const std::vector<int32_t>& neighbor, const std::vector<int32_t>* window) {
   Halo h;
   h.rank = rank;
   const int64_t b = part.begin[rank], e = part.begin[rank + 1];
+  // A window system's row i is at local row i + shift (its rows are one local range).
+  const int64_t shift =
+      window ? (std::lower_bound(window->begin(), window->end(), static_cast<int32_t>(b)) - window->begin()) - b : 0;
   std::vector<std::pair<int, int32_t>> sends;  // (destination rank, owned particle)
   for (int64_t i = b; i < e; ++i)
-    for (int64_t k = offsets[i]; k < offsets[i + 1]; ++k) {
-      const int32_t j = neighbor[k];
+    for (int64_t k = offsets[i + shift]; k < offsets[i + shift + 1]; ++k) {
+      const int32_t j = window ? (*window)[static_cast<size_t>(neighbor[k])] : neighbor[k];
       if (j >= b && j < e) continue;
       h.ghosts.push_back(j);
       sends.emplace_back(part.owner(j), static_cast<int32_t>(i));  // families are symmetric: j's rank reads i

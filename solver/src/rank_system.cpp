@@ -13,16 +13,26 @@
 namespace breccia::solver {
 namespace {
 
+// The rank's particles (owned, then ghosts) in the system they are cut from: `global` their
+// internal indices, `held` their indices in the system's own arrays (a window system's local
+// ones, PdSystem::window_global; else the same). An array is read by its length: the system's
+// n (its own arrays) or the whole body's (a restart reads some whole: read_checkpoint).
+struct RankIds {
+  std::vector<int32_t> global, held;
+  size_t n = 0, whole = 0;
+  size_t size() const { return global.size(); }
+};
+
 // Rows `ids` of a per-particle array of `width` values each; an array that is not held
 // (empty: the feature is off) stays empty.
 template <class T>
-std::vector<T> take(const std::vector<T>& global, const std::vector<int32_t>& ids, size_t width, size_t n) {
+std::vector<T> take(const std::vector<T>& global, const RankIds& r, size_t width) {
   if (global.empty()) return {};
-  if (global.size() != width * n)
-    throw std::logic_error("restrict_to_rank: a per-particle array of unexpected size");
-  std::vector<T> out(width * ids.size());
-  for (size_t q = 0; q < ids.size(); ++q)
-    std::copy_n(global.begin() + static_cast<int64_t>(width) * ids[q], width, out.begin() + static_cast<int64_t>(width * q));
+  const std::vector<int32_t>* ids = global.size() == width * r.n ? &r.held : global.size() == width * r.whole ? &r.global : nullptr;
+  if (!ids) throw std::logic_error("restrict_to_rank: a per-particle array of unexpected size");
+  std::vector<T> out(width * ids->size());
+  for (size_t q = 0; q < ids->size(); ++q)
+    std::copy_n(global.begin() + static_cast<int64_t>(width) * (*ids)[q], width, out.begin() + static_cast<int64_t>(width * q));
   return out;
 }
 
@@ -34,10 +44,10 @@ std::vector<T> take(const std::vector<T>& global, const std::vector<int32_t>& id
 // where the set-up's values are zeros (`zero_at_setup`). A held global array (one process,
 // rank 0, a restart's read): its rows, as take.
 template <class T>
-void take_or_keep(std::vector<T>& local, const std::vector<T>& global, const std::vector<int32_t>& ids, size_t width,
-                  size_t n, bool zero_at_setup) {
-  if (!global.empty() || n == 0) {
-    local = take(global, ids, width, n);
+void take_or_keep(std::vector<T>& local, const std::vector<T>& global, const RankIds& ids, size_t width,
+                  bool zero_at_setup) {
+  if (!global.empty() || ids.whole == 0) {
+    local = take(global, ids, width);
     return;
   }
   const size_t rows = width * ids.size();
@@ -51,10 +61,9 @@ void take_or_keep(std::vector<T>& local, const std::vector<T>& global, const std
 // tensors): held by neither system, it stays empty (the model has none); the rank's own, of
 // its particles' size, is kept where the global system let it go (mpi_stable_step_forces).
 template <class T>
-void take_or_keep_if_held(std::vector<T>& local, const std::vector<T>& global, const std::vector<int32_t>& ids,
-                          size_t width, size_t n) {
-  if (!global.empty() || n == 0 || local.empty()) {
-    local = take(global, ids, width, n);
+void take_or_keep_if_held(std::vector<T>& local, const std::vector<T>& global, const RankIds& ids, size_t width) {
+  if (!global.empty() || ids.whole == 0 || local.empty()) {
+    local = take(global, ids, width);
     return;
   }
   if (local.size() != width * ids.size())
@@ -101,17 +110,17 @@ RankLayout rank_layout(const PdSystem& g, int ranks, int rank) {
     throw InputError(g.config.file, "mpirun -np", e.what(), "at most one rank per particle");
   }
   L.rank = rank;
-  L.halo = build_halo(L.part, rank, g.offsets, g.neighbor);
+  L.halo = build_halo(L.part, rank, g.offsets, g.neighbor, g.window_global.empty() ? nullptr : &g.window_global);
   return L;
 }
 
 namespace {
-void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std::vector<int32_t>& ids);
+void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const RankIds& ids);
 }  // namespace
 
 int64_t first_facet_of(const PdSystem& g, int64_t particle) {
-  const std::vector<int32_t>& fp = g.facets.particle;  // ascending (group_facets_by_particle)
-  return std::lower_bound(fp.begin(), fp.end(), static_cast<int32_t>(particle)) - fp.begin();
+  const std::vector<int32_t>& fp = g.facets.particle;  // ascending (group_facets_by_particle), the system's indices
+  return std::lower_bound(fp.begin(), fp.end(), static_cast<int32_t>(g.system_index(particle))) - fp.begin();
 }
 
 namespace {
@@ -125,6 +134,33 @@ std::vector<int32_t> local_to_global(const RankLayout& L) {
   return ids;
 }
 
+// local_to_global, with each particle's index in g's own arrays (RankIds).
+RankIds rank_ids(const PdSystem& g, const RankLayout& L) {
+  RankIds r;
+  r.global = local_to_global(L);
+  r.n = g.n;
+  r.whole = g.whole_n();
+  if (g.window_global.empty()) {
+    r.held = r.global;
+    return r;
+  }
+  r.held.resize(r.global.size());
+  for (size_t q = 0; q < r.global.size(); ++q) {
+    const int64_t k = g.system_index(r.global[q]);
+    if (k >= static_cast<int64_t>(g.n) || g.window_global[static_cast<size_t>(k)] != r.global[q])
+      throw std::logic_error("restrict_to_rank: particle " + std::to_string(r.global[q]) +
+                             " of the rank's system is outside its window system");
+    r.held[q] = static_cast<int32_t>(k);
+  }
+  return r;
+}
+
+// The row of g.offsets of the whole body's internal row i: a window system's set-up offsets
+// are its own (n + 1, local rows); the whole row offsets (finish_distributed_setup) global.
+int64_t offsets_row(const PdSystem& g, int64_t i) {
+  return g.offsets.size() == g.n + 1 ? g.system_index(i) : i;
+}
+
 // restrict_to_rank; `partners`: the owned rows' partners, renumbered to local indices in
 // place and kept (restrict_to_rank_taking_bonds), or null: copied from g's and renumbered.
 // `s`: the arrays already taken (take_releasing), which stay where the global system let them go.
@@ -134,38 +170,41 @@ PdSystem restrict_rank(const PdSystem& g, const RankLayout& L, std::vector<int32
   s.thickness = g.thickness;
   const int64_t b = L.begin(), owned = L.owned();
   s.n = static_cast<size_t>(owned);
-  const std::vector<int32_t> ids = local_to_global(L);
-  const size_t n = g.n;
+  const RankIds ids = rank_ids(g, L);
   // What the set-up fixes before its stable-step estimate: geometry, materials, families and
   // their coefficients, loads and constraints. The state follows (copy_rank_state).
-  s.original_index = take(g.original_index, ids, 1, n);
+  s.original_index = take(g.original_index, ids, 1);
   // The reference arrays: a distributed set-up's ranks other than 0 let go of the whole ones as
   // the cut takes them (take_releasing): the rank's rows taken then stay.
-  take_or_keep_if_held(s.x0, g.x0, ids, 3, n);
-  take_or_keep_if_held(s.volume, g.volume, ids, 1, n);
-  take_or_keep_if_held(s.density, g.density, ids, 1, n);
-  take_or_keep_if_held(s.horizon, g.horizon, ids, 1, n);
-  take_or_keep_if_held(s.half_cell, g.half_cell, ids, 1, n);
-  take_or_keep_if_held(s.material, g.material, ids, 1, n);
-  take_or_keep_if_held(s.fixed_dof, g.fixed_dof, ids, 1, n);
-  take_or_keep_if_held(s.weighted_volume, g.weighted_volume, ids, 1, n);
-  take_or_keep_if_held(s.lps, g.lps, ids, 1, n);
-  take_or_keep_if_held(s.calibration_factor, g.calibration_factor, ids, 1, n);
-  take_or_keep_if_held(s.corr_moduli, g.corr_moduli, ids, kCorrModuli, n);
-  take_or_keep_if_held(s.short_range_k, g.short_range_k, ids, 1, n);
-  take_or_keep_if_held(s.spacing, g.spacing, ids, 1, n);
-  s.family_volume = take(g.family_volume, ids, 1, n);  // the owned rows' (a distributed set-up's own)
+  take_or_keep_if_held(s.x0, g.x0, ids, 3);
+  take_or_keep_if_held(s.volume, g.volume, ids, 1);
+  take_or_keep_if_held(s.density, g.density, ids, 1);
+  take_or_keep_if_held(s.horizon, g.horizon, ids, 1);
+  take_or_keep_if_held(s.half_cell, g.half_cell, ids, 1);
+  take_or_keep_if_held(s.material, g.material, ids, 1);
+  take_or_keep_if_held(s.fixed_dof, g.fixed_dof, ids, 1);
+  take_or_keep_if_held(s.weighted_volume, g.weighted_volume, ids, 1);
+  take_or_keep_if_held(s.lps, g.lps, ids, 1);
+  take_or_keep_if_held(s.calibration_factor, g.calibration_factor, ids, 1);
+  take_or_keep_if_held(s.corr_moduli, g.corr_moduli, ids, kCorrModuli);
+  take_or_keep_if_held(s.short_range_k, g.short_range_k, ids, 1);
+  take_or_keep_if_held(s.spacing, g.spacing, ids, 1);
+  s.family_volume = take(g.family_volume, ids, 1);  // the owned rows' (a distributed set-up's own)
 
-  // The owned rows, partners renumbered (ghosts are sorted: a binary search each).
-  const int64_t eb = g.offsets[b], ee = g.offsets[b + owned];
+  // The owned rows, partners renumbered (ghosts are sorted: a binary search each; a window
+  // system's partners are its local indices: their internal ones first).
+  const int64_t rb = offsets_row(g, b);
+  const int64_t eb = g.offsets[rb], ee = g.offsets[rb + owned];
   s.offsets.resize(static_cast<size_t>(owned) + 1);
-  for (int64_t i = 0; i <= owned; ++i) s.offsets[i] = g.offsets[b + i] - eb;
+  for (int64_t i = 0; i <= owned; ++i) s.offsets[i] = g.offsets[rb + i] - eb;
+  const std::vector<int32_t>& wg = g.window_global;
+  auto internal = [&](int32_t j) { return wg.empty() ? j : wg[static_cast<size_t>(j)]; };
   if (partners) {
-    for (int32_t& j : *partners) j = static_cast<int32_t>(L.local_index(j));
+    for (int32_t& j : *partners) j = static_cast<int32_t>(L.local_index(internal(j)));
     s.neighbor = std::move(*partners);
   } else {
     s.neighbor.resize(static_cast<size_t>(ee - eb));
-    for (int64_t k = eb; k < ee; ++k) s.neighbor[k - eb] = static_cast<int32_t>(L.local_index(g.neighbor[k]));
+    for (int64_t k = eb; k < ee; ++k) s.neighbor[k - eb] = static_cast<int32_t>(L.local_index(internal(g.neighbor[k])));
   }
   s.xi_len = slice(g.xi_len, eb, ee);
   s.k_own = slice(g.k_own, eb, ee);
@@ -179,18 +218,20 @@ PdSystem restrict_rank(const PdSystem& g, const RankLayout& L, std::vector<int32
   s.symmetric_halves = g.symmetric_halves;
   s.dual_halves_shared = g.dual_halves_shared;
 
-  // Loads and constraints on the owned particles, in the global lists' order.
+  // Loads and constraints on the owned particles, in the global lists' order (g's indices:
+  // a window system's lists hold its window's particles, local).
+  const int64_t lb = g.system_index(b);
   auto owned_local = [&](const std::vector<int32_t>& list) {
     std::vector<int32_t> out;
     for (const int32_t i : list)
-      if (i >= b && i < b + owned) out.push_back(static_cast<int32_t>(i - b));
+      if (i >= lb && i < lb + owned) out.push_back(static_cast<int32_t>(i - lb));
     return out;
   };
   for (const auto& sl : g.surface_loads) {
     PdSystem::SurfaceLoad l{sl.spec, {}};
     for (PressureFacet f : sl.facets)
-      if (f.particle >= b && f.particle < b + owned) {
-        f.particle = static_cast<int32_t>(f.particle - b);
+      if (f.particle >= lb && f.particle < lb + owned) {
+        f.particle = static_cast<int32_t>(f.particle - lb);
         l.facets.push_back(f);
       }
     s.surface_loads.push_back(std::move(l));
@@ -266,17 +307,17 @@ void for_each_released_at_stable_step(PdSystem* s, PdSystem& g, F&& f) {
 // The rank's rows (owned, then ghosts) of each array release_global_at_stable_step lets go
 // of, into `s`, each global array freed as soon as its rows are copied.
 void take_releasing(PdSystem& s, PdSystem& g, const RankLayout& L) {
-  const std::vector<int32_t> ids = local_to_global(L);
-  const size_t n = g.n;
+  const RankIds ids = rank_ids(g, L);
   for_each_released_at_stable_step(&s, g, [&](auto* mine, auto& global, size_t width) {
-    if (width > 0) *mine = take(global, ids, width, n);
+    if (width > 0) *mine = take(global, ids, width);
     std::remove_reference_t<decltype(global)>().swap(global);
   });
 }
 }  // namespace
 
 PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
-  const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
+  const int64_t rb = offsets_row(g, L.begin());
+  const int64_t eb = g.offsets[rb], ee = g.offsets[rb + L.owned()];
   if (g.distributed_rows.empty() || eb != 0 || ee != static_cast<int64_t>(g.neighbor.size())) return restrict_to_rank(g, L);
   // The slices restrict_to_rank would copy are the whole arrays: take them, and restrict the
   // rest (an empty array slices as empty).
@@ -328,32 +369,32 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
 }
 
 void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
-  const std::vector<int32_t> ids = local_to_global(L);
-  const size_t n = g.n;
+  const RankIds ids = rank_ids(g, L);
   s.config = g.config;  // the stable-step estimate turns fracture off in its copy
-  take_or_keep(s.u, g.u, ids, 3, n, false);
-  take_or_keep(s.v, g.v, ids, 3, n, false);
-  take_or_keep(s.a, g.a, ids, 3, n, true);
-  take_or_keep(s.force, g.force, ids, 3, n, false);
-  take_or_keep(s.body, g.body, ids, 3, n, true);
-  s.x = g.x.size() == 3 * n ? take(g.x, ids, 3, n) : std::vector<double>{};
+  take_or_keep(s.u, g.u, ids, 3, false);
+  take_or_keep(s.v, g.v, ids, 3, false);
+  take_or_keep(s.a, g.a, ids, 3, true);
+  take_or_keep(s.force, g.force, ids, 3, false);
+  take_or_keep(s.body, g.body, ids, 3, true);
+  s.x = g.x.size() == 3 * ids.n || g.x.size() == 3 * ids.whole ? take(g.x, ids, 3) : std::vector<double>{};
   // The fields the set-up's last force pass fills (kForcePassFields): a distributed set-up's
   // ranks other than 0 hold them in the rank's system only (mpi_stable_step_forces). Those
   // every model has must be held by one of the two; the model's own (LPS's factors,
   // correspondence's tensors) may be held by neither (the model has none).
-  take_or_keep(s.energy_density, g.energy_density, ids, 1, n, false);
-  take_or_keep(s.dissipated, g.dissipated, ids, 1, n, false);
-  take_or_keep(s.damage, g.damage, ids, 1, n, false);
-  take_or_keep(s.max_stretch, g.max_stretch, ids, 1, n, false);
-  take_or_keep(s.dilatation, g.dilatation, ids, 1, n, false);
-  take_or_keep_if_held(s.lps_a, g.lps_a, ids, 1, n);
-  take_or_keep_if_held(s.lps_b, g.lps_b, ids, 1, n);
-  take_or_keep_if_held(s.corr_deformation, g.corr_deformation, ids, 9, n);
-  take_or_keep_if_held(s.corr_force_tensor, g.corr_force_tensor, ids, 9, n);
-  take_or_keep_if_held(s.corr_nonaffine, g.corr_nonaffine, ids, 1, n);
-  s.min_stretch = take(g.min_stretch, ids, 1, n);
-  s.min_stretch_next = take(g.min_stretch_next, ids, 1, n);
-  const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
+  take_or_keep(s.energy_density, g.energy_density, ids, 1, false);
+  take_or_keep(s.dissipated, g.dissipated, ids, 1, false);
+  take_or_keep(s.damage, g.damage, ids, 1, false);
+  take_or_keep(s.max_stretch, g.max_stretch, ids, 1, false);
+  take_or_keep(s.dilatation, g.dilatation, ids, 1, false);
+  take_or_keep_if_held(s.lps_a, g.lps_a, ids, 1);
+  take_or_keep_if_held(s.lps_b, g.lps_b, ids, 1);
+  take_or_keep_if_held(s.corr_deformation, g.corr_deformation, ids, 9);
+  take_or_keep_if_held(s.corr_force_tensor, g.corr_force_tensor, ids, 9);
+  take_or_keep_if_held(s.corr_nonaffine, g.corr_nonaffine, ids, 1);
+  s.min_stretch = take(g.min_stretch, ids, 1);
+  s.min_stretch_next = take(g.min_stretch_next, ids, 1);
+  const int64_t rb = offsets_row(g, L.begin());
+  const int64_t eb = g.offsets[rb], ee = g.offsets[rb + L.owned()];
   // The global system's bond state arrays (for_each_bond_state_array): take_entry_rows.
   take_entry_rows(s.state, g.state, g.bond_count(), eb, ee);
   take_entry_rows(s.bond_damage, g.bond_damage, g.bond_count(), eb, ee);
@@ -388,11 +429,11 @@ namespace {
 // facet particle the owned ones
 // (one contiguous run of the global list: it is sorted by particle). The scalars are the
 // global system's: every rank advances them alike from sums over every rank (mpi_backend.cpp).
-void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std::vector<int32_t>& ids) {
+void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const RankIds& ids) {
   const GasState& G = g.gas;
   GasState& r = s.gas;
-  const size_t n = g.n;
-  const int64_t eb = g.offsets[L.begin()], ee = g.offsets[L.begin() + L.owned()];
+  const int64_t rb = offsets_row(g, L.begin());
+  const int64_t eb = g.offsets[rb], ee = g.offsets[rb + L.owned()];
   const int64_t fb = first_facet_of(g, L.begin()), fe = first_facet_of(g, L.begin() + L.owned());
   // A distributed set-up's halves are the rank's rows already: they moved into this system
   // with the bonds (restrict_to_rank_taking_bonds) and stay when its state is brought up to
@@ -429,7 +470,7 @@ void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const std
   r.wall_on = slice(G.wall_on, fb, fe);
   auto take_or_keep_gas = [&](auto& mine, const auto& global, auto& kept, size_t width) {
     mine = std::move(kept);
-    take_or_keep(mine, global, ids, width, n, false);
+    take_or_keep(mine, global, ids, width, false);
   };
   take_or_keep_gas(r.kappa_volume, G.kappa_volume, kappa_volume, 2);
   take_or_keep_gas(r.vent_facet_area, G.vent_facet_area, vent_facet_area, 1);

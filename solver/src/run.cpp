@@ -69,6 +69,7 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   // The bond entries each rank's set-up built (PdSystem::setup_candidate_entries), rank 0 first.
   j["setup_entries_per_rank"] = {{"candidates", s.setup_candidate_entries}, {"kept", s.setup_kept_entries}};
   j["setup_window_particles_per_rank"] = s.setup_window_particles;  // the family search's particles
+  j["setup_system_particles_per_rank"] = s.setup_system_particles;  // the set-up system's per-particle arrays
   number("mean_family_size", static_cast<double>(s.bond_count()) / std::max<size_t>(1, s.n));
   number("bytes_per_particle", bytes_per_particle);
   j["steps"] = s.step;

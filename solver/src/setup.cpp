@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <ctime>
 #include <iterator>
 #include <map>
@@ -192,10 +193,13 @@ const SurfaceFacets& require_surface(const PdSystem& s, const std::string& name,
                    "one of the surfaces in the particle file: " + list_names(names));
 }
 
+// The system's indices of file particles, in the list's order; a window system's
+// (PdSystem::window_global) leaves out those outside its window (system_of_file -1).
 std::vector<int32_t> internal_particles(const PdSystem& s, const std::vector<int64_t>& file_indices) {
   std::vector<int32_t> out;
   out.reserve(file_indices.size());
-  for (auto f : file_indices) out.push_back(s.internal_index[f]);
+  for (auto f : file_indices)
+    if (const int32_t i = s.system_of_file(f); i >= 0) out.push_back(i);
   return out;
 }
 
@@ -262,11 +266,14 @@ void for_each_entry_with_reverse(const std::vector<int64_t>& offsets, const std:
 // that the material's homogeneous uniaxial peak stress is its tensile strength
 // (calibrated_onset_stretch; docs/theory.md "Quasi-brittle bonds"), with s_G the brittle
 // critical stretch of its mean G0 at the horizon. 0 for a material without a strength.
-static std::vector<double> softening_onset_per_strength(const PdSystem& s, const std::vector<ElasticInput>& elastic) {
+// `largest`, `median`: the whole body's largest and median horizon (a window system holds its
+// window's particles alone).
+static std::vector<double> softening_onset_per_strength(const PdSystem& s, const std::vector<ElasticInput>& elastic,
+                                                        double largest, double median_horizon) {
   const CaseConfig& c = s.config;
   std::vector<double> out(c.materials.size(), 0.0);
   if (!c.softening || !c.fracture) return out;
-  const double delta = *std::max_element(s.horizon.begin(), s.horizon.end());
+  const double delta = largest;
   const bool lps = c.model == PdModel::LPS;
   for (size_t m = 0; m < c.materials.size(); ++m) {
     const MaterialSpec& ms = c.materials[m];
@@ -281,9 +288,7 @@ static std::vector<double> softening_onset_per_strength(const PdSystem& s, const
       // A graded mesh whose coarsest horizon is too large for the strength: calibrate at the
       // median horizon; bonds of the coarse region whose s_G falls below the onset break
       // brittle at the onset (convert_to_softening), dissipating c s_t^2 / 2 >= c s_G^2 / 2.
-      std::vector<double> h(s.horizon);
-      std::nth_element(h.begin(), h.begin() + h.size() / 2, h.end());
-      s_g = brittle_at(h[h.size() / 2]);
+      s_g = brittle_at(median_horizon);
       s_t = calibrated_onset_stretch(elastic[m], c.model, ms.tensile_strength, s_g);
     }
     if (s_g < s_t) {
@@ -465,13 +470,19 @@ static void add_case_sets(ParticleModel& pm, const CaseConfig& c) {
 // the surface's. Applying a load on a single particle layer pulls that layer out of a
 // nonlocal body; spread over about a horizon it acts on whole families (docs/theory.md "Loads
 // over a boundary layer"). The facets keep the surface's mean normal (a traction does not read it).
-static std::vector<PressureFacet> spread_over_layer(const PdSystem& s, const LoadSpec& ls,
-                                                    const std::vector<PressureFacet>& facets, const std::string& field) {
+// `sf`: the surface's facets (every one, in the file's order), `horizon_of_file`: a file
+// particle's horizon; the layer's volume is the file's, so a window system (PdSystem::
+// window_global) spreads the whole surface's force over the whole layer and keeps the facets
+// of its window's particles.
+// `whole_layer` (if given): every layer particle's internal index, appended.
+static std::vector<PressureFacet> spread_over_layer(const PdSystem& s, const LoadSpec& ls, const SurfaceFacets& sf,
+                                                    const std::function<double(int64_t)>& horizon_of_file,
+                                                    const std::string& field, std::vector<int32_t>* whole_layer = nullptr) {
   double area = 0, normal[3] = {0, 0, 0}, depth = ls.depth;
-  for (const auto& f : facets) {
-    area += f.area;
-    for (int d = 0; d < 3; ++d) normal[d] += f.area * f.normal[d];
-    if (ls.depth_horizon) depth = std::max(depth, s.horizon[static_cast<size_t>(f.particle)]);
+  for (size_t f = 0; f < sf.size(); ++f) {
+    area += sf.area_m2[f];
+    for (int d = 0; d < 3; ++d) normal[d] += sf.area_m2[f] * sf.normal[3 * f + d];
+    if (ls.depth_horizon) depth = std::max(depth, horizon_of_file(sf.particle[f]));
   }
   const double len = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
   for (double& c : normal) c = len > 0 ? c / len : 0.0;
@@ -482,12 +493,15 @@ static std::vector<PressureFacet> spread_over_layer(const PdSystem& s, const Loa
   layer.field = field + ".depth";
   std::vector<int32_t> particles;
   double volume = 0;
+  bool any = false;
   for (const int64_t f : near_surface_set(s.particles, layer, s.config.file)) {
-    const int32_t i = s.internal_index[static_cast<size_t>(f)];
-    particles.push_back(i);
-    volume += s.volume[static_cast<size_t>(i)];
+    any = true;
+    volume += s.particles.volume_m3[static_cast<size_t>(f)];  // the system's volume of it, the same double
+    if (whole_layer) whole_layer->push_back(s.internal_index[static_cast<size_t>(f)]);
+    const int32_t i = s.system_of_file(f);
+    if (i >= 0) particles.push_back(i);
   }
-  if (particles.empty() || !(volume > 0))
+  if (!any || !(volume > 0))
     throw InputError(s.config.file, field + ".depth", "no particle within " + short_number(depth) + " m of surface '" +
                      ls.surface + "'", "a depth of at least half the particle spacing");
   std::vector<PressureFacet> out;
@@ -577,6 +591,19 @@ PdView PdSystem::view() {
   return p;
 }
 
+int32_t PdSystem::system_of_file(int64_t f) const {
+  const int32_t i = internal_index[static_cast<size_t>(f)];
+  if (window_global.empty()) return i;
+  const int64_t k = system_index(i);
+  return k < static_cast<int64_t>(n) && window_global[static_cast<size_t>(k)] == i ? static_cast<int32_t>(k) : -1;
+}
+
+int64_t PdSystem::system_index(int64_t i) const {
+  if (window_global.empty()) return i;
+  return std::lower_bound(window_global.begin(), window_global.end(), static_cast<int32_t>(std::min<int64_t>(i, INT32_MAX))) -
+         window_global.begin();
+}
+
 double PdSystem::total_mass() const {
   double m = 0.0;
   for (size_t i = 0; i < n; ++i) m += density[i] * volume[i];
@@ -605,7 +632,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   s.dimension = pm.dimension;
   s.thickness = pm.dimension == 2 ? pm.thickness_m : 1.0;
   s.n = pm.size();
-  const size_t n = s.n;
+  size_t n = s.n;  // a window system's (take_window, below): its window's count from there on
   if (s.dimension == 2 && c.planar == Planar::None)
     throw InputError(c.file, "model.planar", "missing for a 2D particle model", "plane_stress or plane_strain");
   if (s.dimension == 3 && c.planar != Planar::None)
@@ -671,13 +698,47 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   } else {
     std::fill(s.horizon.begin(), s.horizon.end(), c.horizon_factor * median(spacing));
   }
+  // A file particle's horizon, as set above (spread_over_layer reads every facet's).
+  const double one_horizon_value = c.horizon_m ? *c.horizon_m : c.variable_horizon || n == 0 ? 0.0 : s.horizon[0];
+  const std::function<double(int64_t)> horizon_of_file = [&](int64_t f) {
+    return c.variable_horizon && !c.horizon_m ? c.horizon_factor * pm.spacing_m[static_cast<size_t>(f)] : one_horizon_value;
+  };
   std::vector<double>().swap(spacing);  // read no further (8 B per particle less at the set-up's peak)
+  // What later passes read of the whole body, taken while this system holds it (a window
+  // system, below, holds its window alone): whether every particle has one cell and one
+  // horizon, the largest and median horizons and cells, float32's origin (the bounding box
+  // centre). The medians are order statistics: the same values in any order.
+  bool body_one_horizon = n > 0, body_uniform = n > 0;
+  for (size_t i = 1; i < n && body_one_horizon; ++i) body_one_horizon = s.horizon[i] == s.horizon[0];
+  for (size_t i = 1; i < n && body_uniform; ++i) body_uniform = s.half_cell[i] == s.half_cell[0] && s.horizon[i] == s.horizon[0];
+  const double body_max_horizon = n ? *std::max_element(s.horizon.begin(), s.horizon.end()) : 0.0;
+  const double body_max_half_cell = n ? *std::max_element(s.half_cell.begin(), s.half_cell.end()) : 0.0;
+  const double body_median_horizon = n ? median(s.horizon) : 0.0;
+  const double body_median_half_cell = n ? median(s.half_cell) : 0.0;
+  const std::array<double, 3> f32_origin =
+      c.precision == CaseConfig::Precision::Float32 ? float32_origin(s.x0) : std::array<double, 3>{};
+  // One horizon over a graded arrangement under-resolves its coarse part (docs/atlas.md,
+  // stability map, graded_check.hpp): judged on the whole body here, refused at the start-up
+  // checks below (after the refusals the passes between make, as before).
+  std::exception_ptr graded_refusal;
+  if (c.check_stability) try {
+      require_graded_horizon(s);
+    } catch (const InputError&) {
+      graded_refusal = std::current_exception();
+    }
 
   phase("morton order and horizons");
   // A distributed set-up builds this rank's rows only; the other rows stay empty
   // (distributed_setup.hpp; `dist` marks each place that reads beyond the rank's rows).
+  // The ranks other than 0 then hold their rows' geometric window alone (take_window: a
+  // window system, local indices), rank 0 the whole body (its writers' staging).
   const DistributedSetup& dist = hooks.distributed;
-  const DistributedRows dist_rows = plan_distributed_rows(s, dist);
+  DistributedRows dist_rows = plan_distributed_rows(s, dist);
+  if (setup_on_window(dist)) {
+    take_window(s, dist_rows);
+    n = s.n;
+  }
+
   // Families and per-bond coefficients.
   std::vector<double> pad(n);  // a neighbour's outermost partial-volume sample may reach into the horizon
   for (size_t k = 0; k < n; ++k) pad[k] = partial_volume_reach(s.half_cell[k], s.dimension);
@@ -700,11 +761,12 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     const double a = micromodulus(mi, delta), b = micromodulus(mj, delta);
     return 2.0 * a * b / (a + b);
   };
-  const std::vector<double> onset_per_strength = softening_onset_per_strength(s, elastic);
+  const std::vector<double> onset_per_strength =
+      softening_onset_per_strength(s, elastic, body_max_horizon, body_median_horizon);
   std::vector<uint8_t> no_fail(n, 0);
   for (size_t k = 0; k < c.no_fail_sets.size(); ++k)
-    for (auto f : require_set(s, c.no_fail_sets[k], "model.no_fail[" + std::to_string(k) + "]").indices)
-      no_fail[s.internal_index[f]] = 1;
+    for (auto i : internal_particles(s, require_set(s, c.no_fail_sets[k], "model.no_fail[" + std::to_string(k) + "]").indices))
+      no_fail[i] = 1;
 
   // Partial volumes: one quadrature per candidate entry. Entry (i -> j) counts j's cell's
   // samples inside i's horizon (its own half-bond); its dual half-bond is entry (j -> i)'s own
@@ -718,8 +780,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // entries; the pass that counts the kept entries keeps both counts in the count bytes, so
   // the fill below reads them instead of looking each entry up a second time.
   const bool sampled = c.partial_volume == PartialVolume::Sampled;
-  bool uniform = sampled && n > 0;
-  for (size_t i = 1; i < n && uniform; ++i) uniform = s.half_cell[i] == s.half_cell[0] && s.horizon[i] == s.horizon[0];
+  const bool uniform = sampled && body_uniform && n > 0;
   std::unique_ptr<const LatticeSampleCounts> lattice_counts;
   if (uniform) lattice_counts = std::make_unique<LatticeSampleCounts>(s.horizon[0], s.half_cell[0], s.dimension);
   const bool dual_by_reverse = sampled && !dist_rows.active && !uniform;
@@ -732,8 +793,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // surface correction) or sets both to one value (softening), except the 2D LPS critical
   // stretch's per-end scale. So with one horizon they are equal bit for bit wherever each
   // entry's two partial volumes are: checked exactly below, in the pass that counts them.
-  bool one_horizon = n > 0 && !hooks.store_dual_halves && !model_separates_dual_halves(c, s.dimension);
-  for (size_t i = 1; i < n && one_horizon; ++i) one_horizon = s.horizon[i] == s.horizon[0];
+  const bool one_horizon =
+      n > 0 && body_one_horizon && !hooks.store_dual_halves && !model_separates_dual_halves(c, s.dimension);
   bool betas_equal = one_horizon;
   const bool compare_betas = one_horizon;  // (betas_equal is a thread's own copy in the reductions below)
   std::vector<uint8_t> samples_inside, dual_inside;
@@ -1173,12 +1234,12 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     // dist: each rank sums its own rows; the ghosts' m (which their bonds read) come from
     // their owners, and the first particle without neighbours is found over every rank
     // (all ranks stop with one process's message, none waits in a collective).
-    int64_t lonely = -1;
-    for (int64_t i = dist_rows.begin; i < dist_rows.end && lonely < 0; ++i) {
+    int64_t lonely = -1;  // its file index
+    for (int64_t i = dist_rows.local_begin(); i < dist_rows.local_end() && lonely < 0; ++i) {
       double m = 0.0;
       for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k)
         m += s.k_own[k] * s.xi_len[k] * s.xi_len[k] * s.volume[s.neighbor[k]];
-      if (!(m > 0)) lonely = i;
+      if (!(m > 0)) lonely = s.original_index[i];
       s.weighted_volume[i] = m;
     }
     if (dist_rows.active) {
@@ -1188,7 +1249,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       exchange_owned(dist, dist_rows, s.weighted_volume, 1);
     }
     if (lonely >= 0)
-      throw InputError(c.file, "model.horizon", "particle " + std::to_string(s.original_index[lonely]) + " has no neighbours",
+      throw InputError(c.file, "model.horizon", "particle " + std::to_string(lonely) + " has no neighbours",
                        "a horizon that reaches other particles (about 3 spacings)");
     for (size_t i = 0; i < n; ++i) {
       s.lps[i] = lps_coefficients(elastic[s.material[i]]);
@@ -1297,7 +1358,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     } else {
       // No particle has a complete family (a specimen thinner than two horizons): calibrate
       // on a virtual square/cubic lattice of the median spacing and horizon instead.
-      const double h = 2.0 * median(s.half_cell), delta = median(s.horizon);
+      const double h = 2.0 * body_median_half_cell, delta = body_median_horizon;  // the whole body's
       const int reach = static_cast<int>(std::ceil(delta / h)) + 2;
       const ElasticInput& in = elastic[0];
       const double c0 = pmb_micromodulus(in, c.influence, delta);
@@ -1437,17 +1498,27 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     }
     const SurfaceFacets& sf = require_surface(s, ls.surface, field + ".surface");
     PdSystem::SurfaceLoad sl{&ls, {}};
-    for (size_t f = 0; f < sf.size(); ++f)
-      sl.facets.push_back({s.internal_index[sf.particle[f]], sf.area_m2[f],
-                           {sf.normal[3 * f], sf.normal[3 * f + 1], sf.normal[3 * f + 2]}});
-    if (ls.kind == LoadSpec::Kind::Traction && (ls.depth > 0 || ls.depth_horizon))
-      sl.facets = spread_over_layer(s, ls, sl.facets, field);
+    // (a window system: the facets of its window's particles; every facet's particle in
+    // whole_facet_particles)
+    std::vector<int32_t>* whole = s.window_global.empty() ? nullptr : &s.whole_facet_particles;
+    if (ls.kind == LoadSpec::Kind::Traction && (ls.depth > 0 || ls.depth_horizon)) {
+      sl.facets = spread_over_layer(s, ls, sf, horizon_of_file, field, whole);
+    } else {
+      for (size_t f = 0; f < sf.size(); ++f) {
+        if (whole) whole->push_back(s.internal_index[sf.particle[f]]);
+        if (const int32_t i = s.system_of_file(sf.particle[f]); i >= 0)
+          sl.facets.push_back({i, sf.area_m2[f], {sf.normal[3 * f], sf.normal[3 * f + 1], sf.normal[3 * f + 2]}});
+      }
+    }
     s.surface_loads.push_back(std::move(sl));
   }
   if (s.surface_loads.size() > static_cast<size_t>(kMaxSurfaceLoads))
     throw InputError(c.file, "loads", std::to_string(s.surface_loads.size()) + " pressure/traction loads",
                      "at most " + std::to_string(kMaxSurfaceLoads) + " (their histories travel with each step)");
   s.facets = group_facets_by_particle(s);
+  std::sort(s.whole_facet_particles.begin(), s.whole_facet_particles.end());
+  s.whole_facet_particles.erase(std::unique(s.whole_facet_particles.begin(), s.whole_facet_particles.end()),
+                                s.whole_facet_particles.end());
   for (size_t l = 0, surface = 0; l < c.loads.size(); ++l) {
     if (c.loads[l].kind == LoadSpec::Kind::BodyForce) continue;
     if (c.loads[l].kind == LoadSpec::Kind::Gas)
@@ -1514,7 +1585,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     if (!is.field_file.empty()) {
       // A field from a file, in the particle file's order (original_index: internal -> file).
       const std::string key = "initial[" + std::to_string(q) + "]";
-      const ParticleField f = read_particle_field(is.field_file, is.field_dataset, n, c.file, key);
+      const ParticleField f = read_particle_field(is.field_file, is.field_dataset, s.whole_n(), c.file, key);
       if (f.columns < s.dimension)
         throw InputError(is.field_file, is.field_dataset.empty() ? "columns" : is.field_dataset,
                          std::to_string(f.columns) + " numbers a row", "3 numbers a row for a 3D specimen");
@@ -1575,9 +1646,9 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // (a graded tet mesh crashed here when they came after).
   if (c.model == PdModel::Correspondence) setup_correspondence(s, elastic);  // correspondence.cpp
 
-  // One horizon over a graded arrangement under-resolves its coarse part, and dual horizon
-  // over steep grading reflects waves (docs/atlas.md, stability map, graded_check.hpp).
-  if (c.check_stability) require_graded_horizon(s);
+  // One horizon over a graded arrangement (judged above), and dual horizon over steep
+  // grading reflects waves (docs/atlas.md, stability map, graded_check.hpp).
+  if (graded_refusal) std::rethrow_exception(graded_refusal);
   if (c.variable_horizon) {
     HorizonGrading g = horizon_grading(s);
     if (dist_rows.active) {  // dist: the largest jump over every rank's rows (a maximum: exact in any order)
@@ -1623,6 +1694,9 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       s.spacing[i] = 2.0 * s.half_cell[i];
       s.contact_cell_edge = std::max(s.contact_cell_edge, 1.35 * s.spacing[i]);
     }
+    // The whole body's largest (a window system's may be smaller): 1.35 x rounds monotonically,
+    // so the largest product is the largest cell's, bit for bit.
+    s.contact_cell_edge = std::max(s.contact_cell_edge, 1.35 * (2.0 * body_max_half_cell));
   }
   // The stable step is that of the bonds: the short-range forces act only under more than
   // 10% compression, which a strain of 1e-9 never reaches (docs/theory.md). Lanczos: the
@@ -1632,6 +1706,9 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // each find theirs on their own rows and keep the one of the best row, the first on ties,
   // as one process does over all rows (the same row's entries, the same wave).
   StableStepStartWave wave = stable_step_start_wave(s, lps ? nullptr : &row_stiffness);
+  // (A lattice's wave only: a window of a graded body may hold one cell and one horizon.)
+  if (!body_uniform) wave = StableStepStartWave{};
+  if (wave.row >= 0 && !s.window_global.empty()) wave.row = s.window_global[static_cast<size_t>(wave.row)];  // internal
   if (dist_rows.active) {  // dist: every rank's candidate, the best kept in row order
     for (const StableStepStartWave& other : concat_over_ranks(dist, std::vector<StableStepStartWave>{wave}))
       if (other.row >= 0 &&
@@ -1639,11 +1716,21 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         wave = other;
   }
   std::vector<double>().swap(row_stiffness);
-  // float32's origin, the bounding box centre of every particle, taken while every rank holds
-  // the reference positions: a distributed set-up's ranks other than 0 let them go at the
-  // estimate's cut (release_global_at_stable_step).
-  const std::array<double, 3> f32_origin =
-      c.precision == CaseConfig::Precision::Float32 ? float32_origin(s.x0) : std::array<double, 3>{};
+  // (float32's origin, the bounding box centre of every particle: taken above, from the whole body.)
+  // The particles the set-up's per-particle arrays hold (summary.json; the longest of them):
+  // a window system's window (take_window), else the body.
+  {
+    size_t longest = 0;
+    for (const auto& [size, width] : std::initializer_list<std::pair<size_t, size_t>>{
+             {s.x0.size(), 3}, {s.u.size(), 3}, {s.v.size(), 3}, {s.force.size(), 3}, {s.a.size(), 3},
+             {s.volume.size(), 1}, {s.density.size(), 1}, {s.horizon.size(), 1}, {s.half_cell.size(), 1},
+             {s.material.size(), 1}, {s.fixed_dof.size(), 1}, {s.original_index.size(), 1},
+             {s.weighted_volume.size(), 1}, {s.dilatation.size(), 1}, {s.damage.size(), 1},
+             {s.energy_density.size(), 1}, {s.family_volume.size(), 1}, {s.calibration_factor.size(), 1},
+             {s.lps.size(), 1}})
+      longest = std::max(longest, size / width);
+    s.setup_system_particles = {static_cast<int64_t>(longest)};
+  }
   // A distributed run's ranks each hold their own particles' share of its vectors
   // (StableStepRanks), the rank's system built by stable_step_forces.
   const ForcePass stable_step_pass = hooks.stable_step_forces ? hooks.stable_step_forces(s) : ForcePass{};

@@ -341,6 +341,15 @@ static void expect_each_rank_built_its_own_rows(const std::string& one_dir, cons
     held += w.get<long long>();
   }
   EXPECT_GT(held, one["particles"].get<long long>()) << out << ": the windows hold the ranks' particles and their halos";
+  // The set-up's system (distributed_setup.hpp take_window): rank 0 holds the whole body (its
+  // writers' staging), every other rank its window alone, the longest of its per-particle
+  // arrays (positions, volumes, state, the model's) sized to it (exact counts).
+  const auto& system = dist["setup_system_particles_per_rank"];
+  ASSERT_EQ(one["setup_system_particles_per_rank"], nlohmann::json::array({one["particles"]}));
+  ASSERT_EQ(system.size(), static_cast<size_t>(ranks)) << out;
+  EXPECT_EQ(system[0], one["particles"]) << out << ": rank 0 keeps the whole body";
+  for (int r = 1; r < ranks; ++r)
+    EXPECT_EQ(system[r], window[r]) << out << ": rank " << r << "'s set-up arrays are not sized to its window";
 }
 
 // A case run by one process and, with the distributed set-up, on each of `ranks`: no fallback
@@ -393,6 +402,12 @@ TEST(DistributedSetup, PmbBuildsEachRanksOwnBondsWithOneProcessAnswer) {
     ASSERT_EQ(o.exit_code, 0) << o.err;
     EXPECT_TRUE(summary(out)["distributed_setup"].get<bool>()) << ranks << " ranks built the whole system";
     expect_each_rank_built_its_own_rows(base + "_whole", out, ranks);
+    // On this lattice every window but rank 0's is a part of the body: the set-up arrays of
+    // the ranks other than 0 hold fewer particles than the body (a window system).
+    for (int r = 1; r < ranks; ++r)
+      EXPECT_LT(summary(out)["setup_system_particles_per_rank"][r].get<long long>(),
+                summary(base + "_whole")["particles"].get<long long>())
+          << ranks << " ranks: rank " << r << " holds whole-body arrays at set-up";
     // Each rank's resident set at the end of its loop (docs/parallel.md, Memory), rank 0 first.
     const auto loop_mb = summary(out)["loop_resident_mb"];
     ASSERT_EQ(loop_mb.size(), static_cast<size_t>(ranks)) << "one value per rank";

@@ -650,6 +650,7 @@ struct RankShare {
   std::unique_ptr<ContactExchange> contact;  // model.short_range_forces only
   std::unique_ptr<GasExchange> gas;          // a gas load only
   size_t global_n = 0, global_bonds = 0;  // of the system it was cut from
+  size_t body_n = 0;                      // the whole body's particles (PdSystem::whole_n)
 };
 
 // take_bonds: a distributed set-up's global system, whose bonds are the rank's own: they move
@@ -668,6 +669,7 @@ std::shared_ptr<RankShare> make_rank_share(const PdSystem& global, MPI_Comm comm
     sh->gas = std::make_unique<GasExchange>(sh->layout, static_cast<int64_t>(sh->local.gas.wall_dv.size()), comm);
   sh->global_n = global.n;
   sh->global_bonds = global.bond_count();
+  sh->body_n = global.whole_n();
   return sh;
 }
 
@@ -872,7 +874,7 @@ public:
     for (const ResultsField& f : fields) width += static_cast<size_t>(f.components);
     int size = 1;
     MPI_Comm_size(comm_, &size);
-    const Blocks file_rows{static_cast<int64_t>(g.n), size};  // which rank writes which file rows
+    const Blocks file_rows{static_cast<int64_t>(g.whole_n()), size};  // which rank writes which file rows
     const int64_t owned = layout_.owned();
     std::vector<int> send_counts(size, 0), at(size, 0);  // at: where each block's values go in `send`
     for (int64_t k = 0; k < owned; ++k)
@@ -988,7 +990,7 @@ public:
   // rank its own rows' partners of higher file index, summed over ranks (counts: exact).
   const std::vector<int64_t>& file_bond_offsets(const PdSystem& g) {
     if (file_bond_offsets_.empty()) {
-      file_bond_offsets_ = half_bond_counts(local_, static_cast<size_t>(layout_.owned()), g.n);
+      file_bond_offsets_ = half_bond_counts(local_, static_cast<size_t>(layout_.owned()), g.whole_n());
       MPI_Allreduce(MPI_IN_PLACE, file_bond_offsets_.data(), static_cast<int>(file_bond_offsets_.size()), MPI_INT64_T,
                     MPI_SUM, comm_);
       for (size_t i = 1; i < file_bond_offsets_.size(); ++i) file_bond_offsets_[i] += file_bond_offsets_[i - 1];
@@ -1246,6 +1248,7 @@ StableStepRanks mpi_stable_step_ranks() {
   StableStepRanks r;
   r.begin = sh->layout.begin();
   r.end = r.begin + sh->layout.owned();
+  r.particles = static_cast<int64_t>(sh->body_n);
   r.u = sh->local.u.data();
   r.force = sh->local.force.data();
   r.system = &sh->local;

@@ -1,8 +1,11 @@
 #pragma once
 // The distributed set-up (docs/parallel.md, Memory): under mpirun each rank builds the bonds
 // of the particles it owns only, so the bond arrays, the set-up's and the run's largest,
-// fall as 1/ranks. What every rank still holds whole is per particle (positions, volumes,
-// materials, horizons, the state arrays: a few hundred bytes each); the bond states (1 B
+// fall as 1/ranks. The per-particle arrays (positions, volumes, materials, horizons, the
+// state: a few hundred bytes each) are the rank's geometric window's on the ranks other than
+// 0 (take_window: a window system), the whole body's on rank 0 (its writers' staging);
+// still whole on every rank: the particle file, the file -> internal index and the row
+// offsets (about 60 B per particle); the bond states (1 B
 // per entry, with softening, a rate law or a gas load up to 10 B) are each rank's own rows,
 // in its system, with parallel HDF5; without it whole on rank 0 too, its writers' staging
 // (for_each_bond_state_array).
@@ -10,7 +13,8 @@
 // How: the family sizes are counted from the positions alone (family_sizes, partition.hpp),
 // which gives the whole system's row offsets and the partition before any family exists.
 // The set-up then runs as on one process on a system whose rows outside the rank's range are
-// empty: every per-entry loop covers the rank's rows, and the few values a row reads from
+// empty (a window system: the rank's rows and the window's other particles, local indices;
+// else the whole body): every per-entry loop covers the rank's rows, and the few values a row reads from
 // other rows or every particle (listed at each call in setup.cpp) come through
 // DistributedSetup::concat (a sum or a list over every rank) or, for a value its owner
 // computed per particle, exchange_owned (to the rank's geometric window only). Every value is computed by the same code as on one process, so
@@ -52,7 +56,26 @@ struct DistributedRows {
   std::vector<int64_t> full_offsets;   // the whole system's row offsets (n + 1), from the family sizes
   GeometricWindow window;              // the rows' geometric window (active only): every partner
   WindowExchange exchange;             // the owners' values to that window (active only)
+  // The set-up system is the window (take_window; PdSystem::window_global): its particles are
+  // window.index in local indices, the rows [window.row_begin, window.row_end). False: it holds
+  // the whole body (one process; rank 0, the writers' rank), the rows [begin, end).
+  bool windowed = false;
+  // The rank's rows in the set-up system's indices (where a pass loops over them).
+  int64_t local_begin() const { return windowed ? window.row_begin : begin; }
+  int64_t local_end() const { return windowed ? window.row_end : end; }
 };
+
+// Whether this rank's set-up runs on a window system (take_window): every rank but 0 (rank 0
+// keeps the whole body: its writers gather into it, I/O staging; the same code on a window
+// that is everything).
+bool setup_on_window(const DistributedSetup& d);
+
+// Makes `s` (the whole body's reference arrays, built from the particle file) the rank's
+// window system: every per-particle array held so far (positions, volumes, densities,
+// materials, cells, horizons, file indices) cut to rows.window's particles in its order,
+// s.window_global its global indices (internal_index stays whole: PdSystem::system_of_file),
+// s.n the window's count; rows.windowed set. The whole arrays are freed.
+void take_window(PdSystem& s, DistributedRows& rows);
 
 // How many of `halo` (ascending global indices outside the rank's rows) each rank owns under
 // the partition `part_begin` (ranks + 1 offsets): the counts exchange_owned receives.
@@ -111,20 +134,30 @@ std::vector<T> concat_over_ranks(const DistributedSetup& d, const std::vector<T>
 // values a later pass reads, e.g. LPS's weighted volume. The particles outside the window
 // keep what this rank holds for them (nothing reads them: require_partners_in_window).
 // Collective; an empty array (the feature is off, on every rank alike) stays empty.
+// A window system's array (rows.windowed) is addressed by local index: the halo is the
+// window's particles outside its rows, in order, and a row i is at i - begin + row_begin.
 template <class T>
 void exchange_owned(const DistributedSetup& d, const DistributedRows& rows, std::vector<T>& a, size_t width) {
   if (a.empty() || !rows.active) return;
   const WindowExchange& x = rows.exchange;
   const size_t bytes = width * sizeof(T);
+  const int64_t row_shift = rows.windowed ? rows.window.row_begin - rows.begin : 0;
+  const int64_t rows_held = rows.window.row_end - rows.window.row_begin;
+  auto halo_at = [&](size_t q) {
+    if (!rows.windowed) return static_cast<int64_t>(x.halo[q]);
+    const int64_t k = static_cast<int64_t>(q);
+    return k < rows.window.row_begin ? k : k + rows_held;
+  };
   std::vector<T> out(width * x.send.size());
   for (size_t q = 0; q < x.send.size(); ++q)
-    std::copy_n(a.begin() + static_cast<int64_t>(width) * x.send[q], width, out.begin() + static_cast<int64_t>(width * q));
+    std::copy_n(a.begin() + static_cast<int64_t>(width) * (x.send[q] + row_shift), width,
+                out.begin() + static_cast<int64_t>(width * q));
   std::vector<int64_t> received;
   const std::vector<char> in = d.exchange(out.data(), x.send_counts, bytes, received);
   if (received != x.halo_counts || in.size() != bytes * x.halo.size() || a.size() % width != 0)
     throw std::logic_error("distributed set-up: an exchange of owners' values differs from the window's halo");
   for (size_t q = 0; q < x.halo.size(); ++q)
-    std::memcpy(static_cast<void*>(a.data() + width * static_cast<size_t>(x.halo[q])), in.data() + bytes * q, bytes);
+    std::memcpy(static_cast<void*>(a.data() + width * static_cast<size_t>(halo_at(q))), in.data() + bytes * q, bytes);
 }
 
 // Per material: the sum of the first `dims` of each marked particle's 3 `values`, taken in

@@ -116,8 +116,10 @@ struct Halo {
 // The halo of `rank`: ghosts from its own rows, sends from the rows of the other ranks that
 // reach into it (the families are symmetric: j in i's family iff i in j's, so the sends are
 // also read off this rank's rows).
+// `window` (a window system's local -> internal indices, ascending; PdSystem::window_global):
+// offsets and neighbor are that system's (local rows and partners). Null: the whole body's.
 Halo build_halo(const Partition& part, int rank, const std::vector<int64_t>& offsets,
-                const std::vector<int32_t>& neighbor);
+                const std::vector<int32_t>& neighbor, const std::vector<int32_t>* window = nullptr);
 
 // Figures of a decomposition for docs/performance.md: load balance of the bond loop, ghosts
 // per owned particle, bytes exchanged per step.

@@ -59,7 +59,26 @@ struct PdSystem {
   double thickness = 1.0;
   size_t n = 0;
   std::vector<int64_t> original_index;  // internal -> file index (a global id: files past 2^31 particles)
-  std::vector<int32_t> internal_index;  // file -> internal index
+  std::vector<int32_t> internal_index;  // file -> internal index (whole: a window system too; system_of_file)
+  // A distributed set-up's window system (distributed_setup.hpp; the ranks other than 0): its
+  // n particles are the rank's geometric window alone, local particle k being the whole body's
+  // internal particle window_global[k] (ascending, so the rank's rows are one local range), and
+  // every per-particle array is sized to the window; body_n is the whole body's count. Empty:
+  // the system holds the whole body (one process, rank 0), local index = internal index.
+  std::vector<int32_t> window_global;
+  size_t body_n = 0;
+  // The whole body's particle count (n, unless a window system).
+  size_t whole_n() const { return window_global.empty() ? n : body_n; }
+  // The system's index of the whole body's internal particle `i` (a window system: the first
+  // local index at or after it, so a range of internal indices maps to a local range).
+  int64_t system_index(int64_t i) const;
+  // The system's index of file particle f: internal_index, or a window system's local index
+  // of it (-1: not in the window).
+  int32_t system_of_file(int64_t f) const;
+  // A window system's per-facet-particle arrays (the gas's wall shares) hold its window's
+  // facet particles (facets.particle); the whole body's facet particles, internal indices
+  // ascending, are these (a checkpoint's rows). Empty: facets.particle is the whole list.
+  std::vector<int32_t> whole_facet_particles;
 
   // per particle (internal order)
   std::vector<double> x0, u, v, a, force, body;  // 3N
@@ -198,6 +217,10 @@ struct PdSystem {
   // one value per rank, rank 0 first (finish_distributed_setup gathers them): each rank's own
   // rows alone, so they sum to one process's (summary.json's setup_entries_per_rank).
   std::vector<int64_t> setup_candidate_entries, setup_kept_entries;
+  // The particles each rank's set-up system held (its per-particle arrays' length: the
+  // window's on the ranks other than 0, PdSystem::window_global; one process and rank 0: the
+  // body's), one value per rank the same way (summary.json's setup_system_particles_per_rank).
+  std::vector<int64_t> setup_system_particles;
   // The particles the family search held (its cell lists, its copies): the rows' geometric
   // window (build_own_families; one process: every particle), one value per rank the same way
   // (summary.json's setup_window_particles_per_rank).
@@ -236,6 +259,9 @@ using ForcePassFactory = std::function<ForcePass(PdSystem&)>;
 // Empty (pass unset): one process, the vectors whole.
 struct StableStepRanks {
   int64_t begin = 0, end = 0;
+  // The whole body's particles (a window system holds its window alone, PdSystem::window_global);
+  // 0: the global system's n.
+  int64_t particles = 0;
   double* u = nullptr;
   const double* force = nullptr;
   const PdSystem* system = nullptr;

@@ -43,7 +43,8 @@ RankLayout rank_layout(const PdSystem& global, int ranks, int rank);
 PdSystem restrict_to_rank(const PdSystem& global, const RankLayout& layout);
 
 // restrict_to_rank for a distributed set-up's global system (distributed_setup.hpp), whose
-// only rows are this rank's: the per-entry coefficients move from it into the rank's system
+// only rows are this rank's (on the ranks other than 0 a window system, PdSystem::
+// window_global, read by local index): the per-entry coefficients move from it into the rank's system
 // instead of being copied (the peak of set-up memory); what rank 0's results writer reads of
 // the bond list (partners, own_count or vol_own, k_dual) is copied where it gathers them
 // (root_gathers_bond_list: serial HDF5 with results written). Any other system: restrict_to_rank.
@@ -53,10 +54,12 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& global, const RankLayout& layou
 // damage, the LPS / correspondence / compressive fields, step, time, dt, the accumulators,
 // the float state): what the set-up sets after its stable-step estimate and a checkpoint
 // restores. A rank system built for the estimate is brought up to date with it rather than
-// built again.
+// built again. A window system's (PdSystem::window_global) arrays are read by local index,
+// whole arrays (a restart's read) by internal index, told apart by their length.
 void copy_rank_state(PdSystem& local, const PdSystem& global, const RankLayout& layout);
 
-// What a distributed set-up's ranks other than 0 let go of in their global system once the
+// What a distributed set-up's ranks other than 0 let go of in their global system (their
+// window's arrays: take_window) once the
 // stable-step estimate has cut the rank's system from it (mpi_stable_step_forces), before the
 // estimate's peak: the displacements and velocities, the forces and the fields the estimate's
 // last pass fills (kForcePassFields: energy density, dissipated energy, damage, largest

@@ -237,8 +237,8 @@ PdSystem restrict_rank(const PdSystem& g, const RankLayout& L, std::vector<int32
     s.surface_loads.push_back(std::move(l));
   }
   s.facets = group_facets_by_particle(s);
-  for (const auto& bl : g.body_loads)  // empty: every particle, which is every owned one here
-    s.body_loads.push_back({bl.spec, bl.particles.empty() ? std::vector<int32_t>{} : owned_local(bl.particles)});
+  for (const auto& bl : g.body_loads)  // every particle: every owned one here
+    s.body_loads.push_back({bl.spec, bl.every_particle ? std::vector<int32_t>{} : owned_local(bl.particles), bl.every_particle});
   for (const auto& c : g.constraints) {
     PdSystem::Constraint rc{c.spec, owned_local(c.particles), nullptr, {}, 0.0};
     attach_boundary_field(rc, c.field);  // values follow the rank's own particles

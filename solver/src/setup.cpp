@@ -1491,7 +1491,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     const LoadSpec& ls = c.loads[l];
     const std::string field = "loads[" + std::to_string(l) + "]";
     if (ls.kind == LoadSpec::Kind::BodyForce) {
-      PdSystem::BodyLoad bl{&ls, {}};
+      PdSystem::BodyLoad bl{&ls, {}, ls.set.empty()};
       if (!ls.set.empty()) bl.particles = internal_particles(s, require_set(s, ls.set, field + ".set").indices);
       s.body_loads.push_back(std::move(bl));
       continue;

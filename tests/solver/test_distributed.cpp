@@ -440,6 +440,34 @@ TEST(DistributedSetup, PmbBuildsEachRanksOwnBondsWithOneProcessAnswer) {
   }
 }
 
+// A body load on a set acts on the set's particles alone, also on a rank that holds none of
+// them: a 8 x 4 x 3 mm PMB lattice whose first millimetre along x is pushed (the set `end`,
+// 2 of the 16 layers), one process against 2, 3 and 4 ranks (the Morton ranges leave some
+// ranks without a particle of the set), results.h5, checkpoint.h5 and history.csv byte for
+// byte. (An empty list once meant "every particle": such a rank pushed all its particles.)
+TEST(DistributedSetup, ABodyLoadOnASetSomeRanksDoNotHoldGivesTheOneProcessAnswer) {
+  const std::string file = write_case(
+      "mpi_dist_body_set",
+      "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.008, 0.004, 0.003], spacing: 0.5 mm}}\n"
+      "model: {type: pmb, horizon_factor: 3.015}\n"
+      "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 2}]\n"
+      "sets: [{name: end, box: [0, 0, 0, 0.001, 0.004, 0.003]}]\n"
+      "loads: [{type: body_force, set: end, value: [2e7, 0, 0]}]\n"
+      "time: {steps: 40}\n"
+      "output: {every: 20, history_every: 10, fields: [damage, displacement, velocity]}\n");
+  const std::string base = process_temp_dir() + "/dist_body_set";
+  const Outcome one = solve(file, base + "_whole", 1, 1);
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  for (const int r : {2, 3, 4}) {
+    const std::string out = base + "_np" + std::to_string(r);
+    const Outcome o = solve(file, out, r, 1);
+    ASSERT_EQ(o.exit_code, 0) << o.err;
+    for (const char* f : {"/results.h5", "/checkpoint.h5"})
+      EXPECT_EQ(differing(base + "_whole" + f, out + f), std::vector<std::string>{}) << r << " ranks, " << f;
+    expect_same_history(base + "_whole", out);
+  }
+}
+
 // results.h5's bond list (/bonds/*) written by rows (docs/parallel.md, Files): with parallel
 // HDF5 each rank forms its own rows of the list, in the particle file's order (not one range:
 // the ranks own Morton ranges), and writes them together; the pad bonds' within_horizon bits

@@ -603,7 +603,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
       a.constraint_values.push_back(s.constraints[c].field ? m.constraint_values[c].get() : nullptr);
     }
     for (size_t b = 0; b < s.body_loads.size(); ++b)
-      a.body_load_sets.push_back(s.body_loads[b].particles.empty()
+      a.body_load_sets.push_back(s.body_loads[b].every_particle
                                      ? SetView{static_cast<int64_t>(s.n), nullptr}
                                      : SetView{static_cast<int64_t>(m.body_load_particles[b].size()),
                                                m.body_load_particles[b].get()});

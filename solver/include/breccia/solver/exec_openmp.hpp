@@ -99,7 +99,7 @@ void fill_load_sets(const PdSystem& s, StepArrays<Real>& a) {
   }
   a.body_load_sets.clear();
   for (const auto& b : s.body_loads)
-    a.body_load_sets.push_back(b.particles.empty() ? SetView{static_cast<int64_t>(s.n), nullptr}
+    a.body_load_sets.push_back(b.every_particle ? SetView{static_cast<int64_t>(s.n), nullptr}
                                                    : SetView{static_cast<int64_t>(b.particles.size()), b.particles.data()});
   a.external_work = const_cast<double*>(&s.external_work);
   a.dissipated_energy = const_cast<double*>(&s.dissipated_energy);

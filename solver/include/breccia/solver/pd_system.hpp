@@ -175,7 +175,10 @@ struct PdSystem {
   FacetLayout facets;  // the surface loads' facets grouped by particle (what the step reads)
   struct BodyLoad {
     const LoadSpec* spec;
-    std::vector<int32_t> particles;  // internal; empty = all
+    std::vector<int32_t> particles;  // internal (the set's particles this system holds)
+    // No set named: every particle. Not read off an empty list: a set may hold no particle
+    // of a rank's system (or none at all), and then the load acts on none of them.
+    bool every_particle = false;
   };
   std::vector<BodyLoad> body_loads;
   struct Constraint {

@@ -360,7 +360,8 @@ void pd_external(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t,
   for (size_t b = 0; b < sys.body_loads.size(); ++b) {
     const LoadSpec& spec = *sys.body_loads[b].spec;
     const SetView set = a.body_load_sets[b];
-    exec.for_each(set.particles ? set.count : n,
+    // (every particle: count n and no list; a set this system holds none of: count 0)
+    exec.for_each(set.count,
                   BodyLoad{set, spec.history.at(t), {spec.vector[0], spec.vector[1], spec.vector[2]}, d.density, body},
                   "body_load");
   }

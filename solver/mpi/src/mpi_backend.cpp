@@ -691,6 +691,7 @@ std::shared_ptr<RankShare> take_rank_share(const PdSystem& global, MPI_Comm comm
   return make_rank_share(global, comm);
 }
 
+#ifdef BRECCIA_MPI_CUDA
 // This process's place among the ranks on its node (MPI_COMM_TYPE_SHARED): which GPU it takes.
 int node_local_rank(MPI_Comm comm) {
   MPI_Comm node;
@@ -702,6 +703,7 @@ int node_local_rank(MPI_Comm comm) {
   MPI_Comm_free(&node);
   return local;
 }
+#endif
 
 // --backend cuda: which device each rank took and how the halo travels, printed by rank 0
 // (collective: every rank sends its device's index).

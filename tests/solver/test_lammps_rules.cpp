@@ -165,6 +165,44 @@ TEST(ShortRangeForces, AreTheGradientOfTheirEnergyAndCancelInPairs) {
   EXPECT_NEAR(-gradient, s.force[3 * i] * s.volume[i], 1e-4 * std::fabs(s.force[3 * i] * s.volume[i]));
 }
 
+TEST(ShortRangeForces, AContactOfUnequalParticlesIsNoStifferThanEitherKindsOwn) {
+  // Two bodies in contact act as springs in series (Johnson, Contact Mechanics, 1985: the
+  // effective modulus 1/E* = 1/E1 + 1/E2): a pair of particles with unequal constants
+  // k = 15 c / delta (c ~ delta^-4: k ~ delta^-5) repels with the harmonic mean 2 ki kj /
+  // (ki + kj). A fine particle (spacing l) against a coarse one (2 l: 8 times its volume, k/32)
+  // then feels a spring of 2/33 k x 8 V, about half of what a fine partner gives it (k V);
+  // the arithmetic mean gave 4.1 times (k/2 x 33/32 x 8 V), which took its frequency past
+  // the bonds' stable step on graded meshes (docs/theory.md, LAMMPS PERI's choices).
+  const double k = 3.0e20, volume_fine = 1.25e-10;  // any positive values: the law is linear in both
+  const double short_range_k[2] = {k, k / 32.0}, volume[2] = {volume_fine, 8.0 * volume_fine};
+  PdViewT<double> p;
+  p.n = 2;
+  p.short_range_k = short_range_k;
+  p.volume = volume;
+  p.diagnostics = true;
+  const double reach = 1.0e-3, len = 0.9e-3, gap = reach - len;
+  // The pair's spring on each end, from the push on it: the force density times its own volume.
+  auto spring = [&](int64_t i, int64_t j) {
+    double fx = 0, fy = 0, fz = 0, w = 0;
+    add_short_range_pair(p, i, j, reach, (i == 0 ? 1.0 : -1.0) * len, 0.0, 0.0, len, fx, fy, fz, w);
+    EXPECT_EQ(fy, 0.0);
+    return std::fabs(fx) * volume[i] / gap;
+  };
+  const double fine_on_coarse = spring(0, 1), coarse_on_fine = spring(1, 0);
+  EXPECT_DOUBLE_EQ(fine_on_coarse, coarse_on_fine);  // equal and opposite forces
+  const double series = 2.0 * k * (k / 32.0) / (k + k / 32.0) * volume[0] * volume[1];
+  EXPECT_NEAR(fine_on_coarse, series, 1e-12 * series);
+  // Per unit mass of each end (rho cancels): no stiffer than its own kind's contact.
+  const double fine_own = k * volume[0] * volume[0], coarse_own = (k / 32.0) * volume[1] * volume[1];
+  EXPECT_LT(fine_on_coarse / volume[0], fine_own / volume[0]);
+  EXPECT_LT(fine_on_coarse / volume[1], coarse_own / volume[1]);
+  // Equal constants: the one constant, bit for bit (a lattice's law, LAMMPS's, unchanged).
+  const double same[2] = {k, k};
+  p.short_range_k = same;
+  const double old_law = 0.5 * (k + k) * volume[1];  // the mean of equal constants, exact
+  EXPECT_EQ(spring(0, 1), std::fabs(-old_law * gap / len * len) * volume[0] / gap);
+}
+
 TEST(ShortRangeForces, ReachParticlesOutsideTheFamily) {
   // A particle carried far across the body (a fragment meeting another) feels the particle it
   // lands next to although they were never in one family; without the option it does not.

@@ -1464,8 +1464,13 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
 // family, bonded or broken, whose distance r falls below d = min(0.9 |xi|, 1.35 l) repel
 // with the force density 15 c V_j (d - r) / delta on i, c = 18 K / (pi delta^4) the PMB
 // micromodulus; l is the lattice spacing (here the mean of the two particles' spacings) and
-// 15 c / delta is short_range_k, averaged over the pair so that the pair's forces are
-// equal and opposite. The pair's energy 1/2 k V_i V_j (d - r)^2 is shared between its ends.
+// 15 c / delta is short_range_k. Unequal constants (a graded mesh: k ~ delta^-5) combine
+// as springs in series, 2 ki kj / (ki + kj), as two bodies in contact do, so the pair's
+// forces are equal and opposite and neither end feels a stiffer spring than against its
+// own kind (the arithmetic mean gave a fine particle against a coarse one several times
+// that, past the bonds' stable step: docs/theory.md); equal constants are taken as they are
+// (LAMMPS's one horizon, bit for bit). The pair's energy 1/2 k V_i V_j (d - r)^2 is shared
+// between its ends.
 // Adds to force (after force_kernel) and to energy_density on diagnostic passes.
 //
 // One pair (i, j) at deformed vector d = x_j - x_i of length len inside its reach: adds the
@@ -1473,7 +1478,8 @@ BRECCIA_HD void force_kernel(const PdViewT<Real>& p, int64_t i) {
 template <class Real>
 BRECCIA_HD void add_short_range_pair(const PdViewT<Real>& p, int64_t i, int64_t j, Real reach, Real dx, Real dy,
                                      Real dz, Real len, Real& fx, Real& fy, Real& fz, double& w) {
-  const Real stiffness = Real(0.5) * (p.short_range_k[i] + p.short_range_k[j]) * p.volume[j];
+  const Real ki = p.short_range_k[i], kj = p.short_range_k[j];
+  const Real stiffness = (ki == kj ? ki : Real(2) * ki * (kj / (ki + kj))) * p.volume[j];
   const Real gap = reach - len;
   const Real f = -stiffness * gap / len;  // along j - i: pushes i away from j
   fx += f * dx;

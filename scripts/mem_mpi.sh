@@ -14,6 +14,9 @@
 #   broken bits); default none.
 # RESTART=1: each run is then continued from its checkpoint.h5 on the same ranks for 5 steps
 #   more (--restart, --steps): a second row per rank count, "R restart", with that run's peaks.
+# CASE=FILE: instead of the lattice or the disc, a case file as it is, with CASE_ARGS (options
+#   added to every run, split at spaces), e.g. the full concrete case for one step:
+#   CASE=cases/concrete-blast/case.yaml CASE_ARGS="--set specimen.particles=$PWD/runs/full/particles.h5 --steps 1"
 set -euo pipefail
 BUILD=${1:-build}; N=${2:-30}; RANKS=${3:-"1 2 4"}; MODEL=${MODEL:-"type: pmb"}; TIME=${TIME:-"steps: 5"}
 WRITE_RESULTS=false; [ "${RESULTS:-0}" = 1 ] && WRITE_RESULTS=true
@@ -21,7 +24,10 @@ BIN="$(cd "$BUILD" && pwd)/bin"
 OUT="${OUT:-$(pwd)/runs/mem-mpi}"
 mkdir -p "$OUT"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
-if [ -n "${GAS:-}" ]; then
+CASE_FILE="$OUT/case.yaml"; read -r -a CASE_EXTRA <<< "${CASE_ARGS:-}"
+if [ -n "${CASE:-}" ]; then
+  CASE_FILE="$(cd "$(dirname "$CASE")" && pwd)/$(basename "$CASE")"
+elif [ -n "${GAS:-}" ]; then
   cat > "$OUT/specimen.yaml" <<YAML
 dimension: 2
 thickness: 10 mm
@@ -63,7 +69,7 @@ measure() {
   # One file per rank: GNU time writes the rank's own peak when it exits.
   OMP_NUM_THREADS=1 mpirun --oversubscribe -np "$ranks" bash -c \
     '/usr/bin/time -f %M -o "$0/rss$1.$OMPI_COMM_WORLD_RANK" "${@:2}"' \
-    "$run" "$tag" "$BIN/breccia-solve" "$OUT/case.yaml" -o "$run" --threads 1 --quiet --backend cpu "$@"
+    "$run" "$tag" "$BIN/breccia-solve" "$CASE_FILE" -o "$run" --threads 1 --quiet --backend cpu ${CASE_EXTRA[@]+"${CASE_EXTRA[@]}"} "$@"
   /usr/bin/python3 - "$run" "$ranks" "$tag" "$label" <<'PY'
 import json, sys
 run, ranks, tag, label = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]

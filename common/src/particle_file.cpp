@@ -1,10 +1,12 @@
 #include "breccia/common/particle_file.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <sstream>
+#include <stdexcept>
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/h5.hpp"
@@ -17,6 +19,19 @@ const ParticleSet* ParticleModel::find_set(const std::string& name) const {
   for (const auto& s : sets)
     if (s.name == name) return &s;
   return nullptr;
+}
+
+const int64_t* ParticleModel::cell_nodes(int64_t cell) const {
+  size_t row = static_cast<size_t>(cell);
+  if (!held_cells.empty()) {
+    const auto it = std::lower_bound(held_cells.begin(), held_cells.end(), cell);
+    if (it == held_cells.end() || *it != cell)
+      throw std::out_of_range("particle model: mesh cell " + std::to_string(cell) + " is not held");
+    row = static_cast<size_t>(it - held_cells.begin());
+  }
+  if (nodes_per_cell <= 0 || (row + 1) * static_cast<size_t>(nodes_per_cell) > mesh_cells.size())
+    throw std::out_of_range("particle model: no mesh cell " + std::to_string(cell));
+  return &mesh_cells[row * static_cast<size_t>(nodes_per_cell)];
 }
 
 const SurfaceFacets* ParticleModel::find_surface(const std::string& name) const {

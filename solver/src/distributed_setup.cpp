@@ -120,6 +120,36 @@ void cut_to_window(std::vector<T>& a, const std::vector<int32_t>& index, size_t 
 }
 }  // namespace
 
+void cut_particle_model_to_rows(ParticleModel& pm, const std::vector<int64_t>& file_rows) {
+  if (!pm.held_rows.empty() || !pm.held_cells.empty())
+    throw std::logic_error("cut_particle_model_to_rows: the model holds a part of the file already");
+  std::vector<int64_t> rows = file_rows;
+  std::sort(rows.begin(), rows.end());
+  rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+  const size_t whole = pm.size();
+  for (const int64_t f : rows)
+    if (f < 0 || static_cast<size_t>(f) >= whole) throw std::logic_error("cut_particle_model_to_rows: a row outside the file");
+  auto cut = [&](auto& a, const std::vector<int64_t>& which, size_t width) {
+    std::remove_reference_t<decltype(a)> out(width * which.size());
+    for (size_t k = 0; k < which.size(); ++k)
+      std::copy_n(a.begin() + static_cast<int64_t>(width) * which[k], width, out.begin() + static_cast<int64_t>(width * k));
+    a.swap(out);
+  };
+  cut(pm.position_m, rows, 3);
+  cut(pm.volume_m3, rows, 1);
+  cut(pm.spacing_m, rows, 1);
+  cut(pm.material_id, rows, 1);
+  pm.held_rows = std::move(rows);
+  if (pm.nodes_per_cell > 0 && !pm.mesh_cells.empty()) {
+    std::vector<int64_t> cells;  // every facet's owner cell (facet_vertices, the gas's mouth)
+    for (const SurfaceFacets& sf : pm.surfaces) cells.insert(cells.end(), sf.particle.begin(), sf.particle.end());
+    std::sort(cells.begin(), cells.end());
+    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+    cut(pm.mesh_cells, cells, static_cast<size_t>(pm.nodes_per_cell));
+    pm.held_cells = std::move(cells);
+  }
+}
+
 void take_window(PdSystem& s, DistributedRows& rows) {
   if (!rows.active) throw std::logic_error("take_window: not a distributed set-up");
   const std::vector<int32_t>& index = rows.window.index;
@@ -130,6 +160,7 @@ void take_window(PdSystem& s, DistributedRows& rows) {
   cut_to_window(s.half_cell, index, 1);
   cut_to_window(s.horizon, index, 1);
   cut_to_window(s.original_index, index, 1);
+  cut_particle_model_to_rows(s.particles, s.original_index);
   s.body_n = s.n;
   s.window_global = index;
   s.n = index.size();
@@ -245,6 +276,7 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   s.setup_kept_entries = concat_over_ranks(d, s.setup_kept_entries);
   s.setup_window_particles = concat_over_ranks(d, s.setup_window_particles);
   s.setup_system_particles = concat_over_ranks(d, s.setup_system_particles);
+  s.setup_file_rows = concat_over_ranks(d, s.setup_file_rows);
   // Rank 0's writers read the bond list of results.h5 (partners, and which halves exist),
   // where it writes the files alone (serial HDF5).
   const bool writer_bonds = root_gathers_bond_list(s.config);

@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include <omp.h>
@@ -347,7 +348,7 @@ static std::vector<int64_t> near_surface_set(const ParticleModel& pm, const Regi
   std::string note;
   const std::unique_ptr<FacetTree> tree = surface_facet_tree(pm, *facets, note);
   if (!note.empty()) std::fprintf(stderr, "note: %s: %s\n", r.field.c_str(), note.c_str());
-  const int64_t n = static_cast<int64_t>(pm.size());
+  const int64_t n = static_cast<int64_t>(pm.size());  // the rows held (ParticleModel::held_rows)
   const double limit2 = r.distance * r.distance;
   std::vector<char> inside(static_cast<size_t>(n), 0);
 #pragma omp parallel for schedule(dynamic, 1024)
@@ -357,9 +358,9 @@ static std::vector<int64_t> near_surface_set(const ParticleModel& pm, const Regi
     if (tree->box_distance_squared(p) > limit2) continue;
     inside[static_cast<size_t>(i)] = tree->distance(p) <= r.distance;
   }
-  std::vector<int64_t> out;
+  std::vector<int64_t> out;  // file indices, ascending
   for (int64_t i = 0; i < n; ++i)
-    if (inside[static_cast<size_t>(i)]) out.push_back(i);
+    if (inside[static_cast<size_t>(i)]) out.push_back(pm.file_row(static_cast<size_t>(i)));
   return out;
 }
 
@@ -470,43 +471,57 @@ static void add_case_sets(ParticleModel& pm, const CaseConfig& c) {
 // the surface's. Applying a load on a single particle layer pulls that layer out of a
 // nonlocal body; spread over about a horizon it acts on whole families (docs/theory.md "Loads
 // over a boundary layer"). The facets keep the surface's mean normal (a traction does not read it).
+// The layer is the body's (layer_of_surface: its depth, every particle of it, their volume
+// summed in file order), taken while the particle model holds every row: a window system
+// (PdSystem::window_global) takes it before its cut (take_window) and so spreads the whole
+// surface's force over the whole layer, keeping the facets of its window's particles.
+struct SurfaceLayer {
+  double depth = 0.0;
+  double volume = 0.0;              // of every particle of the layer
+  std::vector<int64_t> particles;   // file indices, ascending
+};
 // `sf`: the surface's facets (every one, in the file's order), `horizon_of_file`: a file
-// particle's horizon; the layer's volume is the file's, so a window system (PdSystem::
-// window_global) spreads the whole surface's force over the whole layer and keeps the facets
-// of its window's particles.
-// `whole_layer` (if given): every layer particle's internal index, appended.
-static std::vector<PressureFacet> spread_over_layer(const PdSystem& s, const LoadSpec& ls, const SurfaceFacets& sf,
-                                                    const std::function<double(int64_t)>& horizon_of_file,
-                                                    const std::string& field, std::vector<int32_t>* whole_layer = nullptr) {
-  double area = 0, normal[3] = {0, 0, 0}, depth = ls.depth;
-  for (size_t f = 0; f < sf.size(); ++f) {
-    area += sf.area_m2[f];
-    for (int d = 0; d < 3; ++d) normal[d] += sf.area_m2[f] * sf.normal[3 * f + d];
-    if (ls.depth_horizon) depth = std::max(depth, horizon_of_file(sf.particle[f]));
-  }
-  const double len = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
-  for (double& c : normal) c = len > 0 ? c / len : 0.0;
+// particle's horizon. Reads every row of the particle model (its positions and volumes).
+static SurfaceLayer layer_of_surface(const PdSystem& s, const LoadSpec& ls, const SurfaceFacets& sf,
+                                     const std::function<double(int64_t)>& horizon_of_file, const std::string& field) {
+  SurfaceLayer out;
+  out.depth = ls.depth;
+  if (ls.depth_horizon)
+    for (size_t f = 0; f < sf.size(); ++f) out.depth = std::max(out.depth, horizon_of_file(sf.particle[f]));
   RegionSetSpec layer;
   layer.kind = RegionSetSpec::Kind::NearSurface;
   layer.surface = ls.surface;
-  layer.distance = depth;
+  layer.distance = out.depth;
   layer.field = field + ".depth";
+  out.particles = near_surface_set(s.particles, layer, s.config.file);
+  for (const int64_t f : out.particles)
+    out.volume += s.particles.volume_m3[static_cast<size_t>(f)];  // the system's volume of it, the same double
+  if (out.particles.empty() || !(out.volume > 0))
+    throw InputError(s.config.file, field + ".depth", "no particle within " + short_number(out.depth) + " m of surface '" +
+                     ls.surface + "'", "a depth of at least half the particle spacing");
+  return out;
+}
+
+// The layer's facets of the system's particles. `whole_layer` (if given): every layer
+// particle's internal index, appended.
+static std::vector<PressureFacet> spread_over_layer(const PdSystem& s, const SurfaceFacets& sf, const SurfaceLayer& layer,
+                                                    std::vector<int32_t>* whole_layer = nullptr) {
+  double area = 0, normal[3] = {0, 0, 0};
+  for (size_t f = 0; f < sf.size(); ++f) {
+    area += sf.area_m2[f];
+    for (int d = 0; d < 3; ++d) normal[d] += sf.area_m2[f] * sf.normal[3 * f + d];
+  }
+  const double len = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+  for (double& c : normal) c = len > 0 ? c / len : 0.0;
   std::vector<int32_t> particles;
-  double volume = 0;
-  bool any = false;
-  for (const int64_t f : near_surface_set(s.particles, layer, s.config.file)) {
-    any = true;
-    volume += s.particles.volume_m3[static_cast<size_t>(f)];  // the system's volume of it, the same double
+  for (const int64_t f : layer.particles) {
     if (whole_layer) whole_layer->push_back(s.internal_index[static_cast<size_t>(f)]);
     const int32_t i = s.system_of_file(f);
     if (i >= 0) particles.push_back(i);
   }
-  if (!any || !(volume > 0))
-    throw InputError(s.config.file, field + ".depth", "no particle within " + short_number(depth) + " m of surface '" +
-                     ls.surface + "'", "a depth of at least half the particle spacing");
   std::vector<PressureFacet> out;
   for (const int32_t i : particles)
-    out.push_back({i, area * s.volume[static_cast<size_t>(i)] / volume, {normal[0], normal[1], normal[2]}});
+    out.push_back({i, area * s.volume[static_cast<size_t>(i)] / layer.volume, {normal[0], normal[1], normal[2]}});
   return out;
 }
 
@@ -734,10 +749,27 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // window system, local indices), rank 0 the whole body (its writers' staging).
   const DistributedSetup& dist = hooks.distributed;
   DistributedRows dist_rows = plan_distributed_rows(s, dist);
+  // The boundary layers of the tractions with a depth (layer_of_surface: every particle of
+  // the layer and their volume), which read every row of the particle file: a window system
+  // takes them before its cut (take_window keeps the file's rows of its window alone); a
+  // refusal is kept for the load's turn, where one process meets it.
+  std::vector<std::optional<SurfaceLayer>> taken_layer(c.loads.size());
+  std::vector<std::exception_ptr> layer_refused(c.loads.size());
   if (setup_on_window(dist)) {
+    for (size_t l = 0; l < c.loads.size(); ++l) {
+      const LoadSpec& ls = c.loads[l];
+      const SurfaceFacets* sf = pm.find_surface(ls.surface);
+      if (ls.kind != LoadSpec::Kind::Traction || !(ls.depth > 0 || ls.depth_horizon) || !sf || sf->size() == 0) continue;
+      try {
+        taken_layer[l] = layer_of_surface(s, ls, *sf, horizon_of_file, "loads[" + std::to_string(l) + "]");
+      } catch (const InputError&) {
+        layer_refused[l] = std::current_exception();
+      }
+    }
     take_window(s, dist_rows);
     n = s.n;
   }
+  s.setup_file_rows = {static_cast<int64_t>(s.particles.size())};  // the file's rows held from here on (summary.json)
 
   // Families and per-bond coefficients.
   std::vector<double> pad(n);  // a neighbour's outermost partial-volume sample may reach into the horizon
@@ -1502,7 +1534,11 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     // whole_facet_particles)
     std::vector<int32_t>* whole = s.window_global.empty() ? nullptr : &s.whole_facet_particles;
     if (ls.kind == LoadSpec::Kind::Traction && (ls.depth > 0 || ls.depth_horizon)) {
-      sl.facets = spread_over_layer(s, ls, sf, horizon_of_file, field, whole);
+      if (layer_refused[l]) std::rethrow_exception(layer_refused[l]);
+      if (!taken_layer[l] && !s.window_global.empty())
+        throw std::logic_error("set-up: a boundary layer not taken before the window system's cut");
+      const SurfaceLayer layer = taken_layer[l] ? std::move(*taken_layer[l]) : layer_of_surface(s, ls, sf, horizon_of_file, field);
+      sl.facets = spread_over_layer(s, sf, layer, whole);
     } else {
       for (size_t f = 0; f < sf.size(); ++f) {
         if (whole) whole->push_back(s.internal_index[sf.particle[f]]);

@@ -15,7 +15,7 @@ std::vector<double> vertices_from_mesh(const ParticleModel& model, const Surface
   const size_t nf = facets.size();
   std::vector<double> out(nf * per_facet * 3, 0.0);
   for (size_t f = 0; f < nf; ++f) {
-    const int64_t* nodes = &model.mesh_cells[static_cast<size_t>(facets.particle[f] * npc)];
+    const int64_t* nodes = model.cell_nodes(facets.particle[f]);  // (npc of them)
     double best = 1e300;
     int skip_best = -1;
     for (int skip = 0; skip < npc; ++skip) {  // the face opposite node `skip`

@@ -350,6 +350,14 @@ static void expect_each_rank_built_its_own_rows(const std::string& one_dir, cons
   EXPECT_EQ(system[0], one["particles"]) << out << ": rank 0 keeps the whole body";
   for (int r = 1; r < ranks; ++r)
     EXPECT_EQ(system[r], window[r]) << out << ": rank " << r << "'s set-up arrays are not sized to its window";
+  // The particle file's rows held from the families on (take_window's cut_particle_model_to_
+  // rows): rank 0 every row (its writers), every other rank its window's (exact counts).
+  const auto& file_rows = dist["setup_file_rows_per_rank"];
+  ASSERT_EQ(one["setup_file_rows_per_rank"], nlohmann::json::array({one["particles"]}));
+  ASSERT_EQ(file_rows.size(), static_cast<size_t>(ranks)) << out;
+  EXPECT_EQ(file_rows[0], one["particles"]) << out << ": rank 0 keeps every row";
+  for (int r = 1; r < ranks; ++r)
+    EXPECT_EQ(file_rows[r], window[r]) << out << ": rank " << r << " holds the particle file's rows beyond its window";
 }
 
 // A case run by one process and, with the distributed set-up, on each of `ranks`: no fallback
@@ -462,6 +470,45 @@ TEST(DistributedSetup, ABodyLoadOnASetSomeRanksDoNotHoldGivesTheOneProcessAnswer
     const std::string out = base + "_np" + std::to_string(r);
     const Outcome o = solve(file, out, r, 1);
     ASSERT_EQ(o.exit_code, 0) << o.err;
+    for (const char* f : {"/results.h5", "/checkpoint.h5"})
+      EXPECT_EQ(differing(base + "_whole" + f, out + f), std::vector<std::string>{}) << r << " ranks, " << f;
+    expect_same_history(base + "_whole", out);
+  }
+}
+
+// The particle file's rows on the ranks other than 0 (take_window, cut_particle_model_to_rows):
+// from the families on each holds its window's rows alone, and what the set-up reads later of
+// every row is taken before the cut: a traction spread over the boundary layer of a graded
+// mesh (depth: horizon; the layer's particles and volume: layer_of_surface), a case set near a
+// surface (before the cut), the pre-crack's facets (the notch). One process against 2, 3 and
+// 4 ranks: results.h5, checkpoint.h5 and history.csv byte for byte, and each rank other than 0
+// holds fewer of the file's rows than the body (before the cut: every row on every rank).
+TEST(DistributedSetup, ATractionOverAGradedLayerGivesTheOneProcessAnswerFromEachRanksWindowRows) {
+  const std::string particles = notched_block();
+  ASSERT_FALSE(particles.empty());
+  const std::string file = write_case(
+      "mpi_dist_layer",
+      "specimen: {particles: " + particles + "}\n"
+      "model: {type: pmb, horizon_factor: 3.015, variable_horizon: true}\n"
+      "materials: [{name: block, density: 2400, youngs_modulus: 30 GPa, poisson_ratio: 0.25, fracture_energy: 20}]\n"
+      "precracks: [{type: surface, surface: notch}]\n"
+      "sets: [{name: grip, near_surface: {surface: xmin, distance: 2 mm}}]\n"
+      "boundary: [{type: velocity, set: grip, value: [0, 0, 0], components: [x]}]\n"
+      "loads: [{type: traction, surface: xmax, value: [200 MPa, 0, 0], depth: horizon}]\n"
+      "time: {steps: 30}\n"
+      "output: {every: 15, history_every: 5, fields: [damage, displacement, velocity]}\n");
+  const std::string base = process_temp_dir() + "/dist_layer";
+  const Outcome one = solve(file, base + "_whole", 1, 1);
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  const long long body = summary(base + "_whole")["particles"].get<long long>();
+  for (const int r : {2, 3, 4}) {
+    const std::string out = base + "_np" + std::to_string(r);
+    const Outcome o = solve(file, out, r, 1);
+    ASSERT_EQ(o.exit_code, 0) << o.err;
+    expect_each_rank_built_its_own_rows(base + "_whole", out, r);
+    for (int q = 1; q < r; ++q)
+      EXPECT_LT(summary(out)["setup_file_rows_per_rank"][q].get<long long>(), body)
+          << r << " ranks: rank " << q << " holds every row of the particle file at set-up";
     for (const char* f : {"/results.h5", "/checkpoint.h5"})
       EXPECT_EQ(differing(base + "_whole" + f, out + f), std::vector<std::string>{}) << r << " ranks, " << f;
     expect_same_history(base + "_whole", out);

@@ -45,8 +45,19 @@ struct ParticleModel {
   int nodes_per_cell = 0;  // 4 (tet), 3 (triangle), 0 (no mesh)
   std::string source;      // what the model was made from (mesh path or "lattice ...")
   std::string content_id;  // hash of positions and volumes; results files quote it
+  // A part of the file's rows (a distributed run's window, the solver's take_window): when
+  // held_rows is not empty the per-particle arrays hold those file rows alone (ascending), and
+  // when held_cells is not empty mesh_cells holds those cells' rows alone (ascending). The
+  // lists (sets, surfaces) and the mesh's nodes stay whole. Empty: every row.
+  std::vector<int64_t> held_rows;
+  std::vector<int64_t> held_cells;
 
   size_t size() const { return volume_m3.size(); }
+  // The file index of held row k (k itself when every row is held).
+  int64_t file_row(size_t k) const { return held_rows.empty() ? static_cast<int64_t>(k) : held_rows[k]; }
+  // The mesh nodes of cell `cell` (a file index): nodes_per_cell of them. Throws
+  // std::out_of_range for a cell not held.
+  const int64_t* cell_nodes(int64_t cell) const;
   const ParticleSet* find_set(const std::string& name) const;
   const SurfaceFacets* find_surface(const std::string& name) const;
 };

@@ -74,8 +74,15 @@ bool setup_on_window(const DistributedSetup& d);
 // window system: every per-particle array held so far (positions, volumes, densities,
 // materials, cells, horizons, file indices) cut to rows.window's particles in its order,
 // s.window_global its global indices (internal_index stays whole: PdSystem::system_of_file),
-// s.n the window's count; rows.windowed set. The whole arrays are freed.
+// s.n the window's count; rows.windowed set; the particle model cut to the window's file
+// rows (cut_particle_model_to_rows). The whole arrays are freed.
 void take_window(PdSystem& s, DistributedRows& rows);
+
+// Cuts `pm`'s per-particle arrays (positions, volumes, spacings, materials) to the file rows
+// `file_rows` (any order; held ascending: ParticleModel::held_rows) and its mesh's cells to
+// the surfaces' facet cells (held_cells: what facet_vertices and the gas's mouth read); the
+// lists (sets, surfaces), the mesh's nodes and the names stay whole.
+void cut_particle_model_to_rows(ParticleModel& pm, const std::vector<int64_t>& file_rows);
 
 // How many of `halo` (ascending global indices outside the rank's rows) each rank owns under
 // the partition `part_begin` (ranks + 1 offsets): the counts exchange_owned receives.

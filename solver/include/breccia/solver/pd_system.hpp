@@ -224,6 +224,10 @@ struct PdSystem {
   // window's on the ranks other than 0, PdSystem::window_global; one process and rank 0: the
   // body's), one value per rank the same way (summary.json's setup_system_particles_per_rank).
   std::vector<int64_t> setup_system_particles;
+  // The particle file's rows each rank's set-up held from its families on (ParticleModel::
+  // held_rows: its window's on the ranks other than 0, take_window; one process and rank 0:
+  // every row), one value per rank the same way (summary.json's setup_file_rows_per_rank).
+  std::vector<int64_t> setup_file_rows;
   // The particles the family search held (its cell lists, its copies): the rows' geometric
   // window (build_own_families; one process: every particle), one value per rank the same way
   // (summary.json's setup_window_particles_per_rank).

@@ -11,6 +11,10 @@ namespace breccia {
 struct ParticleSet {
   std::string name;
   std::vector<int64_t> indices;  // particle indices, sorted, unique
+  // A model holding a part of the rows (ParticleModel::held_rows): indices are the held
+  // members alone and this is the whole set's count. -1: indices is the whole set.
+  int64_t whole_count = -1;
+  bool empty_in_file() const { return whole_count >= 0 ? whole_count == 0 : indices.empty(); }
 };
 
 // Boundary facets of one named surface group (triangles in 3D, edges in 2D).
@@ -70,6 +74,19 @@ void write_particle_file(const std::string& path, ParticleModel model);
 
 // Read and validate; throws InputError naming the file and the dataset on any defect.
 ParticleModel read_particle_file(const std::string& path);
+
+// A distributed run's ranks other than 0 (the solver's setup_system): the file's attributes
+// and lists, none of its per-particle rows (the per-particle arrays and mesh_cells empty; the
+// sets, surfaces, material names and the mesh's nodes whole). `rows`: the file's particle count.
+ParticleModel read_particle_lists(const std::string& path, int64_t& rows);
+// The per-particle datasets' rows `rows` (ascending, unique) into m (its per-particle arrays,
+// in that order; held_rows = rows) and /mesh/cells' rows `cells` (ascending, unique;
+// held_cells = cells) when m has a mesh (nodes_per_cell > 0). Not checked as a whole read
+// checks them (the reader of the whole file, rank 0, did).
+// Read through hyperslabs of at most 65,536 consecutive rows from each wanted row, so memory
+// holds the rows asked for and one block, never a whole dataset.
+void read_particle_rows_at(const std::string& path, const std::vector<int64_t>& rows, const std::vector<int64_t>& cells,
+                           ParticleModel& m);
 
 // Particles [first, first + count) of a particles.h5, in the file's order: what one process
 // of a distributed run reads of the per-particle datasets (hyperslabs), never the whole.

@@ -59,7 +59,7 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& global, const RankLayout& layou
 void copy_rank_state(PdSystem& local, const PdSystem& global, const RankLayout& layout);
 
 // What a distributed set-up's ranks other than 0 let go of in their global system (their
-// window's arrays: take_window) once the
+// window's arrays: plan_window_system) once the
 // stable-step estimate has cut the rank's system from it (mpi_stable_step_forces), before the
 // estimate's peak: the displacements and velocities, the forces and the fields the estimate's
 // last pass fills (kForcePassFields: energy density, dissipated energy, damage, largest

@@ -190,6 +190,7 @@ DistributedRows plan_window_system(PdSystem& s, const DistributedSetup& d, const
     ParticleModel m;
     const std::vector<int64_t> held = sorted_unique(p.file);
     read(held, {}, m);
+    s.setup_file_rows = {static_cast<int64_t>(held.size())};
     const size_t w = p.file.size();
     std::vector<double> x0(3 * w), horizon(w), half_cell(w);
     for (size_t k = 0; k < w; ++k) {
@@ -212,6 +213,7 @@ DistributedRows plan_window_system(PdSystem& s, const DistributedSetup& d, const
   if (pm.nodes_per_cell > 0)
     for (const SurfaceFacets& sf : pm.surfaces) cells.insert(cells.end(), sf.particle.begin(), sf.particle.end());
   read(sorted_unique(p.file), sorted_unique(std::move(cells)), pm);
+  s.setup_file_rows[0] = std::max<int64_t>(s.setup_file_rows[0], static_cast<int64_t>(pm.size()));
   const size_t w = p.file.size();
   s.x0.resize(3 * w);
   s.volume.resize(w);

@@ -926,7 +926,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   } else {
     dist_rows = plan_distributed_rows(s, dist);
   }
-  s.setup_file_rows = {static_cast<int64_t>(s.particles.size())};  // the file's rows held (summary.json)
+  if (!planned) s.setup_file_rows = {static_cast<int64_t>(s.particles.size())};  // every row (summary.json)
 
   // Families and per-bond coefficients.
   std::vector<double> pad(n);  // a neighbour's outermost partial-volume sample may reach into the horizon

@@ -232,9 +232,10 @@ struct PdSystem {
   // window's on the ranks other than 0, PdSystem::window_global; one process and rank 0: the
   // body's), one value per rank the same way (summary.json's setup_system_particles_per_rank).
   std::vector<int64_t> setup_system_particles;
-  // The particle file's rows each rank's set-up held from its families on (ParticleModel::
-  // held_rows: its window's on the ranks other than 0, plan_window_system; one process and rank 0:
-  // every row), one value per rank the same way (summary.json's setup_file_rows_per_rank).
+  // The most rows of the particle file each rank's set-up read and held at once: one process
+  // and rank 0 every row (the whole file), the ranks other than 0 the larger of their slice's
+  // and their rows' windows (plan_window_system), one value per rank the same way
+  // (summary.json's setup_file_rows_per_rank).
   std::vector<int64_t> setup_file_rows;
   // The particles the family search held (its cell lists, its copies): the rows' geometric
   // window (build_own_families; one process: every particle), one value per rank the same way

@@ -696,6 +696,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     int64_t rows_in_file = 0;
     const std::vector<int64_t> none;
     s.particles = c.lattice ? lattice_model(*c.lattice, &none) : read_particle_lists(c.particles_path, rows_in_file);
+    if (!c.lattice && rows_in_file != body.n) throw std::logic_error("distributed set-up: the particle file's rows differ from rank 0's");
     s.particles.content_id = body.content_id;
   } else {
     s.particles = c.lattice ? lattice_model(*c.lattice) : read_particle_file(c.particles_path);
@@ -780,7 +781,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     } else {
       std::fill(s.horizon.begin(), s.horizon.end(), c.horizon_factor * median(spacing));
     }
-    // A file particle's horizon, as set above (spread_over_layer reads every facet's).
+    // A file particle's horizon, as set above (layer_of_surface reads every facet's).
     one_horizon_value = c.horizon_m ? *c.horizon_m : c.variable_horizon || n == 0 ? 0.0 : s.horizon[0];
     horizon_of_file = [&](int64_t f) {
       return c.variable_horizon && !c.horizon_m ? c.horizon_factor * pm.spacing_m[static_cast<size_t>(f)] : one_horizon_value;
@@ -790,7 +791,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     // system, below, holds its window alone): whether every particle has one cell and one
     // horizon, the largest and median horizons and cells, float32's origin (the bounding box
     // centre). The medians are order statistics: the same values in any order.
-    body_one_horizon = n > 0, body_uniform = n > 0;
+    body_one_horizon = n > 0;
+    body_uniform = n > 0;
     for (size_t i = 1; i < n && body_one_horizon; ++i) body_one_horizon = s.horizon[i] == s.horizon[0];
     for (size_t i = 1; i < n && body_uniform; ++i) body_uniform = s.half_cell[i] == s.half_cell[0] && s.horizon[i] == s.horizon[0];
     body_max_horizon = n ? *std::max_element(s.horizon.begin(), s.horizon.end()) : 0.0;

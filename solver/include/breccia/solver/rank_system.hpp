@@ -81,7 +81,7 @@ void release_global_at_stable_step(PdSystem& global);
 // rank's own system holds what its steps need, so the global one keeps only what the time
 // loop and the writers read (docs/parallel.md, Memory). On every rank it lets go of what the
 // set-up alone read (densities, horizons, cells, materials, constraints' and loads' particle
-// lists, the facet lists, the particle file's arrays, the model's coefficients, the gas's
+// lists, the facet lists, the particle file's arrays and file -> internal indices, the model's coefficients, the gas's
 // set-up arrays); on the ranks that do not write (`root` false) also of the arrays rank 0
 // gathers the state into for its files (displacements to bond states, the gas's front and
 // entered cracks) and of what only rank 0's writers read (reference positions, volumes,

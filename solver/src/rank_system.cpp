@@ -533,6 +533,7 @@ std::vector<const void*> release_global_for_loop(PdSystem& g, bool root, const P
   drop(pm.mesh_cells);
   drop(pm.held_rows);
   drop(pm.held_cells);
+  drop(pm.held_nodes);
   // Loads' facets and constraints' particles: the ranks' systems hold their owned ones (the
   // body loads' lists stay: an empty one means every particle).
   for (PdSystem::SurfaceLoad& sl : g.surface_loads) drop(sl.facets);

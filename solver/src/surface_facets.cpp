@@ -22,7 +22,7 @@ std::vector<double> vertices_from_mesh(const ParticleModel& model, const Surface
       double mean[3] = {0, 0, 0};
       for (int v = 0; v < npc; ++v)
         if (v != skip)
-          for (int d = 0; d < 3; ++d) mean[d] += model.mesh_nodes_m[3 * nodes[v] + d] / per_facet;
+          for (int d = 0; d < 3; ++d) mean[d] += model.node_position(nodes[v])[d] / per_facet;
       double d2 = 0;
       for (int d = 0; d < 3; ++d) d2 += std::pow(mean[d] - facets.centroid_m[3 * f + d], 2);
       if (d2 < best) {
@@ -39,7 +39,7 @@ std::vector<double> vertices_from_mesh(const ParticleModel& model, const Surface
     int k = 0;
     for (int v = 0; v < npc; ++v)
       if (v != skip_best) {
-        for (int d = 0; d < 3; ++d) out[(f * per_facet + k) * 3 + d] = model.mesh_nodes_m[3 * nodes[v] + d];
+        for (int d = 0; d < 3; ++d) out[(f * per_facet + k) * 3 + d] = model.node_position(nodes[v])[d];
         ++k;
       }
   }

@@ -49,12 +49,15 @@ struct ParticleModel {
   int nodes_per_cell = 0;  // 4 (tet), 3 (triangle), 0 (no mesh)
   std::string source;      // what the model was made from (mesh path or "lattice ...")
   std::string content_id;  // hash of positions and volumes; results files quote it
-  // A part of the file's rows (a distributed run's window, the solver's take_window): when
-  // held_rows is not empty the per-particle arrays hold those file rows alone (ascending), and
-  // when held_cells is not empty mesh_cells holds those cells' rows alone (ascending). The
-  // lists (sets, surfaces) and the mesh's nodes stay whole. Empty: every row.
+  // A part of the file's rows (a distributed run's window: the solver's plan_window_system):
+  // when held_rows is not empty the per-particle arrays hold those file rows alone
+  // (ascending), when held_cells is not empty mesh_cells holds those cells' rows alone
+  // (ascending), and when held_nodes is not empty mesh_nodes_m holds those nodes alone
+  // (ascending). The sets then hold their members among held_rows (ParticleSet::whole_count);
+  // the surfaces stay whole. Empty: every row.
   std::vector<int64_t> held_rows;
   std::vector<int64_t> held_cells;
+  std::vector<int64_t> held_nodes;
 
   size_t size() const { return volume_m3.size(); }
   // The file index of held row k (k itself when every row is held).
@@ -62,6 +65,8 @@ struct ParticleModel {
   // The mesh nodes of cell `cell` (a file index): nodes_per_cell of them. Throws
   // std::out_of_range for a cell not held.
   const int64_t* cell_nodes(int64_t cell) const;
+  // The position of mesh node `node` (3 values). Throws std::out_of_range for a node not held.
+  const double* node_position(int64_t node) const;
   const ParticleSet* find_set(const std::string& name) const;
   const SurfaceFacets* find_surface(const std::string& name) const;
 };
@@ -75,16 +80,19 @@ void write_particle_file(const std::string& path, ParticleModel model);
 // Read and validate; throws InputError naming the file and the dataset on any defect.
 ParticleModel read_particle_file(const std::string& path);
 
-// A distributed run's ranks other than 0 (the solver's setup_system): the file's attributes
-// and lists, none of its per-particle rows (the per-particle arrays and mesh_cells empty; the
-// sets, surfaces, material names and the mesh's nodes whole). `rows`: the file's particle count.
+// A distributed run's ranks other than 0 (the solver's setup_system): the file's attributes,
+// material names and surfaces, none of its per-particle rows or mesh (nodes_per_cell set),
+// its sets by name and whole count alone (no members yet: read_particle_rows_at). `rows`:
+// the file's particle count.
 ParticleModel read_particle_lists(const std::string& path, int64_t& rows);
 // The per-particle datasets' rows `rows` (ascending, unique) into m (its per-particle arrays,
-// in that order; held_rows = rows) and /mesh/cells' rows `cells` (ascending, unique;
-// held_cells = cells) when m has a mesh (nodes_per_cell > 0). Not checked as a whole read
-// checks them (the reader of the whole file, rank 0, did).
-// Read through hyperslabs of at most 65,536 consecutive rows from each wanted row, so memory
-// holds the rows asked for and one block, never a whole dataset.
+// in that order; held_rows = rows), each of m's sets' members among them (read_particle_lists'
+// sets), and, when m has a mesh (nodes_per_cell > 0), /mesh/cells' rows `cells` (ascending,
+// unique; held_cells) and the nodes those cells name (held_nodes). Not checked as a whole
+// read checks them (the reader of the whole file, rank 0, did).
+// Read through hyperslabs of at most 65,536 consecutive rows from each wanted row (a set's
+// list in blocks of 65,536 entries), so memory holds the rows asked for and one block, never
+// a whole dataset.
 void read_particle_rows_at(const std::string& path, const std::vector<int64_t>& rows, const std::vector<int64_t>& cells,
                            ParticleModel& m);
 

@@ -298,6 +298,9 @@ std::vector<double> File::read_double_rows(const std::string& p, hsize_t first, 
 std::vector<int32_t> File::read_int32_rows(const std::string& p, hsize_t first, hsize_t count) const {
   return read_rows_impl<int32_t>(*this, p, first, count);
 }
+std::vector<int64_t> File::read_int64_rows(const std::string& p, hsize_t first, hsize_t count) const {
+  return read_rows_impl<int64_t>(*this, p, first, count);
+}
 std::vector<uint8_t> File::read_uint8_rows(const std::string& p, hsize_t first, hsize_t count) const {
   return read_rows_impl<uint8_t>(*this, p, first, count);
 }

@@ -1,10 +1,13 @@
 #include "breccia/common/particle_file.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <iterator>
 #include <sstream>
+#include <stdexcept>
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/h5.hpp"
@@ -17,6 +20,31 @@ const ParticleSet* ParticleModel::find_set(const std::string& name) const {
   for (const auto& s : sets)
     if (s.name == name) return &s;
   return nullptr;
+}
+
+const int64_t* ParticleModel::cell_nodes(int64_t cell) const {
+  size_t row = static_cast<size_t>(cell);
+  if (!held_cells.empty()) {
+    const auto it = std::lower_bound(held_cells.begin(), held_cells.end(), cell);
+    if (it == held_cells.end() || *it != cell)
+      throw std::out_of_range("particle model: mesh cell " + std::to_string(cell) + " is not held");
+    row = static_cast<size_t>(it - held_cells.begin());
+  }
+  if (nodes_per_cell <= 0 || (row + 1) * static_cast<size_t>(nodes_per_cell) > mesh_cells.size())
+    throw std::out_of_range("particle model: no mesh cell " + std::to_string(cell));
+  return &mesh_cells[row * static_cast<size_t>(nodes_per_cell)];
+}
+
+const double* ParticleModel::node_position(int64_t node) const {
+  size_t row = static_cast<size_t>(node);
+  if (!held_nodes.empty()) {
+    const auto it = std::lower_bound(held_nodes.begin(), held_nodes.end(), node);
+    if (it == held_nodes.end() || *it != node)
+      throw std::out_of_range("particle model: mesh node " + std::to_string(node) + " is not held");
+    row = static_cast<size_t>(it - held_nodes.begin());
+  }
+  if (node < 0 || 3 * (row + 1) > mesh_nodes_m.size()) throw std::out_of_range("particle model: no mesh node " + std::to_string(node));
+  return &mesh_nodes_m[3 * row];
 }
 
 const SurfaceFacets* ParticleModel::find_surface(const std::string& name) const {
@@ -208,6 +236,94 @@ ParticleRows read_particle_rows(const std::string& path, int64_t first, int64_t 
                        "an index into /materials/names");
   }
   return r;
+}
+
+ParticleModel read_particle_lists(const std::string& path, int64_t& rows) {
+  h5::File f = open_particle_file(path);
+  ParticleModel m;
+  m.dimension = static_cast<int>(f.attr_int("/", "dimension"));
+  m.thickness_m = f.attr_double("/", "thickness_m");
+  m.source = f.attr_string("/", "source");
+  m.content_id = f.attr_string("/", "content_id");
+  const std::vector<hsize_t> dims = f.dims("/particles/volume");
+  rows = dims.empty() ? 0 : static_cast<int64_t>(dims[0]);
+  m.material_names = f.read_strings("/materials/names");
+  for (const auto& name : f.children("/sets")) {
+    const std::vector<hsize_t> d = f.dims("/sets/" + name);
+    m.sets.push_back({name, {}, d.empty() ? 0 : static_cast<int64_t>(d[0])});
+  }
+  for (const auto& name : f.children("/surfaces")) {
+    const std::string g = "/surfaces/" + name;
+    SurfaceFacets s;
+    s.name = name;
+    s.area_m2 = f.read_doubles(g + "/area");
+    s.normal = f.read_doubles(g + "/normal");
+    s.centroid_m = f.read_doubles(g + "/centroid");
+    s.particle = f.read_int64(g + "/particle");
+    if (f.exists(g + "/vertices")) s.vertices_m = f.read_doubles(g + "/vertices");
+    m.surfaces.push_back(std::move(s));
+  }
+  if (f.exists("/mesh/cells")) m.nodes_per_cell = static_cast<int>(f.attr_int("/mesh", "nodes_per_cell"));
+  return m;
+}
+
+namespace {
+
+// Rows `wanted` (ascending) of a dataset of `width` values a row, in blocks of at most
+// `block` consecutive rows from each wanted row.
+template <class T, class Read>
+std::vector<T> rows_at(const std::vector<int64_t>& wanted, size_t width, Read&& read) {
+  constexpr int64_t block = 65536;
+  std::vector<T> out;
+  out.reserve(width * wanted.size());
+  for (size_t q = 0; q < wanted.size();) {
+    const int64_t first = wanted[q];
+    size_t last = q;  // the wanted rows within [first, first + block)
+    while (last < wanted.size() && wanted[last] < first + block) ++last;
+    const int64_t count = wanted[last - 1] - first + 1;
+    const std::vector<T> got = read(static_cast<hsize_t>(first), static_cast<hsize_t>(count));
+    for (; q < last; ++q)
+      out.insert(out.end(), got.begin() + static_cast<int64_t>(width) * (wanted[q] - first),
+                 got.begin() + static_cast<int64_t>(width) * (wanted[q] - first + 1));
+  }
+  return out;
+}
+
+}  // namespace
+
+void read_particle_rows_at(const std::string& path, const std::vector<int64_t>& rows, const std::vector<int64_t>& cells,
+                           ParticleModel& m) {
+  h5::File f = open_particle_file(path);
+  for (size_t q = 1; q < rows.size(); ++q)
+    if (rows[q] <= rows[q - 1]) throw std::invalid_argument("read_particle_rows_at: rows not ascending");
+  auto doubles = [&](const char* d) {
+    return [&f, d](hsize_t b, hsize_t c) { return f.read_double_rows(d, b, c); };
+  };
+  m.position_m = rows_at<double>(rows, 3, doubles("/particles/position"));
+  m.volume_m3 = rows_at<double>(rows, 1, doubles("/particles/volume"));
+  m.spacing_m = rows_at<double>(rows, 1, doubles("/particles/spacing"));
+  m.material_id = rows_at<int32_t>(rows, 1, [&f](hsize_t b, hsize_t c) { return f.read_int32_rows("/particles/material_id", b, c); });
+  m.held_rows = rows;
+  constexpr int64_t block = 65536;
+  for (ParticleSet& set : m.sets) {  // (read_particle_lists': whole_count, no members yet)
+    std::vector<int64_t> held;
+    for (int64_t first = 0; first < set.whole_count; first += block) {
+      const std::vector<int64_t> part = f.read_int64_rows("/sets/" + set.name, static_cast<hsize_t>(first),
+                                                          static_cast<hsize_t>(std::min(block, set.whole_count - first)));
+      std::set_intersection(part.begin(), part.end(), rows.begin(), rows.end(), std::back_inserter(held));
+    }
+    set.indices.swap(held);
+  }
+  if (m.nodes_per_cell > 0 && f.exists("/mesh/cells")) {
+    m.mesh_cells = rows_at<int64_t>(cells, static_cast<size_t>(m.nodes_per_cell),
+                                    [&f](hsize_t b, hsize_t c) { return f.read_int64_rows("/mesh/cells", b, c); });
+    m.held_cells = cells;
+    std::vector<int64_t> nodes(m.mesh_cells);
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    m.mesh_nodes_m = rows_at<double>(nodes, 3, [&f](hsize_t b, hsize_t c) { return f.read_double_rows("/mesh/nodes", b, c); });
+    m.held_nodes = std::move(nodes);
+  }
 }
 
 ParticleModel read_particle_file(const std::string& path) {

@@ -1,6 +1,7 @@
 #include "breccia/solver/distributed_setup.hpp"
 
 #include <algorithm>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -42,7 +43,7 @@ Families build_own_families(const PdSystem& s, const DistributedRows& rows, cons
     if (window_particles) *window_particles = static_cast<int64_t>(s.n);
     return build_families(s.x0, s.horizon, pad);
   }
-  if (rows.windowed) {  // the system is the window (take_window): its rows, local partners kept
+  if (rows.windowed) {  // the system is the window (plan_window_system): its rows, local partners kept
     if (window_particles) *window_particles = static_cast<int64_t>(s.n);
     return build_families(s.x0, s.horizon, pad, rows.window.row_begin, rows.window.row_end);
   }
@@ -68,28 +69,16 @@ Families build_own_families(const PdSystem& s, const DistributedRows& rows, cons
   return fam;
 }
 
-DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d) {
-  DistributedRows rows;
-  rows.end = static_cast<int64_t>(s.n);
-  if (!d.active()) return rows;
-  // The row lengths the set-up will build, counted without a bond stored: the whole
-  // system's offsets and the partition MortonRangePartitioner cuts from them (the one the
-  // whole-system set-up's ranks cut). Each rank counts an equal slice of the particles
-  // (family_slice) and the slices are concatenated in rank order: the same integers as
-  // one count of every particle, so the same partition.
-  // The slice's partners are all in its geometric window (geometric_window), so the count
-  // runs on the window's particles alone (its cell list too): the same integers.
-  const FamilySlice slice = family_slice(static_cast<int64_t>(s.n), d.rank, d.ranks);
-  std::vector<int64_t> slice_sizes;
-  {
-    const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, s.dimension, slice.begin, slice.end);
-    const WindowArrays a = window_arrays(s, w, s.half_cell);
-    slice_sizes = family_sizes(a.x0, a.horizon, a.other, s.dimension, s.config.partial_volume, w.row_begin, w.row_end);
-  }
+namespace {
+
+// The partition cut from every rank's slice of the family sizes (concatenated in rank order
+// on every rank: the whole system's offsets), into `rows`.
+Partition cut_partition(PdSystem& s, const DistributedSetup& d, const std::vector<int64_t>& slice_sizes,
+                        DistributedRows& rows, size_t body_n) {
   const std::vector<int64_t> sizes = concat_over_ranks(d, slice_sizes);
-  if (sizes.size() != s.n) throw std::logic_error("distributed set-up: the ranks' family sizes do not cover the particles");
-  rows.full_offsets.assign(s.n + 1, 0);
-  for (size_t i = 0; i < s.n; ++i) rows.full_offsets[i + 1] = rows.full_offsets[i] + sizes[i];
+  if (sizes.size() != body_n) throw std::logic_error("distributed set-up: the ranks' family sizes do not cover the particles");
+  rows.full_offsets.assign(sizes.size() + 1, 0);
+  for (size_t i = 0; i < sizes.size(); ++i) rows.full_offsets[i + 1] = rows.full_offsets[i] + sizes[i];
   Partition part;
   try {
     part = MortonRangePartitioner().partition(rows.full_offsets, d.ranks);
@@ -100,6 +89,87 @@ DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d) {
   rows.begin = part.begin[d.rank];
   rows.end = part.begin[d.rank + 1];
   s.distributed_rows = part.begin;
+  return part;
+}
+
+// A window and its particles' file rows (in the window's order), as rank 0 sends them.
+struct PlannedWindow {
+  GeometricWindow window;
+  std::vector<int64_t> file;
+};
+
+// Rank 0 (the whole body): each other rank r's geometric window of the rows [begin[r],
+// begin[r + 1]) with its particles' file rows, sent to r; the other ranks: theirs, received.
+// Collective (one all-to-all from rank 0). Message: row_begin, row_end, m, m indices, m rows.
+PlannedWindow scatter_windows(const PdSystem& s, const DistributedSetup& d, const std::vector<int64_t>& begin) {
+  std::vector<int64_t> out, counts(static_cast<size_t>(d.ranks), 0);
+  if (d.rank == 0)
+    for (int r = 1; r < d.ranks; ++r) {
+      const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, s.dimension, begin[r], begin[r + 1]);
+      const size_t at = out.size();
+      out.push_back(w.row_begin);
+      out.push_back(w.row_end);
+      out.push_back(static_cast<int64_t>(w.index.size()));
+      out.insert(out.end(), w.index.begin(), w.index.end());
+      for (const int32_t i : w.index) out.push_back(s.original_index[static_cast<size_t>(i)]);
+      counts[static_cast<size_t>(r)] = static_cast<int64_t>(out.size() - at);
+    }
+  std::vector<int64_t> received;
+  const std::vector<char> in = d.exchange(out.data(), counts, sizeof(int64_t), received);
+  PlannedWindow p;
+  if (d.rank == 0) return p;
+  std::vector<int64_t> msg(in.size() / sizeof(int64_t));
+  if (!in.empty()) std::memcpy(msg.data(), in.data(), in.size());
+  if (msg.size() < 3 || msg.size() != 3 + 2 * static_cast<size_t>(msg[2]))
+    throw std::logic_error("distributed set-up: a planned window from rank 0 is malformed");
+  const size_t m = static_cast<size_t>(msg[2]);
+  p.window.row_begin = msg[0];
+  p.window.row_end = msg[1];
+  p.window.index.assign(msg.begin() + 3, msg.begin() + 3 + static_cast<int64_t>(m));
+  p.file.assign(msg.begin() + 3 + static_cast<int64_t>(m), msg.end());
+  return p;
+}
+
+std::vector<int64_t> sorted_unique(std::vector<int64_t> v) {
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  return v;
+}
+
+// The position of file row f among `held` (ascending).
+size_t held_at(const std::vector<int64_t>& held, int64_t f) {
+  const auto it = std::lower_bound(held.begin(), held.end(), f);
+  if (it == held.end() || *it != f) throw std::logic_error("distributed set-up: a planned file row was not read");
+  return static_cast<size_t>(it - held.begin());
+}
+
+}  // namespace
+
+DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d) {
+  DistributedRows rows;
+  rows.end = static_cast<int64_t>(s.n);
+  if (!d.active()) return rows;
+  if (d.rank != 0) throw std::logic_error("plan_distributed_rows: rank 0's (the other ranks: plan_window_system)");
+  // The row lengths the set-up will build, counted without a bond stored: the whole
+  // system's offsets and the partition MortonRangePartitioner cuts from them (the one the
+  // whole-system set-up's ranks cut). Each rank counts an equal slice of the particles
+  // (family_slice) and the slices are concatenated in rank order: the same integers as
+  // one count of every particle, so the same partition.
+  // The slice's partners are all in its geometric window (geometric_window), so the count
+  // runs on the window's particles alone (its cell list too): the same integers. Rank 0
+  // forms every rank's window (the others hold no whole array: plan_window_system).
+  std::vector<int64_t> slice_begin;
+  for (int r = 0; r <= d.ranks; ++r)
+    slice_begin.push_back(r == d.ranks ? static_cast<int64_t>(s.n) : family_slice(static_cast<int64_t>(s.n), r, d.ranks).begin);
+  scatter_windows(s, d, slice_begin);
+  std::vector<int64_t> slice_sizes;
+  {
+    const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, s.dimension, slice_begin[0], slice_begin[1]);
+    const WindowArrays a = window_arrays(s, w, s.half_cell);
+    slice_sizes = family_sizes(a.x0, a.horizon, a.other, s.dimension, s.config.partial_volume, w.row_begin, w.row_end);
+  }
+  const Partition part = cut_partition(s, d, slice_sizes, rows, s.n);
+  scatter_windows(s, d, part.begin);
   // The rows' window (every partner of the rows: geometric_window) and how the owners'
   // values reach it (exchange_owned), formed once here for the family build and every pass.
   rows.window = geometric_window(s.x0, s.horizon, s.half_cell, s.dimension, rows.begin, rows.end);
@@ -107,34 +177,155 @@ DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d) {
   return rows;
 }
 
+DistributedRows plan_window_system(PdSystem& s, const DistributedSetup& d, const ReadFileRows& read,
+                                   const ValuesOfRow& values) {
+  if (!setup_on_window(d)) throw std::logic_error("plan_window_system: a rank other than 0 of a distributed set-up");
+  DistributedRows rows;
+  s.body_n = s.n;
+  // The family sizes of this rank's slice, on the slice's window as rank 0 formed it: its
+  // particles' file rows read, their positions, horizons and cells in the window's order.
+  std::vector<int64_t> slice_sizes;
+  {
+    const PlannedWindow p = scatter_windows(s, d, {});
+    ParticleModel m;
+    const std::vector<int64_t> held = sorted_unique(p.file);
+    read(held, {}, m);
+    s.setup_file_rows = {static_cast<int64_t>(held.size())};
+    const size_t w = p.file.size();
+    std::vector<double> x0(3 * w), horizon(w), half_cell(w);
+    for (size_t k = 0; k < w; ++k) {
+      const size_t r = held_at(held, p.file[k]);
+      for (int c = 0; c < 3; ++c) x0[3 * k + c] = m.position_m[3 * r + c];
+      const RowValues v = values(m, r);
+      horizon[k] = v.horizon;
+      half_cell[k] = v.half_cell;
+    }
+    slice_sizes = family_sizes(x0, horizon, half_cell, s.dimension, s.config.partial_volume, p.window.row_begin,
+                               p.window.row_end);
+  }
+  const Partition part = cut_partition(s, d, slice_sizes, rows, s.body_n);
+  // The window system (as a cut of the whole body would leave it): the rows' window's
+  // particles in its order, from their file rows; the particle model holds those rows
+  // (ascending) and the facets' mesh cells, its sets their members among them.
+  PlannedWindow p = scatter_windows(s, d, part.begin);
+  ParticleModel& pm = s.particles;
+  std::vector<int64_t> cells;
+  if (pm.nodes_per_cell > 0)
+    for (const SurfaceFacets& sf : pm.surfaces) cells.insert(cells.end(), sf.particle.begin(), sf.particle.end());
+  read(sorted_unique(p.file), sorted_unique(std::move(cells)), pm);
+  s.setup_file_rows[0] = std::max<int64_t>(s.setup_file_rows[0], static_cast<int64_t>(pm.size()));
+  const size_t w = p.file.size();
+  s.x0.resize(3 * w);
+  s.volume.resize(w);
+  s.density.resize(w);
+  s.material.resize(w);
+  s.half_cell.resize(w);
+  s.horizon.resize(w);
+  for (size_t k = 0; k < w; ++k) {
+    const size_t r = held_at(pm.held_rows, p.file[k]);
+    for (int c = 0; c < 3; ++c) s.x0[3 * k + c] = pm.position_m[3 * r + c];
+    s.volume[k] = pm.volume_m3[r];
+    const RowValues v = values(pm, r);
+    s.material[k] = v.material;
+    s.density[k] = v.density;
+    s.half_cell[k] = v.half_cell;
+    s.horizon[k] = v.horizon;
+  }
+  for (ParticleSet& set : pm.sets) {
+    std::vector<int64_t> held;
+    std::set_intersection(set.indices.begin(), set.indices.end(), pm.held_rows.begin(), pm.held_rows.end(),
+                          std::back_inserter(held));
+    if (set.whole_count < 0) set.whole_count = static_cast<int64_t>(set.indices.size());
+    set.indices.swap(held);
+  }
+  s.original_index = std::move(p.file);
+  s.window_global = p.window.index;
+  s.n = w;
+  rows.window = std::move(p.window);
+  rows.windowed = true;
+  rows.exchange = window_exchange(d, part.begin, rows.window);
+  return rows;
+}
+
 bool setup_on_window(const DistributedSetup& d) { return d.active() && d.rank != 0; }
 
 namespace {
-template <class T>
-void cut_to_window(std::vector<T>& a, const std::vector<int32_t>& index, size_t width) {
-  if (a.empty()) return;
-  std::vector<T> out(width * index.size());
-  for (size_t k = 0; k < index.size(); ++k)
-    std::copy_n(a.begin() + static_cast<int64_t>(width) * index[k], width, out.begin() + static_cast<int64_t>(width * k));
-  a.swap(out);
+
+struct Bytes {
+  std::vector<char> b;
+  template <class T>
+  void put(const T& v) {
+    const char* p = reinterpret_cast<const char*>(&v);
+    b.insert(b.end(), p, p + sizeof(T));
+  }
+  template <class T>
+  void put(const std::vector<T>& v) {
+    put<uint64_t>(v.size());
+    const char* p = reinterpret_cast<const char*>(v.data());
+    b.insert(b.end(), p, p + v.size() * sizeof(T));
+  }
+  void put(const std::string& v) { put(std::vector<char>(v.begin(), v.end())); }
+};
+
+struct Reader {
+  const std::vector<char>& b;
+  size_t at = 0;
+  void take(void* out, size_t bytes) {
+    if (at + bytes > b.size()) throw std::logic_error("distributed set-up: rank 0's body plan is short");
+    if (bytes) std::memcpy(out, b.data() + at, bytes);
+    at += bytes;
+  }
+  template <class T>
+  void get(T& v) { take(&v, sizeof(T)); }
+  template <class T>
+  void get(std::vector<T>& v) {
+    uint64_t m = 0;
+    get(m);
+    v.resize(m);
+    take(v.data(), m * sizeof(T));
+  }
+  void get(std::string& v) {
+    std::vector<char> c;
+    get(c);
+    v.assign(c.begin(), c.end());
+  }
+};
+
+template <class Io, class Plan>
+void body_plan_fields(Io& io, Plan& p) {
+  // (one list of the fields for both ways)
+  io(p.refused, p.n, p.fill_horizon, p.one_horizon, p.uniform, p.max_horizon, p.max_half_cell, p.median_horizon,
+     p.median_half_cell, p.f32_origin, p.graded_refused, p.graded_message, p.content_id, p.set_sizes, p.known_file,
+     p.known_internal);
 }
+
 }  // namespace
 
-void take_window(PdSystem& s, DistributedRows& rows) {
-  if (!rows.active) throw std::logic_error("take_window: not a distributed set-up");
-  const std::vector<int32_t>& index = rows.window.index;
-  cut_to_window(s.x0, index, 3);
-  cut_to_window(s.volume, index, 1);
-  cut_to_window(s.density, index, 1);
-  cut_to_window(s.material, index, 1);
-  cut_to_window(s.half_cell, index, 1);
-  cut_to_window(s.horizon, index, 1);
-  cut_to_window(s.original_index, index, 1);
-  s.body_n = s.n;
-  s.window_global = index;
-  s.n = index.size();
-  rows.windowed = true;
+void send_body_plan(const DistributedSetup& d, const BodyPlan& p) {
+  if (d.rank != 0) throw std::logic_error("send_body_plan: rank 0's");
+  Bytes out;
+  auto io = [&](const auto&... v) { (out.put(v), ...); };
+  body_plan_fields(io, p);
+  out.put<uint64_t>(p.layers.size());
+  for (const BodyPlan::Layer& l : p.layers) io(l.taken, l.refused, l.message, l.layer.depth, l.layer.volume, l.layer.particles);
+  d.concat(out.b.data(), out.b.size(), 1, true);
 }
+
+BodyPlan receive_body_plan(const DistributedSetup& d) {
+  if (d.rank == 0) throw std::logic_error("receive_body_plan: the ranks other than 0");
+  const std::vector<char> in = d.concat(nullptr, 0, 1, true);
+  Reader r{in};
+  BodyPlan p;
+  auto io = [&](auto&... v) { (r.get(v), ...); };
+  body_plan_fields(io, p);
+  uint64_t layers = 0;
+  r.get(layers);
+  p.layers.resize(layers);
+  for (BodyPlan::Layer& l : p.layers) io(l.taken, l.refused, l.message, l.layer.depth, l.layer.volume, l.layer.particles);
+  if (r.at != in.size()) throw std::logic_error("distributed set-up: rank 0's body plan is long");
+  return p;
+}
+
 
 std::vector<int64_t> count_by_owner(const std::vector<int64_t>& part_begin, const std::vector<int32_t>& halo) {
   if (part_begin.size() < 2) throw std::invalid_argument("count_by_owner: a partition of at least one rank");
@@ -245,6 +436,7 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   s.setup_kept_entries = concat_over_ranks(d, s.setup_kept_entries);
   s.setup_window_particles = concat_over_ranks(d, s.setup_window_particles);
   s.setup_system_particles = concat_over_ranks(d, s.setup_system_particles);
+  s.setup_file_rows = concat_over_ranks(d, s.setup_file_rows);
   // Rank 0's writers read the bond list of results.h5 (partners, and which halves exist),
   // where it writes the files alone (serial HDF5).
   const bool writer_bonds = root_gathers_bond_list(s.config);

@@ -110,7 +110,7 @@ double mouth_height(const ParticleModel& pm, const SurfaceFacets& sf, const doub
     const int64_t cell = sf.particle[f];
     const double scale = std::sqrt(sf.area_m2[f]);
     for (int a = 0; a < per_cell; ++a) {
-      const double* x = &pm.mesh_nodes_m[3 * pm.mesh_cells[per_cell * cell + a]];
+      const double* x = pm.node_position(pm.cell_nodes(cell)[a]);
       double off = 0.0, h = 0.0;
       for (int d = 0; d < 3; ++d) {
         off += sf.normal[3 * f + d] * (x[d] - sf.centroid_m[3 * f + d]);

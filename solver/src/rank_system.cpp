@@ -517,6 +517,8 @@ std::vector<const void*> release_global_for_loop(PdSystem& g, bool root, const P
   drop(g.lps);
   drop(g.lps_factors);
   drop(g.internal_index);
+  drop(g.known_file);  // (a window system's file -> internal index)
+  drop(g.known_internal);
   g.contact_cells = ContactCells{};
   // The particle file's arrays (rank 0's results writer read them when it opened results.h5,
   // before the loop); its content id stays (checkpoint.h5 quotes it).
@@ -529,6 +531,9 @@ std::vector<const void*> release_global_for_loop(PdSystem& g, bool root, const P
   drop(pm.surfaces);
   drop(pm.mesh_nodes_m);
   drop(pm.mesh_cells);
+  drop(pm.held_rows);
+  drop(pm.held_cells);
+  drop(pm.held_nodes);
   // Loads' facets and constraints' particles: the ranks' systems hold their owned ones (the
   // body loads' lists stay: an empty one means every particle).
   for (PdSystem::SurfaceLoad& sl : g.surface_loads) drop(sl.facets);

@@ -70,6 +70,7 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   j["setup_entries_per_rank"] = {{"candidates", s.setup_candidate_entries}, {"kept", s.setup_kept_entries}};
   j["setup_window_particles_per_rank"] = s.setup_window_particles;  // the family search's particles
   j["setup_system_particles_per_rank"] = s.setup_system_particles;  // the set-up system's per-particle arrays
+  j["setup_file_rows_per_rank"] = s.setup_file_rows;  // the most particle-file rows the set-up held at once
   number("mean_family_size", static_cast<double>(s.bond_count()) / std::max<size_t>(1, s.n));
   number("bytes_per_particle", bytes_per_particle);
   j["steps"] = s.step;

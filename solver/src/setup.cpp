@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include <omp.h>
@@ -72,7 +73,10 @@ std::string list_names(const std::vector<std::string>& names) {
 }
 
 // Square/cubic lattice at cell centres, the same layout breccia-place writes.
-ParticleModel lattice_model(const LatticeSpec& l) {
+// `rows` (if given, ascending): the per-particle arrays hold those rows alone (held_rows;
+// none for an empty list: the lists alone) and no content id is computed (the whole
+// body's: rank 0's, BodyPlan).
+ParticleModel lattice_model(const LatticeSpec& l, const std::vector<int64_t>* rows = nullptr) {
   ParticleModel m;
   m.dimension = l.dimension;
   m.thickness_m = l.dimension == 2 ? l.thickness : 1.0;
@@ -85,34 +89,50 @@ ParticleModel lattice_model(const LatticeSpec& l) {
   std::vector<ParticleSet> faces(2 * d);
   for (int f = 0; f < 2 * d; ++f) faces[f].name = names[f];
   // Reserved: grown by push_back the arrays held up to twice their size to the end of the set-up.
-  const size_t points = static_cast<size_t>(count[0] * count[1] * count[2]);
+  const size_t points = rows ? rows->size() : static_cast<size_t>(count[0] * count[1] * count[2]);
   m.position_m.reserve(3 * points);
   m.volume_m3.reserve(points);
   m.material_id.reserve(points);
+  std::vector<double> face_centre;  // the face particles' positions, for their facets' centroids
+  size_t next = 0;                  // the next of `rows`
+  int64_t id = 0;
   for (long long kz = 0; kz < count[2]; ++kz)
     for (long long ky = 0; ky < count[1]; ++ky)
-      for (long long kx = 0; kx < count[0]; ++kx) {
-        const int64_t id = static_cast<int64_t>(m.volume_m3.size());
+      for (long long kx = 0; kx < count[0]; ++kx, ++id) {
         const long long idx[3] = {kx, ky, kz};
-        for (int k = 0; k < 3; ++k) m.position_m.push_back(k < d ? lo[k] + (idx[k] + 0.5) * l.spacing : 0.0);
-        m.volume_m3.push_back(vol);
-        m.material_id.push_back(0);
-        for (int k = 0; k < d; ++k) {
-          if (idx[k] == 0) faces[2 * k].indices.push_back(id);
-          if (idx[k] == count[k] - 1) faces[2 * k + 1].indices.push_back(id);
+        double x[3];
+        for (int k = 0; k < 3; ++k) x[k] = k < d ? lo[k] + (idx[k] + 0.5) * l.spacing : 0.0;
+        if (!rows || (next < rows->size() && (*rows)[next] == id)) {
+          m.position_m.insert(m.position_m.end(), x, x + 3);
+          m.volume_m3.push_back(vol);
+          m.material_id.push_back(0);
+          ++next;
         }
+        bool face = false;
+        for (int k = 0; k < d; ++k) {
+          if (idx[k] == 0) faces[2 * k].indices.push_back(id), face = true;
+          if (idx[k] == count[k] - 1) faces[2 * k + 1].indices.push_back(id), face = true;
+        }
+        if (face) face_centre.insert(face_centre.end(), x, x + 3);
       }
+  if (rows && next != rows->size()) throw std::logic_error("lattice_model: a row outside the lattice");
+  std::vector<int64_t> face_ids;  // ascending, with face_centre
+  for (const ParticleSet& f : faces) face_ids.insert(face_ids.end(), f.indices.begin(), f.indices.end());
+  std::sort(face_ids.begin(), face_ids.end());
+  face_ids.erase(std::unique(face_ids.begin(), face_ids.end()), face_ids.end());
   const double facet_area = d == 3 ? l.spacing * l.spacing : l.spacing * l.thickness;
   for (int f = 0; f < 2 * d; ++f) {
     SurfaceFacets s;
     s.name = faces[f].name;
     for (auto id : faces[f].indices) {
+      const double* centre =
+          &face_centre[3 * static_cast<size_t>(std::lower_bound(face_ids.begin(), face_ids.end(), id) - face_ids.begin())];
       s.area_m2.push_back(facet_area);
       double nrm[3] = {0, 0, 0};
       nrm[f / 2] = (f % 2) ? 1.0 : -1.0;
       for (int k = 0; k < 3; ++k) {
         s.normal.push_back(nrm[k]);
-        s.centroid_m.push_back(m.position_m[3 * id + k] + 0.5 * l.spacing * nrm[k]);
+        s.centroid_m.push_back(centre[k] + 0.5 * l.spacing * nrm[k]);
       }
       s.particle.push_back(id);
     }
@@ -122,7 +142,11 @@ ParticleModel lattice_model(const LatticeSpec& l) {
   m.spacing_m.assign(m.volume_m3.size(), l.spacing);
   m.material_names = {"default"};
   m.source = "lattice";
-  m.content_id = compute_content_id(m);
+  if (rows) {
+    m.held_rows = *rows;
+  } else {
+    m.content_id = compute_content_id(m);
+  }
   return m;
 }
 
@@ -172,7 +196,7 @@ bool crosses_polygon(const double* p, const double* q, const std::vector<Vec3>& 
 
 const ParticleSet& require_set(const PdSystem& s, const std::string& name, const std::string& field) {
   if (const ParticleSet* set = s.particles.find_set(name)) {
-    if (set->indices.empty())
+    if (set->empty_in_file())
       throw InputError(s.config.file, field, "set '" + name + "' is empty", "a non-empty particle set");
     return *set;
   }
@@ -347,7 +371,7 @@ static std::vector<int64_t> near_surface_set(const ParticleModel& pm, const Regi
   std::string note;
   const std::unique_ptr<FacetTree> tree = surface_facet_tree(pm, *facets, note);
   if (!note.empty()) std::fprintf(stderr, "note: %s: %s\n", r.field.c_str(), note.c_str());
-  const int64_t n = static_cast<int64_t>(pm.size());
+  const int64_t n = static_cast<int64_t>(pm.size());  // the rows held (ParticleModel::held_rows)
   const double limit2 = r.distance * r.distance;
   std::vector<char> inside(static_cast<size_t>(n), 0);
 #pragma omp parallel for schedule(dynamic, 1024)
@@ -357,9 +381,9 @@ static std::vector<int64_t> near_surface_set(const ParticleModel& pm, const Regi
     if (tree->box_distance_squared(p) > limit2) continue;
     inside[static_cast<size_t>(i)] = tree->distance(p) <= r.distance;
   }
-  std::vector<int64_t> out;
+  std::vector<int64_t> out;  // file indices, ascending
   for (int64_t i = 0; i < n; ++i)
-    if (inside[static_cast<size_t>(i)]) out.push_back(i);
+    if (inside[static_cast<size_t>(i)]) out.push_back(pm.file_row(static_cast<size_t>(i)));
   return out;
 }
 
@@ -374,9 +398,9 @@ static std::vector<int64_t> material_set(const ParticleModel& pm, const RegionSe
                        "one of the materials of the particle file: " + list_names(pm.material_names));
     wanted[static_cast<size_t>(it - pm.material_names.begin())] = 1;
   }
-  std::vector<int64_t> out;
+  std::vector<int64_t> out;  // file indices of the rows held (ParticleModel::held_rows)
   for (size_t i = 0; i < pm.size(); ++i)
-    if (wanted[static_cast<size_t>(pm.material_id[i])]) out.push_back(static_cast<int64_t>(i));
+    if (wanted[static_cast<size_t>(pm.material_id[i])]) out.push_back(pm.file_row(i));
   return out;
 }
 
@@ -456,9 +480,9 @@ static void add_case_sets(ParticleModel& pm, const CaseConfig& c) {
         }
         break;
       }
-      default:
+      default:  // (the rows held: ParticleModel::held_rows)
         for (int64_t i = 0; i < n; ++i)
-          if (inside(i)) out.indices.push_back(i);
+          if (inside(i)) out.indices.push_back(pm.file_row(static_cast<size_t>(i)));
     }
     pm.sets.push_back(std::move(out));
   }
@@ -470,43 +494,52 @@ static void add_case_sets(ParticleModel& pm, const CaseConfig& c) {
 // the surface's. Applying a load on a single particle layer pulls that layer out of a
 // nonlocal body; spread over about a horizon it acts on whole families (docs/theory.md "Loads
 // over a boundary layer"). The facets keep the surface's mean normal (a traction does not read it).
+// The layer is the body's (layer_of_surface: its depth, every particle of it, their volume
+// summed in file order), taken where the particle model holds every row: a window system
+// (PdSystem::window_global) takes it from rank 0 (BodyPlan) and so spreads the whole
+// surface's force over the whole layer, keeping the facets of its window's particles.
 // `sf`: the surface's facets (every one, in the file's order), `horizon_of_file`: a file
-// particle's horizon; the layer's volume is the file's, so a window system (PdSystem::
-// window_global) spreads the whole surface's force over the whole layer and keeps the facets
-// of its window's particles.
-// `whole_layer` (if given): every layer particle's internal index, appended.
-static std::vector<PressureFacet> spread_over_layer(const PdSystem& s, const LoadSpec& ls, const SurfaceFacets& sf,
-                                                    const std::function<double(int64_t)>& horizon_of_file,
-                                                    const std::string& field, std::vector<int32_t>* whole_layer = nullptr) {
-  double area = 0, normal[3] = {0, 0, 0}, depth = ls.depth;
-  for (size_t f = 0; f < sf.size(); ++f) {
-    area += sf.area_m2[f];
-    for (int d = 0; d < 3; ++d) normal[d] += sf.area_m2[f] * sf.normal[3 * f + d];
-    if (ls.depth_horizon) depth = std::max(depth, horizon_of_file(sf.particle[f]));
-  }
-  const double len = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
-  for (double& c : normal) c = len > 0 ? c / len : 0.0;
+// particle's horizon. Reads every row of the particle model (its positions and volumes).
+static SurfaceLayer layer_of_surface(const PdSystem& s, const LoadSpec& ls, const SurfaceFacets& sf,
+                                     const std::function<double(int64_t)>& horizon_of_file, const std::string& field) {
+  SurfaceLayer out;
+  out.depth = ls.depth;
+  if (ls.depth_horizon)
+    for (size_t f = 0; f < sf.size(); ++f) out.depth = std::max(out.depth, horizon_of_file(sf.particle[f]));
   RegionSetSpec layer;
   layer.kind = RegionSetSpec::Kind::NearSurface;
   layer.surface = ls.surface;
-  layer.distance = depth;
+  layer.distance = out.depth;
   layer.field = field + ".depth";
+  out.particles = near_surface_set(s.particles, layer, s.config.file);
+  for (const int64_t f : out.particles)
+    out.volume += s.particles.volume_m3[static_cast<size_t>(f)];  // the system's volume of it, the same double
+  if (out.particles.empty() || !(out.volume > 0))
+    throw InputError(s.config.file, field + ".depth", "no particle within " + short_number(out.depth) + " m of surface '" +
+                     ls.surface + "'", "a depth of at least half the particle spacing");
+  return out;
+}
+
+// The layer's facets of the system's particles. `whole_layer` (if given): every layer
+// particle's internal index, appended.
+static std::vector<PressureFacet> spread_over_layer(const PdSystem& s, const SurfaceFacets& sf, const SurfaceLayer& layer,
+                                                    std::vector<int32_t>* whole_layer = nullptr) {
+  double area = 0, normal[3] = {0, 0, 0};
+  for (size_t f = 0; f < sf.size(); ++f) {
+    area += sf.area_m2[f];
+    for (int d = 0; d < 3; ++d) normal[d] += sf.area_m2[f] * sf.normal[3 * f + d];
+  }
+  const double len = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+  for (double& c : normal) c = len > 0 ? c / len : 0.0;
   std::vector<int32_t> particles;
-  double volume = 0;
-  bool any = false;
-  for (const int64_t f : near_surface_set(s.particles, layer, s.config.file)) {
-    any = true;
-    volume += s.particles.volume_m3[static_cast<size_t>(f)];  // the system's volume of it, the same double
-    if (whole_layer) whole_layer->push_back(s.internal_index[static_cast<size_t>(f)]);
+  for (const int64_t f : layer.particles) {
+    if (whole_layer) whole_layer->push_back(s.internal_of_file(f));
     const int32_t i = s.system_of_file(f);
     if (i >= 0) particles.push_back(i);
   }
-  if (!any || !(volume > 0))
-    throw InputError(s.config.file, field + ".depth", "no particle within " + short_number(depth) + " m of surface '" +
-                     ls.surface + "'", "a depth of at least half the particle spacing");
   std::vector<PressureFacet> out;
   for (const int32_t i : particles)
-    out.push_back({i, area * s.volume[static_cast<size_t>(i)] / volume, {normal[0], normal[1], normal[2]}});
+    out.push_back({i, area * s.volume[static_cast<size_t>(i)] / layer.volume, {normal[0], normal[1], normal[2]}});
   return out;
 }
 
@@ -591,8 +624,17 @@ PdView PdSystem::view() {
   return p;
 }
 
+int32_t PdSystem::internal_of_file(int64_t f) const {
+  if (!internal_index.empty()) return internal_index[static_cast<size_t>(f)];
+  const auto it = std::lower_bound(known_file.begin(), known_file.end(), f);
+  if (it == known_file.end() || *it != f)
+    throw std::logic_error("set-up: file particle " + std::to_string(f) + " is neither in the window nor named by rank 0's plan");
+  return known_internal[static_cast<size_t>(it - known_file.begin())];
+}
+
 int32_t PdSystem::system_of_file(int64_t f) const {
-  const int32_t i = internal_index[static_cast<size_t>(f)];
+  if (internal_index.empty() && !std::binary_search(known_file.begin(), known_file.end(), f)) return -1;  // not in the window
+  const int32_t i = internal_of_file(f);
   if (window_global.empty()) return i;
   const int64_t k = system_index(i);
   return k < static_cast<int64_t>(n) && window_global[static_cast<size_t>(k)] == i ? static_cast<int32_t>(k) : -1;
@@ -625,14 +667,47 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     last = now;
     last_cpu = now_cpu;
   };
-  s.particles = c.lattice ? lattice_model(*c.lattice) : read_particle_file(c.particles_path);
-  add_case_sets(s.particles, c);
+  // A distributed set-up: rank 0 (the planner) reads the whole particle file (its writers'
+  // staging), sets the whole body's order and horizons, and tells the other ranks what they
+  // read of every particle (BodyPlan) and which file rows form their windows
+  // (plan_distributed_rows); the ranks other than 0 (`planned`) read the file's lists and
+  // their windows' rows alone (plan_window_system): no array of the body's size.
+  const DistributedSetup& dist = hooks.distributed;
+  const bool planned = setup_on_window(dist);
+  const bool planner = dist.active() && dist.rank == 0;
+  // Rank 0: an input error before its plan is sent stops the other ranks too (they wait for it).
+  struct RootRefusal {
+    const DistributedSetup& d;
+    bool armed;
+    ~RootRefusal() {
+      if (!armed || std::uncaught_exceptions() == 0) return;
+      BodyPlan refused;
+      refused.refused = true;
+      try {
+        send_body_plan(d, refused);
+      } catch (...) {  // (a failed send: the launcher's abort stops them)
+      }
+    }
+  } root_refusal{dist, planner};
+  BodyPlan body;
+  if (planned) {
+    body = receive_body_plan(dist);
+    if (body.refused) throw InputError(c.file, "", "refused by rank 0, which reads the particle file (its message)", "");
+    int64_t rows_in_file = 0;
+    const std::vector<int64_t> none;
+    s.particles = c.lattice ? lattice_model(*c.lattice, &none) : read_particle_lists(c.particles_path, rows_in_file);
+    if (!c.lattice && rows_in_file != body.n) throw std::logic_error("distributed set-up: the particle file's rows differ from rank 0's");
+    s.particles.content_id = body.content_id;
+  } else {
+    s.particles = c.lattice ? lattice_model(*c.lattice) : read_particle_file(c.particles_path);
+    add_case_sets(s.particles, c);
+  }
   phase("particles");
   const ParticleModel& pm = s.particles;
   s.dimension = pm.dimension;
   s.thickness = pm.dimension == 2 ? pm.thickness_m : 1.0;
-  s.n = pm.size();
-  size_t n = s.n;  // a window system's (take_window, below): its window's count from there on
+  s.n = planned ? static_cast<size_t>(body.n) : pm.size();
+  size_t n = s.n;  // a window system's (plan_window_system, below): its window's count from there on
   if (s.dimension == 2 && c.planar == Planar::None)
     throw InputError(c.file, "model.planar", "missing for a 2D particle model", "plane_stress or plane_strain");
   if (s.dimension == 3 && c.planar != Planar::None)
@@ -663,81 +738,197 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     }
   }
 
-  // Internal (Morton) order.
-  const std::vector<int32_t> order = morton_order(pm.position_m);
-  s.original_index.assign(order.begin(), order.end());
-  s.internal_index.assign(n, 0);
-  for (size_t k = 0; k < n; ++k) s.internal_index[order[k]] = static_cast<int32_t>(k);
-  s.x0.resize(3 * n);
-  s.volume.resize(n);
-  s.density.resize(n);
-  s.material.resize(n);
-  s.half_cell.resize(n);
-  s.horizon.resize(n);
-  std::vector<double> spacing(n);
-  for (size_t k = 0; k < n; ++k) {
-    const size_t f = static_cast<size_t>(order[k]);
-    for (int d = 0; d < 3; ++d) s.x0[3 * k + d] = pm.position_m[3 * f + d];
-    s.volume[k] = pm.volume_m3[f];
-    s.material[k] = material_of_file_id[pm.material_id[f]];
-    s.density[k] = c.materials[s.material[k]].density;
-    spacing[k] = pm.spacing_m[f];
-    s.half_cell[k] = 0.5 * spacing[k];
-  }
-  // Horizon: fixed, per-particle (dual horizon), or factor x median spacing.
-  const double max_spacing = *std::max_element(spacing.begin(), spacing.end());
-  if (c.horizon_m) {
-    if (*c.horizon_m < max_spacing)
-      throw InputError(c.file, "model.horizon",
-                       "horizon " + std::to_string(*c.horizon_m) + " m is smaller than the largest particle spacing " +
-                           std::to_string(max_spacing) + " m",
-                       "a horizon of about 3 spacings (at least one)");
-    std::fill(s.horizon.begin(), s.horizon.end(), *c.horizon_m);
-  } else if (c.variable_horizon) {
-    for (size_t k = 0; k < n; ++k) s.horizon[k] = c.horizon_factor * spacing[k];
-  } else {
-    std::fill(s.horizon.begin(), s.horizon.end(), c.horizon_factor * median(spacing));
-  }
-  // A file particle's horizon, as set above (spread_over_layer reads every facet's).
-  const double one_horizon_value = c.horizon_m ? *c.horizon_m : c.variable_horizon || n == 0 ? 0.0 : s.horizon[0];
-  const std::function<double(int64_t)> horizon_of_file = [&](int64_t f) {
-    return c.variable_horizon && !c.horizon_m ? c.horizon_factor * pm.spacing_m[static_cast<size_t>(f)] : one_horizon_value;
-  };
-  std::vector<double>().swap(spacing);  // read no further (8 B per particle less at the set-up's peak)
-  // What later passes read of the whole body, taken while this system holds it (a window
-  // system, below, holds its window alone): whether every particle has one cell and one
-  // horizon, the largest and median horizons and cells, float32's origin (the bounding box
-  // centre). The medians are order statistics: the same values in any order.
-  bool body_one_horizon = n > 0, body_uniform = n > 0;
-  for (size_t i = 1; i < n && body_one_horizon; ++i) body_one_horizon = s.horizon[i] == s.horizon[0];
-  for (size_t i = 1; i < n && body_uniform; ++i) body_uniform = s.half_cell[i] == s.half_cell[0] && s.horizon[i] == s.horizon[0];
-  const double body_max_horizon = n ? *std::max_element(s.horizon.begin(), s.horizon.end()) : 0.0;
-  const double body_max_half_cell = n ? *std::max_element(s.half_cell.begin(), s.half_cell.end()) : 0.0;
-  const double body_median_horizon = n ? median(s.horizon) : 0.0;
-  const double body_median_half_cell = n ? median(s.half_cell) : 0.0;
-  const std::array<double, 3> f32_origin =
-      c.precision == CaseConfig::Precision::Float32 ? float32_origin(s.x0) : std::array<double, 3>{};
-  // One horizon over a graded arrangement under-resolves its coarse part (docs/atlas.md,
-  // stability map, graded_check.hpp): judged on the whole body here, refused at the start-up
-  // checks below (after the refusals the passes between make, as before).
+  // What later passes read of the whole body (below): on the ranks other than 0 from rank 0.
+  double one_horizon_value = 0.0;
+  std::function<double(int64_t)> horizon_of_file;
+  bool body_one_horizon = false, body_uniform = false;
+  double body_max_horizon = 0.0, body_max_half_cell = 0.0, body_median_horizon = 0.0, body_median_half_cell = 0.0;
+  std::array<double, 3> f32_origin{};
   std::exception_ptr graded_refusal;
-  if (c.check_stability) try {
-      require_graded_horizon(s);
-    } catch (const InputError&) {
-      graded_refusal = std::current_exception();
+  if (!planned) {
+    // Internal (Morton) order.
+    const std::vector<int32_t> order = morton_order(pm.position_m);
+    s.original_index.assign(order.begin(), order.end());
+    s.internal_index.assign(n, 0);
+    for (size_t k = 0; k < n; ++k) s.internal_index[order[k]] = static_cast<int32_t>(k);
+    s.x0.resize(3 * n);
+    s.volume.resize(n);
+    s.density.resize(n);
+    s.material.resize(n);
+    s.half_cell.resize(n);
+    s.horizon.resize(n);
+    std::vector<double> spacing(n);
+    for (size_t k = 0; k < n; ++k) {
+      const size_t f = static_cast<size_t>(order[k]);
+      for (int d = 0; d < 3; ++d) s.x0[3 * k + d] = pm.position_m[3 * f + d];
+      s.volume[k] = pm.volume_m3[f];
+      s.material[k] = material_of_file_id[pm.material_id[f]];
+      s.density[k] = c.materials[s.material[k]].density;
+      spacing[k] = pm.spacing_m[f];
+      s.half_cell[k] = 0.5 * spacing[k];
+    }
+    // Horizon: fixed, per-particle (dual horizon), or factor x median spacing.
+    const double max_spacing = *std::max_element(spacing.begin(), spacing.end());
+    if (c.horizon_m) {
+      if (*c.horizon_m < max_spacing)
+        throw InputError(c.file, "model.horizon",
+                         "horizon " + std::to_string(*c.horizon_m) + " m is smaller than the largest particle spacing " +
+                             std::to_string(max_spacing) + " m",
+                         "a horizon of about 3 spacings (at least one)");
+      std::fill(s.horizon.begin(), s.horizon.end(), *c.horizon_m);
+    } else if (c.variable_horizon) {
+      for (size_t k = 0; k < n; ++k) s.horizon[k] = c.horizon_factor * spacing[k];
+    } else {
+      std::fill(s.horizon.begin(), s.horizon.end(), c.horizon_factor * median(spacing));
+    }
+    // A file particle's horizon, as set above (layer_of_surface reads every facet's).
+    one_horizon_value = c.horizon_m ? *c.horizon_m : c.variable_horizon || n == 0 ? 0.0 : s.horizon[0];
+    horizon_of_file = [&](int64_t f) {
+      return c.variable_horizon && !c.horizon_m ? c.horizon_factor * pm.spacing_m[static_cast<size_t>(f)] : one_horizon_value;
+    };
+    std::vector<double>().swap(spacing);  // read no further (8 B per particle less at the set-up's peak)
+    // What later passes read of the whole body, taken while this system holds it (a window
+    // system, below, holds its window alone): whether every particle has one cell and one
+    // horizon, the largest and median horizons and cells, float32's origin (the bounding box
+    // centre). The medians are order statistics: the same values in any order.
+    body_one_horizon = n > 0;
+    body_uniform = n > 0;
+    for (size_t i = 1; i < n && body_one_horizon; ++i) body_one_horizon = s.horizon[i] == s.horizon[0];
+    for (size_t i = 1; i < n && body_uniform; ++i) body_uniform = s.half_cell[i] == s.half_cell[0] && s.horizon[i] == s.horizon[0];
+    body_max_horizon = n ? *std::max_element(s.horizon.begin(), s.horizon.end()) : 0.0;
+    body_max_half_cell = n ? *std::max_element(s.half_cell.begin(), s.half_cell.end()) : 0.0;
+    body_median_horizon = n ? median(s.horizon) : 0.0;
+    body_median_half_cell = n ? median(s.half_cell) : 0.0;
+    f32_origin =
+        c.precision == CaseConfig::Precision::Float32 ? float32_origin(s.x0) : std::array<double, 3>{};
+    // One horizon over a graded arrangement under-resolves its coarse part (docs/atlas.md,
+    // stability map, graded_check.hpp): judged on the whole body here, refused at the start-up
+    // checks below (after the refusals the passes between make, as before).
+    if (c.check_stability) try {
+        require_graded_horizon(s);
+      } catch (const InputError&) {
+        graded_refusal = std::current_exception();
+      }
+  } else {
+    one_horizon_value = body.fill_horizon;
+    horizon_of_file = [](int64_t) -> double {
+      throw std::logic_error("set-up: a file particle's horizon read on a rank other than 0 (rank 0's plan holds the layers)");
+    };
+    body_one_horizon = body.one_horizon;
+    body_uniform = body.uniform;
+    body_max_horizon = body.max_horizon;
+    body_max_half_cell = body.max_half_cell;
+    body_median_horizon = body.median_horizon;
+    body_median_half_cell = body.median_half_cell;
+    f32_origin = body.f32_origin;
+    if (body.graded_refused) graded_refusal = std::make_exception_ptr(InputError(c.file, "", body.graded_message, ""));
+  }
+  // The boundary layers of the tractions with a depth (layer_of_surface: every particle of
+  // the layer and their volume), which read every row of the particle file: rank 0 takes them
+  // here for every rank; a refusal is kept for the load's turn, where one process meets it.
+  std::vector<std::optional<SurfaceLayer>> taken_layer(c.loads.size());
+  std::vector<std::exception_ptr> layer_refused(c.loads.size());
+  if (planner) {
+    body.n = static_cast<int64_t>(n);
+    body.fill_horizon = one_horizon_value;
+    body.one_horizon = body_one_horizon;
+    body.uniform = body_uniform;
+    body.max_horizon = body_max_horizon;
+    body.max_half_cell = body_max_half_cell;
+    body.median_horizon = body_median_horizon;
+    body.median_half_cell = body_median_half_cell;
+    body.f32_origin = f32_origin;
+    if (graded_refusal) try {
+        std::rethrow_exception(graded_refusal);
+      } catch (const InputError& e) {
+        body.graded_refused = true;
+        body.graded_message = e.what();
+      }
+    body.content_id = pm.content_id;
+    for (const ParticleSet& set : pm.sets) body.set_sizes.push_back(static_cast<int64_t>(set.indices.size()));
+    std::vector<int64_t> known;  // the file particles the other ranks name beyond their windows
+    for (const SurfaceFacets& sf : pm.surfaces) known.insert(known.end(), sf.particle.begin(), sf.particle.end());
+    body.layers.resize(c.loads.size());
+    for (size_t l = 0; l < c.loads.size(); ++l) {
+      const LoadSpec& ls = c.loads[l];
+      const SurfaceFacets* sf = pm.find_surface(ls.surface);
+      if (ls.kind != LoadSpec::Kind::Traction || !(ls.depth > 0 || ls.depth_horizon) || !sf || sf->size() == 0) continue;
+      try {
+        taken_layer[l] = layer_of_surface(s, ls, *sf, horizon_of_file, "loads[" + std::to_string(l) + "]");
+        body.layers[l].taken = true;
+        body.layers[l].layer = *taken_layer[l];
+        known.insert(known.end(), taken_layer[l]->particles.begin(), taken_layer[l]->particles.end());
+      } catch (const InputError& e) {
+        layer_refused[l] = std::current_exception();
+        body.layers[l].refused = true;
+        body.layers[l].message = e.what();
+      }
+    }
+    std::sort(known.begin(), known.end());
+    known.erase(std::unique(known.begin(), known.end()), known.end());
+    for (const int64_t f : known) body.known_internal.push_back(s.internal_index[static_cast<size_t>(f)]);
+    body.known_file = std::move(known);
+    send_body_plan(dist, body);
+    root_refusal.armed = false;
+    body = BodyPlan{};
+  }
+  if (planned)
+    for (size_t l = 0; l < c.loads.size() && l < body.layers.size(); ++l) {
+      if (body.layers[l].taken) taken_layer[l] = std::move(body.layers[l].layer);
+      if (body.layers[l].refused)
+        layer_refused[l] = std::make_exception_ptr(InputError(c.file, "loads[" + std::to_string(l) + "]", body.layers[l].message, ""));
     }
 
   phase("morton order and horizons");
   // A distributed set-up builds this rank's rows only; the other rows stay empty
   // (distributed_setup.hpp; `dist` marks each place that reads beyond the rank's rows).
-  // The ranks other than 0 then hold their rows' geometric window alone (take_window: a
+  // The ranks other than 0 hold their rows' geometric window alone (plan_window_system: a
   // window system, local indices), rank 0 the whole body (its writers' staging).
-  const DistributedSetup& dist = hooks.distributed;
-  DistributedRows dist_rows = plan_distributed_rows(s, dist);
-  if (setup_on_window(dist)) {
-    take_window(s, dist_rows);
+  DistributedRows dist_rows;
+  if (planned) {
+    const ReadFileRows read_rows = [&](const std::vector<int64_t>& rows, const std::vector<int64_t>& cells,
+                                       ParticleModel& into) {
+      if (!c.lattice) return read_particle_rows_at(c.particles_path, rows, cells, into);
+      ParticleModel part = lattice_model(*c.lattice, &rows);  // (a lattice has no mesh)
+      into.position_m.swap(part.position_m);
+      into.volume_m3.swap(part.volume_m3);
+      into.spacing_m.swap(part.spacing_m);
+      into.material_id.swap(part.material_id);
+      into.held_rows.swap(part.held_rows);
+    };
+    // A held row's values, as the whole body's loop above sets them (the same expressions).
+    const ValuesOfRow values = [&](const ParticleModel& m, size_t k) {
+      RowValues v;
+      v.material = material_of_file_id[static_cast<size_t>(m.material_id[k])];
+      v.density = c.materials[static_cast<size_t>(v.material)].density;
+      const double spacing = m.spacing_m[k];
+      v.half_cell = 0.5 * spacing;
+      v.horizon = c.horizon_m ? *c.horizon_m : c.variable_horizon ? c.horizon_factor * spacing : one_horizon_value;
+      return v;
+    };
+    dist_rows = plan_window_system(s, dist, read_rows, values);
     n = s.n;
+    // The case's sets on the rows held (their members there), each set's whole count rank 0's.
+    add_case_sets(s.particles, c);
+    if (s.particles.sets.size() != body.set_sizes.size())
+      throw std::logic_error("distributed set-up: the sets differ from rank 0's");
+    for (size_t k = 0; k < body.set_sizes.size(); ++k) s.particles.sets[k].whole_count = body.set_sizes[k];
+    // The file particles this rank names (system_of_file, internal_of_file): its window's
+    // and those of rank 0's plan (the facets', the layers').
+    std::vector<std::pair<int64_t, int32_t>> known;
+    for (size_t k = 0; k < n; ++k) known.emplace_back(s.original_index[k], s.window_global[k]);
+    for (size_t q = 0; q < body.known_file.size(); ++q) known.emplace_back(body.known_file[q], body.known_internal[q]);
+    std::sort(known.begin(), known.end());
+    known.erase(std::unique(known.begin(), known.end()), known.end());
+    for (const auto& [f, i] : known) {
+      s.known_file.push_back(f);
+      s.known_internal.push_back(i);
+    }
+    body = BodyPlan{};
+  } else {
+    dist_rows = plan_distributed_rows(s, dist);
   }
+  if (!planned) s.setup_file_rows = {static_cast<int64_t>(s.particles.size())};  // every row (summary.json)
 
   // Families and per-bond coefficients.
   std::vector<double> pad(n);  // a neighbour's outermost partial-volume sample may reach into the horizon
@@ -1502,10 +1693,14 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     // whole_facet_particles)
     std::vector<int32_t>* whole = s.window_global.empty() ? nullptr : &s.whole_facet_particles;
     if (ls.kind == LoadSpec::Kind::Traction && (ls.depth > 0 || ls.depth_horizon)) {
-      sl.facets = spread_over_layer(s, ls, sf, horizon_of_file, field, whole);
+      if (layer_refused[l]) std::rethrow_exception(layer_refused[l]);
+      if (!taken_layer[l] && !s.window_global.empty())
+        throw std::logic_error("set-up: a boundary layer not taken before the window system's cut");
+      const SurfaceLayer layer = taken_layer[l] ? std::move(*taken_layer[l]) : layer_of_surface(s, ls, sf, horizon_of_file, field);
+      sl.facets = spread_over_layer(s, sf, layer, whole);
     } else {
       for (size_t f = 0; f < sf.size(); ++f) {
-        if (whole) whole->push_back(s.internal_index[sf.particle[f]]);
+        if (whole) whole->push_back(s.internal_of_file(sf.particle[f]));
         if (const int32_t i = s.system_of_file(sf.particle[f]); i >= 0)
           sl.facets.push_back({i, sf.area_m2[f], {sf.normal[3 * f], sf.normal[3 * f + 1], sf.normal[3 * f + 2]}});
       }
@@ -1718,7 +1913,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   std::vector<double>().swap(row_stiffness);
   // (float32's origin, the bounding box centre of every particle: taken above, from the whole body.)
   // The particles the set-up's per-particle arrays hold (summary.json; the longest of them):
-  // a window system's window (take_window), else the body.
+  // a window system's window (plan_window_system), else the body.
   {
     size_t longest = 0;
     for (const auto& [size, width] : std::initializer_list<std::pair<size_t, size_t>>{

@@ -15,14 +15,14 @@ std::vector<double> vertices_from_mesh(const ParticleModel& model, const Surface
   const size_t nf = facets.size();
   std::vector<double> out(nf * per_facet * 3, 0.0);
   for (size_t f = 0; f < nf; ++f) {
-    const int64_t* nodes = &model.mesh_cells[static_cast<size_t>(facets.particle[f] * npc)];
+    const int64_t* nodes = model.cell_nodes(facets.particle[f]);  // (npc of them)
     double best = 1e300;
     int skip_best = -1;
     for (int skip = 0; skip < npc; ++skip) {  // the face opposite node `skip`
       double mean[3] = {0, 0, 0};
       for (int v = 0; v < npc; ++v)
         if (v != skip)
-          for (int d = 0; d < 3; ++d) mean[d] += model.mesh_nodes_m[3 * nodes[v] + d] / per_facet;
+          for (int d = 0; d < 3; ++d) mean[d] += model.node_position(nodes[v])[d] / per_facet;
       double d2 = 0;
       for (int d = 0; d < 3; ++d) d2 += std::pow(mean[d] - facets.centroid_m[3 * f + d], 2);
       if (d2 < best) {
@@ -39,7 +39,7 @@ std::vector<double> vertices_from_mesh(const ParticleModel& model, const Surface
     int k = 0;
     for (int v = 0; v < npc; ++v)
       if (v != skip_best) {
-        for (int d = 0; d < 3; ++d) out[(f * per_facet + k) * 3 + d] = model.mesh_nodes_m[3 * nodes[v] + d];
+        for (int d = 0; d < 3; ++d) out[(f * per_facet + k) * 3 + d] = model.node_position(nodes[v])[d];
         ++k;
       }
   }

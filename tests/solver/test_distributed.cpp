@@ -190,6 +190,23 @@ TEST(Distributed, BadInputIsReportedOnceWithExitCode2) {
   EXPECT_NE(o.err.find(key), std::string::npos) << o.err;
 }
 
+// An input error found on the whole body (a horizon below the largest spacing), which rank 0
+// alone judges (the planner: the other ranks read no whole array and wait for its plan,
+// distributed_setup.hpp BodyPlan): every rank stops with exit code 2, the error said once.
+TEST(Distributed, AWholeBodyInputErrorOnRankZeroStopsEveryRankWithExitCode2) {
+  const std::string file = write_case("mpi_bad_horizon",
+                                      "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.004, 0.004], spacing: 1 mm}}\n"
+                                      "model: {type: pmb, horizon: 0.5 mm}\n"
+                                      "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25}]\n"
+                                      "time: {steps: 5}\n");
+  const Outcome o = solve(file, process_temp_dir() + "/mpi_bad_horizon", 3, 1);
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  size_t count = 0;
+  for (size_t at = o.err.find("error:"); at != std::string::npos; at = o.err.find("error:", at + 1)) ++count;
+  EXPECT_EQ(count, 1u) << o.err;
+  EXPECT_NE(o.err.find("model.horizon"), std::string::npos) << o.err;
+}
+
 // A usage error under mpirun: every rank parses the command line, rank 0 alone speaks, and all
 // leave with exit code 2 (mpirun reports the first non-zero code).
 TEST(Distributed, UsageErrorIsReportedOnceWithExitCode2) {
@@ -350,6 +367,17 @@ static void expect_each_rank_built_its_own_rows(const std::string& one_dir, cons
   EXPECT_EQ(system[0], one["particles"]) << out << ": rank 0 keeps the whole body";
   for (int r = 1; r < ranks; ++r)
     EXPECT_EQ(system[r], window[r]) << out << ": rank " << r << "'s set-up arrays are not sized to its window";
+  // The particle file's rows read (distributed_setup.hpp plan_window_system): rank 0 every
+  // row (the planner, its writers' staging), every other rank its slice's window's, then its
+  // rows' window's: the most held at once at least its window, at most the body.
+  const auto& file_rows = dist["setup_file_rows_per_rank"];
+  ASSERT_EQ(one["setup_file_rows_per_rank"], nlohmann::json::array({one["particles"]}));
+  ASSERT_EQ(file_rows.size(), static_cast<size_t>(ranks)) << out;
+  EXPECT_EQ(file_rows[0], one["particles"]) << out << ": rank 0 reads every row";
+  for (int r = 1; r < ranks; ++r) {
+    EXPECT_GE(file_rows[r].get<long long>(), window[r].get<long long>()) << out << ": rank " << r;
+    EXPECT_LE(file_rows[r].get<long long>(), one["particles"].get<long long>()) << out << ": rank " << r;
+  }
 }
 
 // A case run by one process and, with the distributed set-up, on each of `ranks`: no fallback
@@ -462,6 +490,47 @@ TEST(DistributedSetup, ABodyLoadOnASetSomeRanksDoNotHoldGivesTheOneProcessAnswer
     const std::string out = base + "_np" + std::to_string(r);
     const Outcome o = solve(file, out, r, 1);
     ASSERT_EQ(o.exit_code, 0) << o.err;
+    for (const char* f : {"/results.h5", "/checkpoint.h5"})
+      EXPECT_EQ(differing(base + "_whole" + f, out + f), std::vector<std::string>{}) << r << " ranks, " << f;
+    expect_same_history(base + "_whole", out);
+  }
+}
+
+// The particle file on the ranks other than 0 (distributed_setup.hpp plan_window_system): each
+// reads the rows of its slice's window, then of its rows' window (hyperslabs), never the whole
+// file, and what the set-up reads of every particle comes from rank 0's plan: here a traction
+// spread over the boundary layer of a graded mesh (depth: horizon; the layer's particles and
+// volume: layer_of_surface), a case set near a surface (each rank's members among its rows,
+// the set's whole count rank 0's), the pre-crack's facets (the notch). One process against 2,
+// 3 and 4 ranks: results.h5, checkpoint.h5 and history.csv byte for byte, and each rank other
+// than 0 held fewer of the file's rows at once than the body (before: the whole file on
+// every rank).
+TEST(DistributedSetup, ATractionOverAGradedLayerGivesTheOneProcessAnswerFromEachRanksWindowRows) {
+  const std::string particles = notched_block();
+  ASSERT_FALSE(particles.empty());
+  const std::string file = write_case(
+      "mpi_dist_layer",
+      "specimen: {particles: " + particles + "}\n"
+      "model: {type: pmb, horizon_factor: 3.015, variable_horizon: true}\n"
+      "materials: [{name: block, density: 2400, youngs_modulus: 30 GPa, poisson_ratio: 0.25, fracture_energy: 20}]\n"
+      "precracks: [{type: surface, surface: notch}]\n"
+      "sets: [{name: grip, near_surface: {surface: xmin, distance: 2 mm}}]\n"
+      "boundary: [{type: velocity, set: grip, value: [0, 0, 0], components: [x]}]\n"
+      "loads: [{type: traction, surface: xmax, value: [200 MPa, 0, 0], depth: horizon}]\n"
+      "time: {steps: 30}\n"
+      "output: {every: 15, history_every: 5, fields: [damage, displacement, velocity]}\n");
+  const std::string base = process_temp_dir() + "/dist_layer";
+  const Outcome one = solve(file, base + "_whole", 1, 1);
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  const long long body = summary(base + "_whole")["particles"].get<long long>();
+  for (const int r : {2, 3, 4}) {
+    const std::string out = base + "_np" + std::to_string(r);
+    const Outcome o = solve(file, out, r, 1);
+    ASSERT_EQ(o.exit_code, 0) << o.err;
+    expect_each_rank_built_its_own_rows(base + "_whole", out, r);
+    for (int q = 1; q < r; ++q)
+      EXPECT_LT(summary(out)["setup_file_rows_per_rank"][q].get<long long>(), body)
+          << r << " ranks: rank " << q << " read every row of the particle file";
     for (const char* f : {"/results.h5", "/checkpoint.h5"})
       EXPECT_EQ(differing(base + "_whole" + f, out + f), std::vector<std::string>{}) << r << " ranks, " << f;
     expect_same_history(base + "_whole", out);

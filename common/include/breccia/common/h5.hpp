@@ -73,6 +73,7 @@ public:
   // are not all there.
   std::vector<double> read_double_rows(const std::string& path, hsize_t first, hsize_t count) const;
   std::vector<int32_t> read_int32_rows(const std::string& path, hsize_t first, hsize_t count) const;
+  std::vector<int64_t> read_int64_rows(const std::string& path, hsize_t first, hsize_t count) const;
   std::vector<uint8_t> read_uint8_rows(const std::string& path, hsize_t first, hsize_t count) const;
 
   // Attributes on an object ("/" for the file).

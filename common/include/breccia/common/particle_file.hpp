@@ -11,6 +11,10 @@ namespace breccia {
 struct ParticleSet {
   std::string name;
   std::vector<int64_t> indices;  // particle indices, sorted, unique
+  // A model holding a part of the rows (ParticleModel::held_rows): indices are the held
+  // members alone and this is the whole set's count. -1: indices is the whole set.
+  int64_t whole_count = -1;
+  bool empty_in_file() const { return whole_count >= 0 ? whole_count == 0 : indices.empty(); }
 };
 
 // Boundary facets of one named surface group (triangles in 3D, edges in 2D).
@@ -45,8 +49,24 @@ struct ParticleModel {
   int nodes_per_cell = 0;  // 4 (tet), 3 (triangle), 0 (no mesh)
   std::string source;      // what the model was made from (mesh path or "lattice ...")
   std::string content_id;  // hash of positions and volumes; results files quote it
+  // A part of the file's rows (a distributed run's window: the solver's plan_window_system):
+  // when held_rows is not empty the per-particle arrays hold those file rows alone
+  // (ascending), when held_cells is not empty mesh_cells holds those cells' rows alone
+  // (ascending), and when held_nodes is not empty mesh_nodes_m holds those nodes alone
+  // (ascending). The sets then hold their members among held_rows (ParticleSet::whole_count);
+  // the surfaces stay whole. Empty: every row.
+  std::vector<int64_t> held_rows;
+  std::vector<int64_t> held_cells;
+  std::vector<int64_t> held_nodes;
 
   size_t size() const { return volume_m3.size(); }
+  // The file index of held row k (k itself when every row is held).
+  int64_t file_row(size_t k) const { return held_rows.empty() ? static_cast<int64_t>(k) : held_rows[k]; }
+  // The mesh nodes of cell `cell` (a file index): nodes_per_cell of them. Throws
+  // std::out_of_range for a cell not held.
+  const int64_t* cell_nodes(int64_t cell) const;
+  // The position of mesh node `node` (3 values). Throws std::out_of_range for a node not held.
+  const double* node_position(int64_t node) const;
   const ParticleSet* find_set(const std::string& name) const;
   const SurfaceFacets* find_surface(const std::string& name) const;
 };
@@ -59,6 +79,22 @@ void write_particle_file(const std::string& path, ParticleModel model);
 
 // Read and validate; throws InputError naming the file and the dataset on any defect.
 ParticleModel read_particle_file(const std::string& path);
+
+// A distributed run's ranks other than 0 (the solver's setup_system): the file's attributes,
+// material names and surfaces, none of its per-particle rows or mesh (nodes_per_cell set),
+// its sets by name and whole count alone (no members yet: read_particle_rows_at). `rows`:
+// the file's particle count.
+ParticleModel read_particle_lists(const std::string& path, int64_t& rows);
+// The per-particle datasets' rows `rows` (ascending, unique) into m (its per-particle arrays,
+// in that order; held_rows = rows), each of m's sets' members among them (read_particle_lists'
+// sets), and, when m has a mesh (nodes_per_cell > 0), /mesh/cells' rows `cells` (ascending,
+// unique; held_cells) and the nodes those cells name (held_nodes). Not checked as a whole
+// read checks them (the reader of the whole file, rank 0, did).
+// Read through hyperslabs of at most 65,536 consecutive rows from each wanted row (a set's
+// list in blocks of 65,536 entries), so memory holds the rows asked for and one block, never
+// a whole dataset.
+void read_particle_rows_at(const std::string& path, const std::vector<int64_t>& rows, const std::vector<int64_t>& cells,
+                           ParticleModel& m);
 
 // Particles [first, first + count) of a particles.h5, in the file's order: what one process
 // of a distributed run reads of the per-particle datasets (hyperslabs), never the whole.

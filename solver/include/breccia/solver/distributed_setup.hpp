@@ -3,9 +3,10 @@
 // of the particles it owns only, so the bond arrays, the set-up's and the run's largest,
 // fall as 1/ranks. The per-particle arrays (positions, volumes, materials, horizons, the
 // state: a few hundred bytes each) are the rank's geometric window's on the ranks other than
-// 0 (take_window: a window system), the whole body's on rank 0 (its writers' staging);
-// still whole on every rank: the particle file, the file -> internal index and the row
-// offsets (about 60 B per particle); the bond states (1 B
+// 0 (plan_window_system: a window system, built from the particle file's rows of its window
+// alone, read by hyperslabs), the whole body's on rank 0 (the planner, which reads the whole
+// file: its writers' staging); still whole on every rank: the row offsets (8 B per
+// particle); the bond states (1 B
 // per entry, with softening, a rate law or a gas load up to 10 B) are each rank's own rows,
 // in its system, with parallel HDF5; without it whole on rank 0 too, its writers' staging
 // (for_each_bond_state_array).
@@ -23,7 +24,9 @@
 // copied (restrict_to_rank_taking_bonds); finish_distributed_setup then leaves the global
 // system what the time loop and the files need.
 #include <algorithm>
+#include <array>
 #include <cstdint>
+#include <functional>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -56,7 +59,7 @@ struct DistributedRows {
   std::vector<int64_t> full_offsets;   // the whole system's row offsets (n + 1), from the family sizes
   GeometricWindow window;              // the rows' geometric window (active only): every partner
   WindowExchange exchange;             // the owners' values to that window (active only)
-  // The set-up system is the window (take_window; PdSystem::window_global): its particles are
+  // The set-up system is the window (plan_window_system; PdSystem::window_global): its particles are
   // window.index in local indices, the rows [window.row_begin, window.row_end). False: it holds
   // the whole body (one process; rank 0, the writers' rank), the rows [begin, end).
   bool windowed = false;
@@ -65,17 +68,10 @@ struct DistributedRows {
   int64_t local_end() const { return windowed ? window.row_end : end; }
 };
 
-// Whether this rank's set-up runs on a window system (take_window): every rank but 0 (rank 0
+// Whether this rank's set-up runs on a window system (plan_window_system): every rank but 0 (rank 0
 // keeps the whole body: its writers gather into it, I/O staging; the same code on a window
 // that is everything).
 bool setup_on_window(const DistributedSetup& d);
-
-// Makes `s` (the whole body's reference arrays, built from the particle file) the rank's
-// window system: every per-particle array held so far (positions, volumes, densities,
-// materials, cells, horizons, file indices) cut to rows.window's particles in its order,
-// s.window_global its global indices (internal_index stays whole: PdSystem::system_of_file),
-// s.n the window's count; rows.windowed set. The whole arrays are freed.
-void take_window(PdSystem& s, DistributedRows& rows);
 
 // How many of `halo` (ascending global indices outside the rank's rows) each rank owns under
 // the partition `part_begin` (ranks + 1 offsets): the counts exchange_owned receives.
@@ -94,12 +90,73 @@ WindowExchange window_exchange(const DistributedSetup& d, const std::vector<int6
 void require_partners_in_window(const DistributedRows& rows, const std::vector<int64_t>& offsets,
                                 const std::vector<int32_t>& neighbor);
 
-// Called once the internal order and horizons are set: counts the family sizes, cuts the
-// partition (s.distributed_rows) and returns the rank's rows (inactive on one process).
-// Each rank counts the sizes of its family_slice only (family_sizes with a row range, on the
-// slice's geometric window: every partner, not the body); the slices, concatenated in rank order on every rank, are the whole count (collective).
-// Throws InputError for more ranks than particles.
+// One process and rank 0 (the planner: it holds the whole body, read from the whole particle
+// file, its writers' staging), once the internal order and horizons are set: counts the
+// family sizes, cuts the partition (s.distributed_rows) and returns the rank's rows (inactive
+// on one process). Each rank counts the sizes of its family_slice only (family_sizes with a
+// row range, on the slice's geometric window: every partner, not the body); the slices,
+// concatenated in rank order on every rank, are the whole count (collective). Rank 0 forms
+// every rank's two windows (the slice's, then the rows') and sends each rank its own with
+// their particles' file rows (plan_window_system receives them). Throws InputError for more
+// ranks than particles.
 DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d);
+
+// The ranks other than 0 (setup_on_window): the window system built from the particle file's
+// rows that rank 0's plan names, never the whole body. s: s.n the body's count, s.dimension,
+// s.config, s.particles the file's lists (read_particle_lists). Receives the slice's window,
+// reads its rows (`read`) and counts its family sizes; takes part in the partition's cut;
+// receives the rows' window and reads its rows into s.particles (held_rows; the surfaces'
+// facet cells of the mesh, held_cells): s.x0, volume, density, material, half_cell, horizon,
+// original_index are the window's in its order (values: a held row's material, density,
+// cell and horizon, as the whole body's set-up sets them), s.window_global its internal
+// indices, s.body_n the body's count, s.n the window's; the sets hold their members among
+// the rows (whole_count: the whole set's). Collective with plan_distributed_rows.
+using ReadFileRows = std::function<void(const std::vector<int64_t>& rows, const std::vector<int64_t>& cells, ParticleModel& into)>;
+struct RowValues {
+  double horizon = 0.0, half_cell = 0.0, density = 0.0;
+  int32_t material = 0;
+};
+using ValuesOfRow = std::function<RowValues(const ParticleModel& m, size_t held_row)>;
+DistributedRows plan_window_system(PdSystem& s, const DistributedSetup& d, const ReadFileRows& read,
+                                   const ValuesOfRow& values);
+
+// A traction's boundary layer (setup.cpp layer_of_surface): its depth, every particle of it
+// (file indices, ascending) and their volume summed in file order.
+struct SurfaceLayer {
+  double depth = 0.0;
+  double volume = 0.0;
+  std::vector<int64_t> particles;
+};
+
+// What rank 0 tells the other ranks of the whole body before the plan (send_body_plan,
+// receive_body_plan: one concatenation from rank 0), the values the set-up reads of every
+// particle: whether rank 0 refused the input first (its InputError; the others then stop
+// too, quietly), the body's count, the one horizon (the case's or factor x median spacing),
+// whether every particle has one horizon and one cell, the largest and median horizons and
+// cells, float32's origin, the graded check's refusal, the file's content id, each set's
+// whole count (the file's then the case's), the internal indices of the surfaces' facet
+// particles and of the layers' particles (sorted by file index), and each load's layer.
+struct BodyPlan {
+  bool refused = false;
+  int64_t n = 0;
+  double fill_horizon = 0.0;
+  bool one_horizon = false, uniform = false;
+  double max_horizon = 0.0, max_half_cell = 0.0, median_horizon = 0.0, median_half_cell = 0.0;
+  std::array<double, 3> f32_origin{};
+  bool graded_refused = false;
+  std::string graded_message, content_id;
+  std::vector<int64_t> set_sizes;
+  std::vector<int64_t> known_file;      // ascending
+  std::vector<int32_t> known_internal;  // of known_file
+  struct Layer {
+    bool taken = false, refused = false;
+    std::string message;  // the refusal's
+    SurfaceLayer layer;
+  };
+  std::vector<Layer> layers;  // per load
+};
+void send_body_plan(const DistributedSetup& d, const BodyPlan& p);  // rank 0
+BodyPlan receive_body_plan(const DistributedSetup& d);               // the other ranks
 
 // The families of the rank's rows (every row on one process, build_families), the other rows
 // empty: the same rows, partners and order as the whole build's. A distributed set-up builds

@@ -59,7 +59,12 @@ struct PdSystem {
   double thickness = 1.0;
   size_t n = 0;
   std::vector<int64_t> original_index;  // internal -> file index (a global id: files past 2^31 particles)
-  std::vector<int32_t> internal_index;  // file -> internal index (whole: a window system too; system_of_file)
+  std::vector<int32_t> internal_index;  // file -> internal index (whole; empty on a window system: known_file)
+  // A window system's file -> internal index (distributed_setup.hpp plan_window_system): its
+  // window's particles and those rank 0's plan names (the surfaces' facet particles, the
+  // traction layers'), ascending by file index. Empty with internal_index.
+  std::vector<int64_t> known_file;
+  std::vector<int32_t> known_internal;
   // A distributed set-up's window system (distributed_setup.hpp; the ranks other than 0): its
   // n particles are the rank's geometric window alone, local particle k being the whole body's
   // internal particle window_global[k] (ascending, so the rank's rows are one local range), and
@@ -75,6 +80,9 @@ struct PdSystem {
   // The system's index of file particle f: internal_index, or a window system's local index
   // of it (-1: not in the window).
   int32_t system_of_file(int64_t f) const;
+  // The whole body's internal index of file particle f (a window system: of a known one;
+  // std::logic_error for another).
+  int32_t internal_of_file(int64_t f) const;
   // A window system's per-facet-particle arrays (the gas's wall shares) hold its window's
   // facet particles (facets.particle); the whole body's facet particles, internal indices
   // ascending, are these (a checkpoint's rows). Empty: facets.particle is the whole list.
@@ -224,6 +232,11 @@ struct PdSystem {
   // window's on the ranks other than 0, PdSystem::window_global; one process and rank 0: the
   // body's), one value per rank the same way (summary.json's setup_system_particles_per_rank).
   std::vector<int64_t> setup_system_particles;
+  // The most rows of the particle file each rank's set-up read and held at once: one process
+  // and rank 0 every row (the whole file), the ranks other than 0 the larger of their slice's
+  // and their rows' windows (plan_window_system), one value per rank the same way
+  // (summary.json's setup_file_rows_per_rank).
+  std::vector<int64_t> setup_file_rows;
   // The particles the family search held (its cell lists, its copies): the rows' geometric
   // window (build_own_families; one process: every particle), one value per rank the same way
   // (summary.json's setup_window_particles_per_rank).

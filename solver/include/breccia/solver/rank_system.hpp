@@ -59,7 +59,7 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& global, const RankLayout& layou
 void copy_rank_state(PdSystem& local, const PdSystem& global, const RankLayout& layout);
 
 // What a distributed set-up's ranks other than 0 let go of in their global system (their
-// window's arrays: take_window) once the
+// window's arrays: plan_window_system) once the
 // stable-step estimate has cut the rank's system from it (mpi_stable_step_forces), before the
 // estimate's peak: the displacements and velocities, the forces and the fields the estimate's
 // last pass fills (kForcePassFields: energy density, dissipated energy, damage, largest
@@ -81,7 +81,7 @@ void release_global_at_stable_step(PdSystem& global);
 // rank's own system holds what its steps need, so the global one keeps only what the time
 // loop and the writers read (docs/parallel.md, Memory). On every rank it lets go of what the
 // set-up alone read (densities, horizons, cells, materials, constraints' and loads' particle
-// lists, the facet lists, the particle file's arrays, the model's coefficients, the gas's
+// lists, the facet lists, the particle file's arrays and file -> internal indices, the model's coefficients, the gas's
 // set-up arrays); on the ranks that do not write (`root` false) also of the arrays rank 0
 // gathers the state into for its files (displacements to bond states, the gas's front and
 // entered cracks) and of what only rank 0's writers read (reference positions, volumes,

@@ -1900,9 +1900,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // On a PMB lattice it starts from the lattice's plane wave: a distributed set-up's ranks
   // each find theirs on their own rows and keep the one of the best row, the first on ties,
   // as one process does over all rows (the same row's entries, the same wave).
-  StableStepStartWave wave = stable_step_start_wave(s, lps ? nullptr : &row_stiffness);
-  // (A lattice's wave only: a window of a graded body may hold one cell and one horizon.)
-  if (!body_uniform) wave = StableStepStartWave{};
+  // (The body's verdict: a window of a graded body may hold one cell and one horizon.)
+  StableStepStartWave wave = stable_step_start_wave(s, lps ? nullptr : &row_stiffness, body_uniform);
   if (wave.row >= 0 && !s.window_global.empty()) wave.row = s.window_global[static_cast<size_t>(wave.row)];  // internal
   if (dist_rows.active) {  // dist: every rank's candidate, the best kept in row order
     for (const StableStepStartWave& other : concat_over_ranks(dist, std::vector<StableStepStartWave>{wave}))

@@ -26,15 +26,20 @@ double largest_eigenpair(const double m[6], double v[3]) {
 }
 }  // namespace
 
-StableStepStartWave stable_step_start_wave(const PdSystem& sys, const std::vector<double>* row_sums) {
+StableStepStartWave stable_step_start_wave(const PdSystem& sys, const std::vector<double>* row_sums,
+                                           std::optional<bool> lattice) {
   StableStepStartWave wave;
   if (sys.config.model != PdModel::PMB || sys.n == 0 || sys.offsets.size() != sys.n + 1 || sys.k_own.empty())
     return wave;
   const std::vector<double>& k_dual = sys.k_dual_halves();  // the own halves where shared (pd_system.hpp)
   // A lattice only: one spacing and one horizon. A graded body's top mode is no plane wave
   // (its fine region's wave fits nowhere else), and the wave there slowed the estimate.
-  for (size_t i = 1; i < sys.n; ++i)
-    if (sys.half_cell[i] != sys.half_cell[0] || sys.horizon[i] != sys.horizon[0]) return wave;
+  if (!lattice) {
+    lattice = true;
+    for (size_t i = 1; i < sys.n && *lattice; ++i)
+      lattice = sys.half_cell[i] == sys.half_cell[0] && sys.horizon[i] == sys.horizon[0];
+  }
+  if (!*lattice) return wave;
   // The candidate row: the largest sum of bond stiffness over length per density (a bulk
   // row: the Silling-Askari sum), the first on ties. A distributed set-up's global system
   // holds its own rows only, the others empty: each rank takes its best and the set-up

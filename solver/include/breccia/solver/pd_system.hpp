@@ -8,6 +8,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <optional>
 #include <vector>
 
 #include "breccia/common/families.hpp"
@@ -407,13 +408,17 @@ std::vector<uint8_t> stable_step_region(const PdSystem& sys, double ratio);
 // sum (`score`, `row`: the first such row). found: false but on a PMB lattice (one spacing,
 // one horizon) whose system holds rows. `row_sums` (optional): each row's sum of
 // (k_own + k_dual) / xi_len in entry order, as the set-up's Silling-Askari bound sums it (the
-// same bits): given, the rows are not summed again.
+// same bits): given, the rows are not summed again. `lattice`: whether the whole body has one
+// spacing and one horizon, where the caller knows it (a window system's own particles may all
+// share one cell and one horizon on a graded body: its set-up passes the body's verdict);
+// unset, judged from sys's particles (a system that holds the whole body).
 struct StableStepStartWave {
   bool found = false;
   double score = 0.0;
   int64_t row = -1;
   double k[3] = {0.0, 0.0, 0.0}, p[3] = {0.0, 0.0, 0.0};
 };
-StableStepStartWave stable_step_start_wave(const PdSystem& sys, const std::vector<double>* row_sums = nullptr);
+StableStepStartWave stable_step_start_wave(const PdSystem& sys, const std::vector<double>* row_sums = nullptr,
+                                           std::optional<bool> lattice = std::nullopt);
 
 }  // namespace breccia::solver

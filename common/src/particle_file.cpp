@@ -238,6 +238,25 @@ ParticleRows read_particle_rows(const std::string& path, int64_t first, int64_t 
   return r;
 }
 
+namespace {
+// Every named surface's facets (area, normal, centroid, particle, vertices): the whole file's
+// reader and the lists' reader alike (a surface is sized like the boundary, not the body).
+void read_surfaces(h5::File& f, ParticleModel& m) {
+  for (const auto& name : f.children("/surfaces")) {
+    const std::string g = "/surfaces/" + name;
+    SurfaceFacets s;
+    s.name = name;
+    s.area_m2 = f.read_doubles(g + "/area");
+    s.normal = f.read_doubles(g + "/normal");
+    s.centroid_m = f.read_doubles(g + "/centroid");
+    s.particle = f.read_int64(g + "/particle");
+    if (f.exists(g + "/vertices")) s.vertices_m = f.read_doubles(g + "/vertices");
+    m.surfaces.push_back(std::move(s));
+  }
+}
+
+}  // namespace
+
 ParticleModel read_particle_lists(const std::string& path, int64_t& rows) {
   h5::File f = open_particle_file(path);
   ParticleModel m;
@@ -252,17 +271,7 @@ ParticleModel read_particle_lists(const std::string& path, int64_t& rows) {
     const std::vector<hsize_t> d = f.dims("/sets/" + name);
     m.sets.push_back({name, {}, d.empty() ? 0 : static_cast<int64_t>(d[0])});
   }
-  for (const auto& name : f.children("/surfaces")) {
-    const std::string g = "/surfaces/" + name;
-    SurfaceFacets s;
-    s.name = name;
-    s.area_m2 = f.read_doubles(g + "/area");
-    s.normal = f.read_doubles(g + "/normal");
-    s.centroid_m = f.read_doubles(g + "/centroid");
-    s.particle = f.read_int64(g + "/particle");
-    if (f.exists(g + "/vertices")) s.vertices_m = f.read_doubles(g + "/vertices");
-    m.surfaces.push_back(std::move(s));
-  }
+  read_surfaces(f, m);
   if (f.exists("/mesh/cells")) m.nodes_per_cell = static_cast<int>(f.attr_int("/mesh", "nodes_per_cell"));
   return m;
 }
@@ -339,17 +348,7 @@ ParticleModel read_particle_file(const std::string& path) {
   m.material_id = f.read_int32("/particles/material_id");
   m.material_names = f.read_strings("/materials/names");
   for (const auto& name : f.children("/sets")) m.sets.push_back({name, f.read_int64("/sets/" + name)});
-  for (const auto& name : f.children("/surfaces")) {
-    const std::string g = "/surfaces/" + name;
-    SurfaceFacets s;
-    s.name = name;
-    s.area_m2 = f.read_doubles(g + "/area");
-    s.normal = f.read_doubles(g + "/normal");
-    s.centroid_m = f.read_doubles(g + "/centroid");
-    s.particle = f.read_int64(g + "/particle");
-    if (f.exists(g + "/vertices")) s.vertices_m = f.read_doubles(g + "/vertices");
-    m.surfaces.push_back(std::move(s));
-  }
+  read_surfaces(f, m);
   if (f.exists("/mesh/cells")) {
     m.nodes_per_cell = static_cast<int>(f.attr_int("/mesh", "nodes_per_cell"));
     m.mesh_nodes_m = f.read_doubles("/mesh/nodes");

@@ -71,20 +71,35 @@ Families build_own_families(const PdSystem& s, const DistributedRows& rows, cons
 
 namespace {
 
-// The partition cut from every rank's slice of the family sizes (concatenated in rank order
-// on every rank: the whole system's offsets), into `rows`.
+// The partition cut from every rank's slice of the family sizes, into `rows`: rank 0 receives
+// the slices (concatenated in rank order: the whole system's offsets, which it keeps), cuts
+// and sends every rank the cut and each rank's first entry (2 (ranks + 1) values): no other
+// rank holds an array of the body's size. Every rank refuses too many ranks alike first.
 Partition cut_partition(PdSystem& s, const DistributedSetup& d, const std::vector<int64_t>& slice_sizes,
                         DistributedRows& rows, size_t body_n) {
-  const std::vector<int64_t> sizes = concat_over_ranks(d, slice_sizes);
-  if (sizes.size() != body_n) throw std::logic_error("distributed set-up: the ranks' family sizes do not cover the particles");
-  rows.full_offsets.assign(sizes.size() + 1, 0);
-  for (size_t i = 0; i < sizes.size(); ++i) rows.full_offsets[i + 1] = rows.full_offsets[i] + sizes[i];
-  Partition part;
   try {
-    part = MortonRangePartitioner().partition(rows.full_offsets, d.ranks);
+    require_ranks_fit(static_cast<int64_t>(body_n), d.ranks);
   } catch (const std::invalid_argument& e) {
     throw InputError(s.config.file, "mpirun -np", e.what(), "at most one rank per particle");
   }
+  const std::vector<char> bytes = d.concat(slice_sizes.data(), slice_sizes.size(), sizeof(int64_t), false);
+  std::vector<int64_t> cut;  // rank 0's: part.begin, then each rank's first entry and the total
+  if (d.rank == 0) {
+    std::vector<int64_t> sizes(bytes.size() / sizeof(int64_t));
+    if (!bytes.empty()) std::memcpy(sizes.data(), bytes.data(), bytes.size());
+    if (sizes.size() != body_n)
+      throw std::logic_error("distributed set-up: the ranks' family sizes do not cover the particles");
+    rows.full_offsets.assign(sizes.size() + 1, 0);
+    for (size_t i = 0; i < sizes.size(); ++i) rows.full_offsets[i + 1] = rows.full_offsets[i] + sizes[i];
+    cut = MortonRangePartitioner().partition(rows.full_offsets, d.ranks).begin;
+    for (int r = 0; r <= d.ranks; ++r) cut.push_back(rows.full_offsets[cut[r]]);
+  }
+  cut = concat_over_ranks(d, cut);
+  if (cut.size() != 2 * static_cast<size_t>(d.ranks + 1))
+    throw std::logic_error("distributed set-up: rank 0's partition is malformed");
+  Partition part;
+  part.begin.assign(cut.begin(), cut.begin() + d.ranks + 1);
+  rows.entry_begin.assign(cut.begin() + d.ranks + 1, cut.end());
   rows.active = true;
   rows.begin = part.begin[d.rank];
   rows.end = part.begin[d.rank + 1];
@@ -428,8 +443,9 @@ MaterialSums sum_marked_by_material(const DistributedSetup& d, const Distributed
 void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const DistributedSetup& d) {
   if (!rows.active) return;
   const size_t own_entries = s.state.size();
+  const size_t setup_offsets = s.offsets.size();
   if (s.offsets.back() != static_cast<int64_t>(own_entries) ||
-      rows.full_offsets[rows.end] - rows.full_offsets[rows.begin] != static_cast<int64_t>(own_entries))
+      rows.entry_begin[d.rank + 1] - rows.entry_begin[d.rank] != static_cast<int64_t>(own_entries))
     throw std::logic_error("distributed set-up: a rank's rows differ from the counted family sizes");
   // What each rank's set-up built, to every rank (summary.json): its own rows' entries alone.
   s.setup_candidate_entries = concat_over_ranks(d, s.setup_candidate_entries);
@@ -478,7 +494,15 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
     // Shared dual halves (pd_system.hpp k_dual_halves): the own moduli, which the rank kept here.
     gather_entries(d, s.dual_halves_shared ? s.k_own : s.k_dual, false);
   }
+  // The row offsets kept for the run: rank 0 the whole system's (its writers' staging), the
+  // other ranks none (their rows' are their systems'): each rank's entry range and the total
+  // are s.distributed_entries (bond_count).
   s.offsets = rows.full_offsets;
+  s.distributed_entries = rows.entry_begin;
+  // The longest row offsets this rank held from the cut on (summary.json): the set-up
+  // system's (its rows' window on the ranks other than 0), the cut's, the kept ones.
+  s.setup_offsets_rows = concat_over_ranks(
+      d, std::vector<int64_t>{static_cast<int64_t>(std::max({setup_offsets, rows.full_offsets.size(), s.offsets.size()}))});
   for_each_bond_state_array(s, [&](auto& a) {
     if (a.size() != (staged ? s.bond_count() : 0)) throw std::logic_error("distributed set-up: the gathered bond states");
   });

@@ -605,8 +605,10 @@ void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
   if (rank != 0)
 #endif
     if (!s.distributed_rows.empty()) {
-      entry_first = static_cast<size_t>(s.offsets[s.distributed_rows[rank]]);
-      entry_count = static_cast<size_t>(s.offsets[s.distributed_rows[rank + 1]]) - entry_first;
+      if (s.distributed_entries.size() != s.distributed_rows.size())
+        throw std::logic_error("read_checkpoint: a distributed set-up's entry ranges are missing");
+      entry_first = static_cast<size_t>(s.distributed_entries[rank]);
+      entry_count = static_cast<size_t>(s.distributed_entries[rank + 1]) - entry_first;
     }
   auto entries_sized = [&](const std::string& dataset) {
     const std::vector<hsize_t> d = f.dims(dataset);

@@ -48,12 +48,16 @@ Partition cut_equal_work(int64_t n, int ranks, const Cumulative& cum) {
 
 }  // namespace
 
-Partition MortonRangePartitioner::partition(const std::vector<int64_t>& offsets, int ranks) const {
-  const int64_t n = static_cast<int64_t>(offsets.size()) - 1;
+void require_ranks_fit(int64_t n, int ranks) {
   if (ranks < 1) throw std::invalid_argument("partition: at least one rank");
   if (ranks > n)
     throw std::invalid_argument("partition: " + std::to_string(ranks) + " ranks for " + std::to_string(n) +
                                 " particles (at most one rank per particle)");
+}
+
+Partition MortonRangePartitioner::partition(const std::vector<int64_t>& offsets, int ranks) const {
+  const int64_t n = static_cast<int64_t>(offsets.size()) - 1;
+  require_ranks_fit(n, ranks);
   // cum[i]: work of particles [0, i).
   std::vector<double> cum(static_cast<size_t>(n) + 1, 0.0);
   for (int64_t i = 0; i < n; ++i) cum[i + 1] = cum[i] + static_cast<double>(offsets[i + 1] - offsets[i]) + particle_weight_;

@@ -161,6 +161,16 @@ int64_t offsets_row(const PdSystem& g, int64_t i) {
   return g.offsets.size() == g.n + 1 ? g.system_index(i) : i;
 }
 
+// The entries [first, end) of the rank's rows in g's per-entry numbering: from g's row
+// offsets, or, where a finished distributed set-up left none (the ranks other than 0),
+// from its entry ranges.
+std::pair<int64_t, int64_t> rank_entries(const PdSystem& g, const RankLayout& L) {
+  if (g.offsets.empty() && !g.distributed_entries.empty())
+    return {g.distributed_entries[L.rank], g.distributed_entries[L.rank + 1]};
+  const int64_t rb = offsets_row(g, L.begin());
+  return {g.offsets[rb], g.offsets[rb + L.owned()]};
+}
+
 // restrict_to_rank; `partners`: the owned rows' partners, renumbered to local indices in
 // place and kept (restrict_to_rank_taking_bonds), or null: copied from g's and renumbered.
 // `s`: the arrays already taken (take_releasing), which stay where the global system let them go.
@@ -316,8 +326,7 @@ void take_releasing(PdSystem& s, PdSystem& g, const RankLayout& L) {
 }  // namespace
 
 PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
-  const int64_t rb = offsets_row(g, L.begin());
-  const int64_t eb = g.offsets[rb], ee = g.offsets[rb + L.owned()];
+  const auto [eb, ee] = rank_entries(g, L);
   if (g.distributed_rows.empty() || eb != 0 || ee != static_cast<int64_t>(g.neighbor.size())) return restrict_to_rank(g, L);
   // The slices restrict_to_rank would copy are the whole arrays: take them, and restrict the
   // rest (an empty array slices as empty).
@@ -393,8 +402,7 @@ void copy_rank_state(PdSystem& s, const PdSystem& g, const RankLayout& L) {
   take_or_keep_if_held(s.corr_nonaffine, g.corr_nonaffine, ids, 1);
   s.min_stretch = take(g.min_stretch, ids, 1);
   s.min_stretch_next = take(g.min_stretch_next, ids, 1);
-  const int64_t rb = offsets_row(g, L.begin());
-  const int64_t eb = g.offsets[rb], ee = g.offsets[rb + L.owned()];
+  const auto [eb, ee] = rank_entries(g, L);
   // The global system's bond state arrays (for_each_bond_state_array): take_entry_rows.
   take_entry_rows(s.state, g.state, g.bond_count(), eb, ee);
   take_entry_rows(s.bond_damage, g.bond_damage, g.bond_count(), eb, ee);
@@ -432,8 +440,7 @@ namespace {
 void restrict_gas(PdSystem& s, const PdSystem& g, const RankLayout& L, const RankIds& ids) {
   const GasState& G = g.gas;
   GasState& r = s.gas;
-  const int64_t rb = offsets_row(g, L.begin());
-  const int64_t eb = g.offsets[rb], ee = g.offsets[rb + L.owned()];
+  const auto [eb, ee] = rank_entries(g, L);
   const int64_t fb = first_facet_of(g, L.begin()), fe = first_facet_of(g, L.begin() + L.owned());
   // A distributed set-up's halves are the rank's rows already: they moved into this system
   // with the bonds (restrict_to_rank_taking_bonds) and stay when its state is brought up to

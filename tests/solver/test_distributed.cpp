@@ -378,6 +378,15 @@ static void expect_each_rank_built_its_own_rows(const std::string& one_dir, cons
     EXPECT_GE(file_rows[r].get<long long>(), window[r].get<long long>()) << out << ": rank " << r;
     EXPECT_LE(file_rows[r].get<long long>(), one["particles"].get<long long>()) << out << ": rank " << r;
   }
+  // The row offsets (distributed_setup.hpp cut_partition, finish_distributed_setup): rank 0
+  // holds the whole system's (n + 1: it cuts the partition, its writers' staging); every other
+  // rank at most its set-up system's (its window's rows, n + 1 of the window), never the body's.
+  const auto& offsets = dist["offsets_rows_per_rank"];
+  ASSERT_EQ(offsets.size(), static_cast<size_t>(ranks)) << out;
+  EXPECT_EQ(offsets[0].get<long long>(), one["particles"].get<long long>() + 1) << out << ": rank 0";
+  for (int r = 1; r < ranks; ++r)
+    EXPECT_LE(offsets[r].get<long long>(), system[r].get<long long>() + 1)
+        << out << ": rank " << r << " held row offsets beyond its window's";
 }
 
 // A case run by one process and, with the distributed set-up, on each of `ranks`: no fallback

@@ -633,9 +633,12 @@ std::vector<int64_t> particle_ranges(const Partition& part, size_t width) {
   for (const int64_t b : part.begin) begin.push_back(b * static_cast<int64_t>(width));
   return begin;
 }
-std::vector<int64_t> entry_ranges(const Partition& part, const std::vector<int64_t>& offsets) {
+// A finished distributed set-up's global system holds them (PdSystem::distributed_entries;
+// no row offsets on the ranks other than 0).
+std::vector<int64_t> entry_ranges(const Partition& part, const PdSystem& g) {
+  if (!g.distributed_entries.empty()) return g.distributed_entries;
   std::vector<int64_t> begin;
-  for (const int64_t b : part.begin) begin.push_back(offsets[b]);
+  for (const int64_t b : part.begin) begin.push_back(g.offsets[b]);
   return begin;
 }
 
@@ -821,7 +824,7 @@ public:
   void download(PdSystem& g) override {
     to_host();
     const std::vector<int64_t> one = particle_ranges(layout_.part, 1), three = particle_ranges(layout_.part, 3),
-                               nine = particle_ranges(layout_.part, 9), entries = entry_ranges(layout_.part, g.offsets);
+                               nine = particle_ranges(layout_.part, 9), entries = entry_ranges(layout_.part, g);
     for (auto [l, gl] : {std::pair{&local_.u, &g.u}, {&local_.v, &g.v}, {&local_.a, &g.a}, {&local_.force, &g.force},
                          {&local_.body, &g.body}})
       gather(*l, *gl, three);
@@ -1011,7 +1014,7 @@ public:
     const CheckpointRows mine{&local_,
                               static_cast<size_t>(first),
                               static_cast<size_t>(owned),
-                              static_cast<size_t>(g.offsets[first]),
+                              static_cast<size_t>(entry_ranges(layout_.part, g)[layout_.rank]),
                               static_cast<size_t>(local_.offsets[owned]),
                               static_cast<size_t>(facets[layout_.rank]),
                               static_cast<size_t>(facets[layout_.rank + 1] - facets[layout_.rank])};

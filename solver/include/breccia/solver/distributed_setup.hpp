@@ -5,14 +5,14 @@
 // state: a few hundred bytes each) are the rank's geometric window's on the ranks other than
 // 0 (plan_window_system: a window system, built from the particle file's rows of its window
 // alone, read by hyperslabs), the whole body's on rank 0 (the planner, which reads the whole
-// file: its writers' staging); still whole on every rank: the row offsets (8 B per
-// particle); the bond states (1 B
-// per entry, with softening, a rate law or a gas load up to 10 B) are each rank's own rows,
+// file: its writers' staging); the row offsets likewise: the ranks other than 0 keep their
+// entry ranges alone (cut_partition: rank 0 cuts; PdSystem::distributed_entries); the bond
+// states (1 B per entry, with softening, a rate law or a gas load up to 10 B) are each rank's own rows,
 // in its system, with parallel HDF5; without it whole on rank 0 too, its writers' staging
 // (for_each_bond_state_array).
 //
 // How: the family sizes are counted from the positions alone (family_sizes, partition.hpp),
-// which gives the whole system's row offsets and the partition before any family exists.
+// which gives rank 0 the whole system's row offsets and the partition before any family exists.
 // The set-up then runs as on one process on a system whose rows outside the rank's range are
 // empty (a window system: the rank's rows and the window's other particles, local indices;
 // else the whole body): every per-entry loop covers the rank's rows, and the few values a row reads from
@@ -56,7 +56,10 @@ struct WindowExchange {
 struct DistributedRows {
   bool active = false;
   int64_t begin = 0, end = 0;          // the rank's rows (internal order)
-  std::vector<int64_t> full_offsets;   // the whole system's row offsets (n + 1), from the family sizes
+  // The whole system's row offsets (n + 1), from the family sizes: rank 0 alone (it cuts the
+  // partition and keeps them for its writers, I/O staging); empty on the other ranks.
+  std::vector<int64_t> full_offsets;
+  std::vector<int64_t> entry_begin;    // every rank's: each rank's first bond entry, then the total (ranks + 1)
   GeometricWindow window;              // the rows' geometric window (active only): every partner
   WindowExchange exchange;             // the owners' values to that window (active only)
   // The set-up system is the window (plan_window_system; PdSystem::window_global): its particles are
@@ -95,7 +98,7 @@ void require_partners_in_window(const DistributedRows& rows, const std::vector<i
 // family sizes, cuts the partition (s.distributed_rows) and returns the rank's rows (inactive
 // on one process). Each rank counts the sizes of its family_slice only (family_sizes with a
 // row range, on the slice's geometric window: every partner, not the body); the slices,
-// concatenated in rank order on every rank, are the whole count (collective). Rank 0 forms
+// concatenated in rank order on rank 0, are the whole count (collective). Rank 0 forms
 // every rank's two windows (the slice's, then the rows') and sends each rank its own with
 // their particles' file rows (plan_window_system receives them). Throws InputError for more
 // ranks than particles.

@@ -37,6 +37,10 @@ public:
 // Contiguous ranges of the internal (Morton) order with equal work: each particle weighs its
 // family size plus `particle_weight` bond entries' worth of per-particle work (kick, drift,
 // loads, outputs), so a graded mesh with very unequal families still balances the bond loop.
+// Throws std::invalid_argument unless 1 <= ranks <= n (at most one rank per particle): the
+// partitioners' refusal, which a rank that cuts nothing checks too (cut_partition).
+void require_ranks_fit(int64_t n, int ranks);
+
 class MortonRangePartitioner final : public Partitioner {
 public:
   explicit MortonRangePartitioner(double particle_weight = 4.0) : particle_weight_(particle_weight) {}

@@ -224,6 +224,13 @@ struct PdSystem {
   // A distributed set-up's partition (ranks + 1 row offsets, cut before any family existed;
   // distributed_setup.hpp): the ranks' layouts take it. Empty: every rank built everything.
   std::vector<int64_t> distributed_rows;
+  // Its bond entries' ranges, once the set-up finished (finish_distributed_setup): each rank's
+  // rows' first entry, then the total (ranks + 1). The ranks other than 0 keep no row offsets
+  // here (`offsets` empty: their rows' are their own systems'); rank 0 the whole ones.
+  std::vector<int64_t> distributed_entries;
+  // The longest row offsets each rank held from the partition's cut on (the set-up system's,
+  // the cut's, the ones kept for the run), rank 0 first (summary.json's offsets_rows_per_rank).
+  std::vector<int64_t> setup_offsets_rows;
   // The bond entries the set-up built (setup_system): the candidate families' entries (the
   // family search's, its largest arrays) and the kept ones (the bond arrays'). Under mpirun,
   // one value per rank, rank 0 first (finish_distributed_setup gathers them): each rank's own
@@ -248,8 +255,12 @@ struct PdSystem {
 
   PdView view();
   // The bond entries of the whole system: the CSR's, since a distributed set-up's global
-  // system keeps the offsets but not the partners (distributed_setup.hpp).
-  size_t bond_count() const { return offsets.empty() ? neighbor.size() : static_cast<size_t>(offsets.back()); }
+  // system keeps the offsets (rank 0) or the entry ranges (the others) but not the partners
+  // (distributed_setup.hpp).
+  size_t bond_count() const {
+    if (offsets.empty() && !distributed_entries.empty()) return static_cast<size_t>(distributed_entries.back());
+    return offsets.empty() ? neighbor.size() : static_cast<size_t>(offsets.back());
+  }
   // Any load at all? Without one the body force stays zero and a step skips the loads.
   bool loads_vary() const { return !surface_loads.empty() || !body_loads.empty() || config.indenter.enabled; }
   double total_mass() const;

@@ -488,6 +488,9 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
   if (!s.xi_len.empty())
     throw std::logic_error("distributed set-up without the stable-step hook that cuts the rank's system");
   if (writer_bonds) {
+    // A window system's partners are its local indices: rank 0's list holds internal ones.
+    if (!s.window_global.empty())
+      for (int32_t& j : s.neighbor) j = s.window_global[static_cast<size_t>(j)];
     gather_entries(d, s.neighbor, false);
     gather_entries(d, s.vol_own, false);    // empty where the own counts serve (pd_system.hpp)
     gather_entries(d, s.own_count, false);  // empty with the analytic partial volume

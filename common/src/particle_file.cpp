@@ -22,13 +22,18 @@ const ParticleSet* ParticleModel::find_set(const std::string& name) const {
   return nullptr;
 }
 
+std::optional<size_t> held_position(const std::vector<int64_t>& held, int64_t index) {
+  const auto it = std::lower_bound(held.begin(), held.end(), index);
+  if (it == held.end() || *it != index) return std::nullopt;
+  return static_cast<size_t>(it - held.begin());
+}
+
 const int64_t* ParticleModel::cell_nodes(int64_t cell) const {
   size_t row = static_cast<size_t>(cell);
   if (!held_cells.empty()) {
-    const auto it = std::lower_bound(held_cells.begin(), held_cells.end(), cell);
-    if (it == held_cells.end() || *it != cell)
-      throw std::out_of_range("particle model: mesh cell " + std::to_string(cell) + " is not held");
-    row = static_cast<size_t>(it - held_cells.begin());
+    const std::optional<size_t> at = held_position(held_cells, cell);
+    if (!at) throw std::out_of_range("particle model: mesh cell " + std::to_string(cell) + " is not held");
+    row = *at;
   }
   if (nodes_per_cell <= 0 || (row + 1) * static_cast<size_t>(nodes_per_cell) > mesh_cells.size())
     throw std::out_of_range("particle model: no mesh cell " + std::to_string(cell));
@@ -38,10 +43,9 @@ const int64_t* ParticleModel::cell_nodes(int64_t cell) const {
 const double* ParticleModel::node_position(int64_t node) const {
   size_t row = static_cast<size_t>(node);
   if (!held_nodes.empty()) {
-    const auto it = std::lower_bound(held_nodes.begin(), held_nodes.end(), node);
-    if (it == held_nodes.end() || *it != node)
-      throw std::out_of_range("particle model: mesh node " + std::to_string(node) + " is not held");
-    row = static_cast<size_t>(it - held_nodes.begin());
+    const std::optional<size_t> at = held_position(held_nodes, node);
+    if (!at) throw std::out_of_range("particle model: mesh node " + std::to_string(node) + " is not held");
+    row = *at;
   }
   if (node < 0 || 3 * (row + 1) > mesh_nodes_m.size()) throw std::out_of_range("particle model: no mesh node " + std::to_string(node));
   return &mesh_nodes_m[3 * row];

@@ -1,6 +1,7 @@
 #include "breccia/solver/distributed_setup.hpp"
 
 #include <algorithm>
+#include <optional>
 #include <iterator>
 #include <stdexcept>
 #include <string>
@@ -153,9 +154,9 @@ std::vector<int64_t> sorted_unique(std::vector<int64_t> v) {
 
 // The position of file row f among `held` (ascending).
 size_t held_at(const std::vector<int64_t>& held, int64_t f) {
-  const auto it = std::lower_bound(held.begin(), held.end(), f);
-  if (it == held.end() || *it != f) throw std::logic_error("distributed set-up: a planned file row was not read");
-  return static_cast<size_t>(it - held.begin());
+  const std::optional<size_t> at = held_position(held, f);
+  if (!at) throw std::logic_error("distributed set-up: a planned file row was not read");
+  return *at;
 }
 
 }  // namespace

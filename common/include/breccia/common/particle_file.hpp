@@ -3,6 +3,7 @@
 // (readers). Layout and units are documented in docs/formats.md; SI throughout.
 // Particle i is the centroid of source-mesh cell i (when the model came from a mesh).
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,10 @@ struct SurfaceFacets {
   size_t size() const { return area_m2.size(); }
   bool has_vertices() const { return !vertices_m.empty(); }
 };
+
+// The position of file index `index` in `held` (ascending file indices: a model's held rows,
+// cells or nodes), or none where it is not held: the one lookup behind every held-row read.
+std::optional<size_t> held_position(const std::vector<int64_t>& held, int64_t index);
 
 struct ParticleModel {
   int dimension = 3;             // 2 or 3

@@ -96,12 +96,12 @@ bool within_either_horizon(const double* xi, const double* xj, double horizon_i,
 
 }  // namespace
 
-std::vector<int64_t> half_bond_counts(const PdSystem& r, size_t owned, size_t n) {
-  std::vector<int64_t> counts(n + 1, 0);
+std::vector<int64_t> half_bond_counts(const PdSystem& r, size_t owned) {
+  std::vector<int64_t> counts(owned, 0);
   for (size_t i = 0; i < owned; ++i) {
     const int64_t fi = r.original_index[i];
     for (int64_t k = r.offsets[i]; k < r.offsets[i + 1]; ++k)
-      if (fi < r.original_index[r.neighbor[k]]) ++counts[fi + 1];
+      if (fi < r.original_index[r.neighbor[k]]) ++counts[i];
   }
   return counts;
 }
@@ -109,7 +109,11 @@ std::vector<int64_t> half_bond_counts(const PdSystem& r, size_t owned, size_t n)
 HalfBondList half_bond_list(const PdSystem& s) {
   const size_t n = s.n;
   HalfBondList h;
-  h.offsets = half_bond_counts(s, n, n);
+  h.offsets.assign(n + 1, 0);
+  {
+    const std::vector<int64_t> counts = half_bond_counts(s, n);
+    for (size_t i = 0; i < n; ++i) h.offsets[s.original_index[i] + 1] = counts[i];
+  }
   for (size_t i = 0; i < n; ++i) h.offsets[i + 1] += h.offsets[i];
   const size_t b = static_cast<size_t>(h.offsets[n]);
   h.neighbors.resize(b);
@@ -165,7 +169,7 @@ std::vector<uint8_t> broken_bits(const PdSystem& s, const HalfBondList& h, int64
   return bits;
 }
 
-std::vector<int64_t> broken_bond_positions(const PdSystem& r, size_t owned, const std::vector<int64_t>& file_offsets,
+std::vector<int64_t> broken_bond_positions(const PdSystem& r, size_t owned, const std::vector<int64_t>& row_first,
                                            const std::vector<std::pair<int64_t, int64_t>>& precrack_pairs) {
   std::vector<int64_t> positions;
   std::vector<std::pair<int64_t, int64_t>> row;
@@ -174,22 +178,23 @@ std::vector<int64_t> broken_bond_positions(const PdSystem& r, size_t owned, cons
     higher_partners_by_file_index(r, i, row);
     for (size_t q = 0; q < row.size(); ++q)
       if (fracture_broken(r, row[q].second) && !is_precrack(precrack_pairs, fi, row[q].first))
-        positions.push_back(file_offsets[fi] + static_cast<int64_t>(q));
+        positions.push_back(row_first[i] + static_cast<int64_t>(q));
   }
   return positions;
 }
 
-FileBondRows file_bond_rows(const PdSystem& r, size_t owned, const std::vector<int64_t>& file_offsets) {
+FileBondRows file_bond_rows(const PdSystem& r, size_t owned, const std::vector<int64_t>& row_first) {
   std::vector<std::pair<int64_t, size_t>> order(owned);  // (file index, row): the file's order
   for (size_t i = 0; i < owned; ++i) order[i] = {r.original_index[i], i};
   std::sort(order.begin(), order.end());
   FileBondRows out;
   std::vector<std::pair<int64_t, int64_t>> row;
+  int64_t end = 0;  // the last row's end: the next row of higher file index starts there or later
   for (const auto& [fi, i] : order) {
     higher_partners_by_file_index(r, i, row);
-    const int64_t first = file_offsets[fi];
-    if (static_cast<int64_t>(row.size()) != file_offsets[fi + 1] - first)
-      throw std::logic_error("file_bond_rows: a row's partners differ from the list's offsets");
+    const int64_t first = row_first[i];
+    if (first < end) throw std::logic_error("file_bond_rows: a row's place overlaps the row before it");
+    end = first + static_cast<int64_t>(row.size());
     if (row.empty()) continue;
     if (!out.runs.empty() && static_cast<int64_t>(out.runs.back().first + out.runs.back().rows) == first)
       out.runs.back().rows += row.size();
@@ -354,8 +359,8 @@ void ResultsWriter::write_together(const PdSystem& s, ResultsWriter* w, const st
 }
 
 void ResultsWriter::write_bonds_together(ResultsWriter* w, const std::string& out_dir,
-                                         const std::vector<int64_t>& file_offsets, size_t offsets_first,
-                                         size_t offsets_count, const FileBondRows& mine,
+                                         const std::vector<int64_t>& offsets_block, size_t offsets_first,
+                                         size_t offsets_rows, int64_t bonds_total, const FileBondRows& mine,
                                          const std::vector<uint8_t>& within_horizon, size_t within_first,
                                          MPI_Comm comm) {
   if (w) {  // the root's own handle closed: the ranks open the file together
@@ -363,10 +368,9 @@ void ResultsWriter::write_bonds_together(ResultsWriter* w, const std::string& ou
     w->bonds_pending_ = false;
   }
   h5::File f(out_dir + "/results.h5", h5::File::Mode::ReadWrite, comm);
-  const size_t bonds = static_cast<size_t>(file_offsets.back());
+  const size_t bonds = static_cast<size_t>(bonds_total);
   // The datasets and their order as write_results_bonds writes them.
-  f.write_rows("/bonds/offsets", file_offsets.data() + offsets_first, offsets_first, offsets_count,
-               {file_offsets.size()});
+  f.write_rows("/bonds/offsets", offsets_block.data(), offsets_first, offsets_block.size(), {offsets_rows});
   f.write_runs("/bonds/neighbors", mine.neighbors.data(), mine.runs, {bonds});
   f.write_rows("/bonds/within_horizon", within_horizon.data(), within_first, within_horizon.size(), {(bonds + 7) / 8});
 }

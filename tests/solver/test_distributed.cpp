@@ -387,6 +387,23 @@ static void expect_each_rank_built_its_own_rows(const std::string& one_dir, cons
   for (int r = 1; r < ranks; ++r)
     EXPECT_LE(offsets[r].get<long long>(), system[r].get<long long>() + 1)
         << out << ": rank " << r << " held row offsets beyond its window's";
+#ifdef BRECCIA_PARALLEL_HDF5
+  // results.h5's bond-list offsets (mpi_backend.cpp file_bond_offsets): each rank holds its
+  // block of the n + 1 rows and its own rows' first places, so the ranks hold 2 n + 1 in all
+  // (exact counts) and, from 3 ranks on, each fewer than the body's n (2 ranks: about n each).
+  // With a serial HDF5 rank 0 holds the whole list and the figure is absent.
+  const long long n = one["particles"].get<long long>();
+  ASSERT_FALSE(one.contains("file_offsets_rows_per_rank")) << "one process holds the whole list";
+  ASSERT_TRUE(dist.contains("file_offsets_rows_per_rank")) << out;
+  const auto& file_offsets = dist["file_offsets_rows_per_rank"];
+  ASSERT_EQ(file_offsets.size(), static_cast<size_t>(ranks)) << out;
+  long long file_offsets_held = 0;
+  for (int r = 0; r < ranks; ++r) {
+    file_offsets_held += file_offsets[r].get<long long>();
+    if (ranks >= 3) EXPECT_LT(file_offsets[r].get<long long>(), n) << out << ": rank " << r << " held the whole offsets";
+  }
+  EXPECT_EQ(file_offsets_held, 2 * n + 1) << out;
+#endif
 }
 
 // A case run by one process and, with the distributed set-up, on each of `ranks`: no fallback

@@ -917,14 +917,14 @@ public:
   // ranks form the bits' blocks from them (bit_block), and every rank gathers every block (the
   // dataset, 1 bit per bond).
   std::vector<uint8_t> broken_bits_together(const PdSystem& g, long long* count) {
-    const std::vector<int64_t>& offsets = file_bond_offsets(g);
+    const FileBondOffsets& offsets = file_bond_offsets(g);
     std::vector<int64_t> mine =
-        broken_bond_positions(local_, static_cast<size_t>(layout_.owned()), offsets, g.precrack_pairs);
+        broken_bond_positions(local_, static_cast<size_t>(layout_.owned()), offsets.row_first, g.precrack_pairs);
     long long total = static_cast<long long>(mine.size());
     MPI_Allreduce(MPI_IN_PLACE, &total, 1, MPI_LONG_LONG, MPI_SUM, comm_);
     *count = total;
-    const Blocks bytes = bit_bytes(offsets.back());
-    std::vector<uint8_t> block = bit_block(std::move(mine), offsets.back(), true, bytes);
+    const Blocks bytes = bit_bytes(offsets.bonds);
+    std::vector<uint8_t> block = bit_block(std::move(mine), offsets.bonds, true, bytes);
     std::vector<int> counts(static_cast<size_t>(bytes.ranks)), displs(static_cast<size_t>(bytes.ranks));
     for (int q = 0; q < bytes.ranks; ++q) {
       displs[q] = static_cast<int>(bytes.begin(q));
@@ -965,42 +965,98 @@ public:
   // results.h5's bond list, when the root's writer left it to the ranks (a new file:
   // bonds_pending), written by every rank together: each rank forms its own rows
   // (file_bond_rows: its rows' partners, in the file's order, at their places, which the
-  // list's offsets give) and writes them as its runs of /bonds/neighbors, its block of the
-  // offsets' rows, and its block of the within_horizon bits (bit_block, from the places of
-  // its pad bonds, which lie beyond both horizons: about a quarter of the bonds on a lattice
-  // with m = 3.015). No rank gathers a partner. On a restart the root checks its file's list
-  // against the count (check_bond_count). Collective.
-  void results_bonds(const PdSystem& g, ResultsWriter* results, const std::string& out_dir) {
+  // list's offsets give: file_bond_offsets) and writes them as its runs of /bonds/neighbors,
+  // its block of the offsets' rows, and its block of the within_horizon bits (bit_block, from
+  // the places of its pad bonds, which lie beyond both horizons: about a quarter of the bonds
+  // on a lattice with m = 3.015). No rank gathers a partner or the whole offsets. On a restart
+  // the root checks its file's list against the count (check_bond_count). Collective.
+  void results_bonds(PdSystem& g, ResultsWriter* results, const std::string& out_dir) {
     if (!g.config.write_results) return;
-    const std::vector<int64_t>& offsets = file_bond_offsets(g);
+    const FileBondOffsets& offsets = file_bond_offsets(g);
+    // The offsets this rank holds (its block and its rows' first places), to rank 0
+    // (summary.json's file_offsets_rows_per_rank).
+    const int64_t held = static_cast<int64_t>(offsets.block.size() + offsets.row_first.size());
+    g.file_offsets_rows.assign(static_cast<size_t>(layout_.part.ranks()), 0);
+    MPI_Gather(&held, 1, MPI_INT64_T, g.file_offsets_rows.data(), 1, MPI_INT64_T, 0, comm_);
     int pending = results && results->bonds_pending() ? 1 : 0;
     MPI_Bcast(&pending, 1, MPI_INT, 0, comm_);
-    if (results) results->check_bond_count(offsets.back());
+    if (results) results->check_bond_count(offsets.bonds);
     if (!pending) return;
     const int r = layout_.rank;
-    const Blocks offset_rows{static_cast<int64_t>(offsets.size()), layout_.part.ranks()};
-    FileBondRows mine = file_bond_rows(local_, static_cast<size_t>(layout_.owned()), offsets);
-    const Blocks bytes = bit_bytes(offsets.back());
-    const std::vector<uint8_t> within = bit_block(std::move(mine.beyond_horizon), offsets.back(), false, bytes);
-    ResultsWriter::write_bonds_together(results, out_dir, offsets, static_cast<size_t>(offset_rows.begin(r)),
-                                        static_cast<size_t>(offset_rows.begin(r + 1) - offset_rows.begin(r)), mine,
-                                        within, static_cast<size_t>(bytes.begin(r)), comm_);
+    FileBondRows mine = file_bond_rows(local_, static_cast<size_t>(layout_.owned()), offsets.row_first);
+    const Blocks bytes = bit_bytes(offsets.bonds);
+    const std::vector<uint8_t> within = bit_block(std::move(mine.beyond_horizon), offsets.bonds, false, bytes);
+    ResultsWriter::write_bonds_together(results, out_dir, offsets.block, static_cast<size_t>(offsets.block_first),
+                                        g.whole_n() + 1, offsets.bonds, mine, within,
+                                        static_cast<size_t>(bytes.begin(r)), comm_);
 #if defined(__GLIBC__)
     mine = FileBondRows{};
     malloc_trim(0);  // the rows' staging back to the system, as after the set-up (glibc keeps freed pages)
 #endif
   }
 
-  // results.h5's /bonds/offsets (HalfBondList::offsets) on every rank, counted once: each
-  // rank its own rows' partners of higher file index, summed over ranks (counts: exact).
-  const std::vector<int64_t>& file_bond_offsets(const PdSystem& g) {
-    if (file_bond_offsets_.empty()) {
-      file_bond_offsets_ = half_bond_counts(local_, static_cast<size_t>(layout_.owned()), g.whole_n());
-      MPI_Allreduce(MPI_IN_PLACE, file_bond_offsets_.data(), static_cast<int>(file_bond_offsets_.size()), MPI_INT64_T,
-                    MPI_SUM, comm_);
-      for (size_t i = 1; i < file_bond_offsets_.size(); ++i) file_bond_offsets_[i] += file_bond_offsets_[i - 1];
+  // results.h5's /bonds/offsets (HalfBondList::offsets, n + 1 rows) without the whole array on
+  // any rank, formed once (the bond lists do not change): the rows are cut into one contiguous
+  // block per rank (Blocks, as the output groups' rows), each rank sends each own row's (file
+  // index, count of partners of higher file index: half_bond_counts) to the rank whose block
+  // holds that file index (one all-to-all), the block's first offset is the sum of the lower
+  // blocks' counts (MPI_Exscan) and its others a prefix sum within it; then each rank gets
+  // back its own rows' first places in answer to the same messages (the reverse all-to-all,
+  // 8 bytes per row). Counts: exact. Held per rank: its block and its own rows, O(n / ranks).
+  struct FileBondOffsets {
+    int64_t block_first = 0;          // the block's first row of /bonds/offsets
+    std::vector<int64_t> block;       // /bonds/offsets rows [block_first, block_first + size)
+    std::vector<int64_t> row_first;   // own row i's first place in the list (internal order)
+    int64_t bonds = -1;               // the list's length (the offsets' last row)
+  };
+  const FileBondOffsets& file_bond_offsets(const PdSystem& g) {
+    FileBondOffsets& o = file_bond_offsets_;
+    if (o.bonds >= 0) return o;
+    const int ranks = layout_.part.ranks(), r = layout_.rank;
+    const size_t owned = static_cast<size_t>(layout_.owned());
+    const Blocks rows{static_cast<int64_t>(g.whole_n()) + 1, ranks};
+    const std::vector<int64_t> counts = half_bond_counts(local_, owned);
+    std::vector<int> send_counts(static_cast<size_t>(ranks), 0), at(static_cast<size_t>(ranks), 0);
+    for (size_t k = 0; k < owned; ++k) ++send_counts[rows.holding(local_.original_index[k])];
+    for (int q = 1; q < ranks; ++q) at[q] = at[q - 1] + send_counts[q - 1];
+    std::vector<int64_t> send(2 * owned), recv;  // (file index, count) per own row, by block
+    for (size_t k = 0; k < owned; ++k) {
+      const int64_t fi = local_.original_index[k];
+      int64_t* out = send.data() + 2 * static_cast<size_t>(at[rows.holding(fi)]++);
+      out[0] = fi;
+      out[1] = counts[k];
     }
-    return file_bond_offsets_;
+    MPI_Datatype pair;
+    MPI_Type_contiguous(2, MPI_INT64_T, &pair);
+    MPI_Type_commit(&pair);
+    AllToAll exchange;
+    exchange.run(send.data(), send_counts, recv, 2, pair, comm_);
+    MPI_Type_free(&pair);
+    // The block: row fi + 1 - block_first first holds row fi's count, then the prefix sum.
+    o.block_first = rows.begin(r);
+    o.block.assign(static_cast<size_t>(rows.begin(r + 1) - o.block_first), 0);
+    int64_t total = 0;  // the block's rows' counts: the next block's first offset less this one's
+    for (size_t k = 0; k < recv.size(); k += 2) {
+      const size_t row = static_cast<size_t>(recv[k] - o.block_first);
+      if (row + 1 < o.block.size()) o.block[row + 1] = recv[k + 1];
+      total += recv[k + 1];
+    }
+    int64_t base = 0;
+    MPI_Exscan(&total, &base, 1, MPI_INT64_T, MPI_SUM, comm_);
+    if (r == 0) base = 0;  // MPI_Exscan leaves rank 0's undefined
+    if (!o.block.empty()) o.block[0] = base;
+    for (size_t k = 1; k < o.block.size(); ++k) o.block[k] += o.block[k - 1];
+    MPI_Allreduce(&total, &o.bonds, 1, MPI_INT64_T, MPI_SUM, comm_);
+    // The answers: each received row's first place, back in the order it came.
+    std::vector<int64_t> first(recv.size() / 2), back(owned);
+    for (size_t k = 0; k < first.size(); ++k) first[k] = o.block[static_cast<size_t>(recv[2 * k] - o.block_first)];
+    MPI_Alltoallv(first.data(), exchange.recv_counts.data(), exchange.recv_displs.data(), MPI_INT64_T, back.data(),
+                  send_counts.data(), exchange.send_displs.data(), MPI_INT64_T, comm_);
+    o.row_first.resize(owned);
+    std::fill(at.begin(), at.end(), 0);  // the same walk as the sending one: row k's answer
+    for (int q = 1; q < ranks; ++q) at[q] = at[q - 1] + send_counts[q - 1];
+    for (size_t k = 0; k < owned; ++k) o.row_first[k] = back[static_cast<size_t>(at[rows.holding(local_.original_index[k])]++)];
+    return o;
   }
 
   // Every rank writes its own rows of checkpoint.h5 (collective I/O): nothing is gathered.
@@ -1027,7 +1083,7 @@ public:
   // (results_bonds); else rank 0 holds the list and checks a restart's file alone (an error
   // there reaches every rank through mpi_abort_all). Collective; outside the
   // parallel-HDF5 block above, since both builds call it (relax, mpi_time_loop).
-  void start_results(const PdSystem& g, ResultsWriter* results, const std::string& out_dir) {
+  void start_results(PdSystem& g, ResultsWriter* results, const std::string& out_dir) {
 #ifdef BRECCIA_PARALLEL_HDF5
     results_bonds(g, results, out_dir);
 #else
@@ -1141,7 +1197,9 @@ private:
   std::unique_ptr<HaloExchange>& halo_ = share_->halo;
   std::unique_ptr<StepBackend> device_;  // --backend cuda: the rank's system on its GPU
   std::vector<const void*> released_;    // the global arrays this rank let go of (held())
-  std::vector<int64_t> file_bond_offsets_;  // file_bond_offsets: n + 1 per rank, once
+#ifdef BRECCIA_PARALLEL_HDF5
+  FileBondOffsets file_bond_offsets_;  // file_bond_offsets: once
+#endif
 };
 
 }  // namespace

@@ -23,26 +23,28 @@ std::vector<uint8_t> broken_bits(const PdSystem& sys, const HalfBondList& list, 
 // The same bits per rank, without the whole bond state or bond list on any rank: a rank's
 // owned rows [0, owned) of `rows` (its system: partners local, `original_index` over owned
 // and ghosts) each add, per partner of higher file index, its place in the file's bond list,
-// `file_offsets[fi]` (HalfBondList::offsets) plus its rank among those partners by file
-// index. half_bond_counts gives each own row's count of such partners at its file index (n + 1
-// values, index fi + 1; summed over ranks and prefix-summed they are the list's offsets);
-// broken_bond_positions the places of its broken bonds (fracture_broken, pre-crack pairs
-// excluded, as broken_bits), from which the ranks form the bits together (mpi_backend.cpp).
-std::vector<int64_t> half_bond_counts(const PdSystem& rows, size_t owned, size_t n);
-std::vector<int64_t> broken_bond_positions(const PdSystem& rows, size_t owned, const std::vector<int64_t>& file_offsets,
+// its row's first place `row_first[i]` (HalfBondList::offsets at its file index) plus its rank
+// among those partners by file index. half_bond_counts gives each owned row's count of such
+// partners (internal order; placed at their file indices and prefix-summed over every rank's
+// rows they are the list's offsets: half_bond_list, and the ranks' blocks of them in
+// mpi_backend.cpp's file_bond_offsets); broken_bond_positions the places of its broken bonds
+// (fracture_broken, pre-crack pairs excluded, as broken_bits), from which the ranks form the
+// bits together (mpi_backend.cpp).
+std::vector<int64_t> half_bond_counts(const PdSystem& rows, size_t owned);
+std::vector<int64_t> broken_bond_positions(const PdSystem& rows, size_t owned, const std::vector<int64_t>& row_first,
                                            const std::vector<std::pair<int64_t, int64_t>>& precrack_pairs);
 
 // A rank's rows of the file's bond list (results.h5 /bonds, the list half_bond_list makes),
 // from its system's owned rows [0, owned) (partners local; original_index, x0 and horizon over
 // owned and ghosts), so that no rank holds another's: its rows in file-index order, each row's
-// partners of higher file index at their places in the list, file_offsets[fi] plus their rank
-// by file index (file_offsets: the list's offsets, summed from every rank's half_bond_counts).
+// partners of higher file index at their places in the list, row_first[i] (as for
+// broken_bond_positions) plus their rank by file index.
 struct FileBondRows {
   std::vector<int64_t> neighbors;       // the rows' partners (file indices), run after run
   std::vector<h5::RowRun> runs;         // their places in the list: ascending, adjacent rows merged
   std::vector<int64_t> beyond_horizon;  // places whose within_horizon bit is clear (the pad bonds)
 };
-FileBondRows file_bond_rows(const PdSystem& rows, size_t owned, const std::vector<int64_t>& file_offsets);
+FileBondRows file_bond_rows(const PdSystem& rows, size_t owned, const std::vector<int64_t>& row_first);
 
 // A per-particle field of an output group: its dataset, its components per particle and the
 // system's array it comes from (internal order).
@@ -80,14 +82,14 @@ public:
                              size_t file_first, size_t file_count, const std::vector<std::vector<double>>& rows,
                              const std::vector<uint8_t>& broken, long long broken_count, MPI_Comm comm);
   // /bonds/* of a new file whose writer left them to the ranks (bonds_pending), written by
-  // every rank of comm together: rows [offsets_first, offsets_first + offsets_count) of
-  // /bonds/offsets (file_offsets: the whole list's), its own rows of /bonds/neighbors
-  // (file_bond_rows) and bytes [within_first, within_first + size) of /bonds/within_horizon.
-  // The datasets are the ones write_results_bonds writes of the whole list. Collective; the
-  // root is the one rank whose `writer` is not null.
+  // every rank of comm together: its block of /bonds/offsets (`offsets_block`, rows from
+  // offsets_first of the offsets_rows = n + 1), its own rows of /bonds/neighbors
+  // (file_bond_rows; bonds_total bonds in all) and bytes [within_first, within_first + size)
+  // of /bonds/within_horizon. The datasets are the ones write_results_bonds writes of the
+  // whole list. Collective; the root is the one rank whose `writer` is not null.
   static void write_bonds_together(ResultsWriter* writer, const std::string& out_dir,
-                                   const std::vector<int64_t>& file_offsets, size_t offsets_first,
-                                   size_t offsets_count, const FileBondRows& mine,
+                                   const std::vector<int64_t>& offsets_block, size_t offsets_first,
+                                   size_t offsets_rows, int64_t bonds_total, const FileBondRows& mine,
                                    const std::vector<uint8_t>& within_horizon, size_t within_first, MPI_Comm comm);
 #endif
 

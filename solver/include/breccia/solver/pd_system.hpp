@@ -231,6 +231,11 @@ struct PdSystem {
   // The longest row offsets each rank held from the partition's cut on (the set-up system's,
   // the cut's, the ones kept for the run), rank 0 first (summary.json's offsets_rows_per_rank).
   std::vector<int64_t> setup_offsets_rows;
+  // The rows of results.h5's /bonds/offsets each rank of a distributed run with parallel HDF5
+  // held (its block and its own rows' first places: mpi_backend.cpp file_bond_offsets), rank
+  // 0 first (summary.json's file_offsets_rows_per_rank). Empty elsewhere: one process, or rank
+  // 0 with a serial HDF5, holds the whole list (half_bond_list).
+  std::vector<int64_t> file_offsets_rows;
   // The bond entries the set-up built (setup_system): the candidate families' entries (the
   // family search's, its largest arrays) and the kept ones (the bond arrays'). Under mpirun,
   // one value per rank, rank 0 first (finish_distributed_setup gathers them): each rank's own

@@ -338,7 +338,8 @@ void ResultsWriter::count_output(const PdSystem& s) {
 #ifdef BRECCIA_PARALLEL_HDF5
 void ResultsWriter::write_together(const PdSystem& s, ResultsWriter* w, const std::string& out_dir, size_t file_first,
                                    size_t file_count, const std::vector<std::vector<double>>& rows,
-                                   const std::vector<uint8_t>& broken, long long broken_count, MPI_Comm comm) {
+                                   const std::vector<uint8_t>& broken_block, size_t broken_first, size_t broken_bytes,
+                                   long long broken_count, MPI_Comm comm) {
   // The root: the group's index, then its own handle closed, since the ranks open the file
   // together (one open per process).
   long long index = 0;
@@ -353,7 +354,9 @@ void ResultsWriter::write_together(const PdSystem& s, ResultsWriter* w, const st
     const std::vector<ResultsField> fields = results_fields(s);
     for (size_t k = 0; k < fields.size(); ++k)
       f.write_rows(g + "/" + fields[k].name, rows[k].data(), file_first, file_count, field_dims(s.whole_n(), fields[k].components));
-    finish_results_output(f, static_cast<int>(index), static_cast<long long>(s.step), s.time, broken, broken_count);
+    // /broken as finish_results_output writes the whole bits (the same dataset), by blocks.
+    f.write_rows(g + "/broken", broken_block.data(), broken_first, broken_block.size(), {broken_bytes});
+    finish_results_output_attributes(f, static_cast<int>(index), static_cast<long long>(s.step), s.time, broken_count);
   }
   if (w) w->count_output(s);
 }

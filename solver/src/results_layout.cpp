@@ -41,8 +41,13 @@ void write_results_bonds(const h5::File& f, const HalfBondList& bonds) {
 
 void finish_results_output(const h5::File& f, int index, long long step, double time_s,
                            const std::vector<uint8_t>& broken, int64_t broken_count) {
+  f.write(results_output_group(index) + "/broken", broken, {broken.size()});
+  finish_results_output_attributes(f, index, step, time_s, broken_count);
+}
+
+void finish_results_output_attributes(const h5::File& f, int index, long long step, double time_s,
+                                      int64_t broken_count) {
   const std::string g = results_output_group(index);
-  f.write(g + "/broken", broken, {broken.size()});
   f.set_attr(g, "broken_count", static_cast<long long>(broken_count));
   f.set_attr(g, "step", step);
   f.set_attr(g, "time_s", time_s);

@@ -323,6 +323,40 @@ static std::string graded_case(const std::string& particles, const std::string& 
          "output: {every: 20, history_every: 10, fields: [damage, displacement, velocity]}\n";
 }
 
+// An output group's broken bits (mpi_backend.cpp broken_bits_together), with parallel HDF5:
+// each rank forms and writes its own block of the dataset's bytes, so the most bytes of them
+// each rank held (summary.json's broken_bits_bytes_per_rank) sum to the dataset's bytes once
+// (exact) and, at 2 ranks or more and a dataset of 2 bytes or more, each is fewer than the
+// dataset's (a rank that gathered the whole bits held all of them). Returns the figure. With a
+// serial HDF5 rank 0 forms the whole bits and the figure is absent.
+static std::vector<long long> expect_broken_bits_by_blocks(const std::string& one_dir, const std::string& out, int ranks) {
+  const auto one = summary(one_dir), dist = summary(out);
+#ifdef BRECCIA_PARALLEL_HDF5
+  const auto sets = datasets(one_dir + "/results.h5");
+  const auto it = sets.find("output/000000/broken");
+  EXPECT_NE(it, sets.end()) << one_dir << ": no output group";
+  if (it == sets.end()) return {};
+  const long long whole = static_cast<long long>(it->second.size());
+  EXPECT_FALSE(one.contains("broken_bits_bytes_per_rank")) << "one process forms the whole bits";
+  EXPECT_TRUE(dist.contains("broken_bits_bytes_per_rank")) << out;
+  if (!dist.contains("broken_bits_bytes_per_rank")) return {};
+  const auto held = dist["broken_bits_bytes_per_rank"].get<std::vector<long long>>();
+  EXPECT_EQ(held.size(), static_cast<size_t>(ranks)) << out;
+  long long sum = 0;
+  for (size_t r = 0; r < held.size(); ++r) {
+    sum += held[r];
+    if (ranks >= 2 && whole >= 2) EXPECT_LT(held[r], whole) << out << ": rank " << r << " held the whole broken bits";
+  }
+  EXPECT_EQ(sum, whole) << out << ": the ranks' blocks are not the dataset's bytes once each";
+  return held;
+#else
+  EXPECT_FALSE(dist.contains("broken_bits_bytes_per_rank")) << out;
+  (void)one;
+  (void)ranks;
+  return {};
+#endif
+}
+
 // Each rank's set-up built the bonds of its own rows alone (distributed_setup.hpp), read off
 // summary.json's setup_entries_per_rank (rank 0 first): the candidate family entries (the
 // family search's arrays, the set-up's largest) and the kept bond entries of the ranks sum to
@@ -404,6 +438,7 @@ static void expect_each_rank_built_its_own_rows(const std::string& one_dir, cons
   }
   EXPECT_EQ(file_offsets_held, 2 * n + 1) << out;
 #endif
+  expect_broken_bits_by_blocks(one_dir, out, ranks);
 }
 
 // A case run by one process and, with the distributed set-up, on each of `ranks`: no fallback
@@ -621,6 +656,44 @@ TEST(Distributed, ResultsBondListWrittenByRowsEqualsOneProcessFile) {
     const Outcome o = solve(file, out, ranks, 1, "--restart " + out + "/checkpoint.h5");
     EXPECT_EQ(o.exit_code, 2) << ranks << " ranks: " << o.err;
     EXPECT_NE(o.err.find("/bonds/neighbors: missing or a different bond count"), std::string::npos) << o.err;
+  }
+}
+
+// An output group's broken bits written by blocks of bytes (expect_broken_bits_by_blocks), here
+// fewer bytes than ranks: a 3 x 2 x 1 PMB lattice (1 mm spacing, m = 3.015: all 15 pairs
+// bonded, 2 bytes) expanding until 3 bonds break, bits in both bytes. At 4 ranks ranks 0 and 2
+// hold no byte (they write none and still take part); at 2, 3 and 4 ranks every dataset of
+// results.h5 is one process's byte for byte.
+TEST(Distributed, BrokenBitsWrittenByBlocksEvenWhereARankHoldsNoByte) {
+  const std::string file = write_case(
+      "mpi_bits_tiny",
+      "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.003, 0.002, 0.001], spacing: 1 mm}}\n"
+      "model: {type: pmb, horizon_factor: 3.015}\n"
+      "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 2}]\n"
+      "initial: [{type: radial_velocity, center: [0.0012, 0.001, 0.0005], strain_rate: 100}]\n"
+      "time: {steps: 40, check_stability: false}\n"
+      "output: {every: 20, history_every: 10, fields: [damage, displacement, velocity]}\n");
+  const std::string base = process_temp_dir() + "/bits_tiny";
+  const Outcome one = solve(file, base + "_whole", 1, 1);
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  {  // what the comparison covers: 2 bytes of bits, broken bonds in each
+    const auto sets = datasets(base + "_whole/results.h5");
+    ASSERT_TRUE(sets.count("output/000002/broken"));
+    const std::string& bits = sets.at("output/000002/broken");
+    ASSERT_EQ(bits.size(), 2u);
+    EXPECT_NE(bits[0], 0) << "no broken bond in the first byte";
+    EXPECT_NE(bits[1], 0) << "no broken bond in the second byte";
+    EXPECT_GT(summary(base + "_whole")["broken_bonds"].get<long long>(), 0);
+  }
+  for (const int ranks : {2, 3, 4}) {
+    const std::string out = base + "_np" + std::to_string(ranks);
+    const Outcome o = solve(file, out, ranks, 1);
+    ASSERT_EQ(o.exit_code, 0) << o.err;
+    EXPECT_EQ(differing(base + "_whole/results.h5", out + "/results.h5"), std::vector<std::string>{}) << ranks << " ranks";
+    [[maybe_unused]] const std::vector<long long> held = expect_broken_bits_by_blocks(base + "_whole", out, ranks);
+#ifdef BRECCIA_PARALLEL_HDF5
+    if (ranks == 4) EXPECT_EQ(held, (std::vector<long long>{0, 1, 0, 1})) << "bytes 2 q / 4 to 2 (q + 1) / 4 on rank q";
+#endif
   }
 }
 

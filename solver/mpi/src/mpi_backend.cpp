@@ -868,10 +868,8 @@ public:
 
   // Every rank writes rows of results.h5's output group: the file's rows are cut into one
   // contiguous block per rank, and the owned particles' values travel to the rank whose block
-  // holds their file index (one all-to-all). The broken bits: each rank finds its own rows'
-  // broken bonds' places in the file's bond list (broken_bond_positions) and every rank
-  // receives every rank's places (the broken bonds only, 8 bytes each), so no rank gathers
-  // the bond states.
+  // holds their file index (one all-to-all). The broken bits by blocks too
+  // (broken_bits_together): no rank gathers the bond states or the whole bits.
   void write_output(PdSystem& g, ResultsWriter* results, const std::string& out_dir) {
     const int r = layout_.rank;
     const std::vector<ResultsField> fields = results_fields(g);
@@ -906,34 +904,31 @@ public:
         for (int c = 0; c < fields[f].components; ++c) rows[f][static_cast<size_t>(fields[f].components * row + c)] = recv[c0++];
     }
     long long broken_count = 0;
-    const std::vector<uint8_t> broken = broken_bits_together(g, &broken_count);
+    const Blocks bytes = bit_bytes(file_bond_offsets(g).bonds);
+    const std::vector<uint8_t> broken = broken_bits_together(g, bytes, &broken_count);
     ResultsWriter::write_together(g, results, out_dir, static_cast<size_t>(file_first), static_cast<size_t>(file_count),
-                                  rows, broken, broken_count, comm_);
+                                  rows, broken, static_cast<size_t>(bytes.begin(r)), static_cast<size_t>(bytes.total),
+                                  broken_count, comm_);
   }
 
-  // The output group's broken bits (one per bond of results.h5's bond list), on every rank
-  // (each writes the same dataset), without the bond states leaving their ranks: each rank
-  // finds its own rows' broken bonds' places in the file's list (broken_bond_positions), the
-  // ranks form the bits' blocks from them (bit_block), and every rank gathers every block (the
-  // dataset, 1 bit per bond).
-  std::vector<uint8_t> broken_bits_together(const PdSystem& g, long long* count) {
+  // This rank's block (`bytes`: bit_bytes) of the output group's broken bits (one per bond of
+  // results.h5's bond list; each rank writes its block of the dataset), without the bond
+  // states leaving their ranks: each rank finds its own rows' broken bonds' places in the
+  // file's list (broken_bond_positions) and the ranks form the blocks from them (bit_block).
+  // No rank holds the whole bits (1 bit per bond: 750 MB at 6e9 bonds); the most bytes of
+  // them each rank held go to rank 0 (summary.json's broken_bits_bytes_per_rank). Collective.
+  std::vector<uint8_t> broken_bits_together(PdSystem& g, const Blocks& bytes, long long* count) {
     const FileBondOffsets& offsets = file_bond_offsets(g);
     std::vector<int64_t> mine =
         broken_bond_positions(local_, static_cast<size_t>(layout_.owned()), offsets.row_first, g.precrack_pairs);
     long long total = static_cast<long long>(mine.size());
     MPI_Allreduce(MPI_IN_PLACE, &total, 1, MPI_LONG_LONG, MPI_SUM, comm_);
     *count = total;
-    const Blocks bytes = bit_bytes(offsets.bonds);
     std::vector<uint8_t> block = bit_block(std::move(mine), offsets.bonds, true, bytes);
-    std::vector<int> counts(static_cast<size_t>(bytes.ranks)), displs(static_cast<size_t>(bytes.ranks));
-    for (int q = 0; q < bytes.ranks; ++q) {
-      displs[q] = static_cast<int>(bytes.begin(q));
-      counts[q] = static_cast<int>(bytes.begin(q + 1) - bytes.begin(q));
-    }
-    std::vector<uint8_t> bits(static_cast<size_t>(bytes.total));
-    MPI_Allgatherv(block.data(), counts[layout_.rank], MPI_BYTE, bits.data(), counts.data(), displs.data(), MPI_BYTE,
-                   comm_);
-    return bits;
+    broken_bits_held_ = std::max(broken_bits_held_, static_cast<int64_t>(block.size()));
+    g.broken_bits_bytes.assign(static_cast<size_t>(bytes.ranks), 0);
+    MPI_Gather(&broken_bits_held_, 1, MPI_INT64_T, g.broken_bits_bytes.data(), 1, MPI_INT64_T, 0, comm_);
+    return block;
   }
 
   // The bytes of `bits` bits (one per bond of the file's list), one contiguous block per rank.
@@ -1199,6 +1194,7 @@ private:
   std::vector<const void*> released_;    // the global arrays this rank let go of (held())
 #ifdef BRECCIA_PARALLEL_HDF5
   FileBondOffsets file_bond_offsets_;  // file_bond_offsets: once
+  int64_t broken_bits_held_ = 0;       // the most bytes of broken bits held (broken_bits_together)
 #endif
 };
 

@@ -74,13 +74,14 @@ public:
 #ifdef BRECCIA_PARALLEL_HDF5
   // A distributed run's output group, written by every rank of comm together (collective
   // I/O, nothing gathered): each rank gives rows [file_first, file_first + file_count) of the
-  // file-order fields (`rows[f]`: results_fields' f-th) and every rank the same broken bits
-  // and count (formed from every rank's broken_bond_positions); the root is the one rank
-  // whose `writer` is not null. The group is the one write() makes of the gathered state.
-  // Collective.
+  // file-order fields (`rows[f]`: results_fields' f-th) and bytes [broken_first, broken_first
+  // + size) of the broken bits (`broken_block`, of broken_bytes in all: formed from every
+  // rank's broken_bond_positions); every rank the same count. The root is the one rank whose
+  // `writer` is not null. The group is the one write() makes of the gathered state. Collective.
   static void write_together(const PdSystem& sys, ResultsWriter* writer, const std::string& out_dir,
                              size_t file_first, size_t file_count, const std::vector<std::vector<double>>& rows,
-                             const std::vector<uint8_t>& broken, long long broken_count, MPI_Comm comm);
+                             const std::vector<uint8_t>& broken_block, size_t broken_first, size_t broken_bytes,
+                             long long broken_count, MPI_Comm comm);
   // /bonds/* of a new file whose writer left them to the ranks (bonds_pending), written by
   // every rank of comm together: its block of /bonds/offsets (`offsets_block`, rows from
   // offsets_first of the offsets_rows = n + 1), its own rows of /bonds/neighbors

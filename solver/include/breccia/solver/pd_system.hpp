@@ -236,6 +236,10 @@ struct PdSystem {
   // 0 first (summary.json's file_offsets_rows_per_rank). Empty elsewhere: one process, or rank
   // 0 with a serial HDF5, holds the whole list (half_bond_list).
   std::vector<int64_t> file_offsets_rows;
+  // The most bytes of an output group's broken bits each rank held (its block of the dataset:
+  // mpi_backend.cpp broken_bits_together), rank 0 first (summary.json's
+  // broken_bits_bytes_per_rank). Empty where one process or rank 0 forms the whole bits.
+  std::vector<int64_t> broken_bits_bytes;
   // The bond entries the set-up built (setup_system): the candidate families' entries (the
   // family search's, its largest arrays) and the kept ones (the bond arrays'). Under mpirun,
   // one value per rank, rank 0 first (finish_distributed_setup gathers them): each rank's own

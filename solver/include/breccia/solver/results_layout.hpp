@@ -60,6 +60,10 @@ std::string results_output_group(int index);  // "/output/NNNNNN", numbered by o
 // time, then /@output_count = index + 1 and a flush (a reader never counts a partial group).
 void finish_results_output(const h5::File& f, int index, long long step, double time_s,
                            const std::vector<uint8_t>& broken, int64_t broken_count);
+// The same after the group's broken bits (its /broken dataset) are written: a distributed
+// run's ranks write them by blocks (ResultsWriter::write_together).
+void finish_results_output_attributes(const h5::File& f, int index, long long step, double time_s,
+                                      int64_t broken_count);
 
 // A per-particle dataset of every output group, as the XDMF sidecar shows it.
 struct XdmfField {

@@ -66,10 +66,12 @@ StableStepRanks mpi_stable_step_ranks();
 DistributedSetup mpi_distributed_setup();
 
 // RunOptions::relax for a distributed run: dynamic relaxation on every rank's share, the
-// state gathered into `global` on rank 0, and the output group written (with parallel HDF5
-// by every rank together: each its rows, nothing gathered; else by rank 0's `results`, null
-// elsewhere); returns the iterations (-1: not converged) and the final energies summed over ranks.
-std::pair<long long, Energies> mpi_relax(PdSystem& global, const RunOptions& options, ResultsWriter* results);
+// history line (rank 0's `history`, null elsewhere; the probes' values from their owners) and
+// the output group written (with parallel HDF5 by every rank together: each its rows, nothing
+// gathered; else by rank 0's `results`, null elsewhere, from the state gathered into `global`);
+// returns the iterations (-1: not converged) and the final energies summed over ranks.
+std::pair<long long, Energies> mpi_relax(PdSystem& global, const RunOptions& options, ResultsWriter* results,
+                                         HistoryWriter* history);
 
 // RunOptions::backend_loop for a distributed run (options.backend "cuda": on the ranks' GPUs).
 RunResult mpi_time_loop(PdSystem& global, const RunOptions& options, ResultsWriter* results,

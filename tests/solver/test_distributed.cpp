@@ -887,9 +887,9 @@ TEST(DistributedSetup, RateLawGivesTheOneProcessAnswer) {
 // and 3 ranks (the indenter's x and y reactions, sums of terms that nearly cancel, show any
 // other order). With parallel HDF5 rank 0 then holds no whole state array after its loop
 // (summary.json's loop_whole_bytes_rank0: the bytes of the whole per-particle and per-entry
-// arrays its global system holds; it held u, v, a, force, body, the fields and the reference
-// arrays, some 230 B per particle, before 2026-12-06); with serial HDF5 it holds them, the
-// staging its files are written from.
+// arrays its global system holds: before 2026-12-06 it held u, v, a, force, body, the fields
+// and the reference arrays, 497,664 B here, 216 B per particle, and this test failed there);
+// with serial HDF5 it holds them, the staging its files are written from.
 TEST(Distributed, ProbesAndTheIndenterGiveTheOneProcessHistoryFromTheirOwners) {
   const std::string file = write_case("mpi_probes_indenter",
       "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.012, 0.006, 0.004], spacing: 0.5 mm}}\n"

@@ -171,28 +171,35 @@ std::string instability_text(const PdSystem& s, const Energies& e, double energy
   return m.str();
 }
 
+std::pair<double, int64_t> first_fastest(const std::vector<double>& v, size_t count) {
+  int64_t i = 0;
+  double vmax = -1;
+  for (size_t k = 0; k < count; ++k) {
+    const double v2 = v[3 * k] * v[3 * k] + v[3 * k + 1] * v[3 * k + 1] + v[3 * k + 2] * v[3 * k + 2];
+    if (v2 > vmax) {
+      vmax = v2;
+      i = static_cast<int64_t>(k);
+    }
+  }
+  return {vmax, i};
+}
+
+std::pair<double, int64_t> first_largest(const std::vector<double>& values, size_t count) {
+  size_t i = 0;
+  for (size_t k = 1; k < count; ++k)
+    if (values[k] > values[i]) i = k;
+  return {count > 0 ? values[i] : 0.0, static_cast<int64_t>(i)};
+}
+
 std::string instability_message(const PdSystem& s, const Energies& e, double energy_scale) {
   std::optional<double> nonaffine;
   if (s.config.model == PdModel::Correspondence && s.corr_nonaffine.size() == s.n) nonaffine = nonaffine_energy(s);
   const Instability kind = instability_kind(s, e, energy_scale, nonaffine);
   size_t i = 0;  // the particle the message names
-  if (kind == Instability::ZeroEnergyModes) {
-    for (size_t k = 1; k < s.n; ++k)
-      if (s.corr_nonaffine[k] > s.corr_nonaffine[i]) i = k;
-  } else if (kind == Instability::NonFinite) {
-    i = e.bad_particle >= 0 ? static_cast<size_t>(e.bad_particle) : 0;
-  } else if (kind == Instability::EnergyGrowth) {
-    double vmax = -1;
-    for (size_t k = 0; k < s.n; ++k) {
-      const double v2 = s.v[3 * k] * s.v[3 * k] + s.v[3 * k + 1] * s.v[3 * k + 1] + s.v[3 * k + 2] * s.v[3 * k + 2];
-      if (v2 > vmax) {
-        vmax = v2;
-        i = k;
-      }
-    }
-  } else {
-    return "";
-  }
+  if (kind == Instability::ZeroEnergyModes) i = static_cast<size_t>(first_largest(s.corr_nonaffine, s.n).second);
+  else if (kind == Instability::NonFinite) i = e.bad_particle >= 0 ? static_cast<size_t>(e.bad_particle) : 0;
+  else if (kind == Instability::EnergyGrowth) i = static_cast<size_t>(first_fastest(s.v, s.n).second);
+  else return "";
   NamedParticle where;
   where.file_index = s.original_index[i];
   for (int d = 0; d < 3; ++d) where.x0[d] = s.x0[3 * i + d];

@@ -1099,27 +1099,17 @@ public:
     const std::optional<double> nonaffine = nonaffine_over_ranks(g);
     int kind = static_cast<int>(instability_kind(g, e, energy_scale, nonaffine));
     MPI_Bcast(&kind, 1, MPI_INT, 0, comm_);  // rank 0's judgement (every rank's energies are alike)
-    const int64_t first = layout_.begin(), owned = layout_.owned();
+    const int64_t first = layout_.begin();
+    const size_t owned = static_cast<size_t>(layout_.owned());
     int64_t pick = 0;
     if (kind == static_cast<int>(Instability::NonFinite)) {
       pick = e.bad_particle >= 0 ? e.bad_particle : 0;
     } else if (kind == static_cast<int>(Instability::ZeroEnergyModes)) {
-      int64_t i = 0;
-      for (int64_t k = 1; k < owned; ++k)
-        if (local_.corr_nonaffine[k] > local_.corr_nonaffine[i]) i = k;
-      pick = first_largest_over_ranks(local_.corr_nonaffine[i], first + i);
+      const auto [value, i] = first_largest(local_.corr_nonaffine, owned);
+      pick = first_largest_over_ranks(value, first + i);
     } else if (kind == static_cast<int>(Instability::EnergyGrowth)) {
-      const std::vector<double>& v = local_.v;
-      int64_t i = 0;
-      double vmax = -1;
-      for (int64_t k = 0; k < owned; ++k) {
-        const double v2 = v[3 * k] * v[3 * k] + v[3 * k + 1] * v[3 * k + 1] + v[3 * k + 2] * v[3 * k + 2];
-        if (v2 > vmax) {
-          vmax = v2;
-          i = k;
-        }
-      }
-      pick = first_largest_over_ranks(vmax, first + i);
+      const auto [speed2, i] = first_fastest(local_.v, owned);
+      pick = first_largest_over_ranks(speed2, first + i);
     } else {
       return "";
     }

@@ -137,5 +137,9 @@ Instability instability_kind(const PdSystem& sys, const Energies& e, double ener
                              std::optional<double> nonaffine);
 std::string instability_text(const PdSystem& sys, const Energies& e, double energy_scale, Instability kind,
                              double nonaffine, const NamedParticle& where);
+// The particle of [0, count) a message names: the first of the fastest (`v`: 3 per particle)
+// with its squared speed, the first of the largest `values` with its value.
+std::pair<double, int64_t> first_fastest(const std::vector<double>& v, size_t count);
+std::pair<double, int64_t> first_largest(const std::vector<double>& values, size_t count);
 
 }  // namespace breccia::solver

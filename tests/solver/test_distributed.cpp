@@ -1021,3 +1021,25 @@ TEST(Distributed, AnInterruptedRunStopsWithOneProcessCheckpointAndContinues) {
   EXPECT_GT(summary(base + "_np1")["broken_bonds"].get<long long>(), s["broken_bonds"].get<long long>())
       << "no bond broke after the restart";
 }
+
+// Dynamic relaxation's one history line (MpiBackend::relax) takes its probe from the probed
+// particle's owner too: the far corner of the pressed bar of
+// DynamicRelaxationConvergesToTheSameStateOnThreeRanks (the last rank's, the end of the Morton
+// order), one process's text on 3 ranks.
+TEST(Distributed, DynamicRelaxationReadsItsProbeOnItsRank) {
+  const std::string file = write_case("mpi_adr_probe",
+      "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.016, 0.008, 0.004], spacing: 1 mm}}\n"
+      "model: {type: lps, horizon_factor: 3.015}\n"
+      "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25}]\n"
+      "precracks: [{type: polygon, points: [[0.008, -0.001, -0.001], [0.008, 0.004, -0.001], [0.008, 0.004, 0.005], [0.008, -0.001, 0.005]]}]\n"
+      "loads: [{type: pressure, surface: xmax, history: {type: constant, value: -2 MPa}}]\n"
+      "boundary: [{type: displacement, set: xmin, value: [0, 0, 0]}]\n"
+      "time: {integrator: adr, adr_tolerance: 1e-10, adr_max_steps: 100000}\n"
+      "output: {fields: [displacement], probes: [{name: tip, position: [16 mm, 8 mm, 4 mm], field: displacement}]}\n");
+  const std::string base = process_temp_dir() + "/adr_probe";
+  ASSERT_EQ(solve(file, base + "_np1", 1, 1).exit_code, 0);
+  const Outcome three = solve(file, base + "_np3", 3, 1);
+  ASSERT_EQ(three.exit_code, 0) << three.err;
+  EXPECT_GT(last_history_value(base + "_np1", "probe_tip_uy"), 1e-5);  // the bar bends open at the crack
+  expect_one_process_files(base + "_np1", base + "_np3");
+}

@@ -23,7 +23,8 @@ struct RunOptions {
   bool progress = true;
   std::string backend = "cpu";
   // This process writes the files and prints (false on the ranks other than 0 of a
-  // distributed run, solver/mpi/: rank 0 holds the gathered state).
+  // distributed run, solver/mpi/: rank 0 writes history.csv, summary.json and, with serial
+  // HDF5, every file from its gathered state).
   bool root = true;
   int ranks = 1;  // processes of the run (summary.json)
   // A backend's dynamic loop (the CUDA backend sets it; it runs run_time_loop with its own

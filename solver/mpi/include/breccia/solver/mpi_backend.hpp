@@ -2,7 +2,8 @@
 // Distributed runs (docs/parallel.md): `mpirun -np P breccia-solve CASE.yaml`. Each rank
 // steps its own share of the particles (rank_system.hpp) with the step of step.hpp, through
 // an execution space that adds the halo exchanges; the time loop (run.hpp) is the one every
-// backend uses, with rank 0 gathering the state when a file is written.
+// backend uses; with serial HDF5 rank 0 gathers the state when a file is written, with
+// parallel HDF5 every rank writes its rows and rank 0 gathers no whole array.
 #include <mpi.h>
 
 #include <memory>
@@ -43,7 +44,7 @@ bool mpi_all_agree(bool ok);
 
 // The time loop's backend for rank `rank` of `comm`: builds the rank's system from the
 // (replicated) global one and keeps it between steps; measure() sums over ranks,
-// download() gathers the owned ranges into the global system on rank 0.
+// download() gathers the owned ranges into the global system on rank 0 (serial HDF5 only).
 // Throws InputError for a case it cannot distribute (naming the key). `cuda`: each rank steps
 // on a GPU (the node-local rank's, modulo the node's GPUs), the halo packed on the device and
 // carried through pinned host buffers, or device buffers with a CUDA-aware MPI.

@@ -48,21 +48,21 @@ double nonaffine_energy(const PdSystem& s) {
   return sum;
 }
 
-std::string zero_energy_mode_message(const PdSystem& s, const Energies& e) {
-  if (s.config.model != PdModel::Correspondence || s.corr_nonaffine.size() != s.n) return "";
+bool zero_energy_modes_grew(const Energies& e, double nonaffine) {
   const double mechanical = e.kinetic + e.strain;
-  const double nonaffine = nonaffine_energy(s);
-  if (!(mechanical > 1e-300) || nonaffine <= kMaxNonAffineRatio * mechanical) return "";
-  size_t worst = 0;
-  for (size_t i = 1; i < s.n; ++i)
-    if (s.corr_nonaffine[i] > s.corr_nonaffine[worst]) worst = i;
+  return mechanical > 1e-300 && !(nonaffine <= kMaxNonAffineRatio * mechanical);
+}
+
+std::string zero_energy_mode_message(const PdSystem& s, const Energies& e, double nonaffine,
+                                     const NamedParticle& largest) {
+  const double mechanical = e.kinetic + e.strain;
   std::ostringstream m;
   m << "run became unstable at step " << s.step << " (t = " << s.time
     << " s): zero-energy (hourglass) modes of the correspondence model grew: the non-affine part of the "
        "deformation (Y - F xi) holds "
     << nonaffine / mechanical << " x the body's kinetic + strain energy under a unit penalty (limit "
-    << kMaxNonAffineRatio << "); largest at particle " << s.original_index[worst] << " at (" << s.x0[3 * worst]
-    << ", " << s.x0[3 * worst + 1] << ", " << s.x0[3 * worst + 2] << "). ";
+    << kMaxNonAffineRatio << "); largest at particle " << largest.file_index << " at (" << largest.x0[0] << ", "
+    << largest.x0[1] << ", " << largest.x0[2] << "). ";
   if (s.config.stabilisation == "penalty")
     m << "Raise model.stabilisation.coefficient (now " << s.config.stabilisation_coefficient
       << "; 1 or more keeps the ratio below the limit).";

@@ -1,5 +1,7 @@
 #include "breccia/solver/outputs.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -385,22 +387,55 @@ void ResultsWriter::write_xdmf(const PdSystem& s) const {
   write_results_xdmf(dir_ + "/results.xdmf", s.n, times_, fields);
 }
 
+std::pair<double, int64_t> nearest_particle(const double* x0, size_t count, const Vec3& position) {
+  int64_t best = 0;
+  double best_d2 = 1e300;
+  for (size_t i = 0; i < count; ++i) {
+    double d2 = 0;
+    for (int d = 0; d < 3; ++d) d2 += std::pow(x0[3 * i + d] - position[d], 2);
+    if (d2 < best_d2) {
+      best_d2 = d2;
+      best = static_cast<int64_t>(i);
+    }
+  }
+  return {best_d2, best};
+}
+
+std::vector<IndenterTerm> indenter_terms(const PdSystem& s, size_t count, int64_t first) {
+  const IndenterSpec& ind = s.config.indenter;
+  // Each thread its static block of the particles, the blocks joined in order: index order.
+  std::vector<std::vector<IndenterTerm>> blocks(static_cast<size_t>(omp_get_max_threads()));
+#pragma omp parallel num_threads(static_cast<int>(blocks.size()))
+  {
+    const size_t t = static_cast<size_t>(omp_get_thread_num()), threads = static_cast<size_t>(omp_get_num_threads());
+    for (size_t i = count * t / threads; i < count * (t + 1) / threads; ++i) {
+      IndenterTerm term{first + static_cast<int64_t>(i), {0.0, 0.0, 0.0}};
+      indenter_force(s.x0.data(), s.u.data(), static_cast<int64_t>(i), s.indenter_position, ind.radius, ind.stiffness,
+                     term.f);
+      if (term.f[0] == 0.0 && term.f[1] == 0.0 && term.f[2] == 0.0) continue;  // out of contact
+      for (double& c : term.f) c *= s.volume[i];
+      blocks[t].push_back(term);
+    }
+  }
+  std::vector<IndenterTerm> out;
+  for (const std::vector<IndenterTerm>& b : blocks) out.insert(out.end(), b.begin(), b.end());
+  return out;
+}
+
+void indenter_reaction(const std::vector<IndenterTerm>& terms, double out[3]) {
+  // The particles out of contact add zeros, which change no sum (it starts from +0 and no
+  // subtraction gives -0), so the terms alone give every particle's sum in index order.
+  out[0] = out[1] = out[2] = 0.0;
+  for (const IndenterTerm& t : terms)
+    for (int d = 0; d < 3; ++d) out[d] -= t.f[d];
+}
+
 HistoryWriter::HistoryWriter(const PdSystem& s, const std::string& out_dir, bool append) {
   std::filesystem::create_directories(out_dir);
   const std::string path = out_dir + "/history.csv";
-  for (const auto& p : s.config.probes) {
-    int32_t best = 0;
-    double best_d2 = 1e300;
-    for (size_t i = 0; i < s.n; ++i) {
-      double d2 = 0;
-      for (int d = 0; d < 3; ++d) d2 += std::pow(s.x0[3 * i + d] - p.position[d], 2);
-      if (d2 < best_d2) {
-        best_d2 = d2;
-        best = static_cast<int32_t>(i);
-      }
-    }
-    probes_.emplace_back(best, p.field == "velocity" ? 1 : 0);
-  }
+  for (const auto& p : s.config.probes)
+    probes_.emplace_back(static_cast<int32_t>(nearest_particle(s.x0.data(), s.n, p.position).second),
+                         p.field == "velocity" ? 1 : 0);
   if (append && std::filesystem::exists(path)) {
     // Drop rows after the checkpoint step so the history continues seamlessly.
     std::ifstream in(path);
@@ -435,26 +470,17 @@ HistoryWriter::~HistoryWriter() {
   if (file_) std::fclose(file_);
 }
 
-void HistoryWriter::write(const PdSystem& s, const Energies& e) {
+void HistoryWriter::write(const PdSystem& s, const Energies& e, const HistoryParticles* particles) {
   // Broken bonds counted as pairs: each pair has two entries, each with up to two halves.
   std::fprintf(file_, "%lld,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%.6f,%lld", s.step, s.time, e.kinetic, e.strain,
                s.external_work, s.dissipated_energy, e.kinetic + e.strain + s.dissipated_energy - s.external_work,
                e.max_damage, e.broken_half_bonds / 2);
   if (s.config.indenter.enabled) {
-    // The force the particles exert on the indenter at this step's position: minus the sum
-    // of what it exerts on them (LAMMPS fix indent's vector).
-    const IndenterSpec& ind = s.config.indenter;
-    double fx = 0.0, fy = 0.0, fz = 0.0;
-    const int64_t n = static_cast<int64_t>(s.n);
-#pragma omp parallel for reduction(+ : fx, fy, fz)
-    for (int64_t i = 0; i < n; ++i) {
-      double f[3];
-      indenter_force(s.x0.data(), s.u.data(), i, s.indenter_position, ind.radius, ind.stiffness, f);
-      fx -= f[0] * s.volume[i];
-      fy -= f[1] * s.volume[i];
-      fz -= f[2] * s.volume[i];
-    }
-    std::fprintf(file_, ",%.9e,%.9e,%.9e", fx, fy, fz);
+    // The force the particles exert on the indenter at this step's position.
+    double f[3];
+    if (particles) std::copy(particles->indenter, particles->indenter + 3, f);
+    else indenter_reaction(indenter_terms(s, s.n, 0), f);
+    std::fprintf(file_, ",%.9e,%.9e,%.9e", f[0], f[1], f[2]);
   }
   if (s.gas.active) {
     const GasState& g = s.gas;
@@ -466,9 +492,10 @@ void HistoryWriter::write(const PdSystem& s, const Energies& e) {
     std::fprintf(file_, ",%.9e,%.9e,%.9e,%.9e,%.9e,%d,%lld,%.9e", g.pressure, g.volume, g.crack_volume, g.work,
                  g.mass_fraction, g.vented ? 1 : 0, wetted, g.outflow_area());
   }
-  for (const auto& [i, kind] : probes_) {
-    const std::vector<double>& src = kind ? s.v : s.u;
-    for (int d = 0; d < 3; ++d) std::fprintf(file_, ",%.9e", src[3 * static_cast<size_t>(i) + d]);
+  for (size_t p = 0; p < probes_.size(); ++p) {
+    const auto [i, kind] = probes_[p];
+    const double* src = particles ? &particles->probes.at(3 * p) : &(kind ? s.v : s.u)[3 * static_cast<size_t>(i)];
+    for (int d = 0; d < 3; ++d) std::fprintf(file_, ",%.9e", src[d]);
   }
   std::fprintf(file_, "\n");
   std::fflush(file_);

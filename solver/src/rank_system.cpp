@@ -508,6 +508,54 @@ struct Release {
 };
 }  // namespace
 
+// The whole arrays release_global_for_loop lets go of on the ranks that do not write, each
+// with whether rank 0 gathers into it (`f(array, named)`: named as held there where rank 0
+// holds it though this system may not, with serial HDF5). `rank_system`: the rank's own system,
+// whose model fields say which of the global system's rank 0 holds (null: those it holds).
+template <class F>
+void for_each_loop_state_array(PdSystem& g, F&& f, const PdSystem* rank_system = nullptr) {
+  // What rank 0 gathers the state into for its files (MpiBackend::download, output).
+  // Rank 0 holds these for every particle; a distributed set-up's other ranks never allocate
+  // `a` and `body` and let `u` and `v` go at the stable step (setup_system,
+  // mpi_stable_step_forces): named as held all the same. So do the forces and the fields
+  // every model has (energy density, dissipated energy, damage, largest stretch, dilatation),
+  // which they let go at the stable step too; the model's own fields (LPS's factors,
+  // correspondence's tensors) are named where the rank's system holds them (rank 0 then holds
+  // them whole).
+  for (auto* a : {&g.u, &g.v, &g.a, &g.body, &g.force, &g.energy_density, &g.dissipated, &g.damage,
+                  &g.max_stretch, &g.dilatation})
+    f(*a, true);
+  for (auto field : {&PdSystem::lps_a, &PdSystem::lps_b, &PdSystem::corr_deformation, &PdSystem::corr_force_tensor,
+                     &PdSystem::corr_nonaffine})
+    f(g.*field, rank_system && !(rank_system->*field).empty());
+  // A gas load's front (its arrival times; between two crack passes the pushes), which rank 0
+  // gathers for its checkpoint: named where rank 0 holds them (crack_entry; the pushes with
+  // crack_pass_every > 1: download).
+  const bool front = g.gas.active && g.gas.crack_entry;
+  f(g.gas.arrival, front);
+  f(g.gas.push, front && g.gas.crack_pass_every > 1);
+  f(g.min_stretch, false);
+  f(g.min_stretch_next, false);
+#ifndef BRECCIA_PARALLEL_HDF5
+  // The bond states: a distributed set-up left them on rank 0 alone (a restart read this
+  // rank's rows here, which its system has taken). Rank 0 holds them whenever there are
+  // bonds: this rank takes part in its gathers (MpiBackend::held).
+  for_each_bond_state_array(g, [&](auto& a) { f(a, g.bond_count() > 0); });
+#endif
+  // What rank 0's writers alone read: the instability message's positions, the indenter's
+  // volumes, the file order, the results' bond list.
+  f(g.x0, false);
+  f(g.volume, false);
+  f(g.original_index, false);
+#ifndef BRECCIA_PARALLEL_HDF5
+  f(g.precrack_pairs, false);  // with parallel HDF5 every rank's broken bits leave out the pre-crack's
+#endif
+  f(g.neighbor, false);
+  f(g.vol_own, false);
+  f(g.own_count, false);
+  f(g.k_dual, false);
+}
+
 void release_global_at_stable_step(PdSystem& g) {
   Release drop;
   for_each_released_at_stable_step(nullptr, g, [&](auto*, auto& global, size_t) { drop(global); });
@@ -562,59 +610,28 @@ std::vector<const void*> release_global_for_loop(PdSystem& g, bool root, const P
   // left none here, a restart this rank's rows, which its system has taken. Not named as held.
   for_each_bond_state_array(g, [](auto& a) { std::remove_reference_t<decltype(a)>().swap(a); });
 #endif
-  if (!root) {
-    // What rank 0 gathers the state into for its files (MpiBackend::download, output).
-    // Rank 0 holds these for every particle; a distributed set-up's other ranks never allocate
-    // `a` and `body` and let `u` and `v` go at the stable step (setup_system,
-    // mpi_stable_step_forces): named as held all the same, else this rank would skip a gather
-    // rank 0 waits in.
-    // So do the forces and the fields every model has (energy density, dissipated energy,
-    // damage, largest stretch, dilatation), which they let go at the stable step too; the
-    // model's own fields (LPS's factors, correspondence's tensors) are named as held where
-    // the rank's system holds them (rank 0 then holds them whole), or where this system does.
-    for (auto* a : {&g.u, &g.v, &g.a, &g.body, &g.force, &g.energy_density, &g.dissipated, &g.damage,
-                    &g.max_stretch, &g.dilatation}) {
-      if (a->empty() && g.n > 0) drop.held.push_back(a);
-      drop(*a);
-    }
-    for (auto field : {&PdSystem::lps_a, &PdSystem::lps_b, &PdSystem::corr_deformation, &PdSystem::corr_force_tensor,
-                       &PdSystem::corr_nonaffine}) {
-      std::vector<double>& a = g.*field;
-      if (a.empty() && g.n > 0 && rank_system && !(rank_system->*field).empty()) drop.held.push_back(&a);
-      drop(a);
-    }
-    // A gas load's front (its arrival times; between two crack passes the pushes), which
-    // rank 0 gathers for its checkpoint: let go at the stable step too, named as held where
-    // rank 0 holds them (crack_entry; the pushes with crack_pass_every > 1: download).
-    if (g.gas.active && g.gas.crack_entry) {
-      if (g.gas.arrival.empty() && g.n > 0) drop.held.push_back(&g.gas.arrival);
-      if (g.gas.push.empty() && g.n > 0 && g.gas.crack_pass_every > 1) drop.held.push_back(&g.gas.push);
-    }
-    for (auto* a : {&g.gas.arrival, &g.gas.push}) drop(*a);
-    for (auto* a : {&g.min_stretch, &g.min_stretch_next}) drop(*a);
-#ifndef BRECCIA_PARALLEL_HDF5
-    // The bond states: a distributed set-up left them on rank 0 alone (a restart read this
-    // rank's rows here, which its system has taken). Rank 0 holds them whenever there are
-    // bonds: this rank takes part in its gathers (MpiBackend::held).
-    for_each_bond_state_array(g, [&](auto& a) {
-      if (g.bond_count() > 0) drop.held.push_back(&a);
-      drop(a);
-    });
+#ifdef BRECCIA_PARALLEL_HDF5
+  const bool staging = false;  // rank 0 gathers nothing: it lets go as the others do
+#else
+  const bool staging = true;   // rank 0 writes every file from its gathered arrays
 #endif
-    // What rank 0's writers alone read: the instability message's positions, the indenter's
-    // volumes, the file order, the results' bond list.
-    drop(g.x0);
-    drop(g.volume);
-    drop(g.original_index);
-#ifndef BRECCIA_PARALLEL_HDF5
-    drop(g.precrack_pairs);  // with parallel HDF5 every rank's broken bits leave out the pre-crack's
-#endif
-    drop(g.neighbor);
-    drop(g.vol_own);
-    drop(g.own_count);
-    drop(g.k_dual);
-  }
+  if (!root || !staging) for_each_loop_state_array(g, [&](auto& a, bool named) {
+      // With staging the arrays rank 0 gathers into are named as held (`named`: where this
+      // system never held them or let them go earlier), else this rank would skip a gather
+      // rank 0 waits in; without staging there is no gather.
+      if (!staging) std::remove_reference_t<decltype(a)>().swap(a);
+      else if (named && a.empty() && g.n > 0) drop.held.push_back(&a);
+      else drop(a);
+    }, rank_system);
   return drop.held;
+}
+
+size_t loop_state_bytes(const PdSystem& g) {
+  size_t bytes = 0;
+  for_each_loop_state_array(const_cast<PdSystem&>(g), [&](auto& a, bool) {
+    bytes += a.capacity() * sizeof(typename std::remove_reference_t<decltype(a)>::value_type);
+  });
+  return bytes;
 }
 
 // What runs on the host in a distributed run and has no device path yet: the gas load's sums

@@ -115,6 +115,8 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   j["broken_bonds"] = r.final_energies.broken_half_bonds / 2;
   // What the time loop holds (RunResult::loop_resident_mb): per rank, rank 0 first.
   if (!r.loop_resident_mb.empty()) j["loop_resident_mb"] = r.loop_resident_mb;
+  // What rank 0 of a distributed run holds whole after it (RunResult::loop_whole_bytes_rank0).
+  if (r.loop_whole_bytes_rank0 >= 0) j["loop_whole_bytes_rank0"] = r.loop_whole_bytes_rank0;
   j["non_finite"] = non_finite;
   if (!non_finite.empty())
     j["non_finite_note"] = "these values were not finite when the run stopped (status " + r.status +
@@ -131,48 +133,79 @@ void print_progress(long long step, long long total_steps, double time_s, long l
                time_s, rate, (total_steps - step) / std::max(rate, 1e-9), max_damage);
 }
 
-std::string instability_message(const PdSystem& s, const Energies& e, double energy_scale) {
-  const auto where = [&](int64_t i) {
-    std::ostringstream m;
-    m << "particle " << s.original_index[i] << " at (" << s.x0[3 * i] << ", " << s.x0[3 * i + 1] << ", "
-      << s.x0[3 * i + 2] << ")";
-    return m.str();
-  };
+Instability instability_kind(const PdSystem& s, const Energies& e, double energy_scale,
+                             std::optional<double> nonaffine) {
   // Correspondence: zero-energy modes grow without a blow-up of the energy (correspondence.cpp).
-  if (e.finite) {
-    const std::string zero_energy = zero_energy_mode_message(s, e);
-    if (!zero_energy.empty()) return zero_energy;
-  }
+  if (e.finite && nonaffine && zero_energy_modes_grew(e, *nonaffine)) return Instability::ZeroEnergyModes;
+  if (!e.finite) return Instability::NonFinite;
+  // Energy far above everything put in: an exponentially growing mode. Not at step 1: a
+  // load that starts from zero gives the particles the second half-kick's velocity before
+  // the trapezoid has any displacement to count work on (external work 0, kinetic > 0); from
+  // step 2 the two lag by at most about 2x, far below the 10x that marks a growing mode.
+  if (s.step >= 2 && e.kinetic + e.strain > 10.0 * energy_scale && e.kinetic + e.strain > 1e-30)
+    return Instability::EnergyGrowth;
+  return Instability::None;
+}
+
+std::string instability_text(const PdSystem& s, const Energies& e, double energy_scale, Instability kind,
+                             double nonaffine, const NamedParticle& where) {
+  if (kind == Instability::None) return "";
+  if (kind == Instability::ZeroEnergyModes) return zero_energy_mode_message(s, e, nonaffine, where);
   std::ostringstream m;
-  if (!e.finite) {
-    const int64_t i = e.bad_particle >= 0 ? e.bad_particle : 0;
-    m << "run became unstable at step " << s.step << " (t = " << s.time << " s): " << where(i)
+  const auto at = [&] {
+    std::ostringstream w;
+    w << "particle " << where.file_index << " at (" << where.x0[0] << ", " << where.x0[1] << ", " << where.x0[2]
+      << ")";
+    return w.str();
+  };
+  if (kind == Instability::NonFinite) {
+    m << "run became unstable at step " << s.step << " (t = " << s.time << " s): " << at()
       << " has a non-finite displacement or velocity";
-  } else if (s.step >= 2 && e.kinetic + e.strain > 10.0 * energy_scale && e.kinetic + e.strain > 1e-30) {
-    // Energy far above everything put in: an exponentially growing mode. Not at step 1: a
-    // load that starts from zero gives the particles the second half-kick's velocity before
-    // the trapezoid has any displacement to count work on (external work 0, kinetic > 0); from
-    // step 2 the two lag by at most about 2x, far below the 10x that marks a growing mode.
-    int64_t worst = 0;
-    double vmax = -1;
-    for (size_t i = 0; i < s.n; ++i) {
-      const double v2 = s.v[3 * i] * s.v[3 * i] + s.v[3 * i + 1] * s.v[3 * i + 1] + s.v[3 * i + 2] * s.v[3 * i + 2];
-      if (v2 > vmax) {
-        vmax = v2;
-        worst = static_cast<int64_t>(i);
-      }
-    }
+  } else {
     m << "run became unstable at step " << s.step << " (t = " << s.time << " s): energy "
       << e.kinetic + e.strain << " J grew beyond 10x the energy supplied (" << energy_scale << " J); fastest "
-      << where(worst);
-  } else {
-    return "";
+      << at();
   }
   m << ". Likely cause: time step too large (dt = " << s.dt << " s, stable step 2/omega_max = " << s.stable_dt
     << " s)";
   if (s.dt <= s.stable_dt) m << ", or a horizon too small for irregular particles (raise model.horizon_factor)";
   m << ". The last good output is kept.";
   return m.str();
+}
+
+std::pair<double, int64_t> first_fastest(const std::vector<double>& v, size_t count) {
+  int64_t i = 0;
+  double vmax = -1;
+  for (size_t k = 0; k < count; ++k) {
+    const double v2 = v[3 * k] * v[3 * k] + v[3 * k + 1] * v[3 * k + 1] + v[3 * k + 2] * v[3 * k + 2];
+    if (v2 > vmax) {
+      vmax = v2;
+      i = static_cast<int64_t>(k);
+    }
+  }
+  return {vmax, i};
+}
+
+std::pair<double, int64_t> first_largest(const std::vector<double>& values, size_t count) {
+  size_t i = 0;
+  for (size_t k = 1; k < count; ++k)
+    if (values[k] > values[i]) i = k;
+  return {count > 0 ? values[i] : 0.0, static_cast<int64_t>(i)};
+}
+
+std::string instability_message(const PdSystem& s, const Energies& e, double energy_scale) {
+  std::optional<double> nonaffine;
+  if (s.config.model == PdModel::Correspondence && s.corr_nonaffine.size() == s.n) nonaffine = nonaffine_energy(s);
+  const Instability kind = instability_kind(s, e, energy_scale, nonaffine);
+  size_t i = 0;  // the particle the message names
+  if (kind == Instability::ZeroEnergyModes) i = static_cast<size_t>(first_largest(s.corr_nonaffine, s.n).second);
+  else if (kind == Instability::NonFinite) i = e.bad_particle >= 0 ? static_cast<size_t>(e.bad_particle) : 0;
+  else if (kind == Instability::EnergyGrowth) i = static_cast<size_t>(first_fastest(s.v, s.n).second);
+  else return "";
+  NamedParticle where;
+  where.file_index = s.original_index[i];
+  for (int d = 0; d < 3; ++d) where.x0[d] = s.x0[3 * i + d];
+  return instability_text(s, e, energy_scale, kind, nonaffine.value_or(0.0), where);
 }
 
 long long relax_to_equilibrium(PdSystem& s, bool progress, const RelaxHooks& hooks) {
@@ -261,6 +294,15 @@ long long total_steps_of(const PdSystem& s, const RunOptions& o) {
 
 }  // namespace
 
+bool StepBackend::unstable(PdSystem& s, const Energies& e, double energy_scale, bool root) {
+  return any(root && !instability_message(s, e, energy_scale).empty());
+}
+
+std::string StepBackend::instability(PdSystem& s, const Energies& e, double energy_scale) {
+  download(s);  // the message names the fastest particle: it needs velocities
+  return instability_message(s, e, energy_scale);
+}
+
 void StepBackend::checkpoint(PdSystem& s, const std::string& path, bool root, bool downloaded) {
   if (!downloaded) download(s);
   if (root) write_checkpoint(s, path);
@@ -283,8 +325,14 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
   const long long total_steps = total_steps_of(s, o);
   Energies e = backend.measure(s);
   double supplied = e.kinetic + e.strain;  // the scale against which blow-up is judged
+  // A history line: its particles' values from the backend (every process takes part), the
+  // line from the root.
+  const auto write_history = [&] {
+    const std::optional<HistoryParticles> particles = backend.history_particles(s);
+    if (root) history->write(s, e, particles ? &*particles : nullptr);
+  };
   if (!restart) {
-    if (root) history->write(s, e);  // host and backend agree before the first step
+    write_history();  // host and backend agree before the first step
     backend.first_output(s, results, o.out_dir);
   }
   const long long first_step = s.step;
@@ -305,15 +353,15 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
       e = backend.measure(s);
       supplied = std::max(supplied, std::fabs(s.external_work) + s.dissipated_energy);
       supplied = std::max(supplied, 1e-300);
-      if (backend.any(root && !instability_message(s, e, supplied).empty())) {
-        backend.download(s);  // the message names the fastest particle: it needs velocities
+      if (backend.unstable(s, e, supplied, root)) {
         r.status = "unstable";
-        if (root) r.message = instability_message(s, e, supplied);
+        const std::string message = backend.instability(s, e, supplied);
+        if (root) r.message = message;
         break;
       }
       if (output_due) backend.output(s, results, o.out_dir);
       else if (!s.config.probes.empty() || s.config.indenter.enabled) backend.download_kinematics(s);
-      if (history_due && root) history->write(s, e);
+      if (history_due) write_history();
     }
     if (s.config.checkpoint_every > 0 && s.step % s.config.checkpoint_every == 0)
       backend.checkpoint(s, o.out_dir + "/checkpoint.h5", root);
@@ -324,7 +372,7 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
       backend.compute_forces(s);  // diagnostics at this step (no bond can break again here)
       e = backend.measure(s);
       backend.download(s);
-      if (root) history->write(s, e);
+      write_history();
       backend.output(s, results, o.out_dir);  // a distributed one written by every rank together
       backend.checkpoint(s, o.out_dir + "/checkpoint.h5", root, true);
       break;
@@ -375,7 +423,7 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();
     long long iters = 0;
     if (o.relax) {
-      std::tie(iters, r.final_energies) = o.relax(s, o, results.get());  // and its output group
+      std::tie(iters, r.final_energies) = o.relax(s, o, results.get(), history.get());  // and its output group
     } else {
       iters = relax_to_equilibrium(s, o.progress);
       r.final_energies = measure(s);
@@ -384,7 +432,7 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
     r.steps = iters < 0 ? s.config.adr_max_steps : iters;
     r.status = iters < 0 ? "not_converged" : "converged";
     if (iters < 0) r.message = "ADR did not reach the tolerance within time.adr_max_steps";
-    if (history) history->write(s, r.final_energies);
+    if (history && !o.relax) history->write(s, r.final_energies);
     if (results && !o.relax) results->write(s);
   } else if (o.backend_loop) {
     r = o.backend_loop(s, o, results.get(), history.get());

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "breccia/common/error.hpp"
+#include "breccia/solver/correspondence.hpp"
 #include "breccia/solver/distributed_setup.hpp"
 #include "breccia/solver/exec_openmp.hpp"
 #include "breccia/solver/float32_state.hpp"
@@ -755,7 +756,10 @@ public:
 #endif
     // float32: one process's first measure leaves the float-rounded kinematics in its system,
     // which the first output writes (run_time_loop); later outputs download first anyway.
-    if (local_.f32.active) download_kinematics(global);
+    if (local_.f32.active) {
+      kinematics_to_host();
+      gather_kinematics(global);  // rank 0's staging (serial HDF5); with parallel HDF5 nothing is held
+    }
     if (cuda) {
 #ifdef BRECCIA_MPI_CUDA
       check_cuda_ranks_support(local_.config, "the case");  // breccia-solve refused these before set-up
@@ -821,8 +825,16 @@ public:
     return out;
   }
 
+  // The rank's state to its host system and, with serial HDF5, gathered into rank 0's global
+  // system, whose writers write every file from it (its staging). With parallel HDF5 every rank
+  // writes its own rows (checkpoint, output) and the history's particles and the instability
+  // message come from their owners (history_particles, instability): nothing is gathered, and
+  // no rank holds the whole state (release_global_for_loop).
   void download(PdSystem& g) override {
     to_host();
+#ifdef BRECCIA_PARALLEL_HDF5
+    (void)g;
+#else
     const std::vector<int64_t> one = particle_ranges(layout_.part, 1), three = particle_ranges(layout_.part, 3),
                                nine = particle_ranges(layout_.part, 9), entries = entry_ranges(layout_.part, g);
     for (auto [l, gl] : {std::pair{&local_.u, &g.u}, {&local_.v, &g.v}, {&local_.a, &g.a}, {&local_.force, &g.force},
@@ -849,13 +861,13 @@ public:
       // Between two crack passes: the vectors the volume follows (/gas/push).
       if (local_.gas.crack_pass_every > 1) gather(local_.gas.push, g.gas.push, three);
     }
+#endif
   }
 
 #ifdef BRECCIA_PARALLEL_HDF5
   void output(PdSystem& g, ResultsWriter* results, const std::string& out_dir) override {
     if (!g.config.write_results) return StepBackend::output(g, results, out_dir);
     to_host();
-    if (!g.config.probes.empty() || g.config.indenter.enabled) download_kinematics(g);
     write_output(g, results, out_dir);
   }
 
@@ -1088,22 +1100,97 @@ public:
 #endif
   }
 
-  void download_kinematics(PdSystem& g) override {
-    if (device_) device_->download_kinematics(local_);
-    else if (local_.f32.active) float32_download_kinematics(local_);
-    const std::vector<int64_t> three = particle_ranges(layout_.part, 3);
-    gather(local_.u, g.u, three);
-    gather(local_.v, g.v, three);
+  // The probes and the indenter are read on their ranks (history_particles): nothing to gather.
+  void download_kinematics(PdSystem&) override {}
+
+  // The probes' values and the indenter's reaction, for rank 0's history line: each probe's
+  // owner sends its particle's displacement or velocity, each rank its particles' indenter
+  // terms in contact (indenter_terms, in index order; the ranks' in rank order, which is index
+  // order), which rank 0 adds as one process does (indenter_reaction). Collective.
+  std::optional<HistoryParticles> history_particles(PdSystem& g) override {
+    const CaseConfig& c = g.config;
+    HistoryParticles out;
+    if (c.probes.empty() && !c.indenter.enabled) return out;
+    kinematics_to_host();
+    const int64_t first = layout_.begin(), owned = layout_.owned();
+    if (!c.probes.empty()) {
+      const std::vector<int64_t>& at = probe_particles(g);
+      std::vector<double> mine;  // per owned probe: its number, then its 3 values
+      for (size_t p = 0; p < at.size(); ++p) {
+        if (at[p] < first || at[p] >= first + owned) continue;
+        const std::vector<double>& src = c.probes[p].field == "velocity" ? local_.v : local_.u;
+        mine.push_back(static_cast<double>(p));
+        for (int d = 0; d < 3; ++d) mine.push_back(src[3 * static_cast<size_t>(at[p] - first) + d]);
+      }
+      const std::vector<double> all = gather_to_root(mine);
+      out.probes.assign(3 * at.size(), 0.0);
+      for (size_t k = 0; k + 3 < all.size(); k += 4)
+        std::copy(all.begin() + static_cast<std::ptrdiff_t>(k + 1), all.begin() + static_cast<std::ptrdiff_t>(k + 4),
+                  out.probes.begin() + 3 * static_cast<std::ptrdiff_t>(all[k]));
+    }
+    if (c.indenter.enabled) {
+      const std::vector<IndenterTerm> mine = indenter_terms(local_, static_cast<size_t>(owned), first);
+      indenter_reaction(gather_to_root(mine), out.indenter);
+    }
+    return out;
+  }
+
+  // The blow-up test of instability_message with its sums over the ranks: the energies are
+  // (measure), correspondence's non-affine energy is summed here. Collective.
+  bool unstable(PdSystem& g, const Energies& e, double energy_scale, bool root) override {
+    const std::optional<double> nonaffine = nonaffine_over_ranks(g);  // every rank: a sum over them
+    return any(root && instability_kind(g, e, energy_scale, nonaffine) != Instability::None);
+  }
+
+  // The message of a blow-up, naming the particle as one process does: the fastest (or the one
+  // of largest non-affine energy) is the first of the largest over the ranks, the non-finite
+  // one measure's; its owner sends rank 0 its file index and position. Collective.
+  std::string instability(PdSystem& g, const Energies& e, double energy_scale) override {
+    to_host();
+    const std::optional<double> nonaffine = nonaffine_over_ranks(g);
+    int kind = static_cast<int>(instability_kind(g, e, energy_scale, nonaffine));
+    MPI_Bcast(&kind, 1, MPI_INT, 0, comm_);  // rank 0's judgement (every rank's energies are alike)
+    const int64_t first = layout_.begin();
+    const size_t owned = static_cast<size_t>(layout_.owned());
+    int64_t pick = 0;
+    if (kind == static_cast<int>(Instability::NonFinite)) {
+      pick = e.bad_particle >= 0 ? e.bad_particle : 0;
+    } else if (kind == static_cast<int>(Instability::ZeroEnergyModes)) {
+      const auto [value, i] = first_largest(local_.corr_nonaffine, owned);
+      pick = first_largest_over_ranks(value, first + i);
+    } else if (kind == static_cast<int>(Instability::EnergyGrowth)) {
+      const auto [speed2, i] = first_fastest(local_.v, owned);
+      pick = first_largest_over_ranks(speed2, first + i);
+    } else {
+      return "";
+    }
+    // The particle's owner sends its file index (exact as a double) and reference position.
+    const std::vector<int64_t>& begin = layout_.part.begin;
+    const int owner = static_cast<int>(std::upper_bound(begin.begin(), begin.end(), pick) - begin.begin()) - 1;
+    double named[4] = {0.0, 0.0, 0.0, 0.0};
+    if (owner == layout_.rank) {
+      const size_t k = static_cast<size_t>(pick - first);
+      named[0] = static_cast<double>(local_.original_index[k]);
+      for (int d = 0; d < 3; ++d) named[1 + d] = local_.x0[3 * k + d];
+      if (owner != 0) MPI_Send(named, 4, MPI_DOUBLE, 0, kNamedTag, comm_);
+    } else if (layout_.rank == 0) {
+      MPI_Recv(named, 4, MPI_DOUBLE, owner, kNamedTag, comm_, MPI_STATUS_IGNORE);
+    }
+    NamedParticle where;
+    where.file_index = static_cast<int64_t>(named[0]);
+    std::copy(named + 1, named + 4, where.x0);
+    return instability_text(g, e, energy_scale, static_cast<Instability>(kind), nonaffine.value_or(0.0), where);
   }
 
   // Dynamic relaxation on the rank's share: the force pass exchanges the halo, the sums
   // (load norm, residual, the damping's Rayleigh quotient) are taken over ranks,
   // reproducibly (reproducible_sum.hpp), so every rank and one process take the same
-  // decisions from the same bits; then the state is gathered into rank 0's global system (the
-  // history and the summary read it) and the one output group written as the time loop's are:
-  // with parallel HDF5 by every rank together (write_output; no rank gathers a bond state or
-  // a partner), else by rank 0's writer from its staging.
-  std::pair<long long, Energies> relax(PdSystem& g, const RunOptions& o, ResultsWriter* results) {
+  // decisions from the same bits; then the history line (its particles from their owners:
+  // history_particles) and the one output group written as the time loop's are: with parallel
+  // HDF5 by every rank together (write_output; nothing gathered), else by rank 0's writer from
+  // its staging (download).
+  std::pair<long long, Energies> relax(PdSystem& g, const RunOptions& o, ResultsWriter* results,
+                                       HistoryWriter* history) {
     start_results(g, results, o.out_dir);  // as the time loop's
     RelaxHooks hooks;
     hooks.forces = [this](PdSystem& l) {
@@ -1133,6 +1220,8 @@ public:
     download(g);
     g.step = local_.step;
     if (local_.gas.active) g.gas.copy_scalars(local_.gas);  // the history's and summary's gas
+    const std::optional<HistoryParticles> particles = history_particles(g);
+    if (history) history->write(g, e, &*particles);
 #ifdef BRECCIA_PARALLEL_HDF5
     if (g.config.write_results) write_output(g, results, o.out_dir);
 #else
@@ -1158,6 +1247,88 @@ private:
   template <class T, class A>
   void gather(const std::vector<T, A>& local, std::vector<T, A>& global, const std::vector<int64_t>& begin) {
     gather_ranges(local, global, begin, layout_.rank, comm_, held(global));
+  }
+
+  // The particles the probes read (global internal indices), found once: each rank's nearest
+  // owned particle (nearest_particle), then the smallest (distance, index) over the ranks, the
+  // particle one process's search finds (the first of the nearest). Collective.
+  const std::vector<int64_t>& probe_particles(const PdSystem& g) {
+    if (probe_particles_.size() == g.config.probes.size()) return probe_particles_;
+    struct Candidate {
+      double d2;
+      long long index;
+    };
+    int ranks = 1;
+    MPI_Comm_size(comm_, &ranks);
+    std::vector<Candidate> all(static_cast<size_t>(ranks));
+    for (const ProbeSpec& p : g.config.probes) {
+      const auto [d2, k] = nearest_particle(local_.x0.data(), static_cast<size_t>(layout_.owned()), p.position);
+      const Candidate mine{d2, static_cast<long long>(layout_.begin() + k)};
+      MPI_Allgather(&mine, sizeof mine, MPI_BYTE, all.data(), sizeof mine, MPI_BYTE, comm_);
+      const Candidate best = *std::min_element(all.begin(), all.end(), [](const Candidate& a, const Candidate& b) {
+        return a.d2 < b.d2 || (a.d2 == b.d2 && a.index < b.index);
+      });
+      probe_particles_.push_back(best.index);
+    }
+    return probe_particles_;
+  }
+
+  // The global index of the largest `value` over the ranks (each rank's first largest owned
+  // one, at `index`), the smallest index among equal values: one process's first largest.
+  int64_t first_largest_over_ranks(double value, int64_t index) {
+    struct Candidate {
+      double value;
+      long long index;
+    };
+    int ranks = 1;
+    MPI_Comm_size(comm_, &ranks);
+    std::vector<Candidate> all(static_cast<size_t>(ranks));
+    const Candidate mine{value, static_cast<long long>(index)};
+    MPI_Allgather(&mine, sizeof mine, MPI_BYTE, all.data(), sizeof mine, MPI_BYTE, comm_);
+    Candidate best = all[0];
+    for (const Candidate& c : all)  // ascending ranks: ascending indices
+      if (c.value > best.value) best = c;
+    return best.index;
+  }
+
+  // Correspondence's non-affine energy (nonaffine_energy) summed over the ranks' own particles;
+  // none for the other models. Collective.
+  std::optional<double> nonaffine_over_ranks(const PdSystem& g) {
+    if (g.config.model != PdModel::Correspondence) return std::nullopt;
+    if (device_) to_host();  // the fields of the last pass
+    double sum = local_.corr_nonaffine.empty() ? 0.0 : nonaffine_energy(local_);
+    MPI_Allreduce(MPI_IN_PLACE, &sum, 1, MPI_DOUBLE, MPI_SUM, comm_);
+    return sum;
+  }
+
+  // Every rank's `mine` to rank 0, in rank order (elements of T as bytes); empty elsewhere.
+  template <class T>
+  std::vector<T> gather_to_root(const std::vector<T>& mine) {
+    int ranks = 1;
+    MPI_Comm_size(comm_, &ranks);
+    const int count = static_cast<int>(mine.size());
+    std::vector<int> counts(static_cast<size_t>(ranks)), displs(static_cast<size_t>(ranks) + 1, 0);
+    MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm_);
+    for (int q = 0; q < ranks; ++q) displs[q + 1] = displs[q] + counts[q];
+    std::vector<T> all(layout_.rank == 0 ? static_cast<size_t>(displs[ranks]) : 0);
+    MPI_Datatype type;
+    MPI_Type_contiguous(static_cast<int>(sizeof(T)), MPI_BYTE, &type);
+    MPI_Type_commit(&type);
+    MPI_Gatherv(mine.data(), count, type, all.data(), counts.data(), displs.data(), type, 0, comm_);
+    MPI_Type_free(&type);
+    return all;
+  }
+
+  // u and v of the rank's state into its host system (from the GPU, or float32's float state).
+  void kinematics_to_host() {
+    if (device_) device_->download_kinematics(local_);
+    else if (local_.f32.active) float32_download_kinematics(local_);
+  }
+  // ... and gathered into rank 0's u and v where it holds them (serial HDF5's staging).
+  void gather_kinematics(PdSystem& g) {
+    const std::vector<int64_t> three = particle_ranges(layout_.part, 3);
+    gather(local_.u, g.u, three);
+    gather(local_.v, g.v, three);
   }
 
   // The rank's whole state into its host system (from the GPU, or float32's float state).
@@ -1196,6 +1367,8 @@ private:
   FileBondOffsets file_bond_offsets_;  // file_bond_offsets: once
   int64_t broken_bits_held_ = 0;       // the most bytes of broken bits held (broken_bits_together)
 #endif
+  std::vector<int64_t> probe_particles_;    // probe_particles: once
+  static constexpr int kNamedTag = 7103;    // instability: the named particle's owner to rank 0
 };
 
 }  // namespace
@@ -1372,10 +1545,11 @@ DistributedSetup mpi_distributed_setup() {
   return d;
 }
 
-std::pair<long long, Energies> mpi_relax(PdSystem& global, const RunOptions& o, ResultsWriter* results) {
+std::pair<long long, Energies> mpi_relax(PdSystem& global, const RunOptions& o, ResultsWriter* results,
+                                         HistoryWriter* history) {
   MpiBackend backend(global, MPI_COMM_WORLD);
   try {
-    return backend.relax(global, o, results);
+    return backend.relax(global, o, results, history);
   } catch (const std::exception& e) {
     mpi_abort_all(e.what(), kExitRunFailed);
   }
@@ -1399,6 +1573,7 @@ RunResult mpi_time_loop(PdSystem& global, const RunOptions& o, ResultsWriter* re
     MPI_Gather(&mine, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, 0, MPI_COMM_WORLD);
     if (std::find(all.begin(), all.end(), -1.0) == all.end()) r.loop_resident_mb = all;
     else r.loop_resident_mb.clear();
+    if (rank == 0) r.loop_whole_bytes_rank0 = static_cast<long long>(loop_state_bytes(global));
     return r;
   } catch (const std::exception& e) {
     // From here a failure may be one rank's alone (a file rank 0 writes): stop them all.

@@ -21,8 +21,12 @@ CorrespondenceView correspondence_view(PdSystem& s);
 // motion would hold under a unit penalty (filled on diagnostics steps).
 double nonaffine_energy(const PdSystem& s);
 
-// Empty while the non-affine energy stays below kMaxNonAffineRatio x (kinetic + strain);
-// else the message that stops the run: zero-energy modes, where, and what to do.
-std::string zero_energy_mode_message(const PdSystem& s, const Energies& e);
+// Whether the non-affine energy `nonaffine` (nonaffine_energy, or its sum over a distributed
+// run's ranks) grew beyond kMaxNonAffineRatio x (kinetic + strain): zero-energy modes.
+bool zero_energy_modes_grew(const Energies& e, double nonaffine);
+// The message that stops the run then: zero-energy modes, where (`largest`: the particle of
+// largest non-affine energy), and what to do.
+std::string zero_energy_mode_message(const PdSystem& s, const Energies& e, double nonaffine,
+                                     const NamedParticle& largest);
 
 }  // namespace breccia::solver

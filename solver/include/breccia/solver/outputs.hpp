@@ -106,11 +106,32 @@ private:
   int64_t unchecked_bonds_ = -1;  // a restart's file: its list's length, not yet checked
 };
 
+// The particle of [0, count) of `x0` nearest `position`, the first of equally near ones, with
+// its squared distance: a probe's particle (HistoryWriter; a distributed run takes the
+// smallest (distance, index) over its ranks' owned particles, the same particle).
+std::pair<double, int64_t> nearest_particle(const double* x0, size_t count, const Vec3& position);
+
+// One particle's share of the indenter's reaction: the force the indenter exerts on it
+// (indenter_force) times its volume.
+struct IndenterTerm {
+  int64_t particle;  // `first` + its index in the system
+  double f[3];
+};
+// The terms of particles [0, count) of `s` (x0, u, volume) in contact with the indenter, in
+// index order (the others' are zero).
+std::vector<IndenterTerm> indenter_terms(const PdSystem& s, size_t count, int64_t first);
+// The force the particles exert on the indenter (LAMMPS fix indent's vector): minus the sum of
+// the terms, added in index order, so one process at any thread count and every rank count
+// (whose ranks send rank 0 their terms in rank order: index order) give the same bits.
+void indenter_reaction(const std::vector<IndenterTerm>& terms, double out[3]);
+
 class HistoryWriter {
 public:
   HistoryWriter(const PdSystem& sys, const std::string& out_dir, bool append);
   ~HistoryWriter();
-  void write(const PdSystem& sys, const Energies& e);
+  // `particles`: the probes' values and the indenter's reaction where the system does not hold
+  // them whole (a distributed run's rank 0: StepBackend::history_particles); null: from `sys`.
+  void write(const PdSystem& sys, const Energies& e, const HistoryParticles* particles = nullptr);
 
 private:
   std::FILE* file_ = nullptr;

@@ -394,6 +394,20 @@ struct Energies {
 };
 Energies measure(const PdSystem& sys);
 
+// A particle a message names (an instability's): its file index and reference position.
+struct NamedParticle {
+  int64_t file_index = 0;
+  double x0[3] = {0.0, 0.0, 0.0};
+};
+
+// What a history line reads of single particles (history.csv): each probe's displacement or
+// velocity (3 values per probe, the case's order) and the indenter's reaction. One process's
+// history writer takes them from its system; a distributed run's owners send them to rank 0.
+struct HistoryParticles {
+  std::vector<double> probes;
+  double indenter[3] = {0.0, 0.0, 0.0};
+};
+
 // Largest angular frequency of the linearised system (times a 2% margin) by power iteration
 // (uses the force kernel on a tiny displacement, so it is exact for the discretisation at
 // hand); the reference the Lanczos estimate below is checked against. `forces`: how each

@@ -93,7 +93,17 @@ void release_global_at_stable_step(PdSystem& global);
 // state arrays and the fields of the stable step's last pass: mpi_stable_step_forces) is
 // named as held all the same where rank 0 holds it: the model's own fields (LPS's factors,
 // correspondence's tensors) where `rank_system`, the rank's own system, holds them.
+// With parallel HDF5 rank 0 writes no file alone and gathers nothing (every rank writes its
+// rows; the history's particles and the instability message come from their owners:
+// MpiBackend::history_particles, instability), so it lets go of those arrays as the others
+// do, and none is named as held.
 std::vector<const void*> release_global_for_loop(PdSystem& global, bool root, const PdSystem* rank_system = nullptr);
+
+// The bytes (capacity) of the whole per-particle and per-entry arrays release_global_for_loop
+// lets go of on the ranks that do not write: the state, the fields, the gas's front, the bond
+// states and partners, the reference positions, volumes and file indices. summary.json's
+// loop_whole_bytes_rank0: what rank 0's global system holds of them after its loop.
+size_t loop_state_bytes(const PdSystem& global);
 
 // A distributed run on the CUDA backend (one GPU per rank, docs/parallel.md) runs what the
 // CUDA step runs on one process, less what a distributed run adds on the host: throws

@@ -23,7 +23,8 @@ struct RunOptions {
   bool progress = true;
   std::string backend = "cpu";
   // This process writes the files and prints (false on the ranks other than 0 of a
-  // distributed run, solver/mpi/: rank 0 holds the gathered state).
+  // distributed run, solver/mpi/: rank 0 writes history.csv, summary.json and, with serial
+  // HDF5, every file from its gathered state).
   bool root = true;
   int ranks = 1;  // processes of the run (summary.json)
   // A backend's dynamic loop (the CUDA backend sets it; it runs run_time_loop with its own
@@ -36,7 +37,9 @@ struct RunOptions {
   // and the final state's energies, which the backend measures (a distributed set-up's global
   // system holds no bonds to measure them with); it writes the output group itself (the root's
   // writer is null on the other ranks). Empty: relax_to_equilibrium here.
-  std::function<std::pair<long long, Energies>(PdSystem&, const RunOptions&, ResultsWriter*)> relax;
+  // It writes the history line too (the root's writer, null elsewhere), since a distributed
+  // run's probes are read on their ranks.
+  std::function<std::pair<long long, Energies>(PdSystem&, const RunOptions&, ResultsWriter*, HistoryWriter*)> relax;
 };
 
 struct RunResult {
@@ -51,6 +54,9 @@ struct RunResult {
   // final outputs: what the loop holds, where the peak (VmHWM) is usually the set-up's. One
   // value per rank of a distributed run (rank 0 first); empty where it cannot be read.
   std::vector<double> loop_resident_mb;
+  // A distributed run: the bytes of whole per-particle and per-entry arrays rank 0's global
+  // system holds after the loop and its final outputs (loop_state_bytes); -1 elsewhere.
+  long long loop_whole_bytes_rank0 = -1;
 };
 
 // What the time loop needs from a backend. The CPU backend works on the PdSystem in place;
@@ -63,6 +69,16 @@ public:
   virtual void compute_forces(PdSystem& s) = 0;  // refresh forces and diagnostics in place
   virtual void download(PdSystem&) {}            // whole state to the host (outputs, checkpoint)
   virtual void download_kinematics(PdSystem&) {} // u and v only (probes)
+  // What the root's next history line reads of single particles (every process calls it):
+  // none here, the history writer reads the host system (after download_kinematics or an
+  // output); a distributed backend has their owners send them to the root.
+  virtual std::optional<HistoryParticles> history_particles(PdSystem&) { return std::nullopt; }
+  // Whether the run blew up at this step (instability_message's tests), the same answer on
+  // every process (`root` judges), and then its message (every process calls it; the root's
+  // is the one used): here from the host system, downloaded first (it names the fastest
+  // particle); a distributed backend takes the sums and the particle over its ranks.
+  virtual bool unstable(PdSystem& s, const Energies& e, double energy_scale, bool root);
+  virtual std::string instability(PdSystem& s, const Energies& e, double energy_scale);
   // checkpoint.h5 at the current step (every process calls it; `downloaded`: download ran
   // since the last step). Here: the whole state to the host, written by the root alone; a
   // distributed backend with parallel HDF5 writes every rank's rows together instead.
@@ -111,5 +127,20 @@ void print_progress(long long step, long long total_steps, double time_s, long l
 
 // Checks a state for blow-up; empty string if healthy, else the message for the user.
 std::string instability_message(const PdSystem& sys, const Energies& e, double energy_scale);
+
+// Its parts, for a system that does not hold the state whole (a distributed run's): which
+// blow-up the energies show (`nonaffine`: correspondence's non-affine energy,
+// nonaffine_energy, where the model has one), and the message of one naming `where`: the
+// particle of largest non-affine energy, the non-finite one (Energies::bad_particle), or the
+// fastest (the first of equally fast ones).
+enum class Instability { None, ZeroEnergyModes, NonFinite, EnergyGrowth };
+Instability instability_kind(const PdSystem& sys, const Energies& e, double energy_scale,
+                             std::optional<double> nonaffine);
+std::string instability_text(const PdSystem& sys, const Energies& e, double energy_scale, Instability kind,
+                             double nonaffine, const NamedParticle& where);
+// The particle of [0, count) a message names: the first of the fastest (`v`: 3 per particle)
+// with its squared speed, the first of the largest `values` with its value.
+std::pair<double, int64_t> first_fastest(const std::vector<double>& v, size_t count);
+std::pair<double, int64_t> first_largest(const std::vector<double>& values, size_t count);
 
 }  // namespace breccia::solver

@@ -2,7 +2,8 @@
 // Distributed runs (docs/parallel.md): `mpirun -np P breccia-solve CASE.yaml`. Each rank
 // steps its own share of the particles (rank_system.hpp) with the step of step.hpp, through
 // an execution space that adds the halo exchanges; the time loop (run.hpp) is the one every
-// backend uses, with rank 0 gathering the state when a file is written.
+// backend uses; with serial HDF5 rank 0 gathers the state when a file is written, with
+// parallel HDF5 every rank writes its rows and rank 0 gathers no whole array.
 #include <mpi.h>
 
 #include <memory>
@@ -43,7 +44,7 @@ bool mpi_all_agree(bool ok);
 
 // The time loop's backend for rank `rank` of `comm`: builds the rank's system from the
 // (replicated) global one and keeps it between steps; measure() sums over ranks,
-// download() gathers the owned ranges into the global system on rank 0.
+// download() gathers the owned ranges into the global system on rank 0 (serial HDF5 only).
 // Throws InputError for a case it cannot distribute (naming the key). `cuda`: each rank steps
 // on a GPU (the node-local rank's, modulo the node's GPUs), the halo packed on the device and
 // carried through pinned host buffers, or device buffers with a CUDA-aware MPI.
@@ -66,10 +67,12 @@ StableStepRanks mpi_stable_step_ranks();
 DistributedSetup mpi_distributed_setup();
 
 // RunOptions::relax for a distributed run: dynamic relaxation on every rank's share, the
-// state gathered into `global` on rank 0, and the output group written (with parallel HDF5
-// by every rank together: each its rows, nothing gathered; else by rank 0's `results`, null
-// elsewhere); returns the iterations (-1: not converged) and the final energies summed over ranks.
-std::pair<long long, Energies> mpi_relax(PdSystem& global, const RunOptions& options, ResultsWriter* results);
+// history line (rank 0's `history`, null elsewhere; the probes' values from their owners) and
+// the output group written (with parallel HDF5 by every rank together: each its rows, nothing
+// gathered; else by rank 0's `results`, null elsewhere, from the state gathered into `global`);
+// returns the iterations (-1: not converged) and the final energies summed over ranks.
+std::pair<long long, Energies> mpi_relax(PdSystem& global, const RunOptions& options, ResultsWriter* results,
+                                         HistoryWriter* history);
 
 // RunOptions::backend_loop for a distributed run (options.backend "cuda": on the ranks' GPUs).
 RunResult mpi_time_loop(PdSystem& global, const RunOptions& options, ResultsWriter* results,

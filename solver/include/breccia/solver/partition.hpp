@@ -11,9 +11,11 @@
 // interface.
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
+#include "breccia/common/cell_list.hpp"
 #include "breccia/solver/pd_physics.hpp"
 
 namespace breccia::solver {
@@ -97,6 +99,56 @@ std::vector<int64_t> family_sizes(const std::vector<double>& x0, const std::vect
 // [0, N] or a negative group size. `group_cells`: the groups' extent in cells (0: each row
 // alone, the marking the groups must reproduce exactly; the tests compare the two).
 inline constexpr double kWindowGroupCells = 3.0;
+// geometric_window's reach classes from two folds over the particles, which a distributed
+// set-up's ranks take over their slices of the internal order and combine in rank order
+// (fold: std::min and std::max, so the same doubles as over the whole body): the smallest
+// and largest reach h + pad, then, with the classes' bounds from those, each class's largest
+// horizon and pad, presence and box.
+inline constexpr int kReachClasses = 8;
+struct ReachBounds {
+  double rmin = std::numeric_limits<double>::infinity(), rmax = 0.0;
+  void fold(const ReachBounds& b);
+};
+ReachBounds reach_bounds(const std::vector<double>& horizon, const std::vector<double>& half_cell, int dimension);
+struct ReachFigures {
+  ReachFigures() = default;
+  explicit ReachFigures(const ReachBounds& body);
+  int class_of(double reach) const;  // reach: h + pad
+  void add(const std::vector<double>& x, const std::vector<double>& horizon, const std::vector<double>& half_cell,
+           int dimension);
+  void fold(const ReachFigures& b);
+  double bound[kReachClasses - 1] = {};
+  double H[kReachClasses] = {}, P[kReachClasses] = {};
+  bool present[kReachClasses] = {};
+  BoundingBox box[kReachClasses];  // each class's own particles' box
+};
+
+// The marks geometric_window makes for rows [row_begin, row_end) of the arrays (x0 3N,
+// horizon and half_cell N) under the body's classes (`body`; its count `body_n` caps each
+// grid's cells as geometric_window's): near(x, c) is whether a particle of class c at x is
+// in the rows' window, the test geometric_window makes of every other particle. box(g):
+// grid g's box (none: empty); a particle of class c outside every box g >= c is not near.
+// So a rank holding a slice of the internal order forms its rows' window from its neighbours'
+// particles alone (distributed_setup.cpp), the same window as geometric_window over the body.
+class WindowMarks {
+ public:
+  WindowMarks(const std::vector<double>& x0, const std::vector<double>& horizon, const std::vector<double>& half_cell,
+              int dimension, const ReachFigures& body, int64_t body_n, int64_t row_begin, int64_t row_end,
+              double group_cells = kWindowGroupCells);
+  ~WindowMarks();
+  WindowMarks(const WindowMarks&) = delete;
+  WindowMarks& operator=(const WindowMarks&) = delete;
+  int class_of(int64_t i) const;  // of particle i of the arrays
+  bool near(const double* x, int c) const;
+  bool has_box(int g) const;
+  const BoundingBox& box(int g) const;
+
+ private:
+  struct Grids;
+  Grids* grids_;
+  std::vector<uint8_t> of_;
+};
+
 struct GeometricWindow {
   std::vector<int32_t> index;          // global indices, ascending
   int64_t row_begin = 0, row_end = 0;  // the rows' local range in index

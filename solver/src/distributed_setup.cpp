@@ -155,17 +155,21 @@ FormedWindow form_window(const DistributedSetup& d, const RankRun& rows, int dim
   const RunArrays a = run_arrays(rows.p);
   const int64_t m = static_cast<int64_t>(rows.p.size());
   const WindowMarks marks(a.x0, a.horizon, a.half_cell, dimension, body, body_n, 0, m);
-  struct Boxes {
-    BoundingBox box[kReachClasses];
-    uint8_t has[kReachClasses];
-  } mine{};
-  for (int g = 0; g < kReachClasses; ++g) {
-    mine.has[g] = marks.has_box(g);
-    if (mine.has[g]) mine.box[g] = marks.box(g);
+  // Every rank's marks, summarised by blocks of cells (MarksSummary: a few bytes per 512
+  // cells), to every rank.
+  std::vector<MarksSummary> summaries;
+  {
+    const std::vector<char> mine = marks.summary().bytes();
+    const std::vector<int64_t> sizes = concat_over_ranks(d, std::vector<int64_t>{static_cast<int64_t>(mine.size())});
+    const std::vector<char> all = d.concat(mine.data(), mine.size(), 1, true);
+    size_t at = 0;
+    for (const int64_t size : sizes) {
+      summaries.push_back(MarksSummary::from_bytes(all.data() + at, static_cast<size_t>(size)));
+      at += static_cast<size_t>(size);
+    }
   }
-  const std::vector<Boxes> boxes = each_rank(d, mine);
-  // To each other rank, this run's particles inside one of its boxes of their class or coarser
-  // (near's first test), with their internal indices.
+  // To each other rank, this run's particles that may be near its rows (in a block its
+  // marks reach with their class's bit), with their internal indices.
   struct Candidate {
     int64_t internal;
     PlanParticle p;
@@ -174,18 +178,10 @@ FormedWindow form_window(const DistributedSetup& d, const RankRun& rows, int dim
   std::vector<int64_t> counts(static_cast<size_t>(d.ranks), 0);
   for (int r = 0; r < d.ranks; ++r) {
     if (r == d.rank) continue;
-    const Boxes& b = boxes[static_cast<size_t>(r)];
     const size_t at = out.size();
-    for (int64_t j = 0; j < m; ++j) {
-      const double* x = rows.p[static_cast<size_t>(j)].x;
-      bool inside = false;
-      for (int g = marks.class_of(j); g < kReachClasses && !inside; ++g) {
-        if (!b.has[g]) continue;
-        inside = true;
-        for (int c = 0; c < 3; ++c) inside = inside && x[c] >= b.box[g].lo[c] && x[c] <= b.box[g].hi[c];
-      }
-      if (inside) out.push_back({rows.first + j, rows.p[static_cast<size_t>(j)]});
-    }
+    for (int64_t j = 0; j < m; ++j)
+      if (summaries[static_cast<size_t>(r)].may_be_near(rows.p[static_cast<size_t>(j)].x, marks.class_of(j)))
+        out.push_back({rows.first + j, rows.p[static_cast<size_t>(j)]});
     counts[static_cast<size_t>(r)] = static_cast<int64_t>(out.size() - at);
   }
   std::vector<int64_t> received;

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <set>
 #include <stdexcept>
@@ -370,8 +371,6 @@ struct WindowMarks::Grids {
 
 WindowMarks::~WindowMarks() { delete grids_; }
 int WindowMarks::class_of(int64_t i) const { return of_[static_cast<size_t>(i)]; }
-bool WindowMarks::has_box(int g) const { return grids_->g[g].active; }
-const BoundingBox& WindowMarks::box(int g) const { return grids_->g[g].box; }
 
 // Particle j of class c is near the rows when a grid g >= c marks its cell with bit c.
 bool WindowMarks::near(const double* xj, int c) const {
@@ -383,6 +382,78 @@ bool WindowMarks::near(const double* xj, int c) const {
     if (inside && (m.bits[static_cast<size_t>(m.grid.index_of(xj))] >> c & 1u)) return true;
   }
   return false;
+}
+
+MarksSummary WindowMarks::summary() const {
+  MarksSummary out;
+  for (int g = 0; g < kReachClasses; ++g) {
+    const ClassMarks& m = grids_->g[g];
+    MarksSummary::Grid& s = out.g[g];
+    if (!m.active) continue;
+    s.active = true;
+    s.box = m.box;
+    s.grid = m.grid;
+    for (int d = 0; d < 3; ++d) s.blocks[d] = (m.grid.count[d] + kMarksBlock - 1) / kMarksBlock;
+    s.bits.assign(static_cast<size_t>(s.blocks[0] * s.blocks[1] * s.blocks[2]), 0);
+    for (long long az = 0; az < m.grid.count[2]; ++az)
+      for (long long ay = 0; ay < m.grid.count[1]; ++ay)
+        for (long long ax = 0; ax < m.grid.count[0]; ++ax)
+          s.bits[static_cast<size_t>(((az / kMarksBlock) * s.blocks[1] + ay / kMarksBlock) * s.blocks[0] + ax / kMarksBlock)] |=
+              m.bits[static_cast<size_t>(m.grid.index(ax, ay, az))];
+  }
+  return out;
+}
+
+bool MarksSummary::may_be_near(const double* x, int c) const {
+  for (int k = c; k < kReachClasses; ++k) {
+    const Grid& s = g[k];
+    if (!s.active) continue;
+    bool inside = true;
+    for (int d = 0; d < 3; ++d) inside = inside && x[d] >= s.box.lo[d] && x[d] <= s.box.hi[d];
+    if (!inside) continue;
+    long long b[3];
+    for (int d = 0; d < 3; ++d) b[d] = s.grid.coordinate(d, x[d]) / kMarksBlock;  // index_of's coordinates
+    if (s.bits[static_cast<size_t>((b[2] * s.blocks[1] + b[1]) * s.blocks[0] + b[0])] >> c & 1u) return true;
+  }
+  return false;
+}
+
+std::vector<char> MarksSummary::bytes() const {
+  std::vector<char> out;
+  auto put = [&](const void* p, size_t n) { out.insert(out.end(), static_cast<const char*>(p), static_cast<const char*>(p) + n); };
+  for (const Grid& s : g) {
+    const uint8_t active = s.active;
+    put(&active, 1);
+    if (!s.active) continue;
+    put(&s.box, sizeof s.box);
+    put(&s.grid, sizeof s.grid);
+    put(s.blocks, sizeof s.blocks);
+    put(s.bits.data(), s.bits.size());
+  }
+  return out;
+}
+
+MarksSummary MarksSummary::from_bytes(const char* p, size_t size) {
+  MarksSummary out;
+  size_t at = 0;
+  auto take = [&](void* to, size_t n) {
+    if (at + n > size) throw std::logic_error("MarksSummary: short bytes");
+    std::memcpy(to, p + at, n);
+    at += n;
+  };
+  for (Grid& s : out.g) {
+    uint8_t active = 0;
+    take(&active, 1);
+    s.active = active;
+    if (!s.active) continue;
+    take(&s.box, sizeof s.box);
+    take(&s.grid, sizeof s.grid);
+    take(s.blocks, sizeof s.blocks);
+    s.bits.resize(static_cast<size_t>(s.blocks[0] * s.blocks[1] * s.blocks[2]));
+    take(s.bits.data(), s.bits.size());
+  }
+  if (at != size) throw std::logic_error("MarksSummary: long bytes");
+  return out;
 }
 
 WindowMarks::WindowMarks(const std::vector<double>& x, const std::vector<double>& horizon,

@@ -9,7 +9,6 @@
 #include <exception>
 #include <ctime>
 #include <iterator>
-#include <limits>
 #include <map>
 #include <memory>
 #include <numeric>
@@ -822,11 +821,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     const std::vector<MortonItem>& mine = sorted.items;
     // Each rank's fold of its block, then the folds in rank order (the first of equal values kept).
     auto fold_max = [&](auto value) {
-      double m = -std::numeric_limits<double>::infinity();
-      bool any = false;
-      for (const MortonItem& it : mine) m = any ? std::max(m, value(it)) : value(it), any = true;
       std::vector<double> per_rank;
-      if (any) per_rank.push_back(m);
+      for (const MortonItem& it : mine)
+        if (per_rank.empty()) per_rank.push_back(value(it));
+        else per_rank[0] = std::max(per_rank[0], value(it));
       per_rank = concat_over_ranks(dist, per_rank);
       return per_rank.empty() ? 0.0 : *std::max_element(per_rank.begin(), per_rank.end());
     };

@@ -215,10 +215,10 @@ RankRun move_run(const DistributedSetup& d, RankRun run, const std::vector<int64
 ReachFigures body_reach_figures(const DistributedSetup& d, const RankRun& run, int dimension);
 // The geometric window (partition.hpp geometric_window) of the rank's run as its rows, formed
 // from the ranks' runs (each rank's run: one contiguous run of the order, in rank order):
-// the ranks' grid boxes (WindowMarks::box) to every rank, each rank sends every other its
-// particles inside one of that rank's boxes of their class or coarser, and the rank keeps
-// those near its rows (WindowMarks::near, geometric_window's own test): the same window,
-// its particles (`p`, in the window's order) with it. Collective.
+// the ranks' marks summarised by blocks of cells (MarksSummary) to every rank, each rank
+// sends every other its particles that may be near that rank's rows, and the rank keeps
+// those near them (WindowMarks::near, geometric_window's own test): the same window, its
+// particles (`p`, in the window's order) with it. Collective.
 struct FormedWindow {
   GeometricWindow window;
   std::vector<PlanParticle> p;

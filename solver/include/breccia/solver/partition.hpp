@@ -126,12 +126,33 @@ struct ReachFigures {
 // The marks geometric_window makes for rows [row_begin, row_end) of the arrays (x0 3N,
 // horizon and half_cell N) under the body's classes (`body`; its count `body_n` caps each
 // grid's cells as geometric_window's): near(x, c) is whether a particle of class c at x is
-// in the rows' window, the test geometric_window makes of every other particle. box(g):
-// grid g's box (none: empty); a particle of class c outside every box g >= c is not near.
-// So a rank holding a slice of the internal order forms its rows' window from its neighbours'
-// particles alone (distributed_setup.cpp), the same window as geometric_window over the body.
+// in the rows' window, the test geometric_window makes of every other particle; summary():
+// what the other ranks choose their candidates by. So a rank holding a slice of the internal
+// order forms its rows' window from the particles the other ranks send it (form_window,
+// distributed_setup.hpp), the same window as geometric_window over the body.
+// A summary of a WindowMarks' grids for the other ranks of a distributed set-up: each grid's
+// box and cells, and per block of kMarksBlock^3 cells the union of its cells' bits. A
+// particle near the rows (WindowMarks::near) is in a block with its class's bit
+// (may_be_near): the ranks choose the particles they send a rank by it, a superset of its
+// window, and the rank keeps those near its rows. Bytes: its form for a concatenation.
+inline constexpr long long kMarksBlock = 8;
+struct MarksSummary {
+  struct Grid {
+    bool active = false;
+    BoundingBox box{};
+    CellGrid grid;
+    long long blocks[3] = {0, 0, 0};
+    std::vector<uint8_t> bits;  // per block
+  };
+  Grid g[kReachClasses];
+  bool may_be_near(const double* x, int c) const;
+  std::vector<char> bytes() const;
+  static MarksSummary from_bytes(const char* p, size_t size);
+};
+
 class WindowMarks {
  public:
+  MarksSummary summary() const;
   WindowMarks(const std::vector<double>& x0, const std::vector<double>& horizon, const std::vector<double>& half_cell,
               int dimension, const ReachFigures& body, int64_t body_n, int64_t row_begin, int64_t row_end,
               double group_cells = kWindowGroupCells);
@@ -140,8 +161,6 @@ class WindowMarks {
   WindowMarks& operator=(const WindowMarks&) = delete;
   int class_of(int64_t i) const;  // of particle i of the arrays
   bool near(const double* x, int c) const;
-  bool has_box(int g) const;
-  const BoundingBox& box(int g) const;
 
  private:
   struct Grids;

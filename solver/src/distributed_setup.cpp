@@ -155,8 +155,8 @@ FormedWindow form_window(const DistributedSetup& d, const RankRun& rows, int dim
   const RunArrays a = run_arrays(rows.p);
   const int64_t m = static_cast<int64_t>(rows.p.size());
   const WindowMarks marks(a.x0, a.horizon, a.half_cell, dimension, body, body_n, 0, m);
-  // Every rank's marks, summarised by blocks of cells (MarksSummary: a few bytes per 512
-  // cells), to every rank.
+  // Every rank's marks, summarised by blocks of cells (MarksSummary: 9 B per 512 cells of
+  // its window), to every rank.
   std::vector<MarksSummary> summaries;
   {
     const std::vector<char> mine = marks.summary().bytes();

@@ -394,12 +394,16 @@ MarksSummary WindowMarks::summary() const {
     s.box = m.box;
     s.grid = m.grid;
     for (int d = 0; d < 3; ++d) s.blocks[d] = (m.grid.count[d] + kMarksBlock - 1) / kMarksBlock;
-    s.bits.assign(static_cast<size_t>(s.blocks[0] * s.blocks[1] * s.blocks[2]), 0);
+    std::vector<std::pair<int64_t, uint8_t>> marked;  // (block, a cell's bits), then merged
     for (long long az = 0; az < m.grid.count[2]; ++az)
       for (long long ay = 0; ay < m.grid.count[1]; ++ay)
         for (long long ax = 0; ax < m.grid.count[0]; ++ax)
-          s.bits[static_cast<size_t>(((az / kMarksBlock) * s.blocks[1] + ay / kMarksBlock) * s.blocks[0] + ax / kMarksBlock)] |=
-              m.bits[static_cast<size_t>(m.grid.index(ax, ay, az))];
+          if (const uint8_t b = m.bits[static_cast<size_t>(m.grid.index(ax, ay, az))])
+            marked.emplace_back(((az / kMarksBlock) * s.blocks[1] + ay / kMarksBlock) * s.blocks[0] + ax / kMarksBlock, b);
+    std::sort(marked.begin(), marked.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (const auto& [block, b] : marked)
+      if (!s.block.empty() && s.block.back() == block) s.bits.back() |= b;
+      else s.block.push_back(block), s.bits.push_back(b);
   }
   return out;
 }
@@ -413,7 +417,9 @@ bool MarksSummary::may_be_near(const double* x, int c) const {
     if (!inside) continue;
     long long b[3];
     for (int d = 0; d < 3; ++d) b[d] = s.grid.coordinate(d, x[d]) / kMarksBlock;  // index_of's coordinates
-    if (s.bits[static_cast<size_t>((b[2] * s.blocks[1] + b[1]) * s.blocks[0] + b[0])] >> c & 1u) return true;
+    const int64_t block = (b[2] * s.blocks[1] + b[1]) * s.blocks[0] + b[0];
+    const auto at = std::lower_bound(s.block.begin(), s.block.end(), block);
+    if (at != s.block.end() && *at == block && (s.bits[static_cast<size_t>(at - s.block.begin())] >> c & 1u)) return true;
   }
   return false;
 }
@@ -425,10 +431,13 @@ std::vector<char> MarksSummary::bytes() const {
     const uint8_t active = s.active;
     put(&active, 1);
     if (!s.active) continue;
+    const uint64_t marked = s.block.size();
     put(&s.box, sizeof s.box);
     put(&s.grid, sizeof s.grid);
     put(s.blocks, sizeof s.blocks);
-    put(s.bits.data(), s.bits.size());
+    put(&marked, sizeof marked);
+    put(s.block.data(), marked * sizeof(int64_t));
+    put(s.bits.data(), marked);
   }
   return out;
 }
@@ -438,7 +447,7 @@ MarksSummary MarksSummary::from_bytes(const char* p, size_t size) {
   size_t at = 0;
   auto take = [&](void* to, size_t n) {
     if (at + n > size) throw std::logic_error("MarksSummary: short bytes");
-    std::memcpy(to, p + at, n);
+    if (n) std::memcpy(to, p + at, n);
     at += n;
   };
   for (Grid& s : out.g) {
@@ -446,11 +455,15 @@ MarksSummary MarksSummary::from_bytes(const char* p, size_t size) {
     take(&active, 1);
     s.active = active;
     if (!s.active) continue;
+    uint64_t marked = 0;
     take(&s.box, sizeof s.box);
     take(&s.grid, sizeof s.grid);
     take(s.blocks, sizeof s.blocks);
-    s.bits.resize(static_cast<size_t>(s.blocks[0] * s.blocks[1] * s.blocks[2]));
-    take(s.bits.data(), s.bits.size());
+    take(&marked, sizeof marked);
+    s.block.resize(marked);
+    s.bits.resize(marked);
+    take(s.block.data(), marked * sizeof(int64_t));
+    take(s.bits.data(), marked);
   }
   if (at != size) throw std::logic_error("MarksSummary: long bytes");
   return out;

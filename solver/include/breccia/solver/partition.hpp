@@ -131,10 +131,11 @@ struct ReachFigures {
 // order forms its rows' window from the particles the other ranks send it (form_window,
 // distributed_setup.hpp), the same window as geometric_window over the body.
 // A summary of a WindowMarks' grids for the other ranks of a distributed set-up: each grid's
-// box and cells, and per block of kMarksBlock^3 cells the union of its cells' bits. A
-// particle near the rows (WindowMarks::near) is in a block with its class's bit
-// (may_be_near): the ranks choose the particles they send a rank by it, a superset of its
-// window, and the rank keeps those near its rows. Bytes: its form for a concatenation.
+// box and cells, and per block of kMarksBlock^3 cells the union of its cells' bits (the
+// blocks with a bit alone, about the window's volume: 9 B per 512 cells). A particle near
+// the rows (WindowMarks::near) is in a block with its class's bit (may_be_near): the ranks
+// choose the particles they send a rank by it, a superset of its window, and the rank keeps
+// those near its rows. Bytes: its form for a concatenation.
 inline constexpr long long kMarksBlock = 8;
 struct MarksSummary {
   struct Grid {
@@ -142,7 +143,8 @@ struct MarksSummary {
     BoundingBox box{};
     CellGrid grid;
     long long blocks[3] = {0, 0, 0};
-    std::vector<uint8_t> bits;  // per block
+    std::vector<int64_t> block;  // the blocks with a bit, ascending
+    std::vector<uint8_t> bits;   // theirs
   };
   Grid g[kReachClasses];
   bool may_be_near(const double* x, int c) const;

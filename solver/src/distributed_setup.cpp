@@ -16,6 +16,217 @@ FamilySlice family_slice(int64_t n, int rank, int ranks) {
   return {n * rank / ranks, n * (rank + 1) / ranks};
 }
 
+FamilySlice file_block(int64_t n, int rank, int ranks) { return family_slice(n, rank, ranks); }
+
+BoundingBox body_bounding_box(const DistributedSetup& d, std::span<const double> block_positions) {
+  const BoundingBox mine = bounding_box(block_positions);
+  const std::vector<BoundingBox> boxes = concat_over_ranks(d, std::vector<BoundingBox>{mine});
+  // The blocks in rank order are the file's rows in order, and std::min and std::max keep the
+  // first of equal values: the fold of the blocks' folds is the fold over the file, bit for bit.
+  BoundingBox b{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+  for (const BoundingBox& r : boxes)
+    for (int c = 0; c < 3; ++c) {
+      b.lo[c] = std::min(b.lo[c], r.lo[c]);
+      b.hi[c] = std::max(b.hi[c], r.hi[c]);
+    }
+  return b;
+}
+
+namespace {
+
+bool item_less(const MortonItem& a, const MortonItem& b) { return a.key < b.key || (a.key == b.key && a.file < b.file); }
+
+// A double's place in the order of doubles as an unsigned integer (negative ones reversed).
+uint64_t ordered_bits(double v) {
+  uint64_t u;
+  std::memcpy(&u, &v, sizeof u);
+  return u >> 63 ? ~u : u | (uint64_t{1} << 63);
+}
+double from_ordered_bits(uint64_t u) {
+  u = u >> 63 ? u & ~(uint64_t{1} << 63) : ~u;
+  double v;
+  std::memcpy(&v, &u, sizeof v);
+  return v;
+}
+
+int64_t sum_over_ranks(const DistributedSetup& d, int64_t mine) {
+  int64_t sum = 0;
+  for (const int64_t v : concat_over_ranks(d, std::vector<int64_t>{mine})) sum += v;
+  return sum;
+}
+
+}  // namespace
+
+MortonBlock distributed_morton_sort(const DistributedSetup& d, std::vector<MortonItem> mine) {
+  std::sort(mine.begin(), mine.end(), item_less);  // (key, file) pairs are distinct: a total order
+  const size_t ranks = static_cast<size_t>(d.ranks), m = mine.size();
+  // Regular samples: ranks - 1 from each rank's sorted items, then ranks - 1 splitters evenly
+  // among all samples; rank r receives the items above splitter r - 1 up to splitter r.
+  std::vector<MortonItem> samples;
+  if (m > 0)
+    for (size_t j = 1; j < ranks; ++j) samples.push_back(mine[j * m / ranks]);
+  samples = concat_over_ranks(d, samples);
+  std::sort(samples.begin(), samples.end(), item_less);
+  std::vector<int64_t> counts(ranks, 0);
+  size_t at = 0;
+  for (size_t r = 0; r < ranks; ++r) {
+    size_t end = m;
+    if (r + 1 < ranks && !samples.empty()) {
+      const MortonItem& split = samples[(r + 1) * samples.size() / ranks];
+      end = static_cast<size_t>(std::upper_bound(mine.begin() + static_cast<int64_t>(at), mine.end(), split, item_less) - mine.begin());
+    }
+    counts[r] = static_cast<int64_t>(end - at);
+    at = end;
+  }
+  std::vector<int64_t> received;
+  const std::vector<char> in = d.exchange(mine.data(), counts, sizeof(MortonItem), received);
+  std::vector<MortonItem>().swap(mine);
+  MortonBlock b;
+  b.items.resize(in.size() / sizeof(MortonItem));
+  if (!in.empty()) std::memcpy(static_cast<void*>(b.items.data()), in.data(), in.size());
+  std::sort(b.items.begin(), b.items.end(), item_less);  // the ranks' sorted runs, merged
+  const std::vector<int64_t> held = concat_over_ranks(d, std::vector<int64_t>{static_cast<int64_t>(b.items.size())});
+  for (int r = 0; r < d.ranks; ++r) {
+    if (r < d.rank) b.first += held[static_cast<size_t>(r)];
+    b.n += held[static_cast<size_t>(r)];
+  }
+  return b;
+}
+
+RankRun move_run(const DistributedSetup& d, RankRun run, const std::vector<int64_t>& begin) {
+  std::vector<int64_t> counts(static_cast<size_t>(d.ranks), 0);
+  for (int r = 0; r < d.ranks; ++r) {
+    const int64_t lo = std::max(begin[static_cast<size_t>(r)], run.first),
+                  hi = std::min(begin[static_cast<size_t>(r) + 1], run.first + static_cast<int64_t>(run.p.size()));
+    counts[static_cast<size_t>(r)] = std::max<int64_t>(0, hi - lo);
+  }
+  std::vector<int64_t> received;
+  const std::vector<char> in = d.exchange(run.p.data(), counts, sizeof(PlanParticle), received);
+  RankRun out;
+  out.first = begin[static_cast<size_t>(d.rank)];
+  out.p.resize(in.size() / sizeof(PlanParticle));
+  if (!in.empty()) std::memcpy(static_cast<void*>(out.p.data()), in.data(), in.size());
+  if (static_cast<int64_t>(out.p.size()) != begin[static_cast<size_t>(d.rank) + 1] - out.first)
+    throw std::logic_error("distributed set-up: the ranks' runs do not cover the body");
+  return out;
+}
+
+namespace {
+
+struct RunArrays {
+  std::vector<double> x0, horizon, half_cell;
+};
+RunArrays run_arrays(const std::vector<PlanParticle>& p) {
+  RunArrays a;
+  a.x0.resize(3 * p.size());
+  a.horizon.resize(p.size());
+  a.half_cell.resize(p.size());
+  for (size_t k = 0; k < p.size(); ++k) {
+    std::copy_n(p[k].x, 3, &a.x0[3 * k]);
+    a.horizon[k] = p[k].horizon;
+    a.half_cell[k] = p[k].half_cell;
+  }
+  return a;
+}
+
+// Every rank's value of a trivially copyable T, in rank order.
+template <class T>
+std::vector<T> each_rank(const DistributedSetup& d, const T& mine) {
+  const std::vector<char> bytes = d.concat(&mine, 1, sizeof(T), true);
+  std::vector<T> out(bytes.size() / sizeof(T));
+  if (!bytes.empty()) std::memcpy(static_cast<void*>(out.data()), bytes.data(), bytes.size());
+  return out;
+}
+
+}  // namespace
+
+ReachFigures body_reach_figures(const DistributedSetup& d, const RankRun& run, int dimension) {
+  const RunArrays a = run_arrays(run.p);
+  ReachBounds bounds;  // the runs in rank order are the internal order: the folds are the body's
+  for (const ReachBounds& b : each_rank(d, reach_bounds(a.horizon, a.half_cell, dimension))) bounds.fold(b);
+  ReachFigures mine(bounds), body(bounds);
+  mine.add(a.x0, a.horizon, a.half_cell, dimension);
+  for (const ReachFigures& f : each_rank(d, mine)) body.fold(f);
+  return body;
+}
+
+FormedWindow form_window(const DistributedSetup& d, const RankRun& rows, int dimension, const ReachFigures& body,
+                         int64_t body_n) {
+  const RunArrays a = run_arrays(rows.p);
+  const int64_t m = static_cast<int64_t>(rows.p.size());
+  const WindowMarks marks(a.x0, a.horizon, a.half_cell, dimension, body, body_n, 0, m);
+  // Every rank's marks, summarised by blocks of cells (MarksSummary: 9 B per 512 cells of
+  // its window), to every rank.
+  std::vector<MarksSummary> summaries;
+  {
+    const std::vector<char> mine = marks.summary().bytes();
+    const std::vector<int64_t> sizes = concat_over_ranks(d, std::vector<int64_t>{static_cast<int64_t>(mine.size())});
+    const std::vector<char> all = d.concat(mine.data(), mine.size(), 1, true);
+    size_t at = 0;
+    for (const int64_t size : sizes) {
+      summaries.push_back(MarksSummary::from_bytes(all.data() + at, static_cast<size_t>(size)));
+      at += static_cast<size_t>(size);
+    }
+  }
+  // To each other rank, this run's particles that may be near its rows (in a block its
+  // marks reach with their class's bit), with their internal indices.
+  struct Candidate {
+    int64_t internal;
+    PlanParticle p;
+  };
+  std::vector<Candidate> out;
+  std::vector<int64_t> counts(static_cast<size_t>(d.ranks), 0);
+  for (int r = 0; r < d.ranks; ++r) {
+    if (r == d.rank) continue;
+    const size_t at = out.size();
+    for (int64_t j = 0; j < m; ++j)
+      if (summaries[static_cast<size_t>(r)].may_be_near(rows.p[static_cast<size_t>(j)].x, marks.class_of(j)))
+        out.push_back({rows.first + j, rows.p[static_cast<size_t>(j)]});
+    counts[static_cast<size_t>(r)] = static_cast<int64_t>(out.size() - at);
+  }
+  std::vector<int64_t> received;
+  const std::vector<char> in = d.exchange(out.data(), counts, sizeof(Candidate), received);
+  std::vector<Candidate>().swap(out);
+  std::vector<Candidate> got(in.size() / sizeof(Candidate));
+  if (!in.empty()) std::memcpy(static_cast<void*>(got.data()), in.data(), in.size());
+  // The runs are in rank order: the candidates from lower ranks precede the rows, ascending.
+  FormedWindow f;
+  auto take = [&](const Candidate& q) {
+    const int c = body.class_of(q.p.horizon + partial_volume_reach(q.p.half_cell, dimension));
+    if (!marks.near(q.p.x, c)) return;
+    f.window.index.push_back(static_cast<int32_t>(q.internal));
+    f.p.push_back(q.p);
+  };
+  size_t q = 0;
+  for (; q < got.size() && got[q].internal < rows.first; ++q) take(got[q]);
+  f.window.row_begin = static_cast<int64_t>(f.window.index.size());
+  for (int64_t j = 0; j < m; ++j) {
+    f.window.index.push_back(static_cast<int32_t>(rows.first + j));
+    f.p.push_back(rows.p[static_cast<size_t>(j)]);
+  }
+  f.window.row_end = static_cast<int64_t>(f.window.index.size());
+  for (; q < got.size(); ++q) take(got[q]);
+  for (size_t k = 1; k < f.window.index.size(); ++k)
+    if (f.window.index[k] <= f.window.index[k - 1]) throw std::logic_error("distributed set-up: a formed window is not ascending");
+  if (m == 0) return FormedWindow{};  // (geometric_window's for an empty range: empty)
+  return f;
+}
+
+double distributed_order_statistic(const DistributedSetup& d, const std::vector<double>& mine, int64_t k) {
+  // The least t with more than k values at or below it (in ordered_bits) is the k-th value.
+  std::vector<uint64_t> bits(mine.size());
+  for (size_t i = 0; i < mine.size(); ++i) bits[i] = ordered_bits(mine[i]);
+  uint64_t lo = 0, hi = UINT64_MAX;
+  while (lo < hi) {
+    const uint64_t mid = lo + (hi - lo) / 2;
+    int64_t at_or_below = 0;
+    for (const uint64_t b : bits) at_or_below += b <= mid;
+    if (sum_over_ranks(d, at_or_below) > k) hi = mid;
+    else lo = mid + 1;
+  }
+  return from_ordered_bits(lo);
+}
+
 namespace {
 
 // The window's particles' positions, horizons and one more per-particle array, in its order.
@@ -108,41 +319,27 @@ Partition cut_partition(PdSystem& s, const DistributedSetup& d, const std::vecto
   return part;
 }
 
-// A window and its particles' file rows (in the window's order), as rank 0 sends them.
-struct PlannedWindow {
-  GeometricWindow window;
-  std::vector<int64_t> file;
+// The partition and the rank's rows' window, planned by every rank from its slice of the
+// internal order (family_slice's: the ranks' runs after the Morton sort): the body's reach
+// classes, the slice's window (form_window) and its family sizes (family_sizes on the
+// window's particles: every partner of the slice), the cut (cut_partition), then the rows'
+// window formed from the runs moved to the partition's ranges. Collective.
+struct PlannedRows {
+  Partition part;
+  FormedWindow rows;
 };
-
-// Rank 0 (the whole body): each other rank r's geometric window of the rows [begin[r],
-// begin[r + 1]) with its particles' file rows, sent to r; the other ranks: theirs, received.
-// Collective (one all-to-all from rank 0). Message: row_begin, row_end, m, m indices, m rows.
-PlannedWindow scatter_windows(const PdSystem& s, const DistributedSetup& d, const std::vector<int64_t>& begin) {
-  std::vector<int64_t> out, counts(static_cast<size_t>(d.ranks), 0);
-  if (d.rank == 0)
-    for (int r = 1; r < d.ranks; ++r) {
-      const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, s.dimension, begin[r], begin[r + 1]);
-      const size_t at = out.size();
-      out.push_back(w.row_begin);
-      out.push_back(w.row_end);
-      out.push_back(static_cast<int64_t>(w.index.size()));
-      out.insert(out.end(), w.index.begin(), w.index.end());
-      for (const int32_t i : w.index) out.push_back(s.original_index[static_cast<size_t>(i)]);
-      counts[static_cast<size_t>(r)] = static_cast<int64_t>(out.size() - at);
-    }
-  std::vector<int64_t> received;
-  const std::vector<char> in = d.exchange(out.data(), counts, sizeof(int64_t), received);
-  PlannedWindow p;
-  if (d.rank == 0) return p;
-  std::vector<int64_t> msg(in.size() / sizeof(int64_t));
-  if (!in.empty()) std::memcpy(msg.data(), in.data(), in.size());
-  if (msg.size() < 3 || msg.size() != 3 + 2 * static_cast<size_t>(msg[2]))
-    throw std::logic_error("distributed set-up: a planned window from rank 0 is malformed");
-  const size_t m = static_cast<size_t>(msg[2]);
-  p.window.row_begin = msg[0];
-  p.window.row_end = msg[1];
-  p.window.index.assign(msg.begin() + 3, msg.begin() + 3 + static_cast<int64_t>(m));
-  p.file.assign(msg.begin() + 3 + static_cast<int64_t>(m), msg.end());
+PlannedRows plan_rows(PdSystem& s, const DistributedSetup& d, RankRun slice, DistributedRows& rows, size_t body_n) {
+  const ReachFigures body = body_reach_figures(d, slice, s.dimension);
+  std::vector<int64_t> slice_sizes;
+  {
+    const FormedWindow w = form_window(d, slice, s.dimension, body, static_cast<int64_t>(body_n));
+    const RunArrays a = run_arrays(w.p);
+    slice_sizes = family_sizes(a.x0, a.horizon, a.half_cell, s.dimension, s.config.partial_volume, w.window.row_begin,
+                               w.window.row_end);
+  }
+  PlannedRows p;
+  p.part = cut_partition(s, d, slice_sizes, rows, body_n);
+  p.rows = form_window(d, move_run(d, std::move(slice), p.part.begin), s.dimension, body, static_cast<int64_t>(body_n));
   return p;
 }
 
@@ -161,75 +358,45 @@ size_t held_at(const std::vector<int64_t>& held, int64_t f) {
 
 }  // namespace
 
-DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d) {
+DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d, RankRun slice) {
   DistributedRows rows;
   rows.end = static_cast<int64_t>(s.n);
   if (!d.active()) return rows;
   if (d.rank != 0) throw std::logic_error("plan_distributed_rows: rank 0's (the other ranks: plan_window_system)");
-  // The row lengths the set-up will build, counted without a bond stored: the whole
-  // system's offsets and the partition MortonRangePartitioner cuts from them (the one the
-  // whole-system set-up's ranks cut). Each rank counts an equal slice of the particles
-  // (family_slice) and the slices are concatenated in rank order: the same integers as
-  // one count of every particle, so the same partition.
-  // The slice's partners are all in its geometric window (geometric_window), so the count
-  // runs on the window's particles alone (its cell list too): the same integers. Rank 0
-  // forms every rank's window (the others hold no whole array: plan_window_system).
-  std::vector<int64_t> slice_begin;
-  for (int r = 0; r <= d.ranks; ++r)
-    slice_begin.push_back(r == d.ranks ? static_cast<int64_t>(s.n) : family_slice(static_cast<int64_t>(s.n), r, d.ranks).begin);
-  scatter_windows(s, d, slice_begin);
-  std::vector<int64_t> slice_sizes;
-  {
-    const GeometricWindow w = geometric_window(s.x0, s.horizon, s.half_cell, s.dimension, slice_begin[0], slice_begin[1]);
-    const WindowArrays a = window_arrays(s, w, s.half_cell);
-    slice_sizes = family_sizes(a.x0, a.horizon, a.other, s.dimension, s.config.partial_volume, w.row_begin, w.row_end);
-  }
-  const Partition part = cut_partition(s, d, slice_sizes, rows, s.n);
-  scatter_windows(s, d, part.begin);
-  // The rows' window (every partner of the rows: geometric_window) and how the owners'
-  // values reach it (exchange_owned), formed once here for the family build and every pass.
-  rows.window = geometric_window(s.x0, s.horizon, s.half_cell, s.dimension, rows.begin, rows.end);
-  rows.exchange = window_exchange(d, part.begin, rows.window);
+  // The row lengths the set-up will build, counted without a bond stored, and the partition
+  // MortonRangePartitioner cuts from them (the one the whole-system set-up's ranks cut):
+  // plan_rows, every rank on its slice. The rows' window (every partner of the rows) and how
+  // the owners' values reach it (exchange_owned), formed once here for the family build and
+  // every pass.
+  PlannedRows p = plan_rows(s, d, std::move(slice), rows, s.n);
+  rows.window = std::move(p.rows.window);
+  rows.exchange = window_exchange(d, p.part.begin, rows.window);
   return rows;
 }
 
 DistributedRows plan_window_system(PdSystem& s, const DistributedSetup& d, const ReadFileRows& read,
-                                   const ValuesOfRow& values) {
+                                   const ValuesOfRow& values, RankRun slice) {
   if (!setup_on_window(d)) throw std::logic_error("plan_window_system: a rank other than 0 of a distributed set-up");
   DistributedRows rows;
   s.body_n = s.n;
-  // The family sizes of this rank's slice, on the slice's window as rank 0 formed it: its
-  // particles' file rows read, their positions, horizons and cells in the window's order.
-  std::vector<int64_t> slice_sizes;
-  {
-    const PlannedWindow p = scatter_windows(s, d, {});
-    ParticleModel m;
-    const std::vector<int64_t> held = sorted_unique(p.file);
-    read(held, {}, m);
-    s.setup_file_rows = {static_cast<int64_t>(held.size())};
-    const size_t w = p.file.size();
-    std::vector<double> x0(3 * w), horizon(w), half_cell(w);
-    for (size_t k = 0; k < w; ++k) {
-      const size_t r = held_at(held, p.file[k]);
-      for (int c = 0; c < 3; ++c) x0[3 * k + c] = m.position_m[3 * r + c];
-      const RowValues v = values(m, r);
-      horizon[k] = v.horizon;
-      half_cell[k] = v.half_cell;
-    }
-    slice_sizes = family_sizes(x0, horizon, half_cell, s.dimension, s.config.partial_volume, p.window.row_begin,
-                               p.window.row_end);
-  }
-  const Partition part = cut_partition(s, d, slice_sizes, rows, s.body_n);
+  PlannedRows planned = plan_rows(s, d, std::move(slice), rows, s.body_n);
+  const Partition& part = planned.part;
+  struct {
+    GeometricWindow window;
+    std::vector<int64_t> file;
+  } p;
+  p.window = std::move(planned.rows.window);
+  for (const PlanParticle& q : planned.rows.p) p.file.push_back(q.file);
+  std::vector<PlanParticle>().swap(planned.rows.p);
   // The window system (as a cut of the whole body would leave it): the rows' window's
   // particles in its order, from their file rows; the particle model holds those rows
   // (ascending) and the facets' mesh cells, its sets their members among them.
-  PlannedWindow p = scatter_windows(s, d, part.begin);
   ParticleModel& pm = s.particles;
   std::vector<int64_t> cells;
   if (pm.nodes_per_cell > 0)
     for (const SurfaceFacets& sf : pm.surfaces) cells.insert(cells.end(), sf.particle.begin(), sf.particle.end());
   read(sorted_unique(p.file), sorted_unique(std::move(cells)), pm);
-  s.setup_file_rows[0] = std::max<int64_t>(s.setup_file_rows[0], static_cast<int64_t>(pm.size()));
+  s.setup_file_rows = {static_cast<int64_t>(pm.size())};
   const size_t w = p.file.size();
   s.x0.resize(3 * w);
   s.volume.resize(w);
@@ -310,8 +477,7 @@ struct Reader {
 template <class Io, class Plan>
 void body_plan_fields(Io& io, Plan& p) {
   // (one list of the fields for both ways)
-  io(p.refused, p.n, p.fill_horizon, p.one_horizon, p.uniform, p.max_horizon, p.max_half_cell, p.median_horizon,
-     p.median_half_cell, p.f32_origin, p.graded_refused, p.graded_message, p.content_id, p.set_sizes, p.known_file,
+  io(p.refused, p.n, p.graded_refused, p.graded_message, p.content_id, p.set_sizes, p.known_file,
      p.known_internal);
 }
 

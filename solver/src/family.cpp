@@ -18,21 +18,27 @@ uint64_t morton_spread(uint64_t v) {
   return v;
 }
 
+double morton_extent(const BoundingBox& box) {
+  double extent = 0.0;
+  for (int d = 0; d < 3; ++d) extent = std::max(extent, box.hi[d] - box.lo[d]);
+  return extent <= 0 ? 1.0 : extent;
+}
+
+uint64_t morton_key(const double* p, const BoundingBox& box, double extent) {
+  uint64_t k = 0;
+  for (int d = 0; d < 3; ++d) {
+    const double t = (p[d] - box.lo[d]) / extent;
+    k |= morton_spread(static_cast<uint64_t>(t * 2097151.0)) << d;
+  }
+  return k;
+}
+
 std::vector<int32_t> morton_order(std::span<const double> x) {
   const size_t n = x.size() / 3;
   const BoundingBox box = bounding_box(x);
-  double extent = 0.0;
-  for (int d = 0; d < 3; ++d) extent = std::max(extent, box.hi[d] - box.lo[d]);
-  if (extent <= 0) extent = 1.0;
+  const double extent = morton_extent(box);
   std::vector<uint64_t> key(n);
-  for (size_t i = 0; i < n; ++i) {
-    uint64_t k = 0;
-    for (int d = 0; d < 3; ++d) {
-      const double t = (x[3 * i + d] - box.lo[d]) / extent;
-      k |= morton_spread(static_cast<uint64_t>(t * 2097151.0)) << d;
-    }
-    key[i] = k;
-  }
+  for (size_t i = 0; i < n; ++i) key[i] = morton_key(&x[3 * i], box, extent);
   std::vector<int32_t> order(n);
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) { return key[a] < key[b]; });

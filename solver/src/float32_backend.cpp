@@ -23,8 +23,8 @@ void convert(const std::vector<From>& from, std::vector<To>& to) {
 
 }  // namespace
 
-std::array<double, 3> float32_origin(const std::vector<double>& x0) {
-  std::array<double, 3> origin{};
+std::array<double, 6> float32_extent(const std::vector<double>& x0) {
+  std::array<double, 6> lo_hi{};
   const size_t held = x0.size() / 3;
   for (int d = 0; d < 3; ++d) {
     double lo = 1e300, hi = -1e300;
@@ -32,8 +32,16 @@ std::array<double, 3> float32_origin(const std::vector<double>& x0) {
       lo = std::min(lo, x0[3 * i + d]);
       hi = std::max(hi, x0[3 * i + d]);
     }
-    origin[d] = held ? 0.5 * (lo + hi) : 0.0;
+    lo_hi[d] = lo;
+    lo_hi[3 + d] = hi;
   }
+  return lo_hi;
+}
+
+std::array<double, 3> float32_origin(const std::vector<double>& x0) {
+  const std::array<double, 6> e = float32_extent(x0);
+  std::array<double, 3> origin{};
+  for (int d = 0; d < 3; ++d) origin[d] = x0.size() < 3 ? 0.0 : 0.5 * (e[d] + e[3 + d]);
   return origin;
 }
 

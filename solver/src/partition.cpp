@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <set>
 #include <stdexcept>
@@ -64,6 +65,61 @@ Partition MortonRangePartitioner::partition(const std::vector<int64_t>& offsets,
   return cut_equal_work(n, ranks, [&](int64_t i) { return cum[i]; });
 }
 
+ReachBounds reach_bounds(const std::vector<double>& horizon, const std::vector<double>& half_cell, int dimension) {
+  ReachBounds b;
+  for (size_t j = 0; j < horizon.size(); ++j) {
+    const double r = horizon[j] + partial_volume_reach(half_cell[j], dimension);
+    b.rmin = std::min(b.rmin, r);
+    b.rmax = std::max(b.rmax, r);
+  }
+  return b;
+}
+
+void ReachBounds::fold(const ReachBounds& b) {
+  rmin = std::min(rmin, b.rmin);
+  rmax = std::max(rmax, b.rmax);
+}
+
+ReachFigures::ReachFigures(const ReachBounds& body) {
+  const double q = body.rmin > 0.0 ? std::max(std::pow(2.0, 0.25), std::pow(body.rmax / body.rmin, 1.0 / kReachClasses)) : 2.0;
+  for (int c = 0; c < kReachClasses - 1; ++c) bound[c] = body.rmin * std::pow(q, c + 1);
+  for (int c = 0; c < kReachClasses; ++c)
+    for (int d = 0; d < 3; ++d) box[c].lo[d] = 1e300, box[c].hi[d] = -1e300;
+}
+
+int ReachFigures::class_of(double reach) const {
+  int c = 0;
+  while (c < kReachClasses - 1 && reach >= bound[c]) ++c;
+  return c;
+}
+
+void ReachFigures::add(const std::vector<double>& x, const std::vector<double>& horizon,
+                       const std::vector<double>& half_cell, int dimension) {
+  for (size_t j = 0; j < horizon.size(); ++j) {
+    const double pad = partial_volume_reach(half_cell[j], dimension);
+    const int c = class_of(horizon[j] + pad);
+    present[c] = true;
+    H[c] = std::max(H[c], horizon[j]);
+    P[c] = std::max(P[c], pad);
+    for (int d = 0; d < 3; ++d) {
+      box[c].lo[d] = std::min(box[c].lo[d], x[3 * j + d]);
+      box[c].hi[d] = std::max(box[c].hi[d], x[3 * j + d]);
+    }
+  }
+}
+
+void ReachFigures::fold(const ReachFigures& b) {
+  for (int c = 0; c < kReachClasses; ++c) {
+    present[c] = present[c] || b.present[c];
+    H[c] = std::max(H[c], b.H[c]);
+    P[c] = std::max(P[c], b.P[c]);
+    for (int d = 0; d < 3; ++d) {
+      box[c].lo[d] = std::min(box[c].lo[d], b.box[c].lo[d]);
+      box[c].hi[d] = std::max(box[c].hi[d], b.box[c].hi[d]);
+    }
+  }
+}
+
 namespace {
 
 // Reach classes: a particle's own reach h + pad in geometric bins from the smallest (ratio
@@ -73,7 +129,6 @@ namespace {
 // largest pad P[c]. A pair (i, j) is within max(h_i, h_j) + max(p_i, p_j) (build_families'
 // test from either end), at most max(h_i, H[c]) + max(p_i, P[c]) for j of class c: row i
 // marks, per class, the cells within that of its position.
-constexpr int kReachClasses = 8;
 struct ReachClasses {
   std::vector<uint8_t> of;  // each particle's class
   std::vector<double> pad;  // each particle's partial-volume reach (partial_volume_reach of its half cell)
@@ -82,36 +137,23 @@ struct ReachClasses {
   BoundingBox up_to[kReachClasses];  // the box of classes 0 .. c's particles
 };
 
-ReachClasses reach_classes(const std::vector<double>& x, const std::vector<double>& horizon,
-                           const std::vector<double>& half_cell, int dimension) {
+// The body's classes (its ReachFigures) for the particles of the arrays: their classes and
+// pads, the classes' figures the body's.
+ReachClasses reach_classes(const std::vector<double>& horizon, const std::vector<double>& half_cell, int dimension,
+                           const ReachFigures& body) {
   const size_t n = horizon.size();
   ReachClasses rc;
   rc.pad.resize(n);
   rc.of.resize(n);
-  double rmin = std::numeric_limits<double>::infinity(), rmax = 0.0;
   for (size_t j = 0; j < n; ++j) {
     rc.pad[j] = partial_volume_reach(half_cell[j], dimension);
-    const double r = horizon[j] + rc.pad[j];
-    rmin = std::min(rmin, r);
-    rmax = std::max(rmax, r);
+    rc.of[j] = static_cast<uint8_t>(body.class_of(horizon[j] + rc.pad[j]));
   }
-  double bound[kReachClasses - 1];  // class c: reaches below bound[c] and not below bound[c - 1]
-  const double q = rmin > 0.0 ? std::max(std::pow(2.0, 0.25), std::pow(rmax / rmin, 1.0 / kReachClasses)) : 2.0;
-  for (int c = 0; c < kReachClasses - 1; ++c) bound[c] = rmin * std::pow(q, c + 1);
-  for (int c = 0; c < kReachClasses; ++c)
-    for (int d = 0; d < 3; ++d) rc.up_to[c].lo[d] = 1e300, rc.up_to[c].hi[d] = -1e300;
-  for (size_t j = 0; j < n; ++j) {
-    const double r = horizon[j] + rc.pad[j];
-    int c = 0;
-    while (c < kReachClasses - 1 && r >= bound[c]) ++c;
-    rc.of[j] = static_cast<uint8_t>(c);
-    rc.present[c] = true;
-    rc.H[c] = std::max(rc.H[c], horizon[j]);
-    rc.P[c] = std::max(rc.P[c], rc.pad[j]);
-    for (int d = 0; d < 3; ++d) {
-      rc.up_to[c].lo[d] = std::min(rc.up_to[c].lo[d], x[3 * j + d]);
-      rc.up_to[c].hi[d] = std::max(rc.up_to[c].hi[d], x[3 * j + d]);
-    }
+  for (int c = 0; c < kReachClasses; ++c) {
+    rc.H[c] = body.H[c];
+    rc.P[c] = body.P[c];
+    rc.present[c] = body.present[c];
+    rc.up_to[c] = body.box[c];
   }
   for (int c = 1; c < kReachClasses; ++c)
     for (int d = 0; d < 3; ++d) {
@@ -323,96 +365,205 @@ void GroupMarker::mark(RowGroup& grp, int g, bool own) {
 
 }  // namespace
 
-GeometricWindow geometric_window(const std::vector<double>& x, const std::vector<double>& horizon,
-                                 const std::vector<double>& half_cell, int dimension, int64_t row_begin,
-                                 int64_t row_end, double group_cells) {
+struct WindowMarks::Grids {
+  ClassMarks g[kReachClasses];
+};
+
+WindowMarks::~WindowMarks() { delete grids_; }
+int WindowMarks::class_of(int64_t i) const { return of_[static_cast<size_t>(i)]; }
+
+// Particle j of class c is near the rows when a grid g >= c marks its cell with bit c.
+bool WindowMarks::near(const double* xj, int c) const {
+  for (int g = c; g < kReachClasses; ++g) {
+    const ClassMarks& m = grids_->g[g];
+    if (!m.active) continue;
+    bool inside = true;
+    for (int d = 0; d < 3; ++d) inside = inside && xj[d] >= m.box.lo[d] && xj[d] <= m.box.hi[d];
+    if (inside && (m.bits[static_cast<size_t>(m.grid.index_of(xj))] >> c & 1u)) return true;
+  }
+  return false;
+}
+
+MarksSummary WindowMarks::summary() const {
+  MarksSummary out;
+  for (int g = 0; g < kReachClasses; ++g) {
+    const ClassMarks& m = grids_->g[g];
+    MarksSummary::Grid& s = out.g[g];
+    if (!m.active) continue;
+    s.active = true;
+    s.box = m.box;
+    s.grid = m.grid;
+    for (int d = 0; d < 3; ++d) s.blocks[d] = (m.grid.count[d] + kMarksBlock - 1) / kMarksBlock;
+    std::vector<std::pair<int64_t, uint8_t>> marked;  // (block, a cell's bits), then merged
+    for (long long az = 0; az < m.grid.count[2]; ++az)
+      for (long long ay = 0; ay < m.grid.count[1]; ++ay)
+        for (long long ax = 0; ax < m.grid.count[0]; ++ax)
+          if (const uint8_t b = m.bits[static_cast<size_t>(m.grid.index(ax, ay, az))])
+            marked.emplace_back(((az / kMarksBlock) * s.blocks[1] + ay / kMarksBlock) * s.blocks[0] + ax / kMarksBlock, b);
+    std::sort(marked.begin(), marked.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (const auto& [block, b] : marked)
+      if (!s.block.empty() && s.block.back() == block) s.bits.back() |= b;
+      else s.block.push_back(block), s.bits.push_back(b);
+  }
+  return out;
+}
+
+bool MarksSummary::may_be_near(const double* x, int c) const {
+  for (int k = c; k < kReachClasses; ++k) {
+    const Grid& s = g[k];
+    if (!s.active) continue;
+    bool inside = true;
+    for (int d = 0; d < 3; ++d) inside = inside && x[d] >= s.box.lo[d] && x[d] <= s.box.hi[d];
+    if (!inside) continue;
+    long long b[3];
+    for (int d = 0; d < 3; ++d) b[d] = s.grid.coordinate(d, x[d]) / kMarksBlock;  // index_of's coordinates
+    const int64_t block = (b[2] * s.blocks[1] + b[1]) * s.blocks[0] + b[0];
+    const auto at = std::lower_bound(s.block.begin(), s.block.end(), block);
+    if (at != s.block.end() && *at == block && (s.bits[static_cast<size_t>(at - s.block.begin())] >> c & 1u)) return true;
+  }
+  return false;
+}
+
+std::vector<char> MarksSummary::bytes() const {
+  std::vector<char> out;
+  auto put = [&](const void* p, size_t n) { out.insert(out.end(), static_cast<const char*>(p), static_cast<const char*>(p) + n); };
+  for (const Grid& s : g) {
+    const uint8_t active = s.active;
+    put(&active, 1);
+    if (!s.active) continue;
+    const uint64_t marked = s.block.size();
+    put(&s.box, sizeof s.box);
+    put(&s.grid, sizeof s.grid);
+    put(s.blocks, sizeof s.blocks);
+    put(&marked, sizeof marked);
+    put(s.block.data(), marked * sizeof(int64_t));
+    put(s.bits.data(), marked);
+  }
+  return out;
+}
+
+MarksSummary MarksSummary::from_bytes(const char* p, size_t size) {
+  MarksSummary out;
+  size_t at = 0;
+  auto take = [&](void* to, size_t n) {
+    if (at + n > size) throw std::logic_error("MarksSummary: short bytes");
+    if (n) std::memcpy(to, p + at, n);
+    at += n;
+  };
+  for (Grid& s : out.g) {
+    uint8_t active = 0;
+    take(&active, 1);
+    s.active = active;
+    if (!s.active) continue;
+    uint64_t marked = 0;
+    take(&s.box, sizeof s.box);
+    take(&s.grid, sizeof s.grid);
+    take(s.blocks, sizeof s.blocks);
+    take(&marked, sizeof marked);
+    s.block.resize(marked);
+    s.bits.resize(marked);
+    take(s.block.data(), marked * sizeof(int64_t));
+    take(s.bits.data(), marked);
+  }
+  if (at != size) throw std::logic_error("MarksSummary: long bytes");
+  return out;
+}
+
+WindowMarks::WindowMarks(const std::vector<double>& x, const std::vector<double>& horizon,
+                         const std::vector<double>& half_cell, int dimension, const ReachFigures& body, int64_t body_n,
+                         int64_t row_begin, int64_t row_end, double group_cells)
+    : grids_(new Grids) {
   const size_t n = horizon.size();
   if (x.size() != 3 * n || half_cell.size() != n)
     throw std::invalid_argument("geometric_window: x0 3N, horizon and half_cell N");
   if (!(group_cells >= 0.0)) throw std::invalid_argument("geometric_window: a group extent of at least 0 cells");
   if (row_begin < 0 || row_begin > row_end || row_end > static_cast<int64_t>(n))
     throw std::invalid_argument("geometric_window: rows [begin, end) within [0, N]");
+  ReachClasses rc = reach_classes(horizon, half_cell, dimension, body);
+  if (row_begin < row_end) {
+    ClassMarks* grids = grids_->g;
+    GroupMarker marker(x, horizon, rc, grids);
+    // Grid g holds the marks of the pairs whose coarser end's class is g: rows of class g
+    // towards classes 0 .. g (bits 0 .. g), rows of finer classes towards class g (bit g).
+    // Cells of a third of class g's largest reach, so about the 343 cells around a row's are
+    // visited whatever its class and the candidates' (cells of half the reach, the 125
+    // around, visited a third as many and left windows 4 to 9 % larger on the demo concrete
+    // block's 4 ranks; a quarter, 729, about 4 % smaller at 1.6 times the time); the grid covers
+    // the rows' box grown by the largest reach marked in it, cut to the box of classes 0 .. g
+    // (only their particles are looked up in it); 1 B per cell, at most max(N, 65,536) cells
+    // per grid. A marked cell's particle lies within the reach plus the cell's diagonal.
+    double lo[3], hi[3];
+    for (int d = 0; d < 3; ++d) lo[d] = hi[d] = x[3 * static_cast<size_t>(row_begin) + d];
+    for (int64_t i = row_begin; i < row_end; ++i)
+      for (int d = 0; d < 3; ++d) {
+        lo[d] = std::min(lo[d], x[3 * i + d]);
+        hi[d] = std::max(hi[d], x[3 * i + d]);
+      }
+    double marked_reach[kReachClasses] = {};
+    for (int64_t i = row_begin; i < row_end; ++i) {
+      const int k = rc.of[static_cast<size_t>(i)];
+      for (int c = 0; c < kReachClasses; ++c)
+        if (rc.present[c]) marked_reach[std::max(k, c)] = std::max(marked_reach[std::max(k, c)], marker.reach_to(i, c));
+    }
+    for (int g = 0; g < kReachClasses; ++g) {
+      if (marked_reach[g] <= 0.0) continue;
+      ClassMarks& m = grids[g];
+      m.active = true;
+      for (int d = 0; d < 3; ++d) {
+        m.box.lo[d] = std::max(lo[d] - marked_reach[g], rc.up_to[g].lo[d]);
+        m.box.hi[d] = std::min(hi[d] + marked_reach[g], rc.up_to[g].hi[d]);
+        m.active = m.active && m.box.lo[d] <= m.box.hi[d];
+      }
+      if (!m.active) continue;
+      double cell = std::max((rc.H[g] + rc.P[g]) / 3.0, 1e-300);
+      for (;;) {
+        m.grid = CellGrid::covering(m.box, cell);
+        if (m.grid.cells() <= std::max<long long>(static_cast<long long>(body_n), 65536)) break;
+        cell *= 1.25;
+      }
+      m.bits.assign(static_cast<size_t>(m.grid.cells()), 0);
+    }
+    RowGroup open[kReachClasses][2];  // [grid][0: rows of the grid's class, 1: rows of finer classes]
+    auto add_to_group = [&](int64_t i, int g, bool own) {
+      RowGroup& grp = open[g][own ? 0 : 1];
+      const double* xi = &x[3 * i];
+      const double limit = group_cells * grids[g].grid.cell[0];
+      if (!grp.rows.empty())
+        for (int d = 0; d < 3; ++d)
+          if (std::max(grp.hi[d], xi[d]) - std::min(grp.lo[d], xi[d]) > limit) {
+            marker.mark(grp, g, own);
+            break;
+          }
+      if (grp.rows.empty())
+        for (int d = 0; d < 3; ++d) grp.lo[d] = grp.hi[d] = xi[d];
+      for (int d = 0; d < 3; ++d) grp.lo[d] = std::min(grp.lo[d], xi[d]), grp.hi[d] = std::max(grp.hi[d], xi[d]);
+      grp.rows.push_back(i);
+    };
+    for (int64_t i = row_begin; i < row_end; ++i) {
+      const int k = rc.of[static_cast<size_t>(i)];
+      for (int g = k; g < kReachClasses; ++g)
+        if (grids[g].active && (g == k || rc.present[g])) add_to_group(i, g, g == k);
+    }
+    for (int g = 0; g < kReachClasses; ++g)
+      if (grids[g].active) marker.mark(open[g][0], g, true), marker.mark(open[g][1], g, false);
+  }
+  of_.swap(rc.of);
+}
+
+GeometricWindow geometric_window(const std::vector<double>& x, const std::vector<double>& horizon,
+                                 const std::vector<double>& half_cell, int dimension, int64_t row_begin,
+                                 int64_t row_end, double group_cells) {
+  const size_t n = horizon.size();
+  if (x.size() != 3 * n || half_cell.size() != n)
+    throw std::invalid_argument("geometric_window: x0 3N, horizon and half_cell N");
+  if (row_begin < 0 || row_begin > row_end || row_end > static_cast<int64_t>(n))
+    throw std::invalid_argument("geometric_window: rows [begin, end) within [0, N]");
   GeometricWindow w;
   if (row_begin == row_end) return w;
-  const ReachClasses rc = reach_classes(x, horizon, half_cell, dimension);
-  ClassMarks grids[kReachClasses];
-  GroupMarker marker(x, horizon, rc, grids);
-  // Grid g holds the marks of the pairs whose coarser end's class is g: rows of class g
-  // towards classes 0 .. g (bits 0 .. g), rows of finer classes towards class g (bit g).
-  // Cells of a third of class g's largest reach, so about the 343 cells around a row's are
-  // visited whatever its class and the candidates' (cells of half the reach, the 125
-  // around, visited a third as many and left windows 4 to 9 % larger on the demo concrete
-  // block's 4 ranks; a quarter, 729, about 4 % smaller at 1.6 times the time); the grid covers
-  // the rows' box grown by the largest reach marked in it, cut to the box of classes 0 .. g
-  // (only their particles are looked up in it); 1 B per cell, at most max(N, 65,536) cells
-  // per grid. A marked cell's particle lies within the reach plus the cell's diagonal.
-  double lo[3], hi[3];
-  for (int d = 0; d < 3; ++d) lo[d] = hi[d] = x[3 * static_cast<size_t>(row_begin) + d];
-  for (int64_t i = row_begin; i < row_end; ++i)
-    for (int d = 0; d < 3; ++d) {
-      lo[d] = std::min(lo[d], x[3 * i + d]);
-      hi[d] = std::max(hi[d], x[3 * i + d]);
-    }
-  double marked_reach[kReachClasses] = {};
-  for (int64_t i = row_begin; i < row_end; ++i) {
-    const int k = rc.of[static_cast<size_t>(i)];
-    for (int c = 0; c < kReachClasses; ++c)
-      if (rc.present[c]) marked_reach[std::max(k, c)] = std::max(marked_reach[std::max(k, c)], marker.reach_to(i, c));
-  }
-  for (int g = 0; g < kReachClasses; ++g) {
-    if (marked_reach[g] <= 0.0) continue;
-    ClassMarks& m = grids[g];
-    m.active = true;
-    for (int d = 0; d < 3; ++d) {
-      m.box.lo[d] = std::max(lo[d] - marked_reach[g], rc.up_to[g].lo[d]);
-      m.box.hi[d] = std::min(hi[d] + marked_reach[g], rc.up_to[g].hi[d]);
-      m.active = m.active && m.box.lo[d] <= m.box.hi[d];
-    }
-    if (!m.active) continue;
-    double cell = std::max((rc.H[g] + rc.P[g]) / 3.0, 1e-300);
-    for (;;) {
-      m.grid = CellGrid::covering(m.box, cell);
-      if (m.grid.cells() <= std::max<long long>(static_cast<long long>(n), 65536)) break;
-      cell *= 1.25;
-    }
-    m.bits.assign(static_cast<size_t>(m.grid.cells()), 0);
-  }
-  RowGroup open[kReachClasses][2];  // [grid][0: rows of the grid's class, 1: rows of finer classes]
-  auto add_to_group = [&](int64_t i, int g, bool own) {
-    RowGroup& grp = open[g][own ? 0 : 1];
-    const double* xi = &x[3 * i];
-    const double limit = group_cells * grids[g].grid.cell[0];
-    if (!grp.rows.empty())
-      for (int d = 0; d < 3; ++d)
-        if (std::max(grp.hi[d], xi[d]) - std::min(grp.lo[d], xi[d]) > limit) {
-          marker.mark(grp, g, own);
-          break;
-        }
-    if (grp.rows.empty())
-      for (int d = 0; d < 3; ++d) grp.lo[d] = grp.hi[d] = xi[d];
-    for (int d = 0; d < 3; ++d) grp.lo[d] = std::min(grp.lo[d], xi[d]), grp.hi[d] = std::max(grp.hi[d], xi[d]);
-    grp.rows.push_back(i);
-  };
-  for (int64_t i = row_begin; i < row_end; ++i) {
-    const int k = rc.of[static_cast<size_t>(i)];
-    for (int g = k; g < kReachClasses; ++g)
-      if (grids[g].active && (g == k || rc.present[g])) add_to_group(i, g, g == k);
-  }
-  for (int g = 0; g < kReachClasses; ++g)
-    if (grids[g].active) marker.mark(open[g][0], g, true), marker.mark(open[g][1], g, false);
-  // Particle j of class c is near the rows when a grid g >= c marks its cell with bit c.
-  auto near = [&](size_t j) {
-    const int c = rc.of[j];
-    const double* xj = &x[3 * j];
-    for (int g = c; g < kReachClasses; ++g) {
-      const ClassMarks& m = grids[g];
-      if (!m.active) continue;
-      bool inside = true;
-      for (int d = 0; d < 3; ++d) inside = inside && xj[d] >= m.box.lo[d] && xj[d] <= m.box.hi[d];
-      if (inside && (m.bits[static_cast<size_t>(m.grid.index_of(xj))] >> c & 1u)) return true;
-    }
-    return false;
-  };
+  ReachFigures body(reach_bounds(horizon, half_cell, dimension));
+  body.add(x, horizon, half_cell, dimension);
+  const WindowMarks marks(x, horizon, half_cell, dimension, body, static_cast<int64_t>(n), row_begin, row_end, group_cells);
+  auto near = [&](size_t j) { return marks.near(&x[3 * j], marks.class_of(static_cast<int64_t>(j))); };
   for (int64_t j = 0; j < row_begin; ++j)
     if (near(static_cast<size_t>(j))) w.index.push_back(static_cast<int32_t>(j));
   w.row_begin = static_cast<int64_t>(w.index.size());

@@ -668,10 +668,12 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     last_cpu = now_cpu;
   };
   // A distributed set-up: rank 0 (the planner) reads the whole particle file (its writers'
-  // staging), sets the whole body's order and horizons, and tells the other ranks what they
-  // read of every particle (BodyPlan) and which file rows form their windows
-  // (plan_distributed_rows); the ranks other than 0 (`planned`) read the file's lists and
-  // their windows' rows alone (plan_window_system): no array of the body's size.
+  // staging); every rank reads an equal block of its rows, and the ranks sort them into the
+  // internal order together and take the whole body's horizons and cells from their blocks
+  // (below); rank 0 tells the other ranks what else they read of every particle (BodyPlan)
+  // and which file rows form their windows (plan_distributed_rows); the ranks other than 0
+  // (`planned`) read the file's lists, their blocks' and their windows' rows alone
+  // (plan_window_system): no array of the body's size.
   const DistributedSetup& dist = hooks.distributed;
   const bool planned = setup_on_window(dist);
   const bool planner = dist.active() && dist.rank == 0;
@@ -738,19 +740,169 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     }
   }
 
-  // What later passes read of the whole body (below): on the ranks other than 0 from rank 0.
+  // Rank 0 has met every refusal it can meet alone (the file, the case's sets): the other
+  // ranks learn the body's count, its content id and its sets' whole counts, or stop.
+  if (planner) {
+    body.n = static_cast<int64_t>(n);
+    body.content_id = pm.content_id;
+    for (const ParticleSet& set : pm.sets) body.set_sizes.push_back(static_cast<int64_t>(set.indices.size()));
+    send_body_plan(dist, body);
+    root_refusal.armed = false;  // (the sort below is every rank's: a refusal there is every rank's)
+  }
+
+  // What later passes read of the whole body (below).
   double one_horizon_value = 0.0;
   std::function<double(int64_t)> horizon_of_file;
   bool body_one_horizon = false, body_uniform = false;
   double body_max_horizon = 0.0, body_max_half_cell = 0.0, body_median_horizon = 0.0, body_median_half_cell = 0.0;
   std::array<double, 3> f32_origin{};
   std::exception_ptr graded_refusal;
+  // A particle's horizon from its spacing: fixed, per-particle (dual horizon), or factor x
+  // median spacing (one_horizon_value, set before the first call).
+  auto horizon_of_spacing = [&](double spacing) {
+    return c.horizon_m ? *c.horizon_m : c.variable_horizon ? c.horizon_factor * spacing : one_horizon_value;
+  };
+  auto refuse_small_horizon = [&](double max_spacing) {
+    if (c.horizon_m && *c.horizon_m < max_spacing)
+      throw InputError(c.file, "model.horizon",
+                       "horizon " + std::to_string(*c.horizon_m) + " m is smaller than the largest particle spacing " +
+                           std::to_string(max_spacing) + " m",
+                       "a horizon of about 3 spacings (at least one)");
+  };
+  if (c.horizon_m) one_horizon_value = *c.horizon_m;
+  // The ranks other than 0 read the file's rows alone (their windows', their blocks').
+  const ReadFileRows read_rows = [&](const std::vector<int64_t>& rows, const std::vector<int64_t>& cells,
+                                     ParticleModel& into) {
+    if (!c.lattice) return read_particle_rows_at(c.particles_path, rows, cells, into);
+    ParticleModel part = lattice_model(*c.lattice, &rows);  // (a lattice has no mesh)
+    into.position_m.swap(part.position_m);
+    into.volume_m3.swap(part.volume_m3);
+    into.spacing_m.swap(part.spacing_m);
+    into.material_id.swap(part.material_id);
+    into.held_rows.swap(part.held_rows);
+  };
+  // Internal (Morton) order: one process sorts the body (morton_order); a distributed set-up's
+  // ranks each read an equal block of the file's rows and sort them together
+  // (distributed_morton_sort: the same order), and take the whole body's figures from their
+  // blocks, each the same double as one process's (folds in the order of the file or of the
+  // internal indices; medians as order statistics). Rank 0 receives the order (its whole
+  // system: its writers' staging).
+  std::vector<int32_t> order;  // internal -> file (one process, rank 0)
+  int64_t block_rows = 0;      // the file rows a rank read for the sort (summary.json)
+  RankRun slice_run;           // the rank's family_slice of the order, for the plan (plan_distributed_rows)
+  if (dist.active()) {
+    const int64_t body_n = static_cast<int64_t>(n);
+    const FamilySlice block = file_block(body_n, dist.rank, dist.ranks);
+    block_rows = block.end - block.begin;
+    std::vector<MortonItem> items(static_cast<size_t>(block_rows));
+    {
+      ParticleModel read;
+      const ParticleModel* from = &pm;
+      int64_t shift = block.begin;
+      if (planned) {
+        std::vector<int64_t> rows(static_cast<size_t>(block_rows));
+        std::iota(rows.begin(), rows.end(), block.begin);
+        read_rows(rows, {}, read);
+        from = &read;
+        shift = 0;
+      }
+      const BoundingBox box = body_bounding_box(
+          dist, std::span<const double>(from->position_m.data() + 3 * shift, 3 * static_cast<size_t>(block_rows)));
+      const double extent = morton_extent(box);
+      for (size_t k = 0; k < items.size(); ++k) {
+        MortonItem& it = items[k];
+        it.file = block.begin + static_cast<int64_t>(k);
+        for (int d = 0; d < 3; ++d) it.x[d] = from->position_m[3 * (static_cast<size_t>(shift) + k) + d];
+        it.spacing = from->spacing_m[static_cast<size_t>(shift) + k];
+        it.key = morton_key(it.x, box, extent);
+      }
+    }
+    const MortonBlock sorted = distributed_morton_sort(dist, std::move(items));
+    const std::vector<MortonItem>& mine = sorted.items;
+    // Each rank's fold of its block, then the folds in rank order (the first of equal values kept).
+    auto fold_max = [&](auto value) {
+      std::vector<double> per_rank;
+      for (const MortonItem& it : mine)
+        if (per_rank.empty()) per_rank.push_back(value(it));
+        else per_rank[0] = std::max(per_rank[0], value(it));
+      per_rank = concat_over_ranks(dist, per_rank);
+      return per_rank.empty() ? 0.0 : *std::max_element(per_rank.begin(), per_rank.end());
+    };
+    auto column = [&](auto value) {
+      std::vector<double> v(mine.size());
+      for (size_t k = 0; k < mine.size(); ++k) v[k] = value(mine[k]);
+      return v;
+    };
+    refuse_small_horizon(fold_max([](const MortonItem& it) { return it.spacing; }));
+    if (!c.horizon_m && !c.variable_horizon && body_n > 0)
+      one_horizon_value = c.horizon_factor * distributed_order_statistic(
+                                                 dist, column([](const MortonItem& it) { return it.spacing; }), body_n / 2);
+    auto horizon = [&](const MortonItem& it) { return horizon_of_spacing(it.spacing); };
+    auto half_cell = [](const MortonItem& it) { return 0.5 * it.spacing; };
+    // Internal index 0's horizon and cell (the rank holding it sends them), then every
+    // particle's compared with them.
+    std::vector<double> first;
+    if (sorted.first == 0 && !mine.empty()) first = {horizon(mine[0]), half_cell(mine[0])};
+    first = concat_over_ranks(dist, first);
+    uint8_t same[2] = {1, 1};
+    for (const MortonItem& it : mine) {
+      same[0] = same[0] && horizon(it) == first[0];
+      same[1] = same[1] && half_cell(it) == first[1] && horizon(it) == first[0];
+    }
+    const std::vector<uint8_t> all_same = concat_over_ranks(dist, std::vector<uint8_t>(same, same + 2));
+    body_one_horizon = body_n > 0;
+    body_uniform = body_n > 0;
+    for (size_t q = 0; q < all_same.size(); q += 2) {
+      body_one_horizon = body_one_horizon && all_same[q];
+      body_uniform = body_uniform && all_same[q + 1];
+    }
+    body_max_horizon = fold_max(horizon);
+    body_max_half_cell = fold_max(half_cell);
+    if (body_n > 0) {
+      body_median_horizon = distributed_order_statistic(dist, column(horizon), body_n / 2);
+      body_median_half_cell = distributed_order_statistic(dist, column(half_cell), body_n / 2);
+    }
+    if (c.precision == CaseConfig::Precision::Float32) {  // float32_origin's folds, in internal order
+      std::vector<double> x(3 * mine.size());
+      for (size_t k = 0; k < mine.size(); ++k) std::copy_n(mine[k].x, 3, &x[3 * k]);
+      const std::array<double, 6> own = float32_extent(x);
+      const std::vector<double> ends = concat_over_ranks(dist, std::vector<double>(own.begin(), own.end()));
+      std::array<double, 6> lo_hi{1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
+      for (size_t q = 0; q < ends.size(); q += 6)
+        for (int d = 0; d < 3; ++d) {
+          lo_hi[d] = std::min(lo_hi[d], ends[q + d]);
+          lo_hi[3 + d] = std::max(lo_hi[3 + d], ends[q + 3 + d]);
+        }
+      for (int d = 0; d < 3; ++d) f32_origin[d] = body_n ? 0.5 * (lo_hi[d] + lo_hi[3 + d]) : 0.0;
+    }
+    std::vector<int32_t> file(mine.size());
+    for (size_t k = 0; k < mine.size(); ++k) file[k] = static_cast<int32_t>(mine[k].file);
+    const std::vector<char> bytes = dist.concat(file.data(), file.size(), sizeof(int32_t), false);
+    order.resize(bytes.size() / sizeof(int32_t));
+    if (!bytes.empty()) std::memcpy(order.data(), bytes.data(), bytes.size());
+    if (planner && order.size() != n) throw std::logic_error("distributed set-up: the ranks' Morton order does not cover the body");
+    RankRun run;
+    run.first = sorted.first;
+    run.p.resize(mine.size());
+    for (size_t k = 0; k < mine.size(); ++k) {
+      PlanParticle& q = run.p[k];
+      q.file = mine[k].file;
+      std::copy_n(mine[k].x, 3, q.x);
+      q.horizon = horizon(mine[k]);
+      q.half_cell = half_cell(mine[k]);
+    }
+    std::vector<int64_t> slice_begin;
+    for (int r = 0; r <= dist.ranks; ++r) slice_begin.push_back(r == dist.ranks ? body_n : family_slice(body_n, r, dist.ranks).begin);
+    slice_run = move_run(dist, std::move(run), slice_begin);
+    root_refusal.armed = planner;  // rank 0's own passes below: a refusal stops the others
+  } else {
+    order = morton_order(pm.position_m);
+  }
   if (!planned) {
-    // Internal (Morton) order.
-    const std::vector<int32_t> order = morton_order(pm.position_m);
     s.original_index.assign(order.begin(), order.end());
     s.internal_index.assign(n, 0);
     for (size_t k = 0; k < n; ++k) s.internal_index[order[k]] = static_cast<int32_t>(k);
+    std::vector<int32_t>().swap(order);
     s.x0.resize(3 * n);
     s.volume.resize(n);
     s.density.resize(n);
@@ -759,7 +911,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     s.horizon.resize(n);
     std::vector<double> spacing(n);
     for (size_t k = 0; k < n; ++k) {
-      const size_t f = static_cast<size_t>(order[k]);
+      const size_t f = static_cast<size_t>(s.original_index[k]);
       for (int d = 0; d < 3; ++d) s.x0[3 * k + d] = pm.position_m[3 * f + d];
       s.volume[k] = pm.volume_m3[f];
       s.material[k] = material_of_file_id[pm.material_id[f]];
@@ -767,22 +919,12 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       spacing[k] = pm.spacing_m[f];
       s.half_cell[k] = 0.5 * spacing[k];
     }
-    // Horizon: fixed, per-particle (dual horizon), or factor x median spacing.
-    const double max_spacing = *std::max_element(spacing.begin(), spacing.end());
-    if (c.horizon_m) {
-      if (*c.horizon_m < max_spacing)
-        throw InputError(c.file, "model.horizon",
-                         "horizon " + std::to_string(*c.horizon_m) + " m is smaller than the largest particle spacing " +
-                             std::to_string(max_spacing) + " m",
-                         "a horizon of about 3 spacings (at least one)");
-      std::fill(s.horizon.begin(), s.horizon.end(), *c.horizon_m);
-    } else if (c.variable_horizon) {
-      for (size_t k = 0; k < n; ++k) s.horizon[k] = c.horizon_factor * spacing[k];
-    } else {
-      std::fill(s.horizon.begin(), s.horizon.end(), c.horizon_factor * median(spacing));
+    if (!dist.active()) {  // (a distributed set-up's ranks took these above)
+      refuse_small_horizon(*std::max_element(spacing.begin(), spacing.end()));
+      if (!c.horizon_m && !c.variable_horizon && n > 0) one_horizon_value = c.horizon_factor * median(spacing);
     }
+    for (size_t k = 0; k < n; ++k) s.horizon[k] = horizon_of_spacing(spacing[k]);
     // A file particle's horizon, as set above (layer_of_surface reads every facet's).
-    one_horizon_value = c.horizon_m ? *c.horizon_m : c.variable_horizon || n == 0 ? 0.0 : s.horizon[0];
     horizon_of_file = [&](int64_t f) {
       return c.variable_horizon && !c.horizon_m ? c.horizon_factor * pm.spacing_m[static_cast<size_t>(f)] : one_horizon_value;
     };
@@ -791,16 +933,17 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     // system, below, holds its window alone): whether every particle has one cell and one
     // horizon, the largest and median horizons and cells, float32's origin (the bounding box
     // centre). The medians are order statistics: the same values in any order.
-    body_one_horizon = n > 0;
-    body_uniform = n > 0;
-    for (size_t i = 1; i < n && body_one_horizon; ++i) body_one_horizon = s.horizon[i] == s.horizon[0];
-    for (size_t i = 1; i < n && body_uniform; ++i) body_uniform = s.half_cell[i] == s.half_cell[0] && s.horizon[i] == s.horizon[0];
-    body_max_horizon = n ? *std::max_element(s.horizon.begin(), s.horizon.end()) : 0.0;
-    body_max_half_cell = n ? *std::max_element(s.half_cell.begin(), s.half_cell.end()) : 0.0;
-    body_median_horizon = n ? median(s.horizon) : 0.0;
-    body_median_half_cell = n ? median(s.half_cell) : 0.0;
-    f32_origin =
-        c.precision == CaseConfig::Precision::Float32 ? float32_origin(s.x0) : std::array<double, 3>{};
+    if (!dist.active()) {
+      body_one_horizon = n > 0;
+      body_uniform = n > 0;
+      for (size_t i = 1; i < n && body_one_horizon; ++i) body_one_horizon = s.horizon[i] == s.horizon[0];
+      for (size_t i = 1; i < n && body_uniform; ++i) body_uniform = s.half_cell[i] == s.half_cell[0] && s.horizon[i] == s.horizon[0];
+      body_max_horizon = n ? *std::max_element(s.horizon.begin(), s.horizon.end()) : 0.0;
+      body_max_half_cell = n ? *std::max_element(s.half_cell.begin(), s.half_cell.end()) : 0.0;
+      body_median_horizon = n ? median(s.horizon) : 0.0;
+      body_median_half_cell = n ? median(s.half_cell) : 0.0;
+      f32_origin = c.precision == CaseConfig::Precision::Float32 ? float32_origin(s.x0) : std::array<double, 3>{};
+    }
     // One horizon over a graded arrangement under-resolves its coarse part (docs/atlas.md,
     // stability map, graded_check.hpp): judged on the whole body here, refused at the start-up
     // checks below (after the refusals the passes between make, as before).
@@ -810,18 +953,9 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         graded_refusal = std::current_exception();
       }
   } else {
-    one_horizon_value = body.fill_horizon;
     horizon_of_file = [](int64_t) -> double {
       throw std::logic_error("set-up: a file particle's horizon read on a rank other than 0 (rank 0's plan holds the layers)");
     };
-    body_one_horizon = body.one_horizon;
-    body_uniform = body.uniform;
-    body_max_horizon = body.max_horizon;
-    body_max_half_cell = body.max_half_cell;
-    body_median_horizon = body.median_horizon;
-    body_median_half_cell = body.median_half_cell;
-    f32_origin = body.f32_origin;
-    if (body.graded_refused) graded_refusal = std::make_exception_ptr(InputError(c.file, "", body.graded_message, ""));
   }
   // The boundary layers of the tractions with a depth (layer_of_surface: every particle of
   // the layer and their volume), which read every row of the particle file: rank 0 takes them
@@ -829,23 +963,13 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   std::vector<std::optional<SurfaceLayer>> taken_layer(c.loads.size());
   std::vector<std::exception_ptr> layer_refused(c.loads.size());
   if (planner) {
-    body.n = static_cast<int64_t>(n);
-    body.fill_horizon = one_horizon_value;
-    body.one_horizon = body_one_horizon;
-    body.uniform = body_uniform;
-    body.max_horizon = body_max_horizon;
-    body.max_half_cell = body_max_half_cell;
-    body.median_horizon = body_median_horizon;
-    body.median_half_cell = body_median_half_cell;
-    body.f32_origin = f32_origin;
+    body = BodyPlan{};
     if (graded_refusal) try {
         std::rethrow_exception(graded_refusal);
       } catch (const InputError& e) {
         body.graded_refused = true;
         body.graded_message = e.what();
       }
-    body.content_id = pm.content_id;
-    for (const ParticleSet& set : pm.sets) body.set_sizes.push_back(static_cast<int64_t>(set.indices.size()));
     std::vector<int64_t> known;  // the file particles the other ranks name beyond their windows
     for (const SurfaceFacets& sf : pm.surfaces) known.insert(known.end(), sf.particle.begin(), sf.particle.end());
     body.layers.resize(c.loads.size());
@@ -872,12 +996,19 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     root_refusal.armed = false;
     body = BodyPlan{};
   }
-  if (planned)
+  if (planned) {
+    BodyPlan rest = receive_body_plan(dist);
+    if (rest.refused) throw InputError(c.file, "", "refused by rank 0, which reads the particle file (its message)", "");
+    if (rest.graded_refused) graded_refusal = std::make_exception_ptr(InputError(c.file, "", rest.graded_message, ""));
+    body.known_file = std::move(rest.known_file);
+    body.known_internal = std::move(rest.known_internal);
+    body.layers = std::move(rest.layers);
     for (size_t l = 0; l < c.loads.size() && l < body.layers.size(); ++l) {
       if (body.layers[l].taken) taken_layer[l] = std::move(body.layers[l].layer);
       if (body.layers[l].refused)
         layer_refused[l] = std::make_exception_ptr(InputError(c.file, "loads[" + std::to_string(l) + "]", body.layers[l].message, ""));
     }
+  }
 
   phase("morton order and horizons");
   // A distributed set-up builds this rank's rows only; the other rows stay empty
@@ -886,16 +1017,6 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // window system, local indices), rank 0 the whole body (its writers' staging).
   DistributedRows dist_rows;
   if (planned) {
-    const ReadFileRows read_rows = [&](const std::vector<int64_t>& rows, const std::vector<int64_t>& cells,
-                                       ParticleModel& into) {
-      if (!c.lattice) return read_particle_rows_at(c.particles_path, rows, cells, into);
-      ParticleModel part = lattice_model(*c.lattice, &rows);  // (a lattice has no mesh)
-      into.position_m.swap(part.position_m);
-      into.volume_m3.swap(part.volume_m3);
-      into.spacing_m.swap(part.spacing_m);
-      into.material_id.swap(part.material_id);
-      into.held_rows.swap(part.held_rows);
-    };
     // A held row's values, as the whole body's loop above sets them (the same expressions).
     const ValuesOfRow values = [&](const ParticleModel& m, size_t k) {
       RowValues v;
@@ -903,10 +1024,11 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       v.density = c.materials[static_cast<size_t>(v.material)].density;
       const double spacing = m.spacing_m[k];
       v.half_cell = 0.5 * spacing;
-      v.horizon = c.horizon_m ? *c.horizon_m : c.variable_horizon ? c.horizon_factor * spacing : one_horizon_value;
+      v.horizon = horizon_of_spacing(spacing);
       return v;
     };
-    dist_rows = plan_window_system(s, dist, read_rows, values);
+    dist_rows = plan_window_system(s, dist, read_rows, values, std::move(slice_run));
+    s.setup_file_rows[0] = std::max(s.setup_file_rows[0], block_rows);
     n = s.n;
     // The case's sets on the rows held (their members there), each set's whole count rank 0's.
     add_case_sets(s.particles, c);
@@ -926,7 +1048,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     }
     body = BodyPlan{};
   } else {
-    dist_rows = plan_distributed_rows(s, dist);
+    dist_rows = plan_distributed_rows(s, dist, std::move(slice_run));
   }
   if (!planned) s.setup_file_rows = {static_cast<int64_t>(s.particles.size())};  // every row (summary.json)
 

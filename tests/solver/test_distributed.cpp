@@ -192,9 +192,10 @@ TEST(Distributed, BadInputIsReportedOnceWithExitCode2) {
   EXPECT_NE(o.err.find(key), std::string::npos) << o.err;
 }
 
-// An input error found on the whole body (a horizon below the largest spacing), which rank 0
-// alone judges (the planner: the other ranks read no whole array and wait for its plan,
-// distributed_setup.hpp BodyPlan): every rank stops with exit code 2, the error said once.
+// An input error found on the whole body (a horizon below the largest spacing, which every
+// rank judges from the ranks' blocks of the Morton sort; one rank 0 meets alone reaches the
+// others as a refusal, distributed_setup.hpp BodyPlan): every rank stops with exit code 2,
+// the error said once.
 TEST(Distributed, AWholeBodyInputErrorOnRankZeroStopsEveryRankWithExitCode2) {
   const std::string file = write_case("mpi_bad_horizon",
                                       "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.004, 0.004, 0.004], spacing: 1 mm}}\n"

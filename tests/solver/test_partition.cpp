@@ -7,6 +7,7 @@
 #include <barrier>
 #include <cmath>
 #include <functional>
+#include <random>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -15,6 +16,7 @@
 
 #include "breccia/common/families.hpp"
 #include "breccia/solver/distributed_setup.hpp"
+#include "breccia/solver/family.hpp"
 #include "breccia/solver/partition.hpp"
 #include "breccia/solver/rank_system.hpp"
 #include "helpers.hpp"
@@ -1077,6 +1079,16 @@ struct ThreadRanks {
       sync.arrive_and_wait();  // every rank has read its boxes before any writes again
       return out;
     };
+    d.concat = [this, rank](const void* data, size_t count, size_t bytes, bool everyone) {
+      const char* p = static_cast<const char*>(data);
+      box[rank * ranks].assign(p, p + count * bytes);
+      sync.arrive_and_wait();
+      std::vector<char> out;
+      if (everyone || rank == 0)
+        for (int from = 0; from < ranks; ++from) out.insert(out.end(), box[from * ranks].begin(), box[from * ranks].end());
+      sync.arrive_and_wait();
+      return out;
+    };
     return d;
   }
   int ranks;
@@ -1168,4 +1180,188 @@ TEST(RankSystem, AWindowMissingAPartnerFailsNamingTheRowAndThePartner) {
   }
   // Inactive rows (one process): nothing to check.
   EXPECT_NO_THROW(require_partners_in_window(DistributedRows{}, s.offsets, s.neighbor));
+}
+
+// The distributed Morton order (distributed_setup.hpp distributed_morton_sort; docs/parallel.md,
+// Memory, item 2): every rank's block of file rows, keyed in the whole body's box
+// (body_bounding_box), sorted across 1 to 4 ranks (threads here), is morton_order's stable
+// order exactly: the blocks concatenated in rank order name the same file rows, ties by file
+// row. Random positions, then many tied keys (coincident points and points closer than a
+// key's resolution), with equal blocks and with uneven ones (an empty rank among them).
+namespace {
+template <class F>
+void on_thread_ranks(int ranks, F f) {
+  ThreadRanks world(ranks);
+  std::vector<std::string> error(static_cast<size_t>(ranks));
+  std::vector<std::thread> threads;
+  for (int r = 0; r < ranks; ++r)
+    threads.emplace_back([&, r] {
+      try {
+        f(world.setup(r));
+      } catch (const std::exception& e) {
+        error[static_cast<size_t>(r)] = e.what();
+      }
+    });
+  for (auto& t : threads) t.join();
+  for (int r = 0; r < ranks; ++r) EXPECT_EQ(error[static_cast<size_t>(r)], "") << ranks << " ranks, rank " << r;
+}
+}  // namespace
+
+TEST(DistributedSort, MortonSortOverTheRanksIsMortonOrderWithItsTies) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-0.3, 1.7);
+  std::vector<std::vector<double>> clouds;
+  {
+    std::vector<double> x(3 * 2000);
+    for (double& v : x) v = u(rng);
+    clouds.push_back(std::move(x));
+  }
+  {
+    // Ties: 1500 points on 40 sites (coincident), and 500 within 1e-9 of the extent of one
+    // site (below 1 / 2^21 of it: the same key, distinct positions).
+    std::vector<double> site(3 * 40);
+    for (double& v : site) v = u(rng);
+    std::vector<double> x;
+    for (int i = 0; i < 1500; ++i) {
+      const size_t k = static_cast<size_t>(rng() % 40);
+      x.insert(x.end(), &site[3 * k], &site[3 * k] + 3);
+    }
+    for (int i = 0; i < 500; ++i)
+      for (int d = 0; d < 3; ++d) x.push_back(site[static_cast<size_t>(d)] + 1e-9 * static_cast<double>(i % 7));
+    clouds.push_back(std::move(x));
+  }
+  for (size_t cl = 0; cl < clouds.size(); ++cl) {
+    const std::vector<double>& x = clouds[cl];
+    const int64_t n = static_cast<int64_t>(x.size() / 3);
+    const std::vector<int32_t> expected = morton_order(x);
+    for (const int ranks : {1, 2, 3, 4})
+      for (const bool uneven : {false, true}) {
+        // Each rank's first file row: file_block's, or uneven (rank 1 empty above one rank).
+        std::vector<int64_t> begin;
+        for (int r = 0; r <= ranks; ++r) begin.push_back(r == ranks ? n : file_block(n, r, ranks).begin);
+        if (uneven && ranks > 1) {
+          begin[1] = n / 5;
+          if (ranks > 2) begin[2] = begin[1];
+        }
+        std::vector<std::vector<int32_t>> got(static_cast<size_t>(ranks));
+        std::vector<int64_t> first(static_cast<size_t>(ranks)), whole(static_cast<size_t>(ranks));
+        on_thread_ranks(ranks, [&](const DistributedSetup& d) {
+          const int64_t b = begin[static_cast<size_t>(d.rank)], e = begin[static_cast<size_t>(d.rank) + 1];
+          const breccia::BoundingBox box = body_bounding_box(d, std::span<const double>(x.data() + 3 * b, 3 * static_cast<size_t>(e - b)));
+          const double extent = morton_extent(box);
+          std::vector<MortonItem> items;
+          for (int64_t f = b; f < e; ++f) {
+            MortonItem it;
+            it.file = f;
+            std::copy_n(&x[3 * static_cast<size_t>(f)], 3, it.x);
+            it.spacing = static_cast<double>(f);
+            it.key = morton_key(it.x, box, extent);
+            items.push_back(it);
+          }
+          const MortonBlock sorted = distributed_morton_sort(d, std::move(items));
+          for (const MortonItem& it : sorted.items) {
+            got[static_cast<size_t>(d.rank)].push_back(static_cast<int32_t>(it.file));
+            if (it.spacing != static_cast<double>(it.file) || !std::equal(it.x, it.x + 3, &x[3 * static_cast<size_t>(it.file)]))
+              throw std::runtime_error("an item's position or value did not travel with its row");
+          }
+          first[static_cast<size_t>(d.rank)] = sorted.first;
+          whole[static_cast<size_t>(d.rank)] = sorted.n;
+        });
+        std::vector<int32_t> order;
+        for (int r = 0; r < ranks; ++r) {
+          EXPECT_EQ(first[static_cast<size_t>(r)], static_cast<int64_t>(order.size())) << cl << ", " << ranks << " ranks";
+          EXPECT_EQ(whole[static_cast<size_t>(r)], n);
+          order.insert(order.end(), got[static_cast<size_t>(r)].begin(), got[static_cast<size_t>(r)].end());
+        }
+        EXPECT_EQ(order, expected) << "cloud " << cl << ", " << ranks << " ranks, uneven " << uneven;
+      }
+  }
+  // The tied cloud has ties to break (else the test would not test them).
+  const std::vector<double>& tied = clouds[1];
+  const breccia::BoundingBox box = breccia::bounding_box(tied);
+  std::vector<uint64_t> key;
+  for (size_t i = 0; i < tied.size() / 3; ++i) key.push_back(morton_key(&tied[3 * i], box, morton_extent(box)));
+  std::sort(key.begin(), key.end());
+  EXPECT_LT(std::unique(key.begin(), key.end()) - key.begin(), 100);
+}
+
+// distributed_order_statistic: the k-th smallest of the ranks' values together is the value
+// std::nth_element places at k in one array (the set-up's median: k = n / 2), duplicates,
+// negative values and zero among them, at 1 to 4 ranks with uneven shares.
+TEST(DistributedSort, OrderStatisticOverTheRanksIsNthElementsValue) {
+  std::mt19937_64 rng(11);
+  std::vector<double> v;
+  for (int i = 0; i < 777; ++i) v.push_back(i % 5 == 0 ? 0.25 * static_cast<double>(rng() % 4) : std::ldexp(static_cast<double>(rng() % 1000) - 300.0, -7));
+  v.push_back(0.0);
+  const int64_t n = static_cast<int64_t>(v.size());
+  for (const int ranks : {1, 2, 3, 4})
+    for (const int64_t k : {int64_t{0}, n / 3, n / 2, n - 1}) {
+      std::vector<double> sorted = v;
+      std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
+      const double expected = sorted[static_cast<size_t>(k)];
+      std::vector<double> got(static_cast<size_t>(ranks));
+      on_thread_ranks(ranks, [&](const DistributedSetup& d) {
+        const int64_t b = n * d.rank * d.rank / (ranks * ranks), e = n * (d.rank + 1) * (d.rank + 1) / (ranks * ranks);
+        got[static_cast<size_t>(d.rank)] = distributed_order_statistic(d, std::vector<double>(v.begin() + b, v.begin() + e), k);
+      });
+      for (int r = 0; r < ranks; ++r) EXPECT_EQ(got[static_cast<size_t>(r)], expected) << ranks << " ranks, k " << k;
+    }
+}
+
+// Each rank's geometric window formed from the ranks' runs of the order (form_window,
+// distributed_setup.hpp: the ranks' grid boxes to every rank, the particles inside them to
+// that rank, filtered by geometric_window's own test) is geometric_window's over the whole
+// body, particle for particle, with each particle's values: on the graded cloud (horizons
+// varying threefold, so several reach classes) at 1 to 4 ranks, equal runs and uneven ones
+// (an empty rank among them).
+TEST(DistributedSort, WindowsFormedFromTheRanksRunsAreTheWholeBodysGeometricWindows) {
+  const GradedCloud graded;
+  const int64_t n = graded.n;
+  struct {
+    std::vector<double> x, horizon, half_cell;
+  } cloud;  // in Morton order, as the set-up holds it
+  for (const int32_t f : morton_order(graded.x)) {
+    cloud.x.insert(cloud.x.end(), &graded.x[3 * static_cast<size_t>(f)], &graded.x[3 * static_cast<size_t>(f)] + 3);
+    cloud.horizon.push_back(graded.horizon[static_cast<size_t>(f)]);
+    cloud.half_cell.push_back(graded.half_cell[static_cast<size_t>(f)]);
+  }
+  for (const int ranks : {1, 2, 3, 4})
+    for (const bool uneven : {false, true}) {
+      std::vector<int64_t> begin;
+      for (int r = 0; r <= ranks; ++r) begin.push_back(r == ranks ? n : family_slice(n, r, ranks).begin);
+      if (uneven && ranks > 2) begin[2] = begin[1];
+      if (uneven && ranks == 2) begin[1] = n / 7;
+      std::vector<GeometricWindow> got(static_cast<size_t>(ranks));
+      std::vector<int64_t> wrong(static_cast<size_t>(ranks), 0);
+      on_thread_ranks(ranks, [&](const DistributedSetup& d) {
+        RankRun run;
+        run.first = begin[static_cast<size_t>(d.rank)];
+        for (int64_t i = run.first; i < begin[static_cast<size_t>(d.rank) + 1]; ++i) {
+          PlanParticle q;
+          q.file = 1000000 + i;
+          std::copy_n(&cloud.x[3 * static_cast<size_t>(i)], 3, q.x);
+          q.horizon = cloud.horizon[static_cast<size_t>(i)];
+          q.half_cell = cloud.half_cell[static_cast<size_t>(i)];
+          run.p.push_back(q);
+        }
+        const ReachFigures body = body_reach_figures(d, run, 3);
+        const FormedWindow f = form_window(d, run, 3, body, n);
+        for (size_t k = 0; k < f.p.size(); ++k) {
+          const size_t i = static_cast<size_t>(f.window.index[k]);
+          wrong[static_cast<size_t>(d.rank)] += f.p[k].file != 1000000 + static_cast<int64_t>(i) ||
+                                                f.p[k].horizon != cloud.horizon[i] || f.p[k].x[1] != cloud.x[3 * i + 1];
+        }
+        got[static_cast<size_t>(d.rank)] = f.window;
+      });
+      for (int r = 0; r < ranks; ++r) {
+        const GeometricWindow w = geometric_window(cloud.x, cloud.horizon, cloud.half_cell, 3, begin[static_cast<size_t>(r)],
+                                                   begin[static_cast<size_t>(r) + 1]);
+        const GeometricWindow& g = got[static_cast<size_t>(r)];
+        EXPECT_EQ(g.index, w.index) << ranks << " ranks, rank " << r << ", uneven " << uneven;
+        EXPECT_EQ(g.row_begin, w.row_begin) << ranks << " ranks, rank " << r;
+        EXPECT_EQ(g.row_end, w.row_end) << ranks << " ranks, rank " << r;
+        EXPECT_EQ(wrong[static_cast<size_t>(r)], 0) << ranks << " ranks, rank " << r;
+        if (ranks == 4 && !uneven) EXPECT_LT(w.index.size(), static_cast<size_t>(n)) << "a window, not the body";
+      }
+    }
 }

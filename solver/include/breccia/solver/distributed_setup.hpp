@@ -27,11 +27,13 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <cstring>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "breccia/common/cell_list.hpp"
 #include "breccia/common/families.hpp"
 #include "breccia/solver/partition.hpp"
 #include "breccia/solver/pd_system.hpp"
@@ -93,22 +95,32 @@ WindowExchange window_exchange(const DistributedSetup& d, const std::vector<int6
 void require_partners_in_window(const DistributedRows& rows, const std::vector<int64_t>& offsets,
                                 const std::vector<int32_t>& neighbor);
 
+// A run of the internal order a rank holds while the partition is planned: particles
+// [first, first + p.size()) with what the windows and the family count read of them.
+struct PlanParticle {
+  int64_t file = 0;
+  double x[3] = {0.0, 0.0, 0.0};
+  double horizon = 0.0, half_cell = 0.0;
+};
+struct RankRun {
+  int64_t first = 0;
+  std::vector<PlanParticle> p;
+};
 // One process and rank 0 (the planner: it holds the whole body, read from the whole particle
 // file, its writers' staging), once the internal order and horizons are set: counts the
 // family sizes, cuts the partition (s.distributed_rows) and returns the rank's rows (inactive
-// on one process). Each rank counts the sizes of its family_slice only (family_sizes with a
-// row range, on the slice's geometric window: every partner, not the body); the slices,
-// concatenated in rank order on rank 0, are the whole count (collective). Rank 0 forms
-// every rank's two windows (the slice's, then the rows') and sends each rank its own with
-// their particles' file rows (plan_window_system receives them). Throws InputError for more
-// ranks than particles.
-DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d);
+// on one process). Every rank plans from its slice of the internal order (`slice`: its
+// family_slice's particles, from the Morton sort): it forms its slice's geometric window from
+// the ranks' slices (form_window) and counts the slice's family sizes on it (every partner,
+// not the body); rank 0 receives the sizes and cuts (cut_partition); every rank then forms
+// its rows' window from the runs moved to the partition's ranges. Collective; throws
+// InputError for more ranks than particles.
+DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d, RankRun slice = {});
 
 // The ranks other than 0 (setup_on_window): the window system built from the particle file's
-// rows that rank 0's plan names, never the whole body. s: s.n the body's count, s.dimension,
-// s.config, s.particles the file's lists (read_particle_lists). Receives the slice's window,
-// reads its rows (`read`) and counts its family sizes; takes part in the partition's cut;
-// receives the rows' window and reads its rows into s.particles (held_rows; the surfaces'
+// rows of its window, never the whole body. s: s.n the body's count, s.dimension, s.config,
+// s.particles the file's lists (read_particle_lists). Plans with rank 0 from its slice (as
+// plan_distributed_rows), then reads its rows' window's rows into s.particles (held_rows; the surfaces'
 // facet cells of the mesh, held_cells): s.x0, volume, density, material, half_cell, horizon,
 // original_index are the window's in its order (values: a held row's material, density,
 // cell and horizon, as the whole body's set-up sets them), s.window_global its internal
@@ -121,7 +133,7 @@ struct RowValues {
 };
 using ValuesOfRow = std::function<RowValues(const ParticleModel& m, size_t held_row)>;
 DistributedRows plan_window_system(PdSystem& s, const DistributedSetup& d, const ReadFileRows& read,
-                                   const ValuesOfRow& values);
+                                   const ValuesOfRow& values, RankRun slice);
 
 // A traction's boundary layer (setup.cpp layer_of_surface): its depth, every particle of it
 // (file indices, ascending) and their volume summed in file order.
@@ -131,21 +143,16 @@ struct SurfaceLayer {
   std::vector<int64_t> particles;
 };
 
-// What rank 0 tells the other ranks of the whole body before the plan (send_body_plan,
-// receive_body_plan: one concatenation from rank 0), the values the set-up reads of every
-// particle: whether rank 0 refused the input first (its InputError; the others then stop
-// too, quietly), the body's count, the one horizon (the case's or factor x median spacing),
-// whether every particle has one horizon and one cell, the largest and median horizons and
-// cells, float32's origin, the graded check's refusal, the file's content id, each set's
-// whole count (the file's then the case's), the internal indices of the surfaces' facet
-// particles and of the layers' particles (sorted by file index), and each load's layer.
+// What rank 0 tells the other ranks of the whole body (send_body_plan, receive_body_plan: one
+// concatenation from rank 0), in two parts: before the distributed Morton sort, whether rank 0
+// refused the input first (its InputError; the others then stop too, quietly), the body's
+// count, the file's content id and each set's whole count (the file's then the case's); after
+// it, the graded check's refusal, the internal indices of the surfaces' facet particles and of
+// the layers' particles (sorted by file index), and each load's layer. (The whole body's
+// horizons and cells, float32's origin: every rank takes them from its block of the sort.)
 struct BodyPlan {
   bool refused = false;
   int64_t n = 0;
-  double fill_horizon = 0.0;
-  bool one_horizon = false, uniform = false;
-  double max_horizon = 0.0, max_half_cell = 0.0, median_horizon = 0.0, median_half_cell = 0.0;
-  std::array<double, 3> f32_origin{};
   bool graded_refused = false;
   std::string graded_message, content_id;
   std::vector<int64_t> set_sizes;
@@ -179,6 +186,50 @@ struct FamilySlice {
   int64_t begin = 0, end = 0;
 };
 FamilySlice family_slice(int64_t n, int rank, int ranks);
+
+// The distributed Morton order (docs/parallel.md, Memory, item 2): each rank holds an equal
+// block of the particle file's rows (morton_blocks: file_block), their Morton keys taken in the
+// whole body's bounding box (body_bounding_box: every rank's box folded in rank order, so the
+// same doubles as bounding_box over the file) with morton_key, as morton_order takes them.
+// distributed_morton_sort sorts the items by (key, file row) across the ranks (a sample sort:
+// regular samples, ranks - 1 splitters, one all-to-all): morton_order's stable order exactly,
+// ties going by file row. Each rank returns one contiguous run of that order (ranks in order;
+// `first`: its first internal index), the items' positions and spacings travelling with them.
+struct MortonItem {
+  uint64_t key = 0;
+  int64_t file = 0;
+  double x[3] = {0.0, 0.0, 0.0};
+  double spacing = 0.0;
+};
+struct MortonBlock {
+  std::vector<MortonItem> items;  // internal indices first .. first + items.size() - 1
+  int64_t first = 0, n = 0;       // n: the body's count
+};
+FamilySlice file_block(int64_t n, int rank, int ranks);  // [n rank / ranks, n (rank + 1) / ranks)
+BoundingBox body_bounding_box(const DistributedSetup& d, std::span<const double> block_positions);
+MortonBlock distributed_morton_sort(const DistributedSetup& d, std::vector<MortonItem> mine);
+
+// The runs moved so that rank r holds [begin[r], begin[r + 1]) (collective: one all-to-all).
+RankRun move_run(const DistributedSetup& d, RankRun run, const std::vector<int64_t>& begin);
+// The body's reach classes (partition.hpp ReachFigures) from the ranks' runs (two folds).
+ReachFigures body_reach_figures(const DistributedSetup& d, const RankRun& run, int dimension);
+// The geometric window (partition.hpp geometric_window) of the rank's run as its rows, formed
+// from the ranks' runs (each rank's run: one contiguous run of the order, in rank order):
+// the ranks' marks summarised by blocks of cells (MarksSummary) to every rank, each rank
+// sends every other its particles that may be near that rank's rows, and the rank keeps
+// those near them (WindowMarks::near, geometric_window's own test): the same window, its
+// particles (`p`, in the window's order) with it. Collective.
+struct FormedWindow {
+  GeometricWindow window;
+  std::vector<PlanParticle> p;
+};
+FormedWindow form_window(const DistributedSetup& d, const RankRun& rows, int dimension, const ReachFigures& body,
+                         int64_t body_n);
+
+// The k-th smallest (0-based) of every rank's values together, as std::nth_element places it
+// in one array (setup.cpp median: k = n / 2): a bisection over the doubles' order (64 rounds
+// of one count per rank). Collective; k below the total count.
+double distributed_order_statistic(const DistributedSetup& d, const std::vector<double>& mine, int64_t k);
 
 // Every rank's elements of `mine`, concatenated in rank order, on every rank.
 template <class T>

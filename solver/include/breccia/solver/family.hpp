@@ -5,6 +5,7 @@
 #include <span>
 #include <vector>
 
+#include "breccia/common/cell_list.hpp"
 #include "breccia/common/families.hpp"
 
 namespace breccia::solver {
@@ -15,6 +16,11 @@ using breccia::Families;
 // Permutation that sorts particles along a Morton (Z-order) curve: new index k holds old
 // particle order[k]. Neighbouring particles end up close in memory.
 std::vector<int32_t> morton_order(std::span<const double> position);
+// The Morton key of position p (3 values) in `box`, the bounding box of every particle, and
+// its longest side (morton_extent): morton_order's keys, the one expression for both the
+// whole body's sort and the ranks' (distributed_morton_sort, distributed_setup.hpp).
+double morton_extent(const BoundingBox& box);
+uint64_t morton_key(const double* p, const BoundingBox& box, double extent);
 // The low 21 bits of v spread to every third bit (a coordinate's share of a Morton key).
 uint64_t morton_spread(uint64_t v);
 

@@ -48,6 +48,10 @@ void float32_enable(PdSystem& sys, const double* origin = nullptr);
 // 0 without any). The set-up takes it before its stable-step estimate, whose cut lets a
 // distributed set-up's ranks other than 0 drop the reference positions.
 std::array<double, 3> float32_origin(const std::vector<double>& x0);
+// Its folds: the least then the largest coordinate on each axis (1e300 and -1e300 without any),
+// which a distributed set-up's ranks take over their blocks of the internal order and fold in
+// rank order (std::min and std::max keep the first of equal values: the same doubles).
+std::array<double, 6> float32_extent(const std::vector<double>& x0);
 PdViewT<float> float32_view(PdSystem& sys);
 // Double -> float: displacement, velocity, acceleration, external force density.
 void float32_upload(PdSystem& sys);

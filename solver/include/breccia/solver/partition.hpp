@@ -11,9 +11,11 @@
 // interface.
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
+#include "breccia/common/cell_list.hpp"
 #include "breccia/solver/pd_physics.hpp"
 
 namespace breccia::solver {
@@ -97,6 +99,77 @@ std::vector<int64_t> family_sizes(const std::vector<double>& x0, const std::vect
 // [0, N] or a negative group size. `group_cells`: the groups' extent in cells (0: each row
 // alone, the marking the groups must reproduce exactly; the tests compare the two).
 inline constexpr double kWindowGroupCells = 3.0;
+// geometric_window's reach classes from two folds over the particles, which a distributed
+// set-up's ranks take over their slices of the internal order and combine in rank order
+// (fold: std::min and std::max, so the same doubles as over the whole body): the smallest
+// and largest reach h + pad, then, with the classes' bounds from those, each class's largest
+// horizon and pad, presence and box.
+inline constexpr int kReachClasses = 8;
+struct ReachBounds {
+  double rmin = std::numeric_limits<double>::infinity(), rmax = 0.0;
+  void fold(const ReachBounds& b);
+};
+ReachBounds reach_bounds(const std::vector<double>& horizon, const std::vector<double>& half_cell, int dimension);
+struct ReachFigures {
+  ReachFigures() = default;
+  explicit ReachFigures(const ReachBounds& body);
+  int class_of(double reach) const;  // reach: h + pad
+  void add(const std::vector<double>& x, const std::vector<double>& horizon, const std::vector<double>& half_cell,
+           int dimension);
+  void fold(const ReachFigures& b);
+  double bound[kReachClasses - 1] = {};
+  double H[kReachClasses] = {}, P[kReachClasses] = {};
+  bool present[kReachClasses] = {};
+  BoundingBox box[kReachClasses];  // each class's own particles' box
+};
+
+// The marks geometric_window makes for rows [row_begin, row_end) of the arrays (x0 3N,
+// horizon and half_cell N) under the body's classes (`body`; its count `body_n` caps each
+// grid's cells as geometric_window's): near(x, c) is whether a particle of class c at x is
+// in the rows' window, the test geometric_window makes of every other particle; summary():
+// what the other ranks choose their candidates by. So a rank holding a slice of the internal
+// order forms its rows' window from the particles the other ranks send it (form_window,
+// distributed_setup.hpp), the same window as geometric_window over the body.
+// A summary of a WindowMarks' grids for the other ranks of a distributed set-up: each grid's
+// box and cells, and per block of kMarksBlock^3 cells the union of its cells' bits (the
+// blocks with a bit alone, about the window's volume: 9 B per 512 cells). A particle near
+// the rows (WindowMarks::near) is in a block with its class's bit (may_be_near): the ranks
+// choose the particles they send a rank by it, a superset of its window, and the rank keeps
+// those near its rows. Bytes: its form for a concatenation.
+inline constexpr long long kMarksBlock = 8;
+struct MarksSummary {
+  struct Grid {
+    bool active = false;
+    BoundingBox box{};
+    CellGrid grid;
+    long long blocks[3] = {0, 0, 0};
+    std::vector<int64_t> block;  // the blocks with a bit, ascending
+    std::vector<uint8_t> bits;   // theirs
+  };
+  Grid g[kReachClasses];
+  bool may_be_near(const double* x, int c) const;
+  std::vector<char> bytes() const;
+  static MarksSummary from_bytes(const char* p, size_t size);
+};
+
+class WindowMarks {
+ public:
+  MarksSummary summary() const;
+  WindowMarks(const std::vector<double>& x0, const std::vector<double>& horizon, const std::vector<double>& half_cell,
+              int dimension, const ReachFigures& body, int64_t body_n, int64_t row_begin, int64_t row_end,
+              double group_cells = kWindowGroupCells);
+  ~WindowMarks();
+  WindowMarks(const WindowMarks&) = delete;
+  WindowMarks& operator=(const WindowMarks&) = delete;
+  int class_of(int64_t i) const;  // of particle i of the arrays
+  bool near(const double* x, int c) const;
+
+ private:
+  struct Grids;
+  Grids* grids_;
+  std::vector<uint8_t> of_;
+};
+
 struct GeometricWindow {
   std::vector<int32_t> index;          // global indices, ascending
   int64_t row_begin = 0, row_end = 0;  // the rows' local range in index

@@ -250,8 +250,8 @@ struct PdSystem {
   // body's), one value per rank the same way (summary.json's setup_system_particles_per_rank).
   std::vector<int64_t> setup_system_particles;
   // The most rows of the particle file each rank's set-up read and held at once: one process
-  // and rank 0 every row (the whole file), the ranks other than 0 the larger of their slice's
-  // and their rows' windows (plan_window_system), one value per rank the same way
+  // and rank 0 every row (the whole file), the ranks other than 0 the larger of their block
+  // for the Morton sort and their rows' window (plan_window_system), one value per rank the same way
   // (summary.json's setup_file_rows_per_rank).
   std::vector<int64_t> setup_file_rows;
   // The particles the family search held (its cell lists, its copies): the rows' geometric

@@ -287,6 +287,39 @@ static std::vector<T> read_rows_impl(const File& f, const std::string& path, hsi
   return out;
 }
 
+template <class T>
+static std::vector<T> read_runs_impl(const File& f, const std::string& path, const std::vector<RowRun>& runs) {
+  const std::vector<hsize_t> d = f.dims(path);
+  hsize_t rows = 0, end = 0;
+  std::vector<RowRun> held;  // the runs with rows
+  for (const RowRun& r : runs) {
+    if (d.empty() || r.first < end || r.first > d[0] || r.rows > d[0] - r.first)
+      throw InputError(f.path(), path,
+                       "has " + std::to_string(d.empty() ? 0 : d[0]) + " rows; rows " + std::to_string(r.first) +
+                           " to " + std::to_string(r.first + r.rows) + " were asked for",
+                       "a dataset with those rows (a file of this case)");
+    end = r.first + r.rows;
+    rows += r.rows;
+    if (r.rows > 0) held.push_back(r);
+  }
+  hsize_t row = 1;
+  for (size_t a = 1; a < d.size(); ++a) row *= d[a];
+  std::vector<T> out(rows * row);
+  if (out.empty()) return out;
+  Handle ds{H5Dopen2(f.id(), path.c_str(), H5P_DEFAULT), H5Dclose};
+  Handle whole{H5Dget_space(ds.id), H5Sclose};
+  Handle file_space{select_runs(whole.id, held, 0, held.size(), d), H5Sclose};
+  std::vector<hsize_t> block(d);
+  block[0] = rows;
+  Handle mem_space{H5Screate_simple(static_cast<int>(block.size()), block.data(), nullptr), H5Sclose};
+  if (H5Dread(ds.id, mem_type<T>(), mem_space.id, file_space.id, H5P_DEFAULT, out.data()) < 0)
+    throw InputError(f.path(), path, "cannot be read as a numeric dataset", "numeric data");
+  return out;
+}
+
+std::vector<double> File::read_double_runs(const std::string& p, const std::vector<RowRun>& runs) const {
+  return read_runs_impl<double>(*this, p, runs);
+}
 std::vector<double> File::read_doubles(const std::string& p) const { return read_impl<double>(*this, p); }
 std::vector<float> File::read_floats(const std::string& p) const { return read_impl<float>(*this, p); }
 std::vector<int64_t> File::read_int64(const std::string& p) const { return read_impl<int64_t>(*this, p); }

@@ -626,14 +626,13 @@ void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
   s.dt = f.attr_double("/", "dt_s");
   s.external_work = f.attr_double("/", "external_work_J");
   s.dissipated_energy = f.attr_double("/", "dissipated_J");
-  s.u = f.read_doubles("/u");
-  s.v = f.read_doubles("/v");
-  s.a = f.read_doubles("/a");
-  s.force = f.read_doubles("/force");
-  s.body = f.read_doubles("/body");
-  // The per-entry arrays: a distributed set-up's rank reads its own rows' entries (one run of
-  // the file's entries, which are in internal order), which its system takes (copy_rank_state);
-  // rank 0 of a build without parallel HDF5 reads them whole (its writers' staging).
+  // The per-particle and per-entry arrays: a distributed set-up's rank reads its owned rows
+  // alone (one run of the file's rows and one of its entries: both are in internal order,
+  // whatever the rank count that wrote the file), which its system takes (copy_rank_state);
+  // its ghosts' values come from their owners (the time loop's backend exchanges them,
+  // mpi_backend.cpp). Rank 0 of a build without parallel HDF5 reads them whole (its writers'
+  // staging).
+  size_t row_first = 0, row_count = s.whole_n();
   size_t entry_first = 0, entry_count = s.bond_count();
 #ifndef BRECCIA_PARALLEL_HDF5
   if (rank != 0)
@@ -641,9 +640,23 @@ void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
     if (!s.distributed_rows.empty()) {
       if (s.distributed_entries.size() != s.distributed_rows.size())
         throw std::logic_error("read_checkpoint: a distributed set-up's entry ranges are missing");
+      row_first = static_cast<size_t>(s.distributed_rows[rank]);
+      row_count = static_cast<size_t>(s.distributed_rows[rank + 1]) - row_first;
       entry_first = static_cast<size_t>(s.distributed_entries[rank]);
       entry_count = static_cast<size_t>(s.distributed_entries[rank + 1]) - entry_first;
     }
+  s.restart_rows = {static_cast<int64_t>(row_count)};  // summary.json's restart_rows_per_rank
+  auto particle_rows = [&](const std::string& dataset, size_t width) {
+    const std::vector<hsize_t> d = f.dims(dataset);
+    if (d.empty() || d[0] != s.whole_n() || (d.size() == 1 ? 1 : d[1]) != width)
+      throw InputError(path, dataset, "sized for other particles", "a checkpoint of this case");
+    return f.read_double_rows(dataset, row_first, row_count);
+  };
+  s.u = particle_rows("/u", 3);
+  s.v = particle_rows("/v", 3);
+  s.a = particle_rows("/a", 3);
+  s.force = particle_rows("/force", 3);
+  s.body = particle_rows("/body", 3);
   auto entries_sized = [&](const std::string& dataset) {
     const std::vector<hsize_t> d = f.dims(dataset);
     if (d.size() != 1 || d[0] != s.bond_count())
@@ -682,8 +695,8 @@ void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
                        "a checkpoint of this case with the same fracture rule");
     // The pass below recomputes the checkpointed step's forces with the s_min that step read
     // and writes the step's own again (commit_min_stretch, pd_system.hpp).
-    const auto previous = f.read_doubles("/min_stretch_previous");
-    const auto own = f.read_doubles("/min_stretch");
+    const auto previous = particle_rows("/min_stretch_previous", 1);
+    const auto own = particle_rows("/min_stretch", 1);
     s.min_stretch.assign(previous.begin(), previous.end());
     s.min_stretch_next.assign(own.begin(), own.end());
   }
@@ -726,7 +739,7 @@ void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
                        "a checkpoint of this case written by this version");
     g.wall_on = window_rows(f.read_uint8("/gas/wall_on"));
     if (g.crack_entry) {
-      g.arrival = f.read_doubles("/gas/arrival");
+      g.arrival = particle_rows("/gas/arrival", 1);
       g.arrival_next = g.arrival;
       if (!f.exists("/gas/in_crack"))
         throw InputError(path, "/gas/in_crack", "missing (written by an older breccia-solve)",
@@ -736,10 +749,10 @@ void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
         if (!f.exists("/gas/push") || !f.exists("/gas/crack_pass"))
           throw InputError(path, "/gas/push", "missing (a checkpoint of a run with crack_pass_every 1)",
                            "a checkpoint of this case with its crack_pass_every");
-        g.push = f.read_doubles("/gas/push");
+        g.push = particle_rows("/gas/push", 3);
         const auto pass = f.read_doubles("/gas/crack_pass");
-        if (g.push.size() != 3 * s.whole_n() || pass.size() != 3)
-          throw InputError(path, "/gas/push", "sized for other particles", "a checkpoint of this case");
+        if (pass.size() != 3)
+          throw InputError(path, "/gas/crack_pass", "not 3 values", "a checkpoint of this case");
         g.crack_pass_countdown = static_cast<int>(pass[0]);
         g.crack_pass_done = pass[1] != 0.0;
         g.crack_pass_interval = static_cast<int>(pass[2]);

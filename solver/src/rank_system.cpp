@@ -16,19 +16,27 @@ namespace {
 // The rank's particles (owned, then ghosts) in the system they are cut from: `global` their
 // internal indices, `held` their indices in the system's own arrays (a window system's local
 // ones, PdSystem::window_global; else the same). An array is read by its length: the system's
-// n (its own arrays) or the whole body's (a restart reads some whole: read_checkpoint).
+// n (its own arrays), the whole body's (a restart's on rank 0 with a serial HDF5), or the
+// rank's owned particles' (a distributed restart's: read_checkpoint).
 struct RankIds {
   std::vector<int32_t> global, held;
-  size_t n = 0, whole = 0;
+  size_t n = 0, whole = 0, owned = 0;
   size_t size() const { return global.size(); }
 };
 
 // Rows `ids` of a per-particle array of `width` values each; an array that is not held
-// (empty: the feature is off) stays empty.
+// (empty: the feature is off) stays empty. An array of the owned rows alone gives them and
+// zeros for the ghosts, whose values the time loop's backend then takes from their owners
+// (its halo exchange, mpi_backend.cpp).
 template <class T>
 std::vector<T> take(const std::vector<T>& global, const RankIds& r, size_t width) {
   if (global.empty()) return {};
   const std::vector<int32_t>* ids = global.size() == width * r.n ? &r.held : global.size() == width * r.whole ? &r.global : nullptr;
+  if (!ids && global.size() == width * r.owned) {
+    std::vector<T> out(width * r.size(), T{});
+    std::copy(global.begin(), global.end(), out.begin());
+    return out;
+  }
   if (!ids) throw std::logic_error("restrict_to_rank: a per-particle array of unexpected size");
   std::vector<T> out(width * ids->size());
   for (size_t q = 0; q < ids->size(); ++q)
@@ -140,6 +148,7 @@ RankIds rank_ids(const PdSystem& g, const RankLayout& L) {
   r.global = local_to_global(L);
   r.n = g.n;
   r.whole = g.whole_n();
+  r.owned = static_cast<size_t>(L.owned());
   if (g.window_global.empty()) {
     r.held = r.global;
     return r;

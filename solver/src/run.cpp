@@ -73,6 +73,7 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   j["setup_file_rows_per_rank"] = s.setup_file_rows;  // the most particle-file rows the set-up held at once
   if (!s.setup_offsets_rows.empty()) j["offsets_rows_per_rank"] = s.setup_offsets_rows;  // the longest row offsets held
   if (!s.file_offsets_rows.empty()) j["file_offsets_rows_per_rank"] = s.file_offsets_rows;  // results.h5's bond-list offsets held
+  if (!s.restart_rows.empty()) j["restart_rows_per_rank"] = s.restart_rows;  // a checkpoint's per-particle rows read
   if (!s.broken_bits_bytes.empty()) j["broken_bits_bytes_per_rank"] = s.broken_bits_bytes;  // an output's broken bits held
   number("mean_family_size", static_cast<double>(s.bond_count()) / std::max<size_t>(1, s.n));
   number("bytes_per_particle", bytes_per_particle);

@@ -1901,15 +1901,29 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     }
     if (!is.field_file.empty()) {
       // A field from a file, in the particle file's order (original_index: internal -> file).
+      // A window system (a distributed set-up's ranks other than 0) reads its particles' rows
+      // alone (`rows`, ascending); one process and rank 0 (the whole body) every row.
       const std::string key = "initial[" + std::to_string(q) + "]";
-      const ParticleField f = read_particle_field(is.field_file, is.field_dataset, s.whole_n(), c.file, key);
+      const bool window = !s.window_global.empty();
+      std::vector<int64_t> rows;
+      if (window) {
+        for (auto i : who) rows.push_back(s.original_index[i]);
+        std::sort(rows.begin(), rows.end());
+        rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+      }
+      const ParticleField f =
+          read_particle_field(is.field_file, is.field_dataset, s.whole_n(), c.file, key, window ? &rows : nullptr);
       if (f.columns < s.dimension)
         throw InputError(is.field_file, is.field_dataset.empty() ? "columns" : is.field_dataset,
                          std::to_string(f.columns) + " numbers a row", "3 numbers a row for a 3D specimen");
+      auto row_of = [&](int64_t file_row) {
+        return window ? static_cast<size_t>(std::lower_bound(rows.begin(), rows.end(), file_row) - rows.begin())
+                      : static_cast<size_t>(file_row);
+      };
       double* target = is.kind == InitialSpec::Kind::Velocity ? s.v.data() : s.u.data();
       for (auto i : who)
         for (int d = 0; d < std::min(s.dimension, f.columns); ++d)
-          target[3 * i + d] = f.values[static_cast<size_t>(f.columns) * s.original_index[i] + d];
+          target[3 * i + d] = f.values[static_cast<size_t>(f.columns) * row_of(s.original_index[i]) + d];
       continue;
     }
     if (!is.expression.empty()) {

@@ -971,6 +971,98 @@ TEST(DistributedSetup, RateLawGivesTheOneProcessAnswer) {
   expect_same_history(base + "_whole", out);
 }
 
+// A distributed restart reads each rank's owned rows of checkpoint.h5's per-particle
+// datasets alone (read_checkpoint: one hyperslab each, the file's rows being in internal
+// order); the ghosts' values come from their owners (MpiBackend::restart_ghosts). The
+// minimum stretches of compressive enhancement are among them, and the force pass reads the
+// partners' (ghosts'); float32's state is converted from the rows after the exchange: the
+// pre-cracked lattice expanding, in double and in float32, stopped on 3 ranks and finished on
+// 3, ends byte-identical to one process's uninterrupted run, and no rank read every row
+// (summary.json's restart_rows_per_rank: with parallel HDF5 the ranks' owned counts, which
+// add up to the body's, exact; with a serial HDF5 rank 0, its writers' staging, reads them
+// all).
+TEST(Distributed, RestartReadsEachRanksOwnRowsWithMinimumStretches) {
+  for (const std::string precision : {"float64", "float32"}) {
+    const std::string file = write_case("mpi_restart_rows_" + precision,
+        "model: {type: pmb, horizon_factor: 3.015, compressive_enhancement: 0.25, precision: " + precision + "}\n"
+        "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 2}]\n"
+        "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.008, 0.004, 0.003], spacing: 0.5 mm}}\n"
+        "precracks: [{type: polygon, points: [[0.004, -0.001, -0.001], [0.004, 0.002, -0.001], [0.004, 0.002, 0.004], "
+        "[0.004, -0.001, 0.004]]}]\n"
+        "initial: [{type: radial_velocity, center: [0.004, 0.002, 0.0015], strain_rate: 300}]\n"
+        "time: {steps: 60}\n"
+        "output: {every: 30, history_every: 10, fields: [damage, displacement, velocity]}\n");
+    const std::string base = process_temp_dir() + "/restart_rows_" + precision;
+    ASSERT_EQ(solve(file, base + "_whole", 1, 1).exit_code, 0);
+    EXPECT_EQ(datasets(base + "_whole/checkpoint.h5").count("min_stretch"), 1u) << "no minimum stretches checkpointed";
+    const std::string out = base + "_np3";
+    ASSERT_EQ(solve(file, out, 3, 1, "--steps 30").exit_code, 0);
+    const long long broken_half = summary(out)["broken_bonds"].get<long long>();
+    const Outcome second = solve(file, out, 3, 1, "--steps 30 --restart " + out + "/checkpoint.h5");
+    ASSERT_EQ(second.exit_code, 0) << second.err;
+    EXPECT_EQ(differing(base + "_whole/checkpoint.h5", out + "/checkpoint.h5"), std::vector<std::string>{}) << precision;
+    expect_same_history(base + "_whole", out);
+    EXPECT_GT(summary(base + "_whole")["broken_bonds"].get<long long>(), broken_half)
+        << precision << ": no bond broke after the restart";
+    const long long n = summary(base + "_whole")["particles"].get<long long>();
+    const nlohmann::json rows = summary(out)["restart_rows_per_rank"];
+    ASSERT_EQ(rows.size(), 3u) << out;
+    long long read = 0;
+    for (int r = 0; r < 3; ++r) {
+      read += rows[r].get<long long>();
+#ifndef BRECCIA_PARALLEL_HDF5
+      if (r == 0) {
+        EXPECT_EQ(rows[0].get<long long>(), n) << "rank 0 stages the whole state";
+        continue;
+      }
+#endif
+      EXPECT_LT(rows[r].get<long long>(), n) << "rank " << r << " read every row of the checkpoint";
+    }
+#ifdef BRECCIA_PARALLEL_HDF5
+    EXPECT_EQ(read, n) << "the ranks' owned rows are the body's, each read once";
+#endif
+  }
+}
+
+// An initial field from a file (initial[].file): a distributed set-up's ranks other than 0
+// read their window's rows of it alone (an HDF5 dataset by those rows; a CSV file whole, then
+// its window's rows kept), in the particle file's order. The expanding pre-cracked lattice
+// with its radial velocity from an HDF5 file and a displacement of one set from a CSV file
+// (17 significant digits: the same doubles) gives one process's files on 3 ranks.
+TEST(DistributedSetup, AnInitialFieldFromAFileGivesTheOneProcessAnswer) {
+  const std::string head =
+      "model: {type: pmb, horizon_factor: 3.015}\n"
+      "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25, fracture_energy: 2}]\n"
+      "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.008, 0.004, 0.003], spacing: 0.5 mm}}\n"
+      "precracks: [{type: polygon, points: [[0.004, -0.001, -0.001], [0.004, 0.002, -0.001], [0.004, 0.002, 0.004], "
+      "[0.004, -0.001, 0.004]]}]\n"
+      "sets: [{name: top, box: [-1, 0.003, -1, 1, 1, 1]}]\n"
+      "time: {steps: 60}\n"
+      "output: {every: 30, history_every: 10, fields: [damage, displacement, velocity]}\n";
+  const PdSystem probe = system_from_yaml("initial_file_probe", head);
+  std::vector<double> v(3 * probe.n), u(3 * probe.n);
+  const double c[3] = {0.004, 0.002, 0.0015};
+  for (size_t i = 0; i < probe.n; ++i)
+    for (int d = 0; d < 3; ++d) {  // a radial expansion at 300/s, and a small shear of the top
+      v[3 * probe.original_index[i] + d] = 300.0 * (probe.x0[3 * i + d] - c[d]);
+      u[3 * probe.original_index[i] + d] = d == 0 ? 1e-3 * probe.x0[3 * i + 1] : 0.0;
+    }
+  const std::string dir = process_temp_dir();
+  {
+    breccia::h5::File f(dir + "/v_initial.h5", breccia::h5::File::Mode::Create);
+    f.write("velocity", v, {probe.n, 3});
+  }
+  {
+    std::ofstream csv(dir + "/u_initial.csv");
+    csv << "ux,uy,uz\n";
+    csv.precision(17);
+    for (size_t r = 0; r < probe.n; ++r) csv << u[3 * r] << "," << u[3 * r + 1] << "," << u[3 * r + 2] << "\n";
+  }
+  expect_distributed_setup_gives_one_process_answer(
+      "initial_file", head + "initial:\n  - {type: velocity, file: " + dir + "/v_initial.h5, dataset: velocity}\n"
+                             "  - {type: displacement, set: top, file: " + dir + "/u_initial.csv}\n", {3});
+}
+
 // The probes and the indenter, read on their ranks (MpiBackend::history_particles): each
 // probe's owner sends its particle's value, each rank its particles' indenter terms in
 // contact, which rank 0 adds in index order as one process does (indenter_reaction), so

@@ -736,6 +736,7 @@ public:
   MpiBackend(PdSystem& global, MPI_Comm comm, bool cuda = false)
       : comm_(comm), share_(take_rank_share(global, comm)) {
     if (global.derived_fields_pending) {
+      restart_ghosts(global);
       // read_checkpoint's pass at the restored state, on the rank's particles (no bond
       // breaks: the stretches are the checkpointed step's); forces and the dissipated
       // energy stay the checkpoint's.
@@ -769,6 +770,34 @@ public:
       throw InputError("--backend", "cuda", "cuda under mpirun", "cpu (this build's MPI backend has no CUDA)");
 #endif
     }
+  }
+
+  // A distributed restart: each rank read its owned rows of the checkpoint's per-particle
+  // datasets (read_checkpoint), which its system took with zeros for the ghosts
+  // (copy_rank_state); the ghosts' values come from their owners here, the same doubles as
+  // the file's rows. The rows each rank read go to rank 0 (summary.json's
+  // restart_rows_per_rank). Collective.
+  void restart_ghosts(PdSystem& global) {
+    PdSystem& s = local_;
+    constexpr size_t v3 = 3 * sizeof(double);
+    halo_->exchange({{s.u.data(), v3}, {s.v.data(), v3}, {s.a.data(), v3}});
+    halo_->exchange({{s.force.data(), v3}, {s.body.data(), v3}});
+    if (!s.min_stretch.empty())
+      halo_->exchange({{s.min_stretch.data(), sizeof(s.min_stretch[0])},
+                       {s.min_stretch_next.data(), sizeof(s.min_stretch_next[0])}});
+    if (s.gas.active && s.gas.crack_entry) {
+      GasState& g = s.gas;
+      if (g.push.empty()) halo_->exchange({{g.arrival.data(), sizeof(double)}});
+      else halo_->exchange({{g.arrival.data(), sizeof(double)}, {g.push.data(), v3}});
+      g.arrival_next = g.arrival;  // as read_checkpoint leaves it
+    }
+    if (s.f32.active) {  // float32_enable converted the rows with the ghosts' zeros: again, as it does
+      float32_upload(s);
+      s.f32.force.assign(s.force.begin(), s.force.end());
+    }
+    const int64_t mine = global.restart_rows.empty() ? 0 : global.restart_rows[0];
+    global.restart_rows.assign(static_cast<size_t>(layout_.part.ranks()), 0);
+    MPI_Gather(&mine, 1, MPI_INT64_T, global.restart_rows.data(), 1, MPI_INT64_T, 0, comm_);
   }
 
   void step(PdSystem& g) override {

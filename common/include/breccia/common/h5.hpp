@@ -75,6 +75,10 @@ public:
   std::vector<int32_t> read_int32_rows(const std::string& path, hsize_t first, hsize_t count) const;
   std::vector<int64_t> read_int64_rows(const std::string& path, hsize_t first, hsize_t count) const;
   std::vector<uint8_t> read_uint8_rows(const std::string& path, hsize_t first, hsize_t count) const;
+  // Runs of rows (ascending, disjoint) of a dataset, read by one selection (their union), their
+  // rows one after another: a process's scattered rows (a distributed set-up's rows of a file in
+  // the particle file's order) without the whole array. InputError as read_double_rows.
+  std::vector<double> read_double_runs(const std::string& path, const std::vector<RowRun>& runs) const;
 
   // Attributes on an object ("/" for the file).
   void set_attr(const std::string& obj, const std::string& name, const std::string& value) const;

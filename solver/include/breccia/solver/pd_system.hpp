@@ -258,6 +258,10 @@ struct PdSystem {
   // window (build_own_families; one process: every particle), one value per rank the same way
   // (summary.json's setup_window_particles_per_rank).
   std::vector<int64_t> setup_window_particles;
+  // The per-particle rows of a checkpoint each rank read (read_checkpoint: one process and rank
+  // 0 with a serial HDF5 every row; a distributed set-up's other ranks their owned rows), rank
+  // 0 first once the time loop's backend gathered them (summary.json's restart_rows_per_rank).
+  std::vector<int64_t> restart_rows;
   // A checkpoint was read into such a system: the derived fields (damage, energies) of the
   // restored state are still to be computed, by the ranks' systems (read_checkpoint).
   bool derived_fields_pending = false;

@@ -1283,21 +1283,10 @@ private:
   // particle one process's search finds (the first of the nearest). Collective.
   const std::vector<int64_t>& probe_particles(const PdSystem& g) {
     if (probe_particles_.size() == g.config.probes.size()) return probe_particles_;
-    struct Candidate {
-      double d2;
-      long long index;
-    };
-    int ranks = 1;
-    MPI_Comm_size(comm_, &ranks);
-    std::vector<Candidate> all(static_cast<size_t>(ranks));
     for (const ProbeSpec& p : g.config.probes) {
       const auto [d2, k] = nearest_particle(local_.x0.data(), static_cast<size_t>(layout_.owned()), p.position);
-      const Candidate mine{d2, static_cast<long long>(layout_.begin() + k)};
-      MPI_Allgather(&mine, sizeof mine, MPI_BYTE, all.data(), sizeof mine, MPI_BYTE, comm_);
-      const Candidate best = *std::min_element(all.begin(), all.end(), [](const Candidate& a, const Candidate& b) {
-        return a.d2 < b.d2 || (a.d2 == b.d2 && a.index < b.index);
-      });
-      probe_particles_.push_back(best.index);
+      // The nearest is the first largest of -d2 (negation is exact; ties: the smallest index).
+      probe_particles_.push_back(first_largest_over_ranks(-d2, layout_.begin() + static_cast<int64_t>(k)));
     }
     return probe_particles_;
   }

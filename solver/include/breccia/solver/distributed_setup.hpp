@@ -58,8 +58,8 @@ struct WindowExchange {
 struct DistributedRows {
   bool active = false;
   int64_t begin = 0, end = 0;          // the rank's rows (internal order)
-  // The whole system's row offsets (n + 1), from the family sizes: rank 0 alone (it cuts the
-  // partition and keeps them for its writers, I/O staging); empty on the other ranks.
+  // The whole system's row offsets (n + 1), from the family sizes: rank 0 alone without
+  // parallel HDF5 (root_keeps_offsets: its writers', I/O staging); empty on the other ranks.
   std::vector<int64_t> full_offsets;
   std::vector<int64_t> entry_begin;    // every rank's: each rank's first bond entry, then the total (ranks + 1)
   GeometricWindow window;              // the rows' geometric window (active only): every partner
@@ -331,6 +331,18 @@ inline bool root_gathers_bond_list(const CaseConfig& c) {
   return false;
 #else
   return c.write_results;
+#endif
+}
+
+// Whether rank 0 keeps the whole row offsets (DistributedRows::full_offsets) for its writers:
+// only without parallel HDF5 (its writers' staging, as root_gathers_bond_list's).
+inline bool root_keeps_offsets(const CaseConfig& c) {
+#ifdef BRECCIA_PARALLEL_HDF5
+  (void)c;
+  return false;
+#else
+  (void)c;
+  return true;
 #endif
 }
 

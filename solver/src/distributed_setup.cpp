@@ -514,7 +514,7 @@ struct Reader {
 template <class Io, class Plan>
 void body_plan_fields(Io& io, Plan& p) {
   // (one list of the fields for both ways)
-  io(p.refused, p.n, p.graded_refused, p.graded_message, p.content_id, p.set_sizes, p.known_file,
+  io(p.refused, p.n, p.content_id, p.set_sizes, p.known_file,
      p.known_internal);
 }
 

@@ -147,14 +147,13 @@ struct SurfaceLayer {
 // concatenation from rank 0), in two parts: before the distributed Morton sort, whether rank 0
 // refused the input first (its InputError; the others then stop too, quietly), the body's
 // count, the file's content id and each set's whole count (the file's then the case's); after
-// it, the graded check's refusal, the internal indices of the surfaces' facet particles and of
-// the layers' particles (sorted by file index), and each load's layer. (The whole body's
-// horizons and cells, float32's origin: every rank takes them from its block of the sort.)
+// it, the internal indices of the surfaces' facet particles and of the layers' particles
+// (sorted by file index), and each load's layer. (The whole body's horizons and cells,
+// float32's origin, the graded check: every rank takes them from its block of the sort.)
 struct BodyPlan {
   bool refused = false;
   int64_t n = 0;
-  bool graded_refused = false;
-  std::string graded_message, content_id;
+  std::string content_id;
   std::vector<int64_t> set_sizes;
   std::vector<int64_t> known_file;      // ascending
   std::vector<int32_t> known_internal;  // of known_file

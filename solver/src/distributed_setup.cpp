@@ -701,8 +701,8 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
     // Shared dual halves (pd_system.hpp k_dual_halves): the own moduli, which the rank kept here.
     gather_entries(d, s.dual_halves_shared ? s.k_own : s.k_dual, false);
   }
-  // The row offsets kept for the run: rank 0 the whole system's (its writers' staging), the
-  // other ranks none (their rows' are their systems'): each rank's entry range and the total
+  // The row offsets kept for the run: rank 0 the whole system's with a serial HDF5 (its
+  // writers' staging, root_keeps_offsets), the other ranks none (their rows' are their systems'): each rank's entry range and the total
   // are s.distributed_entries (bond_count).
   s.offsets = rows.full_offsets;
   s.distributed_entries = rows.entry_begin;

@@ -6,13 +6,14 @@
 // 0 (plan_window_system: a window system, built from the particle file's rows of its window
 // alone, read by hyperslabs), the whole body's on rank 0 (the planner, which reads the whole
 // file: its writers' staging); the row offsets likewise: the ranks other than 0 keep their
-// entry ranges alone (cut_partition: rank 0 cuts; PdSystem::distributed_entries); the bond
+// entry ranges alone (cut_partition: every rank cuts from its slice; PdSystem::distributed_entries;
+// rank 0 the whole offsets with a serial HDF5 alone); the bond
 // states (1 B per entry, with softening, a rate law or a gas load up to 10 B) are each rank's own rows,
 // in its system, with parallel HDF5; without it whole on rank 0 too, its writers' staging
 // (for_each_bond_state_array).
 //
 // How: the family sizes are counted from the positions alone (family_sizes, partition.hpp),
-// which gives rank 0 the whole system's row offsets and the partition before any family exists.
+// which gives the partition (and a serial HDF5's rank 0 the whole row offsets) before any family exists.
 // The set-up then runs as on one process on a system whose rows outside the rank's range are
 // empty (a window system: the rank's rows and the window's other particles, local indices;
 // else the whole body): every per-entry loop covers the rank's rows, and the few values a row reads from
@@ -112,7 +113,7 @@ struct RankRun {
 // on one process). Every rank plans from its slice of the internal order (`slice`: its
 // family_slice's particles, from the Morton sort): it forms its slice's geometric window from
 // the ranks' slices (form_window) and counts the slice's family sizes on it (every partner,
-// not the body); rank 0 receives the sizes and cuts (cut_partition); every rank then forms
+// not the body); every rank cuts from its slice's sizes (cut_partition); every rank then forms
 // its rows' window from the runs moved to the partition's ranges. Collective; throws
 // InputError for more ranks than particles.
 DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d, RankRun slice = {});

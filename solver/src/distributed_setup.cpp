@@ -283,35 +283,72 @@ Families build_own_families(const PdSystem& s, const DistributedRows& rows, cons
 
 namespace {
 
-// The partition cut from every rank's slice of the family sizes, into `rows`: rank 0 receives
-// the slices (concatenated in rank order: the whole system's offsets, which it keeps), cuts
-// and sends every rank the cut and each rank's first entry (2 (ranks + 1) values): no other
-// rank holds an array of the body's size. Every rank refuses too many ranks alike first.
-Partition cut_partition(PdSystem& s, const DistributedSetup& d, const std::vector<int64_t>& slice_sizes,
+// The partition cut from every rank's slice of the family sizes (its run of the internal
+// order, `first` its first row), into `rows`, as MortonRangePartitioner cuts the whole
+// offsets: the slices' entries summed over the ranks before each (a prefix over the ranks),
+// each rank finds the cuts whose targets fall in its slice (slice_cuts), and every rank
+// merges the ranks' cuts; each rank's first entry comes from the slice holding its first
+// row. No rank holds an array of the body's size, except rank 0 with a serial HDF5
+// (root_keeps_offsets): it gathers the sizes into the whole offsets for its writers (I/O
+// staging). Every rank refuses too many ranks alike first.
+Partition cut_partition(PdSystem& s, const DistributedSetup& d, const std::vector<int64_t>& slice_sizes, int64_t first,
                         DistributedRows& rows, size_t body_n) {
   try {
     require_ranks_fit(static_cast<int64_t>(body_n), d.ranks);
   } catch (const std::invalid_argument& e) {
     throw InputError(s.config.file, "mpirun -np", e.what(), "at most one rank per particle");
   }
-  const std::vector<char> bytes = d.concat(slice_sizes.data(), slice_sizes.size(), sizeof(int64_t), false);
-  std::vector<int64_t> cut;  // rank 0's: part.begin, then each rank's first entry and the total
-  if (d.rank == 0) {
-    std::vector<int64_t> sizes(bytes.size() / sizeof(int64_t));
-    if (!bytes.empty()) std::memcpy(sizes.data(), bytes.data(), bytes.size());
-    if (sizes.size() != body_n)
-      throw std::logic_error("distributed set-up: the ranks' family sizes do not cover the particles");
-    rows.full_offsets.assign(sizes.size() + 1, 0);
-    for (size_t i = 0; i < sizes.size(); ++i) rows.full_offsets[i + 1] = rows.full_offsets[i] + sizes[i];
-    cut = MortonRangePartitioner().partition(rows.full_offsets, d.ranks).begin;
-    for (int r = 0; r <= d.ranks; ++r) cut.push_back(rows.full_offsets[cut[r]]);
+  int64_t mine = 0;
+  for (const int64_t v : slice_sizes) mine += v;
+  const std::vector<int64_t> slice_entries = concat_over_ranks(d, std::vector<int64_t>{mine});
+  const std::vector<int64_t> slice_first = concat_over_ranks(d, std::vector<int64_t>{first});
+  int64_t before = 0, entries = 0;
+  for (int r = 0; r < d.ranks; ++r) {
+    if (r < d.rank) before += slice_entries[static_cast<size_t>(r)];
+    entries += slice_entries[static_cast<size_t>(r)];
   }
-  cut = concat_over_ranks(d, cut);
-  if (cut.size() != 2 * static_cast<size_t>(d.ranks + 1))
-    throw std::logic_error("distributed set-up: rank 0's partition is malformed");
-  Partition part;
-  part.begin.assign(cut.begin(), cut.begin() + d.ranks + 1);
-  rows.entry_begin.assign(cut.begin() + d.ranks + 1, cut.end());
+  const int64_t n = static_cast<int64_t>(body_n);
+  if (slice_first[static_cast<size_t>(d.rank)] != first || (d.rank + 1 < d.ranks && slice_first[static_cast<size_t>(d.rank) + 1] != first + static_cast<int64_t>(slice_sizes.size())) ||
+      (d.rank + 1 == d.ranks && first + static_cast<int64_t>(slice_sizes.size()) != n))
+    throw std::logic_error("distributed set-up: the ranks' family sizes do not cover the particles");
+  const MortonRangePartitioner partitioner;
+  std::vector<int64_t> cut(static_cast<size_t>(d.ranks), -1);
+  {
+    const std::vector<int64_t> found = partitioner.slice_cuts(slice_sizes, first, before, n, entries, d.ranks);
+    const std::vector<int64_t> all = concat_over_ranks(d, found);
+    for (size_t q = 0; q < all.size(); ++q)
+      if (all[q] >= 0) cut[q % static_cast<size_t>(d.ranks)] = all[q];
+    for (int r = 1; r < d.ranks; ++r)
+      if (cut[static_cast<size_t>(r)] < 0) throw std::logic_error("distributed set-up: a cut's target in no slice");
+  }
+  Partition part = MortonRangePartitioner::from_slice_cuts(cut, n, d.ranks);
+  // Each rank's first entry: the slice holding its first row answers (the last rank's end: the total).
+  {
+    const int64_t m = static_cast<int64_t>(slice_sizes.size()), last = first + m;
+    std::vector<int64_t> prefix(slice_sizes.size() + 1, before);
+    for (int64_t k = 0; k < m; ++k) prefix[k + 1] = prefix[k] + slice_sizes[static_cast<size_t>(k)];
+    std::vector<int64_t> entry(static_cast<size_t>(d.ranks) + 1, -1);
+    for (int r = 0; r <= d.ranks; ++r) {
+      const int64_t b = part.begin[static_cast<size_t>(r)];
+      if ((b >= first && b < last) || (b == n && last == n)) entry[static_cast<size_t>(r)] = prefix[b - first];
+    }
+    rows.entry_begin.assign(static_cast<size_t>(d.ranks) + 1, -1);
+    const std::vector<int64_t> all = concat_over_ranks(d, entry);
+    for (size_t q = 0; q < all.size(); ++q)
+      if (all[q] >= 0) rows.entry_begin[q % (static_cast<size_t>(d.ranks) + 1)] = all[q];
+    for (const int64_t e : rows.entry_begin)
+      if (e < 0) throw std::logic_error("distributed set-up: a rank's first row in no slice");
+  }
+  if (root_keeps_offsets(s.config)) {
+    const std::vector<char> bytes = d.concat(slice_sizes.data(), slice_sizes.size(), sizeof(int64_t), false);
+    if (d.rank == 0) {
+      rows.full_offsets.assign(body_n + 1, 0);
+      const int64_t* size = reinterpret_cast<const int64_t*>(bytes.data());
+      if (bytes.size() != body_n * sizeof(int64_t))
+        throw std::logic_error("distributed set-up: the ranks' family sizes do not cover the particles");
+      for (size_t i = 0; i < body_n; ++i) rows.full_offsets[i + 1] = rows.full_offsets[i] + size[i];
+    }
+  }
   rows.active = true;
   rows.begin = part.begin[d.rank];
   rows.end = part.begin[d.rank + 1];
@@ -338,7 +375,7 @@ PlannedRows plan_rows(PdSystem& s, const DistributedSetup& d, RankRun slice, Dis
                                w.window.row_end);
   }
   PlannedRows p;
-  p.part = cut_partition(s, d, slice_sizes, rows, body_n);
+  p.part = cut_partition(s, d, slice_sizes, slice.first, rows, body_n);
   p.rows = form_window(d, move_run(d, std::move(slice), p.part.begin), s.dimension, body, static_cast<int64_t>(body_n));
   return p;
 }
@@ -477,7 +514,7 @@ struct Reader {
 template <class Io, class Plan>
 void body_plan_fields(Io& io, Plan& p) {
   // (one list of the fields for both ways)
-  io(p.refused, p.n, p.graded_refused, p.graded_message, p.content_id, p.set_sizes, p.known_file,
+  io(p.refused, p.n, p.content_id, p.set_sizes, p.known_file,
      p.known_internal);
 }
 
@@ -664,8 +701,8 @@ void finish_distributed_setup(PdSystem& s, const DistributedRows& rows, const Di
     // Shared dual halves (pd_system.hpp k_dual_halves): the own moduli, which the rank kept here.
     gather_entries(d, s.dual_halves_shared ? s.k_own : s.k_dual, false);
   }
-  // The row offsets kept for the run: rank 0 the whole system's (its writers' staging), the
-  // other ranks none (their rows' are their systems'): each rank's entry range and the total
+  // The row offsets kept for the run: rank 0 the whole system's with a serial HDF5 (its
+  // writers' staging, root_keeps_offsets), the other ranks none (their rows' are their systems'): each rank's entry range and the total
   // are s.distributed_entries (bond_count).
   s.offsets = rows.full_offsets;
   s.distributed_entries = rows.entry_begin;

@@ -74,25 +74,34 @@ HorizonGrading horizon_grading(const PdSystem& s) {
   return g;
 }
 
-void require_graded_horizon(const PdSystem& s) {
-  if (s.config.variable_horizon || s.config.horizon_m) return;  // dual horizon, or a fixed horizon checked in setup
-  const HorizonGrading g = horizon_grading(s);
-  if (g.worst_particle < 0 || g.under_resolved <= kMaxUnderResolvedShare * static_cast<double>(s.n)) return;
-  const GradedLimits& lim = graded_limits(s.config.model);
-  const int64_t i = g.worst_particle;
+bool graded_horizon_refused(const CaseConfig& c, const HorizonGrading& g, int64_t n) {
+  if (c.variable_horizon || c.horizon_m) return false;  // dual horizon, or a fixed horizon checked in setup
+  return g.worst_particle >= 0 && g.under_resolved > kMaxUnderResolvedShare * static_cast<double>(n);
+}
+
+InputError graded_horizon_refusal(const CaseConfig& c, const HorizonGrading& g, int64_t n, double horizon,
+                                  int64_t file_row, const double* x) {
+  const GradedLimits& lim = graded_limits(c.model);
   std::ostringstream found;
-  found << "particle spacings vary by " << g.spacing_ratio << "x and the single horizon (" << s.horizon[i]
+  found << "particle spacings vary by " << g.spacing_ratio << "x and the single horizon (" << horizon
         << " m, horizon_factor x median spacing) is " << g.min_local_ratio << " times the spacing of particle "
-        << s.original_index[i] << " at (" << s.x0[3 * i] << ", " << s.x0[3 * i + 1] << ", " << s.x0[3 * i + 2]
-        << "); " << g.under_resolved << " of " << s.n << " particles are below the measured limit of "
-        << lim.min_local_ratio << " spacings for " << s.config.model_name
+        << file_row << " at (" << x[0] << ", " << x[1] << ", " << x[2] << "); " << g.under_resolved << " of " << n
+        << " particles are below the measured limit of " << lim.min_local_ratio << " spacings for " << c.model_name
         << ": the coarse particles are under-resolved (their stiffness is wrong or they have no bonds). The limit: "
-        << provenance(s.config.model) << ", coarse-interior strain energy " << pct(lim.good_error) << " at local ratio "
+        << provenance(c.model) << ", coarse-interior strain energy " << pct(lim.good_error) << " at local ratio "
         << lim.good_ratio << ", " << pct(lim.bad_error) << " at " << lim.bad_ratio
         << "; refused beyond 5 %, the limit midway";
-  throw InputError(s.config.file, "model.variable_horizon", found.str(),
-                   "variable_horizon: true (dual horizon: horizon = horizon_factor x local spacing; docs/atlas.md), "
-                   "or time.check_stability: false to run anyway");
+  return InputError(c.file, "model.variable_horizon", found.str(),
+                    "variable_horizon: true (dual horizon: horizon = horizon_factor x local spacing; docs/atlas.md), "
+                    "or time.check_stability: false to run anyway");
+}
+
+void require_graded_horizon(const PdSystem& s) {
+  if (s.config.variable_horizon || s.config.horizon_m) return;
+  const HorizonGrading g = horizon_grading(s);
+  if (!graded_horizon_refused(s.config, g, static_cast<int64_t>(s.n))) return;
+  const int64_t i = g.worst_particle;
+  throw graded_horizon_refusal(s.config, g, static_cast<int64_t>(s.n), s.horizon[i], s.original_index[i], &s.x0[3 * i]);
 }
 
 std::string graded_horizon_warning(const PdSystem& s) {

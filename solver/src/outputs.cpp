@@ -433,8 +433,11 @@ void indenter_reaction(const std::vector<IndenterTerm>& terms, double out[3]) {
 HistoryWriter::HistoryWriter(const PdSystem& s, const std::string& out_dir, bool append) {
   std::filesystem::create_directories(out_dir);
   const std::string path = out_dir + "/history.csv";
+  // A distributed run's backend finds the probes over the ranks and hands their values to
+  // write (HistoryParticles): its rank 0 searches no whole positions here (-1).
+  const bool whole = s.distributed_rows.empty();
   for (const auto& p : s.config.probes)
-    probes_.emplace_back(static_cast<int32_t>(nearest_particle(s.x0.data(), s.n, p.position).second),
+    probes_.emplace_back(whole ? static_cast<int32_t>(nearest_particle(s.x0.data(), s.n, p.position).second) : -1,
                          p.field == "velocity" ? 1 : 0);
   if (append && std::filesystem::exists(path)) {
     // Drop rows after the checkpoint step so the history continues seamlessly.
@@ -494,6 +497,7 @@ void HistoryWriter::write(const PdSystem& s, const Energies& e, const HistoryPar
   }
   for (size_t p = 0; p < probes_.size(); ++p) {
     const auto [i, kind] = probes_[p];
+    if (!particles && i < 0) throw std::logic_error("history: a distributed run's probe values were not handed over");
     const double* src = particles ? &particles->probes.at(3 * p) : &(kind ? s.v : s.u)[3 * static_cast<size_t>(i)];
     for (int d = 0; d < 3; ++d) std::fprintf(file_, ",%.9e", src[d]);
   }

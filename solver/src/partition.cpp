@@ -22,29 +22,40 @@ int Partition::owner(int64_t i) const {
 
 namespace {
 
+// The cut for `target` along an order whose work `cum(i)` (particles [0, i)) is
+// non-decreasing: the first i in [lo, hi] with cum(i) >= target (hi if none), then the nearer
+// side of the target. Searched over [0, n] it is the whole order's; over a slice (lo, hi]
+// with cum(lo) < target <= cum(hi), the same i.
+template <class Cumulative>
+int64_t nearer_cut(double target, int64_t lo, int64_t hi, const Cumulative& cum) {
+  while (lo < hi) {
+    const int64_t mid = lo + (hi - lo) / 2;
+    if (cum(mid) < target) lo = mid + 1;
+    else hi = mid;
+  }
+  int64_t i = lo;
+  if (i > 0 && target - cum(i - 1) < cum(i) - target) --i;  // the nearer cut
+  return i;
+}
+
+// The ranges from the nearer cuts (cut[r] for r in [1, ranks)): every rank keeps at least one
+// particle, so ranges stay non-empty while ranks <= n.
+Partition clamp_cuts(const std::vector<int64_t>& cut, int64_t n, int ranks) {
+  Partition p;
+  p.begin.assign(static_cast<size_t>(ranks) + 1, 0);
+  p.begin[ranks] = n;
+  for (int r = 1; r < ranks; ++r) p.begin[r] = std::clamp<int64_t>(cut[r], p.begin[r - 1] + 1, n - (ranks - r));
+  return p;
+}
+
 // Ranges of equal work along an order: `cum(i)` is the work of particles [0, i), non-
 // decreasing, i in [0, n]. Each cut goes to the nearer side of its target, and every rank
 // keeps at least one particle. Shared by MortonRangePartitioner and the lattice figures.
 template <class Cumulative>
 Partition cut_equal_work(int64_t n, int ranks, const Cumulative& cum) {
-  Partition p;
-  p.begin.assign(static_cast<size_t>(ranks) + 1, 0);
-  p.begin[ranks] = n;
-  for (int r = 1; r < ranks; ++r) {
-    const double target = cum(n) * r / ranks;
-    int64_t lo = 0, hi = n;  // the first i with cum(i) >= target
-    while (lo < hi) {
-      const int64_t mid = lo + (hi - lo) / 2;
-      if (cum(mid) < target) lo = mid + 1;
-      else hi = mid;
-    }
-    int64_t i = lo;
-    if (i > 0 && target - cum(i - 1) < cum(i) - target) --i;  // the nearer cut
-    // Every rank keeps at least one particle: ranges stay non-empty while ranks <= n.
-    i = std::clamp<int64_t>(i, p.begin[r - 1] + 1, n - (ranks - r));
-    p.begin[r] = i;
-  }
-  return p;
+  std::vector<int64_t> cut(static_cast<size_t>(ranks), 0);
+  for (int r = 1; r < ranks; ++r) cut[r] = nearer_cut(cum(n) * r / ranks, 0, n, cum);
+  return clamp_cuts(cut, n, ranks);
 }
 
 }  // namespace
@@ -63,6 +74,35 @@ Partition MortonRangePartitioner::partition(const std::vector<int64_t>& offsets,
   std::vector<double> cum(static_cast<size_t>(n) + 1, 0.0);
   for (int64_t i = 0; i < n; ++i) cum[i + 1] = cum[i] + static_cast<double>(offsets[i + 1] - offsets[i]) + particle_weight_;
   return cut_equal_work(n, ranks, [&](int64_t i) { return cum[i]; });
+}
+
+std::vector<int64_t> MortonRangePartitioner::slice_cuts(const std::vector<int64_t>& sizes, int64_t first,
+                                                        int64_t entries_before, int64_t body_n, int64_t body_entries,
+                                                        int ranks) const {
+  // partition's cum(i) sums integers (row lengths and an integral weight) in doubles: below
+  // 2^53 every partial sum is exact, so it equals the integer sum, which the slices' prefix
+  // (entries_before, first) gives here without the rows before them.
+  const double total = static_cast<double>(body_entries) + particle_weight_ * static_cast<double>(body_n);
+  if (particle_weight_ != std::floor(particle_weight_) || particle_weight_ < 0 || !(total < 9007199254740992.0))
+    throw std::logic_error("MortonRangePartitioner::slice_cuts: the work is not an exact integer sum");
+  const int64_t m = static_cast<int64_t>(sizes.size());
+  std::vector<int64_t> prefix(sizes.size() + 1, entries_before);  // entries of rows [0, first + k)
+  for (int64_t k = 0; k < m; ++k) prefix[k + 1] = prefix[k] + sizes[k];
+  auto cum = [&](int64_t i) {  // i in [first, first + m]
+    return static_cast<double>(prefix[i - first]) + particle_weight_ * static_cast<double>(i);
+  };
+  std::vector<int64_t> cut(static_cast<size_t>(ranks), -1);
+  if (m == 0) return cut;
+  for (int r = 1; r < ranks; ++r) {
+    const double target = total * r / ranks;
+    if (cum(first) < target && target <= cum(first + m)) cut[r] = nearer_cut(target, first, first + m, cum);
+  }
+  return cut;
+}
+
+Partition MortonRangePartitioner::from_slice_cuts(const std::vector<int64_t>& cut, int64_t n, int ranks) {
+  require_ranks_fit(n, ranks);
+  return clamp_cuts(cut, n, ranks);
 }
 
 ReachBounds reach_bounds(const std::vector<double>& horizon, const std::vector<double>& half_cell, int dimension) {

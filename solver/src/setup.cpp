@@ -875,6 +875,51 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
         }
       for (int d = 0; d < 3; ++d) f32_origin[d] = body_n ? 0.5 * (lo_hi[d] + lo_hi[3 + d]) : 0.0;
     }
+    // The graded check (require_graded_horizon, horizon_grading's figures) from the blocks,
+    // met by every rank alike: the worst particle the lowest internal index at the smallest
+    // ratio (each block's first, then the blocks' in rank order: internal order), the counts
+    // summed, the median spacing twice the median cell (doubling is exact and keeps the order).
+    if (c.check_stability && !c.variable_horizon && !c.horizon_m && body_n > 0) {
+      struct Worst {
+        double ratio = 1e300, max_ratio = 0.0, h_min = 1e300, h_max = 0.0, x[3] = {0, 0, 0};
+        int64_t internal = -1, file = -1, under = 0;
+      } w;
+      const double limit = graded_limits(c.model).min_local_ratio, median_spacing = 2.0 * body_median_half_cell;
+      for (size_t k = 0; k < mine.size(); ++k) {
+        const double spacing = 2.0 * half_cell(mine[k]), h = horizon(mine[k]), m = h / spacing;
+        if (m < w.ratio) {
+          w.ratio = m;
+          w.internal = sorted.first + static_cast<int64_t>(k);
+          w.file = mine[k].file;
+          std::copy_n(mine[k].x, 3, w.x);
+        }
+        w.max_ratio = std::max(w.max_ratio, m);
+        w.h_min = std::min(w.h_min, spacing);
+        w.h_max = std::max(w.h_max, spacing);
+        w.under += spacing >= kCoarseSpacingFactor * median_spacing && h < limit * spacing;
+      }
+      const std::vector<char> bytes = dist.concat(&w, 1, sizeof(Worst), true);
+      std::vector<Worst> each(bytes.size() / sizeof(Worst));
+      std::memcpy(static_cast<void*>(each.data()), bytes.data(), bytes.size());
+      Worst body{};
+      HorizonGrading g;
+      g.min_local_ratio = 1e300;
+      double h_min = 1e300, h_max = 0.0;
+      for (const Worst& e : each) {
+        if (e.internal >= 0 && e.ratio < g.min_local_ratio) {
+          g.min_local_ratio = e.ratio;
+          body = e;
+        }
+        g.max_local_ratio = std::max(g.max_local_ratio, e.max_ratio);
+        h_min = std::min(h_min, e.h_min);
+        h_max = std::max(h_max, e.h_max);
+        g.under_resolved += static_cast<size_t>(e.under);
+      }
+      g.worst_particle = body.internal;
+      g.spacing_ratio = h_max / h_min;
+      if (graded_horizon_refused(c, g, body_n))
+        graded_refusal = std::make_exception_ptr(graded_horizon_refusal(c, g, body_n, one_horizon_value, body.file, body.x));
+    }
     std::vector<int32_t> file(mine.size());
     for (size_t k = 0; k < mine.size(); ++k) file[k] = static_cast<int32_t>(mine[k].file);
     const std::vector<char> bytes = dist.concat(file.data(), file.size(), sizeof(int32_t), false);
@@ -947,7 +992,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     // One horizon over a graded arrangement under-resolves its coarse part (docs/atlas.md,
     // stability map, graded_check.hpp): judged on the whole body here, refused at the start-up
     // checks below (after the refusals the passes between make, as before).
-    if (c.check_stability) try {
+    if (c.check_stability && !dist.active()) try {  // (a distributed set-up's ranks took it above)
         require_graded_horizon(s);
       } catch (const InputError&) {
         graded_refusal = std::current_exception();
@@ -964,12 +1009,6 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   std::vector<std::exception_ptr> layer_refused(c.loads.size());
   if (planner) {
     body = BodyPlan{};
-    if (graded_refusal) try {
-        std::rethrow_exception(graded_refusal);
-      } catch (const InputError& e) {
-        body.graded_refused = true;
-        body.graded_message = e.what();
-      }
     std::vector<int64_t> known;  // the file particles the other ranks name beyond their windows
     for (const SurfaceFacets& sf : pm.surfaces) known.insert(known.end(), sf.particle.begin(), sf.particle.end());
     body.layers.resize(c.loads.size());
@@ -999,7 +1038,6 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   if (planned) {
     BodyPlan rest = receive_body_plan(dist);
     if (rest.refused) throw InputError(c.file, "", "refused by rank 0, which reads the particle file (its message)", "");
-    if (rest.graded_refused) graded_refusal = std::make_exception_ptr(InputError(c.file, "", rest.graded_message, ""));
     body.known_file = std::move(rest.known_file);
     body.known_internal = std::move(rest.known_internal);
     body.layers = std::move(rest.layers);

@@ -326,6 +326,29 @@ static std::string graded_case(const std::string& particles, const std::string& 
          "output: {every: 20, history_every: 10, fields: [damage, displacement, velocity]}\n";
 }
 
+// The graded check refusing one horizon over the graded block (graded_check.hpp): under
+// mpirun every rank judges it from its block of the Morton sort (setup.cpp); on 3 ranks the
+// one process's message (the same spacing ratio, ratio, worst particle, its position and the
+// count), once, exit code 2.
+TEST(Distributed, GradedHorizonRefusalOnThreeRanksIsTheOneProcessMessage) {
+  const std::string graded = graded_notch();
+  ASSERT_FALSE(graded.empty()) << "could not mesh the graded block";
+  std::string yaml = graded_case(graded, "pmb", 10, true);
+  yaml.replace(yaml.find("variable_horizon: true"), 22, "variable_horizon: false");
+  const std::string file = write_case("mpi_dist_graded", yaml);
+  const Outcome one = solve(file, process_temp_dir() + "/dist_graded_np1", 1, 1);
+  const Outcome three = solve(file, process_temp_dir() + "/dist_graded_np3", 3, 1);
+  EXPECT_EQ(one.exit_code, 2) << one.err;
+  EXPECT_EQ(three.exit_code, 2) << three.err;
+  const auto error_line = [](const std::string& err) {
+    const size_t at = err.find("error:");
+    return at == std::string::npos ? std::string() : err.substr(at, err.find('\n', at) - at);
+  };
+  EXPECT_NE(error_line(one.err).find("model.variable_horizon: particle spacings vary by"), std::string::npos) << one.err;
+  EXPECT_EQ(error_line(one.err), error_line(three.err));
+  EXPECT_EQ(three.err.find("error:", three.err.find("error:") + 1), std::string::npos) << "more than one error: " << three.err;
+}
+
 // An output group's broken bits (mpi_backend.cpp broken_bits_together), with parallel HDF5:
 // each rank forms and writes its own block of the dataset's bytes, so the most bytes of them
 // each rank held (summary.json's broken_bits_bytes_per_rank) sum to the dataset's bytes once

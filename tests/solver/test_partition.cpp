@@ -130,6 +130,41 @@ TEST(Partition, WeightedRangesBalanceTheBondLoop) {
   }
 }
 
+// The cut without the whole offsets (cut_partition: each rank its slice's cuts, merged)
+// equals partition's on the whole offsets, exactly: row lengths with long equal runs (targets
+// on exact ties between two rows), zero-length rows, a few heavy rows (the clamp), cut into
+// 1 to 7 ranks from 1 to 5 slices of unequal lengths.
+TEST(Partition, CutsFromSlicesAreTheWholeOffsetsCuts) {
+  std::mt19937 gen(7);
+  for (int pattern = 0; pattern < 4; ++pattern) {
+    const int64_t n = 40 + 17 * pattern;
+    std::vector<int64_t> sizes(static_cast<size_t>(n));
+    for (int64_t i = 0; i < n; ++i)
+      sizes[i] = pattern == 0 ? 4 : pattern == 1 ? static_cast<int64_t>(gen() % 3) * 2 : pattern == 2 ? (i % 9 == 0 ? 400 : 0)
+                                                                                             : static_cast<int64_t>(gen() % 50);
+    std::vector<int64_t> offsets(static_cast<size_t>(n) + 1, 0);
+    for (int64_t i = 0; i < n; ++i) offsets[i + 1] = offsets[i] + sizes[i];
+    for (int ranks = 1; ranks <= 7; ++ranks) {
+      const Partition whole = MortonRangePartitioner().partition(offsets, ranks);
+      for (int slices = 1; slices <= 5; ++slices) {
+        std::vector<int64_t> cut(static_cast<size_t>(ranks), -1);
+        for (int q = 0; q < slices; ++q) {
+          const int64_t b = n * q * q / (slices * slices), e = n * (q + 1) * (q + 1) / (slices * slices);
+          const std::vector<int64_t> mine(sizes.begin() + b, sizes.begin() + e);
+          const std::vector<int64_t> found = MortonRangePartitioner().slice_cuts(mine, b, offsets[b], n, offsets[n], ranks);
+          for (int r = 1; r < ranks; ++r)
+            if (found[r] >= 0) {
+              EXPECT_EQ(cut[r], -1) << "two slices hold target " << r;
+              cut[r] = found[r];
+            }
+        }
+        EXPECT_EQ(MortonRangePartitioner::from_slice_cuts(cut, n, ranks).begin, whole.begin)
+            << "pattern " << pattern << ", " << ranks << " ranks, " << slices << " slices";
+      }
+    }
+  }
+}
+
 TEST(Partition, AnEmptyRankHasNothingToExchange) {
   const PdSystem s = lattice("partition_empty");
   const int64_t n = static_cast<int64_t>(s.n);

@@ -6,13 +6,14 @@
 // 0 (plan_window_system: a window system, built from the particle file's rows of its window
 // alone, read by hyperslabs), the whole body's on rank 0 (the planner, which reads the whole
 // file: its writers' staging); the row offsets likewise: the ranks other than 0 keep their
-// entry ranges alone (cut_partition: rank 0 cuts; PdSystem::distributed_entries); the bond
+// entry ranges alone (cut_partition: every rank cuts from its slice; PdSystem::distributed_entries;
+// rank 0 the whole offsets with a serial HDF5 alone); the bond
 // states (1 B per entry, with softening, a rate law or a gas load up to 10 B) are each rank's own rows,
 // in its system, with parallel HDF5; without it whole on rank 0 too, its writers' staging
 // (for_each_bond_state_array).
 //
 // How: the family sizes are counted from the positions alone (family_sizes, partition.hpp),
-// which gives rank 0 the whole system's row offsets and the partition before any family exists.
+// which gives the partition (and a serial HDF5's rank 0 the whole row offsets) before any family exists.
 // The set-up then runs as on one process on a system whose rows outside the rank's range are
 // empty (a window system: the rank's rows and the window's other particles, local indices;
 // else the whole body): every per-entry loop covers the rank's rows, and the few values a row reads from
@@ -58,8 +59,8 @@ struct WindowExchange {
 struct DistributedRows {
   bool active = false;
   int64_t begin = 0, end = 0;          // the rank's rows (internal order)
-  // The whole system's row offsets (n + 1), from the family sizes: rank 0 alone (it cuts the
-  // partition and keeps them for its writers, I/O staging); empty on the other ranks.
+  // The whole system's row offsets (n + 1), from the family sizes: rank 0 alone without
+  // parallel HDF5 (root_keeps_offsets: its writers', I/O staging); empty on the other ranks.
   std::vector<int64_t> full_offsets;
   std::vector<int64_t> entry_begin;    // every rank's: each rank's first bond entry, then the total (ranks + 1)
   GeometricWindow window;              // the rows' geometric window (active only): every partner
@@ -112,7 +113,7 @@ struct RankRun {
 // on one process). Every rank plans from its slice of the internal order (`slice`: its
 // family_slice's particles, from the Morton sort): it forms its slice's geometric window from
 // the ranks' slices (form_window) and counts the slice's family sizes on it (every partner,
-// not the body); rank 0 receives the sizes and cuts (cut_partition); every rank then forms
+// not the body); every rank cuts from its slice's sizes (cut_partition); every rank then forms
 // its rows' window from the runs moved to the partition's ranges. Collective; throws
 // InputError for more ranks than particles.
 DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d, RankRun slice = {});
@@ -147,14 +148,13 @@ struct SurfaceLayer {
 // concatenation from rank 0), in two parts: before the distributed Morton sort, whether rank 0
 // refused the input first (its InputError; the others then stop too, quietly), the body's
 // count, the file's content id and each set's whole count (the file's then the case's); after
-// it, the graded check's refusal, the internal indices of the surfaces' facet particles and of
-// the layers' particles (sorted by file index), and each load's layer. (The whole body's
-// horizons and cells, float32's origin: every rank takes them from its block of the sort.)
+// it, the internal indices of the surfaces' facet particles and of the layers' particles
+// (sorted by file index), and each load's layer. (The whole body's horizons and cells,
+// float32's origin, the graded check: every rank takes them from its block of the sort.)
 struct BodyPlan {
   bool refused = false;
   int64_t n = 0;
-  bool graded_refused = false;
-  std::string graded_message, content_id;
+  std::string content_id;
   std::vector<int64_t> set_sizes;
   std::vector<int64_t> known_file;      // ascending
   std::vector<int32_t> known_internal;  // of known_file
@@ -331,6 +331,18 @@ inline bool root_gathers_bond_list(const CaseConfig& c) {
   return false;
 #else
   return c.write_results;
+#endif
+}
+
+// Whether rank 0 keeps the whole row offsets (DistributedRows::full_offsets) for its writers:
+// only without parallel HDF5 (its writers' staging, as root_gathers_bond_list's).
+inline bool root_keeps_offsets(const CaseConfig& c) {
+#ifdef BRECCIA_PARALLEL_HDF5
+  (void)c;
+  return false;
+#else
+  (void)c;
+  return true;
 #endif
 }
 

@@ -24,6 +24,7 @@
 #include <cstdint>
 #include <string>
 
+#include "breccia/common/error.hpp"
 #include "breccia/solver/pd_system.hpp"
 
 namespace breccia::solver {
@@ -86,6 +87,12 @@ HorizonGrading horizon_grading(const PdSystem& s);
 // false. Dual horizon (variable_horizon: true) and a given fixed horizon (checked against
 // the largest spacing by setup) pass.
 void require_graded_horizon(const PdSystem& s);
+// Its parts, for a grading folded from the ranks' blocks (setup.cpp, a distributed set-up):
+// whether the body of n particles is refused, and the refusal naming the worst particle
+// (its horizon, file row and position).
+bool graded_horizon_refused(const CaseConfig& c, const HorizonGrading& g, int64_t n);
+InputError graded_horizon_refusal(const CaseConfig& c, const HorizonGrading& g, int64_t n, double horizon,
+                                  int64_t file_row, const double* x);
 
 // Empty, or a warning (printed by setup_system) that bonded neighbours differ in spacing by
 // more than the model's warn_jump: waves reflect at the change (docs/atlas.md).

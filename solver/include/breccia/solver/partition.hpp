@@ -48,6 +48,15 @@ public:
   explicit MortonRangePartitioner(double particle_weight = 4.0) : particle_weight_(particle_weight) {}
   std::string name() const override { return "morton-ranges"; }
   Partition partition(const std::vector<int64_t>& offsets, int ranks) const override;
+  // partition's cuts without the whole offsets: a rank holding the row lengths `sizes` of
+  // rows [first, first + sizes.size()) (a slice of the order; `entries_before` the entries
+  // of the rows before it, the body's n rows hold body_entries) finds the cuts whose targets
+  // fall in its slice: cut[r] for those r in [1, ranks), -1 for the others (ranks entries).
+  // Every target falls in exactly one non-empty slice; from_slice_cuts makes the ranges of
+  // the ranks' cuts merged, partition's exactly (the same rule, the same ties).
+  std::vector<int64_t> slice_cuts(const std::vector<int64_t>& sizes, int64_t first, int64_t entries_before,
+                                  int64_t body_n, int64_t body_entries, int ranks) const;
+  static Partition from_slice_cuts(const std::vector<int64_t>& cut, int64_t n, int ranks);
 
 private:
   double particle_weight_;

@@ -226,7 +226,8 @@ struct PdSystem {
   std::vector<int64_t> distributed_rows;
   // Its bond entries' ranges, once the set-up finished (finish_distributed_setup): each rank's
   // rows' first entry, then the total (ranks + 1). The ranks other than 0 keep no row offsets
-  // here (`offsets` empty: their rows' are their own systems'); rank 0 the whole ones.
+  // here (`offsets` empty: their rows' are their own systems'); rank 0 the whole ones with a
+  // serial HDF5 (root_keeps_offsets), none with parallel HDF5.
   std::vector<int64_t> distributed_entries;
   // The longest row offsets each rank held from the partition's cut on (the set-up system's,
   // the cut's, the ones kept for the run), rank 0 first (summary.json's offsets_rows_per_rank).

@@ -326,6 +326,24 @@ static std::string graded_case(const std::string& particles, const std::string& 
          "output: {every: 20, history_every: 10, fields: [damage, displacement, velocity]}\n";
 }
 
+// A case refused at set-up: one process and 3 ranks both exit with code 2, the error line
+// holds `expected` and is the one process's, and 3 ranks print it once.
+static void expect_one_refusal_on_three_ranks_as_one_process(const std::string& name, const std::string& yaml,
+                                                             const std::string& expected) {
+  const std::string file = write_case(name, yaml);
+  const Outcome one = solve(file, process_temp_dir() + "/" + name + "_np1", 1, 1);
+  const Outcome three = solve(file, process_temp_dir() + "/" + name + "_np3", 3, 1);
+  EXPECT_EQ(one.exit_code, 2) << one.err;
+  EXPECT_EQ(three.exit_code, 2) << three.err;
+  const auto error_line = [](const std::string& err) {
+    const size_t at = err.find("error:");
+    return at == std::string::npos ? std::string() : err.substr(at, err.find('\n', at) - at);
+  };
+  EXPECT_NE(error_line(one.err).find(expected), std::string::npos) << one.err;
+  EXPECT_EQ(error_line(one.err), error_line(three.err));
+  EXPECT_EQ(three.err.find("error:", three.err.find("error:") + 1), std::string::npos) << "more than one error: " << three.err;
+}
+
 // The graded check refusing one horizon over the graded block (graded_check.hpp): under
 // mpirun every rank judges it from its block of the Morton sort (setup.cpp); on 3 ranks the
 // one process's message (the same spacing ratio, ratio, worst particle, its position and the
@@ -335,18 +353,8 @@ TEST(Distributed, GradedHorizonRefusalOnThreeRanksIsTheOneProcessMessage) {
   ASSERT_FALSE(graded.empty()) << "could not mesh the graded block";
   std::string yaml = graded_case(graded, "pmb", 10, true);
   yaml.replace(yaml.find("variable_horizon: true"), 22, "variable_horizon: false");
-  const std::string file = write_case("mpi_dist_graded", yaml);
-  const Outcome one = solve(file, process_temp_dir() + "/dist_graded_np1", 1, 1);
-  const Outcome three = solve(file, process_temp_dir() + "/dist_graded_np3", 3, 1);
-  EXPECT_EQ(one.exit_code, 2) << one.err;
-  EXPECT_EQ(three.exit_code, 2) << three.err;
-  const auto error_line = [](const std::string& err) {
-    const size_t at = err.find("error:");
-    return at == std::string::npos ? std::string() : err.substr(at, err.find('\n', at) - at);
-  };
-  EXPECT_NE(error_line(one.err).find("model.variable_horizon: particle spacings vary by"), std::string::npos) << one.err;
-  EXPECT_EQ(error_line(one.err), error_line(three.err));
-  EXPECT_EQ(three.err.find("error:", three.err.find("error:") + 1), std::string::npos) << "more than one error: " << three.err;
+  expect_one_refusal_on_three_ranks_as_one_process("mpi_dist_graded", yaml,
+                                                   "model.variable_horizon: particle spacings vary by");
 }
 
 // An output group's broken bits (mpi_backend.cpp broken_bits_together), with parallel HDF5:
@@ -789,18 +797,8 @@ TEST(DistributedSetup, CorrespondenceAndDynamicRelaxationBuildEachRanksOwnBondsW
   {
     std::string yaml = graded_case(graded, "lps", 40, true);
     yaml.replace(yaml.find("horizon_factor: 3.015"), 21, "horizon_factor: 1.5");
-    const std::string file = write_case("mpi_dist_scatter", yaml);
-    const Outcome one = solve(file, process_temp_dir() + "/dist_scatter_np1", 1, 1);
-    const Outcome three = solve(file, process_temp_dir() + "/dist_scatter_np3", 3, 1);
-    EXPECT_EQ(one.exit_code, 2) << one.err;
-    EXPECT_EQ(three.exit_code, 2) << three.err;
-    const auto error_line = [](const std::string& err) {
-      const size_t at = err.find("error:");
-      return at == std::string::npos ? std::string() : err.substr(at, err.find('\n', at) - at);
-    };
-    EXPECT_NE(error_line(one.err).find("model.horizon_factor: per-particle strain energy"), std::string::npos) << one.err;
-    EXPECT_EQ(error_line(one.err), error_line(three.err));
-    EXPECT_EQ(three.err.find("error:", three.err.find("error:") + 1), std::string::npos) << "more than one error: " << three.err;
+    expect_one_refusal_on_three_ranks_as_one_process("mpi_dist_scatter", yaml,
+                                                     "model.horizon_factor: per-particle strain energy");
   }
   expect_distributed_setup_gives_one_process_answer(
       "corr",

@@ -57,17 +57,25 @@ const SurfaceFacets* ParticleModel::find_surface(const std::string& name) const 
   return nullptr;
 }
 
-std::string compute_content_id(const ParticleModel& model) {
-  uint64_t h = 1469598103934665603ull;  // FNV-1a
-  auto mix = [&h](const void* data, size_t bytes) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i < bytes; ++i) { h ^= p[i]; h *= 1099511628211ull; }
-  };
-  mix(model.position_m.data(), model.position_m.size() * sizeof(double));
-  mix(model.volume_m3.data(), model.volume_m3.size() * sizeof(double));
+void ContentHash::add(const void* data, size_t bytes) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (size_t i = 0; i < bytes; ++i) {  // FNV-1a
+    h_ ^= p[i];
+    h_ *= 1099511628211ull;
+  }
+}
+
+std::string ContentHash::hex() const {
   char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h_));
   return buf;
+}
+
+std::string compute_content_id(const ParticleModel& model) {
+  ContentHash h;
+  h.add(model.position_m.data(), model.position_m.size() * sizeof(double));
+  h.add(model.volume_m3.data(), model.volume_m3.size() * sizeof(double));
+  return h.hex();
 }
 
 namespace {
@@ -104,6 +112,46 @@ std::string xdmf_sidecar(const std::string& h5_name, const ParticleModel& m) {
   return x.str();
 }
 
+// Rows' volumes and material ids (row k is file row `file_row(k)`), as every reader checks them.
+template <class FileRow>
+void check_rows(const std::string& file, const std::vector<double>& volume, const std::vector<int32_t>& material_id,
+                size_t material_names, FileRow&& file_row) {
+  for (size_t k = 0; k < volume.size(); ++k) {
+    // Built in two steps: GCC 12 warns falsely (-Wrestrict) on "[" + std::to_string(...).
+    std::string row = std::to_string(file_row(k));
+    row = '[' + row + ']';
+    if (!(volume[k] > 0.0) || !std::isfinite(volume[k]))
+      throw InputError(file, "/particles/volume" + row, "value " + std::to_string(volume[k]), "a positive finite volume");
+    if (material_id[k] < 0 || static_cast<size_t>(material_id[k]) >= std::max<size_t>(material_names, 1))
+      throw InputError(file, "/particles/material_id" + row, "value " + std::to_string(material_id[k]),
+                       "an index into /materials/names");
+  }
+}
+
+// What does not depend on the rows: the dimension, the count, the surfaces' lists.
+void validate_lists(const ParticleModel& m, size_t n, const std::string& file) {
+  if (m.dimension != 2 && m.dimension != 3)
+    throw InputError(file, "/@dimension", "value " + std::to_string(m.dimension), "2 or 3");
+  if (n == 0) throw InputError(file, "/particles/volume", "no particles", "at least one particle");
+  for (const auto& s : m.surfaces) {
+    const size_t f = s.size();
+    if (s.normal.size() != 3 * f || s.centroid_m.size() != 3 * f || s.particle.size() != f)
+      throw InputError(file, "/surfaces/" + s.name, "inconsistent dataset sizes", "area F, normal F x 3, centroid F x 3, particle F");
+    const size_t per_facet = static_cast<size_t>(m.dimension);  // vertices of a facet: 3 or 2
+    if (s.has_vertices() && s.vertices_m.size() != f * per_facet * 3)
+      throw InputError(file, "/surfaces/" + s.name + "/vertices", "size " + std::to_string(s.vertices_m.size()),
+                       std::to_string(f) + " x " + std::to_string(per_facet) + " x 3 (each facet's vertices)");
+    for (auto p : s.particle)
+      if (p < 0 || static_cast<size_t>(p) >= n)
+        throw InputError(file, "/surfaces/" + s.name + "/particle", "index " + std::to_string(p), "a particle index");
+  }
+}
+
+void check_set_index(const std::string& file, const std::string& set, int64_t idx, size_t n) {
+  if (idx < 0 || static_cast<size_t>(idx) >= n)
+    throw InputError(file, "/sets/" + set, "index " + std::to_string(idx), "0 <= index < " + std::to_string(n));
+}
+
 void validate(const ParticleModel& m, const std::string& file) {
   const size_t n = m.size();
   if (m.dimension != 2 && m.dimension != 3)
@@ -117,30 +165,10 @@ void validate(const ParticleModel& m, const std::string& file) {
                      std::to_string(n));
   if (m.spacing_m.size() != n)
     throw InputError(file, "/particles/spacing", "size " + std::to_string(m.spacing_m.size()), std::to_string(n));
-  for (size_t i = 0; i < n; ++i) {
-    if (!(m.volume_m3[i] > 0.0) || !std::isfinite(m.volume_m3[i]))
-      throw InputError(file, "/particles/volume[" + std::to_string(i) + "]",
-                       "value " + std::to_string(m.volume_m3[i]), "a positive finite volume");
-    if (m.material_id[i] < 0 || static_cast<size_t>(m.material_id[i]) >= std::max<size_t>(m.material_names.size(), 1))
-      throw InputError(file, "/particles/material_id[" + std::to_string(i) + "]",
-                       "value " + std::to_string(m.material_id[i]), "an index into /materials/names");
-  }
+  check_rows(file, m.volume_m3, m.material_id, m.material_names.size(), [](size_t k) { return k; });
   for (const auto& s : m.sets)
-    for (auto idx : s.indices)
-      if (idx < 0 || static_cast<size_t>(idx) >= n)
-        throw InputError(file, "/sets/" + s.name, "index " + std::to_string(idx), "0 <= index < " + std::to_string(n));
-  for (const auto& s : m.surfaces) {
-    const size_t f = s.size();
-    if (s.normal.size() != 3 * f || s.centroid_m.size() != 3 * f || s.particle.size() != f)
-      throw InputError(file, "/surfaces/" + s.name, "inconsistent dataset sizes", "area F, normal F x 3, centroid F x 3, particle F");
-    const size_t per_facet = static_cast<size_t>(m.dimension);  // vertices of a facet: 3 or 2
-    if (s.has_vertices() && s.vertices_m.size() != f * per_facet * 3)
-      throw InputError(file, "/surfaces/" + s.name + "/vertices", "size " + std::to_string(s.vertices_m.size()),
-                       std::to_string(f) + " x " + std::to_string(per_facet) + " x 3 (each facet's vertices)");
-    for (auto p : s.particle)
-      if (p < 0 || static_cast<size_t>(p) >= n)
-        throw InputError(file, "/surfaces/" + s.name + "/particle", "index " + std::to_string(p), "a particle index");
-  }
+    for (auto idx : s.indices) check_set_index(file, s.name, idx, n);
+  validate_lists(m, n, file);
 }
 
 }  // namespace
@@ -229,16 +257,7 @@ ParticleRows read_particle_rows(const std::string& path, int64_t first, int64_t 
   r.material_names = f.read_strings("/materials/names");
   if (r.position_m.size() != 3 * r.size())
     throw InputError(path, "/particles/position", "not 3 numbers a row", "3 x N (one row per particle)");
-  for (size_t k = 0; k < r.size(); ++k) {
-    // Built in two steps: GCC 12 warns falsely (-Wrestrict) on "[" + std::to_string(...).
-    std::string row = std::to_string(first + static_cast<int64_t>(k));
-    row = '[' + row + ']';
-    if (!(r.volume_m3[k] > 0.0) || !std::isfinite(r.volume_m3[k]))
-      throw InputError(path, "/particles/volume" + row, "value " + std::to_string(r.volume_m3[k]), "a positive finite volume");
-    if (r.material_id[k] < 0 || static_cast<size_t>(r.material_id[k]) >= std::max<size_t>(r.material_names.size(), 1))
-      throw InputError(path, "/particles/material_id" + row, "value " + std::to_string(r.material_id[k]),
-                       "an index into /materials/names");
-  }
+  check_rows(path, r.volume_m3, r.material_id, r.material_names.size(), [first](size_t k) { return first + static_cast<int64_t>(k); });
   return r;
 }
 
@@ -277,7 +296,26 @@ ParticleModel read_particle_lists(const std::string& path, int64_t& rows) {
   }
   read_surfaces(f, m);
   if (f.exists("/mesh/cells")) m.nodes_per_cell = static_cast<int>(f.attr_int("/mesh", "nodes_per_cell"));
+  // The whole reader's checks that need no row (validate): the datasets' lengths, the lists.
+  const size_t n = static_cast<size_t>(rows);
+  auto rows_of = [&](const char* d) {
+    const std::vector<hsize_t> dd = f.dims(d);
+    size_t count = dd.empty() ? 0 : 1;
+    for (const hsize_t x : dd) count *= static_cast<size_t>(x);
+    return count;
+  };
+  if (const size_t got = rows_of("/particles/position"); got != 3 * n)
+    throw InputError(path, "/particles/position", "size " + std::to_string(got), "3 x " + std::to_string(n) + " (one row per particle)");
+  if (const size_t got = rows_of("/particles/material_id"); got != n)
+    throw InputError(path, "/particles/material_id", "size " + std::to_string(got), std::to_string(n));
+  if (const size_t got = rows_of("/particles/spacing"); got != n)
+    throw InputError(path, "/particles/spacing", "size " + std::to_string(got), std::to_string(n));
+  validate_lists(m, n, path);
   return m;
+}
+
+void check_particle_rows(const ParticleModel& m, const std::string& path) {
+  check_rows(path, m.volume_m3, m.material_id, m.material_names.size(), [&m](size_t k) { return m.file_row(k); });
 }
 
 namespace {
@@ -318,11 +356,14 @@ void read_particle_rows_at(const std::string& path, const std::vector<int64_t>& 
   m.material_id = rows_at<int32_t>(rows, 1, [&f](hsize_t b, hsize_t c) { return f.read_int32_rows("/particles/material_id", b, c); });
   m.held_rows = rows;
   constexpr int64_t block = 65536;
+  const std::vector<hsize_t> dims = f.dims("/particles/volume");
+  const size_t total = dims.empty() ? 0 : static_cast<size_t>(dims[0]);
   for (ParticleSet& set : m.sets) {  // (read_particle_lists': whole_count, no members yet)
     std::vector<int64_t> held;
     for (int64_t first = 0; first < set.whole_count; first += block) {
       const std::vector<int64_t> part = f.read_int64_rows("/sets/" + set.name, static_cast<hsize_t>(first),
                                                           static_cast<hsize_t>(std::min(block, set.whole_count - first)));
+      for (const int64_t idx : part) check_set_index(path, set.name, idx, total);  // (every reader reads the whole list)
       std::set_intersection(part.begin(), part.end(), rows.begin(), rows.end(), std::back_inserter(held));
     }
     set.indices.swap(held);

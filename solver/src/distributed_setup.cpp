@@ -399,7 +399,7 @@ DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d, Ra
   DistributedRows rows;
   rows.end = static_cast<int64_t>(s.n);
   if (!d.active()) return rows;
-  if (d.rank != 0) throw std::logic_error("plan_distributed_rows: rank 0's (the other ranks: plan_window_system)");
+  if (setup_on_window(d)) throw std::logic_error("plan_distributed_rows: a staged rank 0's (the other ranks: plan_window_system)");
   // The row lengths the set-up will build, counted without a bond stored, and the partition
   // MortonRangePartitioner cuts from them (the one the whole-system set-up's ranks cut):
   // plan_rows, every rank on its slice. The rows' window (every partner of the rows) and how
@@ -413,7 +413,7 @@ DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d, Ra
 
 DistributedRows plan_window_system(PdSystem& s, const DistributedSetup& d, const ReadFileRows& read,
                                    const ValuesOfRow& values, RankRun slice) {
-  if (!setup_on_window(d)) throw std::logic_error("plan_window_system: a rank other than 0 of a distributed set-up");
+  if (!setup_on_window(d)) throw std::logic_error("plan_window_system: a distributed set-up's rank on a window");
   DistributedRows rows;
   s.body_n = s.n;
   PlannedRows planned = plan_rows(s, d, std::move(slice), rows, s.body_n);
@@ -467,83 +467,42 @@ DistributedRows plan_window_system(PdSystem& s, const DistributedSetup& d, const
   return rows;
 }
 
-bool setup_on_window(const DistributedSetup& d) { return d.active() && d.rank != 0; }
+bool setup_on_window(const DistributedSetup& d) { return d.active() && !(d.rank == 0 && root_stages_whole_body()); }
 
-namespace {
-
-struct Bytes {
-  std::vector<char> b;
-  template <class T>
-  void put(const T& v) {
-    const char* p = reinterpret_cast<const char*>(&v);
-    b.insert(b.end(), p, p + sizeof(T));
+void refuse_together(const DistributedSetup& d, std::exception_ptr mine) {
+  std::string record;  // file, field, message, each ended by a NUL; empty: no refusal
+  std::exception_ptr other;
+  if (mine) try {
+      std::rethrow_exception(mine);
+    } catch (const InputError& e) {
+      for (const std::string* part : {&e.file(), &e.field()}) record += *part + '\0';
+      record += std::string(e.what()) + '\0';
+    } catch (...) {
+      other = std::current_exception();
+    }
+  if (!d.active()) {
+    if (mine) std::rethrow_exception(mine);
+    return;
   }
-  template <class T>
-  void put(const std::vector<T>& v) {
-    put<uint64_t>(v.size());
-    const char* p = reinterpret_cast<const char*>(v.data());
-    b.insert(b.end(), p, p + v.size() * sizeof(T));
-  }
-  void put(const std::string& v) { put(std::vector<char>(v.begin(), v.end())); }
-};
-
-struct Reader {
-  const std::vector<char>& b;
+  const std::vector<int64_t> sizes = concat_over_ranks(d, std::vector<int64_t>{static_cast<int64_t>(record.size())});
+  const std::vector<char> all = concat_over_ranks(d, std::vector<char>(record.begin(), record.end()));
+  if (other) std::rethrow_exception(other);
   size_t at = 0;
-  void take(void* out, size_t bytes) {
-    if (at + bytes > b.size()) throw std::logic_error("distributed set-up: rank 0's body plan is short");
-    if (bytes) std::memcpy(out, b.data() + at, bytes);
-    at += bytes;
+  for (const int64_t n : sizes) {
+    if (n > 0) {
+      std::vector<std::string> part;
+      for (size_t q = at, begin = at; q < at + static_cast<size_t>(n); ++q)
+        if (all[q] == '\0') {
+          part.emplace_back(all.begin() + static_cast<int64_t>(begin), all.begin() + static_cast<int64_t>(q));
+          begin = q + 1;
+        }
+      if (part.size() != 3) throw std::logic_error("refuse_together: a refusal's record");
+      throw InputError::composed(part[0], part[1], part[2]);
+    }
+    at += static_cast<size_t>(n);
   }
-  template <class T>
-  void get(T& v) { take(&v, sizeof(T)); }
-  template <class T>
-  void get(std::vector<T>& v) {
-    uint64_t m = 0;
-    get(m);
-    v.resize(m);
-    take(v.data(), m * sizeof(T));
-  }
-  void get(std::string& v) {
-    std::vector<char> c;
-    get(c);
-    v.assign(c.begin(), c.end());
-  }
-};
-
-template <class Io, class Plan>
-void body_plan_fields(Io& io, Plan& p) {
-  // (one list of the fields for both ways)
-  io(p.refused, p.n, p.content_id, p.set_sizes, p.known_file,
-     p.known_internal);
 }
 
-}  // namespace
-
-void send_body_plan(const DistributedSetup& d, const BodyPlan& p) {
-  if (d.rank != 0) throw std::logic_error("send_body_plan: rank 0's");
-  Bytes out;
-  auto io = [&](const auto&... v) { (out.put(v), ...); };
-  body_plan_fields(io, p);
-  out.put<uint64_t>(p.layers.size());
-  for (const BodyPlan::Layer& l : p.layers) io(l.taken, l.refused, l.message, l.layer.depth, l.layer.volume, l.layer.particles);
-  d.concat(out.b.data(), out.b.size(), 1, true);
-}
-
-BodyPlan receive_body_plan(const DistributedSetup& d) {
-  if (d.rank == 0) throw std::logic_error("receive_body_plan: the ranks other than 0");
-  const std::vector<char> in = d.concat(nullptr, 0, 1, true);
-  Reader r{in};
-  BodyPlan p;
-  auto io = [&](auto&... v) { (r.get(v), ...); };
-  body_plan_fields(io, p);
-  uint64_t layers = 0;
-  r.get(layers);
-  p.layers.resize(layers);
-  for (BodyPlan::Layer& l : p.layers) io(l.taken, l.refused, l.message, l.layer.depth, l.layer.volume, l.layer.particles);
-  if (r.at != in.size()) throw std::logic_error("distributed set-up: rank 0's body plan is long");
-  return p;
-}
 
 
 std::vector<int64_t> count_by_owner(const std::vector<int64_t>& part_begin, const std::vector<int32_t>& halo) {

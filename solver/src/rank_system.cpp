@@ -372,7 +372,7 @@ PdSystem restrict_to_rank_taking_bonds(PdSystem& g, const RankLayout& L) {
   // taken, before the rest is cut: the whole array and the rank's rows of it are not held
   // side by side for all of them at once (the cut's growth was the stable step's peak).
   PdSystem taken;
-  if (L.rank != 0) take_releasing(taken, g, L);
+  if (!(L.rank == 0 && root_stages_whole_body())) take_releasing(taken, g, L);
   PdSystem s = restrict_rank(g, L, &partners, std::move(taken));
   s.xi_len = std::move(xi_len);
   s.k_own = std::move(k_own);

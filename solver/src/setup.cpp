@@ -72,19 +72,44 @@ std::string list_names(const std::vector<std::string>& names) {
   return s.empty() ? "(none)" : s;
 }
 
+// Lattice point idx's position (its cell's centre; 0 beyond the dimension).
+static void lattice_point(const LatticeSpec& l, const long long idx[3], double x[3]) {
+  for (int k = 0; k < 3; ++k) x[k] = k < l.dimension ? l.box[k] + (idx[k] + 0.5) * l.spacing : 0.0;
+}
+
+static double lattice_volume(const LatticeSpec& l) {
+  return l.dimension == 3 ? l.spacing * l.spacing * l.spacing : l.spacing * l.spacing * l.thickness;
+}
+
+// The whole lattice's content id (compute_content_id of lattice_model's), its points made one
+// at a time: a distributed set-up's ranks hold their rows of it alone.
+static std::string lattice_content_id(const LatticeSpec& l) {
+  const std::array<int64_t, 3> count = lattice_point_counts(l);
+  ContentHash h;
+  for (long long kz = 0; kz < count[2]; ++kz)
+    for (long long ky = 0; ky < count[1]; ++ky)
+      for (long long kx = 0; kx < count[0]; ++kx) {
+        const long long idx[3] = {kx, ky, kz};
+        double x[3];
+        lattice_point(l, idx, x);
+        h.add(x, sizeof x);
+      }
+  const double vol = lattice_volume(l);
+  for (int64_t q = 0; q < count[0] * count[1] * count[2]; ++q) h.add(&vol, sizeof vol);
+  return h.hex();
+}
+
 // Square/cubic lattice at cell centres, the same layout breccia-place writes.
 // `rows` (if given, ascending): the per-particle arrays hold those rows alone (held_rows;
 // none for an empty list: the lists alone) and no content id is computed (the whole
-// body's: rank 0's, BodyPlan).
+// body's: lattice_content_id).
 ParticleModel lattice_model(const LatticeSpec& l, const std::vector<int64_t>* rows = nullptr) {
   ParticleModel m;
   m.dimension = l.dimension;
   m.thickness_m = l.dimension == 2 ? l.thickness : 1.0;
   const int d = l.dimension;
   const std::array<int64_t, 3> count = lattice_point_counts(l);
-  double lo[3] = {0, 0, 0};
-  for (int k = 0; k < d; ++k) lo[k] = l.box[k];
-  const double vol = d == 3 ? l.spacing * l.spacing * l.spacing : l.spacing * l.spacing * l.thickness;
+  const double vol = lattice_volume(l);
   const char* names[6] = {"xmin", "xmax", "ymin", "ymax", "zmin", "zmax"};
   std::vector<ParticleSet> faces(2 * d);
   for (int f = 0; f < 2 * d; ++f) faces[f].name = names[f];
@@ -101,7 +126,7 @@ ParticleModel lattice_model(const LatticeSpec& l, const std::vector<int64_t>* ro
       for (long long kx = 0; kx < count[0]; ++kx, ++id) {
         const long long idx[3] = {kx, ky, kz};
         double x[3];
-        for (int k = 0; k < 3; ++k) x[k] = k < d ? lo[k] + (idx[k] + 0.5) * l.spacing : 0.0;
+        lattice_point(l, idx, x);
         if (!rows || (next < rows->size() && (*rows)[next] == id)) {
           m.position_m.insert(m.position_m.end(), x, x + 3);
           m.volume_m3.push_back(vol);
@@ -495,27 +520,41 @@ static void add_case_sets(ParticleModel& pm, const CaseConfig& c) {
 // nonlocal body; spread over about a horizon it acts on whole families (docs/theory.md "Loads
 // over a boundary layer"). The facets keep the surface's mean normal (a traction does not read it).
 // The layer is the body's (layer_of_surface: its depth, every particle of it, their volume
-// summed in file order), taken where the particle model holds every row: a window system
-// (PdSystem::window_global) takes it from rank 0 (BodyPlan) and so spreads the whole
-// surface's force over the whole layer, keeping the facets of its window's particles.
-// `sf`: the surface's facets (every one, in the file's order), `horizon_of_file`: a file
-// particle's horizon. Reads every row of the particle model (its positions and volumes).
-static SurfaceLayer layer_of_surface(const PdSystem& s, const LoadSpec& ls, const SurfaceFacets& sf,
-                                     const std::function<double(int64_t)>& horizon_of_file, const std::string& field) {
+// summed in file order): a distributed set-up's ranks take it together from their blocks of
+// the file's rows, so a window system (PdSystem::window_global) spreads the whole surface's
+// force over the whole layer, keeping the facets of its window's particles.
+// `rows`: the particle model's rows held (one process: every row; a distributed set-up: the
+// rank's block, file_block), `sf`: the surface's facets (every one, in the file's order),
+// `horizon_of_spacing`: a particle's horizon from its spacing. Collective where `dist` is.
+static SurfaceLayer layer_of_surface(const ParticleModel& rows, const CaseConfig& c, const LoadSpec& ls,
+                                     const SurfaceFacets& sf, const std::function<double(double)>& horizon_of_spacing,
+                                     const DistributedSetup& dist, const std::string& field) {
+  auto held = [&](int64_t f) -> std::optional<size_t> {
+    if (rows.held_rows.empty()) return static_cast<size_t>(f);
+    return held_position(rows.held_rows, f);
+  };
   SurfaceLayer out;
   out.depth = ls.depth;
   if (ls.depth_horizon)
-    for (size_t f = 0; f < sf.size(); ++f) out.depth = std::max(out.depth, horizon_of_file(sf.particle[f]));
+    for (size_t f = 0; f < sf.size(); ++f)
+      if (const std::optional<size_t> k = held(sf.particle[f])) out.depth = std::max(out.depth, horizon_of_spacing(rows.spacing_m[*k]));
+  if (dist.active())  // (a maximum: the same double in any order)
+    for (const double d : concat_over_ranks(dist, std::vector<double>{out.depth})) out.depth = std::max(out.depth, d);
   RegionSetSpec layer;
   layer.kind = RegionSetSpec::Kind::NearSurface;
   layer.surface = ls.surface;
   layer.distance = out.depth;
   layer.field = field + ".depth";
-  out.particles = near_surface_set(s.particles, layer, s.config.file);
-  for (const int64_t f : out.particles)
-    out.volume += s.particles.volume_m3[static_cast<size_t>(f)];  // the system's volume of it, the same double
+  out.particles = near_surface_set(rows, layer, c.file);  // file rows, ascending
+  std::vector<double> volume;
+  for (const int64_t f : out.particles) volume.push_back(rows.volume_m3[*held(f)]);
+  if (dist.active()) {  // the blocks in rank order: the file's order
+    out.particles = concat_over_ranks(dist, out.particles);
+    volume = concat_over_ranks(dist, volume);
+  }
+  for (const double v : volume) out.volume += v;  // in file order, as one process sums them
   if (out.particles.empty() || !(out.volume > 0))
-    throw InputError(s.config.file, field + ".depth", "no particle within " + short_number(out.depth) + " m of surface '" +
+    throw InputError(c.file, field + ".depth", "no particle within " + short_number(out.depth) + " m of surface '" +
                      ls.surface + "'", "a depth of at least half the particle spacing");
   return out;
 }
@@ -667,40 +706,76 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     last = now;
     last_cpu = now_cpu;
   };
-  // A distributed set-up: rank 0 (the planner) reads the whole particle file (its writers'
-  // staging); every rank reads an equal block of its rows, and the ranks sort them into the
-  // internal order together and take the whole body's horizons and cells from their blocks
-  // (below); rank 0 tells the other ranks what else they read of every particle (BodyPlan)
-  // and which file rows form their windows (plan_distributed_rows); the ranks other than 0
-  // (`planned`) read the file's lists, their blocks' and their windows' rows alone
-  // (plan_window_system): no array of the body's size.
+  // A distributed set-up: every rank reads the file's lists (read_particle_lists: the sets'
+  // names and counts, the surfaces, sized like the boundary) and an equal block of its rows
+  // (file_block), checked as a whole read checks them (the first refusal in the file's order
+  // is every rank's: refuse_together); the ranks sort their blocks into the internal order
+  // together and take the whole body's horizons, cells, sets' counts and boundary layers from
+  // them (below); each then reads its rows' window alone (plan_window_system): no array of
+  // the body's size. Rank 0 of a build without parallel HDF5 also reads the whole file and
+  // builds the whole body (`staged`: its writers gather into it, I/O staging).
   const DistributedSetup& dist = hooks.distributed;
   const bool planned = setup_on_window(dist);
-  const bool planner = dist.active() && dist.rank == 0;
-  // Rank 0: an input error before its plan is sent stops the other ranks too (they wait for it).
-  struct RootRefusal {
-    const DistributedSetup& d;
-    bool armed;
-    ~RootRefusal() {
-      if (!armed || std::uncaught_exceptions() == 0) return;
-      BodyPlan refused;
-      refused.refused = true;
-      try {
-        send_body_plan(d, refused);
-      } catch (...) {  // (a failed send: the launcher's abort stops them)
-      }
+  const bool staged = dist.active() && !planned;
+  // A held row's file rows: those of the particle file, or of the case's lattice (no mesh),
+  // each set's members among them.
+  const ReadFileRows read_rows = [&](const std::vector<int64_t>& rows, const std::vector<int64_t>& cells,
+                                     ParticleModel& into) {
+    if (!c.lattice) return read_particle_rows_at(c.particles_path, rows, cells, into);
+    ParticleModel part = lattice_model(*c.lattice, &rows);
+    into.position_m.swap(part.position_m);
+    into.volume_m3.swap(part.volume_m3);
+    into.spacing_m.swap(part.spacing_m);
+    into.material_id.swap(part.material_id);
+    into.held_rows.swap(part.held_rows);
+    for (ParticleSet& set : into.sets) {  // (the lattice's sets are its faces, listed whole)
+      if (set.whole_count >= 0) continue;
+      set.whole_count = static_cast<int64_t>(set.indices.size());
+      std::vector<int64_t> held;
+      std::set_intersection(set.indices.begin(), set.indices.end(), into.held_rows.begin(), into.held_rows.end(),
+                            std::back_inserter(held));
+      set.indices.swap(held);
     }
-  } root_refusal{dist, planner};
-  BodyPlan body;
-  if (planned) {
-    body = receive_body_plan(dist);
-    if (body.refused) throw InputError(c.file, "", "refused by rank 0, which reads the particle file (its message)", "");
-    int64_t rows_in_file = 0;
+  };
+  ParticleModel block;             // a distributed set-up's block of the file's rows
+  int64_t body_rows = 0;           // the file's (or lattice's) particle count
+  std::vector<int64_t> set_sizes;  // a distributed set-up's sets' whole counts (the file's, then the case's)
+  if (dist.active()) {
     const std::vector<int64_t> none;
-    s.particles = c.lattice ? lattice_model(*c.lattice, &none) : read_particle_lists(c.particles_path, rows_in_file);
-    if (!c.lattice && rows_in_file != body.n) throw std::logic_error("distributed set-up: the particle file's rows differ from rank 0's");
-    s.particles.content_id = body.content_id;
-  } else {
+    if (c.lattice) {
+      s.particles = lattice_model(*c.lattice, &none);
+      const std::array<int64_t, 3> count = lattice_point_counts(*c.lattice);
+      body_rows = count[0] * count[1] * count[2];
+      s.particles.content_id = lattice_content_id(*c.lattice);
+    } else {
+      s.particles = read_particle_lists(c.particles_path, body_rows);
+    }
+    const FamilySlice fb = file_block(body_rows, dist.rank, dist.ranks);
+    std::vector<int64_t> rows(static_cast<size_t>(fb.end - fb.begin)), cells;
+    std::iota(rows.begin(), rows.end(), fb.begin);
+    if (s.particles.nodes_per_cell > 0)  // the facets' cells (near_surface_set's triangles)
+      for (const SurfaceFacets& sf : s.particles.surfaces) cells.insert(cells.end(), sf.particle.begin(), sf.particle.end());
+    std::sort(cells.begin(), cells.end());
+    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+    block = s.particles;
+    std::exception_ptr refused;
+    try {
+      read_rows(rows, cells, block);
+      if (!c.lattice) check_particle_rows(block, c.particles_path);
+    } catch (const InputError&) {
+      refused = std::current_exception();
+    }
+    refuse_together(dist, refused);
+    // The case's sets (their refusals are the case's: every rank's alike), each set's whole
+    // count summed over the blocks (the members are unique, the blocks disjoint).
+    add_case_sets(block, c);
+    std::vector<int64_t> held;
+    for (const ParticleSet& set : block.sets) held.push_back(static_cast<int64_t>(set.indices.size()));
+    const std::vector<int64_t> all = concat_over_ranks(dist, held);
+    set_sizes.assign(held.size(), 0);
+    for (size_t q = 0; q < all.size(); ++q) set_sizes[q % held.size()] += all[q];
+  }
+  if (!planned) {
     s.particles = c.lattice ? lattice_model(*c.lattice) : read_particle_file(c.particles_path);
     add_case_sets(s.particles, c);
   }
@@ -708,7 +783,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   const ParticleModel& pm = s.particles;
   s.dimension = pm.dimension;
   s.thickness = pm.dimension == 2 ? pm.thickness_m : 1.0;
-  s.n = planned ? static_cast<size_t>(body.n) : pm.size();
+  s.n = planned ? static_cast<size_t>(body_rows) : pm.size();
   size_t n = s.n;  // a window system's (plan_window_system, below): its window's count from there on
   if (s.dimension == 2 && c.planar == Planar::None)
     throw InputError(c.file, "model.planar", "missing for a 2D particle model", "plane_stress or plane_strain");
@@ -740,19 +815,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     }
   }
 
-  // Rank 0 has met every refusal it can meet alone (the file, the case's sets): the other
-  // ranks learn the body's count, its content id and its sets' whole counts, or stop.
-  if (planner) {
-    body.n = static_cast<int64_t>(n);
-    body.content_id = pm.content_id;
-    for (const ParticleSet& set : pm.sets) body.set_sizes.push_back(static_cast<int64_t>(set.indices.size()));
-    send_body_plan(dist, body);
-    root_refusal.armed = false;  // (the sort below is every rank's: a refusal there is every rank's)
-  }
-
   // What later passes read of the whole body (below).
   double one_horizon_value = 0.0;
-  std::function<double(int64_t)> horizon_of_file;
   bool body_one_horizon = false, body_uniform = false;
   double body_max_horizon = 0.0, body_max_half_cell = 0.0, body_median_horizon = 0.0, body_median_half_cell = 0.0;
   std::array<double, 3> f32_origin{};
@@ -770,50 +834,35 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
                        "a horizon of about 3 spacings (at least one)");
   };
   if (c.horizon_m) one_horizon_value = *c.horizon_m;
-  // The ranks other than 0 read the file's rows alone (their windows', their blocks').
-  const ReadFileRows read_rows = [&](const std::vector<int64_t>& rows, const std::vector<int64_t>& cells,
-                                     ParticleModel& into) {
-    if (!c.lattice) return read_particle_rows_at(c.particles_path, rows, cells, into);
-    ParticleModel part = lattice_model(*c.lattice, &rows);  // (a lattice has no mesh)
-    into.position_m.swap(part.position_m);
-    into.volume_m3.swap(part.volume_m3);
-    into.spacing_m.swap(part.spacing_m);
-    into.material_id.swap(part.material_id);
-    into.held_rows.swap(part.held_rows);
-  };
   // Internal (Morton) order: one process sorts the body (morton_order); a distributed set-up's
   // ranks each read an equal block of the file's rows and sort them together
   // (distributed_morton_sort: the same order), and take the whole body's figures from their
   // blocks, each the same double as one process's (folds in the order of the file or of the
-  // internal indices; medians as order statistics). Rank 0 receives the order (its whole
-  // system: its writers' staging).
-  std::vector<int32_t> order;  // internal -> file (one process, rank 0)
+  // internal indices; medians as order statistics). A staged rank 0 receives the order (its
+  // whole system: its writers' staging).
+  std::vector<int32_t> order;  // internal -> file (one process, a staged rank 0)
   int64_t block_rows = 0;      // the file rows a rank read for the sort (summary.json)
   RankRun slice_run;           // the rank's family_slice of the order, for the plan (plan_distributed_rows)
+  // The boundary layers of the tractions with a depth (layer_of_surface), which read every
+  // row of the particle file: a distributed set-up's ranks take them together from their
+  // blocks (below); a refusal is kept for the load's turn, where one process meets it.
+  std::vector<std::optional<SurfaceLayer>> taken_layer(c.loads.size());
+  std::vector<std::exception_ptr> layer_refused(c.loads.size());
+  // The file particles a window system names beyond its window (the facets', the layers'),
+  // with their internal indices (PdSystem::known_file).
+  std::vector<std::pair<int64_t, int32_t>> known;
   if (dist.active()) {
     const int64_t body_n = static_cast<int64_t>(n);
-    const FamilySlice block = file_block(body_n, dist.rank, dist.ranks);
-    block_rows = block.end - block.begin;
+    block_rows = static_cast<int64_t>(block.size());
     std::vector<MortonItem> items(static_cast<size_t>(block_rows));
     {
-      ParticleModel read;
-      const ParticleModel* from = &pm;
-      int64_t shift = block.begin;
-      if (planned) {
-        std::vector<int64_t> rows(static_cast<size_t>(block_rows));
-        std::iota(rows.begin(), rows.end(), block.begin);
-        read_rows(rows, {}, read);
-        from = &read;
-        shift = 0;
-      }
-      const BoundingBox box = body_bounding_box(
-          dist, std::span<const double>(from->position_m.data() + 3 * shift, 3 * static_cast<size_t>(block_rows)));
+      const BoundingBox box = body_bounding_box(dist, std::span<const double>(block.position_m.data(), block.position_m.size()));
       const double extent = morton_extent(box);
       for (size_t k = 0; k < items.size(); ++k) {
         MortonItem& it = items[k];
-        it.file = block.begin + static_cast<int64_t>(k);
-        for (int d = 0; d < 3; ++d) it.x[d] = from->position_m[3 * (static_cast<size_t>(shift) + k) + d];
-        it.spacing = from->spacing_m[static_cast<size_t>(shift) + k];
+        it.file = block.file_row(k);
+        for (int d = 0; d < 3; ++d) it.x[d] = block.position_m[3 * k + d];
+        it.spacing = block.spacing_m[k];
         it.key = morton_key(it.x, box, extent);
       }
     }
@@ -920,12 +969,41 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       if (graded_horizon_refused(c, g, body_n))
         graded_refusal = std::make_exception_ptr(graded_horizon_refusal(c, g, body_n, one_horizon_value, body.file, body.x));
     }
-    std::vector<int32_t> file(mine.size());
-    for (size_t k = 0; k < mine.size(); ++k) file[k] = static_cast<int32_t>(mine[k].file);
-    const std::vector<char> bytes = dist.concat(file.data(), file.size(), sizeof(int32_t), false);
-    order.resize(bytes.size() / sizeof(int32_t));
-    if (!bytes.empty()) std::memcpy(order.data(), bytes.data(), bytes.size());
-    if (planner && order.size() != n) throw std::logic_error("distributed set-up: the ranks' Morton order does not cover the body");
+    if (root_stages_whole_body()) {  // (every rank alike: the build decides)
+      std::vector<int32_t> file(mine.size());
+      for (size_t k = 0; k < mine.size(); ++k) file[k] = static_cast<int32_t>(mine[k].file);
+      const std::vector<char> bytes = dist.concat(file.data(), file.size(), sizeof(int32_t), false);
+      order.resize(bytes.size() / sizeof(int32_t));
+      if (!bytes.empty()) std::memcpy(order.data(), bytes.data(), bytes.size());
+      if (staged && order.size() != n) throw std::logic_error("distributed set-up: the ranks' Morton order does not cover the body");
+    }
+    // The layers (every rank the whole layer, from the blocks), then the internal index of
+    // each file particle a window system names beyond its window (the facets', the layers'):
+    // the rank holding it in the order answers.
+    std::vector<int64_t> named;
+    for (const SurfaceFacets& sf : block.surfaces) named.insert(named.end(), sf.particle.begin(), sf.particle.end());
+    for (size_t l = 0; l < c.loads.size(); ++l) {
+      const LoadSpec& ls = c.loads[l];
+      const SurfaceFacets* sf = block.find_surface(ls.surface);
+      if (ls.kind != LoadSpec::Kind::Traction || !(ls.depth > 0 || ls.depth_horizon) || !sf || sf->size() == 0) continue;
+      try {
+        taken_layer[l] = layer_of_surface(block, c, ls, *sf, horizon_of_spacing, dist, "loads[" + std::to_string(l) + "]");
+        named.insert(named.end(), taken_layer[l]->particles.begin(), taken_layer[l]->particles.end());
+      } catch (const InputError&) {  // (met by every rank alike, after the layer's folds)
+        layer_refused[l] = std::current_exception();
+      }
+    }
+    std::sort(named.begin(), named.end());
+    named.erase(std::unique(named.begin(), named.end()), named.end());
+    std::vector<int64_t> found;  // (file, internal) pairs
+    for (size_t k = 0; k < mine.size(); ++k)
+      if (std::binary_search(named.begin(), named.end(), mine[k].file)) {
+        found.push_back(mine[k].file);
+        found.push_back(sorted.first + static_cast<int64_t>(k));
+      }
+    found = concat_over_ranks(dist, found);
+    for (size_t q = 0; q < found.size(); q += 2) known.emplace_back(found[q], static_cast<int32_t>(found[q + 1]));
+    std::sort(known.begin(), known.end());
     RankRun run;
     run.first = sorted.first;
     run.p.resize(mine.size());
@@ -939,7 +1017,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     std::vector<int64_t> slice_begin;
     for (int r = 0; r <= dist.ranks; ++r) slice_begin.push_back(r == dist.ranks ? body_n : family_slice(body_n, r, dist.ranks).begin);
     slice_run = move_run(dist, std::move(run), slice_begin);
-    root_refusal.armed = planner;  // rank 0's own passes below: a refusal stops the others
+    block = ParticleModel{};  // (read no further)
   } else {
     order = morton_order(pm.position_m);
   }
@@ -969,10 +1047,6 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       if (!c.horizon_m && !c.variable_horizon && n > 0) one_horizon_value = c.horizon_factor * median(spacing);
     }
     for (size_t k = 0; k < n; ++k) s.horizon[k] = horizon_of_spacing(spacing[k]);
-    // A file particle's horizon, as set above (layer_of_surface reads every facet's).
-    horizon_of_file = [&](int64_t f) {
-      return c.variable_horizon && !c.horizon_m ? c.horizon_factor * pm.spacing_m[static_cast<size_t>(f)] : one_horizon_value;
-    };
     std::vector<double>().swap(spacing);  // read no further (8 B per particle less at the set-up's peak)
     // What later passes read of the whole body, taken while this system holds it (a window
     // system, below, holds its window alone): whether every particle has one cell and one
@@ -997,62 +1071,13 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       } catch (const InputError&) {
         graded_refusal = std::current_exception();
       }
-  } else {
-    horizon_of_file = [](int64_t) -> double {
-      throw std::logic_error("set-up: a file particle's horizon read on a rank other than 0 (rank 0's plan holds the layers)");
-    };
-  }
-  // The boundary layers of the tractions with a depth (layer_of_surface: every particle of
-  // the layer and their volume), which read every row of the particle file: rank 0 takes them
-  // here for every rank; a refusal is kept for the load's turn, where one process meets it.
-  std::vector<std::optional<SurfaceLayer>> taken_layer(c.loads.size());
-  std::vector<std::exception_ptr> layer_refused(c.loads.size());
-  if (planner) {
-    body = BodyPlan{};
-    std::vector<int64_t> known;  // the file particles the other ranks name beyond their windows
-    for (const SurfaceFacets& sf : pm.surfaces) known.insert(known.end(), sf.particle.begin(), sf.particle.end());
-    body.layers.resize(c.loads.size());
-    for (size_t l = 0; l < c.loads.size(); ++l) {
-      const LoadSpec& ls = c.loads[l];
-      const SurfaceFacets* sf = pm.find_surface(ls.surface);
-      if (ls.kind != LoadSpec::Kind::Traction || !(ls.depth > 0 || ls.depth_horizon) || !sf || sf->size() == 0) continue;
-      try {
-        taken_layer[l] = layer_of_surface(s, ls, *sf, horizon_of_file, "loads[" + std::to_string(l) + "]");
-        body.layers[l].taken = true;
-        body.layers[l].layer = *taken_layer[l];
-        known.insert(known.end(), taken_layer[l]->particles.begin(), taken_layer[l]->particles.end());
-      } catch (const InputError& e) {
-        layer_refused[l] = std::current_exception();
-        body.layers[l].refused = true;
-        body.layers[l].message = e.what();
-      }
-    }
-    std::sort(known.begin(), known.end());
-    known.erase(std::unique(known.begin(), known.end()), known.end());
-    for (const int64_t f : known) body.known_internal.push_back(s.internal_index[static_cast<size_t>(f)]);
-    body.known_file = std::move(known);
-    send_body_plan(dist, body);
-    root_refusal.armed = false;
-    body = BodyPlan{};
-  }
-  if (planned) {
-    BodyPlan rest = receive_body_plan(dist);
-    if (rest.refused) throw InputError(c.file, "", "refused by rank 0, which reads the particle file (its message)", "");
-    body.known_file = std::move(rest.known_file);
-    body.known_internal = std::move(rest.known_internal);
-    body.layers = std::move(rest.layers);
-    for (size_t l = 0; l < c.loads.size() && l < body.layers.size(); ++l) {
-      if (body.layers[l].taken) taken_layer[l] = std::move(body.layers[l].layer);
-      if (body.layers[l].refused)
-        layer_refused[l] = std::make_exception_ptr(InputError(c.file, "loads[" + std::to_string(l) + "]", body.layers[l].message, ""));
-    }
   }
 
   phase("morton order and horizons");
   // A distributed set-up builds this rank's rows only; the other rows stay empty
   // (distributed_setup.hpp; `dist` marks each place that reads beyond the rank's rows).
-  // The ranks other than 0 hold their rows' geometric window alone (plan_window_system: a
-  // window system, local indices), rank 0 the whole body (its writers' staging).
+  // The ranks hold their rows' geometric window alone (plan_window_system: a window system,
+  // local indices), a staged rank 0 the whole body (its writers' staging).
   DistributedRows dist_rows;
   if (planned) {
     // A held row's values, as the whole body's loop above sets them (the same expressions).
@@ -1068,23 +1093,21 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     dist_rows = plan_window_system(s, dist, read_rows, values, std::move(slice_run));
     s.setup_file_rows[0] = std::max(s.setup_file_rows[0], block_rows);
     n = s.n;
-    // The case's sets on the rows held (their members there), each set's whole count rank 0's.
+    // The case's sets on the rows held (their members there), each set's whole count the
+    // blocks' sum (above).
     add_case_sets(s.particles, c);
-    if (s.particles.sets.size() != body.set_sizes.size())
-      throw std::logic_error("distributed set-up: the sets differ from rank 0's");
-    for (size_t k = 0; k < body.set_sizes.size(); ++k) s.particles.sets[k].whole_count = body.set_sizes[k];
+    if (s.particles.sets.size() != set_sizes.size()) throw std::logic_error("distributed set-up: the sets differ from the blocks'");
+    for (size_t k = 0; k < set_sizes.size(); ++k) s.particles.sets[k].whole_count = set_sizes[k];
     // The file particles this rank names (system_of_file, internal_of_file): its window's
-    // and those of rank 0's plan (the facets', the layers').
-    std::vector<std::pair<int64_t, int32_t>> known;
+    // and the facets' and layers' (above).
     for (size_t k = 0; k < n; ++k) known.emplace_back(s.original_index[k], s.window_global[k]);
-    for (size_t q = 0; q < body.known_file.size(); ++q) known.emplace_back(body.known_file[q], body.known_internal[q]);
     std::sort(known.begin(), known.end());
     known.erase(std::unique(known.begin(), known.end()), known.end());
     for (const auto& [f, i] : known) {
       s.known_file.push_back(f);
       s.known_internal.push_back(i);
     }
-    body = BodyPlan{};
+    std::vector<std::pair<int64_t, int32_t>>().swap(known);
   } else {
     dist_rows = plan_distributed_rows(s, dist, std::move(slice_run));
   }
@@ -1856,7 +1879,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       if (layer_refused[l]) std::rethrow_exception(layer_refused[l]);
       if (!taken_layer[l] && !s.window_global.empty())
         throw std::logic_error("set-up: a boundary layer not taken before the window system's cut");
-      const SurfaceLayer layer = taken_layer[l] ? std::move(*taken_layer[l]) : layer_of_surface(s, ls, sf, horizon_of_file, field);
+      const SurfaceLayer layer = taken_layer[l] ? std::move(*taken_layer[l])
+                                                : layer_of_surface(s.particles, c, ls, sf, horizon_of_spacing, {}, field);
       sl.facets = spread_over_layer(s, sf, layer, whole);
     } else {
       for (size_t f = 0; f < sf.size(); ++f) {
@@ -1920,7 +1944,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // Accelerations and body forces are zero until the first step: a distributed set-up's ranks
   // other than 0 hold none in this system (48 B per particle less at their set-up's peak);
   // their systems start from zeros (copy_rank_state), rank 0 keeps them for its gathers.
-  if (!dist_rows.active || dist.rank == 0) {
+  if (!dist_rows.active || staged) {
     s.a.assign(3 * n, 0.0);
     s.body.assign(3 * n, 0.0);
   }

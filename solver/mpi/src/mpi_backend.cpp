@@ -1426,7 +1426,7 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
   // So do the forces and the fields the pass below fills (kForcePassFields: 72 B per particle
   // on PMB, more with LPS's factors and correspondence's tensors): the pass leaves the owned
   // values in the rank's system, the ghosts' come from their owners (the halo exchange), and
-  // only rank 0, whose writers read them, gathers them whole; LPS's weighted volume, which
+  // only a staged rank 0 (serial HDF5), whose writers read them, gathers them whole; LPS's weighted volume, which
   // the rank's system took at its cut and no one reads in the global system after it; and a
   // gas load's per-particle arrays. The cut itself lets each go as soon as it has taken the
   // rank's rows of it (restrict_to_rank_taking_bonds: the cut's growth was the estimate's peak).
@@ -1434,7 +1434,8 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   const bool distributed = !global.distributed_rows.empty();
   std::vector<double> u0;
-  if (rank != 0 && distributed) {
+  const bool staged = rank == 0 && root_stages_whole_body();  // its writers read the whole fields
+  if (!staged && distributed) {
     u0 = sh->local.u;
     release_global_at_stable_step(global);  // the cut took and let go of most already (take_releasing)
 #if defined(__GLIBC__)
@@ -1447,7 +1448,7 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
   // pass here, on a whole system's u). The set-up's Lanczos estimate runs its iterations on
   // the ranks' shares instead (mpi_stable_step_ranks: no vector whole on any rank) and calls
   // this pass once, at the real displacement, at its end.
-  return [sh, u0 = std::move(u0), rank](PdSystem& g) {
+  return [sh, u0 = std::move(u0), staged](PdSystem& g) {
     PdSystem& l = sh->local;
     const RankLayout& L = sh->layout;
     const int64_t b = L.begin(), owned = L.owned();
@@ -1467,18 +1468,19 @@ ForcePass mpi_stable_step_forces(PdSystem& global) {
     }
     // The global system holds no bonds to run the pass that ends the estimate (at the real
     // displacement, fracture on): the rank's system keeps what it computed, its ghosts taking
-    // their owners' values (what the rank's system took from the whole arrays before), and
-    // rank 0 gathers every rank's owned values whole, for its writers (the first output, the
-    // first history line) and the start of its own system. Correspondence's deformation
+    // their owners' values (what the rank's system took from the whole arrays before), and a
+    // staged rank 0 (root_stages_whole_body: serial HDF5) gathers every rank's owned values
+    // whole, for its writers (the first output, the first history line) and the start of its
+    // own system; with parallel HDF5 the ranks write their own rows and no rank gathers. Correspondence's deformation
     // gradient, force tensor and non-affine energy too (9, 9 and 1 per particle): the owned
     // values the first output's zero-energy check and the ranks' systems start from, as the
     // whole system's pass leaves them on one process. Every rank holds the same fields (the
     // case decides which): the same exchanges and gathers on every rank.
-    const bool root = rank == 0;
     auto share = [&](std::vector<double>& local, std::vector<double>& whole, size_t width) {
       if (local.empty()) return;  // the model has none (every rank alike)
       sh->halo->exchange({{local.data(), width * sizeof(double)}});
-      if (root && whole.size() != width * g.n) throw std::logic_error("stable step: rank 0's whole " + std::to_string(width) + "-wide field");
+      if (!root_stages_whole_body()) return;  // (parallel HDF5: the ranks write their own rows)
+      if (staged && whole.size() != width * g.n) throw std::logic_error("stable step: rank 0's whole " + std::to_string(width) + "-wide field");
       gather_ranges(local, whole, particle_ranges(L.part, width), L.rank, MPI_COMM_WORLD, true);
     };
     share(l.force, g.force, 3);

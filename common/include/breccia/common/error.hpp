@@ -15,10 +15,17 @@ public:
   InputError(std::string file, std::string field, std::string found, std::string expected)
       : std::runtime_error(compose(file, field, found, expected)),
         file_(std::move(file)), field_(std::move(field)) {}
+  // A message composed already (another process's InputError, passed on whole: what()).
+  static InputError composed(std::string file, std::string field, const std::string& message) {
+    return InputError(std::move(file), std::move(field), message, Composed{});
+  }
   const std::string& file() const { return file_; }
   const std::string& field() const { return field_; }
 
 private:
+  struct Composed {};
+  InputError(std::string file, std::string field, const std::string& message, Composed)
+      : std::runtime_error(message), file_(std::move(file)), field_(std::move(field)) {}
   static std::string compose(const std::string& file, const std::string& field,
                              const std::string& found, const std::string& expected) {
     std::string msg = file.empty() ? std::string("input") : file;

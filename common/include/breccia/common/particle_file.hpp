@@ -78,6 +78,16 @@ struct ParticleModel {
 
 // Stable 64-bit hash of positions and volumes, as hex: the provenance key.
 std::string compute_content_id(const ParticleModel& model);
+// That hash fed in parts, in its order (every position, then every volume): a model made in
+// pieces (a distributed run's lattice) takes the whole model's id without holding it.
+class ContentHash {
+public:
+  void add(const void* data, size_t bytes);
+  std::string hex() const;
+
+private:
+  uint64_t h_ = 1469598103934665603ull;  // FNV-1a's offset basis
+};
 
 // Write particles.h5 (atomically) and its ParaView sidecar particles.xdmf next to it.
 void write_particle_file(const std::string& path, ParticleModel model);
@@ -85,16 +95,21 @@ void write_particle_file(const std::string& path, ParticleModel model);
 // Read and validate; throws InputError naming the file and the dataset on any defect.
 ParticleModel read_particle_file(const std::string& path);
 
-// A distributed run's ranks other than 0 (the solver's setup_system): the file's attributes,
-// material names and surfaces, none of its per-particle rows or mesh (nodes_per_cell set),
-// its sets by name and whole count alone (no members yet: read_particle_rows_at). `rows`:
-// the file's particle count.
+// A distributed run's ranks (the solver's setup_system): the file's attributes, material
+// names and surfaces, none of its per-particle rows or mesh (nodes_per_cell set), its sets by
+// name and whole count alone (no members yet: read_particle_rows_at). `rows`: the file's
+// particle count. Checked as read_particle_file checks what needs no row (the datasets'
+// lengths, the surfaces); check_particle_rows and read_particle_rows_at check the rest.
 ParticleModel read_particle_lists(const std::string& path, int64_t& rows);
+// The held rows' volumes and material ids, as read_particle_file checks them (InputError
+// naming the file row).
+void check_particle_rows(const ParticleModel& m, const std::string& path);
 // The per-particle datasets' rows `rows` (ascending, unique) into m (its per-particle arrays,
 // in that order; held_rows = rows), each of m's sets' members among them (read_particle_lists'
 // sets), and, when m has a mesh (nodes_per_cell > 0), /mesh/cells' rows `cells` (ascending,
-// unique; held_cells) and the nodes those cells name (held_nodes). Not checked as a whole
-// read checks them (the reader of the whole file, rank 0, did).
+// unique; held_cells) and the nodes those cells name (held_nodes). The sets' indices are
+// checked as a whole read checks them (every one is read); the rows are not
+// (check_particle_rows: a distributed set-up checks each rank's block of them).
 // Read through hyperslabs of at most 65,536 consecutive rows from each wanted row (a set's
 // list in blocks of 65,536 entries), so memory holds the rows asked for and one block, never
 // a whole dataset.

@@ -30,6 +30,7 @@
 #include <functional>
 #include <span>
 #include <cstring>
+#include <exception>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -74,9 +75,9 @@ struct DistributedRows {
   int64_t local_end() const { return windowed ? window.row_end : end; }
 };
 
-// Whether this rank's set-up runs on a window system (plan_window_system): every rank but 0 (rank 0
-// keeps the whole body: its writers gather into it, I/O staging; the same code on a window
-// that is everything).
+// Whether this rank's set-up runs on a window system (plan_window_system): every rank, but
+// rank 0 where it stages the whole body for its writers (root_stages_whole_body: serial HDF5;
+// the same code on a window that is everything).
 bool setup_on_window(const DistributedSetup& d);
 
 // How many of `halo` (ascending global indices outside the rank's rows) each rank owns under
@@ -107,8 +108,8 @@ struct RankRun {
   int64_t first = 0;
   std::vector<PlanParticle> p;
 };
-// One process and rank 0 (the planner: it holds the whole body, read from the whole particle
-// file, its writers' staging), once the internal order and horizons are set: counts the
+// One process and a staged rank 0 (root_stages_whole_body: it holds the whole body, read
+// from the whole particle file, its writers' staging), once the internal order and horizons are set: counts the
 // family sizes, cuts the partition (s.distributed_rows) and returns the rank's rows (inactive
 // on one process). Every rank plans from its slice of the internal order (`slice`: its
 // family_slice's particles, from the Morton sort): it forms its slice's geometric window from
@@ -118,10 +119,10 @@ struct RankRun {
 // InputError for more ranks than particles.
 DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d, RankRun slice = {});
 
-// The ranks other than 0 (setup_on_window): the window system built from the particle file's
+// The ranks of a distributed set-up but a staged rank 0 (setup_on_window): the window system built from the particle file's
 // rows of its window, never the whole body. s: s.n the body's count, s.dimension, s.config,
-// s.particles the file's lists (read_particle_lists). Plans with rank 0 from its slice (as
-// plan_distributed_rows), then reads its rows' window's rows into s.particles (held_rows; the surfaces'
+// s.particles the file's lists (read_particle_lists). Plans with the other ranks from its
+// slice (as plan_distributed_rows), then reads its rows' window's rows into s.particles (held_rows; the surfaces'
 // facet cells of the mesh, held_cells): s.x0, volume, density, material, half_cell, horizon,
 // original_index are the window's in its order (values: a held row's material, density,
 // cell and horizon, as the whole body's set-up sets them), s.window_global its internal
@@ -143,30 +144,6 @@ struct SurfaceLayer {
   double volume = 0.0;
   std::vector<int64_t> particles;
 };
-
-// What rank 0 tells the other ranks of the whole body (send_body_plan, receive_body_plan: one
-// concatenation from rank 0), in two parts: before the distributed Morton sort, whether rank 0
-// refused the input first (its InputError; the others then stop too, quietly), the body's
-// count, the file's content id and each set's whole count (the file's then the case's); after
-// it, the internal indices of the surfaces' facet particles and of the layers' particles
-// (sorted by file index), and each load's layer. (The whole body's horizons and cells,
-// float32's origin, the graded check: every rank takes them from its block of the sort.)
-struct BodyPlan {
-  bool refused = false;
-  int64_t n = 0;
-  std::string content_id;
-  std::vector<int64_t> set_sizes;
-  std::vector<int64_t> known_file;      // ascending
-  std::vector<int32_t> known_internal;  // of known_file
-  struct Layer {
-    bool taken = false, refused = false;
-    std::string message;  // the refusal's
-    SurfaceLayer layer;
-  };
-  std::vector<Layer> layers;  // per load
-};
-void send_body_plan(const DistributedSetup& d, const BodyPlan& p);  // rank 0
-BodyPlan receive_body_plan(const DistributedSetup& d);               // the other ranks
 
 // The families of the rank's rows (every row on one process, build_families), the other rows
 // empty: the same rows, partners and order as the whole build's. A distributed set-up builds
@@ -230,6 +207,13 @@ FormedWindow form_window(const DistributedSetup& d, const RankRun& rows, int dim
 // in one array (setup.cpp median: k = n / 2): a bisection over the doubles' order (64 rounds
 // of one count per rank). Collective; k below the total count.
 double distributed_order_statistic(const DistributedSetup& d, const std::vector<double>& mine, int64_t k);
+
+// Each rank's refusal of its part of the input (`mine`: an InputError, or null), the first in
+// rank order thrown on every rank as that InputError (its message whole), so that rank 0
+// prints the message once and no rank goes on alone. The ranks read the file's rows in blocks
+// in rank order (file_block), so the first refusal is the first row's a whole read meets.
+// Any other exception is rethrown on its own rank (its abort stops the others). Collective.
+void refuse_together(const DistributedSetup& d, std::exception_ptr mine);
 
 // Every rank's elements of `mine`, concatenated in rank order, on every rank.
 template <class T>
@@ -331,6 +315,17 @@ inline bool root_gathers_bond_list(const CaseConfig& c) {
   return false;
 #else
   return c.write_results;
+#endif
+}
+
+// Whether rank 0 of a distributed set-up builds the whole body's system beside its block
+// (its writers' staging): only a build without parallel HDF5, whose rank 0 writes every file
+// alone. With parallel HDF5 every rank builds its rows' window system (setup_on_window).
+inline bool root_stages_whole_body() {
+#ifdef BRECCIA_PARALLEL_HDF5
+  return false;
+#else
+  return true;
 #endif
 }
 

@@ -222,6 +222,9 @@ void File::write_rows(const std::string& p, const uint8_t* d, hsize_t first, hsi
 void File::write_rows(const std::string& p, const int64_t* d, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const {
   write_impl(*this, p, d, {{first, rows}}, dims, transfer_);
 }
+void File::write_rows(const std::string& p, const int32_t* d, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const {
+  write_impl(*this, p, d, {{first, rows}}, dims, transfer_);
+}
 void File::write_runs(const std::string& p, const int64_t* d, const std::vector<RowRun>& runs,
                       std::vector<hsize_t> dims) const {
   write_impl(*this, p, d, runs, dims, transfer_);

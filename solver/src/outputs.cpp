@@ -14,6 +14,7 @@
 #include "breccia/common/error.hpp"
 #include "breccia/common/output_file.hpp"
 #include "breccia/common/particle_file.hpp"
+#include "breccia/solver/lattice_model.hpp"
 #include "breccia/solver/load_kernels.hpp"
 #include "breccia/solver/pd_kernels.hpp"
 
@@ -248,25 +249,40 @@ ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool
   }
   file_ = std::make_unique<h5::File>(path, h5::File::Mode::Create);
   h5::File& f = *file_;
-  // A lattice built from the case file has no particles.h5 yet: one is written beside the results.
+  // A lattice built from the case file has no particles.h5 yet: one is written beside the
+  // results, of the whole lattice, made again where this system holds a part of it or none
+  // (a distributed run's rank 0: the set-up's window, or let go: run_case).
   std::string particles_file = s.config.particles_path;
-  if (particles_file.empty()) particles_file = write_particles_beside_results(out_dir, s.particles);
+  if (particles_file.empty()) {
+    if (s.particles.held_rows.empty() && s.particles.size() == s.whole_n())
+      particles_file = write_particles_beside_results(out_dir, s.particles);
+    else if (s.config.lattice)
+      particles_file = write_particles_beside_results(out_dir, lattice_model(*s.config.lattice));
+    else
+      throw std::logic_error("results.h5: no particle file, and a part of the particle model");
+  }
   write_results_identity(f, {std::filesystem::absolute(particles_file).string(), s.particles.content_id, s.dimension,
                              s.thickness, s.config.model_name, std::filesystem::absolute(s.config.file).string()});
-  const size_t n = s.n;
-  std::vector<double> density(n), horizon(n);
-  std::vector<int32_t> material(n);
-  for (size_t k = 0; k < n; ++k) {
-    const size_t fi = static_cast<size_t>(s.original_index[k]);
-    density[fi] = s.density[k];
-    horizon[fi] = s.horizon[k];
-    material[fi] = s.material[k];
+#ifdef BRECCIA_PARALLEL_HDF5
+  // A distributed run: every rank writes its own rows (write_particles_together).
+  particles_pending_ = !s.distributed_rows.empty();
+#endif
+  if (!particles_pending_) {
+    const size_t n = s.n;
+    std::vector<double> density(n), horizon(n);
+    std::vector<int32_t> material(n);
+    for (size_t k = 0; k < n; ++k) {
+      const size_t fi = static_cast<size_t>(s.original_index[k]);
+      density[fi] = s.density[k];
+      horizon[fi] = s.horizon[k];
+      material[fi] = s.material[k];
+    }
+    f.write("/particles/position", s.particles.position_m, {n, 3});
+    f.write("/particles/volume", s.particles.volume_m3, {n});
+    f.write("/particles/density", density, {n});
+    f.write("/particles/horizon", horizon, {n});
+    f.write("/particles/material_id", material, {n});
   }
-  f.write("/particles/position", s.particles.position_m, {n, 3});
-  f.write("/particles/volume", s.particles.volume_m3, {n});
-  f.write("/particles/density", density, {n});
-  f.write("/particles/horizon", horizon, {n});
-  f.write("/particles/material_id", material, {n});
   std::vector<std::string> names;
   std::vector<double> g0;
   for (const auto& m : s.config.materials) {
@@ -379,12 +395,29 @@ void ResultsWriter::write_bonds_together(ResultsWriter* w, const std::string& ou
   f.write_runs("/bonds/neighbors", mine.neighbors.data(), mine.runs, {bonds});
   f.write_rows("/bonds/within_horizon", within_horizon.data(), within_first, within_horizon.size(), {(bonds + 7) / 8});
 }
+
+void ResultsWriter::write_particles_together(ResultsWriter* w, const std::string& out_dir, size_t file_first,
+                                             size_t file_count, const std::vector<std::vector<double>>& rows,
+                                             size_t whole_n, MPI_Comm comm) {
+  if (w) {  // the root's own handle closed: the ranks open the file together
+    w->file_.reset();
+    w->particles_pending_ = false;
+  }
+  h5::File f(out_dir + "/results.h5", h5::File::Mode::ReadWrite, comm);
+  // The datasets, their types and order as the constructor writes them of the whole arrays.
+  f.write_rows("/particles/position", rows.at(0).data(), file_first, file_count, {whole_n, 3});
+  f.write_rows("/particles/volume", rows.at(1).data(), file_first, file_count, {whole_n});
+  f.write_rows("/particles/density", rows.at(2).data(), file_first, file_count, {whole_n});
+  f.write_rows("/particles/horizon", rows.at(3).data(), file_first, file_count, {whole_n});
+  const std::vector<int32_t> material(rows.at(4).begin(), rows.at(4).end());
+  f.write_rows("/particles/material_id", material.data(), file_first, file_count, {whole_n});
+}
 #endif
 
 void ResultsWriter::write_xdmf(const PdSystem& s) const {
   std::vector<XdmfField> fields;
   for (const ResultsField& f : results_fields(s)) fields.push_back({f.name, f.components});
-  write_results_xdmf(dir_ + "/results.xdmf", s.n, times_, fields);
+  write_results_xdmf(dir_ + "/results.xdmf", s.whole_n(), times_, fields);
 }
 
 std::pair<double, int64_t> nearest_particle(const double* x0, size_t count, const Vec3& position) {

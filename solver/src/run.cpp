@@ -462,6 +462,19 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
   malloc_trim(0);
 #endif
   if (!o.restart_file.empty()) read_checkpoint(s, o.restart_file, o.setup_hooks.distributed.rank);
+#ifdef BRECCIA_PARALLEL_HDF5
+  // A distributed run reads no particle file rows after its set-up: the ranks write
+  // results.h5's /particles from their systems' rows (ResultsWriter::write_particles_together)
+  // and a lattice's particles.h5 is made again (lattice_model). So they go here, before the
+  // writers open their files, not at the loop's start (release_global_for_loop).
+  if (!s.distributed_rows.empty()) {
+    ParticleModel& pm = s.particles;
+    std::vector<double>().swap(pm.position_m);
+    std::vector<double>().swap(pm.volume_m3);
+    std::vector<double>().swap(pm.spacing_m);
+    std::vector<int32_t>().swap(pm.material_id);
+  }
+#endif
   const double setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (o.progress) {
     std::fprintf(stderr,

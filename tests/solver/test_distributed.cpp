@@ -130,6 +130,10 @@ TEST(Distributed, CheckpointOfThreeRanksRestartsOnTwoAndOneByteIdentical) {
     ASSERT_EQ(second.exit_code, 0) << second.err;
     EXPECT_EQ(differing(base + "_whole/checkpoint.h5", out + "/checkpoint.h5"), std::vector<std::string>{})
         << "stopped at step 60 on 3 ranks, finished on " << ranks;
+    // The results too, their /particles written by the 3 ranks' rows; and the lattice's
+    // particles.h5 beside them, of the whole lattice whatever rank 0 held of it.
+    for (const char* f : {"/results.h5", "/particles.h5"})
+      EXPECT_EQ(differing(base + "_whole" + f, out + f), std::vector<std::string>{}) << out << f;
   }
   EXPECT_GT(summary(base + "_whole")["broken_bonds"].get<long long>(), broken_half) << "no bond broke after the restart";
 }

@@ -908,48 +908,91 @@ public:
   }
 
   // Every rank writes rows of results.h5's output group: the file's rows are cut into one
-  // contiguous block per rank, and the owned particles' values travel to the rank whose block
-  // holds their file index (one all-to-all). The broken bits by blocks too
+  // contiguous block per rank (file_rows), and the owned particles' values travel to the rank
+  // whose block holds their file index (file_blocks). The broken bits by blocks too
   // (broken_bits_together): no rank gathers the bond states or the whole bits.
   void write_output(PdSystem& g, ResultsWriter* results, const std::string& out_dir) {
     const int r = layout_.rank;
-    const std::vector<ResultsField> fields = results_fields(g);
-    size_t width = 1;  // per particle: its file index, then every field's components
-    for (const ResultsField& f : fields) width += static_cast<size_t>(f.components);
-    int size = 1;
-    MPI_Comm_size(comm_, &size);
-    const Blocks file_rows{static_cast<int64_t>(g.whole_n()), size};  // which rank writes which file rows
-    const int64_t owned = layout_.owned();
-    std::vector<int> send_counts(size, 0), at(size, 0);  // at: where each block's values go in `send`
-    for (int64_t k = 0; k < owned; ++k)
-      send_counts[file_rows.holding(local_.original_index[k])] += static_cast<int>(width);
-    for (int q = 1; q < size; ++q) at[q] = at[q - 1] + send_counts[q - 1];
-    std::vector<double> send(static_cast<size_t>(at[size - 1] + send_counts[size - 1])), recv;
-    for (int64_t k = 0; k < owned; ++k) {
-      const int64_t fi = local_.original_index[k];  // the rank's own: the global list is rank 0's
-      int& next = at[file_rows.holding(fi)];
-      double* out = send.data() + next;
-      next += static_cast<int>(width);
-      *out++ = static_cast<double>(fi);  // exact: file indices stay below 2^53
-      for (const ResultsField& f : fields)
-        for (int c = 0; c < f.components; ++c) *out++ = (local_.*f.values)[static_cast<size_t>(f.components * k + c)];
-    }
-    AllToAll().run(send.data(), send_counts, recv, 1, MPI_DOUBLE, comm_);
-    const int64_t file_first = file_rows.begin(r), file_count = file_rows.begin(r + 1) - file_first;
-    std::vector<std::vector<double>> rows(fields.size());
-    for (size_t f = 0; f < fields.size(); ++f) rows[f].resize(static_cast<size_t>(file_count * fields[f].components));
-    for (size_t at = 0; at < recv.size(); at += width) {
-      const int64_t row = static_cast<int64_t>(recv[at]) - file_first;
-      size_t c0 = at + 1;
-      for (size_t f = 0; f < fields.size(); ++f)
-        for (int c = 0; c < fields[f].components; ++c) rows[f][static_cast<size_t>(fields[f].components * row + c)] = recv[c0++];
-    }
+    std::vector<Column> columns;
+    for (const ResultsField& f : results_fields(g)) columns.push_back({(local_.*f.values).data(), f.components});
+    const Blocks rows_of = file_rows(g);
+    const std::vector<std::vector<double>> rows = file_blocks(columns, rows_of);
+    const int64_t file_first = rows_of.begin(r), file_count = rows_of.begin(r + 1) - file_first;
     long long broken_count = 0;
     const Blocks bytes = bit_bytes(file_bond_offsets(g).bonds);
     const std::vector<uint8_t> broken = broken_bits_together(g, bytes, &broken_count);
     ResultsWriter::write_together(g, results, out_dir, static_cast<size_t>(file_first), static_cast<size_t>(file_count),
                                   rows, broken, static_cast<size_t>(bytes.begin(r)), static_cast<size_t>(bytes.total),
                                   broken_count, comm_);
+  }
+
+  // The particle file's rows, one contiguous block per rank: which rank writes which rows of
+  // results.h5's per-particle datasets.
+  Blocks file_rows(const PdSystem& g) const { return Blocks{static_cast<int64_t>(g.whole_n()), layout_.part.ranks()}; }
+
+  // A per-particle array of the rank's system (internal order): `components` values per row,
+  // the owned rows first.
+  struct Column {
+    const double* values;
+    int components;
+  };
+  // This rank's block (`rows_of`: file_rows) of each column in the particle file's order: the
+  // owned rows' values travel to the rank whose block holds their file index (one all-to-all,
+  // every column at once). Collective.
+  std::vector<std::vector<double>> file_blocks(const std::vector<Column>& columns, const Blocks& rows_of) {
+    const int r = layout_.rank, size = rows_of.ranks;
+    size_t width = 1;  // per particle: its file index, then every column's components
+    for (const Column& c : columns) width += static_cast<size_t>(c.components);
+    const int64_t owned = layout_.owned();
+    std::vector<int> send_counts(size, 0), at(size, 0);  // at: where each block's values go in `send`
+    for (int64_t k = 0; k < owned; ++k)
+      send_counts[rows_of.holding(local_.original_index[k])] += static_cast<int>(width);
+    for (int q = 1; q < size; ++q) at[q] = at[q - 1] + send_counts[q - 1];
+    std::vector<double> send(static_cast<size_t>(at[size - 1] + send_counts[size - 1])), recv;
+    for (int64_t k = 0; k < owned; ++k) {
+      const int64_t fi = local_.original_index[k];  // the rank's own: the global list is rank 0's
+      int& next = at[rows_of.holding(fi)];
+      double* out = send.data() + next;
+      next += static_cast<int>(width);
+      *out++ = static_cast<double>(fi);  // exact: file indices stay below 2^53
+      for (const Column& col : columns)
+        for (int c = 0; c < col.components; ++c) *out++ = col.values[static_cast<size_t>(col.components * k + c)];
+    }
+    AllToAll().run(send.data(), send_counts, recv, 1, MPI_DOUBLE, comm_);
+    const int64_t file_first = rows_of.begin(r), file_count = rows_of.begin(r + 1) - file_first;
+    std::vector<std::vector<double>> rows(columns.size());
+    for (size_t f = 0; f < columns.size(); ++f) rows[f].resize(static_cast<size_t>(file_count * columns[f].components));
+    for (size_t at = 0; at < recv.size(); at += width) {
+      const int64_t row = static_cast<int64_t>(recv[at]) - file_first;
+      size_t c0 = at + 1;
+      for (size_t f = 0; f < columns.size(); ++f)
+        for (int c = 0; c < columns[f].components; ++c) rows[f][static_cast<size_t>(columns[f].components * row + c)] = recv[c0++];
+    }
+    return rows;
+  }
+
+  // results.h5's /particles, when the root's writer left them to the ranks (a new file:
+  // particles_pending), written by every rank together: its owned rows' reference positions,
+  // volumes, densities, horizons and materials (its system's: the set-up's values, the same
+  // doubles as the particle file's and the global system's) moved to the file's blocks
+  // (file_blocks, as an output's fields). No rank holds the whole arrays. Collective.
+  void results_particles(PdSystem& g, ResultsWriter* results, const std::string& out_dir) {
+    if (!g.config.write_results) return;
+    int pending = results && results->particles_pending() ? 1 : 0;
+    MPI_Bcast(&pending, 1, MPI_INT, 0, comm_);
+    if (!pending) return;
+    const int r = layout_.rank;
+    const size_t owned = static_cast<size_t>(layout_.owned());
+    const std::vector<double> material(local_.material.begin(), local_.material.begin() + owned);  // exact
+    const Blocks rows_of = file_rows(g);
+    const std::vector<std::vector<double>> rows =
+        file_blocks({{local_.x0.data(), 3}, {local_.volume.data(), 1}, {local_.density.data(), 1},
+                     {local_.horizon.data(), 1}, {material.data(), 1}},
+                    rows_of);
+    const int64_t file_first = rows_of.begin(r);
+    ResultsWriter::write_particles_together(results, out_dir, static_cast<size_t>(file_first),
+                                            static_cast<size_t>(rows_of.begin(r + 1) - file_first), rows, g.whole_n(),
+                                            comm_);
   }
 
   // This rank's block (`bytes`: bit_bytes) of the output group's broken bits (one per bond of
@@ -1114,13 +1157,15 @@ public:
   }
 #endif
 
-  // results.h5's bond list when a run (time loop or dynamic relaxation) starts: with parallel
-  // HDF5 written by the ranks together and a restart's file checked by them together
-  // (results_bonds); else rank 0 holds the list and checks a restart's file alone (an error
-  // there reaches every rank through mpi_abort_all). Collective; outside the
-  // parallel-HDF5 block above, since both builds call it (relax, mpi_time_loop).
+  // results.h5's particles and bond list when a run (time loop or dynamic relaxation) starts:
+  // with parallel HDF5 written by the ranks together and a restart's file checked by them
+  // together (results_particles, results_bonds); else rank 0 wrote the particles, holds the
+  // list and checks a restart's file alone (an error there reaches every rank through
+  // mpi_abort_all). Collective; outside the parallel-HDF5 block above, since both builds call
+  // it (relax, mpi_time_loop).
   void start_results(PdSystem& g, ResultsWriter* results, const std::string& out_dir) {
 #ifdef BRECCIA_PARALLEL_HDF5
+    results_particles(g, results, out_dir);
     results_bonds(g, results, out_dir);
 #else
     (void)g;

@@ -54,6 +54,7 @@ public:
   void write_rows(const std::string& path, const double* data, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const;
   void write_rows(const std::string& path, const uint8_t* data, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const;
   void write_rows(const std::string& path, const int64_t* data, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const;
+  void write_rows(const std::string& path, const int32_t* data, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const;
   // The same for several runs of rows per process (ascending, disjoint; data: their rows one
   // after another): a process whose rows are not one range (a distributed run's rows of the
   // results' bond list, in the particle file's order) writes them in one collective call.

@@ -68,6 +68,9 @@ public:
   // (write_bonds_together), and a restart's file is checked against the count of the list
   // they form (check_bond_count; the writer cannot count it alone).
   bool bonds_pending() const { return bonds_pending_; }
+  // Likewise /particles/* with parallel HDF5 (no rank holds the whole arrays): a new file
+  // waits for the ranks (write_particles_together).
+  bool particles_pending() const { return particles_pending_; }
   void check_bond_count(int64_t bonds);  // throws InputError on a restart's other list; once
   int64_t bond_list_size() const { return static_cast<int64_t>(bonds_.neighbors.size()); }  // where it holds the list
 
@@ -92,6 +95,15 @@ public:
                                    const std::vector<int64_t>& offsets_block, size_t offsets_first,
                                    size_t offsets_rows, int64_t bonds_total, const FileBondRows& mine,
                                    const std::vector<uint8_t>& within_horizon, size_t within_first, MPI_Comm comm);
+  // /particles/* of a new file whose writer left them to the ranks (particles_pending),
+  // written by every rank of comm together: rows [file_first, file_first + file_count) of the
+  // whole_n file rows of the reference positions (3 per row), volumes, densities, horizons and
+  // material indices (`rows`, in that order; the material indices as doubles, exact). The
+  // datasets are the ones the constructor writes of the whole arrays. Collective; the root is
+  // the one rank whose `writer` is not null.
+  static void write_particles_together(ResultsWriter* writer, const std::string& out_dir, size_t file_first,
+                                       size_t file_count, const std::vector<std::vector<double>>& rows, size_t whole_n,
+                                       MPI_Comm comm);
 #endif
 
 private:
@@ -103,6 +115,7 @@ private:
   std::vector<double> times_;
   HalfBondList bonds_;  // empty where the ranks hold the list (bonds_pending, check_bond_count)
   bool bonds_pending_ = false;    // a new file without /bonds yet
+  bool particles_pending_ = false;  // a new file without /particles yet
   int64_t unchecked_bonds_ = -1;  // a restart's file: its list's length, not yet checked
 };
 

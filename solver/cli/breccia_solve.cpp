@@ -16,6 +16,7 @@
 #include "breccia/common/cli.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/yaml_input.hpp"
+#include "breccia/solver/lattice_model.hpp"
 #include "breccia/solver/mpi_launch.hpp"
 #include "breccia/solver/partition.hpp"
 #include "breccia/solver/rank_system.hpp"

@@ -3,11 +3,45 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <stdexcept>
 
-#include "breccia/solver/pd_system.hpp"
-
 namespace breccia::solver {
+
+std::array<int64_t, 3> lattice_point_counts(const LatticeSpec& l) {
+  std::array<int64_t, 3> count{1, 1, 1};
+  for (int k = 0; k < l.dimension; ++k)
+    count[k] = std::max<int64_t>(1, std::llround((l.box[k + l.dimension] - l.box[k]) / l.spacing));
+  return count;
+}
+
+namespace {
+// Lattice point idx's position (its cell's centre; 0 beyond the dimension).
+void lattice_point(const LatticeSpec& l, const long long idx[3], double x[3]) {
+  for (int k = 0; k < 3; ++k) x[k] = k < l.dimension ? l.box[k] + (idx[k] + 0.5) * l.spacing : 0.0;
+}
+
+double lattice_volume(const LatticeSpec& l) {
+  return l.dimension == 3 ? l.spacing * l.spacing * l.spacing : l.spacing * l.spacing * l.thickness;
+}
+
+}  // namespace
+
+std::string lattice_content_id(const LatticeSpec& l) {
+  const std::array<int64_t, 3> count = lattice_point_counts(l);
+  ContentHash h;
+  for (long long kz = 0; kz < count[2]; ++kz)
+    for (long long ky = 0; ky < count[1]; ++ky)
+      for (long long kx = 0; kx < count[0]; ++kx) {
+        const long long idx[3] = {kx, ky, kz};
+        double x[3];
+        lattice_point(l, idx, x);
+        h.add(x, sizeof x);
+      }
+  const double vol = lattice_volume(l);
+  for (int64_t q = 0; q < count[0] * count[1] * count[2]; ++q) h.add(&vol, sizeof vol);
+  return h.hex();
+}
 
 ParticleModel lattice_model(const LatticeSpec& l, const std::vector<int64_t>* rows) {
   ParticleModel m;
@@ -15,9 +49,7 @@ ParticleModel lattice_model(const LatticeSpec& l, const std::vector<int64_t>* ro
   m.thickness_m = l.dimension == 2 ? l.thickness : 1.0;
   const int d = l.dimension;
   const std::array<int64_t, 3> count = lattice_point_counts(l);
-  double lo[3] = {0, 0, 0};
-  for (int k = 0; k < d; ++k) lo[k] = l.box[k];
-  const double vol = d == 3 ? l.spacing * l.spacing * l.spacing : l.spacing * l.spacing * l.thickness;
+  const double vol = lattice_volume(l);
   const char* names[6] = {"xmin", "xmax", "ymin", "ymax", "zmin", "zmax"};
   std::vector<ParticleSet> faces(2 * d);
   for (int f = 0; f < 2 * d; ++f) faces[f].name = names[f];
@@ -34,7 +66,7 @@ ParticleModel lattice_model(const LatticeSpec& l, const std::vector<int64_t>* ro
       for (long long kx = 0; kx < count[0]; ++kx, ++id) {
         const long long idx[3] = {kx, ky, kz};
         double x[3];
-        for (int k = 0; k < 3; ++k) x[k] = k < d ? lo[k] + (idx[k] + 0.5) * l.spacing : 0.0;
+        lattice_point(l, idx, x);
         if (!rows || (next < rows->size() && (*rows)[next] == id)) {
           m.position_m.insert(m.position_m.end(), x, x + 3);
           m.volume_m3.push_back(vol);

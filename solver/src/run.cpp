@@ -44,9 +44,10 @@ double resident_mb() {
 void on_sigint(int) { g_interrupted = true; }
 
 void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, double setup_s) {
+  const size_t n = s.whole_n();  // (a distributed run's rank 0 holds its window: the body's count)
   const double bytes_per_particle =
       (s.bond_count() * s.bytes_per_bond_entry() +
-       s.n * (13 * sizeof(double) + sizeof(int64_t) + sizeof(int32_t) + 1)) / std::max<double>(1.0, s.n);
+       n * (13 * sizeof(double) + sizeof(int64_t) + sizeof(int32_t) + 1)) / std::max<double>(1.0, n);
   // json_file.hpp escapes the strings (a message may quote a path); a value that is not
   // finite (a run stopped for blowing up) is written as null and named in non_finite, so
   // the file stays JSON that any strict parser reads.
@@ -64,7 +65,7 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   // Whether each rank built only its own bonds (distributed_setup.hpp) or the whole system.
   j["distributed_setup"] = !s.distributed_rows.empty();
   j["dimension"] = s.dimension;
-  j["particles"] = s.n;
+  j["particles"] = n;
   j["bonds"] = s.bond_count();
   // The bond entries each rank's set-up built (PdSystem::setup_candidate_entries), rank 0 first.
   j["setup_entries_per_rank"] = {{"candidates", s.setup_candidate_entries}, {"kept", s.setup_kept_entries}};
@@ -75,7 +76,7 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   if (!s.file_offsets_rows.empty()) j["file_offsets_rows_per_rank"] = s.file_offsets_rows;  // results.h5's bond-list offsets held
   if (!s.restart_rows.empty()) j["restart_rows_per_rank"] = s.restart_rows;  // a checkpoint's per-particle rows read
   if (!s.broken_bits_bytes.empty()) j["broken_bits_bytes_per_rank"] = s.broken_bits_bytes;  // an output's broken bits held
-  number("mean_family_size", static_cast<double>(s.bond_count()) / std::max<size_t>(1, s.n));
+  number("mean_family_size", static_cast<double>(s.bond_count()) / std::max<size_t>(1, n));
   number("bytes_per_particle", bytes_per_particle);
   j["steps"] = s.step;
   j["steps_this_run"] = r.steps;
@@ -481,8 +482,8 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
                  "breccia-solve: %s, %s %dD, %zu particles, %zu bonds (%.1f per particle), horizon %.4g m\n"
                  "  stable step 2/omega_max = %.4e s (Silling-Askari bound %s), dt = %.4e s (safety %.2f)\n"
                  "  set-up %.2f s\n",
-                 config.name.c_str(), config.model_name.c_str(), s.dimension, s.n, s.bond_count(),
-                 static_cast<double>(s.bond_count()) / std::max<size_t>(1, s.n), s.horizon.empty() ? 0.0 : s.horizon[0],
+                 config.name.c_str(), config.model_name.c_str(), s.dimension, s.whole_n(), s.bond_count(),
+                 static_cast<double>(s.bond_count()) / std::max<size_t>(1, s.whole_n()), s.horizon.empty() ? 0.0 : s.horizon[0],
                  s.stable_dt,
                  s.silling_askari_dt > 0 ? (short_number(s.silling_askari_dt) + " s").c_str() : "n/a for LPS", s.dt,
                  config.safety, setup_s);
@@ -493,7 +494,7 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
       phases += item;
     }
     std::fprintf(stderr, "  set-up phases: %s (stable step: %d force passes over %zu of %zu particles)\n", phases.c_str(),
-                 s.stable_step_passes, s.stable_step_particles, s.n);
+                 s.stable_step_passes, s.stable_step_particles, s.whole_n());
   }
   RunResult r = run_system(s, o);
   if (o.root) write_summary(s, o, r, setup_s);

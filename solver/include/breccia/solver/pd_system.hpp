@@ -350,9 +350,6 @@ struct SetupHooks {
 template <class Real>
 std::vector<double> family_volumes(const PdViewT<Real>& p);
 
-// Points per axis of a `specimen: {lattice: ...}` box (1 on the axes it does not have).
-std::array<int64_t, 3> lattice_point_counts(const LatticeSpec& lattice);
-
 // Build everything from a case file: particles (file or lattice), families, coefficients,
 // pre-cracks, loads, constraints, initial conditions, stable step. Throws InputError.
 PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks = {});

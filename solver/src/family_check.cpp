@@ -135,17 +135,21 @@ EnergyScatter energy_scatter(PdSystem& s, const DistributedSetup& d, const Distr
 void require_resolved_families(PdSystem& s, const DistributedSetup& d, const DistributedRows& rows) {
   const EnergyScatter e = energy_scatter(s, d, rows);
   if (e.sampled < kMinScatterSample || e.rms <= kMaxEnergyScatter) return;
-  // (internal index: a window system, PdSystem::window_global, may not hold it; rank 0, which
-  // reports, holds every particle)
+  // The worst particle's file index, position and horizon: a distributed set-up's ranks take
+  // them from the first rank whose window holds it (every rank then says the same).
   const int64_t i = s.window_global.empty() ? e.worst_particle : s.system_index(e.worst_particle);
-  if (i >= static_cast<int64_t>(s.n) || (!s.window_global.empty() && s.window_global[static_cast<size_t>(i)] != e.worst_particle))
-    throw InputError(s.config.file, "model.horizon_factor", "per-particle strain energy scatters too much (rank 0 reports)",
-                     "a larger horizon_factor");
+  const bool held = i < static_cast<int64_t>(s.n) &&
+                    (s.window_global.empty() || s.window_global[static_cast<size_t>(i)] == e.worst_particle);
+  std::vector<double> worst;  // file index (exact as a double), position, horizon
+  if (held)
+    worst = {static_cast<double>(s.original_index[i]), s.x0[3 * i], s.x0[3 * i + 1], s.x0[3 * i + 2], s.horizon[i]};
+  if (rows.active) worst = concat_over_ranks(d, worst);
+  if (worst.size() < 5) throw std::logic_error("energy scatter: no rank holds the worst particle");
   std::ostringstream found;
   found << "per-particle strain energy under uniaxial strain scatters by " << 100.0 * e.rms << " % RMS over "
         << e.sampled << " particles with complete families (limit " << 100.0 * kMaxEnergyScatter
-        << " %) about its mean; worst is particle " << s.original_index[i] << " at (" << s.x0[3 * i] << ", " << s.x0[3 * i + 1]
-        << ", " << s.x0[3 * i + 2] << "), off by " << 100.0 * e.worst << " %: the horizon (" << s.horizon[i]
+        << " %) about its mean; worst is particle " << static_cast<int64_t>(worst[0]) << " at (" << worst[1] << ", "
+        << worst[2] << ", " << worst[3] << "), off by " << 100.0 * e.worst << " %: the horizon (" << worst[4]
         << " m) is too small for this particle arrangement";
   throw InputError(s.config.file, "model.horizon_factor", found.str(),
                    "a larger horizon_factor (tet-centroid particles: 2.5 or more keeps the scatter at 7-8 %; docs/atlas.md), "

@@ -267,31 +267,8 @@ static std::vector<T> read_impl(const File& f, const std::string& path) {
 }
 
 template <class T>
-static std::vector<T> read_rows_impl(const File& f, const std::string& path, hsize_t first, hsize_t count) {
-  std::vector<hsize_t> d = f.dims(path);
-  if (d.empty() || first > d[0] || count > d[0] - first)
-    throw InputError(f.path(), path,
-                     "has " + std::to_string(d.empty() ? 0 : d[0]) + " rows; rows " + std::to_string(first) + " to " +
-                         std::to_string(first + count) + " were asked for",
-                     "a dataset with those rows (a particle file of this case)");
-  hsize_t row = 1;
-  for (size_t a = 1; a < d.size(); ++a) row *= d[a];
-  std::vector<T> out(count * row);
-  if (out.empty()) return out;
-  Handle ds{H5Dopen2(f.id(), path.c_str(), H5P_DEFAULT), H5Dclose};
-  Handle file_space{H5Dget_space(ds.id), H5Sclose};
-  std::vector<hsize_t> start(d.size(), 0), block(d);
-  start[0] = first;
-  block[0] = count;
-  Handle mem_space{H5Screate_simple(static_cast<int>(block.size()), block.data(), nullptr), H5Sclose};
-  if (H5Sselect_hyperslab(file_space.id, H5S_SELECT_SET, start.data(), nullptr, block.data(), nullptr) < 0 ||
-      H5Dread(ds.id, mem_type<T>(), mem_space.id, file_space.id, H5P_DEFAULT, out.data()) < 0)
-    throw InputError(f.path(), path, "cannot be read as a numeric dataset", "numeric data");
-  return out;
-}
-
-template <class T>
-static std::vector<T> read_runs_impl(const File& f, const std::string& path, const std::vector<RowRun>& runs) {
+static std::vector<T> read_runs_impl(const File& f, const std::string& path, const std::vector<RowRun>& runs,
+                                     const char* expected = "a dataset with those rows (a file of this case)") {
   const std::vector<hsize_t> d = f.dims(path);
   hsize_t rows = 0, end = 0;
   std::vector<RowRun> held;  // the runs with rows
@@ -300,7 +277,7 @@ static std::vector<T> read_runs_impl(const File& f, const std::string& path, con
       throw InputError(f.path(), path,
                        "has " + std::to_string(d.empty() ? 0 : d[0]) + " rows; rows " + std::to_string(r.first) +
                            " to " + std::to_string(r.first + r.rows) + " were asked for",
-                       "a dataset with those rows (a file of this case)");
+                       expected);
     end = r.first + r.rows;
     rows += r.rows;
     if (r.rows > 0) held.push_back(r);
@@ -318,6 +295,12 @@ static std::vector<T> read_runs_impl(const File& f, const std::string& path, con
   if (H5Dread(ds.id, mem_type<T>(), mem_space.id, file_space.id, H5P_DEFAULT, out.data()) < 0)
     throw InputError(f.path(), path, "cannot be read as a numeric dataset", "numeric data");
   return out;
+}
+
+// One run of rows (a particle file's, by the readers of a distributed set-up).
+template <class T>
+static std::vector<T> read_rows_impl(const File& f, const std::string& path, hsize_t first, hsize_t count) {
+  return read_runs_impl<T>(f, path, {{first, count}}, "a dataset with those rows (a particle file of this case)");
 }
 
 std::vector<double> File::read_double_runs(const std::string& p, const std::vector<RowRun>& runs) const {

@@ -128,11 +128,15 @@ void check_rows(const std::string& file, const std::vector<double>& volume, cons
   }
 }
 
-// What does not depend on the rows: the dimension, the count, the surfaces' lists.
-void validate_lists(const ParticleModel& m, size_t n, const std::string& file) {
+// The dimension and the count of n particles.
+void check_dimension_and_count(const ParticleModel& m, size_t n, const std::string& file) {
   if (m.dimension != 2 && m.dimension != 3)
     throw InputError(file, "/@dimension", "value " + std::to_string(m.dimension), "2 or 3");
   if (n == 0) throw InputError(file, "/particles/volume", "no particles", "at least one particle");
+}
+
+// The surfaces' lists against n particles.
+void check_surfaces(const ParticleModel& m, size_t n, const std::string& file) {
   for (const auto& s : m.surfaces) {
     const size_t f = s.size();
     if (s.normal.size() != 3 * f || s.centroid_m.size() != 3 * f || s.particle.size() != f)
@@ -154,9 +158,7 @@ void check_set_index(const std::string& file, const std::string& set, int64_t id
 
 void validate(const ParticleModel& m, const std::string& file) {
   const size_t n = m.size();
-  if (m.dimension != 2 && m.dimension != 3)
-    throw InputError(file, "/@dimension", "value " + std::to_string(m.dimension), "2 or 3");
-  if (n == 0) throw InputError(file, "/particles/volume", "no particles", "at least one particle");
+  check_dimension_and_count(m, n, file);
   if (m.position_m.size() != 3 * n)
     throw InputError(file, "/particles/position", "size " + std::to_string(m.position_m.size()),
                      "3 x " + std::to_string(n) + " (one row per particle)");
@@ -168,7 +170,7 @@ void validate(const ParticleModel& m, const std::string& file) {
   check_rows(file, m.volume_m3, m.material_id, m.material_names.size(), [](size_t k) { return k; });
   for (const auto& s : m.sets)
     for (auto idx : s.indices) check_set_index(file, s.name, idx, n);
-  validate_lists(m, n, file);
+  check_surfaces(m, n, file);
 }
 
 }  // namespace
@@ -310,7 +312,8 @@ ParticleModel read_particle_lists(const std::string& path, int64_t& rows) {
     throw InputError(path, "/particles/material_id", "size " + std::to_string(got), std::to_string(n));
   if (const size_t got = rows_of("/particles/spacing"); got != n)
     throw InputError(path, "/particles/spacing", "size " + std::to_string(got), std::to_string(n));
-  validate_lists(m, n, path);
+  check_dimension_and_count(m, n, path);
+  check_surfaces(m, n, path);
   return m;
 }
 

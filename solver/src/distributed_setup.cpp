@@ -429,10 +429,7 @@ DistributedRows plan_window_system(PdSystem& s, const DistributedSetup& d, const
   // particles in its order, from their file rows; the particle model holds those rows
   // (ascending) and the facets' mesh cells, its sets their members among them.
   ParticleModel& pm = s.particles;
-  std::vector<int64_t> cells;
-  if (pm.nodes_per_cell > 0)
-    for (const SurfaceFacets& sf : pm.surfaces) cells.insert(cells.end(), sf.particle.begin(), sf.particle.end());
-  read(sorted_unique(p.file), sorted_unique(std::move(cells)), pm);
+  read(sorted_unique(p.file), facet_cells(pm), pm);
   s.setup_file_rows = {static_cast<int64_t>(pm.size())};
   const size_t w = p.file.size();
   s.x0.resize(3 * w);
@@ -451,13 +448,6 @@ DistributedRows plan_window_system(PdSystem& s, const DistributedSetup& d, const
     s.half_cell[k] = v.half_cell;
     s.horizon[k] = v.horizon;
   }
-  for (ParticleSet& set : pm.sets) {
-    std::vector<int64_t> held;
-    std::set_intersection(set.indices.begin(), set.indices.end(), pm.held_rows.begin(), pm.held_rows.end(),
-                          std::back_inserter(held));
-    if (set.whole_count < 0) set.whole_count = static_cast<int64_t>(set.indices.size());
-    set.indices.swap(held);
-  }
   s.original_index = std::move(p.file);
   s.window_global = p.window.index;
   s.n = w;
@@ -465,6 +455,13 @@ DistributedRows plan_window_system(PdSystem& s, const DistributedSetup& d, const
   rows.windowed = true;
   rows.exchange = window_exchange(d, part.begin, rows.window);
   return rows;
+}
+
+std::vector<int64_t> facet_cells(const ParticleModel& m) {
+  std::vector<int64_t> cells;
+  if (m.nodes_per_cell > 0)
+    for (const SurfaceFacets& sf : m.surfaces) cells.insert(cells.end(), sf.particle.begin(), sf.particle.end());
+  return sorted_unique(std::move(cells));
 }
 
 bool setup_on_window(const DistributedSetup& d) { return d.active() && !(d.rank == 0 && root_stages_whole_body()); }

@@ -644,16 +644,12 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       s.particles = read_particle_lists(c.particles_path, body_rows);
     }
     const FamilySlice fb = file_block(body_rows, dist.rank, dist.ranks);
-    std::vector<int64_t> rows(static_cast<size_t>(fb.end - fb.begin)), cells;
+    std::vector<int64_t> rows(static_cast<size_t>(fb.end - fb.begin));
     std::iota(rows.begin(), rows.end(), fb.begin);
-    if (s.particles.nodes_per_cell > 0)  // the facets' cells (near_surface_set's triangles)
-      for (const SurfaceFacets& sf : s.particles.surfaces) cells.insert(cells.end(), sf.particle.begin(), sf.particle.end());
-    std::sort(cells.begin(), cells.end());
-    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
     block = s.particles;
     std::exception_ptr refused;
     try {
-      read_rows(rows, cells, block);
+      read_rows(rows, facet_cells(block), block);
       if (!c.lattice) check_particle_rows(block, c.particles_path);
     } catch (const InputError&) {
       refused = std::current_exception();

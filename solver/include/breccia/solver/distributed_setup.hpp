@@ -80,6 +80,11 @@ struct DistributedRows {
 // the same code on a window that is everything).
 bool setup_on_window(const DistributedSetup& d);
 
+// The mesh cells of the surfaces' facets (ascending, unique; none without a mesh): what a
+// reader of some of the file's rows also reads (near_surface_set's and the pre-cracks'
+// triangles).
+std::vector<int64_t> facet_cells(const ParticleModel& m);
+
 // How many of `halo` (ascending global indices outside the rank's rows) each rank owns under
 // the partition `part_begin` (ranks + 1 offsets): the counts exchange_owned receives.
 std::vector<int64_t> count_by_owner(const std::vector<int64_t>& part_begin, const std::vector<int32_t>& halo);
@@ -127,7 +132,10 @@ DistributedRows plan_distributed_rows(PdSystem& s, const DistributedSetup& d, Ra
 // original_index are the window's in its order (values: a held row's material, density,
 // cell and horizon, as the whole body's set-up sets them), s.window_global its internal
 // indices, s.body_n the body's count, s.n the window's; the sets hold their members among
-// the rows (whole_count: the whole set's). Collective with plan_distributed_rows.
+// the rows (whole_count: the whole set's), as `read` leaves them. Collective with
+// plan_distributed_rows.
+// ReadFileRows: the file rows `rows` (ascending) into `into` (held_rows), each of its sets'
+// members among them (whole_count: the whole set's), and the mesh cells `cells`.
 using ReadFileRows = std::function<void(const std::vector<int64_t>& rows, const std::vector<int64_t>& cells, ParticleModel& into)>;
 struct RowValues {
   double horizon = 0.0, half_cell = 0.0, density = 0.0;

@@ -1,5 +1,6 @@
 // breccia-solve: run a peridynamics (or MPS) case.
-//   breccia-solve CASE.yaml [-o DIR] [--threads N] [--restart FILE] [--steps N] [--backend cpu|cuda|auto] [--quiet]
+//   breccia-solve CASE.yaml [-o DIR] [--threads N] [--restart FILE] [--steps N] [--backend cpu|cuda|auto]
+//                [--kernel-times WARMUP] [--quiet]
 //   breccia-solve CASE.yaml --decomposition 2,4,...   (set up, print the domain decomposition's figures, exit)
 // The command line is CLI11's with the tools' conventions (common/cli.hpp).
 #include <array>
@@ -105,6 +106,11 @@ int main(int argc, char** argv) {
          "--steps", [&](long long n) { opt.steps = n; }, "override the number of steps")
       ->type_name("N")
       ->check(cli::whole_number(0, LLONG_MAX));
+  app.add_option_function<long long>(
+         "--kernel-times", [&](long long n) { opt.kernel_times_warmup = n; },
+         "time every GPU kernel with CUDA events after WARMUP steps (summary.json kernel_times)")
+      ->type_name("WARMUP")
+      ->check(cli::whole_number(0, LLONG_MAX));
   app.add_option("--backend", backend, "where the time loop runs (default: auto, the GPU when there is one)")
       ->type_name("cpu|cuda|auto")
       ->check(cli::one_of({"cpu", "cuda", "auto"}));
@@ -153,6 +159,8 @@ int main(int argc, char** argv) {
         throw InputError(case_file, "model.type", "mps under mpirun -np " + std::to_string(ranks),
                          "one process (MPS particles move between ranks: not distributed, docs/parallel.md)");
 #ifdef BRECCIA_WITH_MPS
+      if (opt.kernel_times_warmup && opt.progress)
+        std::fprintf(stderr, "note: --kernel-times: the MPS launchers are not timed per kernel yet; nothing is timed\n");
       mps::RunCaseOptions mps_options;
       mps_options.threads = opt.threads;
       mps_options.max_steps = opt.steps.value_or(0);

@@ -114,6 +114,20 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
     number("gas_cpu_s", s.gas.cpu_s);  // the same share in process CPU time: not inflated by other load
     number("gas_cpu_share_of_loop", r.cpu_s > 0 ? s.gas.cpu_s / r.cpu_s : 0.0);
   }
+  if (r.kernel_times) {  // --kernel-times: each kernel's GPU time over the timed steps
+    const KernelTimes& t = *r.kernel_times;
+    Json kernels = Json::array();
+    for (const KernelTime& k : t.kernels)
+      kernels.push_back({{"name", k.name},
+                         {"launches", k.launches},
+                         {"seconds", k.seconds},
+                         {"us_per_step", t.steps_timed > 0 ? 1e6 * k.seconds / static_cast<double>(t.steps_timed) : 0.0}});
+    j["kernel_times"] = {{"warmup_steps", t.warmup_steps},
+                         {"steps_timed", t.steps_timed},
+                         {"seconds", t.seconds()},
+                         {"kernels", kernels},
+                         {"note", "CUDA events around every launch of the timed steps, summed per kernel name"}};
+  }
   j["broken_bonds"] = r.final_energies.broken_half_bonds / 2;
   // What the time loop holds (RunResult::loop_resident_mb): per rank, rank 0 first.
   if (!r.loop_resident_mb.empty()) j["loop_resident_mb"] = r.loop_resident_mb;
@@ -338,6 +352,9 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
     backend.first_output(s, results, o.out_dir);
   }
   const long long first_step = s.step;
+  if (o.kernel_times_warmup && !backend.time_kernels(*o.kernel_times_warmup) && root && o.progress)
+    std::fprintf(stderr, "note: --kernel-times: the time loop runs on the CPU, which launches no GPU kernels; "
+                         "nothing is timed\n");
   const std::clock_t cpu0 = std::clock();
   const auto t0 = std::chrono::steady_clock::now();
   auto last_report = t0;
@@ -394,6 +411,8 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
   r.cpu_s = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
   r.bond_updates_per_s = r.wall_s > 0 ? static_cast<double>(s.bond_count()) * r.steps / r.wall_s : 0.0;
   if (const double mb = resident_mb(); mb >= 0) r.loop_resident_mb = {mb};
+  r.kernel_times = backend.kernel_times();  // the loop's launches only (resolves every event)
+  if (r.kernel_times && root && o.progress) std::fputs(kernel_times_table(*r.kernel_times).c_str(), stderr);
   if (r.status == "completed") {
     r.final_energies = backend.measure(s);
     backend.download(s);

@@ -111,7 +111,30 @@ TEST(SolverCli, MalformedNumbersOnTheCommandLineAreRejected) {
 TEST(SolverCli, FollowsTheToolsCommandLineContract) {
   breccia::testing::expect_cli_contract(
       BRECCIA_SOLVE_EXE, "breccia-solve", "case.yaml -o out --quiet",
-      {{"--threads", "4x"}, {"--threads", "-1"}, {"--steps", "10s"}, {"--steps", "-3"}});
+      {{"--threads", "4x"}, {"--threads", "-1"}, {"--steps", "10s"}, {"--steps", "-3"}, {"--kernel-times", "-3"},
+       {"--kernel-times", "ten"}});
+}
+
+// --kernel-times on a run whose loop is on the CPU: a note says nothing is timed, the run
+// completes as without it, and summary.json carries no kernel_times (a GPU run's table:
+// test_solver_cuda, CudaBackend.RunLoopReportsKernelTimesWhenAsked).
+TEST(SolverCli, KernelTimesOnTheCpuSayNothingIsTimed) {
+  const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_kernel_times";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/case.yaml") << kBase + kMaterial + kTime;
+  const std::string cmd = std::string(BRECCIA_SOLVE_EXE) + " " + dir + "/case.yaml -o " + dir +
+                          "/out --backend cpu --kernel-times 2 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 512> buf{};
+  while (fgets(buf.data(), buf.size(), p)) out += buf.data();
+  ASSERT_EQ(WEXITSTATUS(pclose(p)), 0) << out;
+  EXPECT_NE(out.find("--kernel-times: the time loop runs on the CPU"), std::string::npos) << out;
+  std::ifstream summary(dir + "/out/summary.json");
+  const nlohmann::json j = nlohmann::json::parse(summary);
+  EXPECT_EQ(j.at("steps_this_run"), 5);
+  EXPECT_FALSE(j.contains("kernel_times"));
 }
 
 #ifdef BRECCIA_ATLAS_EXE

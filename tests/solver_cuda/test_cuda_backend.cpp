@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
+#include <optional>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -471,6 +473,58 @@ TEST(CudaBackend, GasRunLoopWritesTheSameHistoryAsTheCpuLoop) {
   EXPECT_EQ(rg.status, rc.status);
   ASSERT_GT(cpu.gas.crack_volume, 0.0) << "the gas must be in the crack";
   expect_same_history("cuda_gas_run_cpu", "cuda_gas_run_gpu", 31u);
+}
+
+// --kernel-times (cuda_kernel_clock.cuh): every launch of the steps after the warm-up is
+// bracketed by events. The steps here launch the same kernels every step, so each kernel's
+// launches are a whole multiple of the steps timed; the kernels run one after another on one
+// stream, so their summed times cannot exceed the wall time from the first timed launch to
+// the moment the last event has been resolved.
+TEST(CudaBackend, KernelTimesCoverEveryLaunchOfTheTimedStepsOnly) {
+  if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
+  PdSystem s = system_from_yaml("kernel_times", kPmbPlateFracture);
+  CudaSystem device(s);
+  EXPECT_FALSE(device.kernel_times()) << "nothing was asked";
+  constexpr int kWarmup = 10, kTimed = 50;
+  device.time_kernels(kWarmup);
+  for (int k = 0; k < kWarmup; ++k) device.step(s);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int k = 0; k < kTimed; ++k) device.step(s);
+  const std::optional<KernelTimes> t = device.kernel_times();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  ASSERT_TRUE(t);
+  EXPECT_EQ(t->warmup_steps, kWarmup);
+  EXPECT_EQ(t->steps_timed, kTimed);
+  ASSERT_FALSE(t->kernels.empty());
+  bool force_pass = false;
+  for (const KernelTime& k : t->kernels) {
+    EXPECT_GT(k.launches, 0) << k.name;
+    EXPECT_EQ(k.launches % kTimed, 0) << k.name << ": " << k.launches << " launches in " << kTimed << " steps";
+    EXPECT_GT(k.seconds, 0.0) << k.name;
+    force_pass = force_pass || k.name == "force_kernel";
+  }
+  EXPECT_TRUE(force_pass) << "the PMB plate's bond force pass (force_kernel) was not timed";
+  EXPECT_LE(t->seconds(), wall);
+  for (size_t k = 1; k < t->kernels.size(); ++k) EXPECT_GE(t->kernels[k - 1].seconds, t->kernels[k].seconds);
+}
+
+TEST(CudaBackend, RunLoopReportsKernelTimesWhenAsked) {
+  if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
+  std::string yaml = kPmbPlateFracture;
+  yaml.replace(yaml.find("time: {steps: 1000}"), std::string::npos, "time: {steps: 120}\noutput: {every: 60, history_every: 20}\n");
+  PdSystem gpu = system_from_yaml("kernel_times_run", yaml);
+  RunOptions o;
+  o.progress = false;
+  o.backend = "cuda";
+  o.out_dir = ::testing::TempDir() + "/cuda_kernel_times_run";
+  o.kernel_times_warmup = 20;
+  const RunResult r = run_system_cuda(gpu, o);
+  ASSERT_TRUE(r.kernel_times);
+  EXPECT_EQ(r.kernel_times->steps_timed, 100);
+  const auto measure = std::find_if(r.kernel_times->kernels.begin(), r.kernel_times->kernels.end(),
+                                    [](const KernelTime& k) { return k.name == "measure reduction"; });
+  ASSERT_NE(measure, r.kernel_times->kernels.end()) << "the history rows' measures are launches of the loop too";
+  EXPECT_EQ(measure->launches, 5);  // the rows at steps 40, 60, 80, 100, 120
 }
 
 // The no-device contract: these run where there is no GPU and skip where there is one.

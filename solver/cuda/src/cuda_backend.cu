@@ -17,6 +17,7 @@
 #include "breccia/common/error.hpp"
 #include "breccia/solver/cuda_backend.hpp"
 #include "breccia/solver/correspondence_kernels.hpp"
+#include "breccia/solver/cuda_kernel_clock.cuh"
 #include "breccia/solver/cuda_launch.cuh"
 #include "breccia/solver/cuda_memory.cuh"
 #include "breccia/solver/float32_state.hpp"
@@ -308,6 +309,7 @@ struct CudaSystem::Impl {
   PdView view;
   FacetView facets{};
   bool sync_after_launch = false;  // BRECCIA_CUDA_SYNC=1: attribute asynchronous faults to their kernel
+  cuda::KernelClock clock;         // --kernel-times: events around every launch after the warm-up
 
   // The step's arrays (step.hpp) over the device copies, double and float; built once, their
   // views copies of `view` and `fview` (refresh_step_views keeps them so).
@@ -324,7 +326,10 @@ struct CudaSystem::Impl {
   // family kernels).
   template <class F>
   void for_each(int64_t n, const F& f, const char* name) {
+    if (n == 0) return;  // no launch (cuda::for_each), nothing to time
+    clock.before();
     cuda::for_each(n, f, name, sync_after_launch);
+    clock.after(name);
   }
   template <class From, class To>
   void convert(int64_t count, const From* from, To* to, const char* what) {
@@ -410,7 +415,9 @@ public:
   template <class Load, class Finish>
   void reduce(int64_t n, const Load& load, const Finish& finish, const char* name) const {
     static_assert(std::is_same_v<typename Load::Value, StepSums>, "the step's reductions sum StepSums");
+    m_.clock.before();
     solver::reduce(n, load, m_.step_partial.get(), finish, name, m_.sync_after_launch);
+    m_.clock.after(name);
   }
   // commit_min_stretch: the device buffers trade places; every view follows (`a` is one of
   // the Impl's step arrays, refreshed with the others).
@@ -746,9 +753,15 @@ void CudaSystem::step(PdSystem& sys) {
   Impl& m = *impl_;
   m.sync_flags(sys);
   CudaExec exec(m);
+  m.clock.step_begins();
   if (m.f32) pd_step(exec, m.farrays, sys);
   else pd_step(exec, m.arrays, sys);
+  m.clock.step_ends();
 }
+
+void CudaSystem::time_kernels(long long warmup_steps) { impl_->clock.start(warmup_steps); }
+
+std::optional<KernelTimes> CudaSystem::kernel_times() { return impl_->clock.times(); }
 
 void CudaSystem::Impl::float_kinematics_to_double() {
   convert(3 * view.n, floats.u.get(), doubles.u.get(), "float u to double");
@@ -759,9 +772,12 @@ Energies CudaSystem::measure(PdSystem& sys) {
   Impl& m = *impl_;
   Energies e;
   if (m.f32) m.float_kinematics_to_double();  // float32 measures the double copies, as on the CPU
-  if (m.view.n > 0)
+  if (m.view.n > 0) {
+    m.clock.before();
     reduce(m.view.n, MeasureLoad{m.view}, m.measure_partial.get(), MeasureFinish{m.scalars.get()},
            "measure reduction", m.sync_after_launch);
+    m.clock.after("measure reduction");
+  }
   std::vector<DeviceScalars> host;
   m.scalars.download(host, "energy sums");  // synchronises with the default stream
   // The history row counts the particles the gas has reached.

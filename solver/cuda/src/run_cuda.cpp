@@ -21,6 +21,11 @@ public:
   void compute_forces(PdSystem& s) override { gpu_.compute_forces(s); }
   void download(PdSystem& s) override { gpu_.download(s); }
   void download_kinematics(PdSystem& s) override { gpu_.download_kinematics(s); }
+  bool time_kernels(long long warmup_steps) override {
+    gpu_.time_kernels(warmup_steps);
+    return true;
+  }
+  std::optional<KernelTimes> kernel_times() override { return gpu_.kernel_times(); }
 
 private:
   static PdSystem& prepared(PdSystem& s) {

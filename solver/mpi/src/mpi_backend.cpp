@@ -814,6 +814,10 @@ public:
     if (local_.gas.active) g.gas.copy_scalars(local_.gas);  // every rank's alike (GasExchange)
   }
 
+  // --kernel-times: each rank's device times its own launches; rank 0's are the summary's.
+  bool time_kernels(long long warmup_steps) override { return device_ && device_->time_kernels(warmup_steps); }
+  std::optional<KernelTimes> kernel_times() override { return device_ ? device_->kernel_times() : std::nullopt; }
+
   void compute_forces(PdSystem&) override {
     local_.diagnostics = true;
     if (device_) return device_->compute_forces(local_);  // the fields stay there until a download

@@ -6,6 +6,7 @@
 #include <string>
 #include <utility>
 
+#include "breccia/solver/kernel_times.hpp"
 #include "breccia/solver/pd_system.hpp"
 
 namespace breccia::solver {
@@ -27,6 +28,9 @@ struct RunOptions {
   // HDF5, every file from its gathered state).
   bool root = true;
   int ranks = 1;  // processes of the run (summary.json)
+  // --kernel-times WARMUP: time every GPU launch with CUDA events after WARMUP steps
+  // (kernel_times.hpp; summary.json `kernel_times`). A backend without kernels ignores it.
+  std::optional<long long> kernel_times_warmup;
   // A backend's dynamic loop (the CUDA backend sets it; it runs run_time_loop with its own
   // StepBackend); empty: the CPU backend.
   std::function<RunResult(PdSystem&, const RunOptions&, ResultsWriter*, HistoryWriter*)> backend_loop;
@@ -57,6 +61,8 @@ struct RunResult {
   // A distributed run: the bytes of whole per-particle and per-entry arrays rank 0's global
   // system holds after the loop and its final outputs (loop_state_bytes); -1 elsewhere.
   long long loop_whole_bytes_rank0 = -1;
+  // --kernel-times: the GPU time of each kernel (this process's device; rank 0's under MPI).
+  std::optional<KernelTimes> kernel_times;
 };
 
 // What the time loop needs from a backend. The CPU backend works on the PdSystem in place;
@@ -94,6 +100,11 @@ public:
   // A decision every process must take together (stop on Ctrl-C, on a blow-up): true if it
   // is true on any of them. One process: the flag itself.
   virtual bool any(bool flag) { return flag; }
+  // --kernel-times: start timing every launch after `warmup_steps` steps of this run; false
+  // where the backend launches no GPU kernels (the CPU's), which then times nothing.
+  virtual bool time_kernels(long long /*warmup_steps*/) { return false; }
+  // What it timed (every event resolved); nullopt where nothing was asked or timed.
+  virtual std::optional<KernelTimes> kernel_times() { return std::nullopt; }
 };
 
 // The dynamic time loop shared by every backend: outputs, history, checkpoints, progress,

@@ -6,10 +6,12 @@
 // This header is plain C++ (no CUDA types), so host-only code such as breccia-solve's CLI
 // can include it and link breccia_solver_cuda without being compiled by nvcc.
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "breccia/solver/cuda_device.hpp"  // cuda_device_available, cuda_device_description
 #include "breccia/solver/halo_transport.hpp"
+#include "breccia/solver/kernel_times.hpp"
 #include "breccia/solver/pd_system.hpp"
 #include "breccia/solver/run.hpp"
 
@@ -47,6 +49,12 @@ public:
   void download(PdSystem& sys);
   // Copy only u and v (history probes need nothing more).
   void download_kinematics(PdSystem& sys);
+  // --kernel-times: from `warmup_steps` steps on (counted from now), every launch is bracketed
+  // by two CUDA events and its elapsed time summed per kernel name (docs/cuda.md, "Per-kernel
+  // times"). The events are resolved in batches, so timing adds no synchronisation per step.
+  void time_kernels(long long warmup_steps);
+  // What was timed so far (waits for the pending events); nullopt unless time_kernels was called.
+  std::optional<KernelTimes> kernel_times();
 
   struct Impl;  // defined in cuda_backend.cu only (named there by its execution space)
 

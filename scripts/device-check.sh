@@ -5,7 +5,8 @@
 #   agreement tests   test_solver_cuda 60, distributed_cuda 45 (2 ranks on the GPU against 1:
 #                     test_distributed_cuda under the kit's mpirun), test_mps_cuda 40,
 #                     test_mps_solid_cuda 30, test_atlas_backends 15
-#   PD throughput     PMB and LPS on a 61^3 lattice, GPU 25 + CPU 20 each
+#   PD throughput     PMB and LPS on a 61^3 lattice, GPU 25 + CPU 20 each (GPU: 200 warm-up + 2,000
+#                     steps with per-kernel CUDA-event times, stopped gently before the cap)
 #   float32           PMB and LPS float32, GPU 15 each
 #   MPS harmonics     0.125 mm, GPU 20 + CPU 25, histories compared
 #   Taylor bar        32 across, GPU 25
@@ -32,7 +33,8 @@
 #
 # Environment: OUT (results folder), BRECCIA_DEVICE_DRY=1 (no GPU runs), BUDGET_S (420),
 # ONLY=tests,pd,float32,mps,taylor,sanitizer,rest (run only these groups), PD_N (lattice edge,
-# default 61: 227k particles, 2.8e7 bond entries), PD_GPU_STEPS (500), PD_CPU_STEPS (20),
+# default 61: 227k particles, 2.8e7 bond entries), PD_WARMUP (200) and PD_TIMED_STEPS (2000) of
+# the PMB and LPS GPU legs, PD_GPU_STEPS (500, the other GPU legs), PD_CPU_STEPS (20),
 # MPS_SPACING (0.125 mm), MPS_END (15 us), TAYLOR_ACROSS (32), SANITIZER=0 (skip it).
 set -uo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
@@ -135,13 +137,18 @@ PYTHON=${PYTHON:-python3}  # the device's python3 has numpy; here /usr/bin/pytho
 "$PYTHON" -c "import numpy" 2>/dev/null || PYTHON=/usr/bin/python3
 if [ "$DRY" = 1 ]; then
   PD_N=${PD_N:-21}; PD_GPU_STEPS=${PD_GPU_STEPS:-20}; PD_CPU_STEPS=${PD_CPU_STEPS:-10}
+  PD_WARMUP=${PD_WARMUP:-5}; PD_TIMED_STEPS=${PD_TIMED_STEPS:-20}
   MPS_SPACING=${MPS_SPACING:-0.25}; MPS_END=${MPS_END:-3 us}; TAYLOR_ACROSS=${TAYLOR_ACROSS:-4}
 else
   # Sized for the caps: the PD set-up (families, bond coefficients, stable step) took 13.7 s
   # for 41^3 on 2 cores here and grows with the particles, so 81^3 (531k, 7.7x) could not be
   # set up twice in 25 s; 61^3 (227k, 2.8e7 bond entries) still overflows the GPU's L2 many
   # times. MPS to 15 us (1,441 steps): the rates are the figures; the CPU leg fits its 35 s.
+  # The PMB and LPS GPU legs run PD_WARMUP + PD_TIMED_STEPS steps with per-kernel CUDA-event
+  # times over the last PD_TIMED_STEPS (breccia-solve --kernel-times); the other GPU legs
+  # PD_GPU_STEPS, timed after a tenth of them.
   PD_N=${PD_N:-61}; PD_GPU_STEPS=${PD_GPU_STEPS:-500}; PD_CPU_STEPS=${PD_CPU_STEPS:-20}
+  PD_WARMUP=${PD_WARMUP:-200}; PD_TIMED_STEPS=${PD_TIMED_STEPS:-2000}
   MPS_SPACING=${MPS_SPACING:-0.125}; MPS_END=${MPS_END:-15 us}; TAYLOR_ACROSS=${TAYLOR_ACROSS:-32}
 fi
 GPU_BACKEND=cuda
@@ -317,6 +324,14 @@ check() {
 CHILD=
 timed() { timeout "$T" "$@" & CHILD=$!; wait "$CHILD"; local rc=$?; CHILD=; return $rc; }
 run_bin_t() { timed "${ENVP[@]}" "${LOADP[@]}" "$@"; }
+# A time loop stopped gently: Ctrl-C (SIGINT) 10 s before the cap, on which breccia-solve ends
+# its loop and writes summary.json over the steps done (status interrupted, exit 130), then a
+# kill at the cap. A GPU slower than planned still returns its rate and kernel times.
+run_bin_int() {
+  local soft=$((T > 20 ? T - 10 : T))
+  timeout -s INT -k $((T - soft + 1)) "$soft" "${ENVP[@]}" "${LOADP[@]}" "$@" & CHILD=$!
+  wait "$CHILD"; local rc=$?; CHILD=; return $rc
+}
 
 # gtest: PASSED/FAILED/SKIPPED counts into the results, the XML report into the archive.
 run_tests() {  # run_tests NAME [gtest args]
@@ -343,9 +358,12 @@ PD_L=$(awk -v n="$PD_N" 'BEGIN{printf "%.6g", n*0.0005}')
 PD2_L=$(awk -v n="$PD_N" 'BEGIN{printf "%.6g", int(n^1.5 + 0.5)*0.0005}')
 result pd_n "$PD_N"
 pd_leg() {  # pd_leg MODEL gpu|cpu
-  local model=$1 leg=$2 backend=$GPU_BACKEND steps=$PD_GPU_STEPS model_line
+  local model=$1 leg=$2 backend=$GPU_BACKEND steps=$PD_GPU_STEPS model_line warmup timing=()
   local specimen="{lattice: {dimension: 3, box: [0, 0, 0, $PD_L, $PD_L, $PD_L], spacing: 0.0005}}"
   gpu_leg_possible "$leg" || return 0
+  warmup=$((PD_GPU_STEPS / 10))
+  case $model in pmb|lps) steps=$((PD_WARMUP + PD_TIMED_STEPS)) warmup=$PD_WARMUP ;; esac
+  [ "$leg" = gpu ] && timing=(--kernel-times "$warmup")  # on the CPU (the rehearsal) a note, nothing timed
   [ "$leg" = cpu ] && backend=cpu steps=$PD_CPU_STEPS
   case $model in
     lps2d*)  # dual horizon (variable halves); lps2dsell: over the layout
@@ -366,16 +384,28 @@ initial: [{type: radial_velocity, center: [0, 0, 0], strain_rate: 10}]
 time: {steps: $steps}
 output: {every: 1000000, history_every: 1000000, results: false}
 YAML
-  run_bin_t "$BIN/breccia-solve" "$WORK/$k.yaml" -o "$dir" --backend "$backend" --threads "$THREADS" --quiet >"$WORK/$k.log" 2>&1
+  run_bin_int "$BIN/breccia-solve" "$WORK/$k.yaml" -o "$dir" --backend "$backend" --threads "$THREADS" \
+    "${timing[@]}" >"$WORK/$k.log" 2>&1
   local rc=$?
-  tail -2 "$WORK/$k.log"
+  grep -v "^step " "$WORK/$k.log" | tail -20  # the kernel table (GPU) or the note, and the last line
   [ -f "$dir/summary.json" ] && "$PYTHON" - "$dir/summary.json" "$k" >>"$RESULTS" <<'PY'
-import json, sys
+import json, re, sys
 s = json.load(open(sys.argv[1])); k = sys.argv[2]
-for f in ("backend", "threads", "particles", "setup_wall_s", "wall_s", "bond_updates_per_s"):
+for f in ("backend", "threads", "particles", "setup_wall_s", "wall_s", "bond_updates_per_s", "status"):
     print(f"{k}_{f}={s[f]}")
 print(f"{k}_steps={s['steps_this_run']}")
+t = s.get("kernel_times")
+if t:  # per kernel, microseconds per timed step (all of them are in the archived summary.json)
+    print(f"{k}_kernel_steps_timed={t['steps_timed']}")
+    print(f"{k}_kernel_all_us_per_step={1e6 * t['seconds'] / max(t['steps_timed'], 1):.2f}")
+    for kern in t["kernels"][:8]:
+        print(f"{k}_kernel_{re.sub('[^A-Za-z0-9]+', '_', kern['name'])}_us_per_step={kern['us_per_step']:.2f}")
 PY
+  # Stopped at the cap by the gentle stop (timeout's 124; the run's own 130): the figures
+  # above are over the steps it made.
+  if [ "$rc" = 124 ] || [ "$rc" = 130 ]; then
+    grep -q '"status": "interrupted"' "$dir/summary.json" 2>/dev/null && result "${k}_stopped_at_cap" 1 && return 0
+  fi
   return $rc
 }
 

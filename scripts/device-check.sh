@@ -370,8 +370,9 @@ run_tests() {  # run_tests NAME [gtest args]
 gpu_leg_possible() { [ "$1" != gpu ] || [ "$DRY" = 1 ] || [ "$HAVE_GPU" = 1 ] || { skip "no GPU"; false; }; }
 
 # A breccia-solve run's summary.json into the results under KEY: rate, set-up and loop times,
-# status, the set-up's phases, the gas's share and the first 8 kernels' microseconds per timed
-# step (all of them are in the archived summary.json). A run stopped at its cap by the gentle
+# status, the set-up's phases, the gas's share, the device memory (bytes per particle, the
+# particles of that kind that would fit) and the first 8 kernels' microseconds per timed step
+# (all of them are in the archived summary.json). A run stopped at its cap by the gentle
 # stop (timeout's 124, the run's own 130) counts as done, its figures over the steps it made.
 summary_results() {  # summary_results DIR KEY RC
   local dir=$1 k=$2 rc=$3
@@ -386,6 +387,10 @@ for f in ("backend", "threads", "particles", "setup_wall_s", "wall_s", "bond_upd
 print(f"{k}_steps={s['steps_this_run']}")
 for phase, seconds in s.get("setup_phases_s", {}).items():
     print(f"{k}_setup_{name(phase)}_s={seconds:.3f}")
+d = s.get("device_memory")  # the GPU's: bytes per particle and how many such particles fit
+if d:
+    for f in ("system_bytes", "bytes_per_particle", "free_before_bytes", "particles_that_would_fit"):
+        print(f"{k}_device_{f}={d[f]}")
 t = s.get("kernel_times")
 if t:
     print(f"{k}_kernel_steps_timed={t['steps_timed']}")

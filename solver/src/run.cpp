@@ -128,6 +128,21 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
                          {"kernels", kernels},
                          {"note", "CUDA events around every launch of the timed steps, summed per kernel name"}};
   }
+  if (r.device_memory) {  // a GPU run: its device copy's memory, and how many such particles would fit
+    const DeviceMemory& d = *r.device_memory;
+    // (under MPI rank 0's device holds its own particles and ghosts, not the body's n: no per-particle figure)
+    const double per_particle =
+        n > 0 && o.ranks == 1 ? static_cast<double>(d.system_bytes) / static_cast<double>(n) : 0.0;
+    j["device_memory"] = {
+        {"system_bytes", d.system_bytes},
+        {"bytes_per_particle", per_particle},
+        {"free_before_bytes", d.free_before_bytes},
+        {"total_bytes", d.total_bytes},
+        {"particles_that_would_fit", per_particle > 0 ? static_cast<int64_t>(d.free_before_bytes / per_particle) : 0},
+        {"note", "cudaMemGetInfo: free memory before the upload less free memory after it (or at the loop's end); "
+                 "particles_that_would_fit: the free memory before it over bytes_per_particle, same model and "
+                 "family size"}};
+  }
   j["broken_bonds"] = r.final_energies.broken_half_bonds / 2;
   // What the time loop holds (RunResult::loop_resident_mb): per rank, rank 0 first.
   if (!r.loop_resident_mb.empty()) j["loop_resident_mb"] = r.loop_resident_mb;
@@ -412,6 +427,7 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
   r.bond_updates_per_s = r.wall_s > 0 ? static_cast<double>(s.bond_count()) * r.steps / r.wall_s : 0.0;
   if (const double mb = resident_mb(); mb >= 0) r.loop_resident_mb = {mb};
   r.kernel_times = backend.kernel_times();  // the loop's launches only (resolves every event)
+  r.device_memory = backend.device_memory();
   if (r.kernel_times && root && o.progress) std::fputs(kernel_times_table(*r.kernel_times).c_str(), stderr);
   if (r.status == "completed") {
     r.final_energies = backend.measure(s);

@@ -527,6 +527,30 @@ TEST(CudaBackend, RunLoopReportsKernelTimesWhenAsked) {
   EXPECT_EQ(measure->launches, 5);  // the rows at steps 40, 60, 80, 100, 120
 }
 
+// The device memory a system takes (DeviceMemory, cudaMemGetInfo) against the layout counted
+// in docs/cuda.md ("Memory layout, counted from the arrays"): PMB with one horizon and shared
+// dual halves holds 26 B per bond entry and 289 B per particle. The bounds: at least 25 B per
+// entry and 200 B per particle (the counted arrays must be there), at most twice the layout
+// with every optional array (38 B, 400 B) plus 64 MiB of allocation granularity.
+TEST(CudaBackend, DeviceMemoryOfASystemIsTheCountedLayout) {
+  if (!cuda_device_available()) GTEST_SKIP() << kNoDevice;
+  PdSystem s = system_from_yaml("device_memory", R"(
+specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.015, 0.015, 0.015], spacing: 0.5 mm}}
+model: {type: pmb, horizon_factor: 3.015}
+materials: [{name: m, density: 2200, youngs_modulus: 22.35 GPa, poisson_ratio: 0.25}]
+time: {steps: 10}
+)");
+  const double entries = static_cast<double>(s.offsets[s.n]), particles = static_cast<double>(s.n);
+  CudaSystem device(s);
+  const DeviceMemory m = device.device_memory();
+  EXPECT_GT(m.total_bytes, 0);
+  EXPECT_GE(m.free_before_bytes, m.system_bytes);
+  EXPECT_GE(static_cast<double>(m.system_bytes), 25.0 * entries + 200.0 * particles)
+      << entries << " entries, " << particles << " particles";
+  EXPECT_LE(static_cast<double>(m.system_bytes), 2.0 * (38.0 * entries + 400.0 * particles) + 64.0 * 1024 * 1024)
+      << entries << " entries, " << particles << " particles";
+}
+
 // The no-device contract: these run where there is no GPU and skip where there is one.
 TEST(CudaBackend, DeviceQueryAnswersWithoutThrowingOnAnyMachine) {
   bool available = false;

@@ -310,6 +310,8 @@ struct CudaSystem::Impl {
   FacetView facets{};
   bool sync_after_launch = false;  // BRECCIA_CUDA_SYNC=1: attribute asynchronous faults to their kernel
   cuda::KernelClock clock;         // --kernel-times: events around every launch after the warm-up
+  // cudaMemGetInfo's free memory before the upload, the device's total, and what the upload took
+  size_t memory_free_before = 0, memory_total = 0, memory_uploaded = 0;
 
   // The step's arrays (step.hpp) over the device copies, double and float; built once, their
   // views copies of `view` and `fview` (refresh_step_views keeps them so).
@@ -476,6 +478,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
   const size_t held = s.x0.size() / 3;
   const char* sync = std::getenv("BRECCIA_CUDA_SYNC");
   m.sync_after_launch = sync && std::string(sync) == "1";
+  check(cudaMemGetInfo(&m.memory_free_before, &m.memory_total), "cudaMemGetInfo");
 
   m.doubles.upload(s, s.n, held, "");
   {  // current positions: refreshed by every force pass, but a download before the first one
@@ -691,6 +694,16 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     }
   }
   m.refresh_step_views();
+  m.memory_uploaded = device_memory().system_bytes;
+}
+
+DeviceMemory CudaSystem::device_memory() {
+  const Impl& m = *impl_;
+  size_t free_now = 0, total = 0;
+  check(cudaMemGetInfo(&free_now, &total), "cudaMemGetInfo");
+  const size_t used = m.memory_free_before > free_now ? m.memory_free_before - free_now : 0;
+  return {static_cast<int64_t>(std::max(used, m.memory_uploaded)), static_cast<int64_t>(m.memory_free_before),
+          static_cast<int64_t>(m.memory_total)};
 }
 
 // The gas's arrays as the host has them (set-up, or a restart's state), and the view of them.

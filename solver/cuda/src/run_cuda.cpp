@@ -26,6 +26,7 @@ public:
     return true;
   }
   std::optional<KernelTimes> kernel_times() override { return gpu_.kernel_times(); }
+  std::optional<DeviceMemory> device_memory() override { return gpu_.device_memory(); }
 
 private:
   static PdSystem& prepared(PdSystem& s) {

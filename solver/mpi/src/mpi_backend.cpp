@@ -817,6 +817,7 @@ public:
   // --kernel-times: each rank's device times its own launches; rank 0's are the summary's.
   bool time_kernels(long long warmup_steps) override { return device_ && device_->time_kernels(warmup_steps); }
   std::optional<KernelTimes> kernel_times() override { return device_ ? device_->kernel_times() : std::nullopt; }
+  std::optional<DeviceMemory> device_memory() override { return device_ ? device_->device_memory() : std::nullopt; }
 
   void compute_forces(PdSystem&) override {
     local_.diagnostics = true;

@@ -46,6 +46,15 @@ struct RunOptions {
   std::function<std::pair<long long, Energies>(PdSystem&, const RunOptions&, ResultsWriter*, HistoryWriter*)> relax;
 };
 
+// A GPU backend's memory (summary.json device_memory): the device memory its copy of the
+// system took (the free memory before its upload less the free memory after it, or at the end
+// of the loop if more), the memory free before it, and the device's total.
+struct DeviceMemory {
+  int64_t system_bytes = 0;
+  int64_t free_before_bytes = 0;
+  int64_t total_bytes = 0;
+};
+
 struct RunResult {
   std::string status;   // completed | unstable | interrupted | converged | not_converged
   long long steps = 0;  // steps taken in this invocation
@@ -63,6 +72,7 @@ struct RunResult {
   long long loop_whole_bytes_rank0 = -1;
   // --kernel-times: the GPU time of each kernel (this process's device; rank 0's under MPI).
   std::optional<KernelTimes> kernel_times;
+  std::optional<DeviceMemory> device_memory;  // a GPU run's (this process's device; rank 0's under MPI)
 };
 
 // What the time loop needs from a backend. The CPU backend works on the PdSystem in place;
@@ -105,6 +115,8 @@ public:
   virtual bool time_kernels(long long /*warmup_steps*/) { return false; }
   // What it timed (every event resolved); nullopt where nothing was asked or timed.
   virtual std::optional<KernelTimes> kernel_times() { return std::nullopt; }
+  // A GPU backend's memory (DeviceMemory); nullopt on the CPU.
+  virtual std::optional<DeviceMemory> device_memory() { return std::nullopt; }
 };
 
 // The dynamic time loop shared by every backend: outputs, history, checkpoints, progress,

@@ -55,6 +55,8 @@ public:
   void time_kernels(long long warmup_steps);
   // What was timed so far (waits for the pending events); nullopt unless time_kernels was called.
   std::optional<KernelTimes> kernel_times();
+  // The device memory this system took (run.hpp DeviceMemory), measured by cudaMemGetInfo.
+  DeviceMemory device_memory();
 
   struct Impl;  // defined in cuda_backend.cu only (named there by its execution space)
 

@@ -376,7 +376,7 @@ gpu_leg_possible() { [ "$1" != gpu ] || [ "$DRY" = 1 ] || [ "$HAVE_GPU" = 1 ] ||
 # stop (timeout's 124, the run's own 130) counts as done, its figures over the steps it made.
 summary_results() {  # summary_results DIR KEY RC
   local dir=$1 k=$2 rc=$3
-  [ -f "$dir/summary.json" ] && "$PYTHON" - "$dir/summary.json" "$k" >>"$RESULTS" <<'PY'
+  [ -f "$dir/summary.json" ] && "$PYTHON" - "$dir/summary.json" "$k" "${DEVICE:-none}" >>"$RESULTS" <<'PY'
 import json, re, sys
 s = json.load(open(sys.argv[1])); k = sys.argv[2]
 name = lambda text: re.sub("[^A-Za-z0-9]+", "_", text).strip("_")
@@ -391,6 +391,20 @@ d = s.get("device_memory")  # the GPU's: bytes per particle and how many such pa
 if d:
     for f in ("system_bytes", "bytes_per_particle", "free_before_bytes", "particles_that_would_fit"):
         print(f"{k}_device_{f}={d[f]}")
+# The GPU's rate against docs/cuda.md's bandwidth floor (bytes streamed per bond-update on the
+# path this lattice runs: one horizon, no diagnostics between outputs) and the GPU issue's
+# targets (3x CabanaPD's published H100 rates: PMB 7e10, LPS 4.2e10 bond-updates/s).
+model = re.sub(r"^pd_|_gpu$", "", k)
+floor_bytes = {"pmb": 25, "lps": 46, "pmb32": 17, "lps32": 30, "pmbsell": 25, "lpssell": 46}.get(model)
+device = " ".join(sys.argv[3:])
+bandwidth = 4.8e12 if "H200" in device else 3.35e12 if "H100" in device else None
+if s.get("backend") == "cuda" and floor_bytes and bandwidth:
+    rate = s["bond_updates_per_s"]
+    print(f"{k}_bandwidth_floor={bandwidth / floor_bytes:.3g}")
+    print(f"{k}_fraction_of_floor={rate * floor_bytes / bandwidth:.3f}")
+    target = {"pmb": 7e10, "lps": 4.2e10}.get(model.replace("sell", "").replace("32", ""))
+    if target:
+        print(f"{k}_fraction_of_target={rate / target:.3f}")
 t = s.get("kernel_times")
 if t:
     print(f"{k}_kernel_steps_timed={t['steps_timed']}")

@@ -11,6 +11,10 @@ double KernelTimes::seconds() const {
   return total;
 }
 
+double KernelTimes::us_per_step(double seconds) const {
+  return steps_timed > 0 ? 1e6 * seconds / static_cast<double>(steps_timed) : 0.0;
+}
+
 void KernelTimeTable::add(std::string_view name, double seconds) {
   auto row = std::find_if(rows_.begin(), rows_.end(), [&](const KernelTime& k) { return k.name == name; });
   if (row == rows_.end()) {
@@ -41,14 +45,13 @@ std::string kernel_times_table(const KernelTimes& t) {
   std::snprintf(line, sizeof line, "  %-32s %10s %12s %12s %8s\n", "kernel", "launches", "total s", "us/step", "share");
   out += line;
   const double total = t.seconds();
-  const double steps = static_cast<double>(std::max<int64_t>(t.steps_timed, 1));
   for (const KernelTime& k : t.kernels) {
     std::snprintf(line, sizeof line, "  %-32.32s %10lld %12.6f %12.2f %7.1f%%\n", k.name.c_str(),
-                  static_cast<long long>(k.launches), k.seconds, 1e6 * k.seconds / steps,
+                  static_cast<long long>(k.launches), k.seconds, t.us_per_step(k.seconds),
                   total > 0 ? 100.0 * k.seconds / total : 0.0);
     out += line;
   }
-  std::snprintf(line, sizeof line, "  %-32s %10s %12.6f %12.2f\n", "all kernels", "", total, 1e6 * total / steps);
+  std::snprintf(line, sizeof line, "  %-32s %10s %12.6f %12.2f\n", "all kernels", "", total, t.us_per_step(total));
   out += line;
   return out;
 }

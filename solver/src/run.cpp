@@ -121,7 +121,7 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
       kernels.push_back({{"name", k.name},
                          {"launches", k.launches},
                          {"seconds", k.seconds},
-                         {"us_per_step", t.steps_timed > 0 ? 1e6 * k.seconds / static_cast<double>(t.steps_timed) : 0.0}});
+                         {"us_per_step", t.us_per_step(k.seconds)}});
     j["kernel_times"] = {{"warmup_steps", t.warmup_steps},
                          {"steps_timed", t.steps_timed},
                          {"seconds", t.seconds()},

@@ -27,13 +27,16 @@ struct Outcome {
   std::string output;
 };
 
-Outcome run_solver(const std::string& case_yaml, const std::string& name, const std::string& extra = "") {
+// `quiet`: --quiet (no notes); the run writes into process_temp_dir()/cli_NAME/out.
+Outcome run_solver(const std::string& case_yaml, const std::string& name, const std::string& extra = "",
+                   bool quiet = true) {
   const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_" + name;
   std::string mk = "mkdir -p " + dir;
   if (std::system(mk.c_str()) != 0) return {-1, ""};
   const std::string file = dir + "/case.yaml";
   std::ofstream(file) << case_yaml;
-  const std::string cmd = std::string(BRECCIA_SOLVE_EXE) + " " + file + " -o " + dir + "/out --quiet " + extra + " 2>&1";
+  const std::string cmd =
+      std::string(BRECCIA_SOLVE_EXE) + " " + file + " -o " + dir + "/out" + (quiet ? " --quiet " : " ") + extra + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   std::string out;
   std::array<char, 512> buf{};
@@ -119,19 +122,10 @@ TEST(SolverCli, FollowsTheToolsCommandLineContract) {
 // completes as without it, and summary.json carries no kernel_times (a GPU run's table:
 // test_solver_cuda, CudaBackend.RunLoopReportsKernelTimesWhenAsked).
 TEST(SolverCli, KernelTimesOnTheCpuSayNothingIsTimed) {
-  const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_kernel_times";
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  std::ofstream(dir + "/case.yaml") << kBase + kMaterial + kTime;
-  const std::string cmd = std::string(BRECCIA_SOLVE_EXE) + " " + dir + "/case.yaml -o " + dir +
-                          "/out --backend cpu --kernel-times 2 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 512> buf{};
-  while (fgets(buf.data(), buf.size(), p)) out += buf.data();
-  ASSERT_EQ(WEXITSTATUS(pclose(p)), 0) << out;
-  EXPECT_NE(out.find("--kernel-times: the time loop runs on the CPU"), std::string::npos) << out;
-  std::ifstream summary(dir + "/out/summary.json");
+  const Outcome o = run_solver(kBase + kMaterial + kTime, "kernel_times", "--backend cpu --kernel-times 2", false);
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_NE(o.output.find("--kernel-times: the time loop runs on the CPU"), std::string::npos) << o.output;
+  std::ifstream summary(breccia::solver::testing::process_temp_dir() + "/cli_kernel_times/out/summary.json");
   const nlohmann::json j = nlohmann::json::parse(summary);
   EXPECT_EQ(j.at("steps_this_run"), 5);
   EXPECT_FALSE(j.contains("kernel_times"));

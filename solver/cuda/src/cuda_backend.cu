@@ -397,14 +397,17 @@ void CudaSystem::Impl::exchange(const HaloArrays& h) {
 
 namespace {
 
+// Its two launches are one kernel of --kernel-times (m.clock), as Impl::for_each's launch is.
 template <class Load, class Finish>
-void reduce(int64_t n, const Load& load, typename Load::Value* partial, Finish finish, const char* name,
-            bool synchronize) {
+void reduce(CudaSystem::Impl& m, int64_t n, const Load& load, typename Load::Value* partial, Finish finish,
+            const char* name) {
   const int grid = static_cast<int>(std::clamp<int64_t>(blocks_for(n), 1, kMaxReduceBlocks));
+  m.clock.before();
   reduce_partial_cuda<Load><<<grid, kBlock>>>(n, load, partial);
-  check_launch(name, synchronize);
+  check_launch(name, m.sync_after_launch);
   reduce_final_cuda<Load, Finish><<<1, kBlock>>>(grid, partial, finish);
-  check_launch(name, synchronize);
+  check_launch(name, m.sync_after_launch);
+  m.clock.after(name);
 }
 
 // The CUDA execution space of step.hpp: launches on the device copies; sums stay on the
@@ -417,9 +420,7 @@ public:
   template <class Load, class Finish>
   void reduce(int64_t n, const Load& load, const Finish& finish, const char* name) const {
     static_assert(std::is_same_v<typename Load::Value, StepSums>, "the step's reductions sum StepSums");
-    m_.clock.before();
-    solver::reduce(n, load, m_.step_partial.get(), finish, name, m_.sync_after_launch);
-    m_.clock.after(name);
+    solver::reduce(m_, n, load, m_.step_partial.get(), finish, name);
   }
   // commit_min_stretch: the device buffers trade places; every view follows (`a` is one of
   // the Impl's step arrays, refreshed with the others).
@@ -785,12 +786,9 @@ Energies CudaSystem::measure(PdSystem& sys) {
   Impl& m = *impl_;
   Energies e;
   if (m.f32) m.float_kinematics_to_double();  // float32 measures the double copies, as on the CPU
-  if (m.view.n > 0) {
-    m.clock.before();
-    reduce(m.view.n, MeasureLoad{m.view}, m.measure_partial.get(), MeasureFinish{m.scalars.get()},
-           "measure reduction", m.sync_after_launch);
-    m.clock.after("measure reduction");
-  }
+  if (m.view.n > 0)
+    reduce(m, m.view.n, MeasureLoad{m.view}, m.measure_partial.get(), MeasureFinish{m.scalars.get()},
+           "measure reduction");
   std::vector<DeviceScalars> host;
   m.scalars.download(host, "energy sums");  // synchronises with the default stream
   // The history row counts the particles the gas has reached.

@@ -21,6 +21,8 @@ struct KernelTimes {
   int64_t steps_timed = 0;   // steps whose launches were all timed
   std::vector<KernelTime> kernels;  // largest total first (ties by name)
   double seconds() const;           // the kernels' total
+  // A time over the timed steps in microseconds per step (0 when no step was timed).
+  double us_per_step(double seconds) const;
 };
 
 // Sums (name, seconds) per name; the names of a step are few (about ten), so rows are found

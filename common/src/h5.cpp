@@ -1,6 +1,7 @@
 #include "breccia/common/h5.hpp"
 
 #include <stdexcept>
+#include <type_traits>
 
 #include "breccia/common/error.hpp"
 
@@ -136,7 +137,7 @@ static hid_t select_runs(hid_t space, const std::vector<RowRun>& runs, size_t lo
 // collective transfer list; a process with no rows selects none and still takes part).
 template <class T>
 static void write_impl(const File& f, const std::string& path, const T* data, const std::vector<RowRun>& runs,
-                       std::vector<hsize_t> dims, hid_t transfer) {
+                       std::vector<hsize_t> dims, hid_t transfer, Filter filter = Filter::Deflate) {
   hsize_t total = 1;
   for (auto d : dims) total *= d;
   hsize_t rows = 0, end = 0;
@@ -157,7 +158,12 @@ static void write_impl(const File& f, const std::string& path, const T* data, co
     std::vector<hsize_t> chunk = dims;
     chunk[0] = std::min<hsize_t>(dims[0], 65536);
     H5Pset_chunk(plist.id, static_cast<int>(chunk.size()), chunk.data());
-    H5Pset_deflate(plist.id, 1);
+    if (filter == Filter::ScaleOffset) {
+      if constexpr (!std::is_integral_v<T>) throw std::logic_error("h5 write " + path + ": scale-offset is for integers");
+      H5Pset_scaleoffset(plist.id, H5Z_SO_INT, H5Z_SO_INT_MINBITS_DEFAULT);
+    } else {
+      H5Pset_deflate(plist.id, 1);
+    }
   }
   Handle ds{H5Dcreate2(f.id(), path.c_str(), mem_type<T>(), space.id, H5P_DEFAULT, plist.id, H5P_DEFAULT),
             H5Dclose};
@@ -189,12 +195,12 @@ static void write_impl(const File& f, const std::string& path, const T* data, co
 
 template <class T>
 static void write_whole(const File& f, const std::string& path, const std::vector<T>& data, std::vector<hsize_t> dims,
-                        hid_t transfer) {
+                        hid_t transfer, Filter filter = Filter::Deflate) {
   hsize_t total = 1;
   for (auto d : dims) total *= d;
   if (total != data.size()) throw std::logic_error("h5 write " + path + ": dims do not match data size");
   // On a collective file every process writes the whole array, the same values.
-  write_impl(f, path, data.data(), {{0, dims.empty() ? 0 : dims[0]}}, dims, transfer);
+  write_impl(f, path, data.data(), {{0, dims.empty() ? 0 : dims[0]}}, dims, transfer, filter);
 }
 
 void File::write(const std::string& p, const std::vector<double>& d, std::vector<hsize_t> dims) const {
@@ -203,8 +209,8 @@ void File::write(const std::string& p, const std::vector<double>& d, std::vector
 void File::write(const std::string& p, const std::vector<float>& d, std::vector<hsize_t> dims) const {
   write_whole(*this, p, d, dims, transfer_);
 }
-void File::write(const std::string& p, const std::vector<int64_t>& d, std::vector<hsize_t> dims) const {
-  write_whole(*this, p, d, dims, transfer_);
+void File::write(const std::string& p, const std::vector<int64_t>& d, std::vector<hsize_t> dims, Filter filter) const {
+  write_whole(*this, p, d, dims, transfer_, filter);
 }
 void File::write(const std::string& p, const std::vector<int32_t>& d, std::vector<hsize_t> dims) const {
   write_whole(*this, p, d, dims, transfer_);
@@ -214,6 +220,9 @@ void File::write(const std::string& p, const std::vector<uint8_t>& d, std::vecto
 }
 
 void File::write_rows(const std::string& p, const double* d, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const {
+  write_impl(*this, p, d, {{first, rows}}, dims, transfer_);
+}
+void File::write_rows(const std::string& p, const float* d, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const {
   write_impl(*this, p, d, {{first, rows}}, dims, transfer_);
 }
 void File::write_rows(const std::string& p, const uint8_t* d, hsize_t first, hsize_t rows, std::vector<hsize_t> dims) const {
@@ -226,8 +235,8 @@ void File::write_rows(const std::string& p, const int32_t* d, hsize_t first, hsi
   write_impl(*this, p, d, {{first, rows}}, dims, transfer_);
 }
 void File::write_runs(const std::string& p, const int64_t* d, const std::vector<RowRun>& runs,
-                      std::vector<hsize_t> dims) const {
-  write_impl(*this, p, d, runs, dims, transfer_);
+                      std::vector<hsize_t> dims, Filter filter) const {
+  write_impl(*this, p, d, runs, dims, transfer_, filter);
 }
 
 void File::write_strings(const std::string& path, const std::vector<std::string>& values) const {

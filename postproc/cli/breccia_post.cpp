@@ -152,6 +152,10 @@ int main(int argc, char** argv) {
       "--no-plots", [&] { o.plots = false; }, "skip the PNG charts");
   app.add_flag_callback(
       "--quiet", [&] { o.progress = false; }, "no progress on stderr");
+  app.add_option("--threads", o.threads,
+                 "threads (default: OpenMP's, all cores): the crack history beside the outputs, charts beside both")
+      ->type_name("N")
+      ->check(whole_number(1, 4096));
   if (const auto code = breccia::cli::parse(app, argc, argv)) return *code;
   return breccia::cli::run_reporting_errors([&]() -> int {
     const breccia::postproc::PostOptions options = finish(g);

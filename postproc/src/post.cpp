@@ -6,11 +6,16 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <fstream>
+#include <future>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <span>
 #include <sstream>
+
+#include <omp.h>
 
 #include "breccia/common/data_dir.hpp"
 #include "breccia/common/error.hpp"
@@ -99,6 +104,7 @@ public:
       summary_.phases.emplace_back(name, std::chrono::duration<double>(now - last).count());
       last = now;
     };
+    threads_ = opt_.threads > 0 ? opt_.threads : omp_get_max_threads();
     run_ = open_run(opt_.run_dir, opt_.particles_file);
     phase("read run");
     if (run_.outputs.empty() && (opt_.cracks || opt_.fragments))
@@ -119,21 +125,37 @@ public:
       }
     }
     phase("bond faces");
-    if (!run_.outputs.empty() && need_faces) crack_history();
-    phase("crack history");
+    // The crack history (every output's cracks) and the analysis of the selected outputs read
+    // the same run and write different files: with a second thread they run side by side (the
+    // history on threads_ - 1 threads), each read of results.h5 under its mutex.
+    const bool history = !run_.outputs.empty() && need_faces;
+    const fs::path history_path = history ? out("crack_history.csv") : fs::path();
+    const bool beside = history && threads_ > 1;
+    std::future<std::string> history_csv;
+    if (beside) history_csv = std::async(std::launch::async, [this] { return crack_history(threads_ - 1); });
+    if (history && !beside) {
+      write_text_file(history_path, crack_history(1));
+      phase("crack history");
+    }
     for (size_t k = 0; k < analysed_.size(); ++k) {
       if (analysed_.size() > 1 && opt_.progress)
         std::fprintf(stderr, "[post] output %zu/%zu (step %lld)\n", k + 1, analysed_.size(), run_.outputs[analysed_[k]].step);
       analyse_output(analysed_[k], k + 1 == analysed_.size());
     }
     if (opt_.all_steps) write_collections();
-    phase("outputs (cracks, fragments, fields)");
+    phase(beside ? "outputs (cracks, fragments, fields; the crack history beside them)" : "outputs (cracks, fragments, fields)");
+    if (beside) {
+      write_text_file(history_path, history_csv.get());
+      phase("crack history (the rest, after the outputs)");
+    }
     load_history();
     if (opt_.energy && history_ && energy_available_) energy();
     if (opt_.probes && history_) probes();
     if (opt_.energy && history_ && history_->find("gas_pressure_Pa") && opt_.plots)  // a gas load (solver gas.hpp)
       plot("plot_gas.py", "--history " + shell_quote(history_->path.string()), "gas.png");
     phase("history (energy, probes)");
+    finish_plots();
+    phase("charts (the rest, after the other work)");
     write_json();
     phase("summary");
     return summary_;
@@ -160,26 +182,45 @@ private:
     return CrackInputs{&broken, &precracks_, damage, run_.material_id, run_.fracture_energy_J_m2, {}, 0};
   }
 
-  void crack_history() {
-    Progress progress("crack history", static_cast<long long>(run_.outputs.size()));
-    std::ostringstream csv;
-    csv << "output,step,time_s,crack_area_m2,fracture_area_m2,precrack_area_m2,crack_length_m,crack_count,"
-           "crack_faces,broken_bonds,G0_times_fracture_area_J,smoothed_crack_area_m2,smoothed_fracture_area_m2,"
-           "G0_times_smoothed_fracture_area_J\n";
+  // crack_history.csv's text: one row per output, the outputs on `threads` threads (rows in
+  // output order whatever the count).
+  std::string crack_history(int threads) {
+    const size_t outputs = run_.outputs.size();
+    Progress progress("crack history", static_cast<long long>(outputs));
+    std::mutex progress_mutex;
+    long long done = 0;
+    std::vector<std::string> rows(outputs);
     // No fracture energy (MPS): the G0 x area cells stay empty rather than 0.
     const bool g0 = !run_.fracture_energy_J_m2.empty();
-    for (size_t k = 0; k < run_.outputs.size(); ++k) {
-      const OutputFrame fr = read_output_cracks_only(run_, k);
-      const BondBits broken(run_.bonds, fr.broken, face_bond_);
-      const CrackResult c = find_cracks(faces_, crack_inputs(broken, fr.damage), opt_.crack_criterion, opt_.damage_threshold);
-      csv << k << ',' << fr.info.step << ',' << fmt(fr.info.time_s) << ',' << fmt(c.area_m2) << ','
-          << fmt(c.fracture_area_m2) << ',' << fmt(c.precrack_area_m2) << ',' << fmt(c.length_m) << ','
-          << c.crack_count << ',' << c.face_count << ',' << fr.broken_count << ',' << (g0 ? fmt(c.G0_area_J) : "") << ','
-          << fmt(c.smoothed_area_m2) << ',' << fmt(c.smoothed_fracture_area_m2) << ','
-          << (g0 ? fmt(c.G0_smoothed_area_J) : "") << '\n';
-      if (opt_.progress) progress.update(static_cast<long long>(k + 1));
+    // An exception may not leave an OpenMP region: the first is kept and rethrown after it.
+    std::exception_ptr error;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (size_t k = 0; k < outputs; ++k) {
+      try {
+        const OutputFrame fr = read_output_cracks_only(run_, k);
+        const BondBits broken(run_.bonds, fr.broken, face_bond_);
+        const CrackResult c = find_cracks(faces_, crack_inputs(broken, fr.damage), opt_.crack_criterion, opt_.damage_threshold);
+        std::ostringstream row;
+        row << k << ',' << fr.info.step << ',' << fmt(fr.info.time_s) << ',' << fmt(c.area_m2) << ','
+            << fmt(c.fracture_area_m2) << ',' << fmt(c.precrack_area_m2) << ',' << fmt(c.length_m) << ','
+            << c.crack_count << ',' << c.face_count << ',' << fr.broken_count << ',' << (g0 ? fmt(c.G0_area_J) : "") << ','
+            << fmt(c.smoothed_area_m2) << ',' << fmt(c.smoothed_fracture_area_m2) << ','
+            << (g0 ? fmt(c.G0_smoothed_area_J) : "") << '\n';
+        rows[k] = row.str();
+        const std::lock_guard<std::mutex> lock(progress_mutex);
+        if (opt_.progress) progress.update(++done);
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(progress_mutex);
+        if (!error) error = std::current_exception();
+      }
     }
-    write_text_file(out("crack_history.csv"), csv.str());
+    if (error) std::rethrow_exception(error);
+    std::string csv =
+        "output,step,time_s,crack_area_m2,fracture_area_m2,precrack_area_m2,crack_length_m,crack_count,"
+        "crack_faces,broken_bonds,G0_times_fracture_area_J,smoothed_crack_area_m2,smoothed_fracture_area_m2,"
+        "G0_times_smoothed_fracture_area_J\n";
+    for (const auto& row : rows) csv += row;
+    return csv;
   }
 
   void analyse_output(size_t index, bool last) {
@@ -219,16 +260,18 @@ private:
       rec.has_fragments = true;
       rec.fragment_count = static_cast<int32_t>(frag.fragments.size());
       if (last) compare_solver_fragments(fr.info, comp);
+      // The last output's size distribution first, so that its chart is drawn while the
+      // meshes below are written.
+      if (last) {
+        fragments_ = frag;
+        distribution();
+      }
       write_fragments_csv(out("fragments" + sfx + ".csv"), frag);
       write_fragments_vtu(out("fragments" + sfx + ".vtu"), frag, fr);
       Mesh deformed = deformed_mesh(run_.particles, fr.displacement_m, comp);
       deformed.cell_data.push_back({"fragment_id", 1, std::vector<double>(frag.fragment_id.begin(), frag.fragment_id.end()), true});
       deformed.cell_data.push_back({"damage", 1, fr.damage, false});
       write_vtu(out("deformed" + sfx + ".vtu"), deformed);
-      if (last) {
-        fragments_ = frag;
-        distribution();
-      }
     }
     if (opt_.all_steps) {
       if (opt_.cracks) pvd_["cracks"].emplace_back(fr.info.time_s, "cracks" + sfx + ".vtp");
@@ -244,9 +287,13 @@ private:
   // An MPS run with fracture writes its own pieces (/output/NNNNNN/fragment, a union-find over
   // the same intact bonds): post's components must be the same partition.
   void compare_solver_fragments(const OutputInfo& info, const std::vector<int32_t>& comp) {
-    const h5::File f(run_.results_path.string(), h5::File::Mode::Read);
-    if (!f.exists(info.group + "/fragment")) return;
-    const std::vector<int32_t> labels = f.read_int32(info.group + "/fragment");
+    std::vector<int32_t> labels;
+    {
+      const std::lock_guard<std::mutex> lock(results_file_mutex());  // the crack history may be reading
+      const h5::File f(run_.results_path.string(), h5::File::Mode::Read);
+      if (!f.exists(info.group + "/fragment")) return;
+      labels = f.read_int32(info.group + "/fragment");
+    }
     if (labels.size() != comp.size())
       throw InputError(run_.results_path.string(), info.group + "/fragment", "size " + std::to_string(labels.size()),
                        "N = " + std::to_string(comp.size()));
@@ -319,20 +366,40 @@ private:
     plot("plot_fragment_sizes.py", args, "fragment_sizes.png");
   }
 
+  // A chart: its script run by the Python interpreter, on a thread of its own when there are
+  // two or more (at most threads_ - 1 at once), so that post goes on meanwhile; finish_plots
+  // collects them in the order asked, the same list of files with any thread count.
   void plot(const std::string& script, const std::string& args, const std::string& png) {
     const fs::path dir = opt_.scripts_dir.empty() ? default_scripts_dir() : opt_.scripts_dir;
     const fs::path log = summary_.post_dir / "plots.log";
     const std::string cmd = shell_quote(opt_.python) + " " + shell_quote((dir / script).string()) + " " + args +
                             " --out " + shell_quote((summary_.post_dir / png).string()) + " >> " +
                             shell_quote(log.string()) + " 2>&1";
-    const int rc = std::system(cmd.c_str());
-    if (rc == 0 && fs::exists(summary_.post_dir / png)) {
-      summary_.written.push_back(png);
+    auto draw = [cmd] { return std::system(cmd.c_str()); };
+    if (threads_ < 2) {
+      std::promise<int> rc;
+      rc.set_value(draw());
+      plots_.push_back({script, png, log, rc.get_future()});
       return;
     }
-    const std::string msg = png + ": " + script + " failed (exit " + std::to_string(rc) + "), see " + log.string();
-    summary_.plot_failures.push_back(msg);
-    std::fprintf(stderr, "warning: %s; the numerical results are unaffected\n", msg.c_str());
+    // The oldest charts still drawing are waited for until a thread is free.
+    while (plots_.size() - plots_waited_ >= static_cast<size_t>(threads_ - 1)) plots_[plots_waited_++].rc.wait();
+    plots_.push_back({script, png, log, std::async(std::launch::async, draw)});
+  }
+
+  void finish_plots() {
+    for (auto& p : plots_) {
+      const int rc = p.rc.get();
+      if (rc == 0 && fs::exists(summary_.post_dir / p.png)) {
+        summary_.written.push_back(p.png);
+        continue;
+      }
+      const std::string msg = p.png + ": " + p.script + " failed (exit " + std::to_string(rc) + "), see " + p.log.string();
+      summary_.plot_failures.push_back(msg);
+      std::fprintf(stderr, "warning: %s; the numerical results are unaffected\n", msg.c_str());
+    }
+    plots_.clear();
+    plots_waited_ = 0;
   }
 
   void load_history() {
@@ -683,8 +750,17 @@ private:
   };
 
   const PostOptions& opt_;
+  int threads_ = 1;  // opt_.threads, or OpenMP's count
   PostSummary summary_;
   RunData run_;
+  // Charts asked for (plot), in order; those before plots_waited_ have been waited for.
+  struct PendingPlot {
+    std::string script, png;
+    fs::path log;
+    std::future<int> rc;  // the interpreter's exit status
+  };
+  std::vector<PendingPlot> plots_;
+  size_t plots_waited_ = 0;
   std::vector<size_t> analysed_;
   RemovedBonds precracks_;
   std::vector<int64_t> face_bond_;  // per candidate face: its bond in run_.bonds, -1 if none

@@ -172,6 +172,7 @@ RunData open_run(const fs::path& run_dir, const std::string& particles_override)
 namespace {
 
 OutputFrame read_frame(const RunData& run, size_t k, bool full) {
+  const std::lock_guard<std::mutex> lock(results_file_mutex());
   if (k >= run.outputs.size())
     throw InputError(run.results_path.string(), "/output", "output index " + std::to_string(k),
                      "< output_count = " + std::to_string(run.outputs.size()));
@@ -197,6 +198,11 @@ OutputFrame read_frame(const RunData& run, size_t k, bool full) {
 }
 
 }  // namespace
+
+std::mutex& results_file_mutex() {
+  static std::mutex m;
+  return m;
+}
 
 OutputFrame read_output(const RunData& run, size_t k) { return read_frame(run, k, true); }
 OutputFrame read_output_cracks_only(const RunData& run, size_t k) { return read_frame(run, k, false); }

@@ -295,8 +295,11 @@ int main(int argc, char** argv) {
       return 130;
     }
     if (opt.progress)
-      std::fprintf(stderr, "done: %lld steps in %.2f s, %.3g bond-updates/s; results in %s\n", r.steps, r.wall_s,
-                   r.bond_updates_per_s, opt.out_dir.c_str());
+      std::fprintf(stderr,
+                   "done: %lld steps in %.2f s, %.3g bond-updates/s; results in %s (header %.2f s, final checkpoint "
+                   "%.2f s)\n",
+                   r.steps, r.wall_s, r.bond_updates_per_s, opt.out_dir.c_str(), r.results_header_wall_s,
+                   r.final_checkpoint_wall_s);
     return 0;
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

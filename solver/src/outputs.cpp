@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -101,6 +102,7 @@ bool within_either_horizon(const double* xi, const double* xj, double horizon_i,
 
 std::vector<int64_t> half_bond_counts(const PdSystem& r, size_t owned) {
   std::vector<int64_t> counts(owned, 0);
+#pragma omp parallel for schedule(dynamic, 1024)
   for (size_t i = 0; i < owned; ++i) {
     const int64_t fi = r.original_index[i];
     for (int64_t k = r.offsets[i]; k < r.offsets[i + 1]; ++k)
@@ -142,14 +144,30 @@ HalfBondList half_bond_list(const PdSystem& s) {
   const std::vector<double>& x = s.particles.position_m;
   h.within_horizon.assign((b + 7) / 8, 0);
   h.precrack.assign((b + 7) / 8, 0);
-  for (size_t i = 0; i < n; ++i)
-    for (int64_t at = h.offsets[i]; at < h.offsets[i + 1]; ++at) {
+  // Rows in parallel: a row's bits are gathered a byte at a time; a byte that lies wholly in
+  // the row is stored, one shared with the rows beside it is OR-ed in atomically.
+#pragma omp parallel for schedule(dynamic, 1024)
+  for (size_t i = 0; i < n; ++i) {
+    const int64_t begin = h.offsets[i], end = h.offsets[i + 1];
+    uint8_t within = 0, precrack = 0;
+    const auto flush = [&](int64_t byte) {
+      const bool own = 8 * byte >= begin && 8 * byte + 8 <= end;
+      for (auto [bits, value] : {std::pair{&h.within_horizon, within}, std::pair{&h.precrack, precrack}}) {
+        if (value == 0) continue;
+        if (own) (*bits)[byte] = value;
+        else std::atomic_ref<uint8_t>((*bits)[byte]).fetch_or(value, std::memory_order_relaxed);
+      }
+      within = precrack = 0;
+    };
+    for (int64_t at = begin; at < end; ++at) {
+      if (at > begin && (at & 7) == 0) flush((at >> 3) - 1);
       const size_t j = static_cast<size_t>(h.neighbors[at]);
-      if (within_either_horizon(&x[3 * i], &x[3 * j], horizon[i], horizon[j]))
-        h.within_horizon[at >> 3] |= static_cast<uint8_t>(1u << (at & 7));
+      if (within_either_horizon(&x[3 * i], &x[3 * j], horizon[i], horizon[j])) within |= static_cast<uint8_t>(1u << (at & 7));
       if (!s.precrack_pairs.empty() && is_precrack(s.precrack_pairs, static_cast<int64_t>(i), static_cast<int64_t>(j)))
-        h.precrack[at >> 3] |= static_cast<uint8_t>(1u << (at & 7));
+        precrack |= static_cast<uint8_t>(1u << (at & 7));
     }
+    if (end > begin) flush((end - 1) >> 3);
+  }
   return h;
 }
 
@@ -392,7 +410,7 @@ void ResultsWriter::write_bonds_together(ResultsWriter* w, const std::string& ou
   const size_t bonds = static_cast<size_t>(bonds_total);
   // The datasets and their order as write_results_bonds writes them.
   f.write_rows("/bonds/offsets", offsets_block.data(), offsets_first, offsets_block.size(), {offsets_rows});
-  f.write_runs("/bonds/neighbors", mine.neighbors.data(), mine.runs, {bonds});
+  f.write_runs("/bonds/neighbors", mine.neighbors.data(), mine.runs, {bonds}, h5::Filter::ScaleOffset);
   f.write_rows("/bonds/within_horizon", within_horizon.data(), within_first, within_horizon.size(), {(bonds + 7) / 8});
 }
 
@@ -572,9 +590,9 @@ void write_checkpoint_content(const h5::File& f, const PdSystem& s, const Checkp
     const size_t entries = s.bond_count();
     f.write_rows("/bond_state", r.state.data(), e0, ec, {entries});
     if (s.config.softening)  // softening bonds (their damage is held exactly then: setup_system)
-      f.write_rows("/bond_damage", doubles_of(r.bond_damage, ec).data(), e0, ec, {entries});
+      f.write_rows("/bond_damage", r.bond_damage.data(), e0, ec, {entries});  // float32, as held
     if (s.config.strength_rate != StrengthRateLaw::None)  // the onsets softening bonds were given at their rate
-      f.write_rows("/bond_onset", doubles_of(r.s_onset, ec).data(), e0, ec, {entries});
+      f.write_rows("/bond_onset", r.s_onset.data(), e0, ec, {entries});
     if (!r.min_stretch.empty()) {  // every rank owns a particle: held alike  // compressive enhancement: the s_min this step's pass read, and its own
       f.write_rows("/min_stretch_previous", doubles_of(r.min_stretch, pc).data(), p0, pc, {n});
       f.write_rows("/min_stretch", doubles_of(r.min_stretch_next, pc).data(), p0, pc, {n});

@@ -35,7 +35,9 @@ std::string write_particles_beside_results(const std::string& out_dir, const Par
 
 void write_results_bonds(const h5::File& f, const HalfBondList& bonds) {
   f.write("/bonds/offsets", bonds.offsets, {bonds.offsets.size()});
-  f.write("/bonds/neighbors", bonds.neighbors, {bonds.neighbors.size()});
+  // Packed by scale-offset, not deflated: the list is the largest array of the file and both
+  // ends of the chain wait for it (h5.hpp, Filter).
+  f.write("/bonds/neighbors", bonds.neighbors, {bonds.neighbors.size()}, h5::Filter::ScaleOffset);
   f.write("/bonds/within_horizon", bonds.within_horizon, {bonds.within_horizon.size()});
 }
 

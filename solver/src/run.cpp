@@ -85,6 +85,8 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
   number("stable_dt_s", s.stable_dt);
   number("silling_askari_dt_s", s.silling_askari_dt);
   number("setup_wall_s", setup_s);
+  number("results_header_wall_s", r.results_header_wall_s);
+  number("final_checkpoint_wall_s", r.final_checkpoint_wall_s);
   Json phases;  // where the set-up's time went (setup_system)
   for (const auto& [name, seconds] : s.setup_phases) phases[name] = seconds;
   j["setup_phases_s"] = phases;
@@ -432,7 +434,9 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
   if (r.status == "completed") {
     r.final_energies = backend.measure(s);
     backend.download(s);
+    const auto checkpoint_t0 = std::chrono::steady_clock::now();
     backend.checkpoint(s, o.out_dir + "/checkpoint.h5", root, true);
+    r.final_checkpoint_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - checkpoint_t0).count();
   } else {
     r.final_energies = e;
   }
@@ -452,9 +456,11 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
     // The case as run (its variant and --set overrides applied): reports read values from it.
     if (!s.config.file.empty() && std::filesystem::exists(s.config.file))
       write_text_file(o.out_dir + "/case_as_run.yaml", Section::text_as_loaded(s.config.file));
-    if (s.config.write_results) results = std::make_unique<ResultsWriter>(s, o.out_dir, restart);
-    history = std::make_unique<HistoryWriter>(s, o.out_dir, restart);
   }
+  const auto header_t0 = std::chrono::steady_clock::now();
+  if (o.root && s.config.write_results) results = std::make_unique<ResultsWriter>(s, o.out_dir, restart);
+  const double header_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - header_t0).count();
+  if (o.root) history = std::make_unique<HistoryWriter>(s, o.out_dir, restart);
   RunResult r;
   if (s.config.quasi_static) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -481,6 +487,7 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
     r = run_time_loop(s, o, cpu, results.get(), history.get());
   }
   std::signal(SIGINT, previous);
+  r.results_header_wall_s = header_s;
   return r;
 }
 

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <numbers>
 #include <sstream>
 
@@ -124,6 +125,39 @@ TEST(BrecciaPostCli, FailingChartScriptIsReportedAndResultsAreKept) {
   EXPECT_NE(bt::read_text(dir / "post" / "post.json").find("fragment_sizes.png: plot_fragment_sizes.py failed"), std::string::npos);
 }
 
+// The crack history runs beside the last output's analysis and the charts beside both when
+// post has two or more threads: every file but the charts must be the same bytes as on one.
+TEST(BrecciaPostCli, ThreadCountDoesNotChangeTheFilesWritten) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_threads";
+  auto run = cracked_cubes(dir);
+  // More outputs than threads, so that the history's outputs are shared out.
+  for (long long step : {200, 300, 400, 500}) {
+    auto more = run.outputs.back();
+    more.step = step;
+    more.time_s = 1e-7 * static_cast<double>(step);
+    run.outputs.push_back(more);
+  }
+  bt::write_run(run);
+  write_history(dir, kG0 * 16e-6);
+  std::map<std::string, std::string> first;
+  for (const char* threads : {"1", "3"}) {
+    const Result r = run_post("'" + dir.string() + "' --quiet --threads " + threads);
+    ASSERT_EQ(r.code, 0) << r.output;
+    for (const char* f : {"crack_history.csv", "cracks.vtp", "damage_iso.vtp", "fragments.csv", "fragments.vtu",
+                          "deformed.vtu", "size_distribution.csv", "post.json", "probe_A.csv", "spectrum_A.csv"}) {
+      const std::string text = bt::read_text(dir / "post" / f);
+      if (first.count(f) == 0) first[f] = text;
+      else EXPECT_EQ(text, first[f]) << f << " differs on " << threads << " threads";
+    }
+    for (const char* png : {"fragment_sizes.png", "energy.png", "probe_A.png", "spectrum_A.png"})
+      EXPECT_TRUE(fs::exists(dir / "post" / png)) << png << " on " << threads << " threads\n" << r.output;
+  }
+  // Every output in order, the last at 16 mm^2.
+  const std::string hist = first["crack_history.csv"];
+  EXPECT_NE(hist.find("\n0,0,0,0,"), std::string::npos) << hist;
+  EXPECT_NE(hist.find("\n5,500,5e-05,1.6e-05,"), std::string::npos) << hist;
+}
+
 TEST(BrecciaPostCli, TwoDimensionalLatticeRunReportsCrackLengthAndTwoFragments) {
   // 10 x 6 square lattice, thickness 5 mm, cut between rows 2 and 3: a 10 mm crack.
   const fs::path dir = fs::path(::testing::TempDir()) / "post_lattice2d";
@@ -226,6 +260,27 @@ TEST(BrecciaPostCli, BrokenBitsOfTheWrongLengthAreBadInputNamingTheDataset) {
             std::string::npos) << r.output;
 }
 
+// An output only the crack history reads (not the last) is bad: on two threads that error
+// comes from the history's thread, once, with exit code 2 (post.json is not written).
+TEST(BrecciaPostCli, BadOutputReadBesideTheAnalysisIsBadInputReportedOnce) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_bad_history_output";
+  bt::write_run(cracked_cubes(dir));
+  std::vector<uint8_t> bits;
+  {
+    h5::File f((dir / "results.h5").string(), h5::File::Mode::Read);
+    bits = f.read_uint8("/output/000000/broken");
+  }
+  bits.pop_back();
+  replace_dataset(dir / "results.h5", "/output/000000/broken", bits);
+  const Result r = run_post("'" + dir.string() + "' --no-plots --quiet --threads 2");
+  EXPECT_EQ(r.code, kExitBadInput);
+  const std::string expected = (dir / "results.h5").string() + ": /output/000000/broken: size " + std::to_string(bits.size());
+  const size_t at = r.output.find(expected);
+  ASSERT_NE(at, std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find(expected, at + 1), std::string::npos) << "reported twice:\n" << r.output;
+  EXPECT_FALSE(fs::exists(dir / "post" / "post.json"));
+}
+
 TEST(BrecciaPostCli, BrokenCountThatDisagreesWithTheBitsIsBadInput) {
   const fs::path dir = fs::path(::testing::TempDir()) / "post_bad_count";
   bt::write_run(cracked_cubes(dir));
@@ -274,7 +329,8 @@ TEST(BrecciaPostCli, FollowsTheToolsCommandLineContract) {
                                          {"--step", "-1"},
                                          {"--min-fragment-particles", "0"},
                                          {"--damage-threshold", "0.5x"},
-                                         {"--frequency", "2 parsecs"}});
+                                         {"--frequency", "2 parsecs"},
+                                         {"--threads", "0"}});
 }
 
 TEST(BrecciaPostCli, UnknownOptionIsBadInput) {

@@ -35,6 +35,10 @@ struct PostOptions {
   std::string python = "/usr/bin/python3";
   std::filesystem::path scripts_dir;   // empty: the built-in default
   bool progress = true;
+  // Threads (0: OpenMP's count, OMP_NUM_THREADS or every core). With two or more, the crack
+  // history runs beside the analysis of the selected outputs and the charts are drawn beside
+  // the rest; the files written are the same with any count.
+  int threads = 0;
 };
 
 struct PostSummary {

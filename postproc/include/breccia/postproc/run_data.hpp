@@ -4,6 +4,7 @@
 // Layout of results.h5: docs/postproc.md ("Inputs").
 #include <cstdint>
 #include <filesystem>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -60,8 +61,14 @@ struct OutputFrame {
 // check provenance (particles_content_id == content_id). InputError on any defect.
 RunData open_run(const std::filesystem::path& run_dir, const std::string& particles_override = "");
 
+// Both reads may be called from several threads at once: they take results_file_mutex().
 OutputFrame read_output(const RunData& run, size_t output_index);
 // Only the broken bonds and damage: what a crack-area history needs for every output.
 OutputFrame read_output_cracks_only(const RunData& run, size_t output_index);
+
+// Held by every read of results.h5 after open_run: the HDF5 library Debian ships is not built
+// thread-safe, so two threads must never be inside it at once (post's crack history reads
+// outputs beside the analysis of the last one).
+std::mutex& results_file_mutex();
 
 }  // namespace breccia::postproc

@@ -73,6 +73,11 @@ struct RunResult {
   // --kernel-times: the GPU time of each kernel (this process's device; rank 0's under MPI).
   std::optional<KernelTimes> kernel_times;
   std::optional<DeviceMemory> device_memory;  // a GPU run's (this process's device; rank 0's under MPI)
+  // Writes outside the set-up and the loop that the user still waits for (summary.json): the
+  // results file's header (identity, particles, the bond list), before the first step, and the
+  // checkpoint after the last. Wall seconds, the root's.
+  double results_header_wall_s = 0.0;
+  double final_checkpoint_wall_s = 0.0;
 };
 
 // What the time loop needs from a backend. The CPU backend works on the PdSystem in place;

@@ -5,7 +5,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <condition_variable>
 #include <cstdlib>
+#include <deque>
 #include <exception>
 #include <fstream>
 #include <future>
@@ -14,6 +16,7 @@
 #include <optional>
 #include <span>
 #include <sstream>
+#include <thread>
 
 #include <omp.h>
 
@@ -96,6 +99,9 @@ struct StepRecord {
 class Runner {
 public:
   explicit Runner(const PostOptions& o) : opt_(o) {}
+  ~Runner() { stop_plots(); }
+  Runner(const Runner&) = delete;
+  Runner& operator=(const Runner&) = delete;
 
   PostSummary run() {
     auto last = std::chrono::steady_clock::now();
@@ -112,6 +118,14 @@ public:
     summary_.post_dir = opt_.run_dir / "post";
     fs::create_directories(summary_.post_dir);
     select_outputs();
+    // history.csv first: the charts that read it alone are drawn beside everything else.
+    load_history();
+    if (opt_.plots && opt_.energy && history_ && energy_available_ && history_->rows() > 0)
+      plot("plot_energy.py", "--history " + shell_quote((energy_history_.empty() ? history_->path : energy_history_).string()),
+           "energy.png");
+    if (opt_.plots && opt_.energy && history_ && history_->find("gas_pressure_Pa"))  // a gas load (solver gas.hpp)
+      plot("plot_gas.py", "--history " + shell_quote(history_->path.string()), "gas.png");
+    phase("history.csv");
     const bool need_faces = opt_.cracks || opt_.energy;
     if (!run_.outputs.empty() && (need_faces || opt_.fragments)) {
       precracks_ = RemovedBonds(run_.precrack_bonds, run_.size());
@@ -148,12 +162,9 @@ public:
       write_text_file(history_path, history_csv.get());
       phase("crack history (the rest, after the outputs)");
     }
-    load_history();
     if (opt_.energy && history_ && energy_available_) energy();
     if (opt_.probes && history_) probes();
-    if (opt_.energy && history_ && history_->find("gas_pressure_Pa") && opt_.plots)  // a gas load (solver gas.hpp)
-      plot("plot_gas.py", "--history " + shell_quote(history_->path.string()), "gas.png");
-    phase("history (energy, probes)");
+    phase("energy, probes");
     finish_plots();
     phase("charts (the rest, after the other work)");
     write_json();
@@ -366,40 +377,66 @@ private:
     plot("plot_fragment_sizes.py", args, "fragment_sizes.png");
   }
 
-  // A chart: its script run by the Python interpreter, on a thread of its own when there are
-  // two or more (at most threads_ - 1 at once), so that post goes on meanwhile; finish_plots
-  // collects them in the order asked, the same list of files with any thread count.
+  // A chart: its script run by the Python interpreter. With two or more threads the charts are
+  // drawn one after another by a thread of their own (plots_worker_), so that post goes on
+  // meanwhile; finish_plots collects them in the order asked, the same list of files with any
+  // thread count.
   void plot(const std::string& script, const std::string& args, const std::string& png) {
     const fs::path dir = opt_.scripts_dir.empty() ? default_scripts_dir() : opt_.scripts_dir;
     const fs::path log = summary_.post_dir / "plots.log";
-    const std::string cmd = shell_quote(opt_.python) + " " + shell_quote((dir / script).string()) + " " + args +
-                            " --out " + shell_quote((summary_.post_dir / png).string()) + " >> " +
-                            shell_quote(log.string()) + " 2>&1";
-    auto draw = [cmd] { return std::system(cmd.c_str()); };
+    std::string cmd = shell_quote(opt_.python) + " " + shell_quote((dir / script).string()) + " " + args + " --out " +
+                      shell_quote((summary_.post_dir / png).string()) + " >> " + shell_quote(log.string()) + " 2>&1";
     if (threads_ < 2) {
-      std::promise<int> rc;
-      rc.set_value(draw());
-      plots_.push_back({script, png, log, rc.get_future()});
+      const int rc = std::system(cmd.c_str());
+      plots_.push_back({script, png, log, std::move(cmd), rc});
       return;
     }
-    // The oldest charts still drawing are waited for until a thread is free.
-    while (plots_.size() - plots_waited_ >= static_cast<size_t>(threads_ - 1)) plots_[plots_waited_++].rc.wait();
-    plots_.push_back({script, png, log, std::async(std::launch::async, draw)});
+    {
+      const std::lock_guard<std::mutex> lock(plots_mutex_);
+      plots_.push_back({script, png, log, std::move(cmd), -1});  // a deque: the worker's element stays put
+    }
+    plots_ready_.notify_one();
+    if (!plots_worker_.joinable()) plots_worker_ = std::thread([this] { draw_plots(); });
+  }
+
+  // The chart thread: each queued command in order, until finish_plots closes the queue.
+  void draw_plots() {
+    std::unique_lock<std::mutex> lock(plots_mutex_);
+    for (;;) {
+      plots_ready_.wait(lock, [this] { return plots_drawn_ < plots_.size() || plots_closed_; });
+      if (plots_drawn_ == plots_.size()) return;  // closed, nothing left
+      const size_t k = plots_drawn_;
+      const std::string cmd = plots_[k].cmd;
+      lock.unlock();
+      const int rc = std::system(cmd.c_str());
+      lock.lock();
+      plots_[k].rc = rc;
+      ++plots_drawn_;
+    }
+  }
+
+  // Waits for the chart thread to draw what was asked and stop (also on the way out of an
+  // error: a joinable thread may not be destroyed).
+  void stop_plots() {
+    {
+      const std::lock_guard<std::mutex> lock(plots_mutex_);
+      plots_closed_ = true;
+    }
+    plots_ready_.notify_one();
+    if (plots_worker_.joinable()) plots_worker_.join();
   }
 
   void finish_plots() {
-    for (auto& p : plots_) {
-      const int rc = p.rc.get();
-      if (rc == 0 && fs::exists(summary_.post_dir / p.png)) {
+    stop_plots();
+    for (const auto& p : plots_) {
+      if (p.rc == 0 && fs::exists(summary_.post_dir / p.png)) {
         summary_.written.push_back(p.png);
         continue;
       }
-      const std::string msg = p.png + ": " + p.script + " failed (exit " + std::to_string(rc) + "), see " + p.log.string();
+      const std::string msg = p.png + ": " + p.script + " failed (exit " + std::to_string(p.rc) + "), see " + p.log.string();
       summary_.plot_failures.push_back(msg);
       std::fprintf(stderr, "warning: %s; the numerical results are unaffected\n", msg.c_str());
     }
-    plots_.clear();
-    plots_waited_ = 0;
   }
 
   void load_history() {
@@ -474,9 +511,7 @@ private:
     const auto held = [&](size_t k) { return h.column("kinetic_J")[k] + h.column("strain_J")[k] + dissipated[k]; };
     const double supplied = work[row] + (held(0) - work[0]), stored = held(row);
     energy_imbalance_ = (supplied - stored) / std::max({std::abs(supplied), std::abs(stored), 1e-300});
-    if (opt_.plots)
-      plot("plot_energy.py", "--history " + shell_quote((energy_history_.empty() ? h.path : energy_history_).string()),
-           "energy.png");
+    // (Its chart was asked for when history.csv was read: run.)
   }
 
   // Uniform samples for the FFT; linear resampling when the history is not uniform.
@@ -753,14 +788,20 @@ private:
   int threads_ = 1;  // opt_.threads, or OpenMP's count
   PostSummary summary_;
   RunData run_;
-  // Charts asked for (plot), in order; those before plots_waited_ have been waited for.
+  // Charts asked for (plot), in order, and the thread that draws them (draw_plots): it has
+  // drawn the first plots_drawn_; plots_mutex_ guards the queue, rc and the counters.
   struct PendingPlot {
     std::string script, png;
     fs::path log;
-    std::future<int> rc;  // the interpreter's exit status
+    std::string cmd;
+    int rc = -1;  // the interpreter's exit status
   };
-  std::vector<PendingPlot> plots_;
-  size_t plots_waited_ = 0;
+  std::deque<PendingPlot> plots_;
+  std::mutex plots_mutex_;
+  std::condition_variable plots_ready_;
+  size_t plots_drawn_ = 0;
+  bool plots_closed_ = false;
+  std::thread plots_worker_;
   std::vector<size_t> analysed_;
   RemovedBonds precracks_;
   std::vector<int64_t> face_bond_;  // per candidate face: its bond in run_.bonds, -1 if none

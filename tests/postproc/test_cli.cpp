@@ -244,19 +244,25 @@ TEST(BrecciaPostCli, BondPartnerOutOfRangeIsBadInputNamingTheDataset) {
             std::string::npos) << r.output;
 }
 
-TEST(BrecciaPostCli, BrokenBitsOfTheWrongLengthAreBadInputNamingTheDataset) {
-  const fs::path dir = fs::path(::testing::TempDir()) / "post_bad_bits";
-  bt::write_run(cracked_cubes(dir));
+// Drops the last byte of an output's broken bits in dir/results.h5; returns the bytes left.
+size_t shorten_broken_bits(const fs::path& dir, const std::string& dataset) {
   std::vector<uint8_t> bits;
   {
     h5::File f((dir / "results.h5").string(), h5::File::Mode::Read);
-    bits = f.read_uint8("/output/000001/broken");
+    bits = f.read_uint8(dataset);
   }
   bits.pop_back();
-  replace_dataset(dir / "results.h5", "/output/000001/broken", bits);
+  replace_dataset(dir / "results.h5", dataset, bits);
+  return bits.size();
+}
+
+TEST(BrecciaPostCli, BrokenBitsOfTheWrongLengthAreBadInputNamingTheDataset) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_bad_bits";
+  bt::write_run(cracked_cubes(dir));
+  const size_t bytes = shorten_broken_bits(dir, "/output/000001/broken");
   const Result r = run_post("'" + dir.string() + "' --no-plots --quiet");
   EXPECT_EQ(r.code, kExitBadInput);
-  EXPECT_NE(r.output.find((dir / "results.h5").string() + ": /output/000001/broken: size " + std::to_string(bits.size())),
+  EXPECT_NE(r.output.find((dir / "results.h5").string() + ": /output/000001/broken: size " + std::to_string(bytes)),
             std::string::npos) << r.output;
 }
 
@@ -265,16 +271,10 @@ TEST(BrecciaPostCli, BrokenBitsOfTheWrongLengthAreBadInputNamingTheDataset) {
 TEST(BrecciaPostCli, BadOutputReadBesideTheAnalysisIsBadInputReportedOnce) {
   const fs::path dir = fs::path(::testing::TempDir()) / "post_bad_history_output";
   bt::write_run(cracked_cubes(dir));
-  std::vector<uint8_t> bits;
-  {
-    h5::File f((dir / "results.h5").string(), h5::File::Mode::Read);
-    bits = f.read_uint8("/output/000000/broken");
-  }
-  bits.pop_back();
-  replace_dataset(dir / "results.h5", "/output/000000/broken", bits);
+  const size_t bytes = shorten_broken_bits(dir, "/output/000000/broken");
   const Result r = run_post("'" + dir.string() + "' --no-plots --quiet --threads 2");
   EXPECT_EQ(r.code, kExitBadInput);
-  const std::string expected = (dir / "results.h5").string() + ": /output/000000/broken: size " + std::to_string(bits.size());
+  const std::string expected = (dir / "results.h5").string() + ": /output/000000/broken: size " + std::to_string(bytes);
   const size_t at = r.output.find(expected);
   ASSERT_NE(at, std::string::npos) << r.output;
   EXPECT_EQ(r.output.find(expected, at + 1), std::string::npos) << "reported twice:\n" << r.output;

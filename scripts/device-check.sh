@@ -381,7 +381,7 @@ import json, re, sys
 s = json.load(open(sys.argv[1])); k = sys.argv[2]
 name = lambda text: re.sub("[^A-Za-z0-9]+", "_", text).strip("_")
 for f in ("backend", "threads", "particles", "setup_wall_s", "wall_s", "bond_updates_per_s", "status",
-          "time_s", "gas_share_of_loop"):
+          "time_s", "gas_share_of_loop", "results_header_wall_s", "final_checkpoint_wall_s"):
     if f in s:
         print(f"{k}_{f}={s[f]}")
 print(f"{k}_steps={s['steps_this_run']}")

@@ -120,7 +120,7 @@ public:
     select_outputs();
     // history.csv first: the charts that read it alone are drawn beside everything else.
     load_history();
-    if (opt_.plots && opt_.energy && history_ && energy_available_ && history_->rows() > 0)
+    if (opt_.plots && energy_balance_applies() && history_->rows() > 0)
       plot("plot_energy.py", "--history " + shell_quote((energy_history_.empty() ? history_->path : energy_history_).string()),
            "energy.png");
     if (opt_.plots && opt_.energy && history_ && history_->find("gas_pressure_Pa"))  // a gas load (solver gas.hpp)
@@ -162,7 +162,7 @@ public:
       write_text_file(history_path, history_csv.get());
       phase("crack history (the rest, after the outputs)");
     }
-    if (opt_.energy && history_ && energy_available_) energy();
+    if (energy_balance_applies()) energy();
     if (opt_.probes && history_) probes();
     phase("energy, probes");
     finish_plots();
@@ -383,17 +383,17 @@ private:
   // thread count.
   void plot(const std::string& script, const std::string& args, const std::string& png) {
     const fs::path dir = opt_.scripts_dir.empty() ? default_scripts_dir() : opt_.scripts_dir;
-    const fs::path log = summary_.post_dir / "plots.log";
     std::string cmd = shell_quote(opt_.python) + " " + shell_quote((dir / script).string()) + " " + args + " --out " +
-                      shell_quote((summary_.post_dir / png).string()) + " >> " + shell_quote(log.string()) + " 2>&1";
+                      shell_quote((summary_.post_dir / png).string()) + " >> " + shell_quote(plots_log().string()) +
+                      " 2>&1";
     if (threads_ < 2) {
       const int rc = std::system(cmd.c_str());
-      plots_.push_back({script, png, log, std::move(cmd), rc});
+      plots_.push_back({script, png, std::move(cmd), rc});
       return;
     }
     {
       const std::lock_guard<std::mutex> lock(plots_mutex_);
-      plots_.push_back({script, png, log, std::move(cmd), -1});  // a deque: the worker's element stays put
+      plots_.push_back({script, png, std::move(cmd), -1});  // a deque: the worker's element stays put
     }
     plots_ready_.notify_one();
     if (!plots_worker_.joinable()) plots_worker_ = std::thread([this] { draw_plots(); });
@@ -433,11 +433,17 @@ private:
         summary_.written.push_back(p.png);
         continue;
       }
-      const std::string msg = p.png + ": " + p.script + " failed (exit " + std::to_string(p.rc) + "), see " + p.log.string();
+      const std::string msg = p.png + ": " + p.script + " failed (exit " + std::to_string(p.rc) + "), see " + plots_log().string();
       summary_.plot_failures.push_back(msg);
       std::fprintf(stderr, "warning: %s; the numerical results are unaffected\n", msg.c_str());
     }
   }
+
+  // Every chart script appends its output to this one log.
+  fs::path plots_log() const { return summary_.post_dir / "plots.log"; }
+
+  // The energy balance (and its chart) apply: asked for, history.csv read, energy columns in it.
+  bool energy_balance_applies() const { return opt_.energy && history_ && energy_available_; }
 
   void load_history() {
     const fs::path p = opt_.run_dir / "history.csv";
@@ -792,7 +798,6 @@ private:
   // drawn the first plots_drawn_; plots_mutex_ guards the queue, rc and the counters.
   struct PendingPlot {
     std::string script, png;
-    fs::path log;
     std::string cmd;
     int rc = -1;  // the interpreter's exit status
   };

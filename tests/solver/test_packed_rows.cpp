@@ -222,3 +222,34 @@ TEST(PackedRows, PmbRowsOfBothWidthsEqualTheOneEntryLoop) { compare_widths("pmb"
 
 TEST(PackedRows, LpsRowsOfBothWidthsEqualTheOneEntryLoops) { compare_widths("lps"); }
 #endif
+
+// The general loop's and the dilatation's skip of broken entries (last_of_zero_run): walking
+// a row as those loops do visits exactly the entries with a nonzero state, in row order,
+// whatever the runs of zeros (shorter than a word, whole words, a row's tail, a whole row).
+TEST(PackedRows, ZeroRunSkipVisitsEveryLiveEntryOnceInRowOrder) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const int64_t begin = static_cast<int64_t>(rng() % 13);  // rows start anywhere in the array
+    const int64_t count = static_cast<int64_t>(rng() % 70);
+    std::vector<uint8_t> state(static_cast<size_t>(begin + count + 8), 0);
+    const double live = (trial % 4) * 0.3;  // 0: a dead row; up to 0.9 live
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int64_t q = 0; q < count; ++q) state[begin + q] = u(rng) < live ? uint8_t(1 + rng() % 3) : uint8_t(0);
+    std::vector<int64_t> expected, visited;
+    for (int64_t q = 0; q < count; ++q)
+      if (state[begin + q]) expected.push_back(q);
+    const CsrRow at{begin};
+    for (int64_t q = 0; q < count; ++q) {
+      if (!state[at(q)]) {
+        const int64_t last = last_of_zero_run(state.data(), at, q, count);
+        ASSERT_GE(last, q);
+        ASSERT_LT(last, count);
+        for (int64_t r = q; r <= last; ++r) ASSERT_EQ(state[at(r)], 0) << "skipped a live entry";
+        q = last;
+        continue;
+      }
+      visited.push_back(q);
+    }
+    ASSERT_EQ(visited, expected) << "trial " << trial;
+  }
+}

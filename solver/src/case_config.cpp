@@ -240,9 +240,11 @@ CaseConfig parse_case_file(const std::string& path) {
                          "compressive_strength >= tensile_strength");
     }
     if (auto w = m.optional_section("weibull")) {
-      w->allow_only({"modulus", "seed", "scales", "strength_scaling"});
+      w->allow_only({"modulus", "seed", "scales", "strength_scaling", "correlation_length"});
       ms.weibull_modulus = w->positive("modulus", Quantity::Dimensionless);
       ms.weibull_seed = w->integer("seed", 1);
+      if (w->has("correlation_length"))
+        ms.weibull_correlation_length = w->positive("correlation_length", Quantity::Length);
       if (w->has("scales")) {
         const std::string what = w->choice("scales", {"both", "fracture_energy", "tensile_strength"});
         if (what != "fracture_energy" && !(ms.tensile_strength > 0))

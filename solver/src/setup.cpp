@@ -30,6 +30,7 @@
 #include "breccia/solver/graded_check.hpp"
 #include "breccia/solver/lattice_model.hpp"
 #include "breccia/solver/partial_volume_lattice.hpp"
+#include "breccia/solver/random_field.hpp"
 #include "breccia/solver/particle_field.hpp"
 #include "breccia/solver/pd_system.hpp"
 #include "breccia/solver/step.hpp"
@@ -1238,6 +1239,20 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   for (size_t m = 0; m < c.materials.size(); ++m)
     if (c.materials[m].weibull_modulus > 0)
       weibull_scale[m] = c.materials[m].fracture_energy / std::tgamma(1.0 + 1.0 / c.materials[m].weibull_modulus);
+  // weibull.correlation_length: each such material's Gaussian field at every particle, once
+  // (the bond's draw is then a function of its two ends' values and its length).
+  std::vector<std::vector<double>> weibull_field(c.materials.size());
+  std::vector<double> weibull_length(c.materials.size(), 0.0);
+  for (size_t m = 0; m < c.materials.size(); ++m) {
+    const MaterialSpec& ms = c.materials[m];
+    if (!(ms.weibull_modulus > 0 && ms.weibull_correlation_length > 0 && ms.fracture_energy > 0)) continue;
+    const GaussianRandomField field(ms.weibull_correlation_length, static_cast<uint64_t>(ms.weibull_seed));
+    weibull_length[m] = ms.weibull_correlation_length;
+    auto& g = weibull_field[m];
+    g.resize(n);
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < static_cast<int64_t>(n); ++i) g[i] = field(&s.x0[3 * i]);
+  }
   std::vector<LpsCriticalStretch> lps_stretch;  // per material: its factors once, not per bond
   for (const auto& e : elastic) lps_stretch.emplace_back(e, c.influence);
   auto fill_strengths = [&](int64_t i, int64_t j, int64_t out, CalibrationMemo& s0_memo) {
@@ -1246,8 +1261,16 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     double G0 = wm.fracture_energy;
     double strength_draw = wm.fracture_energy;  // the strength scales as this over the mean G0
     if (G0 > 0 && wm.weibull_modulus > 0) {
-      const double U = bond_uniform(static_cast<uint64_t>(s.original_index[i]), static_cast<uint64_t>(s.original_index[j]),
-                                    static_cast<uint64_t>(wm.weibull_seed));
+      double U;
+      if (weibull_length[weak] > 0) {
+        double r2 = 0;
+        for (int d = 0; d < 3; ++d) r2 += (s.x0[3 * j + d] - s.x0[3 * i + d]) * (s.x0[3 * j + d] - s.x0[3 * i + d]);
+        const double L = weibull_length[weak];
+        U = correlated_bond_uniform(weibull_field[weak][i], weibull_field[weak][j], std::exp(-r2 / (L * L)));
+      } else {
+        U = bond_uniform(static_cast<uint64_t>(s.original_index[i]), static_cast<uint64_t>(s.original_index[j]),
+                         static_cast<uint64_t>(wm.weibull_seed));
+      }
       // The draw of G0 (mean G0); weibull.scales says what it scatters (both by default, the
       // strength following the draw as weibull.strength_scaling says).
       const double drawn = weibull_scale[weak] * std::pow(-std::log(U), 1.0 / wm.weibull_modulus);

@@ -31,6 +31,9 @@ struct MaterialSpec {
   double tensile_strength = 0.0; // > 0: bilinear softening bonds with this strength (0: brittle)
   double weibull_modulus = 0.0;  // 0: no scatter
   long long weibull_seed = 1;
+  // > 0: the draws are correlated in space over this length (a Gaussian random field through a
+  // Gaussian copula, random_field.hpp; docs/theory.md "Weibull heterogeneity"); 0: per bond.
+  double weibull_correlation_length = 0.0;
   // What the Weibull draw scales (softening materials): both G0 and the strength by the same
   // ratio to the mean (default), or only one of them.
   enum class WeibullScales { Both, FractureEnergy, TensileStrength } weibull_scales = WeibullScales::Both;

@@ -525,6 +525,49 @@ TEST(Crushing, OneBondFollowsTheScaledLawInCompression) {
   EXPECT_EQ(none, 0.0);
 }
 
+// The force loop keeps a quiet softening entry's whole force without calling soften
+// (softening_entry_quiet). Over stretches on both sides of the onset and of the crushing onset,
+// with and without damage, crushing, the rate law and fracture: wherever an entry is quiet,
+// soften returns 0 and changes nothing (damage, onset, ultimate, released energy), bit for bit.
+// And the test can fail: past the onset an undamaged entry is not quiet, and soften damages it.
+TEST(Softening, QuietEntriesAreTheOnesSoftenLeavesAlone) {
+  const double st = 1e-4, su = 1.1e-3;
+  std::vector<double> v{0, 0, 0, 1e-3, 0, 0};  // particle 1 recedes along x: a positive stretch rate
+  int quiet = 0, loud = 0;
+  for (double d0 : {0.0, 0.3})
+    for (float crush : {0.0f, 4.0f})
+      for (int rate : {0, static_cast<int>(StrengthRateLaw::FibMC2010)})
+        for (bool fracture : {true, false})
+          for (int q = -120; q <= 120; ++q) {
+            const double s = st * q / 20.0;  // -6 to +6 onsets: past the crushing onset (4) too
+            std::vector<float> onset{static_cast<float>(st)}, ultimate{static_cast<float>(su)},
+                damage{static_cast<float>(d0)}, raised{static_cast<float>(su)};
+            PdView p;
+            p.s_onset = onset.data(); p.s0_own = ultimate.data(); p.s_ultimate = raised.data();
+            p.bond_damage = damage.data(); p.crush_ratio = crush; p.strength_rate = rate; p.fracture = fracture;
+            p.v = v.data();
+            const BondMotionT<double> motion{0, 1, 1e-3, 0, 0, 1e-3, 1e-3};
+            double released = 0.0;
+            const bool is_quiet = softening_entry_quiet(p, 0, s);
+            const double d = soften(p, 0, s, 1.0, released, motion);
+            if (is_quiet) {
+              ++quiet;
+              ASSERT_EQ(d, 0.0) << s;
+              ASSERT_EQ(released, 0.0) << s;
+              ASSERT_EQ(damage[0], 0.0f) << s;
+              ASSERT_EQ(onset[0], static_cast<float>(st)) << s;
+              ASSERT_EQ(raised[0], static_cast<float>(su)) << s;
+            } else {
+              ++loud;
+              if (d0 == 0.0 && fracture && s > 1.05 * st && rate == 0) EXPECT_GT(d, 0.0) << s;
+              if (d0 == 0.0 && fracture && crush > 0.0f && s < -1.05 * crush * st) EXPECT_GT(d, 0.0) << s;
+            }
+          }
+  std::printf("quiet entries %d, others %d\n", quiet, loud);
+  EXPECT_GT(quiet, 100);
+  EXPECT_GT(loud, 100);
+}
+
 namespace {
 // The LPS rate bar above, shortened at `rate` /s (homogeneous uniaxial stress from the start), and
 // the peak compressive stress its interior bonds give at one homogeneously strained point

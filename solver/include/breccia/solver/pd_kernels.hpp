@@ -409,6 +409,16 @@ BRECCIA_HD double soften(const PdViewT<Real>& p, int64_t k, double s, double uni
   return d;
 }
 
+// Is softening entry k quiet at stretch s: undamaged, stretched no further than its onset, and
+// not compressed where bonds crush? Then soften(p, k, s, ...) would return its damage 0 and
+// change nothing (no damage stored, nothing released, no onset raised: the rate law acts only
+// past the onset), so a loop may keep the entry's whole force without forming its energy unit
+// or calling it. The contract is tested against soften itself (Softening.QuietEntriesAreTheOnesSoftenLeavesAlone).
+template <class Real>
+BRECCIA_HD bool softening_entry_quiet(const PdViewT<Real>& p, int64_t k, double s) {
+  return p.bond_damage[k] == 0.0f && s <= double(p.s_onset[k]) && (s >= 0.0 || !(p.crush_ratio > 0.0f));
+}
+
 // Particle i's force sums over its row. PMB with one constant horizon (every path: the packed
 // rows, the two-stage and one-entry loops, the device's, the SELL lanes', the diagnostic loop)
 // keeps four partial sums per component, entry q of the row added to sum q mod 4 in row order,
@@ -965,13 +975,15 @@ BRECCIA_HD void lps_symmetric_force_kernel(const PdViewT<Real>& p, int64_t i) {
     Real keep = Real(1);
     bool breaking = false;
     if (softens(p, k)) {
-      const double dmg = soften(p, k, double(e) / xi, 0.5 * double(b_i) * omega * double(p.volume[j]) * p.volume[i] * double(xi) * xi,
-                                released, BondMotionT<Real>{i, j, dx, dy, dz, len, xi});
-      if (dmg >= 1.0) {
-        p.state[k] = 0;
-        continue;
+      if (!softening_entry_quiet(p, k, double(e) / xi)) {
+        const double dmg = soften(p, k, double(e) / xi, 0.5 * double(b_i) * omega * double(p.volume[j]) * p.volume[i] * double(xi) * xi,
+                                  released, BondMotionT<Real>{i, j, dx, dy, dz, len, xi});
+        if (dmg >= 1.0) {
+          p.state[k] = 0;
+          continue;
+        }
+        keep = static_cast<Real>(1.0 - dmg);
       }
-      keep = static_cast<Real>(1.0 - dmg);
     } else {
       const Real s0 = p.s0_own[k] - stretch_shift(p, i, j);
       if (p.fracture && e > s0 * xi) {
@@ -1213,13 +1225,15 @@ BRECCIA_HD void pmb_symmetric_force_loop(const PdViewT<Real>& p, int64_t i) {
     double share = 1.0;
     bool breaking = false;
     if (softens(p, k)) {
-      const double dmg = soften(p, k, double(extension) / xi, 0.25 * double(p.volume[i]) * double(k2) * xi, released,
-                                BondMotionT<Real>{i, j, dx, dy, dz, len, xi});
-      if (dmg >= 1.0) {
-        p.state[k] = 0;
-        continue;
+      if (!softening_entry_quiet(p, k, double(extension) / xi)) {
+        const double dmg = soften(p, k, double(extension) / xi, 0.25 * double(p.volume[i]) * double(k2) * xi, released,
+                                  BondMotionT<Real>{i, j, dx, dy, dz, len, xi});
+        if (dmg >= 1.0) {
+          p.state[k] = 0;
+          continue;
+        }
+        share = 1.0 - dmg;
       }
-      share = 1.0 - dmg;
     } else {
       const Real s0_bond = p.s0_own[k] - stretch_shift(p, i, j);
       if (p.fracture && extension > s0_bond * xi) {
@@ -1347,13 +1361,15 @@ BRECCIA_HD void general_force_row(const PdViewT<Real>& p, int64_t i, int64_t cou
     }
     double keep = 1.0;  // softening: the share of the bond's force left, 1 - d
     if (softens(p, k)) {
-      const double unit = lps ? 0.5 * (p.lps[i].shear_term / m_i) * p.k_own[k] * double(p.volume[j]) * p.volume[i] * double(xi) * xi
-                              : 0.25 * double(p.volume[i]) * (double(p.k_own[k]) + double(p.k_dual[k])) * xi;
-      keep = 1.0 - soften(p, k, double(g.stretch), unit, released, BondMotionT<Real>{i, j, g.dx, g.dy, g.dz, g.length, xi});
-      if (keep <= 0.0) {
-        p.state[k] = 0;
-        broke(k);
-        continue;
+      if (!softening_entry_quiet(p, k, double(g.stretch))) {  // most entries of an intact block are quiet
+        const double unit = lps ? 0.5 * (p.lps[i].shear_term / m_i) * p.k_own[k] * double(p.volume[j]) * p.volume[i] * double(xi) * xi
+                                : 0.25 * double(p.volume[i]) * (double(p.k_own[k]) + double(p.k_dual[k])) * xi;
+        keep = 1.0 - soften(p, k, double(g.stretch), unit, released, BondMotionT<Real>{i, j, g.dx, g.dy, g.dz, g.length, xi});
+        if (keep <= 0.0) {
+          p.state[k] = 0;
+          broke(k);
+          continue;
+        }
       }
     } else if (p.fracture) {
       const Real shift = stretch_shift(p, i, j);

@@ -1242,12 +1242,13 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // weibull.correlation_length: each such material's Gaussian field at every particle, once
   // (the bond's draw is then a function of its two ends' values and its length).
   std::vector<std::vector<double>> weibull_field(c.materials.size());
-  std::vector<double> weibull_length(c.materials.size(), 0.0);
+  std::vector<std::unique_ptr<GaussianRandomField>> weibull_fields(c.materials.size());
   for (size_t m = 0; m < c.materials.size(); ++m) {
     const MaterialSpec& ms = c.materials[m];
     if (!(ms.weibull_modulus > 0 && ms.weibull_correlation_length > 0 && ms.fracture_energy > 0)) continue;
-    const GaussianRandomField field(ms.weibull_correlation_length, static_cast<uint64_t>(ms.weibull_seed));
-    weibull_length[m] = ms.weibull_correlation_length;
+    weibull_fields[m] =
+        std::make_unique<GaussianRandomField>(ms.weibull_correlation_length, static_cast<uint64_t>(ms.weibull_seed));
+    const GaussianRandomField& field = *weibull_fields[m];
     auto& g = weibull_field[m];
     g.resize(n);
 #pragma omp parallel for schedule(static)
@@ -1262,11 +1263,11 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     double strength_draw = wm.fracture_energy;  // the strength scales as this over the mean G0
     if (G0 > 0 && wm.weibull_modulus > 0) {
       double U;
-      if (weibull_length[weak] > 0) {
+      if (weibull_fields[weak]) {
         double r2 = 0;
         for (int d = 0; d < 3; ++d) r2 += (s.x0[3 * j + d] - s.x0[3 * i + d]) * (s.x0[3 * j + d] - s.x0[3 * i + d]);
-        const double L = weibull_length[weak];
-        U = correlated_bond_uniform(weibull_field[weak][i], weibull_field[weak][j], std::exp(-r2 / (L * L)));
+        U = correlated_bond_uniform(weibull_field[weak][i], weibull_field[weak][j],
+                                    weibull_fields[weak]->correlation(std::sqrt(r2)));
       } else {
         U = bond_uniform(static_cast<uint64_t>(s.original_index[i]), static_cast<uint64_t>(s.original_index[j]),
                          static_cast<uint64_t>(wm.weibull_seed));

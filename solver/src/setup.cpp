@@ -1239,20 +1239,21 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   for (size_t m = 0; m < c.materials.size(); ++m)
     if (c.materials[m].weibull_modulus > 0)
       weibull_scale[m] = c.materials[m].fracture_energy / std::tgamma(1.0 + 1.0 / c.materials[m].weibull_modulus);
-  // weibull.correlation_length: each such material's Gaussian field at every particle, once
-  // (the bond's draw is then a function of its two ends' values and its length).
-  std::vector<std::vector<double>> weibull_field(c.materials.size());
-  std::vector<std::unique_ptr<GaussianRandomField>> weibull_fields(c.materials.size());
+  // weibull.correlation_length: each such material's Gaussian field and its value at every
+  // particle, once (a bond's draw is then a function of its two ends' values and its length).
+  struct CorrelatedDraws {
+    std::unique_ptr<GaussianRandomField> field;  // null: independent draws per bond
+    std::vector<double> at_particle;
+  };
+  std::vector<CorrelatedDraws> correlated(c.materials.size());
   for (size_t m = 0; m < c.materials.size(); ++m) {
     const MaterialSpec& ms = c.materials[m];
     if (!(ms.weibull_modulus > 0 && ms.weibull_correlation_length > 0 && ms.fracture_energy > 0)) continue;
-    weibull_fields[m] =
-        std::make_unique<GaussianRandomField>(ms.weibull_correlation_length, static_cast<uint64_t>(ms.weibull_seed));
-    const GaussianRandomField& field = *weibull_fields[m];
-    auto& g = weibull_field[m];
-    g.resize(n);
+    CorrelatedDraws& draws = correlated[m];
+    draws.field = std::make_unique<GaussianRandomField>(ms.weibull_correlation_length, static_cast<uint64_t>(ms.weibull_seed));
+    draws.at_particle.resize(n);
 #pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < static_cast<int64_t>(n); ++i) g[i] = field(&s.x0[3 * i]);
+    for (int64_t i = 0; i < static_cast<int64_t>(n); ++i) draws.at_particle[i] = (*draws.field)(&s.x0[3 * i]);
   }
   std::vector<LpsCriticalStretch> lps_stretch;  // per material: its factors once, not per bond
   for (const auto& e : elastic) lps_stretch.emplace_back(e, c.influence);
@@ -1263,11 +1264,8 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     double strength_draw = wm.fracture_energy;  // the strength scales as this over the mean G0
     if (G0 > 0 && wm.weibull_modulus > 0) {
       double U;
-      if (weibull_fields[weak]) {
-        double r2 = 0;
-        for (int d = 0; d < 3; ++d) r2 += (s.x0[3 * j + d] - s.x0[3 * i + d]) * (s.x0[3 * j + d] - s.x0[3 * i + d]);
-        U = correlated_bond_uniform(weibull_field[weak][i], weibull_field[weak][j],
-                                    weibull_fields[weak]->correlation(std::sqrt(r2)));
+      if (const CorrelatedDraws& draws = correlated[weak]; draws.field) {  // |xi| is set before each call
+        U = correlated_bond_uniform(draws.at_particle[i], draws.at_particle[j], draws.field->correlation(s.xi_len[out]));
       } else {
         U = bond_uniform(static_cast<uint64_t>(s.original_index[i]), static_cast<uint64_t>(s.original_index[j]),
                          static_cast<uint64_t>(wm.weibull_seed));

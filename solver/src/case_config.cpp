@@ -590,13 +590,22 @@ CaseConfig parse_case_file(const std::string& path) {
   const Section time = root.section("time");
   time.allow_only({"end", "steps", "dt", "safety", "check_stability", "integrator", "adr_tolerance", "adr_max_steps"});
   c.end_time = time.optional_number("end", Quantity::Time);
-  if (time.has("steps")) c.steps = time.integer("steps");
+  // A negative end or count runs no step without saying so: refused, as --steps -3 is. Zero
+  // stays allowed (the set-up and the initial outputs alone, as --steps 0).
+  if (c.end_time && !(*c.end_time >= 0.0))
+    throw InputError(path, "time.end", short_number(*c.end_time) + " s", "a time >= 0 (e.g. 700 us)");
+  if (time.has("steps")) {
+    c.steps = time.integer("steps");
+    if (*c.steps < 0) throw InputError(path, "time.steps", std::to_string(*c.steps), "a whole number of steps >= 0");
+  }
   if (time.has("dt")) c.dt = time.positive("dt", Quantity::Time);
   c.safety = time.positive("safety", Quantity::Dimensionless, 0.8);
   c.check_stability = time.boolean("check_stability", true);
   c.quasi_static = time.choice("integrator", {"verlet", "adr"}, "verlet") == "adr";
   c.adr_tolerance = time.positive("adr_tolerance", Quantity::Dimensionless, 1e-8);
   c.adr_max_steps = time.integer("adr_max_steps", 100000);
+  if (c.adr_max_steps < 1)
+    throw InputError(path, "time.adr_max_steps", std::to_string(c.adr_max_steps), "a whole number of steps >= 1");
   if (!c.end_time && !c.steps && !c.quasi_static)
     throw InputError(path, "time", "neither 'end' nor 'steps' given", "time.end (e.g. 700 us) or time.steps");
   if (c.quasi_static && c.strength_rate != StrengthRateLaw::None)
@@ -632,8 +641,14 @@ CaseConfig parse_case_file(const std::string& path) {
       c.probes.push_back({p.text("name"), p.vec3("position", Quantity::Length),
                           p.choice("field", {"displacement", "velocity"}, "displacement")});
     }
-    if (c.output_every <= 0 || c.history_every <= 0)
-      throw InputError(path, "output.every", "a non-positive interval", "a positive number of steps");
+    for (const auto& [key, every] : {std::pair<const char*, long long>{"every", c.output_every},
+                                     {"history_every", c.history_every}})
+      if (every <= 0)
+        throw InputError(path, std::string("output.") + key, "a non-positive interval (" + std::to_string(every) + ")",
+                         "a positive number of steps");
+    if (c.checkpoint_every < 0)
+      throw InputError(path, "output.checkpoint_every", std::to_string(c.checkpoint_every),
+                       "a number of steps >= 0 (0: a checkpoint at the end and on Ctrl-C only)");
   }
   return c;
 }

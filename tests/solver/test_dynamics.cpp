@@ -6,6 +6,9 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "breccia/solver/calibration.hpp"
 #include "breccia/common/error.hpp"
@@ -178,6 +181,33 @@ TEST(Energy, TimeStepAboveTheStableOneIsRejectedBeforeTheRun) {
     FAIL() << "a time step of 1 s must be rejected";
   } catch (const breccia::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("time.dt"), std::string::npos) << e.what();
+  }
+}
+
+// A negative end time or step count used to run no step and exit 0; each is refused by its
+// key, as `--steps -3` is on the command line. Zero stays allowed (the set-up alone).
+TEST(CaseInput, NegativeEndTimesAndStepCountsAreRefusedByName) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"time: {end: -1 us}", "time.end"},
+      {"time: {steps: -3}", "time.steps"},
+      {"time: {steps: 1, integrator: adr, adr_max_steps: 0}", "time.adr_max_steps"},
+      {"time: {steps: 1}\noutput: {history_every: 0}", "output.history_every"},
+      {"time: {steps: 1}\noutput: {every: -2}", "output.every"},
+      {"time: {steps: 1}\noutput: {checkpoint_every: -1}", "output.checkpoint_every"}};
+  for (const auto& [time, key] : cases) {
+    std::string yaml = kFreeSquare;
+    yaml.replace(yaml.find("time: {steps: 1}"), 16, time);
+    try {
+      system_from_yaml("negative_time", yaml);
+      ADD_FAILURE() << time << ": accepted";
+    } catch (const breccia::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << time << ": " << e.what();
+    }
+  }
+  for (const std::string time : {"time: {end: 0 s}", "time: {steps: 0}"}) {
+    std::string yaml = kFreeSquare;
+    yaml.replace(yaml.find("time: {steps: 1}"), 16, time);
+    EXPECT_NO_THROW(system_from_yaml("zero_time", yaml)) << time;
   }
 }
 

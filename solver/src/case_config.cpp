@@ -220,7 +220,8 @@ CaseConfig parse_case_file(const std::string& path) {
     if (m.has("tensile_strength")) {
       ms.tensile_strength = m.positive("tensile_strength", Quantity::Pressure);
       if (!(ms.fracture_energy > 0))
-        throw InputError(path, m.field("tensile_strength"), "given without a fracture_energy",
+        throw InputError(path, m.field("tensile_strength"),
+                         "given without a fracture energy (fracture_energy absent or 0: unbreakable)",
                          "fracture_energy > 0 too (the softening law takes both: strength and G0)");
     }
     if (m.has("strength_rate")) {  // docs/theory.md "Rate-dependent strength"
@@ -601,6 +602,11 @@ CaseConfig parse_case_file(const std::string& path) {
   if (time.has("dt")) c.dt = time.positive("dt", Quantity::Time);
   c.safety = time.positive("safety", Quantity::Dimensionless, 0.8);
   c.check_stability = time.boolean("check_stability", true);
+  // dt = safety x 2/omega_max: above 1 the step is past the stability limit, as a time.dt
+  // above the stable step is (refused at set-up unless check_stability: false).
+  if (c.check_stability && c.safety > 1.0)
+    throw InputError(path, "time.safety", short_number(c.safety) + " (dt = safety x the stable step)",
+                     "0 < safety <= 1 (or check_stability: false)");
   c.quasi_static = time.choice("integrator", {"verlet", "adr"}, "verlet") == "adr";
   c.adr_tolerance = time.positive("adr_tolerance", Quantity::Dimensionless, 1e-8);
   c.adr_max_steps = time.integer("adr_max_steps", 100000);

@@ -184,16 +184,18 @@ TEST(Energy, TimeStepAboveTheStableOneIsRejectedBeforeTheRun) {
   }
 }
 
-// A negative end time or step count used to run no step and exit 0; each is refused by its
-// key, as `--steps -3` is on the command line. Zero stays allowed (the set-up alone).
-TEST(CaseInput, NegativeEndTimesAndStepCountsAreRefusedByName) {
+// A negative end time or step count used to run no step and exit 0, and a safety factor past
+// 1 ran past the stable step; each is refused by its key, as `--steps -3` and a time.dt past
+// the stable step are. Zero stays allowed (the set-up alone).
+TEST(CaseInput, NegativeEndTimesStepCountsAndASafetyPastOneAreRefusedByName) {
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"time: {end: -1 us}", "time.end"},
       {"time: {steps: -3}", "time.steps"},
       {"time: {steps: 1, integrator: adr, adr_max_steps: 0}", "time.adr_max_steps"},
       {"time: {steps: 1}\noutput: {history_every: 0}", "output.history_every"},
       {"time: {steps: 1}\noutput: {every: -2}", "output.every"},
-      {"time: {steps: 1}\noutput: {checkpoint_every: -1}", "output.checkpoint_every"}};
+      {"time: {steps: 1}\noutput: {checkpoint_every: -1}", "output.checkpoint_every"},
+      {"time: {steps: 1, safety: 1.5}", "time.safety"}};
   for (const auto& [time, key] : cases) {
     std::string yaml = kFreeSquare;
     yaml.replace(yaml.find("time: {steps: 1}"), 16, time);
@@ -204,7 +206,9 @@ TEST(CaseInput, NegativeEndTimesAndStepCountsAreRefusedByName) {
       EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << time << ": " << e.what();
     }
   }
-  for (const std::string time : {"time: {end: 0 s}", "time: {steps: 0}"}) {
+  // (and a safety past 1 where the stability check is off, as a time.dt past the stable step is)
+  for (const std::string time :
+       {"time: {end: 0 s}", "time: {steps: 0}", "time: {steps: 1, safety: 1.5, check_stability: false}"}) {
     std::string yaml = kFreeSquare;
     yaml.replace(yaml.find("time: {steps: 1}"), 16, time);
     EXPECT_NO_THROW(system_from_yaml("zero_time", yaml)) << time;

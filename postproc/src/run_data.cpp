@@ -119,9 +119,14 @@ RunData open_run(const fs::path& run_dir, const std::string& particles_override)
                                            : fs::path(particles_override);
   if (particles_override.empty() && pf.is_relative()) pf = run_dir / pf;
   run.particles_path = pf;
-  if (!fs::exists(pf))
+  if (!fs::exists(pf)) {
+    // Name where the path came from: the option the user gave, or the run's own record of it.
+    if (!particles_override.empty())
+      throw InputError("command line", "--particles", "'" + pf.string() + "' does not exist",
+                       "the particles.h5 the run in " + run_dir.string() + " was computed from");
     throw InputError(rp, "/@particles_file", "particles file '" + pf.string() + "' does not exist",
                      "the particles.h5 this run was computed from (or --particles FILE)");
+  }
   run.particles = read_particle_file(pf.string());
   const std::string quoted = f.attr_string("/", "particles_content_id");
   if (quoted != run.particles.content_id)

@@ -190,6 +190,19 @@ TEST(BrecciaPostCli, MissingResultsFileIsBadInputNamingTheFile) {
   EXPECT_NE(r.output.find("error: " + (dir / "results.h5").string() + ": file does not exist"), std::string::npos) << r.output;
 }
 
+// A --particles path that does not exist is the option's fault, not the run's: the error names
+// the option (it named results.h5's attribute, which the option had replaced).
+TEST(BrecciaPostCli, MissingParticlesFileGivenByTheOptionIsBadInputNamingTheOption) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_particles_option";
+  bt::write_run(cracked_cubes(dir));
+  const fs::path missing = dir / "no_such_particles.h5";
+  const Result r = run_post("'" + dir.string() + "' --particles '" + missing.string() + "' --no-plots");
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.output.find("error: command line: --particles: '" + missing.string() + "' does not exist"),
+            std::string::npos)
+      << r.output;
+}
+
 TEST(BrecciaPostCli, UnknownStepIsBadInputListingTheAvailableSteps) {
   const fs::path dir = fs::path(::testing::TempDir()) / "post_step";
   bt::write_run(cracked_cubes(dir));

@@ -65,6 +65,26 @@ bool gpu_available() {
 #endif
 }
 
+// Why the output folder cannot take the run's files ("" when it can): it is created if
+// missing and a file is made and removed in it.
+std::string output_folder_problem(const std::string& out_dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) return ec.message();
+  const std::string probe = out_dir + "/.breccia-write-probe";
+  std::FILE* f = std::fopen(probe.c_str(), "w");
+  if (!f) return "cannot create a file there";
+  std::fclose(f);
+  std::remove(probe.c_str());
+  return "";
+}
+
+[[noreturn]] void throw_output_folder_error(const std::string& out_dir, const std::string& why) {
+  // (A rank other than 0 does not know why: it only learns that rank 0 could not write.)
+  throw breccia::InputError("-o", out_dir, "not writable" + (why.empty() ? std::string() : " (" + why + ")"),
+                            "a folder this user can write");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -268,22 +288,12 @@ int main(int argc, char** argv) {
       opt.setup_hooks.stable_step_ranks = solver::mpi_stable_step_ranks;
       opt.setup_hooks.distributed = solver::mpi_distributed_setup();
       // Only rank 0 writes: make sure it can before the others set up and wait for it.
-      std::string why;
-      if (rank == 0) {
-        std::error_code ec;
-        std::filesystem::create_directories(opt.out_dir, ec);
-        const std::string probe = opt.out_dir + "/.breccia-write-probe";
-        if (std::FILE* f = ec ? nullptr : std::fopen(probe.c_str(), "w")) {
-          std::fclose(f);
-          std::remove(probe.c_str());
-        } else {
-          why = ec ? ec.message() : "cannot create a file there";
-        }
-      }
-      if (!solver::mpi_all_agree(why.empty()))
-        throw InputError("-o", opt.out_dir, "not writable" + (why.empty() ? std::string() : " (" + why + ")"),
-                         "a folder this user can write");
+      const std::string why = rank == 0 ? output_folder_problem(opt.out_dir) : std::string();
+      if (!solver::mpi_all_agree(why.empty())) throw_output_folder_error(opt.out_dir, why);
 #endif
+    } else if (const std::string why = output_folder_problem(opt.out_dir); !why.empty()) {
+      // One process: the same check before the set-up, not a crash after it.
+      throw_output_folder_error(opt.out_dir, why);
     }
     const solver::RunResult r = solver::run_case(config, opt);
     if (r.status == "unstable" || r.status == "not_converged") {

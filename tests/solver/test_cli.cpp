@@ -94,6 +94,19 @@ TEST(SolverCli, TimeStepAboveStableIsRejected) {
   EXPECT_EQ(o.output.find("0.000000"), std::string::npos) << o.output;
 }
 
+// An output folder that cannot be made is bad input named by its option, found before the
+// set-up (it ended in an uncaught filesystem error and an abort after it): here a file sits
+// where the folder should be (a path root cannot write either, unlike a read-only mode).
+TEST(SolverCli, OutputFolderThatCannotBeMadeIsBadInputNamingTheOption) {
+  const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_unwritable_out";
+  std::filesystem::create_directories(dir);
+  std::filesystem::remove_all(dir + "/out");
+  std::ofstream(dir + "/out") << "a file, not a folder\n";
+  const Outcome o = run_solver(kBase + kMaterial + kTime, "unwritable_out");
+  expect_bad_input(o, {"error: -o: " + dir + "/out: not writable", "a folder this user can write"});
+  EXPECT_EQ(o.output.find("terminate called"), std::string::npos) << o.output;
+}
+
 TEST(SolverCli, MalformedNumbersOnTheCommandLineAreRejected) {
   const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_threads";
   std::filesystem::create_directories(dir);

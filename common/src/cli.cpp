@@ -6,9 +6,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 
 #include "breccia/common/error.hpp"
+#include "breccia/common/output_file.hpp"
 
 #ifndef BRECCIA_VERSION
 #error "BRECCIA_VERSION comes from CMake's project(VERSION ...) (common/CMakeLists.txt)"
@@ -137,6 +139,11 @@ CLI::Validator one_of(std::vector<std::string> choices) {
 
 void usage_error(const std::string& option, const std::string& found, const std::string& expected) {
   throw InputError("command line", option, found, expected);
+}
+
+void require_writable_folder(const std::string& option, const std::filesystem::path& folder) {
+  if (const std::string why = breccia::folder_write_problem(folder); !why.empty())
+    usage_error(option, "'" + folder.string() + "' not writable (" + why + ")", "a folder this user can write");
 }
 
 int run_reporting_errors(const std::function<int()>& work) {

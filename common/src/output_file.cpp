@@ -1,5 +1,6 @@
 #include "breccia/common/output_file.hpp"
 
+#include <cstdio>
 #include <fstream>
 #include <system_error>
 
@@ -39,5 +40,19 @@ void write_text_file(const std::filesystem::path& path, const std::string& conte
   }
   out.commit();
 }
+
+std::string folder_write_problem(const std::filesystem::path& folder) {
+  const std::filesystem::path f = folder.empty() ? std::filesystem::path(".") : folder;
+  std::error_code ec;
+  std::filesystem::create_directories(f, ec);
+  if (ec) return ec.message();
+  const std::filesystem::path probe = f / ".breccia-write-probe";
+  std::FILE* file = std::fopen(probe.c_str(), "w");
+  if (!file) return "cannot create a file there";
+  std::fclose(file);
+  std::remove(probe.c_str());
+  return "";
+}
+
 
 }  // namespace breccia

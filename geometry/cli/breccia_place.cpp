@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -130,6 +131,7 @@ int main(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   return breccia::cli::run_reporting_errors([&]() -> int {
     check_arguments(args);
+    breccia::cli::require_writable_folder("-o", std::filesystem::path(args.output_path).parent_path());
     breccia::ParticleModel model;
     if (args.lattice) {
       model = make_lattice_from(args);

@@ -64,6 +64,7 @@ int main(int argc, char** argv) {
   return breccia::cli::run_reporting_errors([&]() -> int {
     if (std::filesystem::path(args.options.output).extension() != ".msh")
       cli::usage_error("-o", "'" + args.options.output + "'", "a file name ending in .msh");
+    cli::require_writable_folder("-o", std::filesystem::path(args.options.output).parent_path());
     if (!args.size_factor.empty())
       args.options.size_factor = parse_positive("--size-factor", args.size_factor, Quantity::Dimensionless);
     if (!args.size.empty()) args.options.size_m = parse_positive("--size", args.size, Quantity::Length);

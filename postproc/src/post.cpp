@@ -116,7 +116,10 @@ public:
     if (run_.outputs.empty() && (opt_.cracks || opt_.fragments))
       throw InputError(run_.results_path.string(), "/@output_count", "0 outputs", "at least one output group");
     summary_.post_dir = opt_.run_dir / "post";
-    fs::create_directories(summary_.post_dir);
+    // A run folder this user cannot write (a colleague's results): bad input, said before the work.
+    if (const std::string why = folder_write_problem(summary_.post_dir); !why.empty())
+      throw InputError(summary_.post_dir.string(), "", "not writable (" + why + ")",
+                       "a run folder this user can write (breccia-post writes RUN_DIR/post)");
     select_outputs();
     // history.csv first: the charts that read it alone are drawn beside everything else.
     load_history();

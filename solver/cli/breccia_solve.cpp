@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "breccia/common/cli.hpp"
+#include "breccia/common/output_file.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/yaml_input.hpp"
 #include "breccia/solver/lattice_model.hpp"
@@ -63,20 +64,6 @@ bool gpu_available() {
 #else
   return false;
 #endif
-}
-
-// Why the output folder cannot take the run's files ("" when it can): it is created if
-// missing and a file is made and removed in it.
-std::string output_folder_problem(const std::string& out_dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) return ec.message();
-  const std::string probe = out_dir + "/.breccia-write-probe";
-  std::FILE* f = std::fopen(probe.c_str(), "w");
-  if (!f) return "cannot create a file there";
-  std::fclose(f);
-  std::remove(probe.c_str());
-  return "";
 }
 
 [[noreturn]] void throw_output_folder_error(const std::string& out_dir, const std::string& why) {
@@ -288,10 +275,10 @@ int main(int argc, char** argv) {
       opt.setup_hooks.stable_step_ranks = solver::mpi_stable_step_ranks;
       opt.setup_hooks.distributed = solver::mpi_distributed_setup();
       // Only rank 0 writes: make sure it can before the others set up and wait for it.
-      const std::string why = rank == 0 ? output_folder_problem(opt.out_dir) : std::string();
+      const std::string why = rank == 0 ? breccia::folder_write_problem(opt.out_dir) : std::string();
       if (!solver::mpi_all_agree(why.empty())) throw_output_folder_error(opt.out_dir, why);
 #endif
-    } else if (const std::string why = output_folder_problem(opt.out_dir); !why.empty()) {
+    } else if (const std::string why = breccia::folder_write_problem(opt.out_dir); !why.empty()) {
       // One process: the same check before the set-up, not a crash after it.
       throw_output_folder_error(opt.out_dir, why);
     }

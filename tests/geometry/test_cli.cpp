@@ -104,6 +104,18 @@ TEST(PlaceCli, MissingFileIsRejected) {
   expect_rejected(dir() + "/no_such_mesh.msh", "", {"does not exist"});
 }
 
+// An output folder that cannot be made (a file stands where it should be) is a usage error
+// naming -o, found before the placing (it was a failure, exit 3, after it).
+TEST(PlaceCli, OutputFolderThatCannotBeMadeIsRejectedBeforePlacing) {
+  const std::string mesh = dir() + "/block_for_out.msh";
+  testing::write_block_with_hole(mesh, testing::BlockWithHole{1.0, 0.6, 0.4, 0.1, 0.15});
+  const std::string blocker = write_file("place_out_blocker", "a file, not a folder\n");
+  const RunResult r = run_place("'" + mesh + "' -o '" + blocker + "/particles.h5'");
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.err;
+  EXPECT_NE(r.err.find("error: command line: -o: '" + blocker + "' not writable"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("particles"), std::string::npos) << "placed before the check: " << r.out;
+}
+
 TEST(PlaceCli, NonMeshFileIsRejected) {
   expect_rejected(write_file("notes.msh", "hello, not a mesh\n"), "", {"not a gmsh mesh header", "$MeshFormat"});
 }

@@ -61,6 +61,17 @@ TEST(MeshCliBadInput, MissingFileIsNamed) {
   expect_bad_input("/nonexistent/specimen.yaml", {"/nonexistent/specimen.yaml", "does not exist"});
 }
 
+// An output folder that cannot be made (a file stands where it should be) is a usage error
+// naming -o, found before the meshing (it was a failure, exit 3, after it).
+TEST(MeshCliBadInput, OutputFolderThatCannotBeMadeIsNamedBeforeMeshing) {
+  const std::string blocker = write_temp_file("mesh_out_blocker", "a file, not a folder\n");
+  const CliResult r = run_cli(write_temp_file("good.yaml", kQuickSpec) + " -o " + blocker + "/out.msh");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("error: command line: -o: '" + blocker + "' not writable"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("mesh summary"), std::string::npos) << "meshed before the check: " << r.out;
+  EXPECT_EQ(r.err.find("[writing]"), std::string::npos) << "meshed before the check: " << r.err;
+}
+
 TEST(MeshCliBadInput, YamlSyntaxErrorGivesTheLine) {
   const auto path = write_temp_file("syntax.yaml", "dimension: 3\nbody: [box, \nmesh: {size: 1}\n");
   expect_bad_input(path, {"syntax.yaml", "line", "YAML syntax error"});

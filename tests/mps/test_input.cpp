@@ -109,6 +109,26 @@ TEST(MpsCli, BadInputExitsWithCode2AndNamesTheField) {
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "results.h5"));
 }
 
+// An output folder that cannot be made (a file stands where it should be) is a usage error
+// naming -o, found before the run (it was a failure, exit 3).
+TEST(MpsCli, OutputFolderThatCannotBeMadeIsBadInputNamingTheOption) {
+  const auto dir = std::filesystem::temp_directory_path() / "breccia_mps_cli_out_test";
+  std::filesystem::create_directories(dir);
+  const auto case_file = dir / "good.yaml";
+  std::ofstream(case_file) << replaced("kinetic_friction: 0.5", "kinetic_friction: 0.5");
+  const auto blocker = dir / "blocker";
+  std::ofstream(blocker) << "a file, not a folder\n";
+  const std::string cmd = std::string(BRECCIA_MPS_EXE) + " " + case_file.string() + " -o " + (blocker / "out").string() +
+                          " 2> " + (dir / "stderr.txt").string();
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), breccia::kExitBadInput);
+  std::ifstream err(dir / "stderr.txt");
+  const std::string text((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("error: command line: -o: '" + (blocker / "out").string() + "' not writable"), std::string::npos)
+      << text;
+}
+
 // --help, --version, and usage errors (exit 2 naming the option): the tools' shared contract.
 TEST(MpsCli, FollowsTheToolsCommandLineContract) {
   breccia::testing::expect_cli_contract(BRECCIA_MPS_EXE, "breccia-mps", "case.yaml -o out",

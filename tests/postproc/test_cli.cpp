@@ -203,6 +203,18 @@ TEST(BrecciaPostCli, MissingParticlesFileGivenByTheOptionIsBadInputNamingTheOpti
       << r.output;
 }
 
+// A run folder whose post/ cannot be made (here a file stands there) is bad input naming the
+// folder (it ended in an uncaught filesystem error, exit 3).
+TEST(BrecciaPostCli, PostFolderThatCannotBeMadeIsBadInputNamingIt) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_unwritable";
+  bt::write_run(cracked_cubes(dir));
+  fs::remove_all(dir / "post");
+  std::ofstream(dir / "post") << "a file, not a folder\n";
+  const Result r = run_post("'" + dir.string() + "' --no-plots");
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.output.find("error: " + (dir / "post").string() + ": not writable"), std::string::npos) << r.output;
+}
+
 TEST(BrecciaPostCli, UnknownStepIsBadInputListingTheAvailableSteps) {
   const fs::path dir = fs::path(::testing::TempDir()) / "post_step";
   bt::write_run(cracked_cubes(dir));

@@ -44,6 +44,7 @@ int main(int argc, char** argv) {
   if (const auto code = breccia::cli::parse(app, argc, argv)) return *code;
   return breccia::cli::run_reporting_errors([&]() -> int {
     breccia::Section::set_overrides(case_file, overrides, variant, out_dir);
+    breccia::cli::require_writable_folder("-o", out_dir);
     return breccia::mps::run_case(case_file, out_dir, threads);
   });
 }

@@ -9,6 +9,7 @@
 // with file "command line", as in usage_error below: the tools print those the same way.
 #include <CLI/CLI.hpp>
 #include <climits>
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
@@ -54,5 +55,10 @@ int run_reporting_errors(const std::function<int()>& work);
 // A usage error found after parsing, in the format of the tools' other input errors; throws
 // breccia::InputError (exit code 2).
 [[noreturn]] void usage_error(const std::string& option, const std::string& found, const std::string& expected);
+
+// A folder that cannot take the tool's outputs (breccia::folder_write_problem) as a usage
+// error naming `option` (exit 2): called before a tool's work, so that an output path it
+// cannot write is reported at once, not as a failure once the work is done.
+void require_writable_folder(const std::string& option, const std::filesystem::path& folder);
 
 }  // namespace breccia::cli

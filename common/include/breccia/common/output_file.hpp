@@ -25,6 +25,11 @@ private:
   bool committed_ = false;
 };
 
+// Why `folder` cannot take a tool's output files ("" when it can): it is made (with its
+// parents) if missing, and a file is created and removed in it. The tools ask it before their
+// work (cli::require_writable_folder), so that an unwritable output path is bad input at once.
+std::string folder_write_problem(const std::filesystem::path& folder);
+
 // Write a whole text file atomically.
 void write_text_file(const std::filesystem::path& path, const std::string& content);
 

@@ -537,6 +537,18 @@ TEST(PlanCli, MissingCaseFileExitsTwoNamingTheFile) {
   EXPECT_NE(r.output.find("no such case file"), std::string::npos) << r.output;
 }
 
+// A --write path whose folder cannot be made (a file stands there) is a usage error naming the
+// option, said before the estimates (it was a failure, exit 3, after them).
+TEST(PlanCli, WritePathThatCannotBeWrittenExitsTwoBeforeTheEstimates) {
+  const std::string blocker = temp_path("plan_write_blocker");
+  std::filesystem::remove_all(blocker);
+  std::ofstream(blocker) << "a file, not a folder\n";
+  const CliResult r = run_plan(small_case_file() + " --tolerance 0.05 --write " + blocker + "/proposed.yaml");
+  EXPECT_EQ(r.code, kExitBadInput) << r.output;
+  EXPECT_NE(r.output.find("--write: '" + blocker + "' not writable"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("Cost of the case"), std::string::npos) << r.output;
+}
+
 TEST(PlanCli, WritesAProposedCaseTheSolverLoaderAccepts) {
   const std::string atlas = temp_path("fixture_atlas.csv");
   std::ofstream(atlas) << kFixtureAtlas;

@@ -129,7 +129,7 @@ int main(int argc, char** argv) {
     if (threads > 0) omp_set_num_threads(threads);
     plan.threads = omp_get_max_threads();
     maker.work_dir = std::filesystem::absolute(maker.work_dir).string();
-    std::filesystem::create_directories(maker.work_dir);
+    breccia::cli::require_writable_folder("--work", maker.work_dir);
     const auto t0 = std::chrono::steady_clock::now();
     if (sweeps) {
       CsvTable table(csv, kAtlasHeader, append);

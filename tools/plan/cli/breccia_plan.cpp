@@ -119,6 +119,10 @@ int main(int argc, char** argv) {
       atlas_note = "no atlas at " + atlas_path + " (run `make atlas`, or pass --atlas FILE)";
     }
 
+    // Where --write will go, checked before the estimates are printed (a path it cannot write
+    // was an error after them, exit 3).
+    if (!write_path.empty())
+      breccia::cli::require_writable_folder("--write", std::filesystem::path(write_path).parent_path());
     std::printf("breccia-plan: %s (%s)\n\nCost of the case as given\n", config.name.c_str(), case_file.c_str());
     const plan::CostEstimate given = plan::estimate_cost(config, rates, opt);
     print_cost(given);

@@ -423,6 +423,22 @@ CaseConfig parse_case_file(const std::string& path) {
       ls.kind = LoadSpec::Kind::Gas;
       ls.surface = l.text("surface");
       ls.history = parse_history(l.section("history"), Quantity::Pressure);
+      {
+        // The charge's gauge pressure: a negative one would be no load at all (the isentrope
+        // starts at zero pressure), so it is refused, not run silently.
+        const Section h = l.section("history");
+        const HistorySpec& hs = ls.history;
+        if (hs.kind == HistorySpec::Kind::Table) {
+          for (size_t r = 0; r < hs.table_value.size(); ++r)
+            if (!(hs.table_value[r] >= 0.0))
+              throw InputError(path, h.field("file"), "a negative pressure " + short_number(hs.table_value[r]) +
+                                                          " Pa in row " + std::to_string(r + 1),
+                               "the charge's gauge pressure, >= 0 at every row");
+        } else if (!(hs.value > 0.0)) {
+          const char* key = hs.kind == HistorySpec::Kind::DoubleExponential ? "peak" : "value";
+          throw InputError(path, h.field(key), short_number(hs.value) + " Pa", "the charge's gauge pressure, > 0");
+        }
+      }
       GasSpec& g = ls.gas;
       g.law.kind = l.choice("eos", {"two_gamma", "jwl"}, "two_gamma") == "jwl" ? GasLaw::Kind::Jwl
                                                                              : GasLaw::Kind::TwoGamma;

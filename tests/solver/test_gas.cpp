@@ -16,6 +16,9 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "breccia/common/error.hpp"
 #include "breccia/solver/gas.hpp"
@@ -195,6 +198,17 @@ TEST(Gas, BadInputNamesTheField) {
   fails_with(", crack_pass_every: 2.5", "loads[0].crack_pass_every");
   fails_with(", crack_entry: false, crack_pass_every: 4", "loads[0].crack_pass_every");
   fails_with(", crack_pass_tolerance: 2", "loads[0].crack_pass_tolerance");
+  // A charge's gauge pressure below zero was no load at all, run without a word.
+  for (const auto& [history, key] : std::vector<std::pair<std::string, std::string>>{
+           {"{type: constant, value: -20 MPa}", "loads[0].history.value"},
+           {"{type: double_exponential, peak: -1 GPa, rise_time: 140 us, ratio: 1.5}", "loads[0].history.peak"}})
+    try {
+      system_from_yaml("gas_bad_history", disc_case("", "time: {steps: 1}\n", history));
+      ADD_FAILURE() << "accepted: " << history;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("gauge pressure"), std::string::npos) << e.what();
+    }
 }
 
 namespace {

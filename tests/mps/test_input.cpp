@@ -92,18 +92,34 @@ TEST(MpsInput, UnknownEquationNamesTheChoices) {
   EXPECT_NE(msg.find("rotation_free"), std::string::npos) << msg;
 }
 
+namespace {
+
+// breccia-mps on `case_file` with -o `out`: its exit code (-1: did not exit) and its stderr,
+// kept in `dir`/stderr.txt.
+struct MpsCliRun {
+  int exit_code = -1;
+  std::string err;
+};
+MpsCliRun run_mps_cli(const std::filesystem::path& case_file, const std::filesystem::path& out,
+                      const std::filesystem::path& dir) {
+  const std::string cmd = std::string(BRECCIA_MPS_EXE) + " " + case_file.string() + " -o " + out.string() + " 2> " +
+                          (dir / "stderr.txt").string();
+  const int status = std::system(cmd.c_str());
+  std::ifstream err(dir / "stderr.txt");
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1,
+          std::string((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>())};
+}
+
+}  // namespace
+
 TEST(MpsCli, BadInputExitsWithCode2AndNamesTheField) {
   const auto dir = std::filesystem::temp_directory_path() / "breccia_mps_cli_test";
   std::filesystem::create_directories(dir);
   const auto case_file = dir / "bad.yaml";
   std::ofstream(case_file) << replaced("kinetic_friction: 0.5", "kinetic_friction: 0.9");
-  const std::string cmd = std::string(BRECCIA_MPS_EXE) + " " + case_file.string() + " -o " + (dir / "out").string() +
-                          " 2> " + (dir / "stderr.txt").string();
-  const int status = std::system(cmd.c_str());
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), breccia::kExitBadInput);
-  std::ifstream err(dir / "stderr.txt");
-  const std::string text((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>());
+  const MpsCliRun r = run_mps_cli(case_file, dir / "out", dir);
+  EXPECT_EQ(r.exit_code, breccia::kExitBadInput);
+  const std::string& text = r.err;
   EXPECT_EQ(text.rfind("error: ", 0), 0u) << text;
   EXPECT_NE(text.find("cracks[0].kinetic_friction"), std::string::npos) << text;
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "results.h5"));
@@ -115,18 +131,13 @@ TEST(MpsCli, OutputFolderThatCannotBeMadeIsBadInputNamingTheOption) {
   const auto dir = std::filesystem::temp_directory_path() / "breccia_mps_cli_out_test";
   std::filesystem::create_directories(dir);
   const auto case_file = dir / "good.yaml";
-  std::ofstream(case_file) << replaced("kinetic_friction: 0.5", "kinetic_friction: 0.5");
+  std::ofstream(case_file) << kGood;
   const auto blocker = dir / "blocker";
   std::ofstream(blocker) << "a file, not a folder\n";
-  const std::string cmd = std::string(BRECCIA_MPS_EXE) + " " + case_file.string() + " -o " + (blocker / "out").string() +
-                          " 2> " + (dir / "stderr.txt").string();
-  const int status = std::system(cmd.c_str());
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), breccia::kExitBadInput);
-  std::ifstream err(dir / "stderr.txt");
-  const std::string text((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("error: command line: -o: '" + (blocker / "out").string() + "' not writable"), std::string::npos)
-      << text;
+  const MpsCliRun r = run_mps_cli(case_file, blocker / "out", dir);
+  EXPECT_EQ(r.exit_code, breccia::kExitBadInput);
+  EXPECT_NE(r.err.find("error: command line: -o: '" + (blocker / "out").string() + "' not writable"), std::string::npos)
+      << r.err;
 }
 
 // --help, --version, and usage errors (exit 2 naming the option): the tools' shared contract.

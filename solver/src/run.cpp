@@ -159,9 +159,9 @@ void write_summary(const PdSystem& s, const RunOptions& o, const RunResult& r, d
 
 }  // namespace
 
-void print_progress(long long step, long long total_steps, double time_s, long long steps_done, double elapsed_s,
+void print_progress(long long step, long long total_steps, double time_s, long long recent_steps, double recent_s,
                     double max_damage) {
-  const double rate = steps_done / std::max(elapsed_s, 1e-9);
+  const double rate = recent_steps / std::max(recent_s, 1e-9);
   std::fprintf(stderr, "step %lld/%lld  t = %.4e s  %.1f steps/s  ETA %.1f s  max damage %.3f\n", step, total_steps,
                time_s, rate, (total_steps - step) / std::max(rate, 1e-9), max_damage);
 }
@@ -375,6 +375,7 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
   const std::clock_t cpu0 = std::clock();
   const auto t0 = std::chrono::steady_clock::now();
   auto last_report = t0;
+  long long last_report_step = s.step;
   r.status = "completed";
   while (s.step < total_steps) {
     // Damage and energy density only where something will read them.
@@ -416,9 +417,10 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
     if (o.progress) {
       const auto now = std::chrono::steady_clock::now();
       if (std::chrono::duration<double>(now - last_report).count() > 2.0) {
+        print_progress(s.step, total_steps, s.time, s.step - last_report_step,
+                       std::chrono::duration<double>(now - last_report).count(), e.max_damage);
         last_report = now;
-        print_progress(s.step, total_steps, s.time, s.step - first_step,
-                       std::chrono::duration<double>(now - t0).count(), e.max_damage);
+        last_report_step = s.step;
       }
     }
   }

@@ -13,9 +13,14 @@ double Progress::elapsed_s() const {
 void Progress::update(long long done, const std::string& extra) {
   const auto now = std::chrono::steady_clock::now();
   if (std::chrono::duration<double>(now - last_).count() < interval_s_) return;
+  // The rate since the previous line (the first: since the start), not the mean since the
+  // start: a run whose items get cheaper or dearer as it goes (a blast's steps, 10x cheaper
+  // once its bonds have broken) would otherwise keep an ETA several times off.
+  const double since = std::chrono::duration<double>(now - last_).count();
+  const double rate = since > 0 ? (done - last_done_) / since : 0.0;
   last_ = now;
+  last_done_ = done;
   const double t = elapsed_s();
-  const double rate = t > 0 ? done / t : 0.0;
   const double eta = (rate > 0 && total_ > 0) ? (total_ - done) / rate : 0.0;
   std::fprintf(out_, "[%s] %lld/%lld (%.1f%%)  %.3g /s  elapsed %.1f s  ETA %.1f s  %s\n",
                stage_.c_str(), done, total_, total_ > 0 ? 100.0 * done / total_ : 0.0, rate, t, eta,

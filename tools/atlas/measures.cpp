@@ -158,8 +158,14 @@ std::string softening_bar_case_text(int dimension, double grip_depth_m, double p
                                     const std::string& tensile_strength) {
   auto num = [](double v) { return std::to_string(v); };
   const double L = SofteningBar::length_m;
+  // Appended piece by piece: `"[" + num(x0) + ...` drew GCC 12's -Wrestrict false positive.
   auto grip_box = [&](double x0, double x1) {
-    return dimension == 3 ? "[" + num(x0) + ", -1, -1, " + num(x1) + ", 1, 1]" : "[" + num(x0) + ", -1, " + num(x1) + ", 1]";
+    std::string box = "[";
+    box += num(x0);
+    box += dimension == 3 ? ", -1, -1, " : ", -1, ";
+    box += num(x1);
+    box += dimension == 3 ? ", 1, 1]" : ", 1]";
+    return box;
   };
   char nu[32];
   std::snprintf(nu, sizeof nu, "%.16g", poisson_ratio);

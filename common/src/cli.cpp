@@ -141,9 +141,14 @@ void usage_error(const std::string& option, const std::string& found, const std:
   throw InputError("command line", option, found, expected);
 }
 
+void unwritable_folder_error(const std::string& option, const std::filesystem::path& folder, const std::string& why) {
+  usage_error(option, "'" + folder.string() + "' not writable" + (why.empty() ? std::string() : " (" + why + ")"),
+              "a folder this user can write");
+}
+
 void require_writable_folder(const std::string& option, const std::filesystem::path& folder) {
   if (const std::string why = breccia::folder_write_problem(folder); !why.empty())
-    usage_error(option, "'" + folder.string() + "' not writable (" + why + ")", "a folder this user can write");
+    unwritable_folder_error(option, folder, why);
 }
 
 int run_reporting_errors(const std::function<int()>& work) {

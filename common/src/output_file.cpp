@@ -54,5 +54,4 @@ std::string folder_write_problem(const std::filesystem::path& folder) {
   return "";
 }
 
-
 }  // namespace breccia

@@ -66,12 +66,6 @@ bool gpu_available() {
 #endif
 }
 
-[[noreturn]] void throw_output_folder_error(const std::string& out_dir, const std::string& why) {
-  // (A rank other than 0 does not know why: it only learns that rank 0 could not write.)
-  throw breccia::InputError("-o", out_dir, "not writable" + (why.empty() ? std::string() : " (" + why + ")"),
-                            "a folder this user can write");
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -276,11 +270,10 @@ int main(int argc, char** argv) {
       opt.setup_hooks.distributed = solver::mpi_distributed_setup();
       // Only rank 0 writes: make sure it can before the others set up and wait for it.
       const std::string why = rank == 0 ? breccia::folder_write_problem(opt.out_dir) : std::string();
-      if (!solver::mpi_all_agree(why.empty())) throw_output_folder_error(opt.out_dir, why);
+      if (!solver::mpi_all_agree(why.empty())) cli::unwritable_folder_error("-o", opt.out_dir, why);
 #endif
-    } else if (const std::string why = breccia::folder_write_problem(opt.out_dir); !why.empty()) {
-      // One process: the same check before the set-up, not a crash after it.
-      throw_output_folder_error(opt.out_dir, why);
+    } else {
+      cli::require_writable_folder("-o", opt.out_dir);  // one process: before the set-up, as on ranks
     }
     const solver::RunResult r = solver::run_case(config, opt);
     if (r.status == "unstable" || r.status == "not_converged") {

@@ -103,7 +103,7 @@ TEST(SolverCli, OutputFolderThatCannotBeMadeIsBadInputNamingTheOption) {
   std::filesystem::remove_all(dir + "/out");
   std::ofstream(dir + "/out") << "a file, not a folder\n";
   const Outcome o = run_solver(kBase + kMaterial + kTime, "unwritable_out");
-  expect_bad_input(o, {"error: -o: " + dir + "/out: not writable", "a folder this user can write"});
+  expect_bad_input(o, {"error: command line: -o: '" + dir + "/out' not writable", "a folder this user can write"});
   EXPECT_EQ(o.output.find("terminate called"), std::string::npos) << o.output;
 }
 

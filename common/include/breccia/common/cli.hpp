@@ -60,5 +60,9 @@ int run_reporting_errors(const std::function<int()>& work);
 // error naming `option` (exit 2): called before a tool's work, so that an output path it
 // cannot write is reported at once, not as a failure once the work is done.
 void require_writable_folder(const std::string& option, const std::filesystem::path& folder);
+// Its error, for a caller that learnt `why` elsewhere (a distributed run's ranks other than 0
+// learn only that rank 0 could not write: `why` empty).
+[[noreturn]] void unwritable_folder_error(const std::string& option, const std::filesystem::path& folder,
+                                          const std::string& why);
 
 }  // namespace breccia::cli

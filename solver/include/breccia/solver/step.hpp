@@ -328,17 +328,20 @@ void exchange_halo(Exec& exec, const StepArrays<Real>& a, HaloField field) {
 // are evaluated in double and rounded once, docs/theory.md Precision).
 // A gas load's pressure follows the displacement at t (gas.hpp); `dt` is the step that led
 // to t (0 outside a step: the gas keeps its mass).
+// `gas_pass`: false takes the gas as it stands (its pressure on the wall, no update of its
+// volume, front or cracks): the loads at t = 0 before the first step (pd_initial_accelerations).
 template <class Exec, class Real>
-void pd_external(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t, double dt = 0.0) {
+void pd_external(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t, double dt = 0.0, bool gas_pass = true) {
   const PdView& d = a.d;
   const int64_t n = d.n;
+  const bool gas = sys.gas.active && gas_pass;
   // The gas's own cost is timed (summary.json gas_wall_s, and gas_cpu_s, which other load on
   // the machine does not inflate; the requirement bounds it at 5% of a step).
   const auto gas_start = std::chrono::steady_clock::now();
-  const std::clock_t gas_cpu_start = sys.gas.active ? std::clock() : 0;
-  if (sys.gas.active) gas_update(exec, d, a.facets, sys.gas, t, dt, dt > 0.0 ? static_cast<const Real*>(a.u_before) : nullptr);
+  const std::clock_t gas_cpu_start = gas ? std::clock() : 0;
+  if (gas) gas_update(exec, d, a.facets, sys.gas, t, dt, dt > 0.0 ? static_cast<const Real*>(a.u_before) : nullptr);
   const auto gas_mid = std::chrono::steady_clock::now();
-  const std::clock_t gas_cpu_mid = sys.gas.active ? std::clock() : 0;
+  const std::clock_t gas_cpu_mid = gas ? std::clock() : 0;
   exec.for_each(3 * n, ClearArray{const_cast<double*>(d.body)}, "clear body forces");
   double* body = const_cast<double*>(d.body);
   if (a.facets.particle_count > 0) {
@@ -349,7 +352,7 @@ void pd_external(Exec& exec, const StepArrays<Real>& a, PdSystem& sys, double t,
     exec.for_each(a.facets.particle_count, SurfaceLoads{a.facets, h, d.volume, d.offsets, d.state, body},
                   "surface_load");
   }
-  if (sys.gas.active) {
+  if (gas) {
     const auto crack_start = std::chrono::steady_clock::now();
     const std::clock_t crack_cpu_start = std::clock();
     gas_crack_forces(exec, d, sys.gas, body);
@@ -465,6 +468,38 @@ void pd_force_pass(Exec& exec, const StepArrays<Real>& a, bool sum_released, boo
                 "released energy reduction");
 }
 
+// a = (f + b) / rho for every component, no kick: the accelerations at t = 0.
+template <class Real>
+struct InitialAccelerations {
+  PdViewT<Real> p;
+  BRECCIA_HD void operator()(int64_t i) const {
+    const Real inv_rho = Real(1) / p.density[i];
+    for (int d = 0; d < 3; ++d) p.a[3 * i + d] = (p.force[3 * i + d] + p.body[3 * i + d]) * inv_rho;
+  }
+};
+
+// Velocity Verlet's a(0), before a run's first step: the internal forces at the initial
+// displacement (sys.force, which the set-up's last force pass left, or a restart's
+// read_checkpoint) and the loads at t = 0 (the gas as set up: its pressure at t = 0 on the
+// wall, no pass). Later steps carry a from the step before (StepLoad), a restart past step 0
+// from its checkpoint. Without it (before 2026-12-07) the first half kick read a = 0: a body
+// under a constant load lagged half a step's velocity for the whole run (its displacement
+// short by g dt t / 2), a body released from a strained state started with half its first
+// kick, and the lost kick's kinetic energy stayed in the energy balance as an error.
+template <class Exec, class Real>
+void pd_initial_accelerations(Exec& exec, StepArrays<Real>& a, PdSystem& sys) {
+  constexpr bool single = std::is_same_v<Real, float>;
+  const int64_t n = a.p.n;
+  if (sys.loads_vary()) {
+    // The indenter and the gas read the double displacement: a float run copies it first.
+    if (single && (sys.config.indenter.enabled || sys.gas.active))
+      exec.for_each(3 * n, Convert<Real, double>{a.p.u, const_cast<double*>(a.d.u)}, "float u to double");
+    pd_external(exec, a, sys, sys.time, 0.0, false);
+    if (single) exec.for_each(3 * n, Convert<double, Real>{a.d.body, const_cast<Real*>(a.p.body)}, "body force to float");
+  }
+  exec.for_each(n, InitialAccelerations<Real>{a.p}, "initial_accelerations_kernel");
+}
+
 // One velocity-Verlet step of size sys.dt: the phases of every backend, in this order.
 template <class Exec, class Real>
 void pd_step(Exec& exec, StepArrays<Real>& a, PdSystem& sys) {
@@ -477,6 +512,7 @@ void pd_step(Exec& exec, StepArrays<Real>& a, PdSystem& sys) {
     ++sys.step;
     return;
   }
+  if (sys.step == 0) pd_initial_accelerations(exec, a, sys);
   // Double runs form the owned positions here (float never forms x0 + u): nothing moves u
   // between here and the force pass but the constraints, which keep them current.
   double* positions = single ? nullptr : a.x;

@@ -206,6 +206,8 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
   // Crack-face area factor kappa_i = 2 d / sum_j V_j |xi| (gas.hpp). A distributed set-up
   // holds the rank's rows only (the others are empty here): setup_system gathers the owners'.
   g.kappa_volume.assign(2 * n, 0.0);
+  // (Each row's own sum, in entry order: the same bits on any thread count.)
+#pragma omp parallel for schedule(dynamic, 1024)
   for (size_t i = 0; i < n; ++i) {
     double mi = 0.0;
     for (int64_t k = s.offsets[i]; k < s.offsets[i + 1]; ++k) mi += s.volume[s.neighbor[k]] * s.xi_len[k];
@@ -231,9 +233,12 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
     g.position.assign(3 * n, 0.0);
     // The halves each entry has (gas_entry_open), so the open test reads two bytes.
     assign_on_huge_pages(g.halves, s.neighbor.size());
+    // One byte per entry from its own values (0.21 s on one thread on the full concrete case).
     const std::vector<double>& k_dual = s.k_dual_halves();
-    for (size_t k = 0; k < s.neighbor.size(); ++k)
-      g.halves[k] = static_cast<uint8_t>((s.own_half_exists(static_cast<int64_t>(k)) ? kOwnIntact : 0) | (k_dual[k] > 0.0 ? kDualIntact : 0));
+    const int64_t entries = static_cast<int64_t>(s.neighbor.size());
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < entries; ++k)
+      g.halves[k] = static_cast<uint8_t>((s.own_half_exists(k) ? kOwnIntact : 0) | (k_dual[k] > 0.0 ? kDualIntact : 0));
   }
   // gas_fixed_order_sum's block sums, for the walls' and the particles' sums alike: sized
   // once here, so that no step allocates.

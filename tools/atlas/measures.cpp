@@ -25,8 +25,7 @@ double fundamental_mode_speed_error(solver::PdSystem& s, double length_m, double
     for (size_t i = 0; i < s.n; ++i) q += s.volume[i] * shape[i] * s.u[3 * i];
     return q / norm;
   };
-  solver::cpu_compute_forces(s);
-  for (size_t k = 0; k < 3 * s.n; ++k) s.a[k] = s.force[k] / s.density[k / 3];
+  solver::cpu_compute_forces(s);  // the first step's a(0) is taken from these forces (pd_step)
   s.diagnostics = false;  // energies are not needed: only displacements
   const long long max_steps = static_cast<long long>(4.0 * L / (2.0 * c0_m_s) / s.dt) + 10;
   const std::unique_ptr<solver::StepBackend> device = backend ? backend(s) : nullptr;  // from the state above
@@ -99,8 +98,7 @@ double reflected_pulse_energy(solver::PdSystem& s, double interface_x, double pu
     s.v[3 * i] = c_p * g * x / (w * w);  // right-going: v = -c dg/dx
   }
   s.diagnostics = true;  // the strain energy density is needed at every step
-  solver::cpu_compute_forces(s);
-  for (size_t i = 0; i < s.n; ++i) s.a[3 * i] = s.force[3 * i] / s.density[i];
+  solver::cpu_compute_forces(s);  // the first step's a(0) is taken from these forces (pd_step)
   auto energy_left_of = [&](double xcut) {
     double e = 0;
     for (size_t i = 0; i < s.n; ++i)

@@ -25,6 +25,8 @@ def write_particles(path, pos, vol, spacing, dimension, thickness, source, sets=
     indices; surfaces: name -> {area, normal, centroid, particle}. Written to path + ".partial",
     then moved to path, so a file at path is always complete."""
     n = len(vol)
+    # The folder too (the case READMEs write run/particles.h5 before the solver makes run/).
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     with h5py.File(path + ".partial", "w") as f:
         f.attrs["format"] = np.bytes_("breccia-particles")
         f.attrs["format_version"] = np.int64(1)

@@ -56,8 +56,8 @@ breccia::ParticleModel dcb_particles() {
 }
 
 // Runs the solver and breccia-post on the quick DCB: glass with the critical-stretch law
-// (strength empty) or with tensile_strength (softening bonds).
-std::string run_dcb(const char* name, const std::string& strength) {
+// (strength empty) or with tensile_strength (softening bonds), PMB or LPS.
+std::string run_dcb(const char* name, const std::string& strength, const std::string& model = "pmb") {
   return breccia::postproc::testing::solve_and_post(name, [&](const fs::path& dir) {
     breccia::write_particle_file((dir / "particles.h5").string(), dcb_particles());
     // The pre-crack tip is off every bond's line (a lattice bond crosses y = 0 at multiples of
@@ -65,7 +65,7 @@ std::string run_dcb(const char* name, const std::string& strength) {
     // stably (it leaves that range near 5 mm, about 1.5 arm heights from the far end).
     std::ofstream(dir / "case.yaml") << R"(name: dcb-energy-quick
 specimen: {particles: particles.h5}
-model: {type: pmb, planar: plane_stress, horizon_factor: 3.015, no_fail: [grips]}
+model: {type: )" << model << R"(, planar: plane_stress, horizon_factor: 3.015, no_fail: [grips]}
 materials: [{name: glass, density: 2440, youngs_modulus: 72 GPa, poisson_ratio: 0.3333333333333333, fracture_energy: 3.8)"
                                      << strength << R"(}]
 precracks:
@@ -129,6 +129,24 @@ TEST(EnergyRealRun, StableDcbCrackWithSofteningBondsDissipatesG0TimesItsAreaWith
   EXPECT_GT(area, 2e-3 * kThickness_m);
   EXPECT_LT(area, 5.5e-3 * kThickness_m);
   EXPECT_NEAR(json_number(json, "ratio", "\"energy\""), 1.0, 0.05);
+}
+
+// The same DCB with LPS bonds: a brittle LPS bond books, as it breaks, the deviatoric pair
+// energy at its critical extension with the dilatation left out (lps_break_energy, the
+// calibration's quantity); the energy the run really spends on the crack, the work less the
+// kinetic and strain energy, is that within the time step's share, so the balance closes.
+// Measured (2026-12-07): 0.8 % of the work (0.4 % at a quarter of the step); booked at the
+// particle's current dilatation, as before, it was 30 % off. Tolerance 2 %: the PMB run's
+// own imbalance at this step is 2.2 %, its time step's (cases/dcb-energy/README.md). (The
+// crack area of breccia-post is no measure here: LPS also breaks a few dozen bonds next to the
+// crack plane near the tip, which count as faces; on the crack plane the crack grows 3.5 mm
+// against PMB's 3.2 mm, and the booked dissipation is 0.98 G0 per unit of that area.)
+TEST(EnergyRealRun, StableDcbCrackWithLpsBondsBooksTheEnergyItSpends) {
+  const std::string json = run_dcb("breccia_energy_real_run_lps", "", "lps");
+  ASSERT_FALSE(json.empty()) << "breccia-solve or breccia-post failed";
+  EXPECT_EQ(json_number(json, "fragment_count", "\"fragments\""), 1);
+  EXPECT_GT(json_number(json, "dissipated_J", "\"energy\""), 0.0);
+  EXPECT_LT(std::abs(json_number(json, "relative_imbalance")), 0.02) << json;
 }
 
 // A plate given an initial velocity field and nothing else: no work is done, so the balance

@@ -277,6 +277,12 @@ struct PdSystem {
   }
   // Any load at all? Without one the body force stays zero and a step skips the loads.
   bool loads_vary() const { return !surface_loads.empty() || !body_loads.empty() || config.indenter.enabled; }
+  // A boundary moves its particles (velocity or displacement; fixed ones hold them at rest).
+  bool prescribes_motion() const {
+    for (const Constraint& c : constraints)
+      if (c.spec->kind != BoundarySpec::Kind::Fixed) return true;
+    return false;
+  }
   double total_mass() const;
 };
 

@@ -210,13 +210,32 @@ struct CorrespondenceForces {
 struct StepSums {
   double released;  // energy of the bonds broken this step [J]
   double work;      // work of external forces and reactions over the step [J]
+  // 1/2 m v^2 of the prescribed components [J]: StepLoad's at the step's end, PrescribedKinetic's
+  // at its start. A boundary's reaction counts the internal forces only, so the kinetic energy
+  // a velocity or displacement boundary gives its own particles is booked as work this way.
+  double prescribed_kinetic;
 };
+
+// The sums' combine, written once for every load over StepSums.
+BRECCIA_HD StepSums step_sums_add(StepSums a, StepSums b) {
+  return {a.released + b.released, a.work + b.work, a.prescribed_kinetic + b.prescribed_kinetic};
+}
+
+// Component k's kinetic energy where a boundary prescribes it, else 0.
+template <class Real>
+BRECCIA_HD double prescribed_kinetic_energy(const PdViewT<Real>& p, int64_t k) {
+  const int64_t i = k / 3;
+  const bool constrained = p.fixed_dof[i] & (1u << (k % 3));
+  const double v = double(p.v[k]);
+  return constrained ? 0.5 * double(p.density[i]) * double(p.volume[i]) * v * v : 0.0;
+}
 
 // The end of a step in one pass (one loop where there were two): component k's share of the
 // step's sums, and, at each particle's first component, that particle's acceleration and
 // second half kick. The kick writes a and v, which no share reads, so fusing changes no
 // bits; the sum still runs over the 3N components in the same order, split among threads as
-// before.
+// before. (A prescribed component's v is the boundary's, set before this pass; the kick
+// leaves it.)
 template <class Real>
 struct StepLoad {
   using Value = StepSums;
@@ -224,25 +243,41 @@ struct StepLoad {
   const Real* u_before;
   const double* f_before;
   double half_dt;
-  BRECCIA_HD static Value identity() { return {0.0, 0.0}; }
-  BRECCIA_HD static Value combine(Value a, Value b) { return {a.released + b.released, a.work + b.work}; }
+  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0}; }
+  BRECCIA_HD static Value combine(Value a, Value b) { return step_sums_add(a, b); }
   // k runs over 3N components; the first N also carry the particles' released energy.
   BRECCIA_HD Value operator()(int64_t k) const {
     const int64_t i = k / 3;
     if (k % 3 == 0) acceleration_kernel(p, i, half_dt);
     const bool constrained = p.fixed_dof[i] & (1u << (k % 3));
     const double f_after = double(p.volume[i]) * (constrained ? -double(p.force[k]) : double(p.body[k]));
-    return {k < p.n ? p.dissipated[k] : 0.0, 0.5 * (f_before[k] + f_after) * (double(p.u[k]) - double(u_before[k]))};
+    return {k < p.n ? p.dissipated[k] : 0.0, 0.5 * (f_before[k] + f_after) * (double(p.u[k]) - double(u_before[k])),
+            prescribed_kinetic_energy(p, k)};
   }
+};
+
+// The prescribed components' kinetic energy at a step's start (before the boundaries move
+// them), taken off the work; StepFinish adds it at the step's end.
+template <class Real>
+struct PrescribedKinetic {
+  using Value = StepSums;
+  PdViewT<Real> p;
+  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0}; }
+  BRECCIA_HD static Value combine(Value a, Value b) { return step_sums_add(a, b); }
+  BRECCIA_HD Value operator()(int64_t k) const { return {0.0, 0.0, prescribed_kinetic_energy(p, k)}; }
+};
+struct PrescribedKineticBefore {
+  double* external_work;
+  BRECCIA_HD void operator()(StepSums s) const { *external_work -= s.prescribed_kinetic; }
 };
 
 // Released energy alone, for a force pass outside a step.
 struct ReleasedLoad {
   using Value = StepSums;
   const double* dissipated;
-  BRECCIA_HD static Value identity() { return {0.0, 0.0}; }
-  BRECCIA_HD static Value combine(Value a, Value b) { return {a.released + b.released, a.work + b.work}; }
-  BRECCIA_HD Value operator()(int64_t i) const { return {dissipated[i], 0.0}; }
+  BRECCIA_HD static Value identity() { return {0.0, 0.0, 0.0}; }
+  BRECCIA_HD static Value combine(Value a, Value b) { return step_sums_add(a, b); }
+  BRECCIA_HD Value operator()(int64_t i) const { return {dissipated[i], 0.0, 0.0}; }
 };
 
 struct StepFinish {
@@ -250,7 +285,7 @@ struct StepFinish {
   double* dissipated_energy;
   BRECCIA_HD void operator()(StepSums s) const {
     *dissipated_energy += s.released;
-    *external_work += s.work;
+    *external_work += s.work + s.prescribed_kinetic;
   }
 };
 
@@ -513,6 +548,11 @@ void pd_step(Exec& exec, StepArrays<Real>& a, PdSystem& sys) {
     return;
   }
   if (sys.step == 0) pd_initial_accelerations(exec, a, sys);
+  // A velocity or displacement boundary: its particles' kinetic energy before it moves them
+  // (StepFinish books the change; fixed components hold v = 0 and add nothing).
+  if (sys.prescribes_motion())
+    exec.reduce(3 * n, PrescribedKinetic<Real>{a.p}, PrescribedKineticBefore{a.external_work},
+                "prescribed kinetic energy");
   // Double runs form the owned positions here (float never forms x0 + u): nothing moves u
   // between here and the force pass but the constraints, which keep them current.
   double* positions = single ? nullptr : a.x;

@@ -1595,16 +1595,20 @@ BRECCIA_HD void short_range_kernel(const PdViewT<Real>& p, int64_t i) {
   if (p.diagnostics) p.energy_density[i] += w;
 }
 
-// a = (f_int + b) / rho, then the second half kick of velocity Verlet.
+// a = (f_int + b) / rho of particle i's components (every one, prescribed or not).
+template <class Real>
+BRECCIA_HD void accelerations_kernel(const PdViewT<Real>& p, int64_t i) {
+  const Real inv_rho = Real(1) / p.density[i];
+  for (int d = 0; d < 3; ++d) p.a[3 * i + d] = (p.force[3 * i + d] + p.body[3 * i + d]) * inv_rho;
+}
+
+// The accelerations, then the second half kick of velocity Verlet on the free components.
 template <class Real>
 BRECCIA_HD void acceleration_kernel(const PdViewT<Real>& p, int64_t i, double half_dt) {
-  const Real inv_rho = Real(1) / p.density[i];
+  accelerations_kernel(p, i);
   const Real h = static_cast<Real>(half_dt);
-  for (int d = 0; d < 3; ++d) {
-    const int64_t c = 3 * i + d;
-    p.a[c] = (p.force[c] + p.body[c]) * inv_rho;
-    if (!(p.fixed_dof[i] & (1u << d))) p.v[c] += h * p.a[c];
-  }
+  for (int d = 0; d < 3; ++d)
+    if (!(p.fixed_dof[i] & (1u << d))) p.v[3 * i + d] += h * p.a[3 * i + d];
 }
 
 // First half kick and drift for free components (prescribed ones are set by the caller).

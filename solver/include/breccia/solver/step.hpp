@@ -503,14 +503,11 @@ void pd_force_pass(Exec& exec, const StepArrays<Real>& a, bool sum_released, boo
                 "released energy reduction");
 }
 
-// a = (f + b) / rho for every component, no kick: the accelerations at t = 0.
+// The accelerations at t = 0, no kick (accelerations_kernel, pd_kernels.hpp).
 template <class Real>
 struct InitialAccelerations {
   PdViewT<Real> p;
-  BRECCIA_HD void operator()(int64_t i) const {
-    const Real inv_rho = Real(1) / p.density[i];
-    for (int d = 0; d < 3; ++d) p.a[3 * i + d] = (p.force[3 * i + d] + p.body[3 * i + d]) * inv_rho;
-  }
+  BRECCIA_HD void operator()(int64_t i) const { accelerations_kernel(p, i); }
 };
 
 // Velocity Verlet's a(0), before a run's first step: the internal forces at the initial

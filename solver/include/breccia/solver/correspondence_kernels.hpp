@@ -26,7 +26,7 @@ struct CorrespondenceView {
   // and the stabilisation coefficient G (0: none).
   const double* moduli = nullptr;
   double* deformation = nullptr;  // 9N: F_i
-  // 9N: A_i = sigma_i K_i^-1 - G h F_i (small strain: P ~ sigma). The force state is then
+  // 9N: A_i = P_i K_i^-1 - G h F_i (P: first Piola-Kirchhoff, svk_stress). The force state is then
   // T_i<xi> = w (A_i xi + G h Y): the penalty's F_i xi folded into one tensor per particle.
   double* force_tensor = nullptr;
   double* nonaffine = nullptr;    // N: (h/2) sum_j w |Y - F xi|^2 V_j, the G = 1 penalty energy density
@@ -74,29 +74,48 @@ BRECCIA_HD void bond_vectors(const PdView& p, int64_t i, int64_t j, double* xi, 
   }
 }
 
-// Linear isotropic elasticity on the small strain eps = sym(F) - I in d dimensions:
-// sigma = K_d tr(eps) I + 2 mu dev(eps) (K_d: 3D bulk, plane stress/strain 2D bulk, as LPS).
-// Returns the energy density K_d tr^2 / 2 + mu dev:dev.
-BRECCIA_HD double hooke_stress(const double* F, int d, double bulk, double shear, double* sigma) {
-  double eps[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+// St Venant-Kirchhoff in d dimensions (Holzapfel 2000, section 6.5; docs/theory.md): the
+// Green-Lagrange strain E = (F^T F - I) / 2, formed as sym(H) + H^T H / 2 with H = F - I so
+// that a small strain loses nothing to cancellation against I; the second Piola-Kirchhoff
+// stress S = K_d tr(E) I + 2 mu dev(E) (K_d: 3D bulk, plane stress/strain 2D bulk, as LPS);
+// the first Piola-Kirchhoff stress P = F S = dW/dF, which the force state takes (Silling et al.
+// 2007, section 18: T = w P K^-1 xi). Returns the energy density
+// W = K_d tr(E)^2 / 2 + mu dev(E):dev(E). E is zero under any rigid rotation (F = R), so a
+// turned or spinning body carries no stress; at small strain E -> sym(F) - I and P -> Hooke's
+// sigma. (The small strain sym(F) - I used before read a turn of 30 degrees as a compression
+// of 1 - cos 30 = 13 % in its plane.)
+BRECCIA_HD double svk_stress(const double* F, int d, double bulk, double shear, double* P) {
+  double H[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, E[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, S[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  for (int a = 0; a < d; ++a)
+    for (int b = 0; b < d; ++b) H[3 * a + b] = F[3 * a + b] - (a == b ? 1.0 : 0.0);
   double tr = 0.0;
   for (int a = 0; a < d; ++a)
-    for (int b = 0; b < d; ++b) eps[3 * a + b] = 0.5 * (F[3 * a + b] + F[3 * b + a]) - (a == b ? 1.0 : 0.0);
-  for (int a = 0; a < d; ++a) tr += eps[4 * a];
+    for (int b = 0; b < d; ++b) {
+      double hh = 0.0;
+      for (int c = 0; c < d; ++c) hh += H[3 * c + a] * H[3 * c + b];
+      E[3 * a + b] = 0.5 * (H[3 * a + b] + H[3 * b + a]) + 0.5 * hh;
+    }
+  for (int a = 0; a < d; ++a) tr += E[4 * a];
   double dev2 = 0.0;
-  for (int k = 0; k < 9; ++k) sigma[k] = 0.0;
   for (int a = 0; a < d; ++a)
     for (int b = 0; b < d; ++b) {
-      const double dev = eps[3 * a + b] - (a == b ? tr / d : 0.0);
+      const double dev = E[3 * a + b] - (a == b ? tr / d : 0.0);
       dev2 += dev * dev;
-      sigma[3 * a + b] = 2.0 * shear * dev + (a == b ? bulk * tr : 0.0);
+      S[3 * a + b] = 2.0 * shear * dev + (a == b ? bulk * tr : 0.0);
+    }
+  for (int k = 0; k < 9; ++k) P[k] = 0.0;
+  for (int a = 0; a < d; ++a)
+    for (int b = 0; b < d; ++b) {
+      double v = 0.0;
+      for (int c = 0; c < d; ++c) v += F[3 * a + c] * S[3 * c + b];
+      P[3 * a + b] = v;
     }
   return 0.5 * bulk * tr * tr + shear * dev2;
 }
 
 // Pass 1 for particle i: break over-stretched bonds (critical stretch, as PMB/LPS), then
 // K_i = sum_j w xi (x) xi V_j, F_i = (sum_j w Y (x) xi V_j) K_i^-1 over i's intact own bonds,
-// the stress and A_i = sigma K_i^-1 - G h F_i. Writes damage, energy density (elastic part) and the
+// the stress and A_i = P K_i^-1 - G h F_i. Writes damage, energy density (elastic part) and the
 // energy released by bonds broken here.
 template <int d>
 BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int64_t i) {
@@ -151,12 +170,12 @@ BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int
         for (int e = 0; e < d; ++e) s += N[3 * a + e] * Kinv[3 * e + b];
         F[3 * a + b] = s;
       }
-    double sigma[9];
-    W = hooke_stress(F, d, mod[0], mod[1], sigma);
+    double P[9];
+    W = svk_stress(F, d, mod[0], mod[1], P);
     for (int a = 0; a < d; ++a)
       for (int b = 0; b < d; ++b) {
         double s = 0.0;
-        for (int e = 0; e < d; ++e) s += sigma[3 * a + e] * Kinv[3 * e + b];
+        for (int e = 0; e < d; ++e) s += P[3 * a + e] * Kinv[3 * e + b];
         Q[3 * a + b] = s - mod[4] * mod[3] * F[3 * a + b];
       }
   }
@@ -175,7 +194,7 @@ BRECCIA_HD void correspondence_deformation_kernel(const CorrespondenceView& c, i
 }
 
 // Pass 2 for particle i: f_i = sum_j (T_i<xi> - T_j<-xi>) V_j with
-// T_i<xi> = w_ij (sigma_i K_i^-1 xi + G_i h_i z_i) = w_ij (A_i xi + G_i h_i Y), with
+// T_i<xi> = w_ij (P_i K_i^-1 xi + G_i h_i z_i) = w_ij (A_i xi + G_i h_i Y), with
 // z_i = Y - F_i xi the non-affine part of the bond's deformation (zero under any affine
 // field), and the same from j's side. The penalty's energy
 // (G h / 2) sum_j w |z|^2 V_j has dW/dF = 0 (sum_j w z (x) xi V_j = 0 by the definition of F),

@@ -22,7 +22,7 @@ struct CorrespondenceView {
   PdView p;             // the shared arrays; k_own / k_dual hold w = omega * beta (as LPS)
   int dimension = 3;
   // Per particle, 5 values: dimensional bulk modulus K_d, shear modulus mu, the equivalent PMB
-  // micro-modulus c0 (critical-stretch energy), the unit penalty stiffness h = c0 / (2 delta),
+  // micro-modulus c0 (the scale of the penalty), the unit penalty stiffness h = c0 / (2 delta),
   // and the stabilisation coefficient G (0: none).
   const double* moduli = nullptr;
   double* deformation = nullptr;  // 9N: F_i
@@ -113,16 +113,57 @@ BRECCIA_HD double svk_stress(const double* F, int d, double bulk, double shear, 
   return 0.5 * bulk * tr * tr + shear * dev2;
 }
 
+// The deformation gradient of a family from its moments, F = N K^-1 (I where K does not span
+// the space), and the family's energy density at it: St Venant-Kirchhoff's W(F) plus G times
+// the penalty's (h/2) sum_j w |Y - F xi|^2 V_j, written with the moments as
+// (h/2) (S - 2 F:N + F K : F), S = sum_j w |Y|^2 V_j, so that no second pass over the bonds is
+// needed. (The difference of two such sums, the energy a break releases, is what it is used
+// for: the moments' rounding, ~1e-16 of S, is ~1e-10 of the elastic energy at a strain of 1e-3.)
+template <int d>
+BRECCIA_HD double correspondence_family_energy(const double* K, const double* N, double S, const double* mod) {
+  double F[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, Kinv[9], P[9];
+  double W = 0.0;
+  if (invert_block(K, d, Kinv)) {
+    for (int a = 0; a < d; ++a)
+      for (int b = 0; b < d; ++b) {
+        double s = 0.0;
+        for (int e = 0; e < d; ++e) s += N[3 * a + e] * Kinv[3 * e + b];
+        F[3 * a + b] = s;
+      }
+    W = svk_stress(F, d, mod[0], mod[1], P);
+  }
+  double fn = 0.0, fkf = 0.0;
+  for (int a = 0; a < d; ++a)
+    for (int b = 0; b < d; ++b) {
+      fn += F[3 * a + b] * N[3 * a + b];
+      double fk = 0.0;
+      for (int e = 0; e < d; ++e) fk += F[3 * a + e] * K[3 * e + b];
+      fkf += fk * F[3 * a + b];
+    }
+  return W + mod[4] * 0.5 * mod[3] * (S - 2.0 * fn + fkf);
+}
+
 // Pass 1 for particle i: break over-stretched bonds (critical stretch, as PMB/LPS), then
 // K_i = sum_j w xi (x) xi V_j, F_i = (sum_j w Y (x) xi V_j) K_i^-1 over i's intact own bonds,
 // the stress and A_i = P K_i^-1 - G h F_i. Writes damage, energy density (elastic part) and the
-// energy released by bonds broken here.
+// energy released by bonds broken here: the drop of the particle's energy density (elastic and
+// penalty) times V_i at the current positions, its family's moments with the bonds that broke
+// against without them, so the energy balance books what the break took out of the body. (A
+// bond's own half belongs to i's energy alone; its dual half to j's, which j's pass breaks and
+// books from its own entry. Before 2026-12-07 the break booked what the equivalent PMB
+// half-bond holds at its critical stretch, not the correspondence energy: on the DCB the
+// balance was 9.7 % of the work off, docs/theory.md.)
 template <int d>
 BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int64_t i) {
   const PdView& p = c.p;
   const double* mod = c.moduli + kCorrModuli * i;
   double K[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, N[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-  double released = 0.0, smax = 0.0, intact_vol = 0.0;
+  // The own halves broken in this pass: their share of the moments (and S = sum w |Y|^2 V_j,
+  // over the intact ones in S), for the energy they release.
+  double dK[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, dN[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  double S = 0.0, dS = 0.0;
+  bool own_broke = false;
+  double smax = 0.0, intact_vol = 0.0;
   const double total_vol = p.diagnostics ? family_volume(p, i) : 0.0;
   for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
     uint8_t st = p.state[k];
@@ -132,13 +173,19 @@ BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int
     bond_vectors(p, i, j, xi, Y);
     const double len = std::sqrt(Y[0] * Y[0] + Y[1] * Y[1] + Y[2] * Y[2]);
     const double stretch = (len - p.xi_len[k]) / p.xi_len[k];
+    const double wv = p.k_own[k] * p.volume[j];
     if (p.fracture) {
       const uint8_t after = break_bonds(p, k, stretch, 0.0);
       if (after != st) {
-        // Released: what the equivalent PMB half-bond holds at its critical stretch.
         if ((st & ~after) & kOwnIntact) {
-          const double s0 = p.s0_own[k];
-          released += p.volume[i] * 0.25 * mod[2] * p.k_own[k] * s0 * s0 * p.xi_len[k] * p.volume[j];
+          own_broke = true;
+          for (int a = 0; a < d; ++a) {
+            dS += wv * Y[a] * Y[a];
+            for (int b = 0; b < d; ++b) {
+              dK[3 * a + b] += wv * xi[a] * xi[b];
+              dN[3 * a + b] += wv * Y[a] * xi[b];
+            }
+          }
         }
         st = after;
         p.state[k] = st;
@@ -147,12 +194,23 @@ BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int
     if (!(st & kOwnIntact)) continue;
     intact_vol += own_volume(p, k);
     if (stretch > smax) smax = stretch;
-    const double wv = p.k_own[k] * p.volume[j];
-    for (int a = 0; a < d; ++a)
+    for (int a = 0; a < d; ++a) {
+      if (p.fracture) S += wv * Y[a] * Y[a];
       for (int b = 0; b < d; ++b) {
         K[3 * a + b] += wv * xi[a] * xi[b];
         N[3 * a + b] += wv * Y[a] * xi[b];
       }
+    }
+  }
+  double released = 0.0;
+  if (own_broke) {
+    double K0[9], N0[9];
+    for (int q = 0; q < 9; ++q) {
+      K0[q] = K[q] + dK[q];
+      N0[q] = N[q] + dN[q];
+    }
+    released = p.volume[i] * (correspondence_family_energy<d>(K0, N0, S + dS, mod) -
+                              correspondence_family_energy<d>(K, N, S, mod));
   }
   double* F = c.deformation + 9 * i;
   double* Q = c.force_tensor + 9 * i;  // becomes A_i

@@ -29,6 +29,18 @@ std::string stabilisation_yaml(const std::string& type) {
   return type == "none" ? "{type: none}" : "{type: penalty, coefficient: 1}";
 }
 
+// A one-step correspondence system on `specimen` (a YAML line), horizon 3.015 spacings, the
+// stabilisation `type` and a rock of Young's modulus E and Poisson's ratio nu; `planar` is the
+// model's `planar: ...,` entry (2D) or empty.
+PdSystem correspondence_system(const std::string& name, const std::string& specimen, const std::string& planar,
+                               const std::string& type, const std::string& E, const std::string& nu,
+                               const std::string& density = "2600") {
+  return system_from_yaml(name, specimen + "\nmodel: {type: correspondence, " + planar +
+                                    "horizon_factor: 3.015, stabilisation: " + stabilisation_yaml(type) + "}\n"
+                                    "materials: [{name: rock, density: " + density + ", youngs_modulus: " + E +
+                                    ", poisson_ratio: " + nu + "}]\ntime: {steps: 1}\n");
+}
+
 // A small-strain field with shear and a rotation part (eps not symmetric): F must come out
 // as I + eps exactly, the stress from the Green-Lagrange strain sym(eps) + eps^T eps / 2.
 const double kEps[9] = {1.0e-4, 2.0e-5, -3.0e-5, -1.0e-5, -5.0e-5, 1.5e-5, 4.0e-5, -2.5e-5, 3.0e-5};
@@ -84,12 +96,9 @@ class CorrespondencePatch : public ::testing::TestWithParam<const char*> {};
 // ~1e4 x double epsilon); the interior force is a sum of terms of size sigma/delta that
 // cancel by symmetry (1e-9 of one term).
 TEST_P(CorrespondencePatch, AffineFieldGivesExactStressAndNoInteriorForceIn3D) {
-  PdSystem s = system_from_yaml(std::string("corr_patch3d_") + GetParam(),
-                                "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.015, 0.015, 0.015], spacing: 1 mm}}\n"
-                                "model: {type: correspondence, horizon_factor: 3.015, stabilisation: " +
-                                    stabilisation_yaml(GetParam()) + "}\n"
-                                "materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.3}]\n"
-                                "time: {steps: 1}\n");
+  PdSystem s = correspondence_system(std::string("corr_patch3d_") + GetParam(),
+                                     "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.015, 0.015, 0.015], spacing: 1 mm}}",
+                                     "", GetParam(), "50 GPa", "0.3");
   const PatchResult r = patch(s, kEps, 0.015);
   std::printf("3D patch (%s): max |F - I - eps| %.2e, max |W / W_exact - 1| %.2e, max interior |f| / (sigma/delta) %.2e over %d\n",
               GetParam(), r.worst_f, r.worst_energy, r.worst_interior_force, r.interior);
@@ -101,12 +110,9 @@ TEST_P(CorrespondencePatch, AffineFieldGivesExactStressAndNoInteriorForceIn3D) {
 
 TEST_P(CorrespondencePatch, AffineFieldGivesExactStressAndNoInteriorForceIn2D) {
   for (const char* planar : {"plane_stress", "plane_strain"}) {
-    PdSystem s = system_from_yaml(std::string("corr_patch2d_") + GetParam() + planar,
-                                  "specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.02], spacing: 1 mm, thickness: 1 mm}}\n"
-                                  "model: {type: correspondence, planar: " + std::string(planar) +
-                                      ", horizon_factor: 3.015, stabilisation: " + stabilisation_yaml(GetParam()) + "}\n"
-                                  "materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.2}]\n"
-                                  "time: {steps: 1}\n");
+    PdSystem s = correspondence_system(std::string("corr_patch2d_") + GetParam() + planar,
+                                       "specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.02], spacing: 1 mm, thickness: 1 mm}}",
+                                       "planar: " + std::string(planar) + ", ", GetParam(), "50 GPa", "0.2");
     const double eps2[9] = {1.0e-4, 3.0e-5, 0, -1.0e-5, -4.0e-5, 0, 0, 0, 0};
     const PatchResult r = patch(s, eps2, 0.02);
     std::printf("2D %s patch (%s): max |F - I - eps| %.2e, max |W / W_exact - 1| %.2e, max interior |f| / (sigma/delta) %.2e over %d\n",
@@ -276,14 +282,11 @@ TEST_P(CorrespondencePatch, ARigidRotationLeavesTheBodyUnstressed) {
   const double theta = std::numbers::pi / 6, c = std::cos(theta), s_ = std::sin(theta);
   for (int dimension : {3, 2}) {
     const std::string specimen = dimension == 3
-                                     ? "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.012, 0.012, 0.012], spacing: 1 mm}}\n"
-                                     : "specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.02], spacing: 1 mm, thickness: 1 mm}}\n";
+                                     ? "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.012, 0.012, 0.012], spacing: 1 mm}}"
+                                     : "specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.02], spacing: 1 mm, thickness: 1 mm}}";
     const std::string planar = dimension == 3 ? "" : "planar: plane_strain, ";
-    PdSystem s = system_from_yaml(std::string("corr_rotation_") + std::to_string(dimension) + GetParam(),
-                                  specimen + "model: {type: correspondence, " + planar +
-                                      "horizon_factor: 3.015, stabilisation: " + stabilisation_yaml(GetParam()) + "}\n"
-                                      "materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.3}]\n"
-                                      "time: {steps: 1}\n");
+    PdSystem s = correspondence_system(std::string("corr_rotation_") + std::to_string(dimension) + GetParam(), specimen,
+                                       planar, GetParam(), "50 GPa", "0.3");
     // R about the unit axis n (Rodrigues); 2D: n = z.
     const double k = dimension == 3 ? 1.0 / std::sqrt(3.0) : 0.0;
     const double n[3] = {k, k, dimension == 3 ? k : 1.0};
@@ -327,12 +330,9 @@ TEST_P(CorrespondencePatch, ARigidRotationLeavesTheBodyUnstressed) {
 // momentum to round-off (P F^T is symmetric: sums over ~1e4 steps, 1e-10 relative) and the
 // total energy of velocity Verlet within 1e-6 (measured 1e-9 to 5e-8, the step's O(dt^2)).
 TEST_P(CorrespondencePatch, ASpinningBodyTurnsAQuarterTurnUnstressed) {
-  PdSystem s = system_from_yaml(std::string("corr_spin_") + GetParam(),
-                                "specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.02], spacing: 1 mm, thickness: 1 mm}}\n"
-                                "model: {type: correspondence, planar: plane_strain, horizon_factor: 3.015, stabilisation: " +
-                                    stabilisation_yaml(GetParam()) + "}\n"
-                                "materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25}]\n"
-                                "time: {steps: 1}\n");
+  PdSystem s = correspondence_system(std::string("corr_spin_") + GetParam(),
+                                     "specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.02], spacing: 1 mm, thickness: 1 mm}}",
+                                     "planar: plane_strain, ", GetParam(), "50 GPa", "0.25");
   const double E = 50e9, rho = 2600, centre = 0.01;
   const double radius = centre * std::sqrt(2.0), omega = std::sqrt(1e-5 * E / rho) / radius;
   for (size_t i = 0; i < s.n; ++i) {

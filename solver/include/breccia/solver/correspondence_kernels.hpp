@@ -113,6 +113,21 @@ BRECCIA_HD double svk_stress(const double* F, int d, double bulk, double shear, 
   return 0.5 * bulk * tr * tr + shear * dev2;
 }
 
+// F = N K^-1 from a family's moments, and K^-1; F = I and false where K does not span the space
+// (all bonds broken or collinear).
+template <int d>
+BRECCIA_HD bool family_deformation(const double* K, const double* N, double* F, double* Kinv) {
+  for (int k = 0; k < 9; ++k) F[k] = (k % 4 == 0) ? 1.0 : 0.0;
+  if (!invert_block(K, d, Kinv)) return false;
+  for (int a = 0; a < d; ++a)
+    for (int b = 0; b < d; ++b) {
+      double s = 0.0;
+      for (int e = 0; e < d; ++e) s += N[3 * a + e] * Kinv[3 * e + b];
+      F[3 * a + b] = s;
+    }
+  return true;
+}
+
 // The deformation gradient of a family from its moments, F = N K^-1 (I where K does not span
 // the space), and the family's energy density at it: St Venant-Kirchhoff's W(F) plus G times
 // the penalty's (h/2) sum_j w |Y - F xi|^2 V_j, written with the moments as
@@ -121,17 +136,8 @@ BRECCIA_HD double svk_stress(const double* F, int d, double bulk, double shear, 
 // for: the moments' rounding, ~1e-16 of S, is ~1e-10 of the elastic energy at a strain of 1e-3.)
 template <int d>
 BRECCIA_HD double correspondence_family_energy(const double* K, const double* N, double S, const double* mod) {
-  double F[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, Kinv[9], P[9];
-  double W = 0.0;
-  if (invert_block(K, d, Kinv)) {
-    for (int a = 0; a < d; ++a)
-      for (int b = 0; b < d; ++b) {
-        double s = 0.0;
-        for (int e = 0; e < d; ++e) s += N[3 * a + e] * Kinv[3 * e + b];
-        F[3 * a + b] = s;
-      }
-    W = svk_stress(F, d, mod[0], mod[1], P);
-  }
+  double F[9], Kinv[9], P[9];
+  const double W = family_deformation<d>(K, N, F, Kinv) ? svk_stress(F, d, mod[0], mod[1], P) : 0.0;
   double fn = 0.0, fkf = 0.0;
   for (int a = 0; a < d; ++a)
     for (int b = 0; b < d; ++b) {
@@ -216,18 +222,9 @@ BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int
   double* Q = c.force_tensor + 9 * i;  // becomes A_i
   double Kinv[9];
   double W = 0.0;
-  for (int k = 0; k < 9; ++k) {
-    F[k] = (k % 4 == 0) ? 1.0 : 0.0;
-    Q[k] = (k % 4 == 0 && k / 4 < d) ? -mod[4] * mod[3] : 0.0;  // A = -G h F with F = I
-  }
+  for (int k = 0; k < 9; ++k) Q[k] = (k % 4 == 0 && k / 4 < d) ? -mod[4] * mod[3] : 0.0;  // A = -G h F with F = I
   // A family that no longer spans the space (all bonds broken or collinear) carries no stress.
-  if (invert_block(K, d, Kinv)) {
-    for (int a = 0; a < d; ++a)
-      for (int b = 0; b < d; ++b) {
-        double s = 0.0;
-        for (int e = 0; e < d; ++e) s += N[3 * a + e] * Kinv[3 * e + b];
-        F[3 * a + b] = s;
-      }
+  if (family_deformation<d>(K, N, F, Kinv)) {
     double P[9];
     W = svk_stress(F, d, mod[0], mod[1], P);
     for (int a = 0; a < d; ++a)

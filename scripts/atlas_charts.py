@@ -812,7 +812,7 @@ def main():
                     facts.append(f"{model.upper()} {kind}: stable up to f = {s}, unstable from f = {u}")
         md.append("| dt above 2/omega_max | " + "; ".join(facts) + "; the energy grows by 10x within tens of steps "
                   "| refused at start-up (`time.dt` above the stable step, InputError); with `check_stability: false`, "
-                  "`run_time_loop` stops the run when energy exceeds 10x the energy supplied or a value turns "
+                  "`run_time_loop` stops the run when energy (kinetic, strain and dissipated) exceeds 10x the energy supplied or a value turns "
                   "non-finite (\"run became unstable at step ...: time step too large\") | "
                   "`Models/StabilityMapTimeStep.TimeStepAboveTheStableLimitIsStoppedByTheEnergyDetector/{pmb,lps}`, "
                   "`Models/StabilityMapTimeStep.TimeStepJustBelowTheStableLimitRunsWithoutTrippingTheDetector/{pmb,lps}`, "

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -172,6 +173,15 @@ inline SplitRuns straight_and_restarted(const CaseConfig& config, const std::str
   o.steps = r.straight.step - first_steps;
   run_system(r.restarted, o);
   return r;
+}
+
+// What the callers of straight_and_restarted compare first: the same step, displacements and
+// velocities bit for bit, and the same bond states (each adds its model's own state).
+inline void expect_same_motion(const PdSystem& second, const PdSystem& straight) {
+  ASSERT_EQ(second.step, straight.step);
+  EXPECT_EQ(0, std::memcmp(second.u.data(), straight.u.data(), straight.u.size() * sizeof(double)));
+  EXPECT_EQ(0, std::memcmp(second.v.data(), straight.v.data(), straight.v.size() * sizeof(double)));
+  EXPECT_EQ(second.state, straight.state);
 }
 
 }  // namespace breccia::solver::testing

@@ -134,7 +134,7 @@ CaseConfig parse_case_file(const std::string& path) {
   model.allow_only({"type", "planar", "influence", "horizon", "horizon_factor", "variable_horizon",
                     "surface_correction", "fracture", "no_fail", "precision",
                     "stabilisation", "partial_volume", "compressive_enhancement", "short_range_forces",
-                    "pmb_calibration", "break_check", "cuda_layout"});
+                    "pmb_calibration", "break_check", "cuda_layout", "stress_damage_limit"});
   c.model_name = model.choice("type", {"pmb", "lps", "mps", "correspondence"});
   c.model = c.model_name == "lps" ? PdModel::LPS : PdModel::PMB;
   if (c.model_name == "correspondence") c.model = PdModel::Correspondence;
@@ -195,6 +195,15 @@ CaseConfig parse_case_file(const std::string& path) {
     if (c.stabilisation == "none" && st->has("coefficient"))
       throw InputError(path, st->field("coefficient"), "a coefficient with type: none", "no coefficient, or type: penalty");
     c.stabilisation_coefficient = c.stabilisation == "none" ? 0.0 : st->positive("coefficient", Quantity::Dimensionless, 1.0);
+  }
+  if (model.has("stress_damage_limit")) {
+    if (c.model != PdModel::Correspondence)
+      throw InputError(path, "model.stress_damage_limit", "given with type: " + c.model_name,
+                       "only with type: correspondence (PMB and LPS bonds carry their own force)");
+    c.stress_damage_limit = model.positive("stress_damage_limit", Quantity::Dimensionless);
+    if (!(c.stress_damage_limit < 1.0))
+      throw InputError(path, "model.stress_damage_limit", std::to_string(c.stress_damage_limit),
+                       "a share of the family's volume between 0 and 1 (exclusive), e.g. 0.5");
   }
   if (c.model == PdModel::Correspondence && c.surface_correction)
     throw InputError(path, "model.surface_correction", "energy with type: correspondence",

@@ -37,6 +37,7 @@ CorrespondenceView correspondence_view(PdSystem& s) {
   v.deformation = s.corr_deformation.data();
   v.force_tensor = s.corr_force_tensor.data();
   v.nonaffine = s.corr_nonaffine.data();
+  v.damage_limit = correspondence_damage_limit(s.config);
   return v;
 }
 

@@ -16,6 +16,7 @@
 
 #include "breccia/common/error.hpp"
 #include "breccia/solver/cuda_backend.hpp"
+#include "breccia/solver/correspondence.hpp"
 #include "breccia/solver/correspondence_kernels.hpp"
 #include "breccia/solver/cuda_kernel_clock.cuh"
 #include "breccia/solver/cuda_launch.cuh"
@@ -635,6 +636,7 @@ CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make
     m.arrays.corr.deformation = m.corr_deformation.get();
     m.arrays.corr.force_tensor = m.corr_force_tensor.get();
     m.arrays.corr.nonaffine = m.corr_nonaffine.get();
+    m.arrays.corr.damage_limit = correspondence_damage_limit(s.config);
   }
   if (m.f32) {
     fill(m.farrays);

@@ -204,6 +204,9 @@ struct CaseConfig {
   // Correspondence only: none | penalty (non-affine penalty, docs/theory.md), coefficient G
   std::string stabilisation = "penalty";
   double stabilisation_coefficient = 1.0;
+  // model.stress_damage_limit (correspondence only; 0: off): a particle whose family has lost
+  // more than this share of its own volume carries no stress (docs/theory.md, Correspondence).
+  double stress_damage_limit = 0.0;
   std::vector<MaterialSpec> materials;
   std::vector<PrecrackSpec> precracks;
   std::vector<RegionSetSpec> sets;  // case-defined particle sets (evaluated first in set-up)

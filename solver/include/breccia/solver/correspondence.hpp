@@ -14,6 +14,12 @@ namespace breccia::solver {
 // Fills the moduli and the per-particle tensors; `elastic` is indexed by material.
 void setup_correspondence(PdSystem& s, const std::vector<ElasticInput>& elastic);
 
+// The view's damage limit (CorrespondenceView::damage_limit) from the case: 2, off, unless
+// model.stress_damage_limit is given.
+inline double correspondence_damage_limit(const CaseConfig& c) {
+  return c.stress_damage_limit > 0.0 ? c.stress_damage_limit : 2.0;
+}
+
 // The two passes' view of the host state (the step of step.hpp launches them).
 CorrespondenceView correspondence_view(PdSystem& s);
 

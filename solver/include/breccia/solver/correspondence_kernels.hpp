@@ -30,7 +30,11 @@ struct CorrespondenceView {
   // T_i<xi> = w (A_i xi + G h Y): the penalty's F_i xi folded into one tensor per particle.
   double* force_tensor = nullptr;
   double* nonaffine = nullptr;    // N: (h/2) sum_j w |Y - F xi|^2 V_j, the G = 1 penalty energy density
+  // model.stress_damage_limit: a particle whose family has lost more than this share of its own
+  // volume carries no stress (F = I, the penalty alone); above 1: never.
+  double damage_limit = 2.0;
 };
+
 
 inline constexpr int kCorrModuli = 5;
 
@@ -135,9 +139,10 @@ BRECCIA_HD bool family_deformation(const double* K, const double* N, double* F, 
 // needed. (The difference of two such sums, the energy a break releases, is what it is used
 // for: the moments' rounding, ~1e-16 of S, is ~1e-10 of the elastic energy at a strain of 1e-3.)
 template <int d>
-BRECCIA_HD double correspondence_family_energy(const double* K, const double* N, double S, const double* mod) {
-  double F[9], Kinv[9], P[9];
-  const double W = family_deformation<d>(K, N, F, Kinv) ? svk_stress(F, d, mod[0], mod[1], P) : 0.0;
+BRECCIA_HD double correspondence_family_energy(const double* K, const double* N, double S, const double* mod,
+                                               bool stress_off) {
+  double F[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, Kinv[9], P[9];
+  const double W = !stress_off && family_deformation<d>(K, N, F, Kinv) ? svk_stress(F, d, mod[0], mod[1], P) : 0.0;
   double fn = 0.0, fkf = 0.0;
   for (int a = 0; a < d; ++a)
     for (int b = 0; b < d; ++b) {
@@ -170,7 +175,9 @@ BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int
   double S = 0.0, dS = 0.0;
   bool own_broke = false;
   double smax = 0.0, intact_vol = 0.0;
-  const double total_vol = p.diagnostics ? family_volume(p, i) : 0.0;
+  const bool limited = c.damage_limit < 1.0;
+  const double total_vol = p.diagnostics || limited ? family_volume(p, i) : 0.0;
+  double broken_vol = 0.0;  // own volume of the halves broken in this pass
   for (int64_t k = p.offsets[i]; k < p.offsets[i + 1]; ++k) {
     uint8_t st = p.state[k];
     if (!st) continue;
@@ -185,6 +192,7 @@ BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int
       if (after != st) {
         if ((st & ~after) & kOwnIntact) {
           own_broke = true;
+          if (limited) broken_vol += own_volume(p, k);
           for (int a = 0; a < d; ++a) {
             dS += wv * Y[a] * Y[a];
             for (int b = 0; b < d; ++b) {
@@ -208,6 +216,11 @@ BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int
       }
     }
   }
+  // Past the damage limit (damage: the share of the family's own volume lost) the particle
+  // carries no stress; crossing it is a break like any other, booked below.
+  const bool stress_off = limited && total_vol > 0.0 && 1.0 - intact_vol / total_vol > c.damage_limit;
+  const bool stress_off_before =
+      limited && total_vol > 0.0 && 1.0 - (intact_vol + broken_vol) / total_vol > c.damage_limit;
   double released = 0.0;
   if (own_broke) {
     double K0[9], N0[9];
@@ -215,8 +228,8 @@ BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int
       K0[q] = K[q] + dK[q];
       N0[q] = N[q] + dN[q];
     }
-    released = p.volume[i] * (correspondence_family_energy<d>(K0, N0, S + dS, mod) -
-                              correspondence_family_energy<d>(K, N, S, mod));
+    released = p.volume[i] * (correspondence_family_energy<d>(K0, N0, S + dS, mod, stress_off_before) -
+                              correspondence_family_energy<d>(K, N, S, mod, stress_off));
   }
   double* F = c.deformation + 9 * i;
   double* Q = c.force_tensor + 9 * i;  // becomes A_i
@@ -224,7 +237,9 @@ BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int
   double W = 0.0;
   for (int k = 0; k < 9; ++k) Q[k] = (k % 4 == 0 && k / 4 < d) ? -mod[4] * mod[3] : 0.0;  // A = -G h F with F = I
   // A family that no longer spans the space (all bonds broken or collinear) carries no stress.
-  if (family_deformation<d>(K, N, F, Kinv)) {
+  if (stress_off) {
+    for (int k = 0; k < 9; ++k) F[k] = (k % 4 == 0) ? 1.0 : 0.0;
+  } else if (family_deformation<d>(K, N, F, Kinv)) {
     double P[9];
     W = svk_stress(F, d, mod[0], mod[1], P);
     for (int a = 0; a < d; ++a)

@@ -151,6 +151,15 @@ INSTANTIATE_TEST_SUITE_P(Stabilisation, CorrespondencePatch, ::testing::Values("
 
 namespace {
 
+// Runs `s` to its end without writing results or progress, in a temporary folder of `name`.
+RunResult run_quietly(PdSystem& s, const std::string& name) {
+  s.config.write_results = false;
+  RunOptions o;
+  o.out_dir = process_temp_dir() + "/" + name;
+  o.progress = false;
+  return run_system(s, o);
+}
+
 // A free 2D plane-strain square (20 mm, dx 1 mm, m = 3) set moving in one of two ways that
 // feed the particle-scale modes: "impact", one column starting at 5 m/s; "noise", random
 // velocities (+-1 m/s per component, fixed seed) in every mode, the zero-energy ones too.
@@ -165,7 +174,6 @@ RunResult provoke(const std::string& scenario, const std::string& stabilisation,
                                     initial + "time: {steps: " + std::to_string(steps) + ", safety: " + std::to_string(safety) +
                                     "}\n"
                                 "output: {every: 1000000, history_every: 5, fields: [damage]}\n");
-  s.config.write_results = false;
   if (scenario == "noise") {
     std::mt19937_64 rng(20071);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
@@ -173,10 +181,7 @@ RunResult provoke(const std::string& scenario, const std::string& stabilisation,
       for (int d = 0; d < 2; ++d) s.v[3 * i + d] = uni(rng);
   }
   const Energies e0 = measure(s);
-  RunOptions o;
-  o.out_dir = process_temp_dir() + "/corr_" + scenario + "_" + stabilisation;
-  o.progress = false;
-  RunResult r = run_system(s, o);
+  RunResult r = run_quietly(s, "corr_" + scenario + "_" + stabilisation);
   if (energy_change) *energy_change = (r.final_energies.kinetic + r.final_energies.strain) / (e0.kinetic + e0.strain) - 1.0;
   return r;
 }
@@ -422,11 +427,7 @@ TEST(CorrespondenceRestart, HalfRunsWithACheckpointEqualOneStraightRunBitForBit)
 // supplied (the check before 2026-12-07) this run went on to its end with every bond broken.
 TEST(CorrespondenceFracture, ABlowUpIsStoppedAlthoughItsBreaksBookItsEnergy) {
   PdSystem s = system_from_yaml("corr_blowup", correspondence_plate_deck("time: {steps: 400, safety: 1.5, check_stability: false}\n"));
-  s.config.write_results = false;
-  RunOptions o;
-  o.out_dir = process_temp_dir() + "/corr_blowup";
-  o.progress = false;
-  const RunResult r = run_system(s, o);
+  const RunResult r = run_quietly(s, "corr_blowup");
   std::printf("blow-up: status %s at step %lld: %s\n", r.status.c_str(), r.steps, r.message.substr(0, 160).c_str());
   EXPECT_EQ(r.status, "unstable");
   EXPECT_LT(r.steps, 400);
@@ -445,11 +446,7 @@ TEST(CorrespondenceFracture, AStressLimitKeepsASuddenlyLoadedCrackStable) {
     PdSystem s = system_from_yaml(limit ? "corr_limit" : "corr_no_limit",
                                   correspondence_plate_deck("time: {steps: 400}\n", "10 MPa", "5 us",
                                                             limit ? ", stress_damage_limit: 0.5" : ""));
-    s.config.write_results = false;
-    RunOptions o;
-    o.out_dir = process_temp_dir() + (limit ? "/corr_limit" : "/corr_no_limit");
-    o.progress = false;
-    const RunResult r = run_system(s, o);
+    const RunResult r = run_quietly(s, limit ? "corr_limit" : "corr_no_limit");
     const Energies& e = r.final_energies;
     const double imbalance = (e.kinetic + e.strain + s.dissipated_energy - s.external_work) / s.external_work;
     std::printf("plate at 10 MPa, limit %s: %s at step %lld, work %.3e J, imbalance %.2e\n", limit ? "0.5" : "none",

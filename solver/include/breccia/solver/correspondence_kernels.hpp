@@ -35,7 +35,6 @@ struct CorrespondenceView {
   double damage_limit = 2.0;
 };
 
-
 inline constexpr int kCorrModuli = 5;
 
 // Inverse of the d x d block of a row-major 3x3 matrix; false if (nearly) singular, i.e.
@@ -117,11 +116,10 @@ BRECCIA_HD double svk_stress(const double* F, int d, double bulk, double shear, 
   return 0.5 * bulk * tr * tr + shear * dev2;
 }
 
-// F = N K^-1 from a family's moments, and K^-1; F = I and false where K does not span the space
-// (all bonds broken or collinear).
+// F = N K^-1 from a family's moments (its d x d block), and K^-1; false, F untouched, where K
+// does not span the space (all bonds broken or collinear): the callers' F = I stands.
 template <int d>
 BRECCIA_HD bool family_deformation(const double* K, const double* N, double* F, double* Kinv) {
-  for (int k = 0; k < 9; ++k) F[k] = (k % 4 == 0) ? 1.0 : 0.0;
   if (!invert_block(K, d, Kinv)) return false;
   for (int a = 0; a < d; ++a)
     for (int b = 0; b < d; ++b) {
@@ -235,11 +233,13 @@ BRECCIA_HD void correspondence_deformation_pass(const CorrespondenceView& c, int
   double* Q = c.force_tensor + 9 * i;  // becomes A_i
   double Kinv[9];
   double W = 0.0;
-  for (int k = 0; k < 9; ++k) Q[k] = (k % 4 == 0 && k / 4 < d) ? -mod[4] * mod[3] : 0.0;  // A = -G h F with F = I
-  // A family that no longer spans the space (all bonds broken or collinear) carries no stress.
-  if (stress_off) {
-    for (int k = 0; k < 9; ++k) F[k] = (k % 4 == 0) ? 1.0 : 0.0;
-  } else if (family_deformation<d>(K, N, F, Kinv)) {
+  for (int k = 0; k < 9; ++k) {
+    F[k] = (k % 4 == 0) ? 1.0 : 0.0;
+    Q[k] = (k % 4 == 0 && k / 4 < d) ? -mod[4] * mod[3] : 0.0;  // A = -G h F with F = I
+  }
+  // A family that no longer spans the space (all bonds broken or collinear), or past the
+  // damage limit, carries no stress.
+  if (!stress_off && family_deformation<d>(K, N, F, Kinv)) {
     double P[9];
     W = svk_stress(F, d, mod[0], mod[1], P);
     for (int a = 0; a < d; ++a)

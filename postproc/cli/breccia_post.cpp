@@ -50,7 +50,6 @@ double frequency_of(const std::string& flag, const std::string& text) {
 breccia::postproc::PostOptions finish(Given g) {
   breccia::postproc::PostOptions& o = g.o;
   o.run_dir = g.run_dir;
-  if (!g.frequency.empty()) o.frequency_Hz = frequency_of("--frequency", g.frequency);
   o.hann = g.hann;
   std::string spectrum_detail;  // one of --gate/--resolution/--band given
   if (!g.gate.empty()) {
@@ -68,12 +67,13 @@ breccia::postproc::PostOptions finish(Given g) {
     spectrum_detail = "--gate";
   }
   for (const auto& [flag, text, into] :
-       {std::tuple{"--resolution", &g.resolution, &o.resolution_Hz}, std::tuple{"--band", &g.band, &o.band_Hz}}) {
+       {std::tuple{"--frequency", &g.frequency, &o.frequency_Hz}, std::tuple{"--resolution", &g.resolution, &o.resolution_Hz},
+        std::tuple{"--band", &g.band, &o.band_Hz}}) {
     if (text->empty()) continue;
     const double f = frequency_of(flag, *text);
     if (!(f > 0)) throw InputError("command line", flag, std::to_string(f) + " Hz", "a positive frequency");
     *into = f;
-    spectrum_detail = flag;
+    if (into != &o.frequency_Hz) spectrum_detail = flag;
   }
   if (!(o.damage_threshold >= 0.0 && o.damage_threshold <= 1.0))
     throw InputError("command line", "--damage-threshold", std::to_string(o.damage_threshold),

@@ -153,16 +153,30 @@ CandidateFaces candidate_faces(const ParticleModel& m, const Families& fam) {
 
 namespace {
 
-// Local crack plane per crack face from the principal axes of the crack-face centroids
-// within a radius (3D: normal = least-variance axis; 2D: normal = in-plane perpendicular of
-// the largest-variance axis), then area x |n_face . n_plane|. Only faces with weight[f] > 0
-// take part (as faces and as neighbours); each counts weight[f] x its projected area.
+// Local crack plane per crack face from the principal axes of the centroids of the faces of
+// the same crack (crack_id: faces joined through shared vertices) within a radius (3D:
+// normal = least-variance axis; 2D: normal = in-plane perpendicular of the largest-variance
+// axis), then area x |n_face . n_plane|. Only faces with weight[f] > 0 take part (as faces and
+// as neighbours); each counts weight[f] x its projected area. Two parallel cracks a few
+// spacings apart would otherwise share a neighbourhood, and the fit across both would turn
+// the plane through the gap between them and project every face to nothing.
 struct Smoothed {
   double area_m2 = 0.0, fracture_area_m2 = 0.0, G0_fracture_area_J = 0.0, length_m = 0.0, radius_m = 0.0;
 };
 
 Smoothed smooth_areas(const CandidateFaces& faces, const CrackInputs& in, const CrackResult& r,
                       const std::vector<double>& weight) {
+  // Cell moments are kept per (cell, crack): a block's fit sees one crack's faces only.
+  struct CellCrack {
+    long long cell;
+    int32_t crack;
+    bool operator==(const CellCrack&) const = default;
+  };
+  struct CellCrackHash {
+    size_t operator()(const CellCrack& k) const {
+      return std::hash<long long>()(k.cell) ^ (std::hash<int32_t>()(k.crack) * 0x9e3779b97f4a7c15ULL);
+    }
+  };
   Smoothed out;
   const int vpf = faces.vertices_per_face;
   const bool planar = faces.dimension == 2;
@@ -215,10 +229,10 @@ Smoothed smooth_areas(const CandidateFaces& faces, const CrackInputs& in, const 
     Eigen::Vector3d first = Eigen::Vector3d::Zero();
     Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
   };
-  std::unordered_map<long long, Moments> cell_moments;
-  std::vector<long long> face_cell(nc);
+  std::unordered_map<CellCrack, Moments, CellCrackHash> cell_moments;
+  std::vector<CellCrack> face_cell(nc);
   for (size_t k = 0; k < nc; ++k) {
-    face_cell[k] = grid.index_of(centroid[k].data());
+    face_cell[k] = {grid.index_of(centroid[k].data()), r.crack_id[crack[k]]};
     Moments& m = cell_moments[face_cell[k]];
     const double w = weight[crack[k]] * faces.area_m2[crack[k]];
     m.w += w;
@@ -230,15 +244,15 @@ Smoothed smooth_areas(const CandidateFaces& faces, const CrackInputs& in, const 
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
     bool defined = false;
   };
-  std::unordered_map<long long, Plane> cell_plane;
+  std::unordered_map<CellCrack, Plane, CellCrackHash> cell_plane;
   cell_plane.reserve(cell_moments.size());
   for (const auto& [key, own] : cell_moments) {
-    const long long cx = key % dims[0], cy = (key / dims[0]) % dims[1], cz = key / (dims[0] * dims[1]);
+    const long long cx = key.cell % dims[0], cy = (key.cell / dims[0]) % dims[1], cz = key.cell / (dims[0] * dims[1]);
     Moments block;
     for (long long z = std::max(0LL, cz - 1); z <= std::min(dims[2] - 1, cz + 1); ++z)
       for (long long y = std::max(0LL, cy - 1); y <= std::min(dims[1] - 1, cy + 1); ++y)
         for (long long x = std::max(0LL, cx - 1); x <= std::min(dims[0] - 1, cx + 1); ++x) {
-          const auto it = cell_moments.find(grid.index(x, y, z));
+          const auto it = cell_moments.find({grid.index(x, y, z), key.crack});
           if (it == cell_moments.end()) continue;
           block.w += it->second.w;
           block.first += it->second.first;
@@ -257,7 +271,10 @@ Smoothed smooth_areas(const CandidateFaces& faces, const CrackInputs& in, const 
       }
       // Too few neighbours, or no dominant plane (a junction, a blob): keep the face area.
       const Eigen::Vector3d ev = es.eigenvalues();
-      plane.defined = plane.normal.norm() > 0.5 && (planar ? ev[2] > 0 : ev[1] > 4.0 * std::max(ev[0], 0.0));
+      // 2D: the centroids lie in the plane z = const, so ev[0] is ~0 and the line must dominate
+      // the across-crack spread, ev[1]; 3D: the plane must dominate its normal's spread.
+      plane.defined = plane.normal.norm() > 0.5 && (planar ? ev[2] > 4.0 * std::max(ev[1], 0.0)
+                                                           : ev[1] > 4.0 * std::max(ev[0], 0.0));
       if (plane.defined) plane.normal.normalize();
     }
     cell_plane.emplace(key, plane);
@@ -315,6 +332,25 @@ CrackResult find_cracks(const CandidateFaces& faces, const CrackInputs& in, Crac
       r.G0_area_J += faces.area_m2[f] * 0.5 * (g0(a) + g0(b));
     }
   }
+  // Cracks: crack faces connected through shared vertices (edge or node).
+  const int vpf = faces.vertices_per_face;
+  UnionFind uf(nf);
+  std::vector<int32_t> first_face(faces.points_m.size() / 3, -1);
+  for (size_t f = 0; f < nf; ++f) {
+    if (r.state[f] == kIntact) continue;
+    for (int v = 0; v < vpf; ++v) {
+      int32_t& first = first_face[faces.vertices[f * vpf + v]];
+      if (first < 0) first = static_cast<int32_t>(f);
+      else uf.unite(first, static_cast<int32_t>(f));
+    }
+  }
+  std::vector<int32_t> id_of_root(nf, -1);
+  for (size_t f = 0; f < nf; ++f) {
+    if (r.state[f] == kIntact) continue;
+    const int32_t root = uf.find(static_cast<int32_t>(f));
+    if (id_of_root[root] < 0) id_of_root[root] = r.crack_count++;
+    r.crack_id[f] = id_of_root[root];
+  }
   std::vector<double> weight(nf, 0.0);
   for (size_t f = 0; f < nf; ++f) weight[f] = r.state[f] != kIntact ? 1.0 : 0.0;
   const Smoothed all = smooth_areas(faces, in, r, weight);
@@ -344,25 +380,6 @@ CrackResult find_cracks(const CandidateFaces& faces, const CrackInputs& in, Crac
     const Smoothed sep = smooth_areas(faces, in, r, weight);
     r.smoothed_separating_fracture_area_m2 = sep.fracture_area_m2;
     r.G0_smoothed_separating_area_J = sep.G0_fracture_area_J;
-  }
-  // Cracks: crack faces connected through shared vertices (edge or node).
-  const int vpf = faces.vertices_per_face;
-  UnionFind uf(nf);
-  std::vector<int32_t> first_face(faces.points_m.size() / 3, -1);
-  for (size_t f = 0; f < nf; ++f) {
-    if (r.state[f] == kIntact) continue;
-    for (int v = 0; v < vpf; ++v) {
-      int32_t& first = first_face[faces.vertices[f * vpf + v]];
-      if (first < 0) first = static_cast<int32_t>(f);
-      else uf.unite(first, static_cast<int32_t>(f));
-    }
-  }
-  std::vector<int32_t> id_of_root(nf, -1);
-  for (size_t f = 0; f < nf; ++f) {
-    if (r.state[f] == kIntact) continue;
-    const int32_t root = uf.find(static_cast<int32_t>(f));
-    if (id_of_root[root] < 0) id_of_root[root] = r.crack_count++;
-    r.crack_id[f] = id_of_root[root];
   }
   return r;
 }

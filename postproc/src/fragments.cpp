@@ -22,7 +22,10 @@ FragmentResult measure_fragments(const FragmentInputs& in, std::span<const int32
   struct Acc {
     int64_t count = 0;
     double volume = 0, mass = 0, spacing_sum = 0;
-    Eigen::Vector3d x_sum = Eigen::Vector3d::Zero(), u_sum = Eigen::Vector3d::Zero(), v_sum = Eigen::Vector3d::Zero();
+    // x_sum by volume (the reference shape's centre and axes); xm_sum, u_sum, v_sum by mass
+    // (the centre of mass now, which moves at the mass-weighted velocity).
+    Eigen::Vector3d x_sum = Eigen::Vector3d::Zero(), xm_sum = Eigen::Vector3d::Zero(), u_sum = Eigen::Vector3d::Zero(),
+                    v_sum = Eigen::Vector3d::Zero();
     Eigen::Matrix3d xx_sum = Eigen::Matrix3d::Zero();
   };
   std::vector<Acc> acc(component_count);
@@ -38,6 +41,7 @@ FragmentResult measure_fragments(const FragmentInputs& in, std::span<const int32
     a.mass += m;
     a.spacing_sum += dim == 3 ? std::cbrt(v) : std::sqrt(v / in.thickness_m);
     a.x_sum += v * x;
+    a.xm_sum += m * x;
     a.xx_sum += v * x * x.transpose();
     a.u_sum += m * vec(in.displacement_m, i);
     a.v_sum += m * vec(in.velocity_m_s, i);
@@ -148,11 +152,11 @@ FragmentResult measure_fragments(const FragmentInputs& in, std::span<const int32
     f.volume_m3 = a.volume;
     f.mass_kg = a.mass;
     const Eigen::Vector3d xc = a.x_sum / a.volume;
-    const Eigen::Vector3d uc = a.mass > 0 ? Eigen::Vector3d(a.u_sum / a.mass) : Eigen::Vector3d::Zero();
+    const Eigen::Vector3d cm = a.mass > 0 ? Eigen::Vector3d((a.xm_sum + a.u_sum) / a.mass) : xc;
     const Eigen::Vector3d vc = a.mass > 0 ? Eigen::Vector3d(a.v_sum / a.mass) : Eigen::Vector3d::Zero();
     for (int d = 0; d < 3; ++d) {
       f.centroid_reference_m[d] = xc[d];
-      f.centroid_m[d] = xc[d] + uc[d];
+      f.centroid_m[d] = cm[d];
       f.velocity_m_s[d] = vc[d];
     }
     f.equivalent_diameter_m = dim == 3 ? std::cbrt(6.0 * a.volume / std::numbers::pi)

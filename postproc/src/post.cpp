@@ -612,6 +612,13 @@ private:
         throw InputError(h.path.string(), "time_s", "no increase over " + std::to_string(tg.size()) + " rows",
                          "increasing sample times for the spectrum of probe " + probe);
       resampled = resampled || rs;
+      for (size_t k = 0; k < vg.size(); ++k)
+        if (!std::isfinite(vg[k]))
+          throw InputError(h.path.string(), c, std::to_string(vg[k]) + " at t = " + fmt(tg[k]) + " s",
+                           "finite values for the spectrum of probe " + probe);
+      if (opt_.frequency_Hz && *opt_.frequency_Hz > 0.5 / dt)
+        throw InputError("command line", "--frequency", fmt(*opt_.frequency_Hz) + " Hz",
+                         "a frequency below the Nyquist frequency of " + h.path.string() + "'s samples, " + fmt(0.5 / dt) + " Hz");
       const std::string comp = c.size() > 7 + probe.size() ? c.substr(7 + probe.size()) : c;
       try {
         comps.emplace_back(comp, amplitude_spectrum(v, dt, so));

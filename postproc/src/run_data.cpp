@@ -34,6 +34,19 @@ std::vector<T> sized(std::vector<T> v, size_t expected, const std::string& file,
   return v;
 }
 
+// A per-particle vector: N rows of 3 (row-major). The element count alone would take a 3 x N
+// dataset, whose rows read as garbage.
+std::vector<double> rows_of_3(const h5::File& f, const std::string& name, size_t n) {
+  const std::vector<hsize_t> d = f.dims(name);
+  if (!(d.size() == 2 && d[0] == n && d[1] == 3)) {
+    std::string shape;
+    for (size_t k = 0; k < d.size(); ++k) shape += (k ? " x " : "") + std::to_string(d[k]);
+    throw InputError(f.path(), name, "shape " + (shape.empty() ? std::string("scalar") : shape),
+                     "N x 3 with N = " + std::to_string(n) + " particles");
+  }
+  return f.read_doubles(name);
+}
+
 size_t bit_bytes(size_t bonds) { return (bonds + 7) / 8; }
 
 // A bit array over the bond list: ceil(B / 8) bytes, the bits past B clear.
@@ -141,7 +154,7 @@ RunData open_run(const fs::path& run_dir, const std::string& particles_override)
   if (n != run.particles.size())
     throw InputError(rp, "/particles/volume", std::to_string(n) + " particles",
                      std::to_string(run.particles.size()) + " as in " + pf.string());
-  run.position_m = sized(f.read_doubles("/particles/position"), 3 * n, rp, "/particles/position", "N x 3");
+  run.position_m = rows_of_3(f, "/particles/position", n);
   run.volume_m3 = sized(f.read_doubles("/particles/volume"), n, rp, "/particles/volume", "N");
   run.density_kg_m3 = sized(f.read_doubles("/particles/density"), n, rp, "/particles/density", "N");
   run.horizon_m = sized(f.read_doubles("/particles/horizon"), n, rp, "/particles/horizon", "N");
@@ -196,8 +209,8 @@ OutputFrame read_frame(const RunData& run, size_t k, bool full) {
                      std::to_string(fr.broken_count) + ", the bits set in " + g + "/broken");
   if (full) {
     for (const char* d : {"/displacement", "/velocity"}) require(f, g + d, "written by breccia-solve");
-    fr.displacement_m = sized(f.read_doubles(g + "/displacement"), 3 * n, rp, g + "/displacement", "N x 3");
-    fr.velocity_m_s = sized(f.read_doubles(g + "/velocity"), 3 * n, rp, g + "/velocity", "N x 3");
+    fr.displacement_m = rows_of_3(f, g + "/displacement", n);
+    fr.velocity_m_s = rows_of_3(f, g + "/velocity", n);
   }
   return fr;
 }

@@ -127,8 +127,10 @@ SizeDistribution size_distribution(std::span<const double> size_m, std::span<con
   double cum = 0;
   for (size_t k = 0; k < order.size(); ++k) {
     cum += mass_kg[order[k]];
-    // Fragments of equal size form one sieve step: keep only the last (highest) point.
-    if (!d.size_m.empty() && d.size_m.back() == size_m[order[k]]) {
+    // Fragments of equal size form one sieve step: keep only the last (highest) point. Equal
+    // within 1e-9: sizes are box edges, differences of coordinates, so pieces of one size
+    // differ by rounding (0.003 and 0.0030000000000000027 m), not by a sieve.
+    if (!d.size_m.empty() && size_m[order[k]] - d.size_m.back() <= 1e-9 * d.size_m.back()) {
       d.passing.back() = cum / total;
       continue;
     }

@@ -134,10 +134,12 @@ Spectrum amplitude_spectrum(std::span<const double> signal, double dt_s, const S
       best = largest_in(order * nominal, *o.band_Hz);
       if (best == bins) break;
     } else {
-      const size_t centre = order * ref;
-      if (centre + 1 >= bins) break;
+      // +-1 bin around order x the reference bin; a reference in bin 1 leaves no room for it
+      // (bin order - 1 is the harmonic below), so there the harmonic's own bin alone.
+      const size_t centre = order * ref, half = ref >= 2 ? 1 : 0;
+      if (centre + half >= bins) break;
       best = centre;
-      for (size_t k = centre - 1; k <= centre + 1; ++k)
+      for (size_t k = centre - half; k <= centre + half; ++k)
         if (s.amplitude[k] > s.amplitude[best]) best = k;
     }
     s.harmonics.push_back({order, s.frequency_Hz[best], s.amplitude[best], s.amplitude[best] / norm});

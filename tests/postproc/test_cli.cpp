@@ -420,3 +420,49 @@ TEST(BrecciaPostCli, GateOutsideTheRecordOrReversedIsBadInputNamingTheOption) {
   EXPECT_EQ(alone.code, kExitBadInput);
   EXPECT_NE(alone.output.find("--gate: without --spectrum"), std::string::npos) << alone.output;
 }
+
+// --frequency must name a frequency the record resolves: above 0 and at most its Nyquist
+// frequency (samples every 10 ns: 50 MHz); a probe value that is not finite is bad input too.
+TEST(BrecciaPostCli, FrequencyOutsideTheRecordOrANonFiniteProbeValueIsBadInput) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_frequency_bad";
+  bt::write_run(cracked_cubes(dir));
+  write_gated_history(dir);
+  for (const char* f : {"-2e5", "0", "1e12"}) {
+    const Result r = run_post("'" + dir.string() + "' --spectrum A --frequency " + f + " --no-plots --quiet");
+    EXPECT_EQ(r.code, kExitBadInput) << f;
+    EXPECT_NE(r.output.find("--frequency"), std::string::npos) << r.output;
+  }
+  const Result nyquist = run_post("'" + dir.string() + "' --spectrum A --frequency 60e6 --no-plots --quiet");
+  EXPECT_NE(nyquist.output.find("Nyquist frequency"), std::string::npos) << nyquist.output;
+  std::string h = bt::read_text(dir / "history.csv");
+  const size_t row = h.find("\n200,");
+  ASSERT_NE(row, std::string::npos);
+  const size_t value = h.rfind(',', h.find('\n', row + 1)) + 1;
+  h.replace(value, h.find('\n', row + 1) - value, "nan");
+  std::ofstream(dir / "history.csv") << h;
+  const Result nan = run_post("'" + dir.string() + "' --spectrum A --no-plots --quiet");
+  EXPECT_EQ(nan.code, kExitBadInput);
+  EXPECT_NE(nan.output.find("probe_A_ux: nan at t = 2e-06 s"), std::string::npos) << nan.output;
+}
+
+// Positions stored as 3 x N hold 3N numbers like N x 3 but would be read as garbage.
+TEST(BrecciaPostCli, PositionsOfTheWrongShapeAreBadInputNamingTheDataset) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_bad_shape";
+  const auto run = cracked_cubes(dir);
+  bt::write_run(run);
+  std::vector<double> x;
+  {
+    h5::File f((dir / "results.h5").string(), h5::File::Mode::Read);
+    x = f.read_doubles("/particles/position");
+  }
+  {
+    h5::File f((dir / "results.h5").string(), h5::File::Mode::ReadWrite);
+    H5Ldelete(f.id(), "/particles/position", H5P_DEFAULT);
+    f.write("/particles/position", x, {3, run.model.size()});
+  }
+  const Result r = run_post("'" + dir.string() + "' --no-plots --quiet");
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.output.find("/particles/position: shape 3 x " + std::to_string(run.model.size())), std::string::npos)
+      << r.output;
+}
+

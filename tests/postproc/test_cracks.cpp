@@ -132,6 +132,30 @@ TEST(CrackSurface, LatticeCrackUsesBisectorSquares) {
   EXPECT_EQ(cm.points_m.size() / 3, 49u);  // welded corners: a 7 x 7 grid of vertices
 }
 
+TEST(CrackSurface, TwoParallelCracksAFewSpacingsApartKeepTheirAreaWhenSmoothed) {
+  // Two planar through-cracks at x = 3 mm and x = 3 + g mm in a thin lattice plate (12 x 8 x 2
+  // mm) and a 2D lattice plate (12 x 8 mm, 2 mm thick): each crack is 8 x 2 mm^2 of faces lying
+  // in its plane, so the smoothed area equals the face area exactly. A fit over the faces of
+  // both cracks (one neighbourhood holds both for g of 3-5 spacings) would take the plate's
+  // thin direction, across which they do not spread, as the normal: every face projected
+  // to ~0 (the defect this guards against: 1e-20 m^2 at g = 5 mm).
+  for (int dim : {3, 2}) {
+    const auto m = dim == 3 ? bt::lattice(3, {12, 8, 2}, kH) : bt::lattice(2, {12, 8, 0}, kH, 2e-3);
+    const double horizon = 3.015 * kH;
+    for (int gap : {2, 3, 4, 5, 6}) {
+      const double x1 = 3 * kH, x2 = (3 + gap) * kH;
+      const auto cut = bt::bonds_where(m, horizon, [&](const double* a, const double* b) {
+        return crosses(a, b, 0, x1) || crosses(a, b, 0, x2);
+      });
+      const Cracked c = make(m, horizon, cut);
+      const CrackResult r = c.find();
+      EXPECT_EQ(r.crack_count, 2) << dim << "D, gap " << gap;
+      EXPECT_NEAR(r.area_m2, 2 * 8 * kH * 2e-3, 1e-15) << dim << "D, gap " << gap;
+      EXPECT_NEAR(r.smoothed_area_m2, r.area_m2, 1e-9 * r.area_m2) << dim << "D, gap " << gap;
+    }
+  }
+}
+
 TEST(CrackSurface, TwoDimensionalCrackReportsLengthAndLengthTimesThickness) {
   // 2D 5 x 4 mm plate, thickness 2 mm, crack on y = 2 mm across the width: length 5 mm.
   const double thickness = 2e-3;

@@ -77,6 +77,31 @@ TEST(Fragments, SeparatedCubesGiveOneFragmentEachWithExactVolume) {
   }
 }
 
+TEST(Fragments, TheCurrentCentroidIsTheCentreOfMassOfATwoDensityBlockTurnedHalfATurn) {
+  // A 12 x 8 x 4 mm block, density 1000 for x < 6 mm and 3000 above, turned half a turn about
+  // the z axis through its centre (u = -2 (X - c) in x and y). Centre of mass in the reference:
+  // x = (1000 x 3 + 3000 x 9) / 4000 = 7.5 mm; turned: 12 - 7.5 = 4.5 mm. Its velocity is
+  // mass-weighted, so the centroid that moves with it is this one; the reference centroid
+  // stays the shape's centre, 6 mm.
+  const auto m = bt::structured_mesh(3, {12, 8, 4}, kH);
+  const double horizon = 1.6 * kH;
+  const auto fam = build_families(m.position_m, std::vector<double>(m.size(), horizon));
+  int32_t count = 0;
+  const auto comp = intact_components(fam, RemovedBonds({}, m.size()), RemovedBonds({}, m.size()), &count);
+  std::vector<double> density(m.size()), u(3 * m.size(), 0.0);
+  const double c[2] = {6 * kH, 4 * kH};
+  for (size_t i = 0; i < m.size(); ++i) {
+    density[i] = m.position_m[3 * i] < 6 * kH ? 1000.0 : 3000.0;
+    for (int d = 0; d < 2; ++d) u[3 * i + d] = -2.0 * (m.position_m[3 * i + d] - c[d]);
+  }
+  FragmentInputs in{m.dimension, m.thickness_m, m.position_m, u, {}, m.volume_m3, density};
+  const FragmentResult r = measure_fragments(in, comp, count, 1);
+  ASSERT_EQ(r.fragments.size(), 1u);
+  EXPECT_NEAR(r.fragments[0].centroid_reference_m[0], 6 * kH, 1e-12);
+  EXPECT_NEAR(r.fragments[0].centroid_m[0], 4.5 * kH, 1e-12);  // rounding only
+  EXPECT_NEAR(r.fragments[0].centroid_m[1], 4 * kH, 1e-12);
+}
+
 TEST(Fragments, MinimumSizeFilterDropsSmallFragmentsAndCountsTheirMass) {
   std::vector<ParticleModel> parts{bt::structured_mesh(3, {1, 1, 1}, kH), bt::structured_mesh(3, {3, 3, 3}, kH, {5 * kH, 0, 0})};
   const auto m = bt::merge(parts);

@@ -64,3 +64,20 @@ TEST(SizeDistribution, PassingIsCumulativeMassFractionAndInterpolatesX50) {
   EXPECT_DOUBLE_EQ(d.x50_m, 2.0);
   EXPECT_NEAR(d.x80_m, 2.6, 1e-12);  // linear between (2, 0.5) and (3, 1)
 }
+
+TEST(SizeDistribution, PiecesOfOneSizeUpToRoundingAreOneSieveStepAndNotFitted) {
+  // Twelve 3 mm pieces whose box edges, as coordinate differences, came out as 0.003 or
+  // 0.0030000000000000027 m: one sieve step passing everything at 3 mm, nothing to fit.
+  std::vector<double> x, m;
+  for (int k = 0; k < 12; ++k) {
+    x.push_back(k % 3 == 0 ? 0.003 : 0.0030000000000000027);
+    m.push_back(1.0);
+  }
+  const SizeDistribution d = size_distribution(x, m);
+  ASSERT_EQ(d.size_m.size(), 1u);
+  EXPECT_DOUBLE_EQ(d.passing[0], 1.0);
+  EXPECT_FALSE(d.fitted);
+  // Sizes a part in 10^6 apart are two steps (real sieve sizes, not rounding).
+  const SizeDistribution two = size_distribution(std::vector<double>{0.003, 0.003003}, std::vector<double>{1.0, 1.0});
+  EXPECT_EQ(two.size_m.size(), 2u);
+}

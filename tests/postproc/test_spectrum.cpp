@@ -59,6 +59,24 @@ TEST(Spectrum, SinePeaksAtItsBinAndThirdHarmonicRatioIsItsAmplitude) {
   }
 }
 
+TEST(Spectrum, AFundamentalInBinOneReadsEachHarmonicInItsOwnBin) {
+  // One period of a sine plus 0.1 of its second harmonic over 64 samples: the fundamental is
+  // bin 1, the harmonic bin 2, nothing in bins 3-5. A +-1-bin search around order x 1 would
+  // read order 2's ratio from the fundamental (1.0) and order 3's from bin 2 (0.1).
+  const size_t n = 64;
+  const double dt = 1e-7, f0 = 1.0 / (n * dt);
+  std::vector<double> s(n);
+  for (size_t k = 0; k < n; ++k)
+    s[k] = std::sin(2 * std::numbers::pi * f0 * k * dt) + 0.1 * std::sin(2 * std::numbers::pi * 2 * f0 * k * dt);
+  const Spectrum sp = amplitude_spectrum(s, dt, false, std::nullopt);
+  EXPECT_NEAR(sp.reference_frequency_Hz, f0, 1e-9 * f0);
+  ASSERT_EQ(sp.harmonics.size(), 4u);
+  for (const auto& h : sp.harmonics) {
+    EXPECT_NEAR(h.frequency_Hz, h.order * f0, 1e-9 * f0) << "order " << h.order;
+    EXPECT_NEAR(h.ratio, h.order == 2 ? 0.1 : 0.0, 1e-9) << "order " << h.order;  // on-bin tones: rounding only
+  }
+}
+
 TEST(Spectrum, GivenReferenceFrequencyNormalisesThere) {
   // Odd length (Bluestein path) and an explicit reference at the third harmonic.
   const size_t n = 1500;

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <map>
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/output_file.hpp"
@@ -176,6 +177,48 @@ void write_msh(const GmshSession& session, const std::string& output, StageLog& 
 
 int model_dimension() { return gmsh::model::getDimension(); }
 
+// The faces (edges in 2D) of the linear cells of dimension `dim` that belong to one cell
+// only, added as a new discrete entity; returns its tag, or nothing when there are none.
+// A mesh file without a boundary representation (msh 2.2, whose entities are discrete
+// and unconnected) gives getBoundary nothing to work with, so the boundary is found from
+// the elements themselves. Each facet is ordered to face out of its cell.
+std::vector<int> add_boundary_facets(int dim) {
+  const int cell_type = dim == 3 ? 4 : 2, facet_type = dim == 3 ? 2 : 1;
+  std::vector<std::size_t> cells, cell_nodes;
+  gmsh::model::mesh::getElementsByType(cell_type, cells, cell_nodes);
+  std::vector<std::size_t> node_tags;
+  std::vector<double> coords, params;
+  gmsh::model::mesh::getNodes(node_tags, coords, params, -1, -1, false, false);
+  std::map<std::size_t, Vec3> position;
+  for (std::size_t i = 0; i < node_tags.size(); ++i) position[node_tags[i]] = {coords[3 * i], coords[3 * i + 1], coords[3 * i + 2]};
+
+  const std::size_t per = static_cast<std::size_t>(dim) + 1;
+  std::map<std::vector<std::size_t>, std::pair<std::vector<std::size_t>, int>> facets;  // sorted nodes -> (oriented, count)
+  for (std::size_t e = 0; e + per <= cell_nodes.size(); e += per) {
+    for (std::size_t skip = 0; skip < per; ++skip) {
+      std::vector<std::size_t> facet;
+      for (std::size_t i = 0; i < per; ++i)
+        if (i != skip) facet.push_back(cell_nodes[e + i]);
+      const Vec3 inward = sub(position[cell_nodes[e + skip]], position[facet[0]]);
+      const Vec3 a = sub(position[facet[1]], position[facet[0]]);
+      // 3D: the triangle's normal; 2D: the edge's normal in the x-y plane.
+      const Vec3 normal = dim == 3 ? cross(a, sub(position[facet[2]], position[facet[0]])) : Vec3{a[1], -a[0], 0};
+      if (dot(normal, inward) > 0) std::swap(facet[0], facet[1]);
+      auto key = facet;
+      std::sort(key.begin(), key.end());
+      auto& entry = facets[key];
+      if (entry.second++ == 0) entry.first = facet;
+    }
+  }
+  std::vector<std::size_t> nodes;
+  for (const auto& [key, entry] : facets)
+    if (entry.second == 1) nodes.insert(nodes.end(), entry.first.begin(), entry.first.end());
+  if (nodes.empty()) return {};
+  const int entity = gmsh::model::addDiscreteEntity(dim - 1);
+  gmsh::model::mesh::addElementsByType(entity, facet_type, {}, nodes);  // gmsh numbers them
+  return {entity};
+}
+
 }  // namespace
 
 MeshSummary mesh_specimen(const Specimen& spec, const MeshOptions& options) {
@@ -253,6 +296,7 @@ MeshSummary mesh_file(const std::string& input, const MeshOptions& options) {
     for (const auto& c : cells) cell_tags.push_back(c.second);
     gmsh::model::getBoundary(cells, boundary, true, false, false);
     for (const auto& b : boundary) boundary_tags.push_back(std::abs(b.second));
+    if (boundary_tags.empty()) boundary_tags = add_boundary_facets(dim);
     gmsh::model::setPhysicalName(dim, gmsh::model::addPhysicalGroup(dim, cell_tags), "body");
     if (!boundary_tags.empty())
       gmsh::model::setPhysicalName(dim - 1, gmsh::model::addPhysicalGroup(dim - 1, boundary_tags), "outer");

@@ -89,17 +89,37 @@ std::vector<Vec3> rim_points(const Vec3& centre, const Vec3& axis, double r) {
   return pts;
 }
 
+// Largest signed distance into the body along the line p + t * axis: >= 0 when the line
+// meets the body. The signed distance is concave along a line for the convex bodies
+// (a minimum of affine and concave terms), so a ternary search finds its maximum. `p` is
+// a rim point, offset across the axis from an entry in the body, so the body lies within
+// its diameter (< 2 extents) of t = 0 along the line.
+double deepest_on_line(const Body& b, const Vec3& p, const Vec3& axis) {
+  double lo = -2 * body_extent(b), hi = 2 * body_extent(b);
+  const auto depth = [&](double t) { return signed_distance_inside(b, add(p, scale(axis, t))); };
+  for (int k = 0; k < 200 && hi - lo > 1e-9 * body_extent(b); ++k) {
+    const double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
+    if (depth(m1) < depth(m2)) lo = m1;
+    else hi = m2;
+  }
+  return depth((lo + hi) / 2);
+}
+
 Hole read_hole(const Section& s, const Specimen& spec) {
   const double tol = geometric_tolerance(spec);
   Hole h;
   h.name = read_name(s, "name", "hole");
   h.radius_m = s.positive("radius", Quantity::Length);
+  const auto wall_outside = [&] {
+    return InputError(spec.file, s.field("radius"), "hole wall (radius " + format_length(h.radius_m) + ") reaches outside the body",
+                      "a hole whose wall lies inside the body");
+  };
   if (spec.dimension == 2) {
     s.allow_only({"name", "centre", "radius"});
     h.entry = read_point(s, "centre", 2);
     const double d = signed_distance_inside(spec.body, h.entry);
     if (d < h.radius_m + tol)
-      throw InputError(spec.file, s.path(), "hole (radius " + format_length(h.radius_m) + ") reaches outside the body",
+      throw InputError(spec.file, s.field("radius"), "hole (radius " + format_length(h.radius_m) + ") reaches outside the body",
                        "a circle entirely inside the body (use a notch for an edge cut)");
     return h;
   }
@@ -109,16 +129,22 @@ Hole read_hole(const Section& s, const Specimen& spec) {
   if (s.has("depth")) h.depth_m = s.positive("depth", Quantity::Length);
   if (signed_distance_inside(spec.body, h.entry) < -tol)
     throw InputError(spec.file, s.field("centre"), "hole entry point lies outside the body", "a point inside or on the body");
-  if (!h.depth_m) return h;
+  if (!h.depth_m) {
+    // A through hole is cut along its whole axis line. Each line of its wall must meet
+    // the body, else the wall runs outside it along its whole length: the cut opens a
+    // groove along a side or splits the body (the body's cross-section across the axis
+    // must hold the hole's circle).
+    for (const auto& p : rim_points(h.entry, h.axis, h.radius_m))
+      if (deepest_on_line(spec.body, p, h.axis) < -tol) throw wall_outside();
+    return h;
+  }
   const Vec3 bottom = add(h.entry, scale(h.axis, *h.depth_m));
   if (signed_distance_inside(spec.body, bottom) <= tol)
     throw InputError(spec.file, s.field("depth"), "hole bottom lies on or outside the body",
                      "a blind hole ending inside the body (omit depth for a through hole)");
   for (const auto& centre : {h.entry, bottom})
     for (const auto& p : rim_points(centre, h.axis, h.radius_m))
-      if (signed_distance_inside(spec.body, p) < -tol)
-        throw InputError(spec.file, s.path(), "hole wall (radius " + format_length(h.radius_m) + ") reaches outside the body",
-                         "a hole whose wall lies inside the body");
+      if (signed_distance_inside(spec.body, p) < -tol) throw wall_outside();
   return h;
 }
 
@@ -152,6 +178,37 @@ Notch read_notch(const Section& s, const Specimen& spec) {
   return n;
 }
 
+// Distance from p to the slot's solid: in 3D the parallelogram thickened by width/2 on
+// both sides of its plane, in 2D the rectangle of that width around the segment. The
+// solid is the product of its plane figure and the interval across it, so the distance
+// is the hypotenuse of the in-plane distance and the excess across.
+double distance_to_slot(const Specimen& spec, const Notch& n, const Vec3& p) {
+  const Vec3 d = sub(p, n.corner);
+  if (spec.dimension == 2) {
+    const double len = norm(n.edge_a);
+    const Vec3 along = scale(n.edge_a, 1 / len), across{-along[1], along[0], 0};
+    const double s = dot(d, along);
+    const double beyond_ends = std::max({0.0, -s, s - len});
+    return std::hypot(beyond_ends, std::max(0.0, std::abs(dot(d, across)) - n.width_m / 2));
+  }
+  const Vec3 normal = normalized(cross(n.edge_a, n.edge_b));
+  const double offset = dot(d, normal);
+  const Vec3 q = sub(d, scale(normal, offset));  // in the plane, relative to the corner
+  const double aa = dot(n.edge_a, n.edge_a), ab = dot(n.edge_a, n.edge_b), bb = dot(n.edge_b, n.edge_b);
+  const double det = aa * bb - ab * ab;
+  const double s = (dot(q, n.edge_a) * bb - dot(q, n.edge_b) * ab) / det;
+  const double t = (dot(q, n.edge_b) * aa - dot(q, n.edge_a) * ab) / det;
+  double in_plane = 0;
+  if (s < 0 || s > 1 || t < 0 || t > 1) {
+    const Vec3 zero{0, 0, 0}, a = n.edge_a, b = n.edge_b;
+    const auto to_edge = [&](const Vec3& from, const Vec3& edge) {
+      return distance_to_segment(q, from, normalized(edge), norm(edge));
+    };
+    in_plane = std::min({to_edge(zero, a), to_edge(zero, b), to_edge(a, b), to_edge(b, a)});
+  }
+  return std::hypot(in_plane, std::max(0.0, std::abs(offset) - n.width_m / 2));
+}
+
 Inclusion read_inclusion(const Section& s, const Specimen& spec) {
   s.allow_only({"name", "centre", "radius"});
   const double tol = geometric_tolerance(spec);
@@ -170,6 +227,11 @@ Inclusion read_inclusion(const Section& s, const Specimen& spec) {
     if (gap < inc.radius_m + h.radius_m + tol)
       throw InputError(spec.file, s.path(), "inclusion overlaps hole '" + h.name + "'", "inclusions clear of holes");
   }
+  // A slot is cut out before the inclusions are fragmented in, so an inclusion reaching
+  // into it would fill the slot again. Cracks are embedded and may cross an inclusion.
+  for (const auto& n : spec.notches)
+    if (n.kind == Notch::Kind::Slot && distance_to_slot(spec, n, inc.centre) < inc.radius_m + tol)
+      throw InputError(spec.file, s.path(), "inclusion overlaps slot '" + n.name + "'", "inclusions clear of slots");
   for (const auto& other : spec.inclusions)
     if (norm(sub(inc.centre, other.centre)) < inc.radius_m + other.radius_m + tol)
       throw InputError(spec.file, s.path(), "inclusion overlaps another inclusion", "non-overlapping inclusions");
@@ -236,9 +298,14 @@ Specimen load_specimen(const std::string& file) {
   if (spec.dimension == 3 && body.has("shape") && body.text("shape") == "plate" && !root.has("thickness"))
     throw InputError(file, "thickness", "missing", "the plate thickness (a length)");
   spec.body = read_body(body, spec.dimension, spec.thickness_m);
+  // The body's cells and its faces are groups of different dimension; one name for both
+  // would leave only one of them in the mesh.
+  const auto own = body_boundary_groups(spec);
+  if (std::count(own.begin(), own.end(), spec.body.name))
+    throw InputError(file, body.field("name"), "'" + spec.body.name + "' is a boundary group of the body", "a distinct name");
 
   std::set<std::string> surface_groups;  // (dim - 1) group names
-  for (const auto& g : body_boundary_groups(spec)) surface_groups.insert(g);
+  for (const auto& g : own) surface_groups.insert(g);
   std::set<std::string> volume_groups{spec.body.name};
   auto claim_surface = [&](const Section& s, const std::string& name) {
     if (volume_groups.count(name))
@@ -248,7 +315,6 @@ Specimen load_specimen(const std::string& file) {
 
   for (const auto& h : root.list("holes")) {
     spec.holes.push_back(read_hole(h, spec));
-    const auto own = body_boundary_groups(spec);
     if (std::count(own.begin(), own.end(), spec.holes.back().name))
       throw InputError(file, h.field("name"), "'" + spec.holes.back().name + "' is a boundary group of the body", "a distinct name");
     claim_surface(h, spec.holes.back().name);
@@ -256,7 +322,6 @@ Specimen load_specimen(const std::string& file) {
   for (const auto& n : root.list("notches")) {
     spec.notches.push_back(read_notch(n, spec));
     const auto& name = spec.notches.back().name;
-    const auto own = body_boundary_groups(spec);
     if (std::count(own.begin(), own.end(), name) ||
         std::any_of(spec.holes.begin(), spec.holes.end(), [&](const Hole& h) { return h.name == name; }))
       throw InputError(file, n.field("name"), "'" + name + "' is already used by the body or a hole", "a distinct name");

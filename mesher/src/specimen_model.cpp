@@ -93,17 +93,28 @@ DimTags add_crack(const Specimen& spec, const Notch& n) {
   return {{2, add_polygon({c, add(c, n.edge_a), add(add(c, n.edge_a), n.edge_b), add(c, n.edge_b)})}};
 }
 
-// Points on the entity (on its underlying curve/surface, inside its parameter range).
+// Points on the entity. A curve's parameter range is the curve itself, but a trimmed
+// face's is only a rectangle around it (a skewed notch's parallelogram, a face with a hole
+// cut out), and a point of that rectangle off the face fails the notch test although it
+// lies on the face's plane. So a grid over the rectangle is kept where gmsh places it on
+// the face; the rectangle's points serve only where gmsh finds none (a sliver).
 std::vector<Vec3> sample_points(int dim, int tag) {
   std::vector<double> lo, hi, params, xyz;
   gmsh::model::getParametrizationBounds(dim, tag, lo, hi);
   if (dim == 1) {
     for (double t : {0.2, 0.5, 0.8}) params.push_back(lo[0] + t * (hi[0] - lo[0]));
   } else {
-    for (auto [s, t] : {std::pair{0.5, 0.5}, {0.25, 0.25}, {0.75, 0.25}, {0.25, 0.75}, {0.75, 0.75}}) {
-      params.push_back(lo[0] + s * (hi[0] - lo[0]));
-      params.push_back(lo[1] + t * (hi[1] - lo[1]));
-    }
+    constexpr int kGrid = 9;
+    for (int i = 0; i < kGrid; ++i)
+      for (int j = 0; j < kGrid; ++j) {
+        const std::vector<double> uv{lo[0] + (i + 0.5) / kGrid * (hi[0] - lo[0]), lo[1] + (j + 0.5) / kGrid * (hi[1] - lo[1])};
+        if (gmsh::model::isInside(dim, tag, uv) == 1) params.insert(params.end(), uv.begin(), uv.end());
+      }
+    if (params.empty())
+      for (auto [s, t] : {std::pair{0.5, 0.5}, {0.25, 0.25}, {0.75, 0.25}, {0.25, 0.75}, {0.75, 0.75}}) {
+        params.push_back(lo[0] + s * (hi[0] - lo[0]));
+        params.push_back(lo[1] + t * (hi[1] - lo[1]));
+      }
   }
   gmsh::model::getValue(dim, tag, params, xyz);
   std::vector<Vec3> pts;
@@ -147,7 +158,10 @@ PointTest hole_test(const Specimen& spec, const Hole& h, double tol) {
     const double radial = norm(sub(d, scale(h.axis, along)));
     const bool on_wall = std::abs(radial - h.radius_m) < tol && along > -back - tol && along < depth + tol;
     const bool on_bottom = h.depth_m && std::abs(along - depth) < tol && radial < h.radius_m + tol;
-    return on_wall || on_bottom;
+    // An entry inside the body (back == 0: not extended) makes a closed cavity, whose
+    // entry disc is a face of the hole like its bottom. On the surface it is no face.
+    const bool on_entry = h.depth_m && back == 0 && std::abs(along) < tol && radial < h.radius_m + tol;
+    return on_wall || on_bottom || on_entry;
   };
 }
 

@@ -102,6 +102,13 @@ TEST(MeshCliBadInput, HoleOutsideTheBodyIsRejected) {
                    {"hole_out.yaml", "holes[0].centre", "outside the body"});
 }
 
+// Without depth the hole goes through; a radius of 200 mm in a 300 mm block used to reach
+// the meshing and fail there naming a face group (xmin) rather than the hole.
+TEST(MeshCliBadInput, ThroughHoleWiderThanTheBodyIsRejectedNamingTheRadius) {
+  expect_bad_input(spec_with("through_wide.yaml", "    radius: 10 mm\n    depth: 150 mm", "    radius: 200 mm"),
+                   {"through_wide.yaml", "holes[0].radius", "hole wall (radius 200 mm) reaches outside the body"});
+}
+
 TEST(MeshCliBadInput, InclusionOutsideTheBodyIsRejected) {
   expect_bad_input(spec_with("inclusion_out.yaml", "mesh:", "inclusions: [{name: stone, centre: [290 mm, 50 mm, 50 mm], radius: 20 mm}]\nmesh:"),
                    {"inclusion_out.yaml", "inclusions[0]", "outside the body"});

@@ -5,6 +5,8 @@
 // the requested size after optimisation, so the bounds use h = 1.5 * size.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -17,6 +19,7 @@
 namespace breccia::mesher {
 namespace {
 
+using testing::Element;
 using testing::MeshProbe;
 using testing::read_msh;
 using testing::write_temp_file;
@@ -194,6 +197,84 @@ TEST(MeshedGeometry, InclusionAndSlotAndBoreVolumesMatchAnalytic) {
   EXPECT_FALSE(m.group("slot").elements.empty());
 }
 
+// Notch faces are recognised by points sampled on them; a parallelogram that is not a
+// rectangle has sample points of its bounding parameter rectangle outside it, and its
+// faces were lost (the crack's group empty, the slot's main faces missing).
+TEST(MeshedGeometry, SkewedCrackAndSlotKeepTheirWholeSurfaceInTheirGroup) {
+  const std::string block = "body: {shape: box, name: rock, size: [100 mm, 60 mm, 40 mm]}\nmesh: {size: 8 mm}\n";
+  const MeshProbe crack = mesh_spec_text("skew_crack", block +
+      "notches: [{name: precrack, corner: [15 mm, 10 mm, 20 mm], edge_a: [10 mm, 0, 0], edge_b: [20 mm, 30 mm, 0]}]\n");
+  double area = 0;
+  for (const auto& t : crack.group("precrack").elements) {
+    for (auto n : t) EXPECT_NEAR(crack.nodes.at(n)[2], 0.02, 1e-9) << "crack node off the plane z = 20 mm";
+    area += crack.measure(t);
+  }
+  // |edge_a x edge_b| = |(10, 0, 0) x (20, 30, 0)| mm^2 = 10 * 30 = 300 mm^2; planar facets
+  // tile the parallelogram exactly, so only round-off remains.
+  EXPECT_NEAR(area, 300e-6, 1e-12);
+
+  const MeshProbe slot = mesh_spec_text("skew_slot", block +
+      "notches: [{name: precrack, type: slot, width: 2 mm, corner: [15 mm, 10 mm, 20 mm], edge_a: [10 mm, 0, 0], "
+      "edge_b: [60 mm, 30 mm, 0]}]\n");
+  // Two main faces |a x b| = 10 * 30 = 300 mm^2 each, and four sides of width w = 2 mm along
+  // the edges: 2 w (|a| + |b|) = 4 (10 + sqrt(60^2 + 30^2)) = 308.328 mm^2; 908.328 mm^2 in all,
+  // exact up to round-off (planar faces).
+  const double exact = (2 * 300 + 2 * 2 * (10 + std::sqrt(60.0 * 60 + 30 * 30))) * 1e-6;
+  EXPECT_NEAR(slot.total_measure("precrack"), exact, 1e-12);
+  // Box less the slot's prism |a x b| w = 300 * 2 = 600 mm^3.
+  EXPECT_NEAR(slot.total_measure("rock"), (100.0 * 60 * 40 - 600) * 1e-9, 1e-15);
+}
+
+// A blind hole whose entry lies inside the body is a closed cavity: wall, bottom and the
+// entry disc. The entry disc was left out of the group, so the cavity's surface had a hole.
+TEST(MeshedGeometry, CavityHoleGroupIsAClosedSurfaceWithItsEntryDisc) {
+  const MeshProbe m = mesh_spec_text("cavity",
+      "body: {shape: box, name: rock, size: [40 mm, 40 mm, 40 mm]}\n"
+      "holes: [{name: charge, centre: [20 mm, 20 mm, 30 mm], radius: 5 mm, depth: 20 mm}]\n"
+      "mesh: {size: 5 mm}\n");
+  using Face = std::array<std::size_t, 3>;
+  auto sorted = [](const Element& e) {
+    Face f{e[0], e[1], e[2]};
+    std::sort(f.begin(), f.end());
+    return f;
+  };
+  std::map<Face, std::array<double, 3>> normal_of;  // area-weighted, pointing out of the rock
+  std::map<Face, const Element*> charge_faces;
+  int entry_triangles = 0;
+  for (const auto& t : m.group("charge").elements) {
+    charge_faces[sorted(t)] = &t;
+    bool on_entry = true;
+    for (auto n : t) on_entry = on_entry && std::abs(m.nodes.at(n)[2] - 0.03) < 1e-9;
+    entry_triangles += on_entry;
+  }
+  EXPECT_GT(entry_triangles, 0) << "the entry disc at z = 30 mm is missing from charge";
+  for (const auto& tet : m.group("rock").elements)
+    for (int skip = 0; skip < 4; ++skip) {
+      Element tri;
+      for (int i = 0; i < 4; ++i)
+        if (i != skip) tri.push_back(tet[i]);
+      const auto it = charge_faces.find(sorted(tri));
+      if (it == charge_faces.end()) continue;
+      const auto& a = m.nodes.at(tri[0]);
+      const auto& b = m.nodes.at(tri[1]);
+      const auto& c = m.nodes.at(tri[2]);
+      const auto& opposite = m.nodes.at(tet[skip]);
+      std::array<double, 3> u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v{c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      std::array<double, 3> n{(u[1] * v[2] - u[2] * v[1]) / 2, (u[2] * v[0] - u[0] * v[2]) / 2, (u[0] * v[1] - u[1] * v[0]) / 2};
+      const double side = n[0] * (opposite[0] - a[0]) + n[1] * (opposite[1] - a[1]) + n[2] * (opposite[2] - a[2]);
+      if (side > 0) n = {-n[0], -n[1], -n[2]};
+      normal_of[it->first] = n;
+    }
+  ASSERT_EQ(normal_of.size(), charge_faces.size()) << "some charge triangles are not faces of a rock tet";
+  // A closed surface's outward area vectors sum to zero (divergence theorem for the
+  // polyhedron); the missing entry disc left pi (5 mm)^2 = 78.5 mm^2 along z. Each of the
+  // few hundred terms is ~1e-6 m^2 with round-off ~1e-22, so 1e-15 m^2 is far above it.
+  std::array<double, 3> sum{0, 0, 0};
+  for (const auto& [face, n] : normal_of)
+    for (int k = 0; k < 3; ++k) sum[k] += n[k];
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(sum[k], 0.0, 1e-15) << "component " << k;
+}
+
 TEST(MeshFile, ExistingMeshIsRewrittenAsVersion41WithTheSameGroupsAndElements) {
   const std::string original_path = mesh_case_file("specimen-quick.yaml");
   MeshOptions options;
@@ -218,6 +299,60 @@ TEST(MeshFile, GeoGeometryIsMeshedAndGivenBodyAndOuterGroups) {
   EXPECT_NEAR(m.total_measure("body"), 1.0, 1e-12);  // planar faces: tets tile the cube exactly
   EXPECT_EQ(m.group("outer").entities, 6);
   EXPECT_LE(summary.max_element_size_m, 0.25 * 1.5);  // --size caps the element size (1.5x: optimiser slack)
+}
+
+// A .msh 2.2 file carries no boundary representation, so gmsh's getBoundary finds no
+// faces of its volumes and `outer` was missing (a 4.1 file of the same mesh got it).
+TEST(MeshFile, Msh22WithoutPhysicalGroupsGetsAnOuterGroupOfTheCellsBoundary) {
+  // The unit cube as six tetrahedra around the diagonal (0,0,0)-(1,1,1) (Freudenthal):
+  // node 1 + x + 2y + 4z at (x, y, z) in {0, 1}^3; each tet walks the axes in one order.
+  std::string text = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n8\n";
+  for (int i = 0; i < 8; ++i)
+    text += std::to_string(i + 1) + " " + std::to_string(i & 1) + " " + std::to_string((i >> 1) & 1) + " " +
+            std::to_string((i >> 2) & 1) + "\n";
+  text += "$EndNodes\n$Elements\n6\n";
+  const int step[3] = {1, 2, 4};
+  const int orders[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (int k = 0; k < 6; ++k) {
+    const int a = step[orders[k][0]], b = step[orders[k][1]];
+    text += std::to_string(k + 1) + " 4 2 0 1 1 " + std::to_string(1 + a) + " " + std::to_string(1 + a + b) + " 8\n";
+  }
+  text += "$EndElements\n";
+  MeshOptions options;
+  options.verbose = false;
+  options.output = write_temp_file("cube22_out.msh", "");
+  mesh_file(write_temp_file("cube22.msh", text), options);
+  const MeshProbe m = read_msh(options.output);
+  EXPECT_NEAR(m.total_measure("body"), 1.0, 1e-15);
+  // Six faces of two triangles each, 6 m^2 in all; the 12 inner faces (each shared by two
+  // tets) are not boundary.
+  const auto& outer = m.group("outer");
+  EXPECT_EQ(outer.dim, 2);
+  EXPECT_EQ(outer.elements.size(), 12u);
+  EXPECT_NEAR(m.total_measure("outer"), 6.0, 1e-15);
+  for (const auto& t : outer.elements) {
+    int shared_planes = 0;  // all three nodes on one face of the cube
+    for (int axis = 0; axis < 3; ++axis)
+      for (double plane : {0.0, 1.0}) {
+        bool on = true;
+        for (auto n : t) on = on && m.nodes.at(n)[axis] == plane;
+        shared_planes += on;
+      }
+    EXPECT_EQ(shared_planes, 1);
+  }
+
+  // 2D: the unit square as two triangles; its boundary is the four unit edges.
+  const std::string square =
+      "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 1 1 0\n4 0 1 0\n$EndNodes\n"
+      "$Elements\n2\n1 2 2 0 1 1 2 3\n2 2 2 0 1 1 3 4\n$EndElements\n";
+  options.output = write_temp_file("square22_out.msh", "");
+  mesh_file(write_temp_file("square22.msh", square), options);
+  const MeshProbe q = read_msh(options.output);
+  EXPECT_EQ(q.group("outer").dim, 1);
+  EXPECT_EQ(q.group("outer").elements.size(), 4u);
+  double length = 0;
+  for (const auto& e : q.group("outer").elements) length += q.longest_edge(e);
+  EXPECT_NEAR(length, 4.0, 1e-15);
 }
 
 }  // namespace

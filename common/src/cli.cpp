@@ -3,6 +3,7 @@
 
 #include <cerrno>
 #include <climits>
+#include <new>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -158,9 +159,15 @@ int run_reporting_errors(const std::function<int()>& work) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitBadInput;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
+    std::fprintf(stderr, "error: %s\n", failure_message(e).c_str());
     return kExitRunFailed;
   }
+}
+
+std::string failure_message(const std::exception& e) {
+  if (dynamic_cast<const std::bad_alloc*>(&e))
+    return "out of memory: the case needs more memory than this machine gave (breccia-plan CASE estimates it)";
+  return e.what();
 }
 
 }  // namespace breccia::cli

@@ -1,5 +1,6 @@
 #include "breccia/common/csv.hpp"
 
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 
@@ -17,8 +18,10 @@ std::string trim(std::string s) {
 
 bool blank(const std::string& line) { return trim(line).empty(); }
 
-// The number a whole field holds (leading and trailing spaces allowed); false if none.
+// The decimal number a whole field holds (leading and trailing spaces allowed); false if none.
+// strtod also reads hexadecimal ("0x1"), which no table of ours holds: a typo, refused.
 bool parse_number(const std::string& field, double& v) {
+  if (field.find_first_of("xX") != std::string::npos) return false;
   char* end = nullptr;
   v = std::strtod(field.c_str(), &end);
   if (end == field.c_str()) return false;
@@ -85,10 +88,10 @@ CsvColumns read_csv_columns(const std::filesystem::path& path, const CsvReadOpti
                        std::to_string(width) + " (one per header column)");
     for (size_t c = 0; c < width; ++c) {
       double v;
-      if (!parse_number(f[c], v))
+      if (!parse_number(f[c], v) || (o.finite && !std::isfinite(v)))
         throw InputError(path.string(),
                          "line " + std::to_string(lineno) + ", column " + (t.names.empty() ? std::to_string(c + 1) : t.names[c]),
-                         "'" + f[c] + "'", "a number");
+                         "'" + f[c] + "'", o.finite ? "a finite number" : "a number");
       t.columns[c].push_back(v);
     }
     t.line.push_back(lineno);

@@ -99,9 +99,12 @@ std::vector<std::string> File::children(const std::string& group_path) const {
   Handle g{H5Gopen2(id_, group_path.c_str(), H5P_DEFAULT), H5Gclose};
   if (g.id < 0) return names;
   H5G_info_t info;
-  H5Gget_info(g.id, &info);
+  // A damaged file can open the group and fail to list it: bad input naming the group, not a
+  // name of length -1.
+  if (H5Gget_info(g.id, &info) < 0) throw InputError(path_, group_path, "its members cannot be listed", "a readable group");
   for (hsize_t i = 0; i < info.nlinks; ++i) {
     const ssize_t len = H5Lget_name_by_idx(g.id, ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
+    if (len < 0) throw InputError(path_, group_path, "member " + std::to_string(i) + "'s name cannot be read", "a readable group");
     std::string name(static_cast<size_t>(len), '\0');
     H5Lget_name_by_idx(g.id, ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), len + 1, H5P_DEFAULT);
     names.push_back(name);
@@ -397,10 +400,27 @@ std::string File::attr_string(const std::string& obj, const std::string& name) c
   if (!has_attr(obj, name)) throw InputError(path_, obj + "@" + name, "attribute is missing", "attribute " + name);
   Handle o = open_object(id_, obj);
   Handle a{H5Aopen(o.id, name.c_str(), H5P_DEFAULT), H5Aclose};
+  // A damaged file can name the attribute and still not give it: each call is checked, so
+  // that it is bad input naming the attribute, not a string of a garbage length.
+  const auto unreadable = [&](const std::string& why) {
+    return InputError(path_, obj + "@" + name, why, "a readable text attribute");
+  };
+  if (a.id < 0) throw unreadable("cannot be opened");
   Handle type{H5Aget_type(a.id), H5Tclose};
+  if (type.id < 0 || H5Tget_class(type.id) != H5T_STRING) throw unreadable("is not text");
+  if (H5Tis_variable_str(type.id) > 0) {  // as h5py writes a Python str
+    Handle space{H5Aget_space(a.id), H5Sclose};
+    if (space.id < 0 || H5Sget_simple_extent_npoints(space.id) != 1) throw unreadable("is not one text value");
+    char* text = nullptr;
+    if (H5Aread(a.id, type.id, &text) < 0) throw unreadable("cannot be read");
+    std::string out = text ? text : "";
+    H5free_memory(text);
+    return out;
+  }
   const size_t size = H5Tget_size(type.id);
+  if (size == 0 || size > (size_t{1} << 20)) throw unreadable("text of " + std::to_string(size) + " bytes");
   std::string out(size, '\0');
-  H5Aread(a.id, type.id, out.data());
+  if (H5Aread(a.id, type.id, out.data()) < 0) throw unreadable("cannot be read");
   while (!out.empty() && out.back() == '\0') out.pop_back();
   return out;
 }

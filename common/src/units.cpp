@@ -93,7 +93,13 @@ double parse_quantity(const std::string& text, Quantity q, const std::string& fi
   const std::string unit = trim(std::string_view(s).substr(pos));
   if (unit.empty()) return value;  // a plain number is SI
   for (const auto& [name, factor] : table(q)) {
-    if (unit == name) return value * factor;
+    if (unit == name) {
+      const double si = value * factor;  // 1e300 GPa is finite text and an infinite quantity
+      if (!std::isfinite(si))
+        throw InputError(file, field, "'" + text + "' is " + (std::isnan(si) ? "not a number" : "infinite") + " in SI units",
+                         "a finite quantity");
+      return si;
+    }
   }
   throw InputError(file, field, "unit '" + unit + "' is not a unit of " + std::string(quantity_name(q)),
                    "one of: " + accepted_units(q) + (unit.empty() ? "" : ", or a plain number in SI"));

@@ -1,6 +1,7 @@
 #include "breccia/common/yaml_input.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 
@@ -18,20 +19,33 @@ Section::Section(YAML::Node node, std::string file, std::string path)
 namespace {
 // yaml-cpp keeps a repeated key as a second entry and answers lookups with the first, so a
 // second `model:` block would be dropped without a word: refuse it, naming both lines.
-void reject_duplicate_keys(const YAML::Node& node, const std::string& file, const std::string& path) {
+// Also refuses keys that are not plain names ({[1, 2]: 3}) and nesting deeper than any case
+// needs: an alias inside its own anchor (`a: &d [*d]`) is a node that contains itself, and a
+// walk down it would never end.
+void reject_duplicate_keys(const YAML::Node& node, const std::string& file, const std::string& path, int depth = 0) {
+  constexpr int kDeepest = 64;
+  if (depth > kDeepest)
+    throw InputError(file, path.substr(0, path.find('[', path.find('[') + 1)) + "...",
+                     "nested more than " + std::to_string(kDeepest) + " levels deep",
+                     "a case of plain nesting (an alias inside its own anchor, such as &d [*d], contains itself)");
   if (node.IsMap()) {
     std::map<std::string, int> seen;  // key -> line (1-based)
     for (auto it = node.begin(); it != node.end(); ++it) {
+      if (!it->first.IsScalar())
+        throw InputError(file, path.empty() ? "(top level)" : path,
+                         "a key that is a list or a map, on line " + std::to_string(it->first.Mark().line + 1),
+                         "keys that are plain names");
       const std::string key = it->first.Scalar();
       const int line = it->first.Mark().line + 1;
       const std::string field = path.empty() ? key : path + "." + key;
       if (auto [at, inserted] = seen.emplace(key, line); !inserted)
         throw InputError(file, field, "given twice, on lines " + std::to_string(at->second) + " and " + std::to_string(line),
                          "each key once (merge the two)");
-      reject_duplicate_keys(it->second, file, field);
+      reject_duplicate_keys(it->second, file, field, depth + 1);
     }
   } else if (node.IsSequence()) {
-    for (size_t k = 0; k < node.size(); ++k) reject_duplicate_keys(node[k], file, path + "[" + std::to_string(k) + "]");
+    for (size_t k = 0; k < node.size(); ++k)
+      reject_duplicate_keys(node[k], file, path + "[" + std::to_string(k) + "]", depth + 1);
   }
 }
 }  // namespace
@@ -75,7 +89,8 @@ void apply_override(YAML::Node& root, const std::string& key, const YAML::Node& 
       const std::string digits = key.substr(pos + 1, close - pos - 1);
       if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos)
         throw InputError(origin, key, "index '" + digits + "'", "a whole number in [ ]");
-      const size_t index = std::stoul(digits);
+      // More digits than any list has entries: no entry (stoul would overflow past 20 digits).
+      const size_t index = digits.size() > 9 ? SIZE_MAX : std::stoul(digits);
       if (!at.IsSequence() || index >= at.size())
         throw InputError(file, origin + " " + key,
                          "'" + (done.empty() ? std::string("(top level)") : done) + "' has no entry [" + digits + "]" +
@@ -110,6 +125,7 @@ void apply_override(YAML::Node& root, const std::string& assignment, const std::
   } catch (const YAML::Exception& e) {
     throw InputError("--set", key, "value '" + text + "': " + e.msg, "a YAML value (a number, text, or [a, b, c])");
   }
+  reject_duplicate_keys(value, "--set", key);  // a map given whole ({steps: 3, steps: 4}) as the file's are
   apply_override(root, key, value, file, "--set");
 }
 

@@ -300,10 +300,12 @@ int main(int argc, char** argv) {
 #endif
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitRunFailed;
-  } catch (const std::exception& e) {
+  } catch (const std::exception& e) {  // a message and exit 3 (under MPI on every rank), not an abort
+    const std::string message = cli::failure_message(e);
 #ifdef BRECCIA_WITH_MPI
-    if (distributed) mpi.fatal(e.what(), kExitRunFailed);
+    if (distributed) mpi.fatal(message, kExitRunFailed);
 #endif
-    throw;
+    std::fprintf(stderr, "error: %s\n", message.c_str());
+    return kExitRunFailed;
   }
 }

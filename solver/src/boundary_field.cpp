@@ -40,4 +40,19 @@ bool refresh_boundary_values(PdSystem::Constraint& con, const std::vector<double
   return true;
 }
 
+void check_boundary_fields_over_run(const PdSystem& s, double t_end) {
+  constexpr int kSamples = 8;  // intervals: nine times, both ends included
+  for (const PdSystem::Constraint& con : s.constraints) {
+    if (!con.field || !con.field->uses_time) continue;
+    std::vector<double> at(4);
+    for (int k = 0; k <= kSamples; ++k) {
+      at[3] = t_end * k / kSamples;
+      for (const int64_t i : con.particles) {
+        for (int d = 0; d < 3; ++d) at[d] = s.x0[3 * i + d];
+        for (const Expression& e : con.field->components) e(at);  // throws where not finite
+      }
+    }
+  }
+}
+
 }  // namespace breccia::solver

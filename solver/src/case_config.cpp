@@ -68,7 +68,7 @@ HistorySpec parse_history(const Section& s, Quantity q) {
     const std::string csv = s.input_path("file");
     // Rows time_s, value under an optional header; '#' lines are comments.
     const CsvColumns table =
-        read_csv_columns(csv, {.header_optional = true, .comments = true, .expected = "a CSV file time_s,value"});
+        read_csv_columns(csv, {.header_optional = true, .comments = true, .finite = true, .expected = "a CSV file time_s,value"});
     if (table.columns.size() < 2)
       throw InputError(csv, "line " + std::to_string(table.line.empty() ? 1 : table.line.front()),
                        std::to_string(table.columns.size()) + " column", "two numbers: time_s, value");
@@ -124,6 +124,21 @@ CaseConfig parse_case_file(const std::string& path) {
     lat.box = l.numbers("box", Quantity::Length, lat.dimension == 3 ? 6 : 4);
     lat.spacing = l.positive("spacing", Quantity::Length);
     lat.thickness = l.positive("thickness", Quantity::Length, lat.spacing);
+    // Particle indices are 32-bit (the bond lists' partners): a lattice of more points is a
+    // unit slip ("1 um" for "1 mm"), refused here rather than as an allocation failure.
+    double points = 1.0;
+    for (int k = 0; k < lat.dimension; ++k) {
+      const double extent = lat.box[k + lat.dimension] - lat.box[k];
+      if (!(extent > 0))
+        throw InputError(path, l.field("box"), "extent " + short_number(extent) + " m along axis " + std::to_string(k),
+                         lat.dimension == 3 ? "[x0, y0, z0, x1, y1, z1] with x1 > x0, y1 > y0, z1 > z0"
+                                            : "[x0, y0, x1, y1] with x1 > x0, y1 > y0");
+      points *= std::max(1.0, std::round(extent / lat.spacing));
+    }
+    if (points > 2147483647.0)
+      throw InputError(path, l.field("spacing"),
+                       short_number(lat.spacing) + " m, " + short_number(points) + " lattice points",
+                       "at most 2^31 - 1 points (32-bit particle indices): a larger spacing");
     c.lattice = lat;
   } else {
     throw InputError(path, "specimen", "neither 'particles' nor 'lattice' given",
@@ -148,9 +163,10 @@ CaseConfig parse_case_file(const std::string& path) {
   if (c.variable_horizon && c.horizon_m)
     throw InputError(path, "model.horizon", "a fixed horizon together with variable_horizon: true",
                      "either horizon (fixed) or variable_horizon with horizon_factor");
-  if (c.horizon_factor < 1.0)
+  if (c.horizon_factor < 1.0 || c.horizon_factor > kLargestHorizonFactor)
     throw InputError(path, "model.horizon_factor", "value " + std::to_string(c.horizon_factor),
-                     "a horizon of at least one particle spacing (typically 3.015)");
+                     "a horizon of 1 to " + std::to_string(int(kLargestHorizonFactor)) +
+                         " particle spacings (typically 3.015)");
   c.surface_correction = model.choice("surface_correction", {"none", "energy"}, "none") == "energy";
   c.fracture = model.boolean("fracture", true);
   c.partial_volume = model.choice("partial_volume", {"sampled", "lammps"}, "sampled") == "lammps"
@@ -570,6 +586,8 @@ CaseConfig parse_case_file(const std::string& path) {
       }
     }
     bs.ramp_time = b.number("ramp_time", Quantity::Time, 0.0);
+    if (!(bs.ramp_time >= 0.0))
+      throw InputError(path, b.field("ramp_time"), short_number(bs.ramp_time) + " s", "a time >= 0 (0: no ramp)");
     c.boundaries.push_back(bs);
   }
 
@@ -652,6 +670,16 @@ CaseConfig parse_case_file(const std::string& path) {
           throw InputError(path, "boundary[" + std::to_string(b) + "].expression[" + std::to_string(d) + "]",
                            "an expression in t with time.integrator: adr",
                            "an expression in x, y, z only (relaxation finds one equilibrium; it has no time)");
+  if (c.quasi_static) {  // and no load in time: relaxation read every history at t = 0 (a ramp: no load)
+    for (size_t l = 0; l < c.loads.size(); ++l)
+      if (c.loads[l].history.kind != HistorySpec::Kind::Constant)
+        throw InputError(path, "loads[" + std::to_string(l) + "].history", "a history in time with time.integrator: adr",
+                         "type: constant (relaxation finds one equilibrium; it has no time)");
+    for (size_t b = 0; b < c.boundaries.size(); ++b)
+      if (c.boundaries[b].kind == BoundarySpec::Kind::Velocity)
+        throw InputError(path, "boundary[" + std::to_string(b) + "].type", "velocity with time.integrator: adr",
+                         "fixed or displacement (relaxation has no time: a velocity there held the set still)");
+  }
 
   if (auto out = root.optional_section("output")) {
     out->allow_only({"every", "history_every", "checkpoint_every", "fields", "probes", "results"});
@@ -671,6 +699,11 @@ CaseConfig parse_case_file(const std::string& path) {
       p.allow_only({"name", "position", "field"});
       c.probes.push_back({p.text("name"), p.vec3("position", Quantity::Length),
                           p.choice("field", {"displacement", "velocity"}, "displacement")});
+      // Two probes of one name would give history.csv two columns of one name.
+      for (size_t k = 0; k + 1 < c.probes.size(); ++k)
+        if (c.probes[k].name == c.probes.back().name)
+          throw InputError(path, p.field("name"), "'" + c.probes.back().name + "', the name of probes[" + std::to_string(k) + "] too",
+                           "a name of its own for each probe");
     }
     for (const auto& [key, every] : {std::pair<const char*, long long>{"every", c.output_every},
                                      {"history_every", c.history_every}})

@@ -579,6 +579,7 @@ void write_checkpoint_content(const h5::File& f, const PdSystem& s, const Checkp
     f.set_attr("/", "external_work_J", s.external_work);
     f.set_attr("/", "dissipated_J", s.dissipated_energy);
     f.set_attr("/", "bond_count", static_cast<long long>(s.bond_count()));
+    f.set_attr("/", "model", s.config.model_name);
     const size_t n = s.whole_n();  // a window system's (PdSystem::window_global) too
     const PdSystem& r = *mine.rows;
     const size_t p0 = mine.particle_first, pc = mine.particle_count, e0 = mine.entry_first, ec = mine.entry_count;
@@ -676,9 +677,21 @@ void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
   if (static_cast<size_t>(f.attr_int("/", "bond_count")) != s.bond_count())
     throw InputError(path, "/@bond_count", "bond count differs from this case's families",
                      "a checkpoint of the same case (horizon and model unchanged)");
+  // The model's state is read as this case's model's (checkpoints before the attribute: unchecked).
+  if (f.has_attr("/", "model") && f.attr_string("/", "model") != s.config.model_name)
+    throw InputError(path, "/@model", "'" + f.attr_string("/", "model") + "', this case's is '" + s.config.model_name + "'",
+                     "a checkpoint of this case (model unchanged)");
   s.step = f.attr_int("/", "step");
   s.time = f.attr_double("/", "time_s");
-  s.dt = f.attr_double("/", "dt_s");
+  // The run goes on with the checkpoint's step (the same bits as a straight run), which this
+  // case's particles must still bear: a case made stiffer or finer since would blow up a few
+  // steps in, judged unstable (exit 3), where a fresh run with that step is refused (exit 2).
+  const double dt_file = f.attr_double("/", "dt_s");
+  if (s.config.check_stability && s.stable_dt > 0 && dt_file > s.stable_dt)
+    throw InputError(path, "/@dt_s",
+                     short_number(dt_file) + " s, above this case's stable step " + short_number(s.stable_dt) + " s",
+                     "a checkpoint of this case (the material, spacing or model changed since it was written?)");
+  s.dt = dt_file;
   s.external_work = f.attr_double("/", "external_work_J");
   s.dissipated_energy = f.attr_double("/", "dissipated_J");
   // The per-particle and per-entry arrays: a distributed set-up's rank reads its owned rows

@@ -1,5 +1,6 @@
 #include "breccia/solver/particle_field.hpp"
 
+#include <cmath>
 #include <filesystem>
 
 #include "breccia/common/csv.hpp"
@@ -39,7 +40,8 @@ ParticleField read_h5_field(const std::string& path, const std::string& dataset,
 // CSV: one row of 2 or 3 numbers per particle; a first line of names is optional.
 ParticleField read_csv_field(const std::string& path) {
   const CsvColumns csv = read_csv_columns(
-      path, {true, true, "one row per particle in the particle file's order: vx, vy[, vz] (or ux, uy[, uz])"});
+      path, {.header_optional = true, .comments = true, .finite = true,
+             .expected = "one row per particle in the particle file's order: vx, vy[, vz] (or ux, uy[, uz])"});
   const size_t columns = csv.columns.size();
   if (columns != 2 && columns != 3)
     throw InputError(path, "columns", std::to_string(columns) + " columns", "2 or 3 numbers a row");
@@ -62,6 +64,11 @@ ParticleField read_particle_field(const std::string& path, const std::string& da
   // The case parser pairs a dataset with an .h5 file and none with a CSV one.
   ParticleField field =
       dataset.empty() ? read_csv_field(path) : read_h5_field(path, dataset, case_file, key, particles, rows);
+  for (size_t k = 0; k < field.values.size(); ++k)  // (the CSV reader refused them by line)
+    if (!std::isfinite(field.values[k]))
+      throw InputError(path, dataset, std::to_string(field.values[k]) + " in row " + std::to_string(k / field.columns) +
+                                          (rows ? " of this process's rows" : ""),
+                       "finite numbers");
   if (rows && !dataset.empty()) return field;  // its rows alone, the count checked
   const size_t read = field.values.size() / static_cast<size_t>(field.columns);
   if (read != particles)

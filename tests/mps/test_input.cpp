@@ -246,3 +246,27 @@ time: {end: 2 us}
   EXPECT_GT(peak, 0.0);
   for (size_t k = 0; k < ta.value.size(); ++k) EXPECT_NEAR(ta.value[k], tb.value[k], 1e-12 * peak);  // same arithmetic
 }
+
+// A case refused once built (here an end time of 10^13 steps, a unit slip that overflowed the
+// step count to a run of no step, exit 0) leaves the folder's earlier case_as_run.yaml: it
+// was written before the case was built, so the folder named a case that never ran.
+TEST(MpsCli, ACaseRefusedOnceBuiltLeavesTheEarlierRunsFilesInPlace) {
+  const auto dir = std::filesystem::temp_directory_path() / "breccia_mps_cli_keep";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto good = dir / "good.yaml", slip = dir / "slip.yaml";
+  std::ofstream(good) << kGood << "output: {progress: false}\n";
+  std::ofstream(slip) << replaced("time: {end: 1 us}", "time: {end: 1e7 s}") << "output: {progress: false}\n";
+  ASSERT_EQ(run_mps_cli(good, dir / "out", dir).exit_code, 0);
+  const auto read = [](const std::filesystem::path& p) {
+    std::ifstream in(p);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const std::string before = read(dir / "out" / "case_as_run.yaml");
+  ASSERT_NE(before.find("end: 1 us"), std::string::npos) << before;
+  const MpsCliRun r = run_mps_cli(slip, dir / "out", dir);
+  EXPECT_EQ(r.exit_code, breccia::kExitBadInput) << r.err;
+  EXPECT_NE(r.err.find("time.end"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("10^12 steps"), std::string::npos) << r.err;
+  EXPECT_EQ(read(dir / "out" / "case_as_run.yaml"), before);
+}

@@ -431,3 +431,126 @@ TEST(SolverCli, UnknownStrengthRateLawIsNamedWithTheChoices) {
   expect_bad_input(run_solver(kBase + material + kTime, "bad_strength_rate"),
                    {"case.yaml", "materials[0].strength_rate", "fib_mc2010"});
 }
+
+// Inputs found by fuzzing the case format that crashed (abort or segfault), overflowed to a
+// run of no step, or ran on silently: each is now exit 2 naming its field.
+TEST(SolverCli, SlipsThatCrashedOrRanSilentlyAreBadInputNamingTheField) {
+  const std::string material_time = kMaterial + kTime;
+  // A lattice of 10^18 points (1 um for 1 mm: 32-bit particle indices) and inverted boxes.
+  expect_bad_input(run_solver("specimen: {lattice: {dimension: 3, box: [0, 0, 0, 1, 1, 1], spacing: 1 um}}\n"
+                              "model: {type: pmb}\n" + material_time, "lattice_huge"),
+                   {"specimen.lattice.spacing", "2^31 - 1"});
+  expect_bad_input(run_solver("specimen: {lattice: {dimension: 2, box: [0, 0, -0.01, 0.01], spacing: 1 mm, thickness: 1 mm}}\n"
+                              "model: {type: pmb, planar: plane_strain}\n" + material_time, "lattice_inverted"),
+                   {"specimen.lattice.box", "x1 > x0"});
+  // A horizon of a kilometre on millimetre particles, or of 30,150 spacings.
+  expect_bad_input(run_solver("specimen: {lattice: {dimension: 2, box: [0, 0, 0.01, 0.01], spacing: 1 mm, thickness: 1 mm}}\n"
+                              "model: {type: pmb, planar: plane_strain, horizon: 1 km}\n" + material_time, "horizon_km"),
+                   {"model.horizon", "at most 50"});
+  expect_bad_input(run_solver(kBase.substr(0, kBase.find("model:")) +
+                              "model: {type: pmb, planar: plane_strain, horizon_factor: 30150}\n" + material_time, "factor_huge"),
+                   {"model.horizon_factor", "1 to 50"});
+  // A modulus of 1e300 GPa is infinite in pascals; a step of 1e-300 s is 10^295 steps.
+  expect_bad_input(run_solver(kBase + "materials: [{name: m, density: 2000, youngs_modulus: 1e300 GPa, poisson_ratio: 0.25}]\n" + kTime,
+                              "modulus_inf"),
+                   {"youngs_modulus", "infinite in SI units"});
+  expect_bad_input(run_solver(kBase + kMaterial + "time: {end: 1 us, dt: 1e-300}\n", "dt_tiny"), {"time.end", "10^12 steps"});
+  // An alias inside its own anchor (a node that contains itself) and a key that is a list.
+  expect_bad_input(run_solver(kBase + kMaterial + kTime + "description: &d [*d]\n", "self_alias"), {"description", "levels deep"});
+  expect_bad_input(run_solver(kBase + kMaterial + kTime + "{[1, 2]: 3}: x\n", "list_key"), {"a key that is a list or a map"});
+  // --set with an index of 23 digits, and a map given whole with a key twice.
+  expect_bad_input(run_solver(kBase + kMaterial + kTime, "set_index_huge", "--set 'materials[99999999999999999999999].density=1'"),
+                   {"has no entry"});
+  expect_bad_input(run_solver(kBase + kMaterial + kTime, "set_dup", "--set 'time={steps: 3, steps: 4}'"),
+                   {"time.steps", "given twice"});
+  // A negative ramp and two probes of one name (two history.csv columns of one name).
+  expect_bad_input(run_solver(kBase + kMaterial + kTime +
+                                  "sets: [{name: left, box: [0, 0, 0.002, 0.01]}]\n"
+                                  "boundary: [{type: velocity, set: left, value: [0, 0, 0], ramp_time: -1 us}]\n",
+                              "ramp_negative"),
+                   {"boundary[0].ramp_time", "a time >= 0"});
+  expect_bad_input(run_solver(kBase + kMaterial + kTime +
+                                  "output: {probes: [{name: a, position: [0.005, 0.005, 0]}, {name: a, position: [0.002, 0.002, 0]}]}\n",
+                              "probe_twice"),
+                   {"output.probes[1].name", "a name of its own"});
+}
+
+// A load table or an initial field that holds nan, inf or hexadecimal is bad input naming the
+// file and line; it ran as a blow-up (exit 3) before.
+TEST(SolverCli, NonFiniteOrHexadecimalValuesInInputTablesAreBadInput) {
+  const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_tables";
+  std::filesystem::create_directories(dir);
+  for (const auto& [name, cell] : std::vector<std::pair<std::string, std::string>>{{"nan", "nan"}, {"inf", "inf"}, {"hex", "0x1"}}) {
+    std::ofstream(dir + "/" + name + ".csv") << "time_s,value\n0,0\n1e-6," << cell << "\n1e-5,1\n";
+    expect_bad_input(run_solver(kBase + kMaterial + kTime +
+                                    "loads: [{type: body_force, value: [1, 0, 0], history: {type: table, file: " + dir + "/" +
+                                    name + ".csv}}]\n",
+                                "table_" + name),
+                     {name + ".csv", "line 3", "'" + cell + "'"});
+  }
+  std::ofstream(dir + "/field.csv") << "vx,vy\n" << [] {
+    std::string rows;
+    for (int k = 0; k < 100; ++k) rows += k == 42 ? "nan,0\n" : "0,0\n";
+    return rows;
+  }();
+  expect_bad_input(run_solver(kBase + kMaterial + kTime + "initial: [{type: velocity, file: " + dir + "/field.csv}]\n", "field_nan"),
+                   {"field.csv", "line 44", "a finite number"});
+}
+
+// A restart reads the checkpoint's state as this case's: a checkpoint of another model type,
+// or one whose step is above this case's stable step (the material made 100x stiffer since),
+// is refused naming the attribute; before, the first ran on and the second blew up (exit 3).
+TEST(SolverCli, RestartFromAnotherModelOrAStepAboveTheStableOneIsBadInput) {
+  const std::string time = "time: {steps: 4}\noutput: {every: 100, history_every: 2}\n";
+  const Outcome first = run_solver(kBase + kMaterial + time, "restart_source");
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  const std::string checkpoint = breccia::solver::testing::process_temp_dir() + "/cli_restart_source/out/checkpoint.h5";
+  std::string lps = kBase;
+  lps.replace(lps.find("type: pmb"), 9, "type: lps");
+  expect_bad_input(run_solver(lps + kMaterial + time, "restart_lps", "--restart " + checkpoint + " --steps 2"),
+                   {"checkpoint.h5: /@model", "'pmb', this case's is 'lps'"});
+  const std::string stiff = "materials: [{name: m, density: 2000, youngs_modulus: 1000 GPa, poisson_ratio: 0.25}]\n";
+  expect_bad_input(run_solver(kBase + stiff + time, "restart_stiff", "--restart " + checkpoint + " --steps 2"),
+                   {"checkpoint.h5: /@dt_s", "above this case's stable step"});
+  const Outcome same = run_solver(kBase + kMaterial + time, "restart_same", "--restart " + checkpoint + " --steps 2");
+  EXPECT_EQ(same.exit_code, 0) << same.output;
+}
+
+// A boundary value in time that stops being finite mid-run (sqrt(2e-6 - t) past 2 us; the run
+// is 40 steps of a few tenths of a microsecond) is refused before the writers open their
+// files: the folder's earlier results stay as they were (they were truncated to the failed
+// run's first steps before).
+TEST(SolverCli, ABoundaryValueThatTurnsNonFiniteMidRunIsRefusedBeforeAnythingIsWritten) {
+  const std::string sets = "sets: [{name: right, box: [0.009, 0, 0.01, 0.01]}]\n";
+  const std::string time = "time: {steps: 40}\noutput: {every: 10, history_every: 5}\n";
+  const Outcome good = run_solver(kBase + kMaterial + sets + time, "late_field");
+  ASSERT_EQ(good.exit_code, 0) << good.output;
+  const std::string out = breccia::solver::testing::process_temp_dir() + "/cli_late_field/out";
+  const auto read = [](const std::string& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const std::string results = read(out + "/results.h5"), history = read(out + "/history.csv");
+  const Outcome late = run_solver(kBase + kMaterial + sets + time +
+                                      "boundary: [{type: velocity, set: right, components: [x], "
+                                      "expression: ['sqrt(2e-6 - t)', '0']}]\n",
+                                  "late_field");
+  expect_bad_input(late, {"boundary[0].expression[0]", "is not finite at"});
+  EXPECT_EQ(read(out + "/results.h5"), results);
+  EXPECT_EQ(read(out + "/history.csv"), history);
+}
+
+// Relaxation finds one equilibrium: it read every load history at t = 0 (a ramp gave no load
+// at all, "converged" with u = 0) and held a velocity boundary still. Both are refused.
+TEST(SolverCli, AHistoryInTimeOrAVelocityBoundaryUnderRelaxationIsBadInput) {
+  const std::string adr = "time: {integrator: adr}\n";
+  const std::string sets = "sets: [{name: left, box: [0, 0, 0.002, 0.01]}]\n";
+  expect_bad_input(run_solver(kBase + kMaterial + adr + sets + "boundary: [{type: fixed, set: left}]\n"
+                                  "loads: [{type: body_force, value: [1, 0, 0], history: {type: ramp, value: 1, ramp_time: 5 us}}]\n",
+                              "adr_ramp"),
+                   {"loads[0].history", "type: constant"});
+  expect_bad_input(run_solver(kBase + kMaterial + adr + sets + "boundary: [{type: velocity, set: left, value: [1, 0, 0]}]\n",
+                              "adr_velocity"),
+                   {"boundary[0].type", "fixed or displacement"});
+}
+

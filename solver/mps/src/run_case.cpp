@@ -15,6 +15,7 @@
 #include "breccia/common/json_file.hpp"
 #include "breccia/common/output_file.hpp"
 #include "breccia/common/progress.hpp"
+#include "breccia/common/step_count.hpp"
 #include "breccia/common/yaml_input.hpp"
 #include "breccia/mps/case_spec.hpp"
 #include "breccia/mps/results_output.hpp"
@@ -83,6 +84,14 @@ double run_time_loop(Model& sim, const CaseSpec& spec, const std::string& case_f
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
 }
 
+// The case as run (its variant and --set overrides applied): reports read values from it.
+// Written once the case has been built and its steps counted, so that a case refused there
+// leaves the folder's earlier one in place.
+void write_case_as_run(const std::string& case_file, const std::string& out_dir) {
+  if (std::filesystem::exists(case_file))
+    write_text_file(std::filesystem::path(out_dir) / "case_as_run.yaml", Section::text_as_loaded(case_file));
+}
+
 // The stress formulation (solid.hpp): same files, with stress and plastic strain in the
 // snapshots and the energy terms of the stress solid in history.csv.
 int run_solid(const CaseSpec& spec, const std::string& case_file, const std::string& out_dir,
@@ -92,7 +101,8 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
   Solid sim = make_solid(spec, &content_id);
   if (device) sim.attach_device(device(sim));
   if (spec.progress) std::fprintf(stderr, "mps: backend %s\n", sim.backend_description().c_str());
-  long long total_steps = static_cast<long long>(std::ceil(spec.end_time_s / sim.dt_s() - 1e-9));
+  long long total_steps = steps_to_reach(spec.end_time_s, sim.dt_s(), case_file, "time.end");
+  write_case_as_run(case_file, out_dir);
   if (max_steps > 0) total_steps = std::min(total_steps, max_steps);
   std::fprintf(stderr,
                "mps (stress): %zu particles, %zu bonds, %dD; spacing %.4g m, re %.3g spacing; c_L %.1f m/s; dt %.4g s "
@@ -255,9 +265,6 @@ int run_case(const std::string& case_file, const std::string& out_dir, const Run
     throw InputError(case_file, "model.formulation", "stress with a device for the displacement formulation only",
                      "formulation: displacement, or --backend cpu");
   std::filesystem::create_directories(out_dir);
-  // The case as run (its variant and --set overrides applied): reports read values from it.
-  if (std::filesystem::exists(case_file))
-    write_text_file(std::filesystem::path(out_dir) / "case_as_run.yaml", Section::text_as_loaded(case_file));
   if (spec.formulation == Formulation::Stress) return run_solid(spec, case_file, out_dir, solid_device, options.max_steps);
   const auto wall_start = std::chrono::steady_clock::now();
 
@@ -265,7 +272,8 @@ int run_case(const std::string& case_file, const std::string& out_dir, const Run
   if (options.device) sim.attach_device(options.device(sim));
   if (spec.progress) std::fprintf(stderr, "mps: backend %s\n", sim.backend_description().c_str());
   const MaterialSpec& m = spec.material;
-  long long total_steps = static_cast<long long>(std::ceil(spec.end_time_s / sim.dt_s() - 1e-9));
+  long long total_steps = steps_to_reach(spec.end_time_s, sim.dt_s(), case_file, "time.end");
+  write_case_as_run(case_file, out_dir);
   if (options.max_steps > 0) total_steps = std::min(total_steps, options.max_steps);
   std::fprintf(stderr,
                "mps: %zu particles, %zu bonds, %zu crack pairs; spacing %.4g m, re %.3g spacing, n0 %.6g, lambda %.6g m^2\n"

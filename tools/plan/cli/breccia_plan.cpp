@@ -152,5 +152,8 @@ int main(int argc, char** argv) {
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitBadInput;
+  } catch (const std::exception& e) {  // a message and exit 3, not an abort
+    std::fprintf(stderr, "error: %s\n", breccia::cli::failure_message(e).c_str());
+    return kExitRunFailed;
   }
 }

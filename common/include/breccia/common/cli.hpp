@@ -9,6 +9,7 @@
 // with file "command line", as in usage_error below: the tools print those the same way.
 #include <CLI/CLI.hpp>
 #include <climits>
+#include <exception>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -51,6 +52,10 @@ CLI::Validator one_of(std::vector<std::string> choices);
 // Runs a tool's work after parsing: its return value, or an error printed once as
 // "error: ..." with exit code 2 for bad input (InputError) and 3 for a failure mid-way.
 int run_reporting_errors(const std::function<int()>& work);
+
+// What a failure that is not an InputError says: its what(), or for std::bad_alloc that the
+// machine's memory ran out (what() says only "std::bad_alloc").
+std::string failure_message(const std::exception& e);
 
 // A usage error found after parsing, in the format of the tools' other input errors; throws
 // breccia::InputError (exit code 2).

@@ -27,11 +27,14 @@ struct CsvColumns {
 struct CsvReadOptions {
   bool header_optional = false;  // a first row of numbers is data (load tables may omit the header)
   bool comments = false;         // lines starting with '#' are skipped
+  bool finite = false;           // nan and inf refused (input tables; a run's own history.csv may hold
+                                 // them once it became unstable, and is still read)
   std::string expected;          // what the file should be, for error messages
 };
 
-// Blank lines are skipped. Every row holds a number in each column (cells beyond the
-// header's are ignored); otherwise InputError naming the file, the line and the column.
+// Blank lines are skipped. Every row holds a decimal number in each column (cells beyond the
+// header's are ignored; hexadecimal is not a number here); otherwise InputError naming the
+// file, the line and the column.
 CsvColumns read_csv_columns(const std::filesystem::path& path, const CsvReadOptions& options);
 
 }  // namespace breccia

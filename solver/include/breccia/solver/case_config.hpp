@@ -158,6 +158,12 @@ struct ProbeSpec {
   std::string field = "displacement";  // displacement | velocity
 };
 
+// The largest horizon in particle spacings a case may ask for: a 3D family then holds about
+// 4/3 pi 50^3 = 5e5 partners per particle, beyond any machine at a useful particle count;
+// more is a unit slip ("1 km" for "1 mm"), refused at input rather than as an allocation
+// failure. Convergence studies go to m of about 12.
+inline constexpr double kLargestHorizonFactor = 50.0;
+
 struct CaseConfig {
   std::string file;      // the case file path
   std::string directory; // its folder: relative paths resolve against it

@@ -79,16 +79,23 @@ Mesh lattice_blocks(const ParticleModel& m, std::span<const double> u) {
   out.nodes_per_cell = three_d ? 8 : 4;
   static constexpr double kCorner[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
                                            {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
+  // Each block's corners move with its particle: their point data is the particle's
+  // displacement (a mesh's deformed.vtu carries the nodes'; blocks share no node, so there
+  // is no source_node).
+  std::vector<double> displacement;
   for (size_t i = 0; i < m.size(); ++i) {
     const double h = 0.5 * m.spacing_m[i];
     for (int c = 0; c < out.nodes_per_cell; ++c) {
       out.cells.push_back(static_cast<int64_t>(out.points_m.size() / 3));
       for (int d = 0; d < 3; ++d) {
         const double offset = (d < 2 || three_d) ? kCorner[c][d] * h : 0.0;
-        out.points_m.push_back(m.position_m[3 * i + d] + offset + (u.empty() ? 0.0 : u[3 * i + d]));
+        const double ud = u.empty() ? 0.0 : u[3 * i + d];
+        out.points_m.push_back(m.position_m[3 * i + d] + offset + ud);
+        displacement.push_back(ud);
       }
     }
   }
+  if (!u.empty()) out.point_data.push_back({"displacement", 3, std::move(displacement), false});
   return out;
 }
 

@@ -528,8 +528,11 @@ private:
     const size_t n = t.size();
     dt = (t.back() - t.front()) / static_cast<double>(n - 1);
     resampled = false;
+    // Uniform within 1e-6 of a step, plus the rounding of times history.csv prints to 10
+    // significant digits (5e-10 of t: past 2,000 rows that exceeded 1e-6 dt alone, and every
+    // long uniform record was flagged as resampled).
     for (size_t k = 0; k < n; ++k)
-      if (std::abs(t[k] - t.front() - k * dt) > 1e-6 * dt) resampled = true;
+      if (std::abs(t[k] - t.front() - k * dt) > 1e-6 * dt + 1e-9 * std::abs(t[k])) resampled = true;
     if (!resampled) return v;
     std::vector<double> out(n);
     size_t j = 0;

@@ -466,3 +466,24 @@ TEST(BrecciaPostCli, PositionsOfTheWrongShapeAreBadInputNamingTheDataset) {
       << r.output;
 }
 
+
+// A uniform record as breccia-solve prints it (times to 10 significant digits) is uniform,
+// however long: past about 2,000 rows the printed times' rounding exceeded 1e-6 of a step
+// and every long record was reported resampled (and interpolated).
+TEST(BrecciaPostCli, ALongUniformRecordPrintedToTenDigitsIsNotResampled) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "post_long_record";
+  bt::write_run(cracked_cubes(dir));
+  std::ostringstream s;
+  s << "step,time_s,probe_A_ux\n";
+  const double dt = 9.109082355e-9;
+  for (int k = 0; k < 5000; ++k) {
+    char row[96];
+    std::snprintf(row, sizeof row, "%d,%.9e,%.9e\n", k, k * dt, std::sin(2 * std::numbers::pi * k / 250.0));
+    s << row;
+  }
+  std::ofstream(dir / "history.csv") << s.str();
+  const Result r = run_post("'" + dir.string() + "' --spectrum A --no-plots --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json post = nlohmann::json::parse(bt::read_text(dir / "post" / "post.json"));
+  EXPECT_EQ(post.at("spectra").at(0).at("resampled"), false);
+}

@@ -240,6 +240,26 @@ TEST(DeformedMesh, AffineDisplacementIsReproducedAtEveryNode) {
   }
 }
 
+TEST(DeformedMesh, LatticeBlocksMoveWithTheirParticlesAndCarryItsDisplacement) {
+  // One block per particle (no mesh): each of its 8 corners is the particle's centre +- h/2
+  // per axis, moved by the particle's displacement, which is also the corner's point data.
+  const auto m = bt::lattice(3, {3, 2, 2}, kH);
+  std::vector<double> u;
+  for (size_t i = 0; i < m.size(); ++i) u.insert(u.end(), {1e-5 * i, -2e-6, 3e-6 * (i % 2)});
+  const Mesh d = deformed_mesh(m, u, std::vector<int32_t>(m.size(), 0));
+  ASSERT_EQ(d.nodes_per_cell, 8);
+  ASSERT_EQ(d.points_m.size(), 3 * 8 * m.size());
+  ASSERT_EQ(d.point_data.size(), 1u);
+  EXPECT_EQ(d.point_data[0].name, "displacement");
+  for (size_t i = 0; i < m.size(); ++i)
+    for (int c = 0; c < 8; ++c)
+      for (int k = 0; k < 3; ++k) {
+        const size_t p = 3 * (8 * i + c) + k;
+        EXPECT_EQ(d.point_data[0].values[p], u[3 * i + k]);
+        EXPECT_NEAR(std::fabs(d.points_m[p] - u[3 * i + k] - m.position_m[3 * i + k]), 0.5 * kH, 1e-15);
+      }
+}
+
 TEST(DeformedMesh, AffineDisplacementIsReproducedOnTriangleMeshes) {
   const auto m = bt::structured_mesh(2, {4, 3, 0}, kH);
   auto u_of = [](const double* x) { return std::array<double, 3>{0.01 * x[0] - 0.004 * x[1] + 2e-6, 0.02 * x[1], 0.0}; };

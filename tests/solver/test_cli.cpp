@@ -463,6 +463,12 @@ TEST(SolverCli, SlipsThatCrashedOrRanSilentlyAreBadInputNamingTheField) {
                    {"has no entry"});
   expect_bad_input(run_solver(kBase + kMaterial + kTime, "set_dup", "--set 'time={steps: 3, steps: 4}'"),
                    {"time.steps", "given twice"});
+  // A z component in a 2D model (it has no z motion: the value was dropped).
+  expect_bad_input(run_solver(kBase + kMaterial + kTime + "initial: [{type: velocity, value: [0, 0, 100]}]\n", "init_z_2d"),
+                   {"initial[0].value", "a z component in a 2D model"});
+  expect_bad_input(run_solver(kBase + kMaterial + kTime + "initial: [{type: velocity, expression: ['1', '0', '5']}]\n",
+                              "init_z_expression_2d"),
+                   {"initial[0].expression[2]", "a z component in a 2D model"});
   // A negative ramp and two probes of one name (two history.csv columns of one name).
   expect_bad_input(run_solver(kBase + kMaterial + kTime +
                                   "sets: [{name: left, box: [0, 0, 0.002, 0.01]}]\n"

@@ -29,6 +29,7 @@ started. The perturbed records of an ensemble get the same pulse (the perturbati
 noise only).
 """
 import argparse
+import os
 
 import numpy as np
 
@@ -88,6 +89,7 @@ def main():
     if a.pulse_pgv > 0.0:
         acc = acc + pulse_acceleration(t, a.pulse_pgv, a.pulse_period, a.pulse_time, a.pulse_gamma,
                                        a.pulse_phase) / 9.80665
+    os.makedirs(os.path.dirname(a.out) or ".", exist_ok=True)  # the README's run/ folder, made here
     with open(a.out, "w") as f:
         f.write("time_s,acceleration_g\n")
         for ti, ai in zip(t, acc):

@@ -33,6 +33,7 @@ const UnitTable& table(Quantity q) {
       {Quantity::Force, {{"N", 1.0}, {"kN", 1e3}, {"MN", 1e6}}},
       {Quantity::Mass, {{"kg", 1.0}, {"g", 1e-3}}},
       {Quantity::StrainRate, {{"1/s", 1.0}, {"/s", 1.0}}},
+      {Quantity::AngularVelocity, {{"rad/s", 1.0}, {"1/s", 1.0}, {"/s", 1.0}, {"Hz", 2.0 * M_PI}, {"rpm", 2.0 * M_PI / 60.0}}},
   };
   return tables.at(q);
 }
@@ -63,6 +64,7 @@ std::string_view quantity_name(Quantity q) {
     case Quantity::Force: return "force";
     case Quantity::Mass: return "mass";
     case Quantity::StrainRate: return "strain rate";
+    case Quantity::AngularVelocity: return "angular velocity";
   }
   return "quantity";
 }

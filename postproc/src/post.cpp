@@ -582,6 +582,10 @@ private:
     const History& h = *history_;
     std::vector<std::string> cols = h.probe_columns(probe);
     if (cols.empty()) cols = {"probe_" + probe};
+    // A gate outside the record is bad input however short the record (checked first).
+    if (opt_.gate_s && !t.empty() && !(opt_.gate_s->first >= t.front() && opt_.gate_s->second <= t.back()))
+      throw InputError("command line", "--gate", fmt(opt_.gate_s->first) + "," + fmt(opt_.gate_s->second) + " s",
+                       "a gate inside the record of " + h.path.string() + ", [" + fmt(t.front()) + ", " + fmt(t.back()) + "] s");
     if (h.rows() < 4) {
       notes_.push_back("spectrum of " + probe + " skipped: fewer than 4 samples");
       return;
@@ -590,9 +594,6 @@ private:
     GateRows rows{0, t.size()};
     if (opt_.gate_s) {
       const auto [t0, t1] = *opt_.gate_s;
-      if (!(t0 >= t.front() && t1 <= t.back()))
-        throw InputError("command line", "--gate", fmt(t0) + "," + fmt(t1) + " s",
-                         "a gate inside the record of " + h.path.string() + ", [" + fmt(t.front()) + ", " + fmt(t.back()) + "] s");
       rows = gate_rows(t, t0, t1);
       if (rows.last - rows.first < 4)
         throw InputError("command line", "--gate", std::to_string(rows.last - rows.first) + " samples in " + fmt(t0) + "," + fmt(t1) + " s",

@@ -94,10 +94,15 @@ void read_bonds(const h5::File& f, size_t n, RunData& run) {
 size_t RunData::output_index_of_step(long long step) const {
   for (size_t k = 0; k < outputs.size(); ++k)
     if (outputs[k].step == step) return k;
-  std::string have = outputs.empty() ? std::string("no outputs")
-                                     : std::to_string(outputs.size()) + " outputs, steps " +
-                                           std::to_string(outputs.front().step) + " .. " +
-                                           std::to_string(outputs.back().step);
+  // The steps themselves, up to 12 of them; a longer list by its first and last few.
+  std::string have = outputs.empty() ? std::string("no outputs") : std::to_string(outputs.size()) + " outputs, steps ";
+  for (size_t k = 0; k < outputs.size(); ++k) {
+    if (outputs.size() > 12 && k == 6) {
+      have += " ..";
+      k = outputs.size() - 6;
+    }
+    have += (k ? " " : "") + std::to_string(outputs[k].step);
+  }
   throw InputError(results_path.string(), "--step", "no output at step " + std::to_string(step),
                    "the step of one of the outputs (" + have + ")");
 }

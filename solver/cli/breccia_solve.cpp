@@ -164,7 +164,8 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "note: --kernel-times: the MPS launchers are not timed per kernel yet; nothing is timed\n");
       mps::RunCaseOptions mps_options;
       mps_options.threads = opt.threads;
-      mps_options.max_steps = opt.steps.value_or(0);
+      mps_options.max_steps = opt.steps.value_or(-1);
+      mps_options.quiet = !opt.progress;
       if (opt.backend == "cuda") {
         // Both formulations have a CUDA launcher. A stress case using a feature its launcher
         // does not run is refused under --backend cuda (run_case names the key) and runs on

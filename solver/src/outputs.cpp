@@ -666,6 +666,14 @@ void CheckpointedPassState::restore(PdSystem& s) {
   s.force = std::move(force_);
 }
 
+void ResultsWriter::mark_complete() {
+  if (file_) {
+    file_->set_attr("/", "complete", 1LL);
+    return;
+  }
+  h5::File(dir_ + "/results.h5", h5::File::Mode::ReadWrite).set_attr("/", "complete", 1LL);
+}
+
 void read_checkpoint(PdSystem& s, const std::string& path, int rank) {
   if (!std::filesystem::exists(path)) throw InputError(path, "", "checkpoint file does not exist", "a checkpoint.h5");
   h5::File f(path, h5::File::Mode::Read);

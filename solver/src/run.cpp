@@ -507,6 +507,7 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
     r = run_time_loop(s, o, cpu, results.get(), history.get());
   }
   std::signal(SIGINT, previous);
+  if (results && (r.status == "completed" || r.status == "converged")) results->mark_complete();
   r.results_header_wall_s = header_s;
   return r;
 }

@@ -263,7 +263,11 @@ static void convert_to_softening(PdSystem& s) {
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < nb; ++k) {
     const float onset = s.s_onset[k];
-    if (!(onset < FLT_MAX) || !(s.s0_own[k] < FLT_MAX)) continue;  // brittle material or unbreakable bond
+    if (!(onset < FLT_MAX)) continue;  // brittle material
+    if (!(s.s0_own[k] < FLT_MAX)) {    // an unbreakable bond (no_fail) never softens either: an onset
+      s.s_onset[k] = FLT_MAX;          // left in place softened it toward an ultimate stretch of
+      continue;                        // FLT_MAX, a plateau that dissipated and damaged it
+    }
     double s_g = s.s0_own[k];
     const float s_g_dual = s0_dual[k];  // read before the own half is written (the same float when shared)
     const bool own_half = s.own_half_exists(k);
@@ -1235,9 +1239,14 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // symmetric in its ids) and the weaker material, so (j -> i)'s values are (i -> j)'s with
   // own and dual swapped whenever both ends pick the same weaker material (a tie in fracture
   // energy between two materials picks the entry's own end's).
+  // The bond's material: its weaker end's (lower G0); on a tie the lower material index, so
+  // that both halves (i -> j and j -> i) take the same one. (A tie went to each half's own
+  // end: two materials of one G0 and different moduli gave the halves different critical
+  // stretches, which broke at different steps, and momentum was no longer conserved.)
   auto weak_material = [&](int64_t i, int64_t j) {
-    return c.materials[s.material[i]].fracture_energy <= c.materials[s.material[j]].fracture_energy ? s.material[i]
-                                                                                                    : s.material[j];
+    const int a = s.material[i], b = s.material[j];
+    const double ga = c.materials[a].fracture_energy, gb = c.materials[b].fracture_energy;
+    return ga < gb ? a : gb < ga ? b : std::min(a, b);
   };
   auto strengths_shared = [&](int64_t i, int64_t j) { return weak_material(i, j) == weak_material(j, i); };
   // The Weibull scale of each material's G0 draw (the same expression as per bond, once).

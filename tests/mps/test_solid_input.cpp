@@ -267,3 +267,28 @@ TEST(MpsSolidInput, UpdatedLagrangianKeysAreCheckedNamingTheField) {
   EXPECT_NE(msg.find("materials[0].fracture"), std::string::npos) << msg;
   EXPECT_NE(msg.find("lagrangian: total"), std::string::npos) << msg;
 }
+
+// A periodic lattice axis with the stress formulation is refused: its stencils were built on
+// the open lattice, so a strip periodic in y squeezed in x read as one with free faces
+// (sigma_yy ~ 0 where uniaxial strain gives lambda eps).
+TEST(MpsSolidInput, APeriodicAxisWithTheStressFormulationIsRefused) {
+  const std::string msg =
+      error_of(replaced("spacing: 0.5 mm, thickness: 1 mm}", "spacing: 0.5 mm, thickness: 1 mm, periodic: [false, true]}"));
+  EXPECT_NE(msg.find("specimen.lattice.periodic"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("formulation: displacement"), std::string::npos) << msg;
+}
+
+// A free rigid body's angular velocity in Hz is turns per second: 1 Hz is 2 pi rad/s (read
+// as a frequency it was 1 rad/s); rpm and rad/s too.
+TEST(MpsSolidInput, AnAngularVelocityInHertzIsTurnsPerSecond) {
+  for (const auto& [text, expected] : std::vector<std::pair<std::string, double>>{
+           {"1 Hz", 2 * M_PI}, {"60 rpm", 2 * M_PI}, {"3 rad/s", 3.0}, {"3", 3.0}}) {
+    const CaseSpec spec = parse_case_text(
+        test::replace_once(kStress, "contact: {floor: {point: [0, 0], normal: [0, 1]}}",
+                           "contact:\n  rigid_bodies:\n    - {name: wheel, vertices: [[0, 7 mm], [2 mm, 7 mm], [2 mm, 9 mm], "
+                           "[0, 9 mm]], fixed: false, density: 7850, angular_velocity: " + text + "}"),
+        "case.yaml");
+    ASSERT_EQ(spec.rigid_bodies.size(), 1u);
+    EXPECT_NEAR(spec.rigid_bodies[0].angular_velocity_rad_s, expected, 1e-12 * expected) << text;
+  }
+}

@@ -13,6 +13,7 @@
 #include <string>
 #include "helpers.hpp"
 #include "../common/cli_contract.hpp"
+#include "breccia/common/h5.hpp"
 #include "breccia/common/particle_file.hpp"
 #include "atlas.hpp"
 
@@ -560,3 +561,26 @@ TEST(SolverCli, AHistoryInTimeOrAVelocityBoundaryUnderRelaxationIsBadInput) {
                    {"boundary[0].type", "fixed or displacement"});
 }
 
+
+// A finished run's results.h5 says so (root attribute complete = 1; 0 while it runs, and for
+// a run stopped early); an MPS case takes --steps 0 (the set-up and initial outputs alone,
+// it ran to time.end) and --quiet (it printed its summary lines) as a PD case does.
+TEST(SolverCli, AFinishedRunIsMarkedCompleteAndAnMpsCaseTakesStepsZeroAndQuiet) {
+  const Outcome pd = run_solver(kBase + kMaterial + kTime, "complete");
+  ASSERT_EQ(pd.exit_code, 0) << pd.output;
+  {
+    const breccia::h5::File f(breccia::solver::testing::process_temp_dir() + "/cli_complete/out/results.h5",
+                              breccia::h5::File::Mode::Read);
+    EXPECT_EQ(f.attr_int("/", "complete"), 1);
+  }
+  const std::string mps = "specimen:\n  lattice: {dimension: 2, box: [0, 0, 10 mm, 10 mm], spacing: 0.5 mm}\n"
+                          "model: {type: mps, equation: navier}\n"
+                          "materials: [{name: steel, density: 7850, C13: 121.1 GPa, C55: 80.8 GPa}]\n"
+                          "time: {end: 1 us}\n";
+  const Outcome zero = run_solver(mps, "mps_steps_zero", "--steps 0 --backend cpu");
+  ASSERT_EQ(zero.exit_code, 0) << zero.output;
+  EXPECT_EQ(zero.output, "");  // --quiet: nothing but errors
+  std::ifstream js(breccia::solver::testing::process_temp_dir() + "/cli_mps_steps_zero/out/summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(js);
+  EXPECT_EQ(summary.at("steps").get<long long>(), 0) << summary;
+}

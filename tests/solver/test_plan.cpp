@@ -20,6 +20,7 @@
 
 #include "../common/cli_contract.hpp"
 #include "breccia/common/error.hpp"
+#include "breccia/common/particle_file.hpp"
 #include "breccia/plan/plan.hpp"
 #include "breccia/solver/run.hpp"
 #include "helpers.hpp"
@@ -734,4 +735,34 @@ time: {steps: 100}
   EXPECT_EQ(e64.bonds, e32.bonds);
   EXPECT_NEAR(e64.loop_s / e32.loop_s, *speedup, 1e-9);
   EXPECT_NE(e32.rate_source.find("float32"), std::string::npos) << e32.rate_source;
+}
+
+// -o RUN: a relative particle file is looked for in the run folder first, as breccia-solve
+// does (the case READMEs write particles.h5 there); --set overrides a value. Without -o the
+// same case is refused naming the file it did not find next to the case.
+TEST(PlanCli, ARunFolderAndSetAreReadAsTheSolverReadsThem) {
+  const std::string dir = temp_path("plan_run_folder");
+  std::filesystem::create_directories(dir + "/run");
+  breccia::ParticleModel m;
+  m.dimension = 2;
+  m.thickness_m = 1e-3;
+  for (int j = 0; j < 6; ++j)
+    for (int i = 0; i < 20; ++i) {
+      m.position_m.insert(m.position_m.end(), {(i + 0.5) * 1e-3, (j + 0.5) * 1e-3, 0.0});
+      m.volume_m3.push_back(1e-9);
+      m.material_id.push_back(0);
+    }
+  m.material_names = {"steel"};
+  breccia::write_particle_file(dir + "/run/particles.h5", m);
+  const std::string c = dir + "/case.yaml";
+  std::ofstream(c) << "specimen: {particles: particles.h5}\n"
+                      "model: {type: pmb, planar: plane_stress}\n"
+                      "materials: [{name: steel, density: 7850, youngs_modulus: 200 GPa, poisson_ratio: 0.3333333333333333}]\n"
+                      "time: {steps: 10}\n";
+  const CliResult without = run_plan(c + " --tolerance 0.05");
+  EXPECT_EQ(without.code, kExitBadInput) << without.output;
+  const CliResult with = run_plan(c + " -o " + dir + "/run --set time.steps=25 --tolerance 0.05");
+  EXPECT_EQ(with.code, 0) << with.output;
+  EXPECT_NE(with.output.find("particles      120"), std::string::npos) << with.output;
+  EXPECT_NE(with.output.find("steps          25 of"), std::string::npos) << with.output;
 }

@@ -775,3 +775,73 @@ TEST(Weibull, CorrelationLengthCorrelatesTheBondsDraws) {
         if (near.neighbor[m] == static_cast<int32_t>(i)) ASSERT_EQ(near.s_onset[k], near.s_onset[m]);
     }
 }
+
+// no_fail bonds never break, and with a tensile strength they never soften either: a whole
+// plate in a no_fail set, stretched uniaxially to 0.002 (20x the onset of 3 MPa at 10 GPa),
+// holds the brittle plate's elastic energy with no damage and nothing dissipated. Its onset
+// stayed calibrated before: the bond softened toward an ultimate stretch of FLT_MAX, a
+// plateau that dissipated 4.4e-4 J and left 0.65 damage, 85 % of the strain energy lost.
+TEST(Softening, ANoFailSetNeitherBreaksNorSoftens) {
+  const auto plate = [](const std::string& strength) {
+    return "specimen: {lattice: {dimension: 2, box: [0, 0, 0.02, 0.01], spacing: 1 mm, thickness: 1 mm}}\n"
+           "model: {type: pmb, planar: plane_stress, no_fail: [everything]}\n"
+           "materials: [{name: m, density: 1000, youngs_modulus: 10 GPa, poisson_ratio: 0.3333333333333333, "
+           "fracture_energy: 100 J/m2" + strength + "}]\n"
+           "sets: [{name: everything, box: [-1, -1, 1, 1]}]\n"
+           "time: {steps: 1}\n";
+  };
+  std::vector<double> energies;
+  for (const std::string strength : {"", ", tensile_strength: 3 MPa"}) {
+    PdSystem s = system_from_yaml("no_fail_softening", plate(strength));
+    for (size_t i = 0; i < s.n; ++i) s.u[3 * i] = 0.002 * s.x0[3 * i];
+    // Enough passes past the onset for a softening bond to have gone: each pass may soften.
+    for (int pass = 0; pass < 5; ++pass) cpu_compute_forces(s);
+    const Energies e = measure(s);
+    EXPECT_EQ(e.max_damage, 0.0) << strength;
+    EXPECT_EQ(e.broken_half_bonds, 0) << strength;
+    EXPECT_EQ(s.dissipated_energy, 0.0) << strength;
+    energies.push_back(e.strain);
+  }
+  EXPECT_GT(energies[0], 0.0);
+  EXPECT_NEAR(energies[1], energies[0], 1e-12 * energies[0]);
+}
+
+// Two materials of one G0 and different moduli: the bond across the interface takes one
+// material for both its halves, so they break together and momentum is conserved to
+// rounding. The two halves of a 2D lattice thrown apart at +-20 m/s (soft x < 0, stiff
+// x > 0). A tie went to each half's own end: the halves broke at different steps and the
+// total momentum reached 8-12 % of sum m|v|.
+TEST(Fracture, TwoMaterialsOfOneToughnessBreakTheirInterfaceBondsWhole) {
+  breccia::ParticleModel m;
+  m.dimension = 2;
+  m.thickness_m = 1e-3;
+  const double h = 1e-3;
+  for (int j = 0; j < 40; ++j)
+    for (int i = 0; i < 16; ++i) {
+      m.position_m.insert(m.position_m.end(), {(i - 8 + 0.5) * h, (j - 20 + 0.5) * h, 0.0});
+      m.volume_m3.push_back(h * h * m.thickness_m);
+      m.material_id.push_back(i < 8 ? 0 : 1);
+    }
+  m.material_names = {"soft", "stiff"};
+  const std::string particles = process_temp_dir() + "/two_materials/particles.h5";
+  std::filesystem::create_directories(process_temp_dir() + "/two_materials");
+  breccia::write_particle_file(particles, m);
+  PdSystem s = system_from_yaml("two_materials", "specimen: {particles: " + particles + "}\n"
+                                "model: {type: pmb, planar: plane_stress}\n"
+                                "materials:\n"
+                                "  - {name: soft, density: 1000, youngs_modulus: 10 GPa, poisson_ratio: 0.3333333333333333, fracture_energy: 100}\n"
+                                "  - {name: stiff, density: 1000, youngs_modulus: 40 GPa, poisson_ratio: 0.3333333333333333, fracture_energy: 100}\n"
+                                "initial: [{type: velocity, expression: ['x > 0 ? 20 : -20', '0']}]\n"
+                                "time: {steps: 200}\n");
+  double scale = 0.0;
+  for (size_t i = 0; i < s.n; ++i) scale += s.density[i] * s.volume[i] * std::fabs(s.v[3 * i]);
+  for (int k = 0; k < 200; ++k) cpu_step(s);
+  ASSERT_GT(measure(s).broken_half_bonds, 0) << "the interface should break";
+  double px = 0.0, py = 0.0;
+  for (size_t i = 0; i < s.n; ++i) {
+    px += s.density[i] * s.volume[i] * s.v[3 * i];
+    py += s.density[i] * s.volume[i] * s.v[3 * i + 1];
+  }
+  EXPECT_LT(std::fabs(px), 1e-12 * scale);  // rounding: measured ~1e-20 of 1.3e-3 kg m/s
+  EXPECT_LT(std::fabs(py), 1e-12 * scale);
+}

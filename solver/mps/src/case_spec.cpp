@@ -1,5 +1,6 @@
 #include "breccia/mps/case_spec.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <cstdio>
@@ -252,6 +253,11 @@ CaseSpec parse_root(const Section& root) {
                       ? Formulation::Stress
                       : Formulation::Displacement;
   const bool stress = c.formulation == Formulation::Stress;
+  // The stress formulation's stencils, contact and fracture are built on the open lattice: a
+  // periodic axis was ignored there (a strip periodic in y read as free faces).
+  if (stress && c.lattice && std::any_of(c.lattice->periodic.begin(), c.lattice->periodic.end(), [](bool p) { return p; }))
+    fail(spec.section("lattice"), "periodic", "a periodic axis with the stress formulation",
+         "periodic: false on every axis (periodic lattices: formulation: displacement)");
   for (const char* key :
        {"hourglass", "pressure_force", "damping", "damping_until", "gravity", "lagrangian", "stencil_update_strain"})
     if (!stress && model.has(key)) fail(model, key, "given for the displacement formulation", "formulation: stress");

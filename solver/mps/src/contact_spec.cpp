@@ -235,7 +235,8 @@ RigidBodySpec parse_rigid_body(const Section& s, size_t index, int dimension) {
     if (!s.has("density")) fail(s, "density", "missing for a free body", "a density (kg/m^3): mass = density x area x thickness");
     r.density_kg_m3 = s.positive("density", Quantity::Density);
     if (s.has("velocity")) r.velocity_m_s = s.vec3("velocity", Quantity::Velocity);
-    r.angular_velocity_rad_s = s.number("angular_velocity", Quantity::Frequency, 0.0);
+    // rad/s; "1 Hz" is a turn a second (read as a frequency it was 1 rad/s, 2 pi too slow).
+    r.angular_velocity_rad_s = s.number("angular_velocity", Quantity::AngularVelocity, 0.0);
   }
   r.stiffness_factor = s.positive("stiffness_factor", Quantity::Dimensionless, 1.0);
   if (s.has("stiffness_length")) r.stiffness_length_m = s.positive("stiffness_length", Quantity::Length, 0.0);

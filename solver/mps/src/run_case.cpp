@@ -48,7 +48,8 @@ void add_timing(Json& j, const Model& sim, double wall_s, double loop_s) {
 }
 
 template <class Model>
-void report_timing(const Model& sim, double wall_s, double loop_s, const std::string& out_dir) {
+void report_timing(const Model& sim, double wall_s, double loop_s, const std::string& out_dir, bool quiet) {
+  if (quiet) return;
   std::fprintf(stderr, "mps: %lld steps in %.2f s (%.3g particle-steps/s); outputs in %s\n", sim.steps(), wall_s,
                particle_steps_per_s(sim, loop_s), out_dir.c_str());
 }
@@ -95,7 +96,7 @@ void write_case_as_run(const std::string& case_file, const std::string& out_dir)
 // The stress formulation (solid.hpp): same files, with stress and plastic strain in the
 // snapshots and the energy terms of the stress solid in history.csv.
 int run_solid(const CaseSpec& spec, const std::string& case_file, const std::string& out_dir,
-              std::unique_ptr<SolidStepDevice> (*device)(const Solid&), long long max_steps) {
+              std::unique_ptr<SolidStepDevice> (*device)(const Solid&), long long max_steps, bool quiet) {
   const auto wall_start = std::chrono::steady_clock::now();
   std::string content_id;
   Solid sim = make_solid(spec, &content_id);
@@ -103,14 +104,15 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
   if (spec.progress) std::fprintf(stderr, "mps: backend %s\n", sim.backend_description().c_str());
   long long total_steps = steps_to_reach(spec.end_time_s, sim.dt_s(), case_file, "time.end");
   write_case_as_run(case_file, out_dir);
-  if (max_steps > 0) total_steps = std::min(total_steps, max_steps);
-  std::fprintf(stderr,
+  if (max_steps >= 0) total_steps = std::min(total_steps, max_steps);
+  if (!quiet)
+    std::fprintf(stderr,
                "mps (stress): %zu particles, %zu bonds, %dD; spacing %.4g m, re %.3g spacing; c_L %.1f m/s; dt %.4g s "
                "(safety %.2f x spacing / c_L); %lld steps; plasticity %s; pressure force %s; hourglass %.3g\n",
                sim.size(), sim.bonds().size(), sim.dimension(), sim.spacing_m(), spec.re_over_spacing,
                sim.p_wave_speed(), sim.dt_s(), spec.safety, total_steps, sim.law().plastic ? "von Mises" : "none",
                spec.repulsive_pressure ? "repulsive" : "conservative", spec.hourglass);
-  if (sim.law().viscous_time_s > 0.0)
+  if (sim.law().viscous_time_s > 0.0 && !quiet)
     std::fprintf(stderr,
                  "mps (stress): material damping %.3g at %.4g Hz (beta %.4g s); the step above includes its "
                  "stability factor %.4f\n",
@@ -236,7 +238,7 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
   }
   add_timing(j, sim, wall_s, loop_s);
   write_json_file(dir / "summary.json", j);
-  report_timing(sim, wall_s, loop_s, out_dir);
+  report_timing(sim, wall_s, loop_s, out_dir, quiet);
   return 0;
 }
 
@@ -249,7 +251,9 @@ int run_case(const std::string& case_file, const std::string& out_dir, int threa
 }
 
 int run_case(const std::string& case_file, const std::string& out_dir, const RunCaseOptions& options) {
-  const CaseSpec spec = load_case(case_file);
+  CaseSpec spec = load_case(case_file);
+  if (options.quiet) spec.progress = false;
+  const bool quiet = options.quiet;
   if (options.threads > 0) omp_set_num_threads(options.threads);
   // The stress formulation's launcher runs a subset of its features (docs/cuda.md, "MPS").
   auto solid_device = options.solid_device;
@@ -265,7 +269,7 @@ int run_case(const std::string& case_file, const std::string& out_dir, const Run
     throw InputError(case_file, "model.formulation", "stress with a device for the displacement formulation only",
                      "formulation: displacement, or --backend cpu");
   std::filesystem::create_directories(out_dir);
-  if (spec.formulation == Formulation::Stress) return run_solid(spec, case_file, out_dir, solid_device, options.max_steps);
+  if (spec.formulation == Formulation::Stress) return run_solid(spec, case_file, out_dir, solid_device, options.max_steps, quiet);
   const auto wall_start = std::chrono::steady_clock::now();
 
   Simulation sim(spec);
@@ -274,8 +278,9 @@ int run_case(const std::string& case_file, const std::string& out_dir, const Run
   const MaterialSpec& m = spec.material;
   long long total_steps = steps_to_reach(spec.end_time_s, sim.dt_s(), case_file, "time.end");
   write_case_as_run(case_file, out_dir);
-  if (options.max_steps > 0) total_steps = std::min(total_steps, options.max_steps);
-  std::fprintf(stderr,
+  if (options.max_steps >= 0) total_steps = std::min(total_steps, options.max_steps);
+  if (!quiet)
+    std::fprintf(stderr,
                "mps: %zu particles, %zu bonds, %zu crack pairs; spacing %.4g m, re %.3g spacing, n0 %.6g, lambda %.6g m^2\n"
                "mps: c_L %.1f m/s, c_T %.1f m/s; dt %.4g s (CFL dt %.4g s = safety %.2f x spacing / c_max; "
                "spectral stability limit %.4g s); CFL number c_L dt / spacing = %.3f; %lld steps\n",
@@ -283,7 +288,7 @@ int run_case(const std::string& case_file, const std::string& out_dir, const Run
                sim.normalisation().number_density_n0, sim.normalisation().laplacian_lambda_m2, m.p_wave_speed(),
                m.s_wave_speed(), sim.dt_s(), sim.cfl_dt_s(), spec.safety, sim.spectral_dt_limit_s(),
                m.p_wave_speed() * sim.dt_s() / sim.spacing_m(), total_steps);
-  if (sim.dt_s() > sim.spectral_dt_limit_s())
+  if (sim.dt_s() > sim.spectral_dt_limit_s() && !quiet)
     std::fprintf(stderr, "mps: warning: dt %.4g s exceeds the stability limit %.4g s\n", sim.dt_s(),
                  sim.spectral_dt_limit_s());
 
@@ -341,7 +346,7 @@ int run_case(const std::string& case_file, const std::string& out_dir, const Run
   j["max_open_fraction"] = json_number(max_open);
   add_timing(j, sim, wall_s, loop_s);
   write_json_file(dir / "summary.json", j);
-  report_timing(sim, wall_s, loop_s, out_dir);
+  report_timing(sim, wall_s, loop_s, out_dir, quiet);
   return 0;
 }
 

@@ -47,6 +47,9 @@ Simulation::Simulation(const CaseSpec& spec) : spec_(spec) {
       for (int a = 0; a < dimension_; ++a) u_[a][i] = g.amplitude_m[a] * f;
     }
   }
+  // The uniform initial velocity (docs/mps.md: both formulations; the stress one sets it in
+  // make_solid); prescribed particles then take their own values.
+  for (int a = 0; a < dimension_; ++a) v_[a].assign(n, spec_.initial_velocity_m_s[a]);
   choose_time_step();
   apply_prescribed(0.0);
 }

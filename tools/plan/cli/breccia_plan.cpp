@@ -10,9 +10,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "breccia/common/cli.hpp"
 #include "breccia/common/error.hpp"
+#include "breccia/common/yaml_input.hpp"
 #include "breccia/plan/plan.hpp"
 #include "breccia/solver/case_config.hpp"
 
@@ -23,9 +25,10 @@ constexpr const char* kAbout =
     "and what error to expect, before running it, and the cheapest setup that meets a tolerance.";
 constexpr const char* kFooter =
     "Input: CASE.yaml (docs/case-format.md); the accuracy atlas (docs/atlas/atlas.csv, `make atlas`) and\n"
-    "the measured throughputs (solver/plan/throughputs.yaml, or this machine's with --calibrate).\n"
+    "the measured throughputs (tools/plan/throughputs.yaml, or this machine's with --calibrate).\n"
     "Output: the estimates and the proposal on stdout; with --write, the proposed case as YAML.\n"
-    "Example: breccia-plan cases/kalthoff-winkler/case.yaml --tolerance 0.05 --calibrate (docs/plan.md)";
+    "Example: breccia-plan cases/kalthoff-winkler/case-quick.yaml -o RUN --tolerance 0.05 (docs/plan.md; RUN:\n"
+    "the run folder holding the case's particles.h5, written there as the case README says)";
 
 std::string human_bytes(double b) {
   char s[32];
@@ -69,6 +72,16 @@ int main(int argc, char** argv) {
   CLI::App app{kAbout, "breccia-plan"};
   cli::configure(app, kFooter);
   app.add_option("CASE", case_file, "the case file")->required()->type_name("CASE.yaml");
+  // As breccia-solve reads the case: a relative input file is looked for in the run folder
+  // first (-o), the case's variants and --set overrides applied.
+  std::string run_dir, variant;
+  std::vector<std::string> overrides;
+  app.add_option("-o,--out", run_dir, "the run folder the case will write into: relative input files are looked for there first")
+      ->type_name("DIR");
+  app.add_option("--variant", variant, "apply the case file's variants.NAME overrides (before any --set)")->type_name("NAME");
+  app.add_option("--set", overrides, "override a value of the case file (repeatable)")
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false);
   app.add_option_function<double>(
          "--tolerance", [&](double x) { tolerance = x; },
          "the relative error you accept (0.02 = 2%), as the atlas measures it")
@@ -96,6 +109,7 @@ int main(int argc, char** argv) {
   try {
     if (!std::filesystem::exists(case_file))
       throw InputError(case_file, "", "no such case file", "a case YAML (docs/case-format.md)");
+    Section::set_overrides(case_file, overrides, variant, run_dir);
     const solver::CaseConfig config = solver::parse_case_file(case_file);
     plan::Throughputs rates = plan::load_throughputs(rates_path);
     omp_set_num_threads(opt.threads);

@@ -9,7 +9,8 @@ namespace breccia {
 
 enum class Quantity {
   Dimensionless, Length, Area, Volume, Time, Frequency, Pressure, Density, Energy,
-  FractureEnergy, Velocity, Acceleration, Force, Mass, StrainRate
+  FractureEnergy, Velocity, Acceleration, Force, Mass, StrainRate,
+  AngularVelocity  // rad/s; "Hz" is turns per second (2 pi rad/s), "rpm" turns per minute
 };
 
 std::string_view quantity_name(Quantity q);

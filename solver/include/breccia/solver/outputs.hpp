@@ -62,6 +62,9 @@ public:
   ResultsWriter(const PdSystem& sys, const std::string& out_dir, bool restart);
   void write(const PdSystem& sys);  // one output group at the current step
   int output_count() const { return count_; }
+  // The root attribute `complete` to 1: the run reached its end (0 until then, and for a run
+  // stopped early, unstable or interrupted).
+  void mark_complete();
 
   // A distributed run whose global system holds no partners (parallel HDF5: the ranks hold
   // their rows) leaves the bond list to the ranks: a new file waits for them

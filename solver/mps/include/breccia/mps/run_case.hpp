@@ -23,8 +23,12 @@ struct RunCaseOptions {
   std::unique_ptr<SolidStepDevice> (*solid_device)(const Solid&) = nullptr;
   // --backend auto: a refused stress case runs on the CPU instead, saying why.
   bool cpu_when_refused = false;
-  // breccia-solve --steps N: stop after N steps (before time.end if that comes later); 0: to time.end.
-  long long max_steps = 0;
+  // breccia-solve --steps N: stop after N steps (before time.end if that comes later; 0: the
+  // set-up and the initial outputs alone, as for PD); -1: to time.end.
+  long long max_steps = -1;
+  // breccia-solve --quiet: no progress and no summary lines (errors only), whatever the case's
+  // output.progress says.
+  bool quiet = false;
 };
 
 int run_case(const std::string& case_file, const std::string& out_dir, const RunCaseOptions& options);

@@ -243,12 +243,14 @@ TEST(BrecciaPostCli, ProvenanceMismatchIsBadInputNamingBothFiles) {
   }
 }
 
-// Replace one dataset of a written results.h5 (malformed-input tests).
+// Replace one dataset of a written results.h5 (malformed-input tests); dims: its shape (by
+// default one row of every value).
 template <class T>
-void replace_dataset(const fs::path& results, const std::string& name, const std::vector<T>& data) {
+void replace_dataset(const fs::path& results, const std::string& name, const std::vector<T>& data,
+                     std::vector<hsize_t> dims = {}) {
   h5::File f(results.string(), h5::File::Mode::ReadWrite);
   H5Ldelete(f.id(), name.c_str(), H5P_DEFAULT);
-  f.write(name, data, {data.size()});
+  f.write(name, data, dims.empty() ? std::vector<hsize_t>{data.size()} : dims);
 }
 
 TEST(BrecciaPostCli, BondPartnerOutOfRangeIsBadInputNamingTheDataset) {
@@ -455,11 +457,7 @@ TEST(BrecciaPostCli, PositionsOfTheWrongShapeAreBadInputNamingTheDataset) {
     h5::File f((dir / "results.h5").string(), h5::File::Mode::Read);
     x = f.read_doubles("/particles/position");
   }
-  {
-    h5::File f((dir / "results.h5").string(), h5::File::Mode::ReadWrite);
-    H5Ldelete(f.id(), "/particles/position", H5P_DEFAULT);
-    f.write("/particles/position", x, {3, run.model.size()});
-  }
+  replace_dataset(dir / "results.h5", "/particles/position", x, {3, run.model.size()});
   const Result r = run_post("'" + dir.string() + "' --no-plots --quiet");
   EXPECT_EQ(r.code, kExitBadInput);
   EXPECT_NE(r.output.find("/particles/position: shape 3 x " + std::to_string(run.model.size())), std::string::npos)

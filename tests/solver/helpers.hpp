@@ -13,6 +13,7 @@
 
 #include <unistd.h>
 
+#include "breccia/common/particle_file.hpp"
 #include "breccia/solver/case_config.hpp"
 #include "breccia/solver/outputs.hpp"
 #include "breccia/solver/pd_system.hpp"
@@ -87,6 +88,25 @@ inline std::string charge_hole_disc() {
   return path;
 }
 #endif
+
+// A 2D square lattice of nx x ny particles of spacing h (origin at `x0`, `y0`), thickness t,
+// material 0 ("m"): the particle model tests write as particles.h5 when a lattice spec
+// cannot say what they need (several materials, sets).
+inline breccia::ParticleModel square_lattice_model(int nx, int ny, double h, double thickness, double x0 = 0.0,
+                                                   double y0 = 0.0) {
+  breccia::ParticleModel m;
+  m.dimension = 2;
+  m.thickness_m = thickness;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      m.position_m.insert(m.position_m.end(), {x0 + (i + 0.5) * h, y0 + (j + 0.5) * h, 0.0});
+      m.volume_m3.push_back(h * h * thickness);
+      m.spacing_m.push_back(h);
+      m.material_id.push_back(0);
+    }
+  m.material_names = {"m"};
+  return m;
+}
 
 inline PdSystem system_from_yaml(const std::string& name, const std::string& yaml) {
   return setup_system(parse_case_file(write_case(name, yaml)));

@@ -381,16 +381,7 @@ TEST(SolverCli, SummaryOfARunStoppedForNonFiniteValuesIsStrictJson) {
 TEST(SolverCli, BoundarySetListingAParticleTwiceIsRejected) {
   const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_dup_set";
   std::filesystem::create_directories(dir);
-  breccia::ParticleModel m;
-  m.dimension = 2;
-  m.thickness_m = 1e-3;
-  for (int j = 0; j < 6; ++j)
-    for (int i = 0; i < 6; ++i) {
-      m.position_m.insert(m.position_m.end(), {(i + 0.5) * 1e-3, (j + 0.5) * 1e-3, 0.0});
-      m.volume_m3.push_back(1e-9);
-      m.spacing_m.push_back(1e-3);
-      m.material_id.push_back(0);
-    }
+  breccia::ParticleModel m = breccia::solver::testing::square_lattice_model(6, 6, 1e-3, 1e-3);
   m.sets = {breccia::ParticleSet{"edge", {0, 1, 2, 1}}};
   m.source = "test_cli duplicate set";
   breccia::write_particle_file(dir + "/particles.h5", m);

@@ -743,15 +743,7 @@ time: {steps: 100}
 TEST(PlanCli, ARunFolderAndSetAreReadAsTheSolverReadsThem) {
   const std::string dir = temp_path("plan_run_folder");
   std::filesystem::create_directories(dir + "/run");
-  breccia::ParticleModel m;
-  m.dimension = 2;
-  m.thickness_m = 1e-3;
-  for (int j = 0; j < 6; ++j)
-    for (int i = 0; i < 20; ++i) {
-      m.position_m.insert(m.position_m.end(), {(i + 0.5) * 1e-3, (j + 0.5) * 1e-3, 0.0});
-      m.volume_m3.push_back(1e-9);
-      m.material_id.push_back(0);
-    }
+  breccia::ParticleModel m = breccia::solver::testing::square_lattice_model(20, 6, 1e-3, 1e-3);
   m.material_names = {"steel"};
   breccia::write_particle_file(dir + "/run/particles.h5", m);
   const std::string c = dir + "/case.yaml";

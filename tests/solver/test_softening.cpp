@@ -812,16 +812,8 @@ TEST(Softening, ANoFailSetNeitherBreaksNorSoftens) {
 // x > 0). A tie went to each half's own end: the halves broke at different steps and the
 // total momentum reached 8-12 % of sum m|v|.
 TEST(Fracture, TwoMaterialsOfOneToughnessBreakTheirInterfaceBondsWhole) {
-  breccia::ParticleModel m;
-  m.dimension = 2;
-  m.thickness_m = 1e-3;
-  const double h = 1e-3;
-  for (int j = 0; j < 40; ++j)
-    for (int i = 0; i < 16; ++i) {
-      m.position_m.insert(m.position_m.end(), {(i - 8 + 0.5) * h, (j - 20 + 0.5) * h, 0.0});
-      m.volume_m3.push_back(h * h * m.thickness_m);
-      m.material_id.push_back(i < 8 ? 0 : 1);
-    }
+  breccia::ParticleModel m = square_lattice_model(16, 40, 1e-3, 1e-3, -8e-3, -20e-3);
+  for (size_t i = 0; i < m.size(); ++i) m.material_id[i] = m.position_m[3 * i] < 0 ? 0 : 1;
   m.material_names = {"soft", "stiff"};
   const std::string particles = process_temp_dir() + "/two_materials/particles.h5";
   std::filesystem::create_directories(process_temp_dir() + "/two_materials");

@@ -21,6 +21,8 @@ def main():
     ap.add_argument("--rosin-rammler", nargs=2, type=float, metavar=("XC_M", "N"))
     ap.add_argument("--swebrec", nargs=3, type=float, metavar=("XMAX_M", "X50_M", "B"))
     ap.add_argument("--size-label", default="sieve size")
+    # The fragment count: the CSV holds one row per distinct size (a sieve step), fewer.
+    ap.add_argument("--fragments", type=int)
     ap.add_argument("--out", required=True)
     a = ap.parse_args()
     with open(a.data) as f:
@@ -29,7 +31,8 @@ def main():
     p = np.array([float(r["passing"]) for r in rows]) * 100
     fig, ax = plt.subplots(figsize=(7, 4.5), dpi=120)
     ax.step(x, p, where="post", color="k", lw=1.2)
-    ax.plot(x, p, "ko", ms=3, label=f"fragments (n = {len(x)})")
+    count = a.fragments if a.fragments is not None else len(x)
+    ax.plot(x, p, "ko", ms=3, label=f"fragments (n = {count})")
     xs = np.logspace(np.log10(x.min() * 0.5), np.log10(x.max() * 1.2), 300)
     if a.rosin_rammler:
         xc, n = a.rosin_rammler

@@ -375,7 +375,7 @@ private:
     std::string args = "--data " + shell_quote((summary_.post_dir / "size_distribution.csv").string()) +
                        " --rosin-rammler " + fmt(dist_.rosin_rammler.xc_m) + " " + fmt(dist_.rosin_rammler.n) +
                        " --swebrec " + fmt(dist_.swebrec.xmax_m) + " " + fmt(dist_.swebrec.x50_m) + " " +
-                       fmt(dist_.swebrec.b) + " --size-label " +
+                       fmt(dist_.swebrec.b) + " --fragments " + std::to_string(dist_.fragment_count) + " --size-label " +
                        shell_quote(opt_.size_by_diameter ? "equivalent diameter" : "sieve size");
     plot("plot_fragment_sizes.py", args, "fragment_sizes.png");
   }

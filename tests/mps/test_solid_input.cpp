@@ -292,3 +292,20 @@ TEST(MpsSolidInput, AnAngularVelocityInHertzIsTurnsPerSecond) {
     EXPECT_NEAR(spec.rigid_bodies[0].angular_velocity_rad_s, expected, 1e-12 * expected) << text;
   }
 }
+
+// A run stopped on the way (here a particle inverted by the first step) leaves no
+// results.xdmf: results.h5 gets its name only at the end, and the XDMF written at every
+// output named a file that was not there, or, in a folder reused, an earlier run's.
+TEST(MpsSolidCli, ARunStoppedOnTheWayLeavesNoResultsXdmf) {
+  const auto dir = std::filesystem::temp_directory_path() / "breccia_mps_solid_cli_stopped";
+  // u_x = A exp(-(x - c)^2 / w^2) with A = 3 mm, w = 2 mm: du_x/dx reaches -A sqrt(2/e)/w = -1.3.
+  const CliResult r = run_cli(test::replace_once(kStress, "initial: {velocity: [0, -1 m/s]}",
+                                                 "initial: {displacement: {type: gaussian, center: [5 mm, 3 mm], "
+                                                 "width: 2 mm, amplitude: [3 mm, 0]}}") +
+                                  "output: {every: 1, progress: false}\n",
+                              dir);
+  EXPECT_EQ(r.exit_code, breccia::kExitRunFailed) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("inverted"), std::string::npos) << r.stderr_text;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "results.h5"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "results.xdmf"));
+}

@@ -15,6 +15,7 @@
 #include "../common/cli_contract.hpp"
 #include "breccia/common/h5.hpp"
 #include "breccia/common/particle_file.hpp"
+#include "breccia/solver/results_layout.hpp"
 #include "atlas.hpp"
 
 #include <sstream>
@@ -563,6 +564,18 @@ TEST(SolverCli, AFinishedRunIsMarkedCompleteAndAnMpsCaseTakesStepsZeroAndQuiet) 
     const breccia::h5::File f(breccia::solver::testing::process_temp_dir() + "/cli_complete/out/results.h5",
                               breccia::h5::File::Mode::Read);
     EXPECT_EQ(f.attr_int("/", "complete"), 1);
+    // results.xdmf's times are the groups' time_s to the last bit (17 digits).
+    std::ifstream xdmf(breccia::solver::testing::process_temp_dir() + "/cli_complete/out/results.xdmf");
+    const std::string text((std::istreambuf_iterator<char>(xdmf)), std::istreambuf_iterator<char>());
+    size_t at = 0;
+    int groups = 0;
+    while ((at = text.find("<Time Value=\"", at)) != std::string::npos) {
+      at += 13;
+      const double t = std::stod(text.substr(at, text.find('"', at) - at));
+      EXPECT_EQ(t, f.attr_double(breccia::solver::results_output_group(groups), "time_s")) << groups;
+      ++groups;
+    }
+    EXPECT_EQ(groups, f.attr_int("/", "output_count"));
   }
   const std::string mps = "specimen:\n  lattice: {dimension: 2, box: [0, 0, 10 mm, 10 mm], spacing: 0.5 mm}\n"
                           "model: {type: mps, equation: navier}\n"

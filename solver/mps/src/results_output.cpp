@@ -168,7 +168,12 @@ void MpsResultsWriter::write_common(long long step, double time_s, const std::ar
   f.write(g + "/damage", damage, {n_});
   solver::finish_results_output(f, index, step, time_s, broken, broken_count);
   times_.push_back(time_s);
-  solver::write_results_xdmf(out_dir_ + "/results.xdmf", n_, times_, fields_);
+}
+
+std::function<void()> MpsResultsWriter::xdmf_writer() const {
+  return [path = out_dir_ + "/results.xdmf", n = n_, times = times_, fields = fields_] {
+    solver::write_results_xdmf(path, n, times, fields);
+  };
 }
 
 void MpsResultsWriter::write(const Simulation& sim) {

@@ -63,6 +63,7 @@ double run_time_loop(Model& sim, const CaseSpec& spec, const std::string& case_f
                      const std::string& content_id, long long total_steps, OutputFile& results,
                      const std::function<void()>& record, AfterStep after_step, const char* hint) {
   const auto loop_start = std::chrono::steady_clock::now();
+  std::function<void()> write_xdmf;
   {
     MpsResultsWriter writer(results.temp_path().string(), out_dir, spec, case_file, content_id, sim);
     writer.write(sim);
@@ -79,9 +80,11 @@ double run_time_loop(Model& sim, const CaseSpec& spec, const std::string& case_f
     }
     writer.write(sim);
     writer.mark_complete();
+    write_xdmf = writer.xdmf_writer();
     if (spec.progress) progress.finish("t=" + fmt(sim.time_s()) + " s");
   }
   results.commit();
+  write_xdmf();  // (results.xdmf names results.h5: written once that is there)
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
 }
 

@@ -12,6 +12,7 @@
 //  - damage: the fraction of a particle's initial bonds that are cut (0 without fracture).
 // The MPS fields (stress, eq_plastic_strain, fragment) are written beside PD's.
 #include <array>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -43,6 +44,10 @@ public:
   void write(const Solid& sim);
   // Root attribute complete = 1 (the run ended normally).
   void mark_complete();
+  // What writes results.xdmf for the outputs so far (a copy of their times and fields): the
+  // caller runs it once results.h5 has its final name, so that a run stopped on the way
+  // leaves no results.xdmf pointing at a file that is not there (or at an earlier run's).
+  std::function<void()> xdmf_writer() const;
   int output_count() const { return static_cast<int>(times_.size()); }
   const solver::HalfBondList& bonds() const { return bonds_; }
 

@@ -65,10 +65,13 @@ ParticleField read_particle_field(const std::string& path, const std::string& da
   ParticleField field =
       dataset.empty() ? read_csv_field(path) : read_h5_field(path, dataset, case_file, key, particles, rows);
   for (size_t k = 0; k < field.values.size(); ++k)  // (the CSV reader refused them by line)
-    if (!std::isfinite(field.values[k]))
-      throw InputError(path, dataset, std::to_string(field.values[k]) + " in row " + std::to_string(k / field.columns) +
-                                          (rows ? " of this process's rows" : ""),
+    if (!std::isfinite(field.values[k])) {
+      const size_t row = k / static_cast<size_t>(field.columns);  // the file's row (a rank's rows: its own)
+      throw InputError(path, dataset,
+                       std::to_string(field.values[k]) + " in row " +
+                           std::to_string(rows && !dataset.empty() ? static_cast<size_t>((*rows)[row]) : row),
                        "finite numbers");
+    }
   if (rows && !dataset.empty()) return field;  // its rows alone, the count checked
   const size_t read = field.values.size() / static_cast<size_t>(field.columns);
   if (read != particles)

@@ -1878,71 +1878,80 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   s.dissipated.assign(n, 0.0);
   s.damage.assign(n, 0.0);
   s.max_stretch.assign(n, 0.0);
-  for (size_t q = 0; q < c.initial.size(); ++q) {
-    const InitialSpec& is = c.initial[q];
-    std::vector<int32_t> who;
-    if (is.set.empty()) {
-      who.resize(n);
-      std::iota(who.begin(), who.end(), 0);
-    } else {
-      who = internal_particles(s, require_set(s, is.set, "initial[" + std::to_string(q) + "].set").indices);
-    }
-    if (!is.field_file.empty()) {
-      // A field from a file, in the particle file's order (original_index: internal -> file).
-      // A window system (a distributed set-up's ranks other than 0) reads its particles' rows
-      // alone (`rows`, ascending); one process and rank 0 (the whole body) every row.
-      const std::string key = "initial[" + std::to_string(q) + "]";
-      const bool window = !s.window_global.empty();
-      std::vector<int64_t> rows;
-      if (window) {
-        for (auto i : who) rows.push_back(s.original_index[i]);
-        std::sort(rows.begin(), rows.end());
-        rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+  // Each rank evaluates its own particles' initial values (an expression, a file's rows):
+  // a refusal found on one rank is every rank's, from the lowest one that has it, so that
+  // none is left waiting at the next collective (they hung, silent).
+  std::exception_ptr initial_refused;
+  try {
+    for (size_t q = 0; q < c.initial.size(); ++q) {
+      const InitialSpec& is = c.initial[q];
+      std::vector<int32_t> who;
+      if (is.set.empty()) {
+        who.resize(n);
+        std::iota(who.begin(), who.end(), 0);
+      } else {
+        who = internal_particles(s, require_set(s, is.set, "initial[" + std::to_string(q) + "].set").indices);
       }
-      const ParticleField f =
-          read_particle_field(is.field_file, is.field_dataset, s.whole_n(), c.file, key, window ? &rows : nullptr);
-      if (f.columns < s.dimension)
-        throw InputError(is.field_file, is.field_dataset.empty() ? "columns" : is.field_dataset,
-                         std::to_string(f.columns) + " numbers a row", "3 numbers a row for a 3D specimen");
-      auto row_of = [&](int64_t file_row) {
-        return window ? static_cast<size_t>(std::lower_bound(rows.begin(), rows.end(), file_row) - rows.begin())
-                      : static_cast<size_t>(file_row);
-      };
-      double* target = is.kind == InitialSpec::Kind::Velocity ? s.v.data() : s.u.data();
-      for (auto i : who)
-        for (int d = 0; d < std::min(s.dimension, f.columns); ++d)
-          target[3 * i + d] = f.values[static_cast<size_t>(f.columns) * row_of(s.original_index[i]) + d];
-      continue;
-    }
-    // A 2D model has no z motion: a z component given to it was dropped without a word.
-    if (s.dimension == 2 && is.kind != InitialSpec::Kind::RadialVelocity) {
-      const bool z_expression = is.expression.size() > 2 && is.expression[2].find_first_not_of(" 0.") != std::string::npos;
-      if (z_expression || (is.expression.empty() && is.field_file.empty() && is.value[2] != 0.0))
-        throw InputError(c.file, "initial[" + std::to_string(q) + "]." + (z_expression ? "expression[2]" : "value"),
-                         "a z component in a 2D model", "two components (x, y), or a z of 0");
-    }
-    if (!is.expression.empty()) {
-      // Fields by expression, evaluated once per particle at its reference position.
-      double* target = is.kind == InitialSpec::Kind::Velocity ? s.v.data() : s.u.data();
-      const std::string key = "initial[" + std::to_string(q) + "].expression";
-      for (size_t d = 0; d < is.expression.size() && d < static_cast<size_t>(s.dimension); ++d) {
-        const Expression e(is.expression[d], {"x", "y", "z"}, c.file, key + "[" + std::to_string(d) + "]");
-        for (auto i : who) target[3 * i + d] = e({s.x0[3 * i], s.x0[3 * i + 1], s.x0[3 * i + 2]});
-      }
-      continue;
-    }
-    for (auto i : who)
-      for (int d = 0; d < s.dimension; ++d) {
-        if (is.kind == InitialSpec::Kind::Velocity) {
-          s.v[3 * i + d] = is.value[d];
-        } else if (is.kind == InitialSpec::Kind::Displacement) {
-          s.u[3 * i + d] = is.value[d];
-        } else {
-          const bool radial = !(is.cylindrical && d == 2);
-          s.v[3 * i + d] = radial ? is.strain_rate * (s.x0[3 * i + d] - is.center[d]) : 0.0;
+      if (!is.field_file.empty()) {
+        // A field from a file, in the particle file's order (original_index: internal -> file).
+        // A window system (a distributed set-up's ranks other than 0) reads its particles' rows
+        // alone (`rows`, ascending); one process and rank 0 (the whole body) every row.
+        const std::string key = "initial[" + std::to_string(q) + "]";
+        const bool window = !s.window_global.empty();
+        std::vector<int64_t> rows;
+        if (window) {
+          for (auto i : who) rows.push_back(s.original_index[i]);
+          std::sort(rows.begin(), rows.end());
+          rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
         }
+        const ParticleField f =
+            read_particle_field(is.field_file, is.field_dataset, s.whole_n(), c.file, key, window ? &rows : nullptr);
+        if (f.columns < s.dimension)
+          throw InputError(is.field_file, is.field_dataset.empty() ? "columns" : is.field_dataset,
+                           std::to_string(f.columns) + " numbers a row", "3 numbers a row for a 3D specimen");
+        auto row_of = [&](int64_t file_row) {
+          return window ? static_cast<size_t>(std::lower_bound(rows.begin(), rows.end(), file_row) - rows.begin())
+                        : static_cast<size_t>(file_row);
+        };
+        double* target = is.kind == InitialSpec::Kind::Velocity ? s.v.data() : s.u.data();
+        for (auto i : who)
+          for (int d = 0; d < std::min(s.dimension, f.columns); ++d)
+            target[3 * i + d] = f.values[static_cast<size_t>(f.columns) * row_of(s.original_index[i]) + d];
+        continue;
       }
+      // A 2D model has no z motion: a z component given to it was dropped without a word.
+      if (s.dimension == 2 && is.kind != InitialSpec::Kind::RadialVelocity) {
+        const bool z_expression = is.expression.size() > 2 && is.expression[2].find_first_not_of(" 0.") != std::string::npos;
+        if (z_expression || (is.expression.empty() && is.field_file.empty() && is.value[2] != 0.0))
+          throw InputError(c.file, "initial[" + std::to_string(q) + "]." + (z_expression ? "expression[2]" : "value"),
+                           "a z component in a 2D model", "two components (x, y), or a z of 0");
+      }
+      if (!is.expression.empty()) {
+        // Fields by expression, evaluated once per particle at its reference position.
+        double* target = is.kind == InitialSpec::Kind::Velocity ? s.v.data() : s.u.data();
+        const std::string key = "initial[" + std::to_string(q) + "].expression";
+        for (size_t d = 0; d < is.expression.size() && d < static_cast<size_t>(s.dimension); ++d) {
+          const Expression e(is.expression[d], {"x", "y", "z"}, c.file, key + "[" + std::to_string(d) + "]");
+          for (auto i : who) target[3 * i + d] = e({s.x0[3 * i], s.x0[3 * i + 1], s.x0[3 * i + 2]});
+        }
+        continue;
+      }
+      for (auto i : who)
+        for (int d = 0; d < s.dimension; ++d) {
+          if (is.kind == InitialSpec::Kind::Velocity) {
+            s.v[3 * i + d] = is.value[d];
+          } else if (is.kind == InitialSpec::Kind::Displacement) {
+            s.u[3 * i + d] = is.value[d];
+          } else {
+            const bool radial = !(is.cylindrical && d == 2);
+            s.v[3 * i + d] = radial ? is.strain_rate * (s.x0[3 * i + d] - is.center[d]) : 0.0;
+          }
+        }
+    }
+  } catch (const InputError&) {
+    initial_refused = std::current_exception();
   }
+  refuse_together(dist, initial_refused);
   // A fixed set stays at rest whatever an initial condition over it said: its motion was
   // in the first history row's kinetic energy and gone by the second step, unbooked (a
   // uniform 1 m/s over a bar with a fixed end lost 3.3 % of the total there).

@@ -393,6 +393,21 @@ TEST(Distributed, BadRowOfTheParticleFileIsTheOneProcessMessageOnce) {
       "/particles/material_id[" + std::to_string(material_row) + "]: value 7");
 }
 
+// An initial condition whose expression is not finite at particles of the last rank only
+// (x >= 19.25 mm of a 20 mm block): each rank evaluates its own particles, and the refusal is
+// every rank's (setup.cpp, refuse_together), printed once, exit code 2. The ranks that did
+// not meet it waited at the next collective, silent, until killed.
+TEST(Distributed, AnInitialExpressionNotFiniteOnOneRankIsTheOneProcessMessageOnce) {
+  expect_one_refusal_on_three_ranks_as_one_process(
+      "mpi_dist_initial_expression",
+      "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.02, 0.004, 0.004], spacing: 0.5 mm}}\n"
+      "model: {type: pmb, horizon_factor: 3.015}\n"
+      "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25}]\n"
+      "initial: [{type: velocity, expression: ['sqrt(0.019 - x)', '0', '0']}]\n"
+      "time: {steps: 2}\n",
+      "initial[0].expression[0]: 'sqrt(0.019 - x)' is not finite at (0.019250");
+}
+
 // The graded check refusing one horizon over the graded block (graded_check.hpp): under
 // mpirun every rank judges it from its block of the Morton sort (setup.cpp); on 3 ranks the
 // one process's message (the same spacing ratio, ratio, worst particle, its position and the

@@ -22,6 +22,12 @@ const ParticleSet* ParticleModel::find_set(const std::string& name) const {
   return nullptr;
 }
 
+void require_indexable_particle_count(double count, const std::string& file, const std::string& field,
+                                      const std::string& found) {
+  if (count > kMostParticles)
+    throw InputError(file, field, found, "at most 2^31 - 1 points (32-bit particle indices): a larger spacing");
+}
+
 std::optional<size_t> held_position(const std::vector<int64_t>& held, int64_t index) {
   const auto it = std::lower_bound(held.begin(), held.end(), index);
   if (it == held.end() || *it != index) return std::nullopt;

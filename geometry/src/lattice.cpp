@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "breccia/common/error.hpp"
+#include "breccia/common/particle_file.hpp"
 
 namespace breccia::geometry {
 namespace {
@@ -44,11 +45,8 @@ ParticleModel make_lattice(const LatticeSpec& spec) {
   const int dim = cubic ? 3 : 2;
   int64_t count[3] = {1, 1, 1};
   for (int a = 0; a < dim; ++a) count[a] = cells_along(spec.lower_m[a], spec.upper_m[a], dx, a);
-  // 32-bit particle indices downstream: more points is a unit slip ("1 um" for "1 mm").
-  if (static_cast<double>(count[0]) * static_cast<double>(count[1]) * static_cast<double>(count[2]) > 2147483647.0)
-    throw InputError("lattice", "--spacing",
-                     num(dx) + " m, " + num(static_cast<double>(count[0]) * count[1] * count[2]) + " lattice points",
-                     "at most 2^31 - 1 points (32-bit particle indices): a larger spacing");
+  const double points = static_cast<double>(count[0]) * static_cast<double>(count[1]) * static_cast<double>(count[2]);
+  require_indexable_particle_count(points, "lattice", "--spacing", num(dx) + " m, " + num(points) + " lattice points");
   const int64_t n = count[0] * count[1] * count[2];
 
   ParticleModel m;

@@ -101,7 +101,8 @@ size_t RunData::output_index_of_step(long long step) const {
       have += " ..";
       k = outputs.size() - 6;
     }
-    have += (k ? " " : "") + std::to_string(outputs[k].step);
+    if (k) have += ' ';
+    have += std::to_string(outputs[k].step);
   }
   throw InputError(results_path.string(), "--step", "no output at step " + std::to_string(step),
                    "the step of one of the outputs (" + have + ")");

@@ -9,6 +9,7 @@
 #include "breccia/common/csv.hpp"
 #include "breccia/common/error.hpp"
 #include "breccia/common/expression.hpp"
+#include "breccia/common/particle_file.hpp"
 #include "breccia/common/yaml_input.hpp"
 
 namespace breccia::solver {
@@ -124,8 +125,8 @@ CaseConfig parse_case_file(const std::string& path) {
     lat.box = l.numbers("box", Quantity::Length, lat.dimension == 3 ? 6 : 4);
     lat.spacing = l.positive("spacing", Quantity::Length);
     lat.thickness = l.positive("thickness", Quantity::Length, lat.spacing);
-    // Particle indices are 32-bit (the bond lists' partners): a lattice of more points is a
-    // unit slip ("1 um" for "1 mm"), refused here rather than as an allocation failure.
+    // Each axis spans a positive extent, and the points are few enough to index
+    // (require_indexable_particle_count, as breccia-place's lattice).
     double points = 1.0;
     for (int k = 0; k < lat.dimension; ++k) {
       const double extent = lat.box[k + lat.dimension] - lat.box[k];
@@ -135,10 +136,8 @@ CaseConfig parse_case_file(const std::string& path) {
                                             : "[x0, y0, x1, y1] with x1 > x0, y1 > y0");
       points *= std::max(1.0, std::round(extent / lat.spacing));
     }
-    if (points > 2147483647.0)
-      throw InputError(path, l.field("spacing"),
-                       short_number(lat.spacing) + " m, " + short_number(points) + " lattice points",
-                       "at most 2^31 - 1 points (32-bit particle indices): a larger spacing");
+    require_indexable_particle_count(points, path, l.field("spacing"),
+                                     short_number(lat.spacing) + " m, " + short_number(points) + " lattice points");
     c.lattice = lat;
   } else {
     throw InputError(path, "specimen", "neither 'particles' nor 'lattice' given",

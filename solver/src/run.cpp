@@ -280,8 +280,11 @@ long long relax_to_equilibrium(PdSystem& s, bool progress, const RelaxHooks& hoo
     if (s.gas.active && it > 0) external(s, 0.0);  // the gas follows the cavity's volume
     forces(s);
     // Terms per component: the Rayleigh quotient's numerator and denominator of the local
-    // stiffness (Kilic & Madenci's damping), and the squared residual force.
-    const std::vector<double> totals = sum_terms(3, [&](size_t k, int q) {
+    // stiffness (Kilic & Madenci's damping), the squared residual force, and without a load
+    // the squared reaction on the prescribed components (the residual's scale, below).
+    const bool unloaded = !(load_norm > 0);
+    const std::vector<double> totals = sum_terms(unloaded ? 4 : 3, [&](size_t k, int q) {
+      if (q == 3) return is_free(k) ? 0.0 : std::pow(s.force[k] + s.body[k], 2) * s.volume[k / 3];
       if (!is_free(k)) return 0.0;
       if (q == 0) {
         if (it == 0 || v_half[k] == 0.0) return 0.0;
@@ -296,13 +299,8 @@ long long relax_to_equilibrium(PdSystem& s, bool progress, const RelaxHooks& hoo
     // The residual is judged against the load; a body driven by prescribed displacements alone
     // has none, and there the reaction on the prescribed components sets the scale (an
     // absolute 1 made one bar converge at E = 1 kPa and not at 10 GPa).
-    double ref = load_norm;
-    if (!(ref > 0)) {
-      ref = std::sqrt(sum_terms(1, [&](size_t k, int) {
-        return is_free(k) ? 0.0 : std::pow(s.force[k] + s.body[k], 2) * s.volume[k / 3];
-      })[0]);
-      if (!(ref > 0)) ref = 1.0;
-    }
+    double ref = unloaded ? std::sqrt(totals[3]) : load_norm;
+    if (!(ref > 0)) ref = 1.0;
     if (it > 10 && residual <= s.config.adr_tolerance * ref) {
       s.step = it;
       return it;

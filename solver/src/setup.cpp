@@ -1922,7 +1922,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
       // A 2D model has no z motion: a z component given to it was dropped without a word.
       if (s.dimension == 2 && is.kind != InitialSpec::Kind::RadialVelocity) {
         const bool z_expression = is.expression.size() > 2 && is.expression[2].find_first_not_of(" 0.") != std::string::npos;
-        if (z_expression || (is.expression.empty() && is.field_file.empty() && is.value[2] != 0.0))
+        if (z_expression || (is.expression.empty() && is.value[2] != 0.0))
           throw InputError(c.file, "initial[" + std::to_string(q) + "]." + (z_expression ? "expression[2]" : "value"),
                            "a z component in a 2D model", "two components (x, y), or a z of 0");
       }

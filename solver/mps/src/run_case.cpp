@@ -88,12 +88,16 @@ double run_time_loop(Model& sim, const CaseSpec& spec, const std::string& case_f
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
 }
 
-// The case as run (its variant and --set overrides applied): reports read values from it.
-// Written once the case has been built and its steps counted, so that a case refused there
-// leaves the folder's earlier one in place.
-void write_case_as_run(const std::string& case_file, const std::string& out_dir) {
+// Once the case is built (both formulations): the steps to run, to time.end (steps_to_reach
+// refuses a unit slip) or to --steps (max_steps >= 0) if that comes first, and the case as run
+// (its variant and --set overrides applied; reports read values from it), written only now
+// so that a case refused while it was built leaves the folder's earlier one in place.
+long long begin_run(const CaseSpec& spec, double dt_s, const std::string& case_file, const std::string& out_dir,
+                    long long max_steps) {
+  long long total_steps = steps_to_reach(spec.end_time_s, dt_s, case_file, "time.end");
   if (std::filesystem::exists(case_file))
     write_text_file(std::filesystem::path(out_dir) / "case_as_run.yaml", Section::text_as_loaded(case_file));
+  return max_steps >= 0 ? std::min(total_steps, max_steps) : total_steps;
 }
 
 // The stress formulation (solid.hpp): same files, with stress and plastic strain in the
@@ -105,9 +109,7 @@ int run_solid(const CaseSpec& spec, const std::string& case_file, const std::str
   Solid sim = make_solid(spec, &content_id);
   if (device) sim.attach_device(device(sim));
   if (spec.progress) std::fprintf(stderr, "mps: backend %s\n", sim.backend_description().c_str());
-  long long total_steps = steps_to_reach(spec.end_time_s, sim.dt_s(), case_file, "time.end");
-  write_case_as_run(case_file, out_dir);
-  if (max_steps >= 0) total_steps = std::min(total_steps, max_steps);
+  const long long total_steps = begin_run(spec, sim.dt_s(), case_file, out_dir, max_steps);
   if (!quiet)
     std::fprintf(stderr,
                "mps (stress): %zu particles, %zu bonds, %dD; spacing %.4g m, re %.3g spacing; c_L %.1f m/s; dt %.4g s "
@@ -279,9 +281,7 @@ int run_case(const std::string& case_file, const std::string& out_dir, const Run
   if (options.device) sim.attach_device(options.device(sim));
   if (spec.progress) std::fprintf(stderr, "mps: backend %s\n", sim.backend_description().c_str());
   const MaterialSpec& m = spec.material;
-  long long total_steps = steps_to_reach(spec.end_time_s, sim.dt_s(), case_file, "time.end");
-  write_case_as_run(case_file, out_dir);
-  if (options.max_steps >= 0) total_steps = std::min(total_steps, options.max_steps);
+  const long long total_steps = begin_run(spec, sim.dt_s(), case_file, out_dir, options.max_steps);
   if (!quiet)
     std::fprintf(stderr,
                "mps: %zu particles, %zu bonds, %zu crack pairs; spacing %.4g m, re %.3g spacing, n0 %.6g, lambda %.6g m^2\n"

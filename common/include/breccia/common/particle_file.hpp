@@ -34,6 +34,15 @@ struct SurfaceFacets {
   bool has_vertices() const { return !vertices_m.empty(); }
 };
 
+// Particle indices are 32-bit (the bond lists' partners): a model of more particles cannot
+// be indexed. A lattice that large is a unit slip in its spacing ("1 um" for "1 mm"): its
+// writers (breccia-place --lattice, a case's specimen.lattice) refuse it by this rule
+// (InputError naming `file` and `field`, the count in `found`) rather than as an
+// allocation failure.
+inline constexpr double kMostParticles = 2147483647.0;  // 2^31 - 1
+void require_indexable_particle_count(double count, const std::string& file, const std::string& field,
+                                      const std::string& found);
+
 // The position of file index `index` in `held` (ascending file indices: a model's held rows,
 // cells or nodes), or none where it is not held: the one lookup behind every held-row read.
 std::optional<size_t> held_position(const std::vector<int64_t>& held, int64_t index);

@@ -2,6 +2,7 @@
 // The number of time steps that reach an end time: ceil(end / dt), less a hair so that an end
 // that is a whole number of steps in decimal is not one step more. Shared by PD and MPS.
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 

@@ -24,6 +24,7 @@
 #include "breccia/common/yaml_input.hpp"
 #include "breccia/solver/boundary_field.hpp"
 #include "breccia/solver/correspondence.hpp"
+#include "breccia/solver/distributed_setup.hpp"
 #include "breccia/solver/outputs.hpp"
 
 namespace breccia::solver {
@@ -476,7 +477,16 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
       write_text_file(o.out_dir + "/case_as_run.yaml", Section::text_as_loaded(s.config.file));
   }
   const auto header_t0 = std::chrono::steady_clock::now();
-  if (o.root && s.config.write_results) results = std::make_unique<ResultsWriter>(s, o.out_dir, restart);
+  // The root alone opens the writers; a restart's results.h5 of another particle model or
+  // format is refused there, and under mpirun that refusal is every rank's (refuse_together):
+  // the other ranks would otherwise wait in the loop's first collective.
+  std::exception_ptr writer_refused;
+  try {
+    if (o.root && s.config.write_results) results = std::make_unique<ResultsWriter>(s, o.out_dir, restart);
+  } catch (const InputError&) {
+    writer_refused = std::current_exception();
+  }
+  refuse_together(o.setup_hooks.distributed, writer_refused);
   const double header_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - header_t0).count();
   if (o.root) history = std::make_unique<HistoryWriter>(s, o.out_dir, restart);
   RunResult r;
@@ -558,11 +568,22 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
                  s.stable_step_passes, s.stable_step_particles, s.whole_n());
   }
   // Boundary values in time, sampled over the run now that its length is known, before the
-  // writers open their files. One process only: a distributed set-up's systems index their
-  // constraints in the rank systems the time loop builds, so there the loop refuses a value
-  // that is not finite when the step reaches it (each rank that meets it says so).
-  if (!config.quasi_static && s.distributed_rows.empty())
-    check_boundary_fields_over_run(s, static_cast<double>(total_steps_of(s, o)) * s.dt);
+  // writers open their files. Under mpirun each rank samples its system's constraint
+  // particles (its window's), and the first refusal in rank order is every rank's, printed once.
+  if (!config.quasi_static) {
+    // A distributed set-up's global system let go of its reference positions at the stable
+    // step's cut: the rank's system (its owned constraint particles, their positions) holds them.
+    const PdSystem* held = &s;
+    if (!s.distributed_rows.empty() && o.setup_hooks.stable_step_ranks)
+      if (const StableStepRanks ranks = o.setup_hooks.stable_step_ranks(); ranks.system) held = ranks.system;
+    std::exception_ptr refused;
+    try {
+      if (!held->x0.empty()) check_boundary_fields_over_run(*held, static_cast<double>(total_steps_of(s, o)) * s.dt);
+    } catch (const InputError&) {
+      refused = std::current_exception();
+    }
+    refuse_together(o.setup_hooks.distributed, refused);
+  }
   RunResult r = run_system(s, o);
   if (o.root) write_summary(s, o, r, setup_s);
   return r;

@@ -408,6 +408,23 @@ TEST(Distributed, AnInitialExpressionNotFiniteOnOneRankIsTheOneProcessMessageOnc
       "initial[0].expression[0]: 'sqrt(0.019 - x)' is not finite at (0.019250");
 }
 
+// A boundary expression in t that is not finite at one particle of the last rank only (the
+// block's far corner, x + y + z = 0.02725 m > 0.0272): each rank samples its system's
+// constraint particles over the run before the writers open (run.cpp), and the refusal is
+// every rank's, printed once, exit code 2, as one process's. Before, the rank that met it
+// refused at the step, after the outputs began, and the others waited at the next collective.
+TEST(Distributed, ABoundaryExpressionNotFiniteOnOneRankIsTheOneProcessMessageOnce) {
+  expect_one_refusal_on_three_ranks_as_one_process(
+      "mpi_dist_boundary_expression",
+      "specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.02, 0.004, 0.004], spacing: 0.5 mm}}\n"
+      "model: {type: pmb, horizon_factor: 3.015}\n"
+      "materials: [{name: m, density: 2000, youngs_modulus: 10 GPa, poisson_ratio: 0.25}]\n"
+      "sets: [{name: block, box: [0, 0, 0, 0.02, 0.004, 0.004]}]\n"
+      "boundary: [{type: velocity, set: block, components: [x], expression: ['sqrt(0.0272 - x - y - z) * (1 + t)', '0', '0']}]\n"
+      "time: {steps: 2}\n",
+      "boundary[0].expression[0]: 'sqrt(0.0272 - x - y - z) * (1 + t)' is not finite at (0.01975");
+}
+
 // The graded check refusing one horizon over the graded block (graded_check.hpp): under
 // mpirun every rank judges it from its block of the Morton sort (setup.cpp); on 3 ranks the
 // one process's message (the same spacing ratio, ratio, worst particle, its position and the
@@ -756,6 +773,20 @@ TEST(Distributed, ResultsBondListWrittenByRowsEqualsOneProcessFile) {
     const Outcome o = solve(file, out, ranks, 1, "--restart " + out + "/checkpoint.h5");
     EXPECT_EQ(o.exit_code, 2) << ranks << " ranks: " << o.err;
     EXPECT_NE(o.err.find("/bonds/neighbors: missing or a different bond count"), std::string::npos) << o.err;
+  }
+  // A results.h5 of another particle model in the folder: the root alone opens it and refuses
+  // it (ResultsWriter); under mpirun that refusal is every rank's (run.cpp, refuse_together),
+  // printed once, exit code 2. The other ranks waited in the loop's first collective before.
+  for (const int ranks : {1, 2}) {
+    const std::string out = base + "_other_model" + std::to_string(ranks);
+    std::filesystem::remove_all(out);
+    std::filesystem::copy(base + "_np3_half", out);
+    breccia::h5::File(out + "/results.h5", breccia::h5::File::Mode::ReadWrite)
+        .set_attr("/", "particles_content_id", std::string("another model"));
+    const Outcome o = solve(file, out, ranks, 1, "--restart " + out + "/checkpoint.h5");
+    EXPECT_EQ(o.exit_code, 2) << ranks << " ranks: " << o.err;
+    EXPECT_NE(o.err.find("/@particles_content_id: belongs to a different particle model"), std::string::npos) << o.err;
+    EXPECT_EQ(o.err.find("error:", o.err.find("error:") + 1), std::string::npos) << "more than one error: " << o.err;
   }
 }
 

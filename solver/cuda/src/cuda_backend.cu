@@ -473,6 +473,10 @@ private:
 CudaSystem::CudaSystem(const PdSystem& s, HaloTransport* halo) : impl_(std::make_unique<Impl>()) {
   if (!cuda_device_available())
     throw RunError("CUDA backend: no CUDA device is available (no GPU, or no NVIDIA driver); use --backend cpu");
+  // Refused here, before anything is uploaded or a caller that skips breccia-solve's check
+  // (breccia-atlas) opens its outputs; the step's contact() would refuse only at the first pass.
+  if (!s.short_range_k.empty())
+    throw RunError("CUDA backend: model.short_range_forces needs the contact search of the CPU; use --backend cpu");
   check(cudaSetDevice(g_device), "cudaSetDevice(" + std::to_string(g_device) + ")");
   Impl& m = *impl_;
   // The particles held: the n stepped, then a distributed run's ghosts (rank_system.hpp),

@@ -126,6 +126,21 @@ CLI::Validator real_number() {
       "");
 }
 
+CLI::Validator real_number(double lower, bool lower_included) {
+  char bound[64];
+  std::snprintf(bound, sizeof bound, "%s %g", lower_included ? ">=" : ">", lower);
+  return CLI::Validator(
+      [lower, lower_included, bound = std::string(bound)](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (text.empty() || *end != '\0' || !std::isfinite(v))
+          return "'" + text + "' is not a number (expected a real number " + bound + ")";
+        if (lower_included ? v < lower : v <= lower) return "'" + text + "' is out of range (expected a real number " + bound + ")";
+        return {};
+      },
+      "");
+}
+
 CLI::Validator one_of(std::vector<std::string> choices) {
   std::string list;
   for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c;

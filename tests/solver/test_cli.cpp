@@ -153,7 +153,10 @@ TEST(AtlasCli, FollowsTheToolsCommandLineContract) {
   const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_atlas";
   breccia::testing::expect_cli_contract(
       BRECCIA_ATLAS_EXE, "breccia-atlas", "--quick --no-stability --work " + dir + " --csv " + dir + "/atlas.csv",
-      {{"--threads", "4x"}, {"--threads", "-1"}, {"--m", "3,x"}, {"--gradings", "2,4y"}});
+      // --m at or below 0 skipped every point and left an atlas.csv of its header alone, exit 0;
+      // --gradings at or below 0 never ended the graded strip's particle loop.
+      {{"--threads", "4x"}, {"--threads", "-1"}, {"--m", "3,x"}, {"--gradings", "2,4y"}, {"--m", "-1"}, {"--m", "3,0"},
+       {"--gradings", "0"}, {"--gradings", "-1"}});
   EXPECT_FALSE(std::filesystem::exists(dir + "/atlas.csv"));
 }
 #endif

@@ -434,6 +434,28 @@ loads: [{type: traction, surface: xmax, value: [1 MPa, 0, 1 MPa]}]
 time: {steps: 1}
 )"));
   EXPECT_FALSE(tilted.plane) << tilted.why;
+  // Initial conditions and boundaries by value or expression: a z part, or a value that varies
+  // through the thickness, keeps the case 3D (the check read velocities' values alone: a 3D
+  // plate with an initial z displacement was proposed in 2D and then refused by the solver,
+  // and one with a velocity varying in z was run at its z = 0 value).
+  const std::string plate = R"(
+specimen: {lattice: {dimension: 3, box: [0, 0, 0, 0.04, 0.04, 0.002], spacing: 1 mm}}
+model: {type: pmb}
+materials: [{name: rock, density: 2600, youngs_modulus: 50 GPa, poisson_ratio: 0.25}]
+time: {steps: 1}
+)";
+  EXPECT_TRUE(plane_check(case_from_yaml("plate_in_plane", plate + "initial: [{type: velocity, expression: ['1000 * x', '0', '0']}]\n")).plane);
+  for (const auto& [name, extra, why] : std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"plate_uz", "initial: [{type: displacement, value: [0, 0, 1e-6]}]\n", "an initial displacement has a z part"},
+           {"plate_vz_expr", "initial: [{type: velocity, expression: ['0', '0', '1000 * z']}]\n", "varies with z"},
+           {"plate_vx_of_z", "initial: [{type: velocity, expression: ['1000 * (z - 0.001)', '0', '0']}]\n", "varies with z"},
+           {"plate_vz_const", "initial: [{type: velocity, expression: ['0', '0', '2']}]\n", "has a z part"},
+           {"plate_bc_of_z",
+            "boundary: [{type: velocity, set: xmin, components: [x], expression: ['z * t', '0', '0']}]\n", "varies with z"}}) {
+    const PlaneCheck p = plane_check(case_from_yaml(name, plate + extra));
+    EXPECT_FALSE(p.plane) << name << ": " << p.why;
+    EXPECT_NE(p.why.find(why), std::string::npos) << name << ": " << p.why;
+  }
 }
 
 TEST(PlanRules, ProblemClassFollowsIntegratorAndFracture) {
@@ -507,6 +529,45 @@ TEST(PlanAtlas, WrongHeaderIsAnInputErrorNamingTheHeader) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("header"), std::string::npos) << e.what();
   }
+}
+
+// An atlas row's counts and sizes must be positive (and whole where they count): a negative m
+// failed later as the case's horizon error, a dimension of 2.7 was read as 2.
+TEST(PlanAtlas, ARowWithANonPositiveOrFractionalCountIsAnInputErrorNamingTheLine) {
+  const std::string head =
+      "problem,model,dimension,particles_kind,m,spacing_m,precision,backend,threads,particles,bonds,steps,wall_s,"
+      "error,error_measure\n";
+  for (const auto& [name, row, field] : std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"neg_m", "wave_speed_bar,pmb,2,lattice,-3,0.002,float64,cpu,1,600,18000,100,0.1,0.08,x\n", "line 2 m"},
+           {"frac_dim", "wave_speed_bar,pmb,2.7,lattice,3,0.002,float64,cpu,1,600,18000,100,0.1,0.08,x\n", "line 2 dimension"},
+           {"zero_spacing", "wave_speed_bar,pmb,2,lattice,3,0,float64,cpu,1,600,18000,100,0.1,0.08,x\n", "line 2 spacing_m"},
+           {"neg_particles", "wave_speed_bar,pmb,2,lattice,3,0.002,float64,cpu,1,-600,18000,100,0.1,0.08,x\n",
+            "line 2 particles"}}) {
+    const std::string path = temp_path("atlas_" + name + ".csv");
+    std::ofstream(path) << head << row;
+    try {
+      read_atlas(path);
+      ADD_FAILURE() << name << ": no error";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << name << ": " << e.what();
+    }
+  }
+}
+
+// The planner's resolution is a measured row's particle count to the 1/d; powering it back
+// rounded above the count (500.00000000000006) and proposed an unmeasured 510-particle spacing.
+TEST(PlanProposal, AMeasuredLatticeIsProposedAtItsOwnSpacing) {
+  const std::vector<double> box{0, 0, 0.1, 0.02};
+  EXPECT_DOUBLE_EQ(spacing_for_resolution(box, 2, std::pow(500.0, 0.5)), 0.002);
+  EXPECT_DOUBLE_EQ(spacing_for_resolution(box, 2, std::pow(2000.0, 0.5)), 0.001);
+}
+
+// An --atlas file that is not there is a typo the user hears about (exit 2 naming it); only
+// the default atlas, when missing, is a note.
+TEST(PlanCli, AnAtlasNamedButMissingExitsTwoNamingIt) {
+  const CliResult r = run_plan(small_case_file() + " --tolerance 0.05 --atlas " + temp_path("no_such_atlas.csv"));
+  EXPECT_EQ(r.code, kExitBadInput) << r.output;
+  EXPECT_NE(r.output.find("no_such_atlas.csv: --atlas: no such file"), std::string::npos) << r.output;
 }
 
 TEST(PlanCli, NonPositiveOrMissingToleranceExitsTwoWithAMessage) {
@@ -646,6 +707,28 @@ time: {end: 10 us}
   const Proposal no_gain = propose(c, read_atlas(safe_path), 0.05, slower, CostOptions{});
   EXPECT_EQ(no_gain.precision, "float64");
   EXPECT_NE(precision_line(no_gain).find("no real gain"), std::string::npos) << precision_line(no_gain);
+  // A case given in float32 whose proposal stays float64 is written (and costed) in float64, as
+  // the reasoning says: it was written back as float32.
+  CaseConfig given_f32 = c;
+  given_f32.precision = CaseConfig::Precision::Float32;
+  const Proposal stays = propose(given_f32, read_atlas(safe_path), 0.05, slower, CostOptions{});
+  EXPECT_EQ(stays.precision, "float64");
+  EXPECT_EQ(proposed_config(given_f32, stays).precision, CaseConfig::Precision::Float64);
+  const std::string f32_given_dir = temp_path("f32_given");
+  std::filesystem::create_directories(f32_given_dir);
+  const std::string f32_given = f32_given_dir + "/case.yaml";
+  std::ofstream(f32_given) << R"(
+specimen: {lattice: {dimension: 2, box: [0, 0, 0.1, 0.01], spacing: 0.5 mm, thickness: 1 mm}}
+model: {type: pmb, planar: plane_stress, horizon_factor: 3.015, precision: float32}
+materials: [{name: steel, density: 7850, youngs_modulus: 200 GPa, poisson_ratio: 0.3333333333333333}]
+boundary: [{type: velocity, set: xmin, value: [1, 0, 0], components: [x]}]
+time: {end: 10 us}
+)";
+  const CaseConfig parsed_f32 = solver::parse_case_file(f32_given);
+  const Proposal stays_file = propose(parsed_f32, read_atlas(safe_path), 0.05, slower, CostOptions{});
+  const std::string stays_written = temp_path("f32_stays_proposed.yaml");
+  write_proposed_case(parsed_f32, stays_file, stays_written);
+  EXPECT_EQ(solver::parse_case_file(stays_written).precision, CaseConfig::Precision::Float64);
   const Proposal unsafe = propose(c, read_atlas(unsafe_path), 0.05, faster, CostOptions{});
   EXPECT_EQ(unsafe.precision, "float64");
   EXPECT_NE(precision_line(unsafe).find("0 of 2 float32"), std::string::npos) << precision_line(unsafe);

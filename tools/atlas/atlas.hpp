@@ -123,7 +123,8 @@ void softening_strength(const SweepPlan& plan, SpecimenMaker& maker, const RowSi
 inline constexpr const char* kStabilityHeader =
     "study,model,dimension,particles_kind,m,dt_factor,particles,bonds,min_family,steps,status,detected_by,"
     "energy_ratio,energy_scatter,message";
-void stability_map(const SweepPlan& plan, SpecimenMaker& maker, CsvTable& table);
+// series_csv: where the correspondence rows' time series go (beside the table).
+void stability_map(const SweepPlan& plan, SpecimenMaker& maker, CsvTable& table, const std::string& series_csv);
 
 // Graded particle arrangements with and without dual horizon: docs/atlas/stability_graded.csv.
 inline constexpr const char* kGradedHeader =

@@ -93,13 +93,13 @@ int main(int argc, char** argv) {
         ->check(one_of({"cpu", "cuda"}));
     list("--m", plan.m_values, "horizon factors (default: 2,3,4,5)")
         ->type_name("2,3,...")
-        ->check(breccia::cli::real_number());
+        ->check(breccia::cli::real_number(0.0, false));
     list("--stability-studies", stability_studies, "pd, graded, mps (default: all)")
         ->type_name("a,b")
         ->check(one_of({"pd", "graded", "mps"}));
     list("--gradings", plan.gradings, "grading ratios of the graded study (default 1,1.5,2,3,4,6; --quick 2,4)")
         ->type_name("1.5,2,...")
-        ->check(breccia::cli::real_number());
+        ->check(breccia::cli::real_number(1.0, true));
     app.add_flag_callback(
         "--no-stability", [&] { stability = false; }, "skip the stability studies");
     app.add_flag_callback(
@@ -153,7 +153,7 @@ int main(int argc, char** argv) {
     if (stability) {
       if (stability_studies.empty() || has_study("pd")) {
         CsvTable table(stability_csv, kStabilityHeader, append);
-        stability_map(plan, maker, table);
+        stability_map(plan, maker, table, sibling_csv(stability_csv, "stability_correspondence_series.csv"));
       }
       if (stability_studies.empty() || has_study("graded")) {
         CsvTable graded(sibling_csv(stability_csv, "stability_graded.csv"), kGradedHeader, append);

@@ -95,7 +95,7 @@ void fill_families(const PdSystem& s, StabilityRow& row) {
 
 }  // namespace
 
-void stability_map(const SweepPlan& plan, SpecimenMaker& maker, CsvTable& table) {
+void stability_map(const SweepPlan& plan, SpecimenMaker& maker, CsvTable& table, const std::string& series_csv) {
   // (a) time-step factor: 2D plane strain square 20 mm, dx 1 mm, m 3.
   const std::vector<double> factors = plan.quick
       ? std::vector<double>{0.5, 0.9, 0.98, 1.0, 1.02, 1.1, 1.5}
@@ -186,7 +186,7 @@ void stability_map(const SweepPlan& plan, SpecimenMaker& maker, CsvTable& table)
       }
   // (c) correspondence zero-energy modes on the (m, G) plane (stability_correspondence.cpp).
   if (std::find(plan.models.begin(), plan.models.end(), "correspondence") != plan.models.end())
-    stability_correspondence(plan, maker, table);
+    stability_correspondence(plan, maker, table, series_csv);
 }
 
 }  // namespace breccia::atlas

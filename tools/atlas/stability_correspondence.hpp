@@ -8,8 +8,9 @@
 namespace breccia::atlas {
 
 // Adds one row per (m, G) to the stability table and writes the per-run time series of the
-// non-affine energy ratio to `series_csv` (docs/atlas/stability_correspondence_series.csv).
+// non-affine energy ratio to `series_csv` (beside the stability table: as shipped,
+// docs/atlas/stability_correspondence_series.csv).
 void stability_correspondence(const SweepPlan& plan, SpecimenMaker& maker, CsvTable& table,
-                              const std::string& series_csv = "docs/atlas/stability_correspondence_series.csv");
+                              const std::string& series_csv);
 
 }  // namespace breccia::atlas

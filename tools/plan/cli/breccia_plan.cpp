@@ -88,7 +88,8 @@ int main(int argc, char** argv) {
       ->type_name("X")
       ->check(cli::real_number());
   app.add_option("--write", write_path, "write the proposed case here")->type_name("PROPOSED.yaml");
-  app.add_option("--atlas", atlas_path, "the accuracy atlas")->type_name("atlas.csv")->capture_default_str();
+  CLI::Option* atlas_option =
+      app.add_option("--atlas", atlas_path, "the accuracy atlas")->type_name("atlas.csv")->capture_default_str();
   app.add_option("--throughputs", rates_path, "the measured throughputs")
       ->type_name("throughputs.yaml")
       ->capture_default_str();
@@ -98,6 +99,7 @@ int main(int argc, char** argv) {
       ->type_name("N")
       ->check(cli::whole_number(1));
   if (const auto code = cli::parse(app, argc, argv)) return *code;
+  const bool atlas_given = atlas_option->count() > 0;
   if (!tolerance) {
     std::fprintf(stderr, "error: --tolerance: missing (expected a relative error > 0, e.g. --tolerance 0.02)\n");
     return kExitBadInput;
@@ -126,6 +128,10 @@ int main(int argc, char** argv) {
     }
     std::vector<plan::AtlasRow> atlas;
     std::string atlas_note;
+    // A missing default atlas is a note (run `make atlas`); a file named by --atlas that is
+    // not there is a typo the user should hear about.
+    if (atlas_given && !std::filesystem::exists(atlas_path))
+      throw InputError(atlas_path, "--atlas", "no such file", "an atlas CSV (docs/atlas/atlas.csv, or `make atlas`)");
     if (std::filesystem::exists(atlas_path)) {
       atlas = plan::read_atlas(atlas_path);
       atlas_note = std::to_string(atlas.size()) + " rows from " + atlas_path;

@@ -108,16 +108,23 @@ std::vector<AtlasRow> read_atlas(const std::string& path) {
         throw InputError(path, where + " " + name, "'" + f[k] + "'", "a number");
       return v;
     };
+    // A positive number (m, spacing, counts), and a whole one where it counts something.
+    auto positive = [&](int k, const char* name, bool whole) {
+      const double v = num(k, name);
+      if (!(v > 0) || (whole && v != std::floor(v)))
+        throw InputError(path, where + " " + name, "'" + f[k] + "'", whole ? "a whole number >= 1" : "a number > 0");
+      return v;
+    };
     r.problem = f[0];
     r.model = f[1];
-    r.dimension = static_cast<int>(num(2, "dimension"));
+    r.dimension = static_cast<int>(positive(2, "dimension", true));
     r.particles_kind = f[3];
-    r.m = num(4, "m");
-    r.spacing_m = num(5, "spacing_m");
+    r.m = positive(4, "m", false);
+    r.spacing_m = positive(5, "spacing_m", false);
     r.precision = f[6];
     r.backend = f[7];
-    r.threads = static_cast<int>(num(8, "threads"));
-    r.particles = std::llround(num(9, "particles"));
+    r.threads = static_cast<int>(positive(8, "threads", true));
+    r.particles = std::llround(positive(9, "particles", true));
     r.bonds = std::llround(num(10, "bonds"));
     r.steps = std::llround(num(11, "steps"));
     r.wall_s = num(12, "wall_s");

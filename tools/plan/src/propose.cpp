@@ -8,6 +8,7 @@
 #include <set>
 
 #include "breccia/common/error.hpp"
+#include "breccia/common/expression.hpp"
 #include "breccia/common/output_file.hpp"
 #include "breccia/common/yaml_input.hpp"
 #include "breccia/plan/plan.hpp"
@@ -37,6 +38,21 @@ std::string fmt(double v, int digits = 3) {
 const std::set<std::string> kInPlaneFaces{"xmin", "xmax", "ymin", "ymax"};
 
 bool zero(double v) { return std::fabs(v) < 1e-300; }
+
+// Why a value given by expression (a boundary's in x, y, z, t; an initial condition's in
+// x, y, z) is not the same in every z-slice or has a z part, or empty when it is neither:
+// an expression that names z varies through the thickness, and a z component that names a
+// variable or is a constant other than 0 moves the body along z.
+std::string expression_out_of_plane(const std::vector<std::string>& expression, const std::string& what) {
+  const std::vector<std::string> variables{"x", "y", "z", "t"};
+  for (size_t d = 0; d < expression.size(); ++d) {
+    const Expression e(expression[d], variables, "", "");
+    if (e.uses("z")) return what + " expression '" + expression[d] + "' varies with z";
+    if (d == 2 && (e.uses("x") || e.uses("y") || e.uses("t") || !zero(e({0.0, 0.0, 0.0, 0.0}))))
+      return what + " expression has a z part ('" + expression[d] + "')";
+  }
+  return {};
+}
 
 // A 3D polygon pre-crack that is a through-thickness extrusion of a segment: its points
 // project onto exactly two in-plane points. Returns them.
@@ -70,12 +86,14 @@ std::vector<double> in_plane_box(const solver::LatticeSpec& l) {
   return {l.box[0], l.box[1], l.box[3], l.box[4]};
 }
 
-// The largest spacing at which the lattice has at least resolution^d particles, rounded
-// down so the longest side holds a whole number of cells.
+}  // namespace
+
 double spacing_for_resolution(const std::vector<double>& box, int d, double resolution) {
   double longest = 0.0;
   for (int k = 0; k < d; ++k) longest = std::max(longest, box[k + d] - box[k]);
-  const double target = std::pow(resolution, d);
+  // A hair below resolution^d: the resolution is a row's particle count to the 1/d, and
+  // pow(pow(500, 1/2), 2) = 500.00000000000006 would miss the measured 500-particle lattice.
+  const double target = std::pow(resolution, d) * (1.0 - 1e-9);
   double lo = longest * 1e-6, hi = longest;  // lo meets the target, hi (one cell) does not, unless target <= 1
   if (lattice_particles(box, d, hi) >= target) return hi;
   for (int it = 0; it < 80; ++it) {
@@ -84,6 +102,8 @@ double spacing_for_resolution(const std::vector<double>& box, int d, double reso
   }
   return longest / std::ceil(longest / lo - 1e-9);
 }
+
+namespace {
 
 struct Candidate {
   int dimension;
@@ -145,10 +165,16 @@ PlaneCheck plane_check(const CaseConfig& c) {
     }
     if (!kInPlaneFaces.count(b.set)) return no("a boundary acts on set '" + b.set + "', not a side face");
     if (!zero(b.value[2])) return no("a boundary prescribes motion along z");
+    if (const std::string why = expression_out_of_plane(b.expression, "a boundary's"); !why.empty()) return no(why);
   }
   for (const auto& ic : c.initial) {
     if (!ic.set.empty() && !kInPlaneFaces.count(ic.set)) return no("an initial condition acts on set '" + ic.set + "'");
-    if (ic.kind == solver::InitialSpec::Kind::Velocity && !zero(ic.value[2])) return no("an initial velocity has a z part");
+    if (!ic.field_file.empty()) return no("an initial condition is read from a file (" + ic.field_file + "), per particle in 3D");
+    if (ic.kind != solver::InitialSpec::Kind::RadialVelocity && !zero(ic.value[2]))
+      return no(std::string("an initial ") + (ic.kind == solver::InitialSpec::Kind::Velocity ? "velocity" : "displacement") +
+                " has a z part");
+    if (const std::string why = expression_out_of_plane(ic.expression, "an initial condition's"); !why.empty())
+      return no(why);
     if (ic.kind == solver::InitialSpec::Kind::RadialVelocity && !ic.cylindrical)
       return no("a spherical radial velocity has a z part");
   }
@@ -187,7 +213,9 @@ CaseConfig proposed_config(const CaseConfig& c, const Proposal& p) {
   out.model_name = p.model;
   out.horizon_factor = p.horizon_factor;
   out.horizon_m.reset();
-  if (p.precision == "float32") out.precision = solver::CaseConfig::Precision::Float32;
+  // The proposal's precision either way: a float32 case the atlas did not clear for float32
+  // is proposed (costed, written) in float64, as the reasoning says.
+  out.precision = p.precision == "float32" ? solver::CaseConfig::Precision::Float32 : solver::CaseConfig::Precision::Float64;
   // The atlas measures PMB and LPS with the energy surface correction where a free surface
   // matters (tools/atlas, model_yaml): a proposal must run as its rows ran to have their error.
   if (p.from_atlas && (p.model == "pmb" || p.model == "lps")) out.surface_correction = true;
@@ -479,6 +507,7 @@ void write_proposed_case(const CaseConfig& c, const Proposal& p, const std::stri
   model.remove("horizon");
   model["horizon_factor"] = yaml_number(p.horizon_factor);
   if (p.precision == "float32") model["precision"] = "float32";
+  else model.remove("precision");  // float64, the default
   if (p.model != "correspondence") model.remove("stabilisation");  // the loader refuses it for PMB and LPS
   if (pc.surface_correction) model["surface_correction"] = "energy";
   if (pc.lattice && pc.lattice->dimension == 2)

@@ -72,6 +72,7 @@ Throughputs load_throughputs(const std::string& path) {
     LoopRate r;
     r.model = l.choice("model", {"pmb", "lps", "correspondence"});
     r.threads = static_cast<int>(l.integer("threads"));
+    if (r.threads < 1) throw InputError(path, l.field("threads"), std::to_string(r.threads), "a thread count >= 1");
     r.bond_updates_per_core_s = l.positive("bond_updates_per_core_s", Quantity::Dimensionless);
     r.source = l.text("source", path);
     r.precision = l.choice("precision", {"float64", "float32"}, "float64");
@@ -89,6 +90,9 @@ Throughputs load_throughputs(const std::string& path) {
   t.setup_bonds_per_core_s = setup.positive("bonds_per_core_s", Quantity::Dimensionless);
   t.setup_source = setup.text("source", path);
   t.stable_step_passes = static_cast<int>(setup.integer("stable_step_passes", t.stable_step_passes));
+  if (t.stable_step_passes < 1)
+    throw InputError(path, setup.field("stable_step_passes"), std::to_string(t.stable_step_passes),
+                     "a count of force passes >= 1");
   const Section adr = root.section("adr");
   adr.allow_only({"iterations_per_cell_decade", "source"});
   t.adr_iterations_per_cell_decade = adr.positive("iterations_per_cell_decade", Quantity::Dimensionless);

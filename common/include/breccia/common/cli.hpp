@@ -44,6 +44,9 @@ std::optional<long long> to_whole_number(const std::string& text);
 CLI::Validator whole_number(long long min, long long max = INT_MAX);
 // The same for a real number: finite, and nothing after it ("10s" is rejected).
 CLI::Validator real_number();
+// A real number above `lower` (or at it, where `lower_included`): "--m: '-1' is out of range
+// (expected a real number > 0)".
+CLI::Validator real_number(double lower, bool lower_included);
 
 // One of a fixed set of words (--backend cpu|cuda|auto): anything else is rejected with the
 // list ("--backend: 'gpu' is not one of the choices (expected one of cpu, cuda, auto)").

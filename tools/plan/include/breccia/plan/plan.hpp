@@ -217,4 +217,9 @@ void write_proposed_case(const solver::CaseConfig& config, const Proposal& propo
 // and by cost estimates of candidates.
 solver::CaseConfig proposed_config(const solver::CaseConfig& config, const Proposal& proposal);
 
+// The largest spacing at which a lattice box (d = 2: [x0, y0, x1, y1]; 3: [x0, y0, z0, x1, y1,
+// z1]) has at least resolution^d particles, rounded down so the longest side holds a whole
+// number of cells (a measured row's resolution gives its own lattice back).
+double spacing_for_resolution(const std::vector<double>& box, int d, double resolution);
+
 }  // namespace breccia::plan

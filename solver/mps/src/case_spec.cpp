@@ -259,7 +259,8 @@ CaseSpec parse_root(const Section& root) {
     fail(spec.section("lattice"), "periodic", "a periodic axis with the stress formulation",
          "periodic: false on every axis (periodic lattices: formulation: displacement)");
   for (const char* key :
-       {"hourglass", "pressure_force", "damping", "damping_until", "gravity", "lagrangian", "stencil_update_strain"})
+       {"hourglass", "pressure_force", "damping", "damping_until", "gravity", "lagrangian", "stencil_update_strain",
+        "elastic_law"})
     if (!stress && model.has(key)) fail(model, key, "given for the displacement formulation", "formulation: stress");
   if (!stress && c.bodies)
     fail(spec, "bodies", "several bodies in the displacement formulation (it has no contact)", "model.formulation: stress");
@@ -309,6 +310,15 @@ CaseSpec parse_root(const Section& root) {
   if (c.material.plasticity && !stress)
     fail(materials[0], "plasticity", "given for the displacement formulation (it has no stress state)",
          "model.formulation: stress");
+  // The elastic law from F needs F to hold the whole deformation: plastic flow and rebuilt
+  // stencils keep the rate law (docs/mps.md, "Elastic law").
+  const bool rate_needed = c.material.plasticity || c.updated_lagrangian;
+  const std::string elastic_law = model.choice("elastic_law", {"neo_hookean", "rate"}, rate_needed ? "rate" : "neo_hookean");
+  if (elastic_law == "neo_hookean" && rate_needed)
+    fail(model, "elastic_law",
+         std::string("neo_hookean with ") + (c.material.plasticity ? "materials[0].plasticity" : "lagrangian: updated"),
+         "elastic_law: rate (plastic flow and rebuilt stencils use the rate law), or no elastic_law key");
+  c.rate_elastic_law = elastic_law == "rate";
   if (c.material.viscous_time_s > 0.0 && !stress)
     fail(materials[0], "damping_ratio", "given for the displacement formulation (material damping acts on the stress)",
          "model.formulation: stress (or model.damping for mass damping)");

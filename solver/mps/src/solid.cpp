@@ -25,6 +25,9 @@ Solid::Solid(std::vector<double> position_m, std::vector<double> volume_m3, doub
       options_(options) {
   const size_t n = volume_m3_.size();
   if (position_m_.size() != 3 * n) throw RunError("mps solid: positions and volumes disagree in size");
+  // The elastic law from F needs F to hold the whole deformation: plastic flow (the rate law's
+  // return mapping) and rebuilt stencils (F measured from the last rebuild) keep the rate form.
+  if (law_.plastic || options_.updated_lagrangian) law_.elastic = ElasticLaw::Rate;
   // Plane strain: every particle in one plane, so that no bond has a z component (the 2D
   // kernels skip the z row and column of every matrix, solid_kernels.hpp "Plane strain").
   if (options_.dimension == 2)

@@ -16,6 +16,7 @@ Solid make_solid(const CaseSpec& spec, std::string* content_id) {
   law.lame_lambda_pa = m.lame_lambda_pa;
   law.shear_modulus_pa = m.shear_modulus_pa;
   law.viscous_time_s = m.viscous_time_s;
+  law.elastic = spec.rate_elastic_law ? ElasticLaw::Rate : ElasticLaw::NeoHookean;
   if (m.plasticity) {
     law.plastic = true;
     law.hardening = {m.shear_modulus_pa, m.plasticity->yield_stress_pa, m.plasticity->hardening_modulus_pa};

@@ -117,6 +117,10 @@ struct CaseSpec {
   double hourglass = 0.1;          // hourglass stiffness / shear modulus
   bool repulsive_pressure = false; // pressure_force: repulsive (Inagaki) | conservative
   bool updated_lagrangian = false; // lagrangian: updated (stencils rebuilt on the current configuration) | total
+  // elastic_law: neo_hookean (default where it applies: no plasticity, total-Lagrangian
+  // stencils) | rate (Hooke increments on the rotated stress; what plasticity and updated
+  // stencils use)
+  bool rate_elastic_law = false;
   double stencil_update_strain = 0.1;  // rebuild when some |H| (since the last rebuild) exceeds this
   double damping_per_s = 0.0;      // mass-proportional damping (quasi-static runs)
   std::optional<double> damping_until_s;  // damping only while t < this (a settling phase)

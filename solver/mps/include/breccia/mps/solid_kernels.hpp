@@ -194,10 +194,18 @@ BRECCIA_HD inline Mat3 displacement_gradient_at(long long i, BondsView b, Vector
   return mul(sum, moment_inverse);
 }
 
-// Material law of the solid: isotropic Hooke increments plus optional J2 plasticity.
+// The elastic law of a solid without plasticity. NeoHookean: the stress from F itself
+// (neo_hookean_stress), so the internal forces derive from a stored energy and an elastic
+// vibration conserves it; Rate: Hooke increments on the rotated stress (update_stress), which
+// plasticity and updated-Lagrangian stencils need (their F does not hold the whole history).
+enum class ElasticLaw { NeoHookean, Rate };
+
+// Material law of the solid: isotropic elasticity (Lame lambda, mu) plus optional J2 plasticity.
 struct SolidLaw {
   double lame_lambda_pa = 0.0;
   double shear_modulus_pa = 0.0;
+  // Used only where plastic is false on total-Lagrangian stencils (Solid takes Rate otherwise).
+  ElasticLaw elastic = ElasticLaw::NeoHookean;
   bool plastic = false;
   VonMisesHardening hardening;
   // Material (stiffness-proportional, Rayleigh beta) damping: a Kelvin-Voigt viscous stress
@@ -239,6 +247,53 @@ BRECCIA_HD inline SymTensor viscous_stress_of(const SolidLaw& law, const SymTens
   return v;
 }
 
+// Compressible neo-Hookean energy per reference volume and its Cauchy stress (Bonet & Wood
+// 2008, sec. 6.4.3):
+//   psi = mu/2 (tr C - 3) - mu ln J + lambda/2 (ln J)^2,
+//   sigma = [mu (B - I) + lambda ln J I] / J,   B = F F^T, J = det F,
+// so P = J sigma F^-T = mu (F - F^-T) + lambda ln J F^-T = d psi / dF. Linearised it is Hooke's
+// law with the same lambda and mu; unlike St Venant-Kirchhoff it stiffens as J -> 0 (no
+// collapse under strong compression, which the impact cases reach). In 2D (plane strain)
+// F_zz = 1 and the formulas are the 3D ones (sigma_zz = lambda ln J / J, in-plane J).
+BRECCIA_HD inline Mat3 deformation_gradient(const Mat3& h) {
+  Mat3 f = h;
+  f(0, 0) += 1.0;
+  f(1, 1) += 1.0;
+  f(2, 2) += 1.0;
+  return f;
+}
+
+BRECCIA_HD inline double neo_hookean_energy_density(const SolidLaw& law, const Mat3& f, int dimension) {
+  const double j = det(f, dimension);
+  double tr_c = 0.0;
+  for (int k = 0; k < 9; ++k) tr_c += f.a[k] * f.a[k];
+  if (dimension == 2) tr_c = f(0, 0) * f(0, 0) + f(0, 1) * f(0, 1) + f(1, 0) * f(1, 0) + f(1, 1) * f(1, 1) + 1.0;
+  const double log_j = std::log(j);
+  return 0.5 * law.shear_modulus_pa * (tr_c - 3.0) - law.shear_modulus_pa * log_j +
+         0.5 * law.lame_lambda_pa * log_j * log_j;
+}
+
+BRECCIA_HD inline SymTensor neo_hookean_stress(const SolidLaw& law, const Mat3& f, int dimension) {
+  const double j = det(f, dimension);
+  const double mu = law.shear_modulus_pa, volumetric = law.lame_lambda_pa * std::log(j);
+  // B = F F^T by components; in 2D the z row and column of F are (0, 0, 1).
+  auto b = [&](int r, int c) { return f(r, 0) * f(c, 0) + f(r, 1) * f(c, 1) + f(r, 2) * f(c, 2); };
+  SymTensor s;
+  const double inv_j = 1.0 / j;
+  s.xx = (mu * (b(0, 0) - 1.0) + volumetric) * inv_j;
+  s.yy = (mu * (b(1, 1) - 1.0) + volumetric) * inv_j;
+  s.xy = mu * b(0, 1) * inv_j;
+  if (dimension == 2) {
+    s.zz = volumetric * inv_j;  // F_zz = 1: B_zz = 1
+    s.yz = s.zx = 0.0;
+  } else {
+    s.zz = (mu * (b(2, 2) - 1.0) + volumetric) * inv_j;
+    s.yz = mu * b(1, 2) * inv_j;
+    s.zx = mu * b(2, 0) * inv_j;
+  }
+  return s;
+}
+
 // One particle's stress update over a step, from the displacement gradients at the start
 // (h_old, with f_old_inverse = (I + h_old)^-1) and the end (h_new) of the step. The
 // incremental deformation gradient dF = F_new F_old^-1 = I + (H_new - H_old) F_old^-1
@@ -249,6 +304,9 @@ BRECCIA_HD inline SymTensor viscous_stress_of(const SolidLaw& law, const SymTens
 // plastic, the radial return (deviatoric_scale: q_returned / q_trial, 1 when elastic).
 // Returns the stress work density of the step, (sigma_old + sigma_new)/2 : d eps (J/m^3),
 // for the energy balance; the strain increment itself in *strain_increment_out if given.
+// An elastic law written from F (law.elastic NeoHookean, not plastic) sets the stress from
+// h_new alone and returns the change of the stored energy density, psi(F_new) - psi(F_old)
+// (per reference volume), so the booked work is the stored energy exactly, step after step.
 BRECCIA_HD inline double update_stress(const SolidLaw& law, const Mat3& h_old, const Mat3& f_old_inverse,
                                        const Mat3& h_new, int dimension, SymTensor& stress, double& eq_plastic_strain,
                                        double* deviatoric_scale = nullptr, SymTensor* strain_increment_out = nullptr) {
@@ -256,6 +314,13 @@ BRECCIA_HD inline double update_stress(const SolidLaw& law, const Mat3& h_old, c
   for (int k = 0; k < 9; ++k) dh.a[k] = h_new.a[k] - h_old.a[k];
   const Mat3 g = mul(dh, f_old_inverse, dimension);
   const SymTensor strain_increment = symmetric_part(g);
+  if (!law.plastic && law.elastic == ElasticLaw::NeoHookean) {
+    const Mat3 f_new = deformation_gradient(h_new), f_old = deformation_gradient(h_old);
+    stress = neo_hookean_stress(law, f_new, dimension);
+    if (deviatoric_scale) *deviatoric_scale = 1.0;
+    if (strain_increment_out) *strain_increment_out = strain_increment;
+    return neo_hookean_energy_density(law, f_new, dimension) - neo_hookean_energy_density(law, f_old, dimension);
+  }
   Mat3 half_spin;  // W/2
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) half_spin(r, c) = 0.25 * (g(r, c) - g(c, r));

@@ -115,10 +115,11 @@ time: {end: 4 ms, safety: 0.3}
   EXPECT_LT(std::fabs(p_sum), 1e-9 * std::fabs(p_ring));
   // Intact: no neighbour pair of a ring stretched beyond 1.5x (measured about 1.2x).
   EXPECT_LT(stretch, 1.5);
-  // Energy (kinetic + stress work + hourglass + contact): measured 0.6% worst at this
-  // spacing; the penalty contact and the Hughes-Winget stress update are conservative
-  // only up to the symplectic-Euler O(dt) oscillation, so 1.5%.
-  EXPECT_LT(worst_energy, 0.015);
+  // Energy (kinetic + stress work + hourglass + contact): measured 0.22% worst at this
+  // spacing with the neo-Hookean law (0.6% with the rate law, whose free vibration drifted
+  // upward); the penalty contact and the law are conservative up to the symplectic-Euler
+  // O(dt) oscillation, so 0.6%.
+  EXPECT_LT(worst_energy, 0.006);
 }
 
 // A block sliding on the floor with Coulomb friction decelerates at mu_k g and stops after

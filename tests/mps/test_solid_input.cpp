@@ -268,6 +268,32 @@ TEST(MpsSolidInput, UpdatedLagrangianKeysAreCheckedNamingTheField) {
   EXPECT_NE(msg.find("lagrangian: total"), std::string::npos) << msg;
 }
 
+// model.elastic_law (docs/mps.md, "Elastic law"): neo_hookean by default for an elastic solid
+// on total stencils, rate with plasticity (the only law allowed there, as with updated
+// stencils) and by default with fracture (allowed either way); an explicit neo_hookean with
+// plasticity or updated stencils is refused naming the key.
+TEST(MpsSolidInput, ElasticLawDefaultsAndRefusals) {
+  const std::string plastic = "plasticity: {yield_stress: 240 MPa, hardening_modulus: 1 GPa}";
+  const std::string elastic = replaced(plastic + "}", "}");
+  EXPECT_FALSE(parse_case_text(elastic, "case.yaml").rate_elastic_law);
+  EXPECT_TRUE(make_solid(parse_case_text(elastic, "case.yaml")).law().elastic == ElasticLaw::NeoHookean);
+  EXPECT_TRUE(parse_case_text(kStress, "case.yaml").rate_elastic_law);
+  EXPECT_TRUE(parse_case_text(replaced(plastic, "fracture: {tensile_strength: 100 MPa}"), "case.yaml").rate_elastic_law);
+  EXPECT_FALSE(parse_case_text(test::replace_once(replaced(plastic, "fracture: {tensile_strength: 100 MPa}"),
+                                                  "pressure_force: conservative", "elastic_law: neo_hookean"),
+                               "case.yaml")
+                   .rate_elastic_law);
+  EXPECT_TRUE(parse_case_text(test::replace_once(elastic, "pressure_force: conservative", "elastic_law: rate"), "case.yaml")
+                  .rate_elastic_law);
+  auto msg = error_of(replaced("pressure_force: conservative", "elastic_law: neo_hookean"));
+  EXPECT_NE(msg.find("model.elastic_law"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("materials[0].plasticity"), std::string::npos) << msg;
+  msg = error_of(test::replace_once(elastic, "pressure_force: conservative", "elastic_law: neo_hookean, lagrangian: updated"));
+  EXPECT_NE(msg.find("lagrangian: updated"), std::string::npos) << msg;
+  msg = error_of(test::replace_once(elastic, "pressure_force: conservative", "elastic_law: hyper"));
+  EXPECT_NE(msg.find("model.elastic_law"), std::string::npos) << msg;
+}
+
 // A periodic lattice axis with the stress formulation is refused: its stencils were built on
 // the open lattice, so a strip periodic in y squeezed in x read as one with free faces
 // (sigma_yy ~ 0 where uniaxial strain gives lambda eps).

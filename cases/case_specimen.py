@@ -4,7 +4,10 @@ content_id.
 Imported by cases/*/specimen.py (each puts cases/ on sys.path). Each case's geometry stays in
 its own specimen.py.
 """
+import argparse
+import math
 import os
+import sys
 
 import h5py
 import numpy as np
@@ -20,11 +23,26 @@ def fnv1a64(*arrays):
     return f"{h:016x}"
 
 
+def spacing(text):
+    """argparse type of the specimen scripts' --spacing: a finite length > 0 (m)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a finite lattice spacing > 0 (m), got '{text}'")
+    return value
+
+
 def write_particles(path, pos, vol, spacing, dimension, thickness, source, sets=None, surfaces=None):
     """pos (n, 3) positions, vol and spacing (n,), one material "default". sets: name -> particle
     indices; surfaces: name -> {area, normal, centroid, particle}. Written to path + ".partial",
     then moved to path, so a file at path is always complete."""
     n = len(vol)
+    if n == 0:  # a spacing larger than the specimen, or dimensions that leave nothing
+        print(f"{os.path.basename(sys.argv[0])}: no particles for {source}: expected a --spacing smaller than "
+              "the specimen's dimensions (and positive dimensions); nothing written", file=sys.stderr)
+        sys.exit(2)
     # The folder too (the case READMEs write run/particles.h5 before the solver makes run/).
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     with h5py.File(path + ".partial", "w") as f:

@@ -2,6 +2,9 @@
 # wetted particles, vent state, particles softening / broken, the farthest broken particle.
 # usage: python3 ring_gas_post.py RUN
 import sys, numpy as np, h5py, csv
+if len(sys.argv) != 2:
+    sys.stderr.write("usage: python3 ring_gas_post.py RUN\n")
+    sys.exit(2)
 f = h5py.File(sys.argv[1] + "/results.h5", "r")
 h = list(csv.DictReader(open(sys.argv[1] + "/history.csv")))
 ht = np.array([float(r["time_s"]) for r in h]); hp = np.array([float(r["gas_pressure_Pa"]) for r in h])

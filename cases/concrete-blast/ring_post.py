@@ -3,6 +3,9 @@
 # share of the outer face's particles broken, u_r / Lame near the hole and on the outer face.
 # usage: python3 ring_post.py RUN/results.h5 PEAK_PA RAMP_TIME_S   (ring.yaml: 40e6 1e-3)
 import sys, numpy as np, h5py
+if len(sys.argv) != 4:
+    sys.stderr.write("usage: python3 ring_post.py RUN/results.h5 PEAK_PA RAMP_TIME_S   (ring.yaml: 40e6 1e-3)\n")
+    sys.exit(2)
 f = h5py.File(sys.argv[1], "r"); pmax = float(sys.argv[2]); tramp = float(sys.argv[3])
 E, nu, a, b = 34.2e9, 0.25, 0.01, 0.15
 x = f["particles/position"][:]; r = np.hypot(x[:, 0], x[:, 1])

@@ -30,7 +30,9 @@ one_run() {
   if [ ! -x "$BRECCIA_BIN/breccia-post" ]; then echo "(postproc not built: stopping after solve)"; return 0; fi
   echo "== 4/4 post-process"
   "$BRECCIA_BIN/breccia-post" "$dir" --particles "$OUT/particles.h5"
-  if [ "$VARIANT" != quick ]; then  # the measures (large pieces, debris, radial cracks)
+  # The measures (large pieces, debris, radial cracks): every variant but a single quick
+  # run; the pressure study (PEAKS) reads them from each run, quick included.
+  if [ "$VARIANT" != quick ] || [ -n "${PEAKS:-}" ]; then
     "$PYTHON" "$HERE/measures.py" "$dir" "$OUT/particles.h5" --label "$VARIANT${peak:+ $peak MPa}" --json "$dir/measures.json"
   fi
 }

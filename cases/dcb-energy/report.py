@@ -62,6 +62,9 @@ def load_run(out, name):
 
 
 def main():
+    if len(sys.argv) < 3:
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out, names = sys.argv[1], sys.argv[2:]
     report = {"G0_J_m2": G0, "runs": {}}
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))

@@ -29,7 +29,7 @@ _spec.loader.exec_module(granite)
 def main():
     p = argparse.ArgumentParser()
     p.add_argument("out")
-    p.add_argument("--spacing", type=float, required=True)
+    p.add_argument("--spacing", type=granite.spacing, required=True)
     p.add_argument("--length", type=float, required=True)
     p.add_argument("--arm-height", type=float, required=True)
     p.add_argument("--thickness", type=float, default=1e-3)
@@ -40,7 +40,7 @@ def main():
     nx = int(round(a.length / dx))
     ny = int(round(a.arm_height / dx))
     if abs(nx * dx - a.length) > 1e-9 * a.length or abs(ny * dx - a.arm_height) > 1e-9 * a.arm_height:
-        raise SystemExit("specimen.py: --length and --arm-height must be whole numbers of --spacing")
+        p.error("--length and --arm-height must be whole (positive) numbers of --spacing")
     X, Y = np.meshgrid((np.arange(nx) + 0.5) * dx, (np.arange(-ny, ny) + 0.5) * dx, indexing="xy")
     xy = np.column_stack([X.ravel(), Y.ravel()])
     # Row index (from the bottom) of the pin in the top arm, and its mirror in the bottom arm.

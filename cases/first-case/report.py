@@ -61,6 +61,9 @@ def halves_without_the_crack_bands(h5, last, damage_below=0.5):
 
 
 def main(argv):
+    if len(argv) < 2:
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out = argv[1]
     run = os.path.join(out, "run")
     post = json.load(open(os.path.join(run, "post", "post.json")))

@@ -20,6 +20,9 @@ import numpy as np  # noqa: E402
 
 
 def main(argv):
+    if len(argv) < 2:
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out = argv[1]
     run = os.path.join(out, "run")
     fr = np.atleast_1d(np.genfromtxt(os.path.join(run, "post", "fragments.csv"), delimiter=",", names=True))

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fragmenting cylinder (README.md): the tube, the run, breccia-post's fragments, report.py.
 #   VARIANT=quick|demo|test: spacing 1.25 mm (4 particles through the wall)
-#   VARIANT=full           : spacing 1 mm (CabanaPD's; 70,700 particles)
+#   VARIANT=full           : spacing 1 mm (CabanaPD's; 71,200 particles)
 # Environment: BRECCIA_BIN (executables), OUT (output folder), PYTHON, THREADS (optional).
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"

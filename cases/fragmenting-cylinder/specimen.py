@@ -15,13 +15,13 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "granite-blast"))
-from specimen import write  # noqa: E402
+from specimen import spacing, write  # noqa: E402
 
 
 def main():
     p = argparse.ArgumentParser()
     p.add_argument("out")
-    p.add_argument("--spacing", type=float, required=True)
+    p.add_argument("--spacing", type=spacing, required=True)
     p.add_argument("--outer", type=float, default=0.025)
     p.add_argument("--inner", type=float, default=0.02)
     p.add_argument("--height", type=float, default=0.1)

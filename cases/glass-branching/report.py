@@ -201,6 +201,9 @@ def draw_damage(ax, x, d, dx, title):
 
 
 def main(argv):
+    if len(argv) < 3:
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out, names = argv[1], argv[2:]
     report = {"case": "glass-branching", "damage_threshold": DAMAGE_THRESHOLD,
               "rayleigh_speed_m_s": C_R, "rayleigh_speed_plane_stress_m_s": C_R_PLANE_STRESS, "runs": []}

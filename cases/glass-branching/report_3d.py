@@ -138,6 +138,9 @@ def frame_at(times, t):
 
 
 def main(argv):
+    if len(argv) < 3:
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out, names = argv[1], argv[2:]
     rep = {"case": "glass-branching 3D slab", "damage_threshold": DAMAGE_THRESHOLD_3D,
            "poisson_ratio": NU_3D, "shear_speed_m_s": C_S_3D, "rayleigh_speed_m_s": C_R_3D, "runs": []}

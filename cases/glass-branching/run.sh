@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # Dynamic crack branching in soda-lime glass (Bobaru & Zhang 2015; benchmarks.md section 1a).
-#   VARIANT=quick|demo: dx = 1/3 mm (m = 3), sigma = 2 MPa, G0 = 3.8 J/m2 (~40 s on 2 cores)
+#   VARIANT=quick|demo: dx = 1/3 mm (m = 3), sigma = 2 MPa, G0 = 3.8 J/m2 (~5 s on 1 core)
 #   VARIANT=full      : dx = 0.25 mm (m = 4), sigma/G0 = 2 MPa/3.8, 4 MPa/3.8, 12 MPa/135 J/m2
 #                       (Bobaru & Zhang 2015 and Ha & Bobaru 2010 set-ups; 1-2 min each)
 #   VARIANT=test      : dx = 1/3 mm (m = 3), 2 MPa, 28 us (the CTest regression run). Not dx = 0.5 mm
 #                       with m = 2: there whether the crack forks at all flipped with a 0.35%
-#                       smaller time step (a chaotic coarse lattice); at m = 3 the fork (65.8 /
-#                       66.1 mm, 19.8 / 19.9 us) holds at safety 0.80 and 0.78 (README.md).
+#                       smaller time step (a chaotic coarse lattice); at m = 3 the fork (65.4 /
+#                       65.4 mm, 19.5 / 19.6 us, 2026-12-08) holds at safety 0.80 and 0.78 (README.md).
 # The 3D slab, 100 x 40 x 2 mm (CabanaPD's 3D deck; 3D PMB, nu = 1/4), 2 MPa, G0 = 3.8 J/m2:
 #   VARIANT=3d        : dx = 0.25 mm (m = 4), 400 x 160 x 8 = 512,000 particles (CabanaPD's grid)
 #   VARIANT=3d-quick  : dx = 1/3 mm (m = 3), 300 x 120 x 6 = 216,000 particles (a few minutes)

@@ -105,6 +105,9 @@ def analyse(out, name):
 
 
 def main(argv):
+    if len(argv) < 3:
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out, names = argv[1], argv[2:]
     runs, fields = [], []
     for n in names:

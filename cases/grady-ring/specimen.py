@@ -16,7 +16,7 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from case_specimen import write_particles  # noqa: E402  (cases/case_specimen.py)
+from case_specimen import spacing as spacing_arg, write_particles  # noqa: E402  (cases/case_specimen.py)
 
 
 def main():
@@ -24,12 +24,15 @@ def main():
     p.add_argument("out")
     p.add_argument("--radius", type=float, required=True, help="mean radius")
     p.add_argument("--width", type=float, required=True)
-    p.add_argument("--spacing", type=float, required=True)
+    p.add_argument("--spacing", type=spacing_arg, required=True)
     p.add_argument("--thickness", type=float, required=True)
     a = p.parse_args()
     nw = max(1, int(round(a.width / a.spacing)))
     dr = a.width / nw
     n_theta = int(round(2 * math.pi * a.radius / a.spacing))
+    if n_theta < 1 or a.width <= 0 or a.radius - 0.5 * a.width < 0:
+        p.error(f"--spacing {a.spacing} --radius {a.radius} --width {a.width}: expected 0 < width <= 2 radius "
+                "and a spacing below the ring's circumference")
     dtheta = 2 * math.pi / n_theta
     r_in = a.radius - 0.5 * a.width
     pos, vol, spacing = [], [], []

@@ -24,6 +24,10 @@ from report import grady_size, zmr_size, zmr_e  # noqa: E402
 
 
 def main(argv):
+    sizes = len(argv) > 2 and argv[2] == "--sizes"
+    if len(argv) < 3 or (len(argv) != 4 if sizes else any("=" not in a for a in argv[2:])):
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out_png = argv[1]
     series = []
     if argv[2] == "--sizes":
@@ -37,6 +41,10 @@ def main(argv):
     for label, path in (a.split("=", 1) for a in (argv[2:] if argv[2] != "--sizes" else [])):
         runs = [r for r in json.load(open(path))["runs"] if "mean_size_m" in r and r.get("tensile_strength_Pa")]
         runs.sort(key=lambda r: r["strain_rate_per_s"])
+        if not runs:
+            print(f"zmr_compare.py: {path} ({label}): no run with a tensile strength (expected report.py's "
+                  "report.json of a zmr variant, softening bonds)", file=sys.stderr)
+            sys.exit(2)
         series.append((label, runs))
     strength = series[0][1][0]["tensile_strength_Pa"]
     print("| e | rate (1/s) | ZMR size | " + " | ".join(f"{l}: size, / ZMR" for l, _ in series) + " | change |")

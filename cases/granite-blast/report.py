@@ -126,6 +126,9 @@ def analyse(out, name):
 
 
 def main(argv):
+    if len(argv) < 3:
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out, names = argv[1], argv[2:]
     report = {"case": "granite-blast", "damage_threshold": DAMAGE_THRESHOLD, "hole_radius_m": HOLE_RADIUS,
               "outer_radius_m": OUTER_RADIUS, "runs": []}

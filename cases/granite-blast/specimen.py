@@ -16,7 +16,7 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from case_specimen import write_particles  # noqa: E402  (cases/case_specimen.py)
+from case_specimen import spacing, write_particles  # noqa: E402,F401  (cases/case_specimen.py; spacing: --spacing's type for the other specimen scripts)
 
 
 def annulus(outer, inner, dx):
@@ -42,12 +42,15 @@ def main():
     p.add_argument("out")
     p.add_argument("--outer", type=float, required=True)
     p.add_argument("--inner", type=float, default=0.0)
-    p.add_argument("--spacing", type=float, required=True)
+    p.add_argument("--spacing", type=spacing, required=True)
     p.add_argument("--thickness", type=float, required=True)
     p.add_argument("--inner-surface", default="hole")
     a = p.parse_args()
     dx = a.spacing
     xy, r = annulus(a.outer, a.inner, dx)
+    if len(xy) == 0:
+        p.error(f"--spacing {dx} --outer {a.outer} --inner {a.inner}: no particles; expected 0 <= inner < outer "
+                "and a spacing smaller than the annulus")
     sets = {"outer": np.nonzero(r > a.outer - dx)[0]}
     # The rim as a surface too (a vent surface of the gas load): equal shares of the
     # circumference along the outward radial direction.
@@ -65,6 +68,8 @@ def main():
         # Each wall particle carries an equal share of the hole circumference along its own
         # radial direction: total force p 2 pi r t, zero net force by symmetry.
         m = len(wall)
+        if m == 0:
+            p.error(f"--spacing {dx}: no particle on the hole wall (r < {a.inner} + spacing); expected a finer spacing")
         nrm = -xy[wall] / r[wall, None]
         surfaces[a.inner_surface] = {
             "area": np.full(m, 2 * math.pi * a.inner * a.thickness / m),

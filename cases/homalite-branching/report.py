@@ -70,6 +70,9 @@ def analyse(out, name):
 
 
 def main(argv):
+    if len(argv) != 3:
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out, name = argv[1], argv[2]
     res, x, times, damage, dx = analyse(out, name)
     report = {"case": "homalite-branching", "damage_threshold": gb.DAMAGE_THRESHOLD,

@@ -70,6 +70,9 @@ def analyse(out, name):
 
 
 def main(argv):
+    if len(argv) < 3:
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out, names = argv[1], argv[2:]
     report = {"case": "inclusion-plate", "damage_threshold": gb.DAMAGE_THRESHOLD, "rayleigh_speed_m_s": C_R,
               "runs": []}

@@ -49,7 +49,7 @@ def inclusions(fraction, radius, seed):
 def main():
     p = argparse.ArgumentParser()
     p.add_argument("out")
-    p.add_argument("--spacing", type=float, required=True)
+    p.add_argument("--spacing", type=granite.spacing, required=True)
     p.add_argument("--fraction", type=float, default=0.2)
     p.add_argument("--radius", type=float, default=0.15e-3)
     p.add_argument("--seed", type=int, default=1)
@@ -57,6 +57,8 @@ def main():
     a = p.parse_args()
     dx = a.spacing
     n = int(round(SIDE / dx))
+    if n < 1:
+        p.error(f"--spacing {dx}: expected a spacing below the plate's side ({SIDE} m)")
     X, Y = np.meshgrid(np.arange(n + 1) * dx, np.arange(-ROWS, n + ROWS + 1) * dx, indexing="xy")
     xy = np.column_stack([X.ravel(), Y.ravel()])
     sets = {"load_rows_bottom": np.nonzero(xy[:, 1] < -0.5 * dx)[0],

@@ -53,6 +53,9 @@ def crack_angles(x, damage, initially, tip, side):
 
 
 def main(argv):
+    if len(argv) != 3:
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out, name = argv[1], argv[2]
     run = os.path.join(out, name)
     x, times, damage, summary = case_report.load_damage_history(run)

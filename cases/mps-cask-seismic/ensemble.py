@@ -33,4 +33,7 @@ def main(out):
 
 
 if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     main(sys.argv[1])

@@ -66,6 +66,9 @@ def analyse(out, name):
 
 
 def main(argv):
+    if len(argv) < 4:
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out, record, names = argv[1], argv[2], argv[3:]
     rec = np.loadtxt(record, delimiter=",", skiprows=1)
     runs, series = [], []

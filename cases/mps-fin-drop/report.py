@@ -3,6 +3,8 @@ force and the energy balance at each inclination.
 
     report.py OUT RUN [RUN ...]
 
+Inclination: from the floor normal n of OUT/RUN/case_as_run.yaml, a = atan2(n_x, n_y) (case.yaml:
+n = (sin a, cos a)), so any run folder of this case will do, whatever its name.
 Shape: the fin's centre line at the end (each station's mean current position), its curvature
 (the turning of the line between stations, less that of the initial line, which is not straight
 for a bowed fin (specimen.py --bow); smoothed over one fin thickness), and its bends:
@@ -42,11 +44,18 @@ HINGE_MIN_STRAIN = 0.02
 
 def analyse(out, name):
     run = os.path.join(out, name)
-    angle = float(re.search(r"angle([0-9.]+)", name).group(1))
-    text = open(os.path.join(run, "case_as_run.yaml")).read()
+    as_run = os.path.join(run, "case_as_run.yaml")
+    if not os.path.exists(as_run):
+        print(f"report.py: {as_run} not found (expected a breccia-mps run folder of this case: its floor "
+              "normal gives the inclination, and the friction and particles come from it too)", file=sys.stderr)
+        sys.exit(2)
+    text = open(as_run).read()
     floor = re.search(r"floor:\s*\{([^}]*)\}", text).group(1)
     normal, point = (np.array([float(v) for v in re.search(key + r":\s*\[([^\]]*)\]", floor).group(1).split(",")])
                      for key in ("normal", "point"))
+    # The inclination as the case defines it (case.yaml, run.sh): the target's normal n = (sin a, cos a)
+    # turned by a from the fin's axis (0, 1).
+    angle = round(math.degrees(math.atan2(normal[0], normal[1])), 6) + 0.0
     friction = float(re.search(r"static_friction:\s*([-0-9.eE+]+)", floor).group(1)) if "static_friction" in floor else 0.0
     particles = os.path.normpath(os.path.join(run, re.search(r"particles:\s*(\S+)", text).group(1)))
     with h5py.File(particles, "r") as f:
@@ -144,6 +153,9 @@ def analyse(out, name):
 
 
 def main(argv):
+    if len(argv) < 3:
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out, names = argv[1], argv[2:]
     runs, data = [], []
     for n in names:

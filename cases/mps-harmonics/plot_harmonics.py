@@ -57,10 +57,14 @@ def main():
     post = os.path.join(os.environ.get("BRECCIA_BIN", ""), "breccia-post")
     if "--post" in argv:
         k = argv.index("--post")
-        post = argv[k + 1]
+        post = argv[k + 1] if k + 1 < len(argv) else ""
         del argv[k:k + 2]
     args = [a for a in argv if not a.startswith("--")]
     window = "--no-window" not in argv
+    if len(args) < 2 or not post or any(a.startswith("--") and a != "--no-window" for a in argv) \
+            or any("_h" not in r for r in args[1:]):
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out, runs = args[0], args[1:]
     spacings = sorted({r.split("_h")[1] for r in runs}, key=lambda s: -float(s.replace("mm", "")))
     fig, axes = plt.subplots(2, len(spacings), figsize=(6.5 * len(spacings), 8), squeeze=False)

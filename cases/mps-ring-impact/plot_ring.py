@@ -45,6 +45,9 @@ def first_failure_us(run_dir):
 
 
 def main():
+    if len(sys.argv) < 3:
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out, runs = sys.argv[1], sys.argv[2:]
     summary = {}
     for run in runs:

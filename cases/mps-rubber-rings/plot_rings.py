@@ -99,5 +99,6 @@ def main(run_dir, figure, numbers):
 
 if __name__ == "__main__":
     if len(sys.argv) != 4:
-        sys.exit(__doc__)
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     main(*sys.argv[1:])

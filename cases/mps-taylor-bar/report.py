@@ -146,7 +146,8 @@ def richardson_at_common_time(runs):
 
 def main():
     if len(sys.argv) < 3:
-        sys.exit(__doc__)
+        sys.stderr.write(__doc__)
+        sys.exit(2)
     out = sys.argv[1]
     os.makedirs(out, exist_ok=True)
     runs = [measure(d) for d in sys.argv[2:]

@@ -186,8 +186,9 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
   // crack_opening the cracks' mouths on the vent surfaces come on top (GasCrackSum).
   g.vent_crack_opening = spec.vent_crack_opening;
   const bool mouth_vents = open_surface && (spec.stemming_open || !g.vent_crack_opening);
-  g.vent_area = spec.vent_area > 0.0 ? spec.vent_area : mouth_vents ? mouth_area : 0.0;
   const bool can_vent = spec.stemming_open || !spec.vent_surfaces.empty();
+  // A gas that cannot vent has no outflow area (history.csv's gas_vent_area_m2 said the mouth's).
+  g.vent_area = !can_vent ? 0.0 : spec.vent_area > 0.0 ? spec.vent_area : mouth_vents ? mouth_area : 0.0;
   if (can_vent && !(g.vent_area > 0.0) && !(g.vent_crack_opening && !spec.vent_surfaces.empty()))
     throw InputError(c.file, field + ".vent_area", "missing, and the cavity has no mouth to take it from",
                      "the area through which the gas escapes once it vents (m2), or crack_opening");
@@ -195,11 +196,20 @@ void setup_gas(PdSystem& s, int load_index, const std::string& field) {
   const size_t n = s.n;
   g.vent_facet_area.assign(n, 0.0);
   for (size_t v = 0; v < spec.vent_surfaces.size(); ++v) {
+    const std::string key = field + ".vent_surfaces[" + std::to_string(v) + "]";
     const SurfaceFacets* vent = s.particles.find_surface(spec.vent_surfaces[v]);
     if (!vent)
-      throw InputError(c.file, field + ".vent_surfaces[" + std::to_string(v) + "]",
-                       "'" + spec.vent_surfaces[v] + "' is not a surface of the particle file",
+      throw InputError(c.file, key, "'" + spec.vent_surfaces[v] + "' is not a surface of the particle file",
                        "the name of a boundary surface group");
+    // Named twice, its facet areas were added twice (twice the outflow); the gas's own wall
+    // can never vent (its particles are reached at the start, never by the front).
+    for (size_t w = 0; w < v; ++w)
+      if (spec.vent_surfaces[w] == spec.vent_surfaces[v])
+        throw InputError(c.file, key, "'" + spec.vent_surfaces[v] + "' again (also vent_surfaces[" + std::to_string(w) + "])",
+                         "each vent surface once");
+    if (spec.vent_surfaces[v] == ls.surface)
+      throw InputError(c.file, key, "'" + ls.surface + "', the gas's own surface",
+                       "a free surface the gas reaches through cracks (the cavity's mouth: stemming: open)");
     for (size_t f = 0; f < vent->size(); ++f)  // (a window system: its window's particles)
       if (const int32_t i = s.system_of_file(vent->particle[f]); i >= 0) g.vent_facet_area[i] += vent->area_m2[f];
   }

@@ -21,10 +21,12 @@ help:
 deps:
 	@bash scripts/install-deps.sh
 
-$(BUILD)/CMakeCache.txt:
+# Configured every time, after deps (a few seconds when nothing changed): NATIVE=ON or CUDA=...
+# given to a later make take effect, and a configure that failed half-way (it leaves a
+# CMakeCache.txt) runs again instead of being skipped. Under make -j the configure waits for
+# deps (it ran while the packages were still being installed when the cache was its target).
+configure: deps
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DBRECCIA_CUDA=$(CUDA) -DBRECCIA_NATIVE=$(NATIVE)
-
-configure: deps $(BUILD)/CMakeCache.txt
 
 build: configure
 	cmake --build $(BUILD) -j $(JOBS)

@@ -703,6 +703,15 @@ def main():
     ap.add_argument("--command", default="make atlas QUICK=1")
     ap.add_argument("--provenance", default="", help="when and on what the CSV was measured (printed on the page)")
     args = ap.parse_args()
+    # The tables read, checked first: a missing one was a traceback (run from the repository
+    # root, or name them).
+    needed = [("--graded-limits", args.graded_limits)] if args.only_graded_limits else [
+        ("--csv", args.csv), ("--stability", args.stability), ("--graded", args.graded),
+        ("--mps-stability", args.mps_stability)]
+    for option, path in needed:
+        if not os.path.isfile(path):
+            ap.error(f"{option}: {path} not found (expected a table of breccia-atlas; run from the repository root "
+                     "or give its path)")
     if args.only_graded_limits:
         return write_graded_limits_only(args.graded_limits, args.out)
     rows = read_rows(args.csv)

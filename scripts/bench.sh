@@ -16,6 +16,11 @@
 set -euo pipefail
 source "$(dirname "$0")/lammps_lattice_input.sh"
 BUILD=${1:-build}; N=${2:-41}; STEPS=${3:-100}
+PYTHON=${PYTHON:-/usr/bin/python3}  # set by the Makefile; run on its own too (docs/performance.md)
+# The arguments checked before anything is written: a bad one emptied the last run's bench.csv.
+[[ "$N" =~ ^[1-9][0-9]*$ ]] || { echo "bench.sh: N (argument 2): '$N' (expected a whole number of particles per side >= 1)" >&2; exit 2; }
+[[ "$STEPS" =~ ^[1-9][0-9]*$ ]] || { echo "bench.sh: STEPS (argument 3): '$STEPS' (expected a whole number of steps >= 1)" >&2; exit 2; }
+[ -x "$BUILD/bin/breccia-solve" ] || { echo "bench.sh: BUILD_DIR (argument 1): '$BUILD' has no bin/breccia-solve (expected a built Breccia build folder)" >&2; exit 2; }
 BIN="$(cd "$BUILD" && pwd)/bin"
 OUT="${OUT:-$(pwd)/runs/bench}"
 mkdir -p "$OUT"
@@ -25,6 +30,7 @@ THREADS_LIST=${THREADS_LIST:-"1 $(nproc)"}
 if [ "${LAMMPS:-1}" != 0 ] && ! command -v lmp >/dev/null 2>&1; then
   echo "bench: installing LAMMPS (Debian package lammps) for the side-by-side comparison"
   SUDO=""; [ "$(id -u)" != 0 ] && SUDO=sudo
+  $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends lammps >/dev/null
 fi
 if [ ! -x /usr/bin/time ]; then
@@ -97,9 +103,13 @@ for model in ${LAMMPS_MODELS:-pmb lps}; do
       echo "lammps,$model,float64,$t,$atoms,$BONDS,$STEPS,$loop,$rate,$per,$cpu,$percpu,$proc," >> "$results"
     else
       echo "lammps,$model,float64,$t,,,,failed (see $OUT/lammps-$model-$t.log),," >> "$results"
+      lammps_failed=1
     fi
   done
 done
 echo
 column -s, -t < "$results"
 echo "(table: $results)"
+# A failed LAMMPS row leaves the comparison the bench exists for incomplete: the table is
+# written, and the run says so with a non-zero exit.
+if [ "${lammps_failed:-0}" = 1 ]; then echo "bench.sh: a LAMMPS run failed (rows marked failed above)" >&2; exit 1; fi

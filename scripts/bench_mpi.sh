@@ -8,6 +8,9 @@
 set -euo pipefail
 source "$(dirname "$0")/lammps_lattice_input.sh"
 BUILD=${1:-build}; N=${2:-41}; STEPS=${3:-200}
+[[ "$N" =~ ^[1-9][0-9]*$ ]] || { echo "bench_mpi.sh: N (argument 2): '$N' (expected a whole number of particles per side >= 1)" >&2; exit 2; }
+[[ "$STEPS" =~ ^[1-9][0-9]*$ ]] || { echo "bench_mpi.sh: STEPS (argument 3): '$STEPS' (expected a whole number of steps >= 1)" >&2; exit 2; }
+[ -x "$BUILD/bin/breccia-solve" ] || { echo "bench_mpi.sh: BUILD_DIR (argument 1): '$BUILD' has no bin/breccia-solve (expected a built Breccia build folder)" >&2; exit 2; }
 BIN="$(cd "$BUILD" && pwd)/bin"
 OUT="${OUT:-$(pwd)/runs/bench-mpi}"
 PYTHON=${PYTHON:-/usr/bin/python3}
@@ -53,8 +56,12 @@ PY
         echo "lammps,$model,$ranks,1,$((N*N*N)),$STEPS,,$loop,$(awk -v a=$t0 -v b=$t1 'BEGIN{printf "%.2f", b-a}')," >> "$results"
       else
         echo "lammps,$model,$ranks,1,,,,failed (see $OUT/lammps-$model-$ranks.log),," >> "$results"
+        lammps_failed=1
       fi
     done
+  else
+    echo "bench_mpi: lmp not found: no LAMMPS rows (scripts/bench.sh installs the Debian package lammps)" >&2
+    lammps_missing=1
   fi
 done
 # Speed-ups of the loop and of the whole run from 1 to 2 ranks, per code and model.
@@ -77,3 +84,8 @@ for code in ("breccia", "lammps"):
             print(f"{model} on 2 ranks: Breccia's whole run {l[1] / b[1]:.2f}x faster than LAMMPS's")
 PY
 echo; column -s, -t < "$results"; echo "(table: $results)"
+# The comparison is what this bench is for: a LAMMPS run that failed or a missing lmp is a
+# non-zero exit (the table is written first).
+if [ "${lammps_failed:-0}" = 1 ] || [ "${lammps_missing:-0}" = 1 ]; then
+  echo "bench_mpi: the LAMMPS comparison is incomplete (see above)" >&2; exit 1
+fi

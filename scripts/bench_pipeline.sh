@@ -12,12 +12,19 @@
 #   THREADS=N           solver and post threads (default: all cores)
 set -euo pipefail
 BUILD=${1:-build}
-BIN="$(cd "$BUILD" && pwd)/bin"
 HERE="$(cd "$(dirname "$0")/.." && pwd)"
 CASE="$HERE/cases/concrete-blast"
 PYTHON=${PYTHON:-/usr/bin/python3}
 OUT="${OUT:-$(pwd)/runs/bench-pipeline}"
 THREADS=${THREADS:-$(nproc)}
+# The arguments checked before anything is written or removed (a bad size emptied the last
+# run's pipeline.csv).
+[ -x "$BUILD/bin/breccia-solve" ] || { echo "bench_pipeline.sh: BUILD_DIR (argument 1): '$BUILD' has no bin/breccia-solve (expected a built Breccia build folder)" >&2; exit 2; }
+BIN="$(cd "$BUILD" && pwd)/bin"
+for size in ${SIZES:-demo full}; do
+  spec="$CASE/specimen-$size.yaml"; [ "$size" = full ] && spec="$CASE/specimen.yaml"
+  [ -f "$spec" ] || { echo "bench_pipeline.sh: SIZES: '$size' has no $spec (expected demo, mid, quick or full)" >&2; exit 2; }
+done
 mkdir -p "$OUT"
 results="$OUT/pipeline.csv"
 echo "case,size,threads,particles,steps,mesh_s,place_s,setup_s,step_s,loop_s,post_s,setup_in_steps,post_in_steps,solve_s,header_s,checkpoint_s" > "$results"

@@ -9,9 +9,15 @@ NVCC=${NVCC:-/usr/local/cuda/bin/nvcc}
 DIR="$BUILD/solver/cuda"
 [ -f "$DIR/CMakeFiles/breccia_solver_cuda.dir/includes_CUDA.rsp" ] || { echo "cuda_registers: configure $BUILD with CUDA first (make build)"; exit 2; }
 LOG=$(mktemp)
-( cd "$DIR" && "$NVCC" -O3 -DNDEBUG --generate-code=arch=compute_90,code=sm_90 --fmad=false --expt-relaxed-constexpr \
+trap 'rm -f "$LOG" "$LOG.o"' EXIT
+# nvcc's own messages when it fails (they went to the log alone, which set -e then left behind).
+if ! ( cd "$DIR" && "$NVCC" -O3 -DNDEBUG --generate-code=arch=compute_90,code=sm_90 --fmad=false --expt-relaxed-constexpr \
     -std=c++20 --options-file CMakeFiles/breccia_solver_cuda.dir/includes_CUDA.rsp -Xptxas -v \
-    -c "$ROOT/solver/cuda/src/cuda_backend.cu" -o "$LOG.o" ) >"$LOG" 2>&1
+    -c "$ROOT/solver/cuda/src/cuda_backend.cu" -o "$LOG.o" ) >"$LOG" 2>&1; then
+  cat "$LOG" >&2
+  echo "cuda_registers: nvcc failed (above)" >&2
+  exit 1
+fi
 "${PYTHON:-/usr/bin/python3}" - "$LOG" <<'PY'
 import re, subprocess, sys
 rows, cur = [], None

@@ -307,7 +307,7 @@ export BRECCIA_ATLAS_EXE="${LOADP[*]:+${LOADP[*]} }$BIN/breccia-atlas"
 
 # check GROUP NAME CAP FUNCTION [ARGS]: FUNCTION runs with T, its seconds: up to the sum of the
 # caps so far (CAP 0: only the time the others left, at least 20 s), never past the budget.
-CHECK_T0=$(date +%s) CHECK=
+CHECK_T0=$(date +%s) CHECK= FAILED_CHECKS=
 PLANNED=0
 wanted() { [ -z "${ONLY:-}" ] || [[ ",$ONLY," == *",$1,"* ]]; }
 skip() { result "skipped_$CHECK" "$1"; echo "skipped: $CHECK ($1)"; SKIPPED=1; }
@@ -334,6 +334,9 @@ check() {
     result "${name}_s" "$took"
     status="rc $rc"
     [ "$rc" = 124 ] && status="cut off at $T s" && result "${name}_cut_off_s" "$T"
+    # Failed checks make the script's exit status non-zero at the end (the run goes on: each
+    # check's figures count on their own); one cut off by its time cap is not a failure.
+    [ "$rc" != 0 ] && [ "$rc" != 124 ] && FAILED_CHECKS="$FAILED_CHECKS $name"
   fi
   [ "$SKIPPED" = 1 ] && status=skipped
   # The row: what this check added to the results (its skip reason included).
@@ -651,3 +654,8 @@ check rest pd_lpssell_gpu 0 pd_leg lpssell gpu
 # Variable horizons: the dual-horizon pass on the CSR and on the layout (a 2D LPS square).
 check rest pd_lps2d_gpu 0 pd_leg lps2d gpu
 check rest pd_lps2dsell_gpu 0 pd_leg lps2dsell gpu
+finish  # (the EXIT trap then does nothing)
+if [ -n "${FAILED_CHECKS:-}" ]; then
+  echo "device-check: failed:$FAILED_CHECKS (results.json and summary.md hold every check's figures)"
+  exit 1
+fi

@@ -3,7 +3,9 @@
 set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config
-  dpkg-dev binutils           # make package: dpkg-shlibdeps (the .deb's library dependencies); check-package: strings
+  dpkg-dev binutils file      # make package: dpkg-shlibdeps (the .deb's library dependencies; CPack's Debian
+                              #   generator needs file for it); check-package: strings
+  bsdextrautils time          # make bench: column (its tables) and /usr/bin/time (peak memory)
   libgmsh-dev gmsh            # mesher: OpenCASCADE geometry + tet/tri meshing
   libcgal-dev                 # geometry: exact predicates, AABB trees
   libeigen3-dev               # small dense linear algebra (least squares, 3x3)

@@ -269,8 +269,8 @@ def main():
     ap.add_argument("--out", default="runs/lammps-peri")
     ap.add_argument("--lmp", default=shutil.which("lmp") or "lmp")
     ap.add_argument("--threads", type=int, default=1)
-    ap.add_argument("--models", nargs="+", default=["pmb", "lps"])
-    ap.add_argument("--rules", nargs="+", default=list(RULES))
+    ap.add_argument("--models", nargs="+", default=["pmb", "lps"], choices=["pmb", "lps"])
+    ap.add_argument("--rules", nargs="+", default=list(RULES), choices=list(RULES))
     ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     ap.add_argument("--dt-study", action="store_true",
                     help="also run the fixed rule at dt/2 and dt/4 (LAMMPS, matched, before-force): dt_study.csv")

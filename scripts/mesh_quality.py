@@ -11,6 +11,7 @@ Prints one row per mesh (tets, min, 1st percentile, mean, share under 0.2 and 0.
 histogram in bins of 0.1; --png writes the histograms as one chart.
 """
 import argparse
+import os
 import sys
 
 import meshio
@@ -42,7 +43,10 @@ def main():
     args = ap.parse_args()
     labels = args.labels.split(",") if args.labels else args.meshes
     if len(labels) != len(args.meshes):
-        sys.exit("mesh_quality: --labels needs one label per mesh")
+        ap.error("--labels needs one label per mesh")
+    for path in args.meshes:
+        if not os.path.isfile(path):
+            ap.error(f"mesh {path} not found (expected a gmsh .msh file)")
     bins = np.linspace(0.0, 1.0, 11)
     rows = []
     print("mesh                          tets     min    p1     mean   <0.2     <0.5")

@@ -37,6 +37,10 @@ def main():
     ap.add_argument("--series", default="docs/atlas/stability_correspondence_series.csv")
     ap.add_argument("--out", default="docs/atlas/stability_correspondence.png")
     a = ap.parse_args()
+    for option, path in (("--rows", a.rows), ("--series", a.series)):
+        if not os.path.isfile(path):
+            ap.error(f"{option}: {path} not found (expected breccia-atlas's table; run from the repository root or give "
+                     "its path)")
     all_rows = list(csv.DictReader(open(a.rows)))
     rows = [r for r in all_rows if r["study"].startswith("zero_energy_")]
     series = list(csv.DictReader(open(a.series)))

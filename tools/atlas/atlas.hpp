@@ -46,10 +46,14 @@ inline constexpr const char* kAtlasHeader =
 
 // Appends rows to a CSV, rewriting the whole file atomically after each row, so an
 // interrupted sweep leaves every finished row and never a half-written line.
+// A table written row by row to PATH.partial (each row kept as it comes: a long sweep's
+// progress), which commit() moves onto PATH. An interrupted or failed sweep leaves PATH as it
+// was: the shipped docs/atlas/*.csv, which the planner reads, is replaced only by a whole table.
 class CsvTable {
 public:
   CsvTable(std::string path, std::string header, bool keep_existing);
   void add(const std::string& line);
+  void commit();
 
 private:
   std::string path_, content_;

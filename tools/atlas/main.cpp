@@ -149,19 +149,23 @@ int main(int argc, char** argv) {
       if (has("kalthoff_winkler")) kalthoff_winkler(plan, maker, sink);
       if (has("softening_strength")) softening_strength(plan, maker, sink);
       mps_problems(plan, sink);  // the MPS stress solid (mps_atlas.cpp)
+      table.commit();
     }
     if (stability) {
       if (stability_studies.empty() || has_study("pd")) {
         CsvTable table(stability_csv, kStabilityHeader, append);
         stability_map(plan, maker, table, sibling_csv(stability_csv, "stability_correspondence_series.csv"));
+        table.commit();
       }
       if (stability_studies.empty() || has_study("graded")) {
         CsvTable graded(sibling_csv(stability_csv, "stability_graded.csv"), kGradedHeader, append);
         graded_stability(plan, maker, graded);
+        graded.commit();
       }
       if (stability_studies.empty() || has_study("mps")) {
         CsvTable mps(sibling_csv(stability_csv, "stability_mps.csv"), kMpsStabilityHeader, append);
         mps_tension_stability(plan, mps);
+        mps.commit();
       }
     }
     std::fprintf(stderr, "[atlas] done in %.0f s\n", seconds_since(t0));

@@ -40,13 +40,15 @@ CsvTable::CsvTable(std::string path, std::string header, bool keep_existing) : p
   }
   if (!std::filesystem::path(path_).parent_path().empty())
     std::filesystem::create_directories(std::filesystem::path(path_).parent_path());
-  write_text_file(path_, content_);
+  write_text_file(path_ + ".partial", content_);
 }
 
 void CsvTable::add(const std::string& line) {
   content_ += line + "\n";
-  write_text_file(path_, content_);
+  write_text_file(path_ + ".partial", content_);
 }
+
+void CsvTable::commit() { std::filesystem::rename(path_ + ".partial", path_); }
 
 std::string csv_line(const AtlasRow& r) {
   std::ostringstream o;

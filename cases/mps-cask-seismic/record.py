@@ -8,10 +8,11 @@ thesis used is not in our sources; any CSV in the same format can replace it).
 Generation, seeded so that it repeats: Gaussian white noise at dt, band-passed to 0.5-8 Hz
 (its Fourier components outside the band set to zero: no phase shift), shaped by a trapezoidal
 envelope (rise 1 s, strong motion to 40% of the duration, linear decay to the end; Amin &
-Ang's form of a nonstationary record), its mean velocity removed by a baseline correction
-(a least-squares straight line fitted to the integrated velocity, differentiated back into
-the acceleration) so that the ground ends near rest, scaled to the peak ground acceleration
-`pga` (in g). Writes `time_s,acceleration_g` rows.
+Ang's form of a nonstationary record), a baseline correction (the slope of a least-squares
+straight line fitted to the integrated velocity taken out of the acceleration: the velocity's
+linear trend, not its end value, so the ground does not end at rest: the case's record ends
+at 0.114 m/s, 13% of its 0.867 m/s peak ground velocity, 0.51 m from its start), scaled to the
+peak ground acceleration `pga` (in g). Writes `time_s,acceleration_g` rows.
 
 --perturb eps --perturb-seed s: a member of an ensemble of records that differ from the seed's
 by less than any measurement of a record could tell: a second record made the same way from

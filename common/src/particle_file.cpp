@@ -182,6 +182,14 @@ void validate(const ParticleModel& m, const std::string& file) {
 }  // namespace
 
 void write_particle_file(const std::string& path, ParticleModel m) {
+  // The XDMF sidecar takes the file's name with .xdmf: a particle file named .xdmf was
+  // overwritten by its own sidecar (exit 0, the particles gone); and the sidecar names the
+  // file as file:/dataset, which a ':' in the name would split.
+  const std::string name = std::filesystem::path(path).filename().string();
+  if (std::filesystem::path(path).extension() == ".xdmf" || name.find(':') != std::string::npos)
+    throw InputError(path, "", std::filesystem::path(path).extension() == ".xdmf" ? "a particle file named .xdmf"
+                                                                                  : "a ':' in the file name",
+                     "an HDF5 file name such as particles.h5 (its XDMF sidecar takes the same name with .xdmf)");
   if (m.spacing_m.empty()) {
     m.spacing_m.resize(m.size());
     for (size_t i = 0; i < m.size(); ++i)

@@ -6,9 +6,28 @@ std::string xdmf_document_begin() { return "<?xml version=\"1.0\" ?>\n<Xdmf Vers
 
 std::string xdmf_document_end() { return " </Domain>\n</Xdmf>\n"; }
 
+namespace {
+// XML's five reserved characters as entities: a file name with & or < in it made a sidecar
+// no XML parser reads.
+std::string xml_escaped(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&apos;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+}  // namespace
+
 std::string xdmf_data_item(const std::string& dimensions, bool integer, int precision, const std::string& source) {
   return "<DataItem Dimensions=\"" + dimensions + "\" NumberType=\"" + (integer ? "Int" : "Float") + "\" Precision=\"" +
-         std::to_string(precision) + "\" Format=\"HDF\">" + source + "</DataItem>";
+         std::to_string(precision) + "\" Format=\"HDF\">" + xml_escaped(source) + "</DataItem>";
 }
 
 std::string xdmf_dimensions(size_t n, int components) {

@@ -124,6 +124,9 @@ size_t write_contour_vtp(const std::filesystem::path& path, const Mesh& mesh, co
   contour->ComputeScalarsOff();
   contour->Update();
   vtkPolyData* out = contour->GetOutput();
+  // An empty contour (no damage yet) has no points object, and VTK's reader (so ParaView)
+  // reports "No Points element" for such a file: an empty one is written instead.
+  if (!out->GetPoints()) out->SetPoints(Ptr<vtkPoints>::New());
   auto w = Ptr<vtkXMLPolyDataWriter>::New();
   w->SetInputData(out);
   write_with(w.Get(), path);

@@ -257,12 +257,21 @@ ResultsWriter::ResultsWriter(const PdSystem& s, const std::string& out_dir, bool
       if (file_->attr_int(g, "step") > s.step) {
         H5Ldelete(file_->id(), g.c_str(), H5P_DEFAULT);
       } else {
+        // results.xdmf lists this run's fields for every group: a kept group must hold them
+        // (a restart with more output.fields pointed ParaView at datasets that do not exist).
+        for (const ResultsField& f : results_fields(s))
+          if (!file_->exists(g + "/" + f.name))
+            throw InputError(path, g + "/" + f.name, "missing: the run being continued did not write this field",
+                             "the output.fields of the run the checkpoint belongs to (or a fresh output directory)");
         count_ = k + 1;
         times_.push_back(file_->attr_double(g, "time_s"));
       }
     }
     file_->set_attr("/", "output_count", static_cast<long long>(count_));
     file_->set_attr("/", "complete", 0LL);
+    // results.xdmf at once for the groups kept: it listed the ones just removed until the next
+    // output, and for good if the restarted run stopped before one.
+    write_xdmf(s);
     return;
   }
   file_ = std::make_unique<h5::File>(path, h5::File::Mode::Create);

@@ -426,8 +426,10 @@ RunResult run_time_loop(PdSystem& s, const RunOptions& o, StepBackend& backend, 
       backend.compute_forces(s);  // diagnostics at this step (no bond can break again here)
       e = backend.measure(s);
       backend.download(s);
-      write_history();
-      backend.output(s, results, o.out_dir);  // a distributed one written by every rank together
+      // Not twice where this step already wrote them (a repeated time in results.xdmf and
+      // history.csv, kept by a restart).
+      if (!history_due) write_history();
+      if (!output_due) backend.output(s, results, o.out_dir);  // a distributed one written by every rank together
       backend.checkpoint(s, o.out_dir + "/checkpoint.h5", root, true);
       break;
     }

@@ -361,8 +361,10 @@ CaseSpec parse_root(const Section& root) {
     fs.point_m = f.vec3("point", Quantity::Length);
     fs.normal = f.has("normal") ? f.vec3("normal", Quantity::Dimensionless) : std::array<double, 3>{0.0, 1.0, 0.0};
     if (!(std::hypot(fs.normal[0], fs.normal[1], fs.normal[2]) > 0)) fail(f, "normal", "a zero vector", "a nonzero normal");
+    if (dimension == 2 && fs.normal[2] != 0.0)
+      fail(f, "normal", "a z component in a 2D case (it weakened the penalty)", "an in-plane normal [x, y]");
     fs.stiffness_factor = f.positive("stiffness_factor", Quantity::Dimensionless, 1.0);
-    if (f.has("motion")) fs.motion = parse_motion(f.section("motion"));
+    if (f.has("motion")) fs.motion = parse_motion(f.section("motion"), dimension);
     c.floor = fs;
   }
 

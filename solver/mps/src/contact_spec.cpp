@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -130,7 +131,7 @@ ParticleContactSpec parse_particle_contact(const Section& s) {
   return p;
 }
 
-PrescribedMotion parse_motion(const Section& s) {
+PrescribedMotion parse_motion(const Section& s, int dimension) {
   s.allow_only({"quantity", "direction", "history", "unit"});
   PrescribedMotion m;
   const std::string q = s.choice("quantity", {"acceleration", "velocity", "displacement"});
@@ -138,6 +139,10 @@ PrescribedMotion parse_motion(const Section& s) {
                : q == "velocity"   ? PrescribedMotion::Quantity::Velocity
                                    : PrescribedMotion::Quantity::Displacement;
   if (s.has("direction")) m.direction = s.vec3("direction", Quantity::Dimensionless);
+  // In 2D (plane strain) a z part moved the floor out of the plane: its slip there used up the
+  // friction and its work was booked, while a polygon's motion silently lost it.
+  if (dimension == 2 && m.direction[2] != 0.0)
+    fail(s, "direction", "a z component in a 2D case", "an in-plane direction [x, y]");
   const double len = std::hypot(m.direction[0], m.direction[1], m.direction[2]);
   if (!(len > 0)) fail(s, "direction", "a zero vector", "a nonzero direction [x, y, z]");
   for (double& c : m.direction) c /= len;
@@ -146,11 +151,27 @@ PrescribedMotion parse_motion(const Section& s) {
                         : m.quantity == PrescribedMotion::Quantity::Velocity   ? Quantity::Velocity
                                                                                : Quantity::Length;
   m.history = solver::parse_history(s.section("history"), unit);
+  // A displacement history is the motion's offset from the start: one not at 0 at t = 0 made
+  // the floor jump in the first step, its work unbooked.
+  if (m.quantity == PrescribedMotion::Quantity::Displacement && m.history.at(0.0) != 0.0)
+    fail(s, "history", "a displacement of " + text_of(m.history.at(0.0)) + " m at t = 0",
+         "a displacement history starting at 0 (the obstacle's place at the start is its point)");
   if (s.has("unit")) {
     // A table (or numbers) in g: the usual form of an accelerogram.
     const std::string u = s.choice("unit", {"g", "m/s2"});
     if (m.quantity != PrescribedMotion::Quantity::Acceleration)
       fail(s, "unit", "'" + u + "' for quantity: " + q, "unit only with quantity: acceleration");
+    // unit: scales plain numbers and tables; a value given with its own unit ("0.1 g", read as
+    // m/s2 already) was scaled again (9.8 times too large).
+    const Section h = s.section("history");
+    for (const char* key : {"value", "peak"})
+      if (h.node()[key] && h.node()[key].IsScalar()) {
+        const std::string text = h.node()[key].as<std::string>();
+        char* end = nullptr;
+        std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0')
+          fail(h, key, "'" + text + "' with unit: " + u, "a plain number (unit: scales plain numbers and tables)");
+      }
     const double scale = u == "g" ? 9.80665 : 1.0;
     m.history.value *= scale;
     for (double& v : m.history.table_value) v *= scale;
@@ -226,7 +247,7 @@ RigidBodySpec parse_rigid_body(const Section& s, size_t index, int dimension) {
       fail(s, "motion", "given for a free body (fixed: false)",
            "fixed: true: a prescribed motion (ground motion) drives a fixed body; a free body moves under its "
            "contacts and gravity");
-    r.motion = parse_motion(s.section("motion"));
+    r.motion = parse_motion(s.section("motion"), dimension);
   }
   if (r.fixed) {
     for (const char* key : {"density", "velocity", "angular_velocity"})

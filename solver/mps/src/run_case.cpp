@@ -78,7 +78,7 @@ double run_time_loop(Model& sim, const CaseSpec& spec, const std::string& case_f
         throw RunError("mps: velocities became non-finite at step " + std::to_string(s) + " (" + hint + ")");
       progress.update(s, "t=" + fmt(sim.time_s()) + " s");
     }
-    writer.write(sim);
+    if (total_steps > 0) writer.write(sim);  // with no step the start is the end: one group at t = 0
     writer.mark_complete();
     write_xdmf = writer.xdmf_writer();
     if (spec.progress) progress.finish("t=" + fmt(sim.time_s()) + " s");

@@ -1,4 +1,6 @@
 #pragma once
+#include <cmath>
+#include <limits>
 // Contact of the stress-based MPS solid (solid.hpp; [Inagaki 2009], docs/references.md):
 //  - between particles that are not bonded (different bodies, or parts of one body far
 //    apart in the reference configuration) once they come within the contact distance in
@@ -65,6 +67,9 @@ struct HalfSpace {
   std::optional<PrescribedMotion> motion;
   // Where the motion has taken it (Contact keeps these): offset of point_m and velocity.
   std::array<double, 3> offset_m{0.0, 0.0, 0.0}, velocity_m_s{0.0, 0.0, 0.0};
+  // The motion's last step along its direction (m; NaN before the first): the ground work's
+  // centred booking (Contact::advance_obstacles).
+  double last_step_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 // The plane and its law as the per-particle body half_space_contact_at takes them.
@@ -188,6 +193,7 @@ private:
     double cx = 0.0, cy = 0.0, cx0 = 0.0, cy0 = 0.0, angle = 0.0;
     double vx = 0.0, vy = 0.0, omega = 0.0;
     double fx = 0.0, fy = 0.0, torque = 0.0;  // reactions of the last compute_forces()
+    double last_step_m = std::numeric_limits<double>::quiet_NaN();  // a moving fixed polygon's (HalfSpace's)
     std::vector<double> local_x, local_y;     // vertices relative to the centroid at angle 0
   };
   // Particle pairs in contact candidates: current positions, surface directions (for the

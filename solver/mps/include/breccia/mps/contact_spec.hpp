@@ -117,7 +117,7 @@ RigidBodySpec parse_rigid_body(const Section& s, size_t index, int dimension);
 // motion: {quantity: acceleration | velocity | displacement, direction: [x, y, z],
 // history: {type: constant | ramp | double_exponential | table, ...}, unit: g (a table of
 // accelerations in g)}; a table file is resolved against the case file's folder.
-PrescribedMotion parse_motion(const Section& s);
+PrescribedMotion parse_motion(const Section& s, int dimension);
 // Reads static_friction, kinetic_friction, tangential_stiffness_factor from s.
 FrictionSpec parse_friction(const Section& s);
 // Keys parse_friction reads (for allow_only lists).

@@ -100,6 +100,24 @@ TEST(PlaceCli, LatticeOptionsWriteALattice) {
   EXPECT_NEAR(square.thickness_m, 0.005, 1e-15);
 }
 
+// A particle file named .xdmf was overwritten by its own XDMF sidecar (exit 0, the particles
+// gone); a ':' would split the sidecar's file:/dataset reference. Both refused, nothing
+// written. A name with XML's reserved characters is escaped in the sidecar.
+TEST(PlaceCli, AnOutputTheSidecarWouldClashWithIsRefusedAndNamesAreEscaped) {
+  for (const std::string name : {"model.xdmf", "a:b.h5"}) {
+    const std::string output = dir() + "/" + name;
+    const RunResult r = run_place("--lattice square --box 0,0,0.04,0.02 --spacing 0.01 --thickness 5mm -o '" + output + "'");
+    EXPECT_EQ(r.exit_code, kExitBadInput) << name << ": " << r.err;
+    EXPECT_FALSE(fs::exists(output)) << name;
+  }
+  const std::string odd = dir() + "/a&b<1>.h5";
+  const RunResult r = run_place("--lattice square --box 0,0,0.04,0.02 --spacing 0.01 --thickness 5mm -o '" + odd + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(dir() + "/a&b<1>.xdmf");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("a&amp;b&lt;1&gt;.h5:/particles/position"), std::string::npos) << text;
+}
+
 TEST(PlaceCli, MissingFileIsRejected) {
   expect_rejected(dir() + "/no_such_mesh.msh", "", {"does not exist"});
 }

@@ -518,6 +518,35 @@ TEST(SolverCli, RestartFromAnotherModelOrAStepAboveTheStableOneIsBadInput) {
   EXPECT_EQ(same.exit_code, 0) << same.output;
 }
 
+// A restart into the folder of a longer run (found in review, 2026-12-08): results.xdmf lists
+// only the output groups the restart keeps (it listed the removed ones until the next output,
+// for good when the restarted run stopped before one), and a field the continued run did not
+// write is refused naming the group's dataset (results.xdmf pointed ParaView at it).
+TEST(SolverCli, ARestartKeepsResultsXdmfToItsGroupsAndRefusesAFieldTheRunDidNotWrite) {
+  const std::string dir = breccia::solver::testing::process_temp_dir() + "/cli_restart_xdmf";
+  const std::string output = "output: {every: 2, history_every: 2}\n";
+  ASSERT_EQ(run_solver(kBase + kMaterial + "time: {steps: 4}\n" + output, "restart_xdmf").exit_code, 0);
+  std::filesystem::copy_file(dir + "/out/checkpoint.h5", dir + "/step4.h5", std::filesystem::copy_options::overwrite_existing);
+  ASSERT_EQ(run_solver(kBase + kMaterial + "time: {steps: 8}\n" + output, "restart_xdmf").exit_code, 0);
+  const auto grids = [&] {
+    std::ifstream in(dir + "/out/results.xdmf");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    size_t count = 0;
+    for (size_t at = text.find("<Time "); at != std::string::npos; at = text.find("<Time ", at + 1)) ++count;
+    return std::pair{count, text};
+  };
+  ASSERT_EQ(grids().first, 5u);  // steps 0, 2, 4, 6, 8
+  const Outcome again = run_solver(kBase + kMaterial + "time: {steps: 4}\n" + output, "restart_xdmf",
+                                   "--restart " + dir + "/step4.h5");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  const auto [count, text] = grids();
+  EXPECT_EQ(count, 3u) << text;  // steps 0, 2, 4
+  EXPECT_EQ(text.find("/output/000003"), std::string::npos) << text;
+  const Outcome more = run_solver(kBase + kMaterial + "time: {steps: 6}\noutput: {every: 2, history_every: 2, fields: [stretch]}\n",
+                                  "restart_xdmf", "--restart " + dir + "/step4.h5");
+  expect_bad_input(more, {"results.h5: /output/000000/stretch: missing"});
+}
+
 // A boundary value in time that stops being finite mid-run (sqrt(2e-6 - t) past 2 us; the run
 // is 40 steps of a few tenths of a microsecond) is refused before the writers open their
 // files: the folder's earlier results stay as they were (they were truncated to the failed

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "breccia/common/error.hpp"
@@ -84,6 +85,18 @@ void configure_contact(const CaseSpec& spec, const std::vector<int>& body_id, So
                        "polygon '" + r.name + "' holds " + std::to_string(inside) + " particle(s) at the start",
                        "a rigid body clear of the particles at t = 0");
     solid.contact().add_polygon(std::move(p));
+  }
+  // Polygon-polygon contact is frictionless (docs/mps.md): a free polygon resting on a moving
+  // frictional fixed one is not carried along (found in review, 2026-12-08). Said, not refused:
+  // the same friction acts on the particles that touch that polygon.
+  const bool free_polygon = std::any_of(spec.rigid_bodies.begin(), spec.rigid_bodies.end(), [](const RigidBodySpec& r) { return !r.fixed; });
+  for (size_t k = 0; k < spec.rigid_bodies.size() && free_polygon; ++k) {
+    const RigidBodySpec& r = spec.rigid_bodies[k];
+    if (r.fixed && r.motion && (r.friction.static_friction > 0.0 || r.friction.kinetic_friction > 0.0))
+      std::fprintf(stderr,
+                   "mps: warning: %s: contact.rigid_bodies[%zu] ('%s') moves and has friction, which acts on particles "
+                   "only: polygon-polygon contact is frictionless, so a free polygon on it is not carried along\n",
+                   spec.file.c_str(), k, r.name.c_str());
   }
   if (solid.contact().damped()) {  // the particle dashpots' m_eff: the particle masses
     std::vector<double> mass(n);

@@ -65,9 +65,9 @@ test-sanitize: deps
 	  ctest --output-on-failure -j $(JOBS) --timeout 900 -E "^cases\."
 
 # make compile-serial-hdf5: only the sources whose code differs with a serial HDF5
-# (BRECCIA_PARALLEL_HDF5 unset) compiled in that folder, no link, no tests: the cheap check CI
-# runs so that the serial path cannot stop compiling unnoticed (make test's build takes the
-# parallel HDF5); make test-serial-hdf5 runs its tests.
+# (BRECCIA_PARALLEL_HDF5 unset) compiled in that folder, no link, no tests: a cheap check that
+# the serial path still compiles (make test's build takes the parallel HDF5); CI runs the
+# fuller make test-serial-hdf5, which builds and runs its tests.
 compile-serial-hdf5: deps
 	cmake -S . -B $(SERIAL_HDF5_BUILD) -DCMAKE_BUILD_TYPE=Release -DBRECCIA_CUDA=OFF -DBRECCIA_NATIVE=$(NATIVE) \
 	  -DHDF5_C_COMPILER_EXECUTABLE=/usr/bin/h5cc

@@ -543,6 +543,14 @@ CaseConfig parse_case_file(const std::string& path) {
       if (!g.crack_entry && !g.vent_surfaces.empty())
         throw InputError(path, l.field("vent_surfaces"), "given with crack_entry: false",
                          "no vent surfaces (the gas reaches them only through cracks)");
+      // Keys nothing would read, accepted silently before (a review, 2026-12-08): an outflow
+      // area for a gas that cannot vent, a front speed for a gas that enters no crack.
+      if (l.has("vent_area") && !can_vent)
+        throw InputError(path, l.field("vent_area"), "given for a gas that cannot vent (stemming closed, no vent_surfaces)",
+                         "no vent_area, or stemming: open / vent_surfaces for it to escape through");
+      if (l.has("front_speed") && !g.crack_entry)
+        throw InputError(path, l.field("front_speed"), "given with crack_entry: false",
+                         "no front_speed (the gas enters no crack)");
     } else if (type == "pressure") {
       ls.kind = LoadSpec::Kind::Pressure;
       ls.surface = l.text("surface");

@@ -199,6 +199,10 @@ TEST(Gas, InputTheGasCannotHonourIsRefusedAndAClosedGasHasNoVentArea) {
   const std::string adr = "time: {integrator: adr, adr_tolerance: 1e-6, adr_max_steps: 100}\n";
   fails_with(disc_case(", stemming: open, gas_density: 1000, vent_area: 1 mm2", adr), "loads[0].stemming");
   fails_with(disc_case(", vent_surfaces: [outer], gas_density: 1000, vent_area: 1 mm2", adr), "loads[0].vent_surfaces");
+  // Keys nothing would read: an outflow area for a gas that cannot vent, a front speed for one
+  // that enters no crack.
+  fails_with(disc_case(", crack_entry: false, vent_area: 1 mm2", "time: {steps: 1}\n"), "loads[0].vent_area");
+  fails_with(disc_case(", crack_entry: false, front_speed: 500 m/s", "time: {steps: 1}\n"), "loads[0].front_speed");
   const PdSystem velocity = system_from_yaml("gas_initial_velocity",
                                              disc_case(", crack_entry: false", "initial: [{type: velocity, value: [1, 0]}]\ntime: {steps: 1}\n"));
   EXPECT_TRUE(velocity.gas.active);

@@ -44,4 +44,9 @@ export OUT="$(cd "$OUT" && pwd)"  # run.sh works from its own folder
 export PYTHON="${PYTHON:-/usr/bin/python3}"
 echo "case $(basename "$CASE_DIR") [$VARIANT] -> $OUT"
 cd "$CASE_DIR"
-bash ./run.sh
+# A run that wrote nothing (an unknown variant refused by run.sh, exit 2) leaves no empty
+# output folder behind; whatever a run wrote stays.
+rc=0
+bash ./run.sh || rc=$?
+if [ "$rc" != 0 ] && [ -z "$(ls -A "$OUT")" ]; then rmdir "$OUT"; fi
+exit "$rc"

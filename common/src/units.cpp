@@ -5,6 +5,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <stdexcept>
 #include <map>
 #include <utility>
 #include <vector>
@@ -84,11 +85,16 @@ double parse_quantity(const std::string& text, Quantity q, const std::string& fi
   const std::string s = trim(text);
   size_t pos = 0;
   double value = 0.0;
+  const std::string expected = std::string(quantity_name(q)) + " as a number in SI units or '<number> <unit>'";
+  // Decimal only: stod also reads hexadecimal ("0x10" was 16, "0x1p-24" a time step).
+  if (s.find_first_of("xX") != std::string::npos && s.find_first_of("xX") < s.find_first_of(" \t"))
+    throw InputError(file, field, "'" + text + "' is not a decimal number", expected);
   try {
     value = std::stod(s, &pos);
+  } catch (const std::out_of_range&) {  // beyond a double's range (or below its smallest)
+    throw InputError(file, field, "'" + text + "' is out of the range of a double", "a finite number");
   } catch (...) {
-    throw InputError(file, field, "'" + text + "' is not a number",
-                     std::string(quantity_name(q)) + " as a number in SI units or '<number> <unit>'");
+    throw InputError(file, field, "'" + text + "' is not a number", expected);
   }
   if (!std::isfinite(value))
     throw InputError(file, field, "'" + text + "' is not finite", "a finite number");

@@ -1,11 +1,13 @@
 #include "breccia/common/yaml_input.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cstdint>
 #include <filesystem>
 #include <map>
 
 #include "breccia/common/error.hpp"
+#include "breccia/common/units.hpp"
 
 namespace breccia {
 
@@ -85,10 +87,10 @@ void apply_override(YAML::Node& root, const std::string& key, const YAML::Node& 
     YAML::Node at = chain.back();
     if (key[pos] == '[') {
       const size_t close = key.find(']', pos);
-      if (close == std::string::npos) throw InputError(origin, key, "an unclosed '['", "KEY[INDEX] with a whole number");
+      if (close == std::string::npos) throw InputError(file, origin + " " + key, "an unclosed '['", "KEY[INDEX] with a whole number");
       const std::string digits = key.substr(pos + 1, close - pos - 1);
       if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos)
-        throw InputError(origin, key, "index '" + digits + "'", "a whole number in [ ]");
+        throw InputError(file, origin + " " + key, "index '" + digits + "'", "a whole number in [ ]");
       // More digits than any list has entries: no entry (stoul would overflow past 20 digits).
       const size_t index = digits.size() > 9 ? SIZE_MAX : std::stoul(digits);
       if (!at.IsSequence() || index >= at.size())
@@ -109,7 +111,7 @@ void apply_override(YAML::Node& root, const std::string& key, const YAML::Node& 
       pos = end == std::string::npos ? key.size() : end;
     }
   }
-  if (chain.size() < 2) throw InputError(origin, key, "no key", "KEY=VALUE");
+  if (chain.size() < 2) throw InputError(file, origin + " " + key, "no key", "KEY=VALUE");
   chain.back() = YAML::Clone(value);
 }
 
@@ -269,7 +271,7 @@ std::optional<double> Section::optional_number(const std::string& key, Quantity 
 
 double Section::positive(const std::string& key, Quantity q) const {
   const double v = number(key, q);
-  if (!(v > 0.0)) fail(key, "value " + std::to_string(v) + " is not positive", "a value > 0");
+  if (!(v > 0.0)) fail(key, "value " + short_number(v) + " is not positive", "a value > 0");
   return v;
 }
 
@@ -282,7 +284,14 @@ long long Section::integer(const std::string& key) const {
   const YAML::Node n = child(key);
   try {
     if (!n.IsScalar()) throw YAML::Exception(YAML::Mark(), "");
-    return n.as<long long>();
+    // Base 10 only: yaml-cpp reads a leading 0 as octal (010 was 8 steps) and 0x as hex.
+    const std::string& t = n.Scalar();
+    long long v = 0;
+    const char* begin = t.data() + (!t.empty() && t[0] == '+' ? 1 : 0);
+    const auto [end, ec] = std::from_chars(begin, t.data() + t.size(), v, 10);
+    if (ec != std::errc() || end != t.data() + t.size() || begin == t.data() + t.size())
+      throw YAML::Exception(YAML::Mark(), "");
+    return v;
   } catch (const YAML::Exception&) {
     fail(key, "'" + (n.IsScalar() ? n.Scalar() : std::string("non-scalar")) + "' is not an integer", "an integer");
   }

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <functional>
 
 #include "breccia/common/error.hpp"
 #include "breccia/common/units.hpp"
@@ -76,4 +77,32 @@ TEST(YamlInput, DuplicateKeysAreRejectedWithBothLines) {
     EXPECT_NE(msg.find("materials[1].density"), std::string::npos) << msg;
     EXPECT_NE(msg.find("lines 4 and 5"), std::string::npos) << msg;
   }
+}
+
+// Found in review (2026-12-08): numbers are decimal. stod read "0x10" as 16 and "0x1p-24" as a
+// time step, yaml-cpp read an integer "010" as octal 8 (and "0x10" as 16); a number beyond a
+// double's range was "not a number"; a small negative value printed as -0.000000.
+TEST(Units, NumbersAreDecimalAndOutOfRangeOrNegativeValuesAreNamedAsSuch) {
+  const auto message_of = [](const std::function<void()>& f) {
+    try {
+      f();
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_NE(message_of([] { parse_quantity("0x1p-24", Quantity::Time, "f", "x"); }).find("not a decimal number"),
+            std::string::npos);
+  EXPECT_NE(message_of([] { parse_quantity("0x10 s", Quantity::Time, "f", "x"); }).find("not a decimal number"),
+            std::string::npos);
+  EXPECT_NE(message_of([] { parse_quantity("1e400 Pa", Quantity::Pressure, "f", "x"); }).find("out of the range"),
+            std::string::npos);
+  const std::string path = ::testing::TempDir() + "/numbers.yaml";
+  std::ofstream(path) << "steps: 010\nhex: 0x10\nsigned: +7\ndt: -5 ns\n";
+  const Section root = Section::load_file(path);
+  EXPECT_EQ(root.integer("steps"), 10);
+  EXPECT_EQ(root.integer("signed"), 7);
+  EXPECT_NE(message_of([&] { root.integer("hex"); }).find("'0x10' is not an integer"), std::string::npos);
+  EXPECT_NE(message_of([&] { root.positive("dt", Quantity::Time); }).find("value -5e-09 is not positive"),
+            std::string::npos);
 }

@@ -482,13 +482,9 @@ RunResult run_system(PdSystem& s, const RunOptions& o) {
   // The root alone opens the writers; a restart's results.h5 of another particle model or
   // format is refused there, and under mpirun that refusal is every rank's (refuse_together):
   // the other ranks would otherwise wait in the loop's first collective.
-  std::exception_ptr writer_refused;
-  try {
+  refuse_together(o.setup_hooks.distributed, [&] {
     if (o.root && s.config.write_results) results = std::make_unique<ResultsWriter>(s, o.out_dir, restart);
-  } catch (const InputError&) {
-    writer_refused = std::current_exception();
-  }
-  refuse_together(o.setup_hooks.distributed, writer_refused);
+  });
   const double header_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - header_t0).count();
   if (o.root) history = std::make_unique<HistoryWriter>(s, o.out_dir, restart);
   RunResult r;
@@ -578,13 +574,9 @@ RunResult run_case(const CaseConfig& config, const RunOptions& o) {
     const PdSystem* held = &s;
     if (!s.distributed_rows.empty() && o.setup_hooks.stable_step_ranks)
       if (const StableStepRanks ranks = o.setup_hooks.stable_step_ranks(); ranks.system) held = ranks.system;
-    std::exception_ptr refused;
-    try {
+    refuse_together(o.setup_hooks.distributed, [&] {
       if (!held->x0.empty()) check_boundary_fields_over_run(*held, static_cast<double>(total_steps_of(s, o)) * s.dt);
-    } catch (const InputError&) {
-      refused = std::current_exception();
-    }
-    refuse_together(o.setup_hooks.distributed, refused);
+    });
   }
   RunResult r = run_system(s, o);
   if (o.root) write_summary(s, o, r, setup_s);

@@ -652,14 +652,10 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
     std::vector<int64_t> rows(static_cast<size_t>(fb.end - fb.begin));
     std::iota(rows.begin(), rows.end(), fb.begin);
     block = s.particles;
-    std::exception_ptr refused;
-    try {
+    refuse_together(dist, [&] {
       read_rows(rows, facet_cells(block), block);
       if (!c.lattice) check_particle_rows(block, c.particles_path);
-    } catch (const InputError&) {
-      refused = std::current_exception();
-    }
-    refuse_together(dist, refused);
+    });
     // The case's sets (their refusals are the case's: every rank's alike), each set's whole
     // count summed over the blocks (the members are unique, the blocks disjoint).
     add_case_sets(block, c);
@@ -1881,8 +1877,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
   // Each rank evaluates its own particles' initial values (an expression, a file's rows):
   // a refusal found on one rank is every rank's, from the lowest one that has it, so that
   // none is left waiting at the next collective (they hung, silent).
-  std::exception_ptr initial_refused;
-  try {
+  refuse_together(dist, [&] {
     for (size_t q = 0; q < c.initial.size(); ++q) {
       const InitialSpec& is = c.initial[q];
       std::vector<int32_t> who;
@@ -1948,10 +1943,7 @@ PdSystem setup_system(const CaseConfig& config, const SetupHooks& hooks) {
           }
         }
     }
-  } catch (const InputError&) {
-    initial_refused = std::current_exception();
-  }
-  refuse_together(dist, initial_refused);
+  });
   // A fixed set stays at rest whatever an initial condition over it said: its motion was
   // in the first history row's kinetic energy and gone by the second step, unbooked (a
   // uniform 1 m/s over a bar with a fixed end lost 3.3 % of the total there).

@@ -126,10 +126,7 @@ void Solid::rebuild_stencils_on_current_configuration() {
   std::vector<double> current(3 * n);
   for (size_t i = 0; i < n; ++i) {
     for (int a = 0; a < 3; ++a) current[3 * i + a] = position_m_[3 * i + a] + u_[a][i];
-    Mat3 f = gradient_[i];
-    f(0, 0) += 1.0;
-    f(1, 1) += 1.0;
-    f(2, 2) += 1.0;
+    const Mat3 f = deformation_gradient(gradient_[i]);
     stencil_volume_ratio_[i] *= det(f);
     stencil_volume_m3_[i] = volume_m3_[i] * stencil_volume_ratio_[i];
   }
@@ -224,10 +221,7 @@ std::vector<double> Solid::volume_ratio() const {
   sync_host(false);
   std::vector<double> j(size());
   for (size_t i = 0; i < size(); ++i) {
-    Mat3 f = gradient_[i];
-    f(0, 0) += 1.0;
-    f(1, 1) += 1.0;
-    f(2, 2) += 1.0;
+    const Mat3 f = deformation_gradient(gradient_[i]);
     j[i] = stencil_volume_ratio_[i] * det(f);
   }
   return j;

@@ -117,10 +117,7 @@ void Solid::refresh_cut_stencils(const std::vector<long long>& changed) {
     if (number_density == 0.0) stress_[i] = SymTensor{};  // a detached particle carries no stress
     const Mat3 h = displacement_gradient_at(i, b, u, stencil_volume_m3_.data(), moment_inverse_[i], options_.dimension,
                                             bond_coefficient_.data());
-    Mat3 f = h;
-    f(0, 0) += 1.0;
-    f(1, 1) += 1.0;
-    f(2, 2) += 1.0;
+    const Mat3 f = deformation_gradient(h);
     gradient_[i] = h;
     f_inverse_[i] = det(f, options_.dimension) > 0.0 ? inverse(f, options_.dimension) : identity3();
     matrices_[i] = force_matrices(stress_in_force(i), gradient_[i], f_inverse_[i], moment_inverse_[i],

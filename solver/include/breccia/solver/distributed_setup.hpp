@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "breccia/common/cell_list.hpp"
+#include "breccia/common/error.hpp"
 #include "breccia/common/families.hpp"
 #include "breccia/solver/partition.hpp"
 #include "breccia/solver/pd_system.hpp"
@@ -222,6 +223,17 @@ double distributed_order_statistic(const DistributedSetup& d, const std::vector<
 // in rank order (file_block), so the first refusal is the first row's a whole read meets.
 // Any other exception is rethrown on its own rank (its abort stops the others). Collective.
 void refuse_together(const DistributedSetup& d, std::exception_ptr mine);
+// The same for a rank's check: runs `check`, and its InputError (if any) is every rank's.
+template <class Check>
+void refuse_together(const DistributedSetup& d, Check&& check) {
+  std::exception_ptr mine;
+  try {
+    check();
+  } catch (const InputError&) {
+    mine = std::current_exception();
+  }
+  refuse_together(d, mine);
+}
 
 // Every rank's elements of `mine`, concatenated in rank order, on every rank.
 template <class T>

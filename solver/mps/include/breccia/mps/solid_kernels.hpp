@@ -194,6 +194,15 @@ BRECCIA_HD inline Mat3 displacement_gradient_at(long long i, BondsView b, Vector
   return mul(sum, moment_inverse);
 }
 
+// F = I + H from the displacement gradient H (in 2D, F_zz = 1).
+BRECCIA_HD inline Mat3 deformation_gradient(const Mat3& h) {
+  Mat3 f = h;
+  f(0, 0) += 1.0;
+  f(1, 1) += 1.0;
+  f(2, 2) += 1.0;
+  return f;
+}
+
 // The elastic law of a solid without plasticity. NeoHookean: the stress from F itself
 // (neo_hookean_stress), so the internal forces derive from a stored energy and an elastic
 // vibration conserves it; Rate: Hooke increments on the rotated stress (update_stress), which
@@ -255,19 +264,14 @@ BRECCIA_HD inline SymTensor viscous_stress_of(const SolidLaw& law, const SymTens
 // law with the same lambda and mu; unlike St Venant-Kirchhoff it stiffens as J -> 0 (no
 // collapse under strong compression, which the impact cases reach). In 2D (plane strain)
 // F_zz = 1 and the formulas are the 3D ones (sigma_zz = lambda ln J / J, in-plane J).
-BRECCIA_HD inline Mat3 deformation_gradient(const Mat3& h) {
-  Mat3 f = h;
-  f(0, 0) += 1.0;
-  f(1, 1) += 1.0;
-  f(2, 2) += 1.0;
-  return f;
-}
-
 BRECCIA_HD inline double neo_hookean_energy_density(const SolidLaw& law, const Mat3& f, int dimension) {
   const double j = det(f, dimension);
-  double tr_c = 0.0;
-  for (int k = 0; k < 9; ++k) tr_c += f.a[k] * f.a[k];
-  if (dimension == 2) tr_c = f(0, 0) * f(0, 0) + f(0, 1) * f(0, 1) + f(1, 0) * f(1, 0) + f(1, 1) * f(1, 1) + 1.0;
+  double tr_c = 0.0;  // tr(F^T F); in 2D the in-plane block and F_zz = 1
+  if (dimension == 2) {
+    tr_c = f(0, 0) * f(0, 0) + f(0, 1) * f(0, 1) + f(1, 0) * f(1, 0) + f(1, 1) * f(1, 1) + 1.0;
+  } else {
+    for (int k = 0; k < 9; ++k) tr_c += f.a[k] * f.a[k];
+  }
   const double log_j = std::log(j);
   return 0.5 * law.shear_modulus_pa * (tr_c - 3.0) - law.shear_modulus_pa * log_j +
          0.5 * law.lame_lambda_pa * log_j * log_j;
@@ -365,10 +369,7 @@ struct ForceMatrices {
 BRECCIA_HD inline ForceMatrices force_matrices(const SymTensor& stress, const Mat3& h, const Mat3& f_inverse,
                                                const Mat3& moment_inverse, double hourglass_stiffness,
                                                int dimension = 3) {
-  Mat3 f = h;
-  f(0, 0) += 1.0;
-  f(1, 1) += 1.0;
-  f(2, 2) += 1.0;
+  const Mat3 f = deformation_gradient(h);
   const double j = det(f, dimension);
   const Mat3 g = mul(transpose(f_inverse), moment_inverse, dimension);
   const Mat3 piola = mul(to_matrix(stress), g, dimension);

@@ -49,10 +49,7 @@ struct SolidStressInputs {
 BRECCIA_HD BRECCIA_FLATTEN inline double stress_phase_at(long long i, const SolidStressInputs& in, const SolidStressState& s) {
   const Mat3 h_new =
       displacement_gradient_at(i, in.bonds, in.u, in.volume_m3, in.moment_inverse[i], in.dimension, in.bond_coefficient);
-  Mat3 f = h_new;
-  f(0, 0) += 1.0;
-  f(1, 1) += 1.0;
-  f(2, 2) += 1.0;
+  const Mat3 f = deformation_gradient(h_new);
   if (!(det(f, in.dimension) > 0.0)) return -1.0;  // also catches NaN
   double deviatoric_scale = 1.0;
   SymTensor strain_increment;
